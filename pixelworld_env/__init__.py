@@ -1,0 +1,36 @@
+"""PixelWorld: 2-D pixel worlds generated from a concept language, served as Gymnasium environments."""
+
+from pixelworld_env.concepts import (
+    ArityError,
+    Concept,
+    ConceptError,
+    ConceptSyntaxError,
+    NegatedMacroError,
+    UndeclaredVariableError,
+    UnknownPredicateError,
+    holds,
+    parse,
+)
+from pixelworld_env.constants import HEIGHT, WIDTH, Color, ObjectClass
+from pixelworld_env.env import PixelWorldEnv
+from pixelworld_env.objects import WorldObject
+from pixelworld_env.scene import Scene
+
+__all__ = [
+    "HEIGHT",
+    "WIDTH",
+    "ArityError",
+    "Color",
+    "Concept",
+    "ConceptError",
+    "ConceptSyntaxError",
+    "NegatedMacroError",
+    "ObjectClass",
+    "PixelWorldEnv",
+    "Scene",
+    "UndeclaredVariableError",
+    "UnknownPredicateError",
+    "WorldObject",
+    "holds",
+    "parse",
+]

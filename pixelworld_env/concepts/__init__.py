@@ -1,0 +1,31 @@
+"""The concept language: parser, macros, predicates and semantics (spec §3)."""
+
+from pixelworld_env.concepts.errors import (
+    ArityError,
+    ConceptError,
+    ConceptSyntaxError,
+    MacroRecursionError,
+    NegatedMacroError,
+    UndeclaredVariableError,
+    UnknownPredicateError,
+)
+from pixelworld_env.concepts.evaluate import Concept, holds
+from pixelworld_env.concepts.parser import Clause, Expression, expand, parse
+from pixelworld_env.concepts.predicates import PREDICATES
+
+__all__ = [
+    "PREDICATES",
+    "ArityError",
+    "Clause",
+    "Concept",
+    "ConceptError",
+    "ConceptSyntaxError",
+    "Expression",
+    "MacroRecursionError",
+    "NegatedMacroError",
+    "UndeclaredVariableError",
+    "UnknownPredicateError",
+    "expand",
+    "holds",
+    "parse",
+]

@@ -1,0 +1,59 @@
+"""Exceptions of the concept language; all are ``ValueError``s that name the offending item."""
+
+from __future__ import annotations
+
+
+class ConceptError(ValueError):
+    """Base class of every concept-language error."""
+
+
+class ConceptSyntaxError(ConceptError):
+    """The text does not follow the grammar; ``position`` is the 0-based character offset."""
+
+    def __init__(self, text: str, position: int, expected: str, found: str) -> None:
+        self.text, self.position, self.expected, self.found = text, position, expected, found
+        pointer = " " * position + "^"
+        super().__init__(
+            f"syntax error at position {position}: expected {expected}, found {found}\n  {text}\n  {pointer}"
+        )
+
+
+class UnknownPredicateError(ConceptError):
+    """A relation name is neither a predicate of the vocabulary nor a macro."""
+
+    def __init__(self, name: str, suggestions: list[str]) -> None:
+        self.name = name
+        hint = f"; did you mean {', '.join(suggestions)}?" if suggestions else ""
+        super().__init__(f"unknown predicate or macro {name!r}{hint}")
+
+
+class ArityError(ConceptError):
+    """A predicate or macro is called with the wrong number of arguments."""
+
+    def __init__(self, name: str, expected: int, got: int, kind: str = "predicate") -> None:
+        self.name, self.expected, self.got = name, expected, got
+        super().__init__(f"{kind} {name!r} takes {expected} argument(s), got {got}")
+
+
+class UndeclaredVariableError(ConceptError):
+    """An argument is neither ``self`` nor declared with ``?``."""
+
+    def __init__(self, variable: str, clause: str) -> None:
+        self.variable = variable
+        super().__init__(f"variable {variable!r} in {clause} is not declared (declare it with ?{variable})")
+
+
+class NegatedMacroError(ConceptError):
+    """A macro used inside a negation itself contains a negation."""
+
+    def __init__(self, name: str) -> None:
+        self.name = name
+        super().__init__(f"macro {name!r} is used inside a negation but itself contains a negation")
+
+
+class MacroRecursionError(ConceptError):
+    """Macros reference each other in a cycle (or more than 100 levels deep)."""
+
+    def __init__(self, chain: list[str]) -> None:
+        self.chain = chain
+        super().__init__(f"macro expansion does not terminate: {' -> '.join(chain)}")

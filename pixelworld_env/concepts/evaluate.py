@@ -1,0 +1,119 @@
+"""Compiled concepts and their semantics (spec §3.3)."""
+
+from __future__ import annotations
+
+import difflib
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+from pixelworld_env.concepts.errors import ArityError, UnknownPredicateError
+from pixelworld_env.concepts.parser import SELF, Clause, Expression, expand, parse
+from pixelworld_env.concepts.predicates import PREDICATES, EvalContext, Predicate
+from pixelworld_env.objects import WorldObject
+from pixelworld_env.scene import Scene
+
+Macros = Mapping[str, "str | Expression"]
+
+
+@dataclass(frozen=True)
+class _Check:
+    fn: Predicate
+    slots: tuple[int, ...]  # indices into the binding (variable order)
+
+
+class Concept:
+    """A concept expression compiled against a macro table, ready to test scenes.
+
+    ``Concept(text, macros).holds(scene)`` is true if the variables (``self`` included) can be bound to
+    pairwise distinct non-frame objects so that every positive clause holds and no negated group has all
+    its clauses holding under the same binding. ``dir_above_quirk`` reproduces the AAAI-18 ``dir_above``
+    transposition (spec §3.4); it only matters for generators.
+    """
+
+    def __init__(self, text: str | Expression, macros: Macros | None = None, *,
+                 dir_above_quirk: bool = False) -> None:
+        self._source = text
+        expression = parse(text) if isinstance(text, str) else text
+        self.text = str(text)
+        self.macros = dict(macros or {})
+        self.dir_above_quirk = dir_above_quirk
+        self.expression = expand(expression, self.macros)
+        self.variables: tuple[str, ...] = (SELF, *self.expression.variables)
+        slot = {v: i for i, v in enumerate(self.variables)}
+        self._unary: list[list[Predicate]] = [[] for _ in self.variables]
+        # Positive clauses with two or more arguments, checked as soon as their last variable is bound.
+        self._checks: list[list[_Check]] = [[] for _ in self.variables]
+        self._negations: list[list[list[_Check]]] = [[] for _ in self.variables]
+        for clause in self.expression.positives:
+            spec = self._resolve(clause)
+            slots = tuple(slot[a] for a in clause.args)
+            if len(slots) == 1:
+                self._unary[slots[0]].append(spec)
+            else:
+                self._checks[max(slots)].append(_Check(spec, slots))
+        for group in self.expression.negations:
+            checks = [_Check(self._resolve(c), tuple(slot[a] for a in c.args)) for c in group]
+            self._negations[max(max(c.slots) for c in checks)].append(checks)
+
+    def _resolve(self, clause: Clause) -> Predicate:
+        spec = PREDICATES.get(clause.name)
+        if spec is None:
+            names = list(PREDICATES) + list(self.macros)
+            raise UnknownPredicateError(clause.name, difflib.get_close_matches(clause.name, names, n=3))
+        if spec.arity != len(clause.args):
+            raise ArityError(clause.name, spec.arity, len(clause.args))
+        return spec.fn
+
+    def __repr__(self) -> str:
+        return f"Concept({self.text!r})"
+
+    def __reduce__(self):
+        # Compiled predicates are closures: pickle the source and compile again.
+        return _rebuild, (self._source, self.macros, self.dir_above_quirk)
+
+    def holds(self, scene: Scene) -> bool:
+        """Whether the concept holds in ``scene``."""
+        return self.holds_objects(scene.objects, scene.floor_row)
+
+    def holds_objects(self, objects: tuple[WorldObject, ...], floor_row: int) -> bool:
+        """:meth:`holds` on a bare object list (the world's current state)."""
+        ctx = EvalContext(floor_row=floor_row, dir_above_quirk=self.dir_above_quirk)
+        candidates = [o for o in objects if not o.is_frame]
+        domains: list[list[WorldObject]] = []
+        for i, tests in enumerate(self._unary):
+            pool = [o for o in candidates if o.is_self == (i == 0)]
+            domains.append([o for o in pool if all(t(o, ctx) for t in tests)])
+            if not domains[-1]:
+                return False
+        binding: list[WorldObject] = []
+        return self._search(0, domains, binding, ctx)
+
+    def _search(self, depth: int, domains: list[list[WorldObject]], binding: list[WorldObject],
+                ctx: EvalContext) -> bool:
+        if depth == len(domains):
+            return True
+        checks, negations = self._checks[depth], self._negations[depth]
+        for obj in domains[depth]:
+            if any(obj is bound for bound in binding):
+                continue
+            binding.append(obj)
+            if (all(c.fn(*(binding[s] for s in c.slots), ctx) for c in checks)
+                    and not any(all(c.fn(*(binding[s] for s in c.slots), ctx) for c in group)
+                                for group in negations)
+                    and self._search(depth + 1, domains, binding, ctx)):
+                return True
+            binding.pop()
+        return False
+
+
+def _rebuild(source: str | Expression, macros: Macros, dir_above_quirk: bool) -> Concept:
+    return Concept(source, macros, dir_above_quirk=dir_above_quirk)
+
+
+def holds(expression: str | Concept, scene: Scene, macros: Macros | None = None) -> bool:
+    """Whether a concept expression holds in a scene.
+
+    ``macros`` maps macro names (concept or generator keys) to expressions.
+    """
+    concept = expression if isinstance(expression, Concept) else Concept(expression, macros)
+    return concept.holds(scene)

@@ -1,0 +1,220 @@
+"""Parser of the concept language (spec §3.1) and macro expansion (spec §3.2).
+
+Grammar (whitespace and line breaks are ignored)::
+
+    expression := ("?" IDENT)* item ("&" item)*
+    item       := clause | "~" clause | "~" "(" clause ("&" clause)* ")"
+    clause     := IDENT "(" IDENT ("," IDENT)* ")"
+    IDENT      := [A-Za-z0-9_-]+
+
+``self`` is an implicit variable. A negated item is false for a binding only if all its clauses hold.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass
+from functools import lru_cache
+
+from pixelworld_env.concepts.errors import (
+    ArityError,
+    ConceptSyntaxError,
+    MacroRecursionError,
+    NegatedMacroError,
+    UndeclaredVariableError,
+)
+
+SELF = "self"
+MAX_MACRO_DEPTH = 100
+
+_TOKEN = re.compile(r"\s*(?:(?P<ident>[A-Za-z0-9_\-]+)|(?P<punct>[?(),~&]))")
+
+
+@dataclass(frozen=True)
+class Clause:
+    """``name(args...)``; ``position`` is the offset of the name in the source text."""
+
+    name: str
+    args: tuple[str, ...]
+    position: int = 0
+
+    def __str__(self) -> str:
+        return f"{self.name}({','.join(self.args)})"
+
+    def renamed(self, mapping: Mapping[str, str]) -> Clause:
+        return Clause(self.name, tuple(mapping.get(a, a) for a in self.args), self.position)
+
+
+@dataclass(frozen=True)
+class Expression:
+    """A parsed expression: declared variables, positive clauses and negated groups."""
+
+    variables: tuple[str, ...]
+    positives: tuple[Clause, ...]
+    negations: tuple[tuple[Clause, ...], ...]
+
+    def __str__(self) -> str:
+        parts = [f"?{v}" for v in self.variables]
+        items = [str(c) for c in self.positives]
+        for group in self.negations:
+            items.append(f"~{group[0]}" if len(group) == 1 else "~(" + " & ".join(map(str, group)) + ")")
+        return " ".join(parts + [" & ".join(items)])
+
+
+def _tokenize(text: str) -> list[tuple[str, str, int]]:
+    tokens: list[tuple[str, str, int]] = []
+    pos = 0
+    while pos < len(text):
+        if text[pos:].strip() == "":
+            break
+        match = _TOKEN.match(text, pos)
+        if match is None:
+            start = len(text) - len(text[pos:].lstrip())
+            raise ConceptSyntaxError(text, start, "an identifier or one of ? ( ) , ~ &", repr(text[start]))
+        kind = "ident" if match.group("ident") else "punct"
+        value = match.group(kind)
+        tokens.append((kind, value, match.start(kind)))
+        pos = match.end()
+    tokens.append(("end", "", len(text)))
+    return tokens
+
+
+class _Parser:
+    def __init__(self, text: str) -> None:
+        self.text = text
+        self.tokens = _tokenize(text)
+        self.i = 0
+
+    def _peek(self) -> tuple[str, str, int]:
+        return self.tokens[self.i]
+
+    def _describe(self, token: tuple[str, str, int]) -> str:
+        kind, value, _ = token
+        return "end of text" if kind == "end" else repr(value)
+
+    def _expect(self, value: str | None, expected: str) -> str:
+        kind, tok, pos = self._peek()
+        ok = kind == "ident" if value is None else (kind == "punct" and tok == value)
+        if not ok:
+            raise ConceptSyntaxError(self.text, pos, expected, self._describe(self._peek()))
+        self.i += 1
+        return tok
+
+    def _accept(self, value: str) -> bool:
+        kind, tok, _ = self._peek()
+        if kind == "punct" and tok == value:
+            self.i += 1
+            return True
+        return False
+
+    def parse(self) -> Expression:
+        variables: list[str] = []
+        while self._accept("?"):
+            name = self._expect(None, "a variable name after '?'")
+            if name == SELF:
+                raise ConceptSyntaxError(self.text, self.tokens[self.i - 1][2], "a variable other than self",
+                                         "'self' (self is implicit)")
+            variables.append(name)
+        positives: list[Clause] = []
+        negations: list[tuple[Clause, ...]] = []
+        while True:
+            if self._accept("~"):
+                if self._accept("("):
+                    group = [self._clause()]
+                    while self._accept("&"):
+                        group.append(self._clause())
+                    self._expect(")", "'&' or ')'")
+                    negations.append(tuple(group))
+                else:
+                    negations.append((self._clause(),))
+            else:
+                positives.append(self._clause())
+            if not self._accept("&"):
+                break
+        kind, _, pos = self._peek()
+        if kind != "end":
+            raise ConceptSyntaxError(self.text, pos, "'&' or end of text", self._describe(self._peek()))
+        expression = Expression(tuple(variables), tuple(positives), tuple(negations))
+        _check_declared(expression)
+        return expression
+
+    def _clause(self) -> Clause:
+        kind, _, pos = self._peek()
+        if kind != "ident":
+            expected = "a relation name, '?' declarations must come first" if self._peek()[1] == "?" else \
+                "a relation name"
+            raise ConceptSyntaxError(self.text, pos, expected, self._describe(self._peek()))
+        name = self._expect(None, "a relation name")
+        self._expect("(", f"'(' after {name!r}")
+        args = [self._expect(None, "an argument name")]
+        while self._accept(","):
+            args.append(self._expect(None, "an argument name"))
+        self._expect(")", "',' or ')'")
+        return Clause(name, tuple(args), pos)
+
+
+def _check_declared(expression: Expression) -> None:
+    declared = set(expression.variables) | {SELF}
+    clauses = list(expression.positives) + [c for g in expression.negations for c in g]
+    for clause in clauses:
+        for arg in clause.args:
+            if arg not in declared:
+                raise UndeclaredVariableError(arg, str(clause))
+
+
+def parse(text: str) -> Expression:
+    """Parse concept text into an :class:`Expression` (macros not yet expanded)."""
+    if not isinstance(text, str):
+        raise TypeError(f"a concept expression must be a string, got {type(text).__name__}")
+    return _parse_cached(text)
+
+
+@lru_cache(maxsize=4096)
+def _parse_cached(text: str) -> Expression:
+    return _Parser(text).parse()
+
+
+def expand(
+    expression: Expression, macros: Mapping[str, str | Expression], _chain: tuple[str, ...] = ()
+) -> Expression:
+    """Replace every macro call by the macro's clauses (spec §3.2), recursively."""
+    positives: list[Clause] = []
+    negations: list[tuple[Clause, ...]] = []
+    for clause in expression.positives:
+        if clause.name in macros:
+            body = _macro_body(clause, macros, _chain)
+            positives.extend(body.positives)
+            negations.extend(body.negations)
+        else:
+            positives.append(clause)
+    for group in expression.negations:
+        spliced: list[Clause] = []
+        for clause in group:
+            if clause.name in macros:
+                body = _macro_body(clause, macros, _chain)
+                if body.negations:
+                    raise NegatedMacroError(clause.name)
+                spliced.extend(body.positives)
+            else:
+                spliced.append(clause)
+        negations.append(tuple(spliced))
+    return Expression(expression.variables, tuple(positives), tuple(negations))
+
+
+def _macro_body(clause: Clause, macros: Mapping[str, str | Expression], chain: tuple[str, ...]) -> Expression:
+    chain = (*chain, clause.name)
+    if len(chain) > MAX_MACRO_DEPTH or clause.name in chain[:-1]:
+        raise MacroRecursionError(list(chain))
+    definition = macros[clause.name]
+    macro = parse(definition) if isinstance(definition, str) else definition
+    if len(clause.args) != len(macro.variables):
+        raise ArityError(clause.name, len(macro.variables), len(clause.args), kind="macro")
+    mapping = dict(zip(macro.variables, clause.args, strict=True))
+    mapping[SELF] = SELF
+    body = expand(macro, macros, chain)
+    return Expression(
+        (),
+        tuple(c.renamed(mapping) for c in body.positives),
+        tuple(tuple(c.renamed(mapping) for c in g) for g in body.negations),
+    )

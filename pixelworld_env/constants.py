@@ -1,0 +1,45 @@
+"""Colour codes, object classes and world dimensions of the AAAI-18 PixelWorld (spec §1)."""
+
+from __future__ import annotations
+
+from enum import IntEnum, StrEnum
+
+HEIGHT = 18
+"""World height in cells, frame included (spec §1.1: the paper's 20 counts an extra frame)."""
+WIDTH = 35
+"""World width in cells, frame included."""
+FLOOR_HEIGHT = 3
+"""The floor's top row is ``height - FLOOR_HEIGHT`` (row 15 in an 18-row world)."""
+PADDING = 2
+"""Generated objects keep this distance from the world border (spec §3.8)."""
+
+
+class Color(IntEnum):
+    """Colour codes of the state array (spec §1.3)."""
+
+    EMPTY = 0
+    WHITE = 1
+    RED = 2
+    BLUE = 3
+    GREEN = 4
+    YELLOW = 5
+    MAGENTA = 6
+    PURPLE = 7
+    ORANGE = 8
+
+
+NUM_COLORS = len(Color)
+
+
+class ObjectClass(StrEnum):
+    """Engine classes of the minimal PixelWorld (spec §1.2)."""
+
+    SELF = "self"
+    BASIC = "basic"
+    COMPLEX = "complex"
+    IMMOVEABLE = "immoveable"
+    IMMOVEABLE_BIG = "immoveable_big"
+    FRAME = "frame"
+
+
+MOVEABLE_CLASSES = frozenset({ObjectClass.SELF, ObjectClass.BASIC, ObjectClass.COMPLEX})

@@ -1,0 +1,214 @@
+"""``PixelWorldEnv``: classification and bring-about tasks over a set of scenes (spec §1.4-§2.2)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any, Literal
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from pixelworld_env.concepts import Concept
+from pixelworld_env.concepts.parser import Expression
+from pixelworld_env.constants import NUM_COLORS
+from pixelworld_env.objects import Cell
+from pixelworld_env.render import rgb_image
+from pixelworld_env.scene import Scene
+from pixelworld_env.world import MOVES, World
+
+CLASSIFICATION = "classification"
+BRING_ABOUT = "bring-about"
+KINDS = (CLASSIFICATION, BRING_ABOUT)
+OBSERVATIONS = ("hand", "hand_raw", "full")
+
+CLASSIFICATION_ACTIONS = ("SIG0", "SIG1", "DOWN", "RIGHT", "UP", "LEFT")
+BRING_ABOUT_ACTIONS = ("SIG1", "DOWN", "RIGHT", "UP", "LEFT")
+
+CLASSIFICATION_REWARD = 1.0
+GOAL_POTENTIAL = 0.5
+"""Shaping potential while the goal holds (spec §2.2)."""
+GOAL_REWARD = 1.0
+"""Base reward of SIG1 while the goal holds; SIG1 outside the goal earns 0 (``reward_mistake`` of AAAI-18)."""
+
+_ONE_HOT = np.eye(NUM_COLORS, dtype=np.float32)
+
+
+class PixelWorldEnv(gym.Env):
+    """A PixelWorld task: explore a scene with a 3 x 3 window, then signal (spec §1.5, §2).
+
+    * ``kind="classification"``: actions SIG0, SIG1, DOWN, RIGHT, UP, LEFT. The signal that matches the
+      scene's label earns +1, the other -1; either ends the episode.
+    * ``kind="bring-about"``: actions SIG1, DOWN, RIGHT, UP, LEFT. Moving into a state where ``concept``
+      holds earns +0.5, moving out of it -0.5; SIG1 ends the episode with +0.5 if the goal holds, else 0.
+
+    Episodes are truncated after ``max_steps`` actions (every action counts). ``info`` holds, on every step,
+    ``scene_index``, ``label`` (classification) or ``goal`` (bring-about: whether the concept holds now),
+    ``is_success`` (the paper's rule: the episode has ended with a final reward > 0) and ``signalled``
+    (whether the episode ended with a signal).
+
+    Observations: ``"hand"`` the one-hot (9 colour codes) of the 3 x 3 window, 81 floats; ``"hand_raw"`` the
+    window's 9 raw colour codes row-major (the paper's input); ``"full"`` the whole state array.
+    """
+
+    metadata = {"render_modes": ["rgb_array", "ansi"], "render_fps": 10}
+
+    def __init__(
+        self,
+        scenes: Sequence[Scene],
+        *,
+        kind: Literal["classification", "bring-about"],
+        concept: str | Expression | Concept,
+        labels: Sequence[int] | None = None,
+        macros: Mapping[str, str] | None = None,
+        max_steps: int = 100,
+        observation: Literal["hand", "hand_raw", "full"] = "hand",
+        render_mode: str | None = None,
+        aaai18_reset_bug: bool = False,
+    ) -> None:
+        if kind not in KINDS:
+            raise ValueError(f"kind must be one of {KINDS}, got {kind!r}")
+        if observation not in OBSERVATIONS:
+            raise ValueError(f"observation must be one of {OBSERVATIONS}, got {observation!r}")
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(f"render_mode must be None or one of {self.metadata['render_modes']}, "
+                             f"got {render_mode!r}")
+        if max_steps < 1:
+            raise ValueError(f"max_steps must be >= 1, got {max_steps}")
+        self.scenes: tuple[Scene, ...] = tuple(scenes)
+        if not self.scenes:
+            raise ValueError("PixelWorldEnv needs at least one scene")
+        self.kind = kind
+        self.concept = concept if isinstance(concept, Concept) else Concept(concept, macros)
+        if kind == CLASSIFICATION:
+            if labels is None:
+                labels = [int(self.concept.holds(s)) for s in self.scenes]
+            if len(labels) != len(self.scenes):
+                raise ValueError(f"got {len(labels)} labels for {len(self.scenes)} scenes")
+            if any(label not in (0, 1) for label in labels):
+                raise ValueError("classification labels must be 0 or 1")
+        self.labels: tuple[int, ...] | None = tuple(int(x) for x in labels) if labels is not None else None
+        self.max_steps = int(max_steps)
+        self.observation = observation
+        self.render_mode = render_mode
+        self.aaai18_reset_bug = aaai18_reset_bug
+
+        self.action_names: tuple[str, ...] = CLASSIFICATION_ACTIONS if kind == CLASSIFICATION else BRING_ABOUT_ACTIONS
+        self.action_space = spaces.Discrete(len(self.action_names))
+        self._moves: tuple[Cell | None, ...] = tuple(MOVES.get(name) for name in self.action_names)
+        height, width = self.scenes[0].height, self.scenes[0].width
+        if any((s.height, s.width) != (height, width) for s in self.scenes):
+            raise ValueError("all scenes of an environment must have the same size")
+        if observation == "hand":
+            self.observation_space = spaces.Box(0.0, 1.0, shape=(9 * NUM_COLORS,), dtype=np.float32)
+        elif observation == "hand_raw":
+            self.observation_space = spaces.Box(0, NUM_COLORS - 1, shape=(9,), dtype=np.int64)
+        else:
+            self.observation_space = spaces.Box(0, NUM_COLORS - 1, shape=(height, width), dtype=np.uint8)
+
+        self._worlds: dict[int, World] = {}
+        self._last_self: dict[int, Cell] = {}
+        self._goal_memo: dict[int, dict[Cell, bool]] = {}
+        self._world: World | None = None
+        self._index = 0
+        self._steps = 0
+        self._goal = False
+        self._done = True
+
+    # ------------------------------------------------------------------------------------------ helpers
+
+    def _observe(self) -> np.ndarray:
+        assert self._world is not None
+        if self.observation == "hand":
+            return _ONE_HOT[self._world.window()].reshape(-1)
+        if self.observation == "hand_raw":
+            return self._world.window().astype(np.int64).reshape(-1)
+        return self._world.state().astype(np.uint8)
+
+    def goal_holds(self) -> bool:
+        """Whether the concept holds in the current state (memoised per self cell when only the self moves)."""
+        world = self._world
+        assert world is not None
+        if not world.self_only:
+            return self.concept.holds_objects(tuple(world.objects), world.scene.floor_row)
+        memo = self._goal_memo.setdefault(self._index, {})
+        position = world.self_position
+        holds = memo.get(position)
+        if holds is None:
+            holds = memo[position] = self.concept.holds_objects(tuple(world.objects), world.scene.floor_row)
+        return holds
+
+    def _info(self, success: bool = False, signalled: bool = False) -> dict[str, Any]:
+        info: dict[str, Any] = {"scene_index": self._index, "is_success": success, "signalled": signalled}
+        if self.labels is not None:
+            info["label"] = self.labels[self._index]
+        if self.kind == BRING_ABOUT:
+            info["goal"] = self._goal
+        return info
+
+    @property
+    def world(self) -> World:
+        """The live world of the current episode."""
+        if self._world is None:
+            raise RuntimeError("call reset() first")
+        return self._world
+
+    # ------------------------------------------------------------------------------------------ gym API
+
+    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
+        super().reset(seed=seed)
+        if options and "index" in options:
+            index = int(options["index"])
+            if not 0 <= index < len(self.scenes):
+                raise IndexError(f"scene index {index} out of range (0..{len(self.scenes) - 1})")
+        else:
+            index = int(self.np_random.integers(len(self.scenes)))
+        if self._world is not None and self.aaai18_reset_bug:
+            self._last_self[self._index] = self._world.self_position
+        self._index = index
+        world = self._worlds.get(index)
+        if world is None:
+            world = self._worlds[index] = World(self.scenes[index])
+        world.reset(self._last_self.get(index) if self.aaai18_reset_bug else None)
+        self._world = world
+        self._steps = 0
+        self._done = False
+        self._goal = self.goal_holds() if self.kind == BRING_ABOUT else False
+        return self._observe(), self._info()
+
+    def step(self, action):
+        if self._done:
+            raise RuntimeError("the episode has ended: call reset() before step()")
+        action = int(action)
+        if not 0 <= action < len(self.action_names):
+            raise ValueError(f"invalid action {action}; actions are {list(enumerate(self.action_names))}")
+        self._steps += 1
+        move = self._moves[action]
+        terminated = False
+        reward = 0.0
+        if move is not None:
+            if self._world.move(move) and self.kind == BRING_ABOUT:  # type: ignore[union-attr]
+                goal = self.goal_holds()
+                if goal != self._goal:
+                    reward = GOAL_POTENTIAL if goal else -GOAL_POTENTIAL
+                    self._goal = goal
+        else:
+            terminated = True
+            if self.kind == CLASSIFICATION:
+                correct = (self.action_names[action] == "SIG1") == bool(self.labels[self._index])  # type: ignore[index]
+                reward = CLASSIFICATION_REWARD if correct else -CLASSIFICATION_REWARD
+            else:
+                reward = GOAL_REWARD - GOAL_POTENTIAL if self._goal else 0.0
+        truncated = not terminated and self._steps >= self.max_steps
+        self._done = terminated or truncated
+        info = self._info(success=self._done and reward > 0, signalled=terminated)
+        return self._observe(), reward, terminated, truncated, info
+
+    def render(self):
+        if self.render_mode is None:
+            gym.logger.warn("render() called without a render_mode; pass render_mode='rgb_array' or 'ansi'")
+            return None
+        world = self.world
+        if self.render_mode == "ansi":
+            return world.current_scene().to_ascii() + "\n"
+        return rgb_image(world.state(), window=world.self_position)

@@ -1,0 +1,79 @@
+"""World objects: an engine class, a colour, a position and a rigid template of cells (spec §1.2)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from functools import cached_property
+
+import numpy as np
+
+from pixelworld_env.constants import MOVEABLE_CLASSES, ObjectClass
+
+Cell = tuple[int, int]
+
+
+@dataclass(frozen=True)
+class WorldObject:
+    """One object of a scene.
+
+    ``position`` is the ``(row, col)`` of the top-left corner of the object's template, ``cells`` the
+    ``(drow, dcol)`` offsets of its pixels and ``size`` the ``(height, width)`` of the template array. The
+    template may contain empty rows or columns (clipped containers), so ``size`` is stored, not derived:
+    every bounding-box relation of the concept language uses it (spec §3.4).
+    """
+
+    cls: ObjectClass
+    color: int
+    position: Cell
+    cells: tuple[Cell, ...] = ((0, 0),)
+    size: Cell = (1, 1)
+    family: str | None = "pixel"
+    shape_idx: int = 0
+    pushable: bool = False
+    is_target: bool = False
+    name: str = field(default="", compare=False)
+
+    def __post_init__(self) -> None:
+        if not self.cells:
+            raise ValueError(f"object of class {self.cls!s} has no cells")
+        height, width = self.size
+        for dr, dc in self.cells:
+            if not (0 <= dr < height and 0 <= dc < width):
+                raise ValueError(f"cell offset {(dr, dc)} lies outside the template size {self.size}")
+
+    @property
+    def is_self(self) -> bool:
+        return self.cls is ObjectClass.SELF
+
+    @property
+    def is_frame(self) -> bool:
+        return self.cls is ObjectClass.FRAME
+
+    @property
+    def moveable(self) -> bool:
+        """Whether a move plan may shift this object (the self, ``basic`` and ``complex`` objects)."""
+        return self.cls in MOVEABLE_CLASSES
+
+    @cached_property
+    def template(self) -> np.ndarray:
+        """The template array (``size``), 1 on the object's cells; read-only."""
+        array = np.zeros(self.size, dtype=np.uint8)
+        rows, cols = zip(*self.cells, strict=True)
+        array[list(rows), list(cols)] = 1
+        array.flags.writeable = False
+        return array
+
+    @cached_property
+    def pixels(self) -> frozenset[Cell]:
+        """Absolute ``(row, col)`` cells occupied in the world."""
+        row, col = self.position
+        return frozenset((row + dr, col + dc) for dr, dc in self.cells)
+
+    def moved_to(self, position: Cell) -> WorldObject:
+        """A copy of this object at another position."""
+        return replace(self, position=(int(position[0]), int(position[1])))
+
+
+def cell_extent(cells: tuple[Cell, ...]) -> Cell:
+    """The smallest template size that holds ``cells`` (offsets counted from the template's corner)."""
+    return (max(r for r, _ in cells) + 1, max(c for _, c in cells) + 1)

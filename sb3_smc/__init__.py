@@ -1,0 +1,1 @@
+"""Sensorimotor contingencies (SMCs) for Stable-Baselines3."""

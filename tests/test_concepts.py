@@ -1,0 +1,185 @@
+"""Concept language: predicate truth on hand-drawn scenes, semantics and errors."""
+
+from __future__ import annotations
+
+import pytest
+
+from pixelworld_env import (
+    ArityError,
+    Concept,
+    ConceptSyntaxError,
+    NegatedMacroError,
+    Scene,
+    UndeclaredVariableError,
+    UnknownPredicateError,
+    holds,
+)
+from pixelworld_env.concepts import MacroRecursionError, parse
+
+CONTAINER = """
+#########
+#.......#
+#.a...a.#
+#.a.S.a.#
+#.aaaaa.#
+#=======#
+#.......#
+#########
+"""
+KINDS = {"a": "container"}
+
+
+def scene(text: str, kinds: dict[str, str] | None = None) -> Scene:
+    return Scene.from_ascii(text, kinds if kinds is not None else KINDS)
+
+
+def moved(text: str, row: int, col: int) -> str:
+    """The same drawing with the self moved to (row, col)."""
+    grid = [list(line) for line in text.strip().splitlines()]
+    for line in grid:
+        for j, ch in enumerate(line):
+            if ch == "S":
+                line[j] = "."
+    grid[row][col] = "S"
+    return "\n".join("".join(line) for line in grid)
+
+
+@pytest.mark.parametrize(
+    ("cell", "inside", "supported"),
+    [((3, 4), True, True), ((2, 4), True, False), ((1, 4), False, False), ((3, 7), False, False)],
+)
+def test_inside_regions_of_a_drawn_container(cell: tuple[int, int], inside: bool, supported: bool) -> None:
+    s = scene(moved(CONTAINER, *cell))
+    assert holds("?x container(x) & inside(self,x)", s) is inside
+    assert holds("?x container(x) & inside_supported(self,x)", s) is supported
+
+
+def test_floor_on_top_and_above() -> None:
+    s = scene(CONTAINER)
+    assert holds("?f ?x floor(f) & container(x) & on_top(x,f)", s)
+    assert not holds("?f floor(f) & on_top(self,f)", s)
+    assert holds("?f floor(f) & above(self,f)", s)
+    assert holds("?f floor(f) & on_top(self,f)", scene(moved(CONTAINER, 4, 7)))
+    # floor(f) needs the floor's top on row height - 3
+    shifted = CONTAINER.replace("#=======#\n#.......#", "#.......#\n#=======#")
+    assert not holds("?f floor(f)", scene(shifted))
+
+
+@pytest.mark.parametrize(
+    ("cell", "touches", "adjacent", "near"),
+    [((1, 2), True, True, True), ((1, 1), True, False, True), ((2, 4), False, False, True),
+     ((6, 7), False, False, False)],
+)
+def test_distance_predicates(cell: tuple[int, int], touches: bool, adjacent: bool, near: bool) -> None:
+    s = scene(moved(CONTAINER, *cell))
+    assert holds("?x container(x) & touches(self,x)", s) is touches
+    assert holds("?x container(x) & adjacent(self,x)", s) is adjacent
+    assert holds("?x container(x) & near(self,x)", s) is near
+
+
+def test_left_right_of_and_directional() -> None:
+    left = scene(moved(CONTAINER, 3, 1))
+    assert holds("?x container(x) & left_of(self,x)", left)
+    assert holds("?x container(x) & dir_left_of(self,x)", left)
+    assert holds("?x container(x) & on_left(self,x)", left)
+    assert not holds("?x container(x) & right_of(self,x)", left)
+    inner = scene(CONTAINER)
+    # inside the bbox: not left_of, but left of the right wall in shared rows only if left of every cell
+    assert not holds("?x container(x) & left_of(self,x)", inner)
+    assert not holds("?x container(x) & dir_left_of(self,x)", inner)
+    above = scene(moved(CONTAINER, 1, 3))
+    assert not holds("?x container(x) & dir_left_of(self,x)", above)  # no shared rows
+    assert holds("?x container(x) & dir_above(self,x)", above)
+
+
+def test_dir_above_quirk() -> None:
+    """Inside a container's bbox, above its floor: correct dir_above is true, the AAAI-18 quirk says false."""
+    s = scene(CONTAINER)
+    assert Concept("?x container(x) & dir_above(self,x)").holds(s)
+    assert not Concept("?x container(x) & dir_above(self,x)", dir_above_quirk=True).holds(s)
+
+
+def test_h_between() -> None:
+    text = """
+    ##########
+    #........#
+    #.a.S..b.#
+    #========#
+    #........#
+    ##########
+    """
+    s = scene(text, {"a": "small_blob", "b": "small_blob"})
+    assert holds("?x ?y small_blob(x) & small_blob(y) & h_between(self,x,y)", s)
+    assert not holds("?x ?y small_blob(x) & small_blob(y) & h_between(x,self,y)", s)
+
+
+def test_variables_bind_distinct_non_frame_objects() -> None:
+    s = scene(CONTAINER)
+    assert holds("?x container(x)", s)
+    assert not holds("?x ?y container(x) & container(y)", s)  # only one container
+    assert not holds("?x red(x)", s)  # x never binds the self
+    # the frame (purple) is never a candidate: only the floor and the container remain
+    assert not holds("?x ?y ?z white(x) & blue(y) & touches(z,y)", s)
+
+
+def test_negation_is_per_binding() -> None:
+    text = """
+    ##########
+    #........#
+    #.aS....b#
+    #========#
+    #........#
+    ##########
+    """
+    s = scene(text, {"a": "small_blob", "b": "small_blob"})
+    assert holds("?x small_blob(x) & ~touches(self,x)", s)  # b does not touch, a does
+    assert holds("?x small_blob(x) & touches(self,x)", s)
+    assert not holds("?x small_blob(x) & ~(near(self,x) & small_blob(x)) & ~(far(self,x) & small_blob(x))", s)
+
+
+def test_macros_expand_positionally() -> None:
+    macros = {
+        "on-floor": "?f ?x floor(f) & on_top(x,f)",
+        "container-on-floor": "?f ?x on-floor(f,x) & container(x)",
+        "self-in": "?x container(x) & inside_supported(self,x)",
+    }
+    s = scene(CONTAINER)
+    assert holds("?f ?x container-on-floor(f,x) & self-in(x)", s, macros)
+    assert not holds("?f ?x container-on-floor(f,x) & ~self-in(x)", s, macros)
+
+
+@pytest.mark.parametrize(
+    ("text", "position", "expected"),
+    [
+        ("?x container(x) &", 17, "a relation name"),
+        ("?x container(x", 14, "',' or ')'"),
+        ("?x container x)", 13, "'(' after 'container'"),
+        ("?x container(x) touches(self,x)", 16, "'&' or end of text"),
+        ("?x ~(container(x) & touches(self,x)", 35, "'&' or ')'"),
+        ("container(self) ?x", 16, "'&' or end of text"),
+        ("?x container(x) $ blob(x)", 16, "an identifier or one of"),
+    ],
+)
+def test_syntax_errors_report_position_and_expectation(text: str, position: int, expected: str) -> None:
+    with pytest.raises(ConceptSyntaxError) as info:
+        parse(text)
+    assert info.value.position == position
+    assert expected in str(info.value)
+
+
+def test_named_errors() -> None:
+    s = scene(CONTAINER)
+    with pytest.raises(UnknownPredicateError, match="'containr'.*did you mean container"):
+        holds("?x containr(x)", s)
+    with pytest.raises(ArityError, match="predicate 'touches' takes 2 argument"):
+        holds("touches(self)", s)
+    with pytest.raises(ArityError, match="macro 'm' takes 2 argument"):
+        holds("m(self)", s, {"m": "?a ?b touches(a,b)"})
+    with pytest.raises(UndeclaredVariableError, match="variable 'x' in container\\(x\\)"):
+        holds("container(x)", s)
+    with pytest.raises(NegatedMacroError, match="'m'"):
+        holds("?x ~m(x)", s, {"m": "?a blob(a) & ~touches(self,a)"})
+    with pytest.raises(MacroRecursionError, match="m -> n -> m"):
+        holds("?x m(x)", s, {"m": "?a n(a)", "n": "?a m(a)"})
+    with pytest.raises(ConceptSyntaxError, match="self is implicit"):
+        parse("?self blob(self)")

@@ -1,0 +1,285 @@
+"""PixelWorldEnv: Gymnasium/SB3 compliance, exact rewards, movement, pushing, observations, rendering."""
+
+from __future__ import annotations
+
+import pickle
+import warnings
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env as gym_check_env
+from stable_baselines3.common.env_checker import check_env as sb3_check_env
+
+from pixelworld_env import Color, PixelWorldEnv, Scene
+
+CONTAINER = """
+#########
+#...S...#
+#.a...a.#
+#.a...a.#
+#.aaaaa.#
+#=======#
+#.......#
+#########
+"""
+IN_CONTAINER = "?x container(x) & inside_supported(self,x)"
+DOWN, RIGHT, UP, LEFT = "DOWN", "RIGHT", "UP", "LEFT"
+
+
+def make(kind: str = "bring-about", text: str = CONTAINER, **kwargs) -> PixelWorldEnv:
+    scenes = [Scene.from_ascii(text, {"a": "container"})]
+    return PixelWorldEnv(scenes, kind=kind, concept=kwargs.pop("concept", IN_CONTAINER), **kwargs)
+
+
+def act(env: PixelWorldEnv, name: str):
+    return env.step(env.action_names.index(name))
+
+
+def classification_env(**kwargs) -> PixelWorldEnv:
+    inside = Scene.from_ascii(CONTAINER.replace("#...S...#", "#.......#").replace("#.a...a.#\n#.aaaaa.#",
+                                                                                    "#.a.S.a.#\n#.aaaaa.#"),
+                              {"a": "container"})
+    outside = Scene.from_ascii(CONTAINER, {"a": "container"})
+    return PixelWorldEnv([inside, outside], kind="classification", concept=IN_CONTAINER, **kwargs)
+
+
+def test_action_names_follow_the_paper() -> None:
+    assert classification_env().action_names == ("SIG0", "SIG1", "DOWN", "RIGHT", "UP", "LEFT")
+    assert make().action_names == ("SIG1", "DOWN", "RIGHT", "UP", "LEFT")
+    assert make().action_space == gym.spaces.Discrete(5)
+
+
+@pytest.mark.parametrize("observation", ["hand", "hand_raw"])
+@pytest.mark.parametrize("kind", ["classification", "bring-about"])
+def test_gymnasium_and_sb3_check_env_without_warnings(kind: str, observation: str) -> None:
+    env = classification_env(observation=observation) if kind == "classification" else make(
+        observation=observation)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        gym_check_env(env, skip_render_check=True)
+        sb3_check_env(env, warn=True)
+
+
+def test_labels_default_to_the_concept() -> None:
+    env = classification_env()
+    assert env.labels == (1, 0)
+    with pytest.raises(ValueError, match="got 1 labels for 2 scenes"):
+        PixelWorldEnv(env.scenes, kind="classification", concept=IN_CONTAINER, labels=[1])
+
+
+@pytest.mark.parametrize(("index", "action", "reward"), [(0, "SIG1", 1.0), (0, "SIG0", -1.0), (1, "SIG0", 1.0),
+                                                         (1, "SIG1", -1.0)])
+def test_classification_rewards(index: int, action: str, reward: float) -> None:
+    env = classification_env()
+    env.reset(seed=0, options={"index": index})
+    assert act(env, DOWN)[1:4] == (0.0, False, False)
+    obs, r, terminated, truncated, info = act(env, action)
+    assert (r, terminated, truncated) == (reward, True, False)
+    assert info["is_success"] is (reward > 0) and info["label"] == (1 - index) and info["signalled"]
+    with pytest.raises(RuntimeError, match="call reset"):
+        act(env, DOWN)
+
+
+def test_bring_about_shaping_sequence() -> None:
+    env = make()
+    _, info = env.reset(seed=0)
+    assert info == {"scene_index": 0, "is_success": False, "signalled": False, "goal": False}
+    rewards = []
+    for name in [DOWN, DOWN, UP, DOWN, RIGHT, LEFT, "SIG1"]:
+        _, r, terminated, truncated, info = act(env, name)
+        rewards.append(r)
+        assert "is_success" in info and "goal" in info
+    # (1,4) -> (2,4) inside -> (3,4) supported: +0.5; up: -0.5; down: +0.5; right stays supported; SIG1: +0.5
+    assert rewards == [0.0, 0.5, -0.5, 0.5, 0.0, 0.0, 0.5]
+    assert terminated and not truncated and info["is_success"] and info["goal"]
+
+
+def test_bring_about_signal_outside_goal_and_time_limit() -> None:
+    env = make()
+    env.reset(seed=0)
+    _, r, terminated, _, info = act(env, "SIG1")
+    assert (r, terminated, info["is_success"]) == (0.0, True, False)
+    env = make(max_steps=3)
+    env.reset(seed=0)
+    act(env, DOWN)
+    act(env, LEFT)
+    _, r, terminated, truncated, info = act(env, RIGHT)
+    assert (r, terminated, truncated, info["is_success"]) == (0.0, False, True, False)
+    # entering the goal on the very last step counts as a success under the paper's rule
+    env = make(max_steps=2)
+    env.reset(seed=0)
+    act(env, DOWN)
+    _, r, terminated, truncated, info = act(env, DOWN)
+    assert (r, terminated, truncated, info["is_success"], info["signalled"]) == (0.5, False, True, True, False)
+
+
+def test_blocked_moves_cost_a_step_and_change_nothing() -> None:
+    env = make(max_steps=5)
+    obs, _ = env.reset(seed=0)
+    act(env, DOWN)
+    act(env, DOWN)  # now on the container floor at (3, 4)
+    before = env.world.state().copy()
+    obs, r, _, _, _ = act(env, DOWN)  # container floor below
+    assert r == 0.0 and env.world.self_position == (3, 4)
+    np.testing.assert_array_equal(env.world.state(), before)
+    act(env, UP)
+    _, _, _, truncated, _ = act(env, UP)
+    assert truncated  # five actions, blocked one included
+
+
+def test_hand_window_at_frame_and_floor() -> None:
+    text = """
+    #######
+    #S....#
+    #.....#
+    #.a...#
+    #=====#
+    #.....#
+    #######
+    """
+    env = PixelWorldEnv([Scene.from_ascii(text)], kind="bring-about", concept="?x blob(x) & touches(self,x)",
+                        observation="hand_raw")
+    obs, _ = env.reset(seed=0)
+    assert obs.tolist() == [7, 7, 7, 7, 2, 0, 7, 0, 0]
+    obs, r, *_ = act(env, DOWN)  # (2, 1) touches the blob at (3, 2) diagonally
+    assert obs.tolist() == [7, 0, 0, 7, 2, 0, 7, 0, 1] and r == 0.5
+    obs, r, *_ = act(env, DOWN)
+    assert obs.tolist() == [7, 0, 0, 7, 2, 1, 7, 3, 3] and r == 0.0
+    obs, r, *_ = act(env, RIGHT)  # blocked by the blob
+    assert obs.tolist() == [7, 0, 0, 7, 2, 1, 7, 3, 3] and r == 0.0 and env.world.self_position == (3, 1)
+    onehot = PixelWorldEnv([Scene.from_ascii(text)], kind="bring-about", concept="?x blob(x)").reset(seed=0)[0]
+    assert onehot.shape == (81,) and onehot.dtype == np.float32
+    np.testing.assert_array_equal(onehot.reshape(9, 9).argmax(axis=1), [7, 7, 7, 7, 2, 0, 7, 0, 0])
+    assert onehot.sum() == 9
+
+
+PUSH = """
+##########
+#........#
+#.SAB.c..#
+#........#
+##########
+"""
+
+
+def test_pushing_moves_chains_and_is_blocked_by_immoveables() -> None:
+    scene = Scene.from_ascii(PUSH)
+    env = PixelWorldEnv([scene], kind="bring-about", concept="?x ?y touches(x,y) & blob(x) & blob(y)")
+    env.reset(seed=0)
+    assert env.world.self_only is False
+    act(env, RIGHT)  # S pushes A which pushes B: B now touches c (drawn as "a" by to_ascii)
+    state = env.world.current_scene().to_ascii().splitlines()
+    assert state[2] == "#..SABa..#"
+    act(env, RIGHT)  # c is immoveable: the whole chain is blocked
+    assert env.world.current_scene().to_ascii().splitlines()[2] == "#..SABa..#"
+    act(env, UP)
+    act(env, RIGHT)
+    act(env, RIGHT)
+    act(env, DOWN)  # from above B: pushing down moves B alone
+    lines = env.world.current_scene().to_ascii().splitlines()
+    assert lines[2] == "#...ASa..#" and lines[3] == "#....B...#"
+    act(env, DOWN)  # B would enter the frame: blocked
+    assert env.world.current_scene().to_ascii().splitlines()[3] == "#....B...#"
+    env.reset(seed=0)  # reset restores the initial positions
+    assert env.world.current_scene() == scene
+
+
+def test_pushing_shapes_rigidly_and_goal_after_push() -> None:
+    text = """
+    ##########
+    #........#
+    #.S.AA...#
+    #...A....#
+    #......b.#
+    ##########
+    """
+    scene = Scene.from_ascii(text, {"b": "small_blob"})
+    env = PixelWorldEnv([scene], kind="bring-about", concept="?x ?y blob(x) & small_blob(y) & touches(x,y)")
+    env.reset(seed=0)
+    rewards = [act(env, RIGHT)[1] for _ in range(3)]
+    lines = env.world.current_scene().to_ascii().splitlines()
+    assert lines[2] == "#....SAA.#" and lines[3] == "#.....A..#"
+    assert rewards == [0.0, 0.0, 0.5]  # the pushed blob touches b diagonally after the third push
+
+
+def test_same_seed_same_rollout_and_reset_index() -> None:
+    def rollout(seed: int) -> list:
+        env = classification_env()
+        env.action_space.seed(seed)
+        out = []
+        obs, info = env.reset(seed=seed)
+        for _ in range(200):
+            obs, r, term, trunc, info = env.step(env.action_space.sample())
+            out.append((obs.tobytes(), r, term, trunc, info["scene_index"]))
+            if term or trunc:
+                obs, info = env.reset()
+        return out
+
+    assert rollout(3) == rollout(3)
+    assert rollout(3) != rollout(4)
+    env = classification_env()
+    assert env.reset(seed=0, options={"index": 1})[1]["scene_index"] == 1
+    with pytest.raises(IndexError, match="scene index 2 out of range"):
+        env.reset(options={"index": 2})
+
+
+def test_pickle_round_trip_mid_episode() -> None:
+    env = make()
+    env.reset(seed=5)
+    act(env, DOWN)
+    clone = pickle.loads(pickle.dumps(env))
+    for name in [DOWN, RIGHT, "SIG1"]:
+        a, b = act(env, name), act(clone, name)
+        np.testing.assert_array_equal(a[0], b[0])
+        assert a[1:] == b[1:]
+
+
+def test_aaai18_reset_bug_leaves_a_stale_self_pixel() -> None:
+    fixed = make(observation="hand_raw")
+    buggy = make(observation="hand_raw", aaai18_reset_bug=True)
+    for env in (fixed, buggy):
+        env.reset(seed=0)
+        act(env, RIGHT)  # end the episode at (1, 5), next to the start (1, 4)
+        act(env, "SIG1")
+    assert fixed.reset(seed=0)[0].tolist() == [7, 7, 7, 0, 2, 0, 0, 0, 0]
+    obs, _ = buggy.reset(seed=0)
+    assert obs.tolist() == [7, 7, 7, 0, 2, 2, 0, 0, 0]  # the stale red pixel at (1, 5)
+    obs, *_ = act(buggy, UP)  # blocked by the frame: the stale pixel stays
+    assert obs.tolist() == [7, 7, 7, 0, 2, 2, 0, 0, 0]
+    obs, *_ = act(buggy, LEFT)  # a successful move redraws the world: (1, 3) sees the container at (2, 2)
+    assert obs.tolist() == [7, 7, 7, 0, 2, 0, 1, 0, 0]
+    assert buggy.world.state()[1, 5] == Color.EMPTY
+
+
+def test_render_modes() -> None:
+    env = make(render_mode="rgb_array")
+    env.reset(seed=0)
+    image = env.render()
+    assert image.shape == (80, 90, 3) and image.dtype == np.uint8
+    assert tuple(image[15, 45]) == (220, 30, 30)  # the self is red
+    assert tuple(image[55, 15]) != tuple(image[5, 5])  # floor and frame differ
+    text = make(render_mode="ansi")
+    text.reset(seed=0)
+    assert text.render() == Scene.from_ascii(CONTAINER, {"a": "container"}).to_ascii() + "\n"
+    with pytest.raises(ValueError, match="render_mode"):
+        make(render_mode="human")
+
+
+def test_full_observation() -> None:
+    env = make(observation="full")
+    obs, _ = env.reset(seed=0)
+    assert obs.shape == (8, 9) and obs.dtype == np.uint8
+    assert env.observation_space.contains(obs)
+    assert obs[1, 4] == Color.RED and obs[5, 1] == Color.BLUE and obs[0, 0] == Color.PURPLE
+
+
+def test_goal_memo_matches_direct_evaluation() -> None:
+    env = make()
+    rng = np.random.default_rng(0)
+    env.reset(seed=0)
+    for _ in range(300):
+        _, _, term, trunc, info = env.step(int(rng.integers(1, 5)))
+        assert info["goal"] == env.concept.holds(env.world.current_scene())
+        if term or trunc:
+            env.reset()
