@@ -31,7 +31,7 @@ GOAL_POTENTIAL = 0.5
 GOAL_REWARD = 1.0
 """Base reward of SIG1 while the goal holds; SIG1 outside the goal earns 0 (``reward_mistake`` of AAAI-18)."""
 
-_ONE_HOT = np.eye(NUM_COLORS, dtype=np.float32)
+_ONE_HOT_OFFSETS = np.arange(9) * NUM_COLORS
 
 
 class PixelWorldEnv(gym.Env):
@@ -95,7 +95,10 @@ class PixelWorldEnv(gym.Env):
 
         self.action_names: tuple[str, ...] = CLASSIFICATION_ACTIONS if kind == CLASSIFICATION else BRING_ABOUT_ACTIONS
         self.action_space = spaces.Discrete(len(self.action_names))
-        self._moves: tuple[Cell | None, ...] = tuple(MOVES.get(name) for name in self.action_names)
+        # What each action does: a move offset, or the signal's value (SIG1 -> 1, SIG0 -> 0).
+        self._effects: tuple[Cell | int, ...] = tuple(
+            MOVES[name] if name in MOVES else int(name == "SIG1") for name in self.action_names
+        )
         height, width = self.scenes[0].height, self.scenes[0].width
         if any((s.height, s.width) != (height, width) for s in self.scenes):
             raise ValueError("all scenes of an environment must have the same size")
@@ -106,6 +109,7 @@ class PixelWorldEnv(gym.Env):
         else:
             self.observation_space = spaces.Box(0, NUM_COLORS - 1, shape=(height, width), dtype=np.uint8)
 
+        self._draws: list[int] = []
         self._worlds: dict[int, World] = {}
         self._last_self: dict[int, Cell] = {}
         self._goal_memo: dict[int, dict[Cell, bool]] = {}
@@ -120,7 +124,9 @@ class PixelWorldEnv(gym.Env):
     def _observe(self) -> np.ndarray:
         assert self._world is not None
         if self.observation == "hand":
-            return _ONE_HOT[self._world.window()].reshape(-1)
+            obs = np.zeros(9 * NUM_COLORS, dtype=np.float32)
+            obs[_ONE_HOT_OFFSETS + self._world.window().ravel()] = 1.0
+            return obs
         if self.observation == "hand_raw":
             return self._world.window().astype(np.int64).reshape(-1)
         return self._world.state().astype(np.uint8)
@@ -130,12 +136,12 @@ class PixelWorldEnv(gym.Env):
         world = self._world
         assert world is not None
         if not world.self_only:
-            return self.concept.holds_objects(tuple(world.objects), world.scene.floor_row)
-        memo = self._goal_memo.setdefault(self._index, {})
-        position = world.self_position
+            return self.concept.holds_objects(world.objects, world.scene.floor_row)
+        memo = self._goal_memo[self._index]
+        position = world.positions[world.self_index]
         holds = memo.get(position)
         if holds is None:
-            holds = memo[position] = self.concept.holds_objects(tuple(world.objects), world.scene.floor_row)
+            holds = memo[position] = self.concept.holds_objects(world.objects, world.scene.floor_row)
         return holds
 
     def _info(self, success: bool = False, signalled: bool = False) -> dict[str, Any]:
@@ -157,18 +163,23 @@ class PixelWorldEnv(gym.Env):
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
         super().reset(seed=seed)
+        if seed is not None:
+            self._draws = []
         if options and "index" in options:
             index = int(options["index"])
             if not 0 <= index < len(self.scenes):
                 raise IndexError(f"scene index {index} out of range (0..{len(self.scenes) - 1})")
         else:
-            index = int(self.np_random.integers(len(self.scenes)))
+            if not self._draws:  # uniform scene indices from np_random, drawn in blocks for speed
+                self._draws = self.np_random.integers(len(self.scenes), size=256).tolist()[::-1]
+            index = self._draws.pop()
         if self._world is not None and self.aaai18_reset_bug:
             self._last_self[self._index] = self._world.self_position
         self._index = index
         world = self._worlds.get(index)
         if world is None:
             world = self._worlds[index] = World(self.scenes[index])
+            self._goal_memo[index] = {}
         world.reset(self._last_self.get(index) if self.aaai18_reset_bug else None)
         self._world = world
         self._steps = 0
@@ -179,23 +190,23 @@ class PixelWorldEnv(gym.Env):
     def step(self, action):
         if self._done:
             raise RuntimeError("the episode has ended: call reset() before step()")
-        action = int(action)
-        if not 0 <= action < len(self.action_names):
-            raise ValueError(f"invalid action {action}; actions are {list(enumerate(self.action_names))}")
+        try:
+            effect = self._effects[action]
+        except (IndexError, TypeError):
+            raise ValueError(f"invalid action {action!r}; actions are {list(enumerate(self.action_names))}") from None
         self._steps += 1
-        move = self._moves[action]
         terminated = False
         reward = 0.0
-        if move is not None:
-            if self._world.move(move) and self.kind == BRING_ABOUT:  # type: ignore[union-attr]
+        if effect.__class__ is tuple:  # a move
+            if self._world.move(effect) and self.kind == BRING_ABOUT:  # type: ignore[union-attr]
                 goal = self.goal_holds()
                 if goal != self._goal:
                     reward = GOAL_POTENTIAL if goal else -GOAL_POTENTIAL
                     self._goal = goal
-        else:
+        else:  # a signal: 1 (SIG1) or 0 (SIG0)
             terminated = True
             if self.kind == CLASSIFICATION:
-                correct = (self.action_names[action] == "SIG1") == bool(self.labels[self._index])  # type: ignore[index]
+                correct = effect == self.labels[self._index]  # type: ignore[index]
                 reward = CLASSIFICATION_REWARD if correct else -CLASSIFICATION_REWARD
             else:
                 reward = GOAL_REWARD - GOAL_POTENTIAL if self._goal else 0.0

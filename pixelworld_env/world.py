@@ -20,24 +20,36 @@ class World:
 
     ``grid`` is the state array of colour codes and ``owner`` the index of the object drawn in each cell, both
     padded by one ring of outside cells (colour 0, owner ``OUTSIDE``) so that the 3 x 3 window never leaves
-    the array and moves off the world are blocked.
+    the array and moves off the world are blocked. ``positions`` holds each object's current position.
     """
 
     def __init__(self, scene: Scene) -> None:
         self.scene = scene
-        self.objects: list[WorldObject] = list(scene.objects)
         self.self_index = scene.self_index
-        self.moveable = np.array([o.moveable for o in scene.objects], dtype=bool)
-        me = scene.self_object
+        self.moveable = tuple(o.moveable for o in scene.objects)
+        self._initial = tuple(o.position for o in scene.objects)
+        self.positions: list[Cell] = list(self._initial)
         # Fast path: only the (one-pixel) self can move, so a move succeeds iff the target cell is free.
-        self.self_only = me.cells == ((0, 0),) and int(self.moveable.sum()) == 1
-        self.grid = np.zeros((scene.height + 2, scene.width + 2), dtype=np.int8)
-        self.owner = np.full((scene.height + 2, scene.width + 2), OUTSIDE, dtype=np.int16)
-        self.reset()
+        self.self_only = scene.self_object.cells == ((0, 0),) and sum(self.moveable) == 1
+        self._self_color = int(scene.self_object.color)
+        shape = (scene.height + 2, scene.width + 2)
+        self.grid = np.zeros(shape, dtype=np.int8)
+        self.owner = np.full(shape, OUTSIDE, dtype=np.int16)
+        self._draw()
+        self._grid0, self._owner0 = self.grid.copy(), self.owner.copy()
+        self._stale = False
 
     @property
     def self_position(self) -> Cell:
-        return self.objects[self.self_index].position
+        return self.positions[self.self_index]
+
+    @property
+    def objects(self) -> tuple[WorldObject, ...]:
+        """The objects at their current positions."""
+        return tuple(
+            obj if obj.position == pos else obj.moved_to(pos)
+            for obj, pos in zip(self.scene.objects, self.positions, strict=True)
+        )
 
     def reset(self, stale_cell: Cell | None = None) -> None:
         """Restore the scene's initial state.
@@ -45,25 +57,35 @@ class World:
         ``stale_cell`` reproduces the AAAI-18 reset bug (spec §1.8): a red pixel owned by the self is left in
         that cell (if it is empty) until the first successful move redraws the world.
         """
-        self.objects = list(self.scene.objects)
-        self._redraw()
+        self.positions[:] = self._initial
+        np.copyto(self.grid, self._grid0)
+        np.copyto(self.owner, self._owner0)
+        self._stale = False
         if stale_cell is not None:
             r, c = stale_cell[0] + 1, stale_cell[1] + 1
             if self.owner[r, c] == EMPTY:
                 self.grid[r, c] = Color.RED
                 self.owner[r, c] = self.self_index
-        self._stale = stale_cell is not None
+                self._stale = True
 
-    def _redraw(self) -> None:
+    def set_positions(self, positions: list[Cell] | tuple[Cell, ...]) -> None:
+        """Put every object at the given position and redraw (no collision checks)."""
+        self.positions[:] = positions
+        self._draw()
+
+    def _pixels(self, index: int) -> list[Cell]:
+        row, col = self.positions[index]
+        return [(row + dr, col + dc) for dr, dc in self.scene.objects[index].cells]
+
+    def _draw(self) -> None:
         height, width = self.scene.height, self.scene.width
         self.grid[:] = 0
         self.owner[:] = OUTSIDE
         self.owner[1 : height + 1, 1 : width + 1] = EMPTY
-        for i, obj in enumerate(self.objects):
-            for r, c in obj.pixels:
-                if 0 <= r < height and 0 <= c < width:
-                    self.grid[r + 1, c + 1] = obj.color
-                    self.owner[r + 1, c + 1] = i
+        for i, obj in enumerate(self.scene.objects):
+            for r, c in self._pixels(i):
+                self.grid[r + 1, c + 1] = obj.color
+                self.owner[r + 1, c + 1] = i
         self._stale = False
 
     def move(self, delta: Cell) -> bool:
@@ -75,23 +97,24 @@ class World:
         """
         dr, dc = delta
         if self.self_only:
-            row, col = self.objects[self.self_index].position
+            me = self.self_index
+            row, col = self.positions[me]
             target = self.owner[row + dr + 1, col + dc + 1]
-            if target != EMPTY and target != self.self_index:
+            if target != EMPTY and target != me:
                 return False
+            self.positions[me] = (row + dr, col + dc)
             if self._stale:
-                self._redraw_self_only((row + dr, col + dc))
+                self._draw()
             else:
                 self.grid[row + 1, col + 1] = 0
                 self.owner[row + 1, col + 1] = EMPTY
-                self.grid[row + dr + 1, col + dc + 1] = self.objects[self.self_index].color
-                self.owner[row + dr + 1, col + dc + 1] = self.self_index
-                self.objects[self.self_index] = self.objects[self.self_index].moved_to((row + dr, col + dc))
+                self.grid[row + dr + 1, col + dc + 1] = self._self_color
+                self.owner[row + dr + 1, col + dc + 1] = me
             return True
         plan = [self.self_index]
         planned = {self.self_index}
         for index in plan:  # grows while iterating: breadth-first closure of the pushed objects
-            for r, c in self.objects[index].pixels:
+            for r, c in self._pixels(index):
                 other = int(self.owner[r + dr + 1, c + dc + 1])
                 if other == OUTSIDE:
                     return False
@@ -102,18 +125,14 @@ class World:
                 planned.add(other)
                 plan.append(other)
         for index in plan:
-            row, col = self.objects[index].position
-            self.objects[index] = self.objects[index].moved_to((row + dr, col + dc))
-        self._redraw()
+            row, col = self.positions[index]
+            self.positions[index] = (row + dr, col + dc)
+        self._draw()
         return True
-
-    def _redraw_self_only(self, position: Cell) -> None:
-        self.objects[self.self_index] = self.objects[self.self_index].moved_to(position)
-        self._redraw()
 
     def window(self) -> np.ndarray:
         """The 3 x 3 colour codes centred on the self (cells outside the world read 0)."""
-        row, col = self.objects[self.self_index].position
+        row, col = self.positions[self.self_index]
         return self.grid[row : row + 3, col : col + 3]
 
     def state(self) -> np.ndarray:
@@ -122,4 +141,4 @@ class World:
 
     def current_scene(self) -> Scene:
         """The current state as a :class:`Scene`."""
-        return self.scene.with_positions([o.position for o in self.objects])
+        return self.scene.with_positions(self.positions)
