@@ -40,3 +40,9 @@ def read_samples(path: Path) -> tuple[dict, list[dict]]:
 @pytest.fixture(scope="session")
 def reference() -> Path:
     return require_reference()
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    import torch
+
+    torch.set_num_threads(1)

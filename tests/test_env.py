@@ -283,3 +283,31 @@ def test_goal_memo_matches_direct_evaluation() -> None:
         assert info["goal"] == env.concept.holds(env.world.current_scene())
         if term or trunc:
             env.reset()
+
+
+def test_oracle_plans_with_and_without_pushing() -> None:
+    from pixelworld_env.oracle import plan_to_goal
+
+    env = make()
+    env.reset(seed=0)
+    plan = plan_to_goal(env)
+    assert [env.action_names[a] for a in plan] == [DOWN, DOWN]
+    text = """
+    ##########
+    #........#
+    #.S.A....#
+    #........#
+    #......b.#
+    ##########
+    """
+    push = PixelWorldEnv([Scene.from_ascii(text, {"b": "small_blob"})], kind="bring-about",
+                         concept="?x ?y blob(x) & small_blob(y) & touches(x,y)")
+    push.reset(seed=0)
+    plan = plan_to_goal(push)
+    assert len(plan) == 6  # step to A, push it right twice, go round it, push it down once
+    rewards = [push.step(a)[1] for a in plan]
+    assert rewards[-1] == 0.5 and push.goal_holds()
+    walled = PixelWorldEnv([Scene.from_ascii("#####\n#S#a#\n#####")], kind="bring-about",
+                           concept="?x blob(x) & touches(self,x)")
+    walled.reset(seed=0)
+    assert plan_to_goal(walled) is None
