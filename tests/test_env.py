@@ -307,7 +307,7 @@ def test_oracle_plans_with_and_without_pushing() -> None:
     assert len(plan) == 6  # step to A, push it right twice, go round it, push it down once
     rewards = [push.step(a)[1] for a in plan]
     assert rewards[-1] == 0.5 and push.goal_holds()
-    walled = PixelWorldEnv([Scene.from_ascii("#####\n#S#a#\n#####")], kind="bring-about",
-                           concept="?x blob(x) & touches(self,x)")
+    walled = PixelWorldEnv([Scene.from_ascii("######\n#Sb.a#\n######", {"b": "hline", "a": "small_blob"})],
+                           kind="bring-about", concept="?x small_blob(x) & touches(self,x)")
     walled.reset(seed=0)
     assert plan_to_goal(walled) is None
