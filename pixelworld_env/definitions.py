@@ -1,19 +1,49 @@
-"""Reader for concept, generator and dataset definition files in the original AAAI-18 YAML format.
+"""Reader for the definition and experiment files of the original AAAI-18 release (YAML).
 
-A file may hold the sections ``concepts:``, ``generators:`` (name -> ``{name, desc, logic}``) and
-``datasets:`` (name -> ``[concept, [generators...], {settings}]``), and include other files with
-``__include__: [paths relative to the file]``. Names are the dictionary keys (the ``name:`` fields are
-ignored, spec §7 item 22). Concepts and generators together form the macro table (spec §3.2).
+Definition files (:func:`load_definitions`) may hold the sections
+
+* ``concepts:`` and ``generators:`` -- name -> ``{name, desc, logic}``;
+* ``datasets:`` -- name -> ``[concept, [generators...], {settings}]``;
+* ``curriculum:`` -- entry name -> ``[dataset, [lower-level experiments...]]`` (``*.curriculum`` files), where a
+  lower-level experiment is an output path ``out/aaai18/<group>/<dataset>/<variant>`` and the list may instead
+  be a reference ``+@list_name`` to a named list;
+* named lists -- any other top-level key whose value is a list of strings (the ``*.include`` files, e.g.
+  ``canonical_containment_curriculum: [paths...]``);
+* ``__gen_<anything>:`` blocks that call ``generate_pattern`` with ``name: curriculum`` (the canonical
+  curriculum files): their ``kwargs.cfg`` mapping is read as a ``curriculum:`` section, with ``+@name``
+  resolved through ``kwargs.bindings`` (``local: +@global``) or directly against the named lists;
+
+and include other files with ``__include__: [paths relative to the file]`` (each file is read once). Names are
+the dictionary keys (the ``name:`` fields are ignored, spec §7 item 22). Concepts and generators together form
+the macro table (spec §3.2). A ``+@name`` reference must name a list defined in the curriculum file itself or in
+a file it includes (directly or not). Curriculum entries are grouped by the stem of the file that defines them
+(:attr:`DefinitionSet.curricula`).
+
+Experiment files (:func:`load_experiments`) are the 33 top-level files of ``experiments/aaai18``: their
+``__include__`` chain (common settings, goal, ``level2``/``level2-noprim``, one ``DATA/*.curriculum``) is
+deep-merged in include order and the settings that matter for the benchmark are read from the result.
+
+Every error is a :class:`DefinitionError` whose message names the file and, where there is one, the line.
 """
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Iterable
 from dataclasses import dataclass, field
-from pathlib import Path
+from pathlib import Path, PurePosixPath
 from typing import Any
 
 import yaml
+
+#: Top-level keys with a meaning of their own (everything else that is a list of strings is a named list).
+SECTIONS = ("concepts", "generators", "datasets", "curriculum")
+#: Goal codes of the experiment files (``vals_goal``) -> the benchmark's words.
+GOALS = {"c": "classification", "sig": "bring-about-signal", "dir": "bring-about-direct"}
+
+
+#: The libyaml loader when PyYAML has it (same results, several times faster), else the pure-Python one.
+_Loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 
 
 class DefinitionError(ValueError):
@@ -48,6 +78,46 @@ class DatasetDefinition:
         return "bring-about" if self.name.startswith("ba_") else "classification"
 
 
+@dataclass(frozen=True)
+class NamedList:
+    """A top-level list of strings, e.g. a canonical SMC list of a ``*.include`` file."""
+
+    name: str
+    items: tuple[str, ...]
+    source: str = ""
+    line: int = 0
+    item_lines: tuple[int, ...] = ()
+
+
+@dataclass(frozen=True)
+class CurriculumEntryDefinition:
+    """One entry of a ``*.curriculum`` file: an experiment training ``dataset`` on top of lower-level SMCs.
+
+    ``lower_level`` holds one ``(group, dataset)`` pair per lower-level experiment path
+    ``out/aaai18/<group>/<dataset>/<variant>``, in file order; ``variants`` holds the ``<variant>`` of each.
+    ``list_name`` is the named list the paths were taken from (``+@name``), or ``None`` when they are written
+    into the entry.
+    """
+
+    entry: str
+    dataset: str
+    lower_level: tuple[tuple[str, str], ...]
+    source: str = ""
+    line: int = 0
+    variants: tuple[str, ...] = ()
+    list_name: str | None = None
+
+    @property
+    def curriculum(self) -> str:
+        """The stem of the defining file (e.g. ``con2-cl-canon``)."""
+        return Path(self.source).stem
+
+    @property
+    def level(self) -> int:
+        """1 for a flat entry (no lower-level SMCs), 2 otherwise (every released SMC is level 1)."""
+        return 2 if self.lower_level else 1
+
+
 @dataclass
 class DefinitionSet:
     """Everything read from a set of definition files."""
@@ -56,6 +126,14 @@ class DefinitionSet:
     generators: dict[str, Definition] = field(default_factory=dict)
     datasets: dict[str, DatasetDefinition] = field(default_factory=dict)
     files: list[str] = field(default_factory=list)
+    #: Curriculum file stem -> its entries in file order.
+    curricula: dict[str, list[CurriculumEntryDefinition]] = field(default_factory=dict)
+    #: Named lists (name -> list); a later definition of the same name replaces an earlier one.
+    lists: dict[str, NamedList] = field(default_factory=dict)
+    #: File -> the files it includes directly (all paths resolved).
+    includes: dict[str, list[str]] = field(default_factory=dict)
+    #: Concepts/generators defined more than once, as (replaced, replacing) pairs; the later one is kept.
+    redefinitions: list[tuple[Definition, Definition]] = field(default_factory=list)
 
     @property
     def macros(self) -> dict[str, str]:
@@ -64,9 +142,24 @@ class DefinitionSet:
         table.update({key: d.logic for key, d in self.generators.items()})
         return table
 
+    def scope(self, source: str) -> set[str]:
+        """``source`` and every file it includes, directly or not."""
+        seen: set[str] = set()
+        todo = [source]
+        while todo:
+            path = todo.pop()
+            if path not in seen:
+                seen.add(path)
+                todo.extend(self.includes.get(path, ()))
+        return seen
 
-def _where(path: Path, node: yaml.Node) -> str:
-    return f"{path}, line {node.start_mark.line + 1}"
+
+def _where(path: Path | str, node: yaml.Node | None) -> str:
+    return f"{path}, line {node.start_mark.line + 1}" if node is not None else str(path)
+
+
+def _line(node: yaml.Node | None) -> int:
+    return node.start_mark.line + 1 if node is not None else 0
 
 
 def _load_yaml(path: Path) -> tuple[Any, yaml.Node | None]:
@@ -74,7 +167,7 @@ def _load_yaml(path: Path) -> tuple[Any, yaml.Node | None]:
         text = path.read_text(encoding="utf-8")
     except OSError as exc:
         raise DefinitionError(f"cannot read definition file {path}: {exc.strerror}") from None
-    loader = yaml.SafeLoader(text)
+    loader = _Loader(text)
     try:
         node = loader.get_single_node()
         data = loader.construct_document(node) if node is not None else None
@@ -87,19 +180,54 @@ def _load_yaml(path: Path) -> tuple[Any, yaml.Node | None]:
     return data, node
 
 
-def _entries(section_node: yaml.Node) -> dict[str, yaml.Node]:
+def _construct(node: yaml.Node) -> Any:
+    """The Python value of one node."""
+    return yaml.constructor.SafeConstructor().construct_document(node)
+
+
+def _entries(section_node: yaml.Node | None) -> dict[str, yaml.Node]:
     """Key -> key node of a mapping node (for line numbers)."""
     if not isinstance(section_node, yaml.MappingNode):
         return {}
     return {k.value: k for k, _ in section_node.value if isinstance(k, yaml.ScalarNode)}
 
 
+def _pairs(node: yaml.Node | None) -> list[tuple[yaml.Node, yaml.Node]]:
+    return list(node.value) if isinstance(node, yaml.MappingNode) else []
+
+
+def _child(node: yaml.Node | None, key: str) -> yaml.Node | None:
+    """The value node under ``key`` of a mapping node (the last one, as YAML loading keeps the last)."""
+    found = None
+    for k, v in _pairs(node):
+        if isinstance(k, yaml.ScalarNode) and k.value == key:
+            found = v
+    return found
+
+
+def _is_str(node: yaml.Node) -> bool:
+    return isinstance(node, yaml.ScalarNode) and node.tag == "tag:yaml.org,2002:str"
+
+
+def _str_list(node: yaml.Node | None) -> tuple[str, ...] | None:
+    """The strings of a sequence node of plain strings, else ``None``."""
+    if not isinstance(node, yaml.SequenceNode) or not all(_is_str(item) for item in node.value):
+        return None
+    return tuple(item.value for item in node.value)
+
+
 def load_definitions(paths: str | Path | Iterable[str | Path]) -> DefinitionSet:
-    """Read definition files (following ``__include__``, each file once) into a :class:`DefinitionSet`."""
+    """Read definition files (following ``__include__``, each file once) into a :class:`DefinitionSet`.
+
+    Checks after reading: every dataset names a known concept and known generators, no name is both a
+    concept and a generator, every curriculum entry targets a known dataset and every ``+@name`` reference
+    resolves to a named list within the referring file's includes.
+    """
     result = DefinitionSet()
+    pending: list[_PendingEntry] = []
     todo = [Path(paths)] if isinstance(paths, str | Path) else [Path(p) for p in paths]
     for path in todo:
-        _read_file(path.resolve(), result, set())
+        _read_file(path.resolve(), result, (), pending)
     for name, dataset in result.datasets.items():
         where = f"{dataset.source}, line {dataset.line}"
         if dataset.concept not in result.concepts:
@@ -110,40 +238,69 @@ def load_definitions(paths: str | Path | Iterable[str | Path]) -> DefinitionSet:
     clash = sorted(set(result.concepts) & set(result.generators))
     if clash:
         raise DefinitionError(f"names defined both as concept and as generator: {', '.join(clash)}")
+    for item in pending:
+        entry = item.resolve(result)
+        if entry.dataset not in result.datasets:
+            raise DefinitionError(
+                f"{entry.source}, line {entry.line}: curriculum entry {entry.entry!r} names unknown dataset "
+                f"{entry.dataset!r}"
+            )
+        entries = result.curricula.setdefault(entry.curriculum, [])
+        if entries and entries[0].source != entry.source:
+            raise DefinitionError(f"{entry.source}: curriculum files {entries[0].source} and {entry.source} have the "
+                                  "same stem (curricula are keyed by file stem)")
+        entries.append(entry)
     return result
 
 
-def _read_file(path: Path, result: DefinitionSet, stack: set[Path]) -> None:
+def _read_file(path: Path, result: DefinitionSet, stack: tuple[Path, ...], pending: list[_PendingEntry]) -> None:
     if str(path) in result.files:
         return
-    if path in stack:
-        raise DefinitionError(f"{path}: circular __include__")
     data, node = _load_yaml(path)
     result.files.append(str(path))
+    result.includes[str(path)] = []
     if data is None:
         return
     if not isinstance(data, dict):
         raise DefinitionError(f"{path}: expected a mapping of sections at the top level")
     sections = {k.value: v for k, v in node.value} if isinstance(node, yaml.MappingNode) else {}
+    keys = _entries(node)
     includes = data.get("__include__") or []
     if isinstance(includes, str):
         includes = [includes]
-    for include in includes:
-        _read_file((path.parent / include).resolve(), result, stack | {path})
+    if not isinstance(includes, list) or not all(isinstance(i, str) for i in includes):
+        raise DefinitionError(f"{_where(path, keys.get('__include__'))}: __include__ must be a list of paths")
+    include_nodes = sections.get("__include__")
+    for index, include in enumerate(includes):
+        item = include_nodes.value[index] if isinstance(include_nodes, yaml.SequenceNode) else include_nodes
+        target = (path.parent / include).resolve()
+        if not target.is_file():
+            raise DefinitionError(f"{_where(path, item)}: included file {include!r} not found ({target})")
+        if target == path or target in stack:
+            chain = " -> ".join(p.name for p in (*stack, path, target))
+            raise DefinitionError(f"{_where(path, item)}: circular __include__ of {include!r} ({chain})")
+        result.includes[str(path)].append(str(target))
+        _read_file(target, result, (*stack, path), pending)
     for section in ("concepts", "generators"):
-        target = getattr(result, section)
-        lines = _entries(sections.get(section))
-        for key, entry in (data.get(section) or {}).items():
-            key_node = lines.get(key)
-            where = _where(path, key_node) if key_node else str(path)
+        table = getattr(result, section)
+        if data.get(section) is not None and not isinstance(data.get(section), dict):
+            raise DefinitionError(f"{_where(path, keys.get(section))}: {section!r} must be a mapping")
+        # Walk the nodes rather than the loaded mapping, so that a key repeated in one file is seen too.
+        for key_node, value_node in _pairs(sections.get(section)):
+            key = _construct(key_node)
+            entry = _construct(value_node)
+            where = _where(path, key_node)
             if not isinstance(entry, dict) or not isinstance(entry.get("logic"), str):
                 raise DefinitionError(f"{where}: {section[:-1]} {key!r} needs a 'logic' string")
-            target[key] = Definition(key=key, logic=entry["logic"], desc=str(entry.get("desc", "")),
-                                     source=str(path), line=key_node.start_mark.line + 1 if key_node else 0)
+            definition = Definition(key=key, logic=entry["logic"], desc=str(entry.get("desc", "")),
+                                    source=str(path), line=_line(key_node))
+            if key in table:
+                result.redefinitions.append((table[key], definition))
+            table[key] = definition
     lines = _entries(sections.get("datasets"))
     for name, entry in (data.get("datasets") or {}).items():
         key_node = lines.get(name)
-        where = _where(path, key_node) if key_node else str(path)
+        where = _where(path, key_node)
         if not (isinstance(entry, list) and 2 <= len(entry) <= 3 and isinstance(entry[0], str)
                 and isinstance(entry[1], list) and all(isinstance(g, str) for g in entry[1])):
             raise DefinitionError(
@@ -155,5 +312,265 @@ def _read_file(path: Path, result: DefinitionSet, stack: set[Path]) -> None:
             raise DefinitionError(f"{where}: dataset {name!r}: settings must be a mapping")
         result.datasets[name] = DatasetDefinition(
             name=name, concept=entry[0], generators=tuple(entry[1]), settings=dict(settings), source=str(path),
-            line=key_node.start_mark.line + 1 if key_node else 0,
+            line=_line(key_node),
         )
+    for key_node, value_node in _pairs(node):
+        key = key_node.value if isinstance(key_node, yaml.ScalarNode) else None
+        if not key or key in SECTIONS or key.startswith("__"):
+            continue
+        items = _str_list(value_node)
+        if items is not None:
+            lines = tuple(_line(item) for item in value_node.value)
+            result.lists[key] = NamedList(key, items, str(path), _line(key_node), lines)
+    _read_curricula(path, node, pending)
+
+
+# -- curricula -------------------------------------------------------------------------------------------------
+
+
+@dataclass
+class _Reference:
+    """A ``+@name`` reference (through the bindings of a ``generate_pattern`` call, if any)."""
+
+    name: str
+    node: yaml.Node
+
+
+@dataclass
+class _PendingEntry:
+    """A curriculum entry read from a file, resolved once every file has been read."""
+
+    entry: str
+    dataset: str
+    paths: tuple[tuple[str, yaml.Node], ...] | _Reference
+    source: Path
+    key_node: yaml.Node
+
+    def resolve(self, result: DefinitionSet) -> CurriculumEntryDefinition:
+        list_name = None
+        if isinstance(self.paths, _Reference):
+            ref = self.paths
+            named = result.lists.get(ref.name)
+            if named is None or named.source not in result.scope(str(self.source)):
+                raise DefinitionError(
+                    f"{_where(self.source, ref.node)}: curriculum entry {self.entry!r} refers to +@{ref.name}, "
+                    "which is not a list of paths defined in this file or the files it includes"
+                )
+            list_name = named.name
+            lines = named.item_lines or (named.line,) * len(named.items)
+            paths = [(item, named.source, line) for item, line in zip(named.items, lines, strict=True)]
+        else:
+            paths = [(item, str(self.source), _line(node)) for item, node in self.paths]
+        lower: list[tuple[str, str]] = []
+        variants: list[str] = []
+        for item, source, line in paths:
+            parts = PurePosixPath(item.strip()).parts
+            if len(parts) < 3 or any(not p.strip() for p in parts[-3:]):
+                raise DefinitionError(
+                    f"{source}, line {line}: curriculum entry {self.entry!r}: lower-level experiment {item!r} is "
+                    "not a path <...>/<group>/<dataset>/<variant>"
+                )
+            lower.append((parts[-3], parts[-2]))
+            variants.append(parts[-1])
+        return CurriculumEntryDefinition(
+            entry=self.entry, dataset=self.dataset, lower_level=tuple(lower), source=str(self.source),
+            line=_line(self.key_node), variants=tuple(variants), list_name=list_name,
+        )
+
+
+def _reference(node: yaml.Node, bindings: dict[str, yaml.Node], path: Path) -> _Reference | None:
+    """The list named by a ``+@name`` scalar, following ``bindings``; ``None`` if ``node`` is no reference."""
+    if not (_is_str(node) and node.value.startswith("+@")):
+        return None
+    name = node.value[2:].strip()
+    if not name or "+" in name or "[" in name:
+        raise DefinitionError(f"{_where(path, node)}: unsupported reference {node.value!r} (expected +@list_name)")
+    bound = bindings.get(name)
+    if bound is None:
+        return _Reference(name, node)
+    target = _reference(bound, {}, path)
+    if target is None:
+        raise DefinitionError(f"{_where(path, bound)}: binding {name!r} must be +@list_name")
+    return target
+
+
+def _read_curricula(path: Path, node: yaml.Node | None, pending: list[_PendingEntry]) -> None:
+    """Collect the entries of the ``curriculum:`` section and of ``generate_pattern`` curriculum blocks."""
+    blocks: list[tuple[yaml.Node, dict[str, yaml.Node]]] = []
+    seen: dict[str, yaml.Node] = {}
+    for key_node, value_node in _pairs(node):
+        key = key_node.value if isinstance(key_node, yaml.ScalarNode) else ""
+        if key == "curriculum":
+            if not isinstance(value_node, yaml.MappingNode):
+                raise DefinitionError(f"{_where(path, key_node)}: 'curriculum' must map entry names to "
+                                      "[dataset, [lower-level experiments...]]")
+            blocks.append((value_node, {}))
+        elif key.startswith("__gen") and isinstance(value_node, yaml.MappingNode):
+            call = _child(value_node, "call")
+            kwargs = _child(value_node, "kwargs")
+            name = _child(kwargs, "name")
+            if not (call is not None and _is_str(call) and call.value.endswith(":generate_pattern")
+                    and name is not None and _is_str(name) and name.value == "curriculum"):
+                continue
+            cfg = _child(kwargs, "cfg")
+            if not isinstance(cfg, yaml.MappingNode):
+                raise DefinitionError(f"{_where(path, key_node)}: {key}: kwargs.cfg must map entry names to "
+                                      "[dataset, [lower-level experiments...]]")
+            binding_node = _child(kwargs, "bindings")
+            if binding_node is not None and not isinstance(binding_node, yaml.MappingNode):
+                raise DefinitionError(f"{_where(path, binding_node)}: {key}: kwargs.bindings must be a mapping")
+            bindings = {k.value: v for k, v in _pairs(binding_node) if isinstance(k, yaml.ScalarNode)}
+            blocks.append((cfg, bindings))
+    for mapping, bindings in blocks:
+        for key_node, value_node in mapping.value:
+            where = _where(path, key_node)
+            if not _is_str(key_node):
+                raise DefinitionError(f"{where}: curriculum entry names must be strings")
+            entry = key_node.value
+            if entry in seen:
+                raise DefinitionError(
+                    f"{where}: curriculum entry {entry!r} is defined twice (first at line {_line(seen[entry])})"
+                )
+            seen[entry] = key_node
+            shape = f"{where}: curriculum entry {entry!r} must be [dataset, [lower-level experiments...]]"
+            if not (isinstance(value_node, yaml.SequenceNode) and len(value_node.value) == 2
+                    and _is_str(value_node.value[0])):
+                raise DefinitionError(shape)
+            dataset_node, lower_node = value_node.value
+            ref = _reference(lower_node, bindings, path)
+            paths: tuple[tuple[str, yaml.Node], ...] | _Reference
+            if ref is not None:
+                paths = ref
+            elif isinstance(lower_node, yaml.SequenceNode):
+                for item in lower_node.value:
+                    if not _is_str(item):
+                        raise DefinitionError(
+                            f"{_where(path, item)}: curriculum entry {entry!r}: lower-level experiments must be "
+                            "path strings"
+                        )
+                paths = tuple((item.value, item) for item in lower_node.value)
+            else:
+                raise DefinitionError(shape)
+            pending.append(_PendingEntry(entry, dataset_node.value.strip(), paths, path, key_node))
+
+
+# -- experiment files ------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class ExperimentDefinition:
+    """One top-level experiment file (an experiment group such as ``con2-canon-class``).
+
+    ``goal`` is the ``vals_goal`` code (``c``, ``sig`` or ``dir``); ``smc_filters`` the ``(name, k)`` of every
+    SMC filter variant; ``variants`` the output variant strings
+    ``{dataset_size}+{goal}+{embodiment}+{currname}+{filter}+{policy}+{algorithm}``; ``num_seeds`` the
+    number of training seeds (seeds ``0 .. num_seeds-1``); ``include_base_nonsignals`` is false in the
+    ``-noprim`` files (primitive moves removed from the higher-level action set); ``test_schedule`` lists
+    (trained-on, tested-on) entry pairs (``*.testing`` files).
+    """
+
+    name: str
+    curriculum: str
+    goal: str
+    smc_filters: tuple[tuple[str, int], ...]
+    variants: tuple[str, ...]
+    num_seeds: int
+    include_base_nonsignals: bool
+    num_samples: int
+    test_size: float
+    test_schedule: tuple[tuple[str, str], ...] = ()
+    source: str = ""
+
+    @property
+    def goal_name(self) -> str:
+        """``classification``, ``bring-about-signal`` or ``bring-about-direct``."""
+        return GOALS[self.goal]
+
+    @property
+    def noprim(self) -> bool:
+        """True when the primitive moves are removed from the higher-level action set (``level2-noprim``)."""
+        return not self.include_base_nonsignals
+
+
+def _merge(base: dict[str, Any], override: dict[str, Any]) -> dict[str, Any]:
+    merged = dict(base)
+    for key, value in override.items():
+        if isinstance(value, dict) and isinstance(merged.get(key), dict):
+            merged[key] = _merge(merged[key], value)
+        else:
+            merged[key] = value
+    return merged
+
+
+def _merged_config(path: Path, cache: dict[Path, Any], stack: tuple[Path, ...] = ()) -> dict[str, Any]:
+    """The file's mapping deep-merged over its includes (in include order, later ones winning)."""
+    if path in stack:
+        chain = " -> ".join(str(p) for p in (*stack, path))
+        raise DefinitionError(f"{path}: circular __include__ ({chain})")
+    if path not in cache:
+        cache[path] = _load_yaml(path)[0]
+    data = cache[path]
+    if data is None:
+        return {}
+    if not isinstance(data, dict):
+        raise DefinitionError(f"{path}: expected a mapping at the top level")
+    includes = data.get("__include__") or []
+    merged: dict[str, Any] = {}
+    for include in [includes] if isinstance(includes, str) else includes:
+        target = (path.parent / include).resolve()
+        if not target.is_file():
+            raise DefinitionError(f"{path}: included file {include!r} not found ({target})")
+        merged = _merge(merged, _merged_config(target, cache, (*stack, path)))
+    return _merge(merged, {k: v for k, v in data.items() if k != "__include__"})
+
+
+def _get(config: dict[str, Any], path: str, where: str) -> Any:
+    value: Any = config
+    for part in path.split("."):
+        if not isinstance(value, dict) or part not in value:
+            raise DefinitionError(f"{where}: setting {path!r} not found in the file or its includes")
+        value = value[part]
+    return value
+
+
+def load_experiments(paths: str | Path | Iterable[str | Path]) -> dict[str, ExperimentDefinition]:
+    """Read experiment files (name -> :class:`ExperimentDefinition`, keyed by file name).
+
+    Each file must include exactly one ``*.curriculum`` file directly; ``curriculum`` is its resolved path.
+    """
+    todo = [Path(paths)] if isinstance(paths, str | Path) else [Path(p) for p in paths]
+    cache: dict[Path, Any] = {}
+    result: dict[str, ExperimentDefinition] = {}
+    for raw in todo:
+        path = raw.resolve()
+        where = str(path)
+        config = _merged_config(path, cache)
+        direct = (cache[path] if isinstance(cache[path], dict) else {}).get("__include__") or []
+        curricula = [i for i in ([direct] if isinstance(direct, str) else direct) if str(i).endswith(".curriculum")]
+        if len(curricula) != 1:
+            raise DefinitionError(f"{where}: an experiment file must include exactly one *.curriculum file, "
+                                  f"found {len(curricula)}")
+        vals = _get(config, "overrideable_variant_vals", where)
+        goals = _get(vals, "vals_goal", where)
+        if not (isinstance(goals, list) and len(goals) == 1 and goals[0] in GOALS):
+            raise DefinitionError(f"{where}: vals_goal must be one of {sorted(GOALS)} (got {goals!r})")
+        filters = []
+        for item in _get(vals, "vals_filter", where):
+            if not (isinstance(item, list) and len(item) == 3 and isinstance(item[2], dict) and "k" in item[2]):
+                raise DefinitionError(f"{where}: vals_filter entries must be [name, rule, {{k: n}}] (got {item!r})")
+            filters.append((str(item[0]), int(item[2]["k"])))
+        axes = [_get(vals, key, where) for key in ("vals_dataset_size", "vals_goal", "vals_embodiment",
+                                                   "vals_currname")]
+        axes += [[name for name, _ in filters], _get(vals, "vals_policy", where), _get(vals, "vals_algorithm", where)]
+        variants = tuple("+".join(str(v) for v in combo) for combo in itertools.product(*axes))
+        env_kwargs = config.get("base_env", {}).get("env", {}).get("kwargs", {}) or {}
+        dataset_kwargs = _get(config, "overrideable_dataset_kwargs", where)
+        schedule = tuple((str(a), str(b)) for a, b in config.get("test_schedule") or ())
+        result[path.name] = ExperimentDefinition(
+            name=path.name, curriculum=str((path.parent / curricula[0]).resolve()), goal=goals[0],
+            smc_filters=tuple(filters), variants=variants, num_seeds=int(_get(vals, "num_smcs", where)),
+            include_base_nonsignals=bool(env_kwargs.get("include_base_nonsignals", True)),
+            num_samples=int(_get(dataset_kwargs, "num_samples", where)),
+            test_size=float(_get(config, "common.test_size", where)), test_schedule=schedule, source=where,
+        )
+    return result

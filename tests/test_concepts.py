@@ -183,3 +183,11 @@ def test_named_errors() -> None:
         holds("?x m(x)", s, {"m": "?a n(a)", "n": "?a m(a)"})
     with pytest.raises(ConceptSyntaxError, match="self is implicit"):
         parse("?self blob(self)")
+
+
+def test_catalog_macros_are_the_default() -> None:
+    s = scene(CONTAINER)
+    assert holds("?f ?x container-on-floor(f,x)", s)
+    assert holds("?x self-in-container(x)", s)
+    with pytest.raises(UnknownPredicateError, match="container-on-floor"):
+        holds("?f ?x container-on-floor(f,x)", s, macros={})

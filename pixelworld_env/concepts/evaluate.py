@@ -22,7 +22,8 @@ class _Check:
 
 
 class Concept:
-    """A concept expression compiled against a macro table, ready to test scenes.
+    """A concept expression compiled against a macro table (default: the benchmark catalog's), ready to test
+    scenes.
 
     ``Concept(text, macros).holds(scene)`` is true if the variables (``self`` included) can be bound to
     pairwise distinct non-frame objects so that every positive clause holds and no negated group has all
@@ -35,7 +36,11 @@ class Concept:
         self._source = text
         expression = parse(text) if isinstance(text, str) else text
         self.text = str(text)
-        self.macros = dict(macros or {})
+        if macros is None:
+            from pixelworld_env.catalog import macros as catalog_macros
+
+            macros = catalog_macros()
+        self.macros = dict(macros)
         self.dir_above_quirk = dir_above_quirk
         self.expression = expand(expression, self.macros)
         self.variables: tuple[str, ...] = (SELF, *self.expression.variables)
@@ -113,7 +118,8 @@ def _rebuild(source: str | Expression, macros: Macros, dir_above_quirk: bool) ->
 def holds(expression: str | Concept, scene: Scene, macros: Macros | None = None) -> bool:
     """Whether a concept expression holds in a scene.
 
-    ``macros`` maps macro names (concept or generator keys) to expressions.
+    ``macros`` maps macro names (concept or generator keys) to expressions; by default the benchmark
+    catalog's table (every AAAI-18 concept and generator, :func:`pixelworld_env.catalog.macros`).
     """
     concept = expression if isinstance(expression, Concept) else Concept(expression, macros)
     return concept.holds(scene)
