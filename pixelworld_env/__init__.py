@@ -13,8 +13,12 @@ from pixelworld_env.concepts import (
 )
 from pixelworld_env.constants import HEIGHT, WIDTH, Color, ObjectClass
 from pixelworld_env.env import PixelWorldEnv
+from pixelworld_env.loading import Dataset, load_dataset
 from pixelworld_env.objects import WorldObject
+from pixelworld_env.registration import make_env, register_envs
 from pixelworld_env.scene import Scene
+
+register_envs()
 
 __all__ = [
     "HEIGHT",
@@ -24,6 +28,7 @@ __all__ = [
     "Concept",
     "ConceptError",
     "ConceptSyntaxError",
+    "Dataset",
     "NegatedMacroError",
     "ObjectClass",
     "PixelWorldEnv",
@@ -32,5 +37,7 @@ __all__ = [
     "UnknownPredicateError",
     "WorldObject",
     "holds",
+    "load_dataset",
+    "make_env",
     "parse",
 ]

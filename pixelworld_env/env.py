@@ -10,6 +10,7 @@ import numpy as np
 from gymnasium import spaces
 
 from pixelworld_env.concepts import Concept
+from pixelworld_env.concepts.evaluate import SelfEvaluator
 from pixelworld_env.concepts.parser import Expression
 from pixelworld_env.constants import NUM_COLORS
 from pixelworld_env.objects import Cell
@@ -112,7 +113,8 @@ class PixelWorldEnv(gym.Env):
         self._draws: list[int] = []
         self._worlds: dict[int, World] = {}
         self._last_self: dict[int, Cell] = {}
-        self._goal_memo: dict[int, dict[Cell, bool]] = {}
+        # Per scene: the goal's truth per self cell, and the concept's test for a moved self.
+        self._goal_memo: dict[int, tuple[dict[Cell, bool], SelfEvaluator]] = {}
         self._world: World | None = None
         self._index = 0
         self._steps = 0
@@ -137,11 +139,11 @@ class PixelWorldEnv(gym.Env):
         assert world is not None
         if not world.self_only:
             return self.concept.holds_objects(world.objects, world.scene.floor_row)
-        memo = self._goal_memo[self._index]
+        memo, holds_for = self._goal_memo[self._index]
         position = world.positions[world.self_index]
         holds = memo.get(position)
         if holds is None:
-            holds = memo[position] = self.concept.holds_objects(world.objects, world.scene.floor_row)
+            holds = memo[position] = holds_for(world.scene.self_object.moved_to(position))
         return holds
 
     def _info(self, success: bool = False, signalled: bool = False) -> dict[str, Any]:
@@ -179,7 +181,8 @@ class PixelWorldEnv(gym.Env):
         world = self._worlds.get(index)
         if world is None:
             world = self._worlds[index] = World(self.scenes[index])
-            self._goal_memo[index] = {}
+            scene = self.scenes[index]
+            self._goal_memo[index] = ({}, self.concept.self_evaluator(scene.objects, scene.floor_row))
         world.reset(self._last_self.get(index) if self.aaai18_reset_bug else None)
         self._world = world
         self._steps = 0

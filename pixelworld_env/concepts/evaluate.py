@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import difflib
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 from pixelworld_env.concepts.errors import ArityError, UnknownPredicateError
@@ -82,16 +82,16 @@ class Concept:
 
     def holds_objects(self, objects: tuple[WorldObject, ...], floor_row: int) -> bool:
         """:meth:`holds` on a bare object list (the world's current state)."""
-        ctx = EvalContext(floor_row=floor_row, dir_above_quirk=self.dir_above_quirk)
-        candidates = [o for o in objects if not o.is_frame]
-        domains: list[list[WorldObject]] = []
-        for i, tests in enumerate(self._unary):
-            pool = [o for o in candidates if o.is_self == (i == 0)]
-            domains.append([o for o in pool if all(t(o, ctx) for t in tests)])
-            if not domains[-1]:
-                return False
-        binding: list[WorldObject] = []
-        return self._search(0, domains, binding, ctx)
+        me = next((o for o in objects if o.is_self), None)
+        return me is not None and self.self_evaluator(objects, floor_row)(me)
+
+    def self_evaluator(self, objects: Sequence[WorldObject], floor_row: int) -> SelfEvaluator:
+        """A test of the concept for a given self object, the other ``objects`` held fixed.
+
+        The non-self variables' candidates are filtered once, so testing many self positions (bring-about goals,
+        planning) is cheaper than calling :meth:`holds_objects` for each.
+        """
+        return SelfEvaluator(self, objects, floor_row)
 
     def _search(self, depth: int, domains: list[list[WorldObject]], binding: list[WorldObject],
                 ctx: EvalContext) -> bool:
@@ -109,6 +109,25 @@ class Concept:
                 return True
             binding.pop()
         return False
+
+
+class SelfEvaluator:
+    """``evaluator(self_object) -> bool``: a concept over fixed other objects (see :meth:`Concept.self_evaluator`)."""
+
+    def __init__(self, concept: Concept, objects: Sequence[WorldObject], floor_row: int) -> None:
+        self.concept = concept
+        self.ctx = EvalContext(floor_row=floor_row, dir_above_quirk=concept.dir_above_quirk)
+        others = [o for o in objects if not o.is_frame and not o.is_self]
+        self.domains: list[list[WorldObject]] = [[]]
+        for tests in concept._unary[1:]:
+            self.domains.append([o for o in others if all(t(o, self.ctx) for t in tests)])
+        self.satisfiable = all(self.domains[1:])
+
+    def __call__(self, me: WorldObject) -> bool:
+        if not self.satisfiable or not all(t(me, self.ctx) for t in self.concept._unary[0]):
+            return False
+        self.domains[0] = [me]
+        return self.concept._search(0, self.domains, [], self.ctx)
 
 
 def _rebuild(source: str | Expression, macros: Macros, dir_above_quirk: bool) -> Concept:

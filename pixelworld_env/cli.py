@@ -1,0 +1,170 @@
+"""``pixelworld``: list, show, generate and play the PixelWorld benchmark from the command line."""
+
+from __future__ import annotations
+
+import argparse
+import difflib
+import os
+import sys
+from collections.abc import Sequence
+from typing import TextIO
+
+import numpy as np
+
+from pixelworld_env import catalog
+from pixelworld_env.env import PixelWorldEnv
+from pixelworld_env.registration import make_env, registered_ids
+
+KEYS = {"w": "UP", "a": "LEFT", "s": "DOWN", "d": "RIGHT", "0": "SIG0", "1": "SIG1"}
+
+
+def _resolve(name: str) -> tuple[str, tuple[str, ...]]:
+    """An env id (or a bare dataset/pool name) -> (id, member datasets)."""
+    ids = registered_ids()
+    env_id = name if name.startswith("PW-") else f"PW-{name}-v0"
+    if env_id not in ids:
+        close = difflib.get_close_matches(env_id, list(ids), n=3)
+        hint = f"; did you mean {', '.join(close)}?" if close else "; see `pixelworld list`"
+        raise SystemExit(f"pixelworld: unknown environment {name!r}{hint}")
+    return env_id, ids[env_id]
+
+
+def cmd_list(args: argparse.Namespace, out: TextIO) -> None:
+    rows = []
+    for env_id, members in registered_ids().items():
+        infos = [catalog.dataset(m) for m in members]
+        cats = sorted({i.category for i in infos})
+        train = sum(i.train_size for i in infos)
+        test = sum(i.test_size for i in infos)
+        rows.append((env_id, infos[0].kind, "/".join(cats), f"{train}/{test}", str(len(members))))
+    header = ("id", "kind", "category", "train/test", "datasets")
+    widths = [max(len(r[i]) for r in [header, *rows]) for i in range(len(header))]
+    for row in [header, *rows]:
+        out.write("  ".join(cell.ljust(w) for cell, w in zip(row, widths, strict=True)).rstrip() + "\n")
+
+
+def _env(args: argparse.Namespace, render_mode: str | None) -> PixelWorldEnv:
+    _, members = _resolve(args.id)
+    return make_env(members, split=args.split, seed=args.seed, render_mode=render_mode)
+
+
+def cmd_show(args: argparse.Namespace, out: TextIO) -> None:
+    env = _env(args, "ansi")
+    indices = range(len(env.scenes)) if args.all else [args.index]
+    if args.png:
+        from PIL import Image
+
+        from pixelworld_env.render import rgb_image
+
+        count = min(args.count, len(env.scenes))
+        tiles = [rgb_image(s.grid(), cell_size=4) for s in env.scenes[:count]]
+        cols = min(4, count)
+        rows = -(-count // cols)
+        h, w, _ = tiles[0].shape
+        sheet = np.full((rows * (h + 4), cols * (w + 4), 3), 255, dtype=np.uint8)
+        for k, tile in enumerate(tiles):
+            r, c = divmod(k, cols)
+            sheet[r * (h + 4) : r * (h + 4) + h, c * (w + 4) : c * (w + 4) + w] = tile
+        Image.fromarray(sheet).save(args.png)
+        out.write(f"wrote {count} scenes of {args.id} ({args.split}) to {args.png}\n")
+        return
+    for index in indices:
+        if not 0 <= index < len(env.scenes):
+            raise SystemExit(f"pixelworld: --index {index} out of range (0..{len(env.scenes) - 1})")
+        label = f", label {env.labels[index]}" if env.labels is not None else ""
+        out.write(f"{args.id} {args.split} scene {index}{label}\n{env.scenes[index].to_ascii()}\n\n")
+
+
+def cmd_generate(args: argparse.Namespace, out: TextIO) -> None:
+    from tqdm import tqdm
+
+    from pixelworld_env.datasets import load_or_generate
+    from pixelworld_env.loading import dataset_spec
+
+    names = catalog.dataset_names() if args.all else [n for name in args.names for n in _resolve(name)[1]]
+    if not names:
+        raise SystemExit("pixelworld generate: name datasets or ids, or pass --all")
+    for name in (bar := tqdm(names, unit="dataset", file=sys.stderr)):
+        bar.set_postfix_str(name[:40])
+        load_or_generate(dataset_spec(name), args.seed)
+    out.write(f"{len(names)} dataset(s) ready (seed {args.seed})\n")
+
+
+def cmd_play(args: argparse.Namespace, out: TextIO, keys: TextIO) -> None:
+    env = _env(args, "ansi")
+    env.reset(seed=args.episode_seed, options=None if args.index is None else {"index": args.index})
+    names = env.action_names
+    help_line = "keys: " + ", ".join(f"{k}={v}" for k, v in KEYS.items() if v in names) + ", q=quit"
+    total, step = 0.0, 0
+    while True:
+        out.write(env.render())
+        window = env.world.window()
+        out.write("window:\n" + "\n".join(" ".join(str(int(v)) for v in row) for row in window) + "\n")
+        out.write(f"step {step}, return {total:+.1f}. {help_line}\n> ")
+        out.flush()
+        line = keys.readline()
+        if not line or line.strip() == "q":
+            out.write("\nquit\n")
+            return
+        action = KEYS.get(line.strip()[:1])
+        if action not in names:
+            out.write(f"unknown key {line.strip()!r}\n")
+            continue
+        _, reward, terminated, truncated, info = env.step(names.index(action))
+        total += reward
+        step += 1
+        out.write(f"{action}: reward {reward:+.1f}\n")
+        if terminated or truncated:
+            out.write(env.render())
+            result = "success" if info["is_success"] else "failure"
+            end = "signalled" if terminated else "time limit"
+            out.write(f"episode over ({end}) after {step} steps: return {total:+.1f}, {result}\n")
+            return
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="pixelworld", description=__doc__)
+    sub = parser.add_subparsers(dest="command", required=True)
+    sub.add_parser("list", help="every environment id with kind, category and sizes")
+
+    def env_args(p: argparse.ArgumentParser) -> None:
+        p.add_argument("id", help="environment id (PW-...-v0) or dataset / concept-pool name")
+        p.add_argument("--split", default="train", choices=["train", "test", "all"])
+        p.add_argument("--seed", type=int, default=0, help="dataset generation seed")
+
+    show = sub.add_parser("show", help="print scenes as text or save a PNG sheet")
+    env_args(show)
+    show.add_argument("--index", type=int, default=0)
+    show.add_argument("--all", action="store_true", help="print every scene of the split")
+    show.add_argument("--png", help="save a PNG sheet of the first --count scenes to this file")
+    show.add_argument("--count", type=int, default=16)
+    generate = sub.add_parser("generate", help="generate and cache datasets")
+    generate.add_argument("names", nargs="*")
+    generate.add_argument("--all", action="store_true")
+    generate.add_argument("--seed", type=int, default=0)
+    play = sub.add_parser("play", help="play an episode from the keyboard (w/a/s/d, 0/1 signals, q quits)")
+    env_args(play)
+    play.add_argument("--index", type=int, default=None, help="scene index (default: random)")
+    play.add_argument("--episode-seed", type=int, default=None)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None, out: TextIO | None = None, keys: TextIO | None = None) -> None:
+    args = build_parser().parse_args(argv)
+    out = out or sys.stdout
+    try:
+        if args.command == "list":
+            cmd_list(args, out)
+        elif args.command == "show":
+            cmd_show(args, out)
+        elif args.command == "generate":
+            cmd_generate(args, out)
+        else:
+            cmd_play(args, out, keys or sys.stdin)
+    except BrokenPipeError:  # e.g. `pixelworld list | head`: stop quietly
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        sys.exit(1)
+
+
+if __name__ == "__main__":
+    main()

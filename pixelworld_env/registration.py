@@ -1,0 +1,59 @@
+"""Gymnasium ids for the whole catalog, registered in one place (on ``import pixelworld_env``).
+
+* ``PW-<dataset>-v0`` for every dataset, e.g. ``PW-cl_self-in-container_vs_noncontainer-v0``;
+* ``PW-<cl|ba>_<concept>-v0`` for every concept, pooling the datasets that share the concept and kind,
+  e.g. ``PW-ba_self-in-container-v0``.
+
+Making an env loads (or generates, once) only the datasets it uses.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import gymnasium as gym
+
+from pixelworld_env import catalog
+from pixelworld_env.env import PixelWorldEnv
+from pixelworld_env.loading import Split, load_dataset
+
+ENTRY_POINT = "pixelworld_env.registration:make_env"
+
+
+def env_id(name: str) -> str:
+    """The Gymnasium id of a dataset or concept pool."""
+    return f"PW-{name}-v0"
+
+
+def make_env(datasets: Sequence[str], *, split: Split = "train", seed: int = 0, max_steps: int = 100,
+             observation: str = "hand", render_mode: str | None = None, **kwargs: Any) -> PixelWorldEnv:
+    """A :class:`PixelWorldEnv` over the scenes of one or more catalog datasets sharing kind and concept.
+
+    ``seed`` is the dataset-generation seed (the episode seed goes to ``reset``); ``split`` picks the
+    stratified train or test half, or "all". Extra keyword arguments go to :class:`PixelWorldEnv`.
+    """
+    loaded = [load_dataset(name, split=split, seed=seed) for name in datasets]
+    kinds = {d.kind for d in loaded}
+    concepts = {d.concept for d in loaded}
+    if len(kinds) != 1 or len(concepts) != 1:
+        raise ValueError(f"datasets {list(datasets)} do not share one kind and concept")
+    return PixelWorldEnv(
+        [s for d in loaded for s in d.scenes], kind=loaded[0].kind, concept=loaded[0].concept,
+        labels=[label for d in loaded for label in d.labels] if loaded[0].kind == "classification" else None,
+        macros=catalog.macros(), max_steps=max_steps, observation=observation, render_mode=render_mode, **kwargs,
+    )
+
+
+def registered_ids() -> dict[str, tuple[str, ...]]:
+    """Every PixelWorld id -> the datasets it samples from."""
+    ids = {env_id(name): (name,) for name in catalog.dataset_names()}
+    ids.update({env_id(pool): members for pool, members in catalog.concept_pools().items()})
+    return ids
+
+
+def register_envs() -> None:
+    """Register every id of :func:`registered_ids` with Gymnasium (idempotent)."""
+    for name, members in registered_ids().items():
+        if name not in gym.registry:
+            gym.register(name, entry_point=ENTRY_POINT, kwargs={"datasets": members})
