@@ -124,14 +124,17 @@ class PixelWorldEnv(gym.Env):
     # ------------------------------------------------------------------------------------------ helpers
 
     def _observe(self) -> np.ndarray:
-        assert self._world is not None
         if self.observation == "hand":
-            obs = np.zeros(9 * NUM_COLORS, dtype=np.float32)
-            obs[_ONE_HOT_OFFSETS + self._world.window().ravel()] = 1.0
-            return obs
+            return self.hand_observation()
         if self.observation == "hand_raw":
-            return self._world.window().astype(np.int64).reshape(-1)
-        return self._world.state().astype(np.uint8)
+            return self.world.window().astype(np.int64).reshape(-1)
+        return self.world.state().astype(np.uint8)
+
+    def hand_observation(self) -> np.ndarray:
+        """The one-hot 3 x 3 window of the current state (81 float32), whatever ``observation`` is."""
+        obs = np.zeros(9 * NUM_COLORS, dtype=np.float32)
+        obs[_ONE_HOT_OFFSETS + self._world.window().ravel()] = 1.0  # type: ignore[union-attr]
+        return obs
 
     def goal_holds(self) -> bool:
         """Whether the concept holds in the current state (memoised per self cell when only the self moves)."""
@@ -199,13 +202,8 @@ class PixelWorldEnv(gym.Env):
             raise ValueError(f"invalid action {action!r}; actions are {list(enumerate(self.action_names))}") from None
         self._steps += 1
         terminated = False
-        reward = 0.0
         if effect.__class__ is tuple:  # a move
-            if self._world.move(effect) and self.kind == BRING_ABOUT:  # type: ignore[union-attr]
-                goal = self.goal_holds()
-                if goal != self._goal:
-                    reward = GOAL_POTENTIAL if goal else -GOAL_POTENTIAL
-                    self._goal = goal
+            reward = self._move(effect)  # type: ignore[arg-type]
         else:  # a signal: 1 (SIG1) or 0 (SIG0)
             terminated = True
             if self.kind == CLASSIFICATION:
@@ -217,6 +215,36 @@ class PixelWorldEnv(gym.Env):
         self._done = terminated or truncated
         info = self._info(success=self._done and reward > 0, signalled=terminated)
         return self._observe(), reward, terminated, truncated, info
+
+    def _move(self, delta: Cell) -> float:
+        if self._world.move(delta) and self.kind == BRING_ABOUT:  # type: ignore[union-attr]
+            goal = self.goal_holds()
+            if goal != self._goal:
+                self._goal = goal
+                return GOAL_POTENTIAL if goal else -GOAL_POTENTIAL
+        return 0.0
+
+    def apply_move(self, action: int) -> float:
+        """Apply a move action without counting a step or ending the episode; return its (shaping) reward.
+
+        For options that act on the world inside one step of a higher-level policy
+        (:class:`sb3_smc.HierarchicalSMCWrapper`); signals are not moves and raise ``ValueError``.
+        """
+        if self._done:
+            raise RuntimeError("the episode has ended: call reset() before apply_move()")
+        effect = self._effects[action]
+        if effect.__class__ is not tuple:
+            raise ValueError(f"action {action} ({self.action_names[action]}) is not a move")
+        return self._move(effect)  # type: ignore[arg-type]
+
+    def step_info(self) -> dict[str, Any]:
+        """The ``info`` of the current state (``is_success`` and ``signalled`` false)."""
+        return self._info()
+
+    @property
+    def elapsed_steps(self) -> int:
+        """Actions taken in this episode (``apply_move`` does not count)."""
+        return self._steps
 
     def render(self):
         if self.render_mode is None:

@@ -1,0 +1,97 @@
+"""Sensorimotor contingencies (SMCs): frozen policies with their action names and child SMCs.
+
+An SMC acts on a PixelWorld environment through the action list of :func:`smc_action_names`: the task's
+signals, then (unless ``include_primitives`` is off) the four moves, then one action per child SMC. Its
+observation (:func:`observation_size`) is the one-hot 3 x 3 window (81 values), then one outcome entry per
+child (+1 SIG1, -1 SIG0, 0 not called yet or timed out), then the one-hot of its previous action (all zeros at
+the first step), as the paper's policy input.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any, Protocol, runtime_checkable
+
+import numpy as np
+
+SIGNALS = {"classification": ("SIG0", "SIG1"), "bring-about": ("SIG1",)}
+"""The signal actions of each task kind, in environment order."""
+MOVES = ("DOWN", "RIGHT", "UP", "LEFT")
+"""The primitive moves, in environment order."""
+HAND_SIZE = 81
+"""Length of the one-hot 3 x 3 window."""
+CALL_PREFIX = "SMC:"
+"""Action names of child SMCs are ``CALL_PREFIX + child.name``."""
+
+
+@runtime_checkable
+class StepPolicy(Protocol):
+    """What the wrapper needs to run a policy one observation at a time.
+
+    ``initial_state()`` returns the recurrent state of a fresh call (``None`` for a memoryless policy);
+    ``probabilities(obs, state)`` returns the action probabilities (1-D, summing to 1, one per action name)
+    and the next state. Scripted policies (one-hot probabilities) and trained SB3 models (see
+    :mod:`sb3_smc.policies`) both follow it.
+    """
+
+    def initial_state(self) -> Any: ...
+
+    def probabilities(self, observation: np.ndarray, state: Any) -> tuple[np.ndarray, Any]: ...
+
+
+def smc_action_names(kind: str, children: Sequence[str] = (), include_primitives: bool = True) -> tuple[str, ...]:
+    """The action list of an SMC of task ``kind`` with child SMCs named ``children``."""
+    if kind not in SIGNALS:
+        raise ValueError(f"kind must be one of {tuple(SIGNALS)}, got {kind!r}")
+    moves = MOVES if include_primitives else ()
+    return (*SIGNALS[kind], *moves, *(CALL_PREFIX + name for name in children))
+
+
+def observation_size(n_children: int, n_actions: int) -> int:
+    """Length of an SMC's observation: window, outcome vector, previous action."""
+    return HAND_SIZE + n_children + n_actions
+
+
+@dataclass
+class SMC:
+    """A sensorimotor contingency: a frozen policy, its action names and the SMCs it calls.
+
+    ``metadata`` records provenance (dataset / env id, algorithm, seed, selected update, training return,
+    test score ...); ``model`` is the trained SB3 model when there is one (``None`` for scripted policies).
+    """
+
+    name: str
+    kind: str
+    policy: StepPolicy
+    children: tuple[SMC, ...] = ()
+    include_primitives: bool = True
+    metadata: dict[str, Any] = field(default_factory=dict)
+    model: Any = None
+
+    def __post_init__(self) -> None:
+        if self.kind not in SIGNALS:
+            raise ValueError(f"SMC {self.name!r}: kind must be one of {tuple(SIGNALS)}, got {self.kind!r}")
+        self.children = tuple(self.children)
+        names = [child.name for child in self.children]
+        if len(set(names)) != len(names):
+            raise ValueError(f"SMC {self.name!r}: child names must be unique, got {names}")
+        if _calls(self, self.name):
+            raise ValueError(f"SMC {self.name!r} calls itself (directly or through its children)")
+
+    @property
+    def action_names(self) -> tuple[str, ...]:
+        return smc_action_names(self.kind, [c.name for c in self.children], self.include_primitives)
+
+    @property
+    def observation_size(self) -> int:
+        return observation_size(len(self.children), len(self.action_names))
+
+    @property
+    def depth(self) -> int:
+        """1 for an SMC without children, else 1 + the deepest child's depth."""
+        return 1 + max((c.depth for c in self.children), default=0)
+
+
+def _calls(smc: SMC, name: str) -> bool:
+    return any(child.name == name or _calls(child, name) for child in smc.children)
