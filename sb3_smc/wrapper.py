@@ -1,0 +1,175 @@
+"""``HierarchicalSMCWrapper``: SMCs as extra actions of a PixelWorld environment (spec §5.5, §7 item 8)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from pixelworld_env.env import PixelWorldEnv
+from sb3_smc.policies import sample_action
+from sb3_smc.smc import CALL_PREFIX, MOVES, SMC, observation_size, smc_action_names
+
+SIGNAL_OUTCOMES = {"SIG1": 1.0, "SIG0": -1.0}
+"""The outcome an SMC call records for each signal (0 = not called in this episode, or timed out)."""
+
+_SIGNAL, _MOVE, _CALL = 0, 1, 2
+
+
+class HierarchicalSMCWrapper(gym.Wrapper):
+    """A PixelWorld env whose actions are its signals, the four moves and one action per SMC.
+
+    Choosing an SMC runs its frozen policy on the same world, from a fresh recurrent state and stochastically
+    (seeded by ``reset(seed=...)``), until it emits one of its signals or has taken ``call_step_cap`` decisions.
+    Its signal never ends the episode: it becomes the SMC's **outcome** (+1 SIG1, -1 SIG0, 0 timed out). An SMC
+    that has children calls them the same way, each with its own outcome vector, at any depth.
+
+    * Observation: the one-hot 3 x 3 window (81), the last outcome of each SMC (0 until called in this
+      episode), the one-hot previous action (zeros after reset) — :func:`sb3_smc.smc.observation_size`.
+    * Reward of a call: the sum of the environment rewards of its primitive moves (shaping included).
+    * Time: a call counts as one step of the episode's ``max_steps`` budget (the paper), or, with
+      ``count_primitive_steps=True``, as the number of moves it made (at least 1); calls are then also cut
+      at the remaining budget.
+    * ``include_primitives=False`` removes the four moves (the paper's "noprim" ablation); signals stay.
+    * ``info`` on every step adds ``primitive_steps`` (moves executed during the step), ``elapsed_steps``
+      and ``smc_calls``: one dict per call made during the step, nested calls included, in the order the
+      calls finished: ``{"smc", "depth", "primitive_steps", "outcome", "reward"}``.
+
+    Any policy following :class:`sb3_smc.smc.StepPolicy` can stand behind an SMC (scripted ones included).
+    """
+
+    def __init__(self, env: gym.Env, smcs: Sequence[SMC] = (), *, include_primitives: bool = True,
+                 count_primitive_steps: bool = False, call_step_cap: int = 100) -> None:
+        super().__init__(env)
+        base = env.unwrapped
+        if not isinstance(base, PixelWorldEnv):
+            raise TypeError(f"HierarchicalSMCWrapper needs a PixelWorldEnv underneath, got {type(base).__name__}")
+        if call_step_cap < 1:
+            raise ValueError(f"call_step_cap must be >= 1, got {call_step_cap}")
+        self.base = base
+        self.smcs = tuple(smcs)
+        names = [smc.name for smc in self.smcs]
+        if len(set(names)) != len(names):
+            raise ValueError(f"SMC names must be unique, got {names}")
+        self.include_primitives = include_primitives
+        self.count_primitive_steps = count_primitive_steps
+        self.call_step_cap = int(call_step_cap)
+        self.action_names = smc_action_names(base.kind, names, include_primitives)
+        self.action_space = spaces.Discrete(len(self.action_names))
+        size = observation_size(len(self.smcs), len(self.action_names))
+        self.observation_space = spaces.Box(-1.0, 1.0, shape=(size,), dtype=np.float32)
+        self._plan = self._action_plan(self.action_names, self.action_names.index)
+        self._child_plans: dict[int, list[tuple[int, Any]]] = {}
+        self._outcomes = np.zeros(len(self.smcs), dtype=np.float32)
+        self._previous = np.zeros(len(self.action_names), dtype=np.float32)
+        self._rng: np.random.Generator | None = None
+        self._elapsed = 0
+        self._done = True
+
+    # ------------------------------------------------------------------------------------------ helpers
+
+    def _action_plan(self, names: Sequence[str], parent_index) -> list[tuple[int, Any]]:
+        """For each action name: (_SIGNAL, base index or outcome), (_MOVE, base index) or (_CALL, child index)."""
+        plan: list[tuple[int, Any]] = []
+        children = [n for n in names if n.startswith(CALL_PREFIX)]
+        for name in names:
+            if name in SIGNAL_OUTCOMES:
+                plan.append((_SIGNAL, SIGNAL_OUTCOMES[name] if parent_index is None else parent_index(name)))
+            elif name in MOVES:
+                plan.append((_MOVE, self.base.action_names.index(name)))
+            else:
+                plan.append((_CALL, children.index(name)))
+        return plan
+
+    def _plan_of(self, smc: SMC) -> list[tuple[int, Any]]:
+        plan = self._child_plans.get(id(smc))
+        if plan is None:
+            plan = self._child_plans[id(smc)] = self._action_plan(smc.action_names, None)
+        return plan
+
+    @property
+    def outcomes(self) -> np.ndarray:
+        """The last outcome of each SMC in this episode (a copy)."""
+        return self._outcomes.copy()
+
+    def _observation(self) -> np.ndarray:
+        return np.concatenate((self.base.hand_observation(), self._outcomes, self._previous))
+
+    def run_call(self, smc: SMC, depth: int, calls: list[dict[str, Any]], cap: int) -> tuple[float, int, float]:
+        """Run one call of ``smc`` on the live world: ``(reward, primitive steps, outcome)``."""
+        assert self._rng is not None
+        plan = self._plan_of(smc)
+        n_actions = len(plan)
+        outcomes = np.zeros(len(smc.children), dtype=np.float32)
+        previous = np.zeros(n_actions, dtype=np.float32)
+        state = smc.policy.initial_state()
+        reward, moves, outcome = 0.0, 0, 0.0
+        for _ in range(cap):
+            obs = np.concatenate((self.base.hand_observation(), outcomes, previous))
+            probabilities, state = smc.policy.probabilities(obs, state)
+            if len(probabilities) != n_actions:
+                raise ValueError(f"SMC {smc.name!r}: its policy gives {len(probabilities)} action probabilities, "
+                                 f"but its actions are {smc.action_names}")
+            action = sample_action(probabilities, self._rng)
+            kind, value = plan[action]
+            if kind == _SIGNAL:
+                outcome = value
+                break
+            if kind == _MOVE:
+                reward += self.base.apply_move(value)
+                moves += 1
+            else:
+                r, m, o = self.run_call(smc.children[value], depth + 1, calls, cap)
+                outcomes[value] = o
+                reward += r
+                moves += m
+            previous[:] = 0.0
+            previous[action] = 1.0
+        calls.append({"smc": smc.name, "depth": depth, "primitive_steps": moves, "outcome": int(outcome),
+                      "reward": reward})
+        return reward, moves, outcome
+
+    # ------------------------------------------------------------------------------------------ gym API
+
+    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
+        _, info = self.env.reset(seed=seed, options=options)
+        if seed is not None:
+            self._rng = np.random.default_rng((seed, 0x5EED))
+        elif self._rng is None:
+            self._rng = np.random.default_rng()
+        self._outcomes[:] = 0.0
+        self._previous[:] = 0.0
+        self._elapsed = 0
+        self._done = False
+        info = dict(info, primitive_steps=0, elapsed_steps=0, smc_calls=[])
+        return self._observation(), info
+
+    def step(self, action):
+        if self._done:
+            raise RuntimeError("the episode has ended: call reset() before step()")
+        kind, value = self._plan[int(action)]
+        calls: list[dict[str, Any]] = []
+        if kind == _CALL:
+            cap = self.call_step_cap
+            if self.count_primitive_steps:
+                cap = max(1, min(cap, self.base.max_steps - self._elapsed))
+            reward, moves, outcome = self.run_call(self.smcs[value], 1, calls, cap)
+            self._outcomes[value] = outcome
+            terminated, base_truncated = False, False
+            info = self.base.step_info()
+            cost = max(1, moves) if self.count_primitive_steps else 1
+        else:
+            _, reward, terminated, base_truncated, info = self.env.step(value)
+            moves = int(kind == _MOVE)
+            cost = 1
+        self._elapsed += cost
+        truncated = not terminated and (base_truncated or self._elapsed >= self.base.max_steps)
+        self._done = terminated or truncated
+        self._previous[:] = 0.0
+        self._previous[int(action)] = 1.0
+        info = dict(info, is_success=(terminated or truncated) and reward > 0, primitive_steps=moves,
+                    elapsed_steps=self._elapsed, smc_calls=calls)
+        return self._observation(), float(reward), terminated, truncated, info

@@ -1,0 +1,190 @@
+"""HierarchicalSMCWrapper semantics with scripted SMCs on hand-drawn worlds."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+from pixelworld_env import PixelWorldEnv, Scene
+from sb3_smc import SMC
+from sb3_smc.policies import ScriptedPolicy, SequencePolicy
+from sb3_smc.smc import smc_action_names
+from sb3_smc.wrapper import HierarchicalSMCWrapper
+
+CONTAINER = """
+#########
+#...S...#
+#.a...a.#
+#.a...a.#
+#.aaaaa.#
+#=======#
+#.......#
+#########
+"""
+IN_CONTAINER = "?x container(x) & inside_supported(self,x)"
+OUTCOME = 81  # index of the first outcome entry in an observation
+
+
+def base_env(kind: str = "bring-about", **kwargs) -> PixelWorldEnv:
+    return PixelWorldEnv([Scene.from_ascii(CONTAINER, {"a": "container"})], kind=kind, concept=IN_CONTAINER,
+                         **kwargs)
+
+
+def scripted(name: str, kind: str, names: list[str], children: tuple[SMC, ...] = (),
+             include_primitives: bool = True) -> SMC:
+    """An SMC that plays the named actions in order (then repeats the last)."""
+    actions = smc_action_names(kind, [c.name for c in children], include_primitives)
+    return SMC(name, kind, SequencePolicy(len(actions), [actions.index(n) for n in names]), children=children,
+               include_primitives=include_primitives)
+
+
+def act(env: HierarchicalSMCWrapper, name: str):
+    return env.step(env.action_names.index(name))
+
+
+def test_action_names_and_spaces() -> None:
+    down = scripted("down", "bring-about", ["DOWN", "SIG1"])
+    env = HierarchicalSMCWrapper(base_env(), [down])
+    assert env.action_names == ("SIG1", "DOWN", "RIGHT", "UP", "LEFT", "SMC:down")
+    assert env.observation_space.shape == (81 + 1 + 6,)
+    noprim = HierarchicalSMCWrapper(base_env("classification"), [down], include_primitives=False)
+    assert noprim.action_names == ("SIG0", "SIG1", "SMC:down")
+    assert noprim.action_space == gym.spaces.Discrete(3)
+    with pytest.raises(TypeError, match="PixelWorldEnv"):
+        HierarchicalSMCWrapper(gym.make("CartPole-v1"))
+
+
+def test_call_runs_to_the_signal_sums_rewards_and_records_the_outcome() -> None:
+    into = scripted("into", "bring-about", ["DOWN", "DOWN", "SIG1"])
+    env = HierarchicalSMCWrapper(base_env(), [into])
+    obs, info = env.reset(seed=0)
+    assert obs[OUTCOME] == 0 and info["smc_calls"] == []
+    obs, reward, terminated, truncated, info = act(env, "SMC:into")
+    assert (reward, terminated, truncated) == (0.5, False, False)  # its SIG1 does not end the episode
+    assert obs[OUTCOME] == 1.0 and env.outcomes.tolist() == [1.0]
+    assert info["smc_calls"] == [{"smc": "into", "depth": 1, "primitive_steps": 2, "outcome": 1, "reward": 0.5}]
+    assert info["primitive_steps"] == 2 and info["elapsed_steps"] == 1 and info["goal"] is True
+    assert env.base.world.self_position == (3, 4)
+    np.testing.assert_array_equal(obs[82:], np.eye(6)[5])  # previous action: the call
+    _, reward, terminated, _, info = act(env, "SIG1")
+    assert (reward, terminated, info["is_success"]) == (0.5, True, True)
+    with pytest.raises(RuntimeError, match="reset"):
+        act(env, "DOWN")
+
+
+def test_shaping_telescopes_inside_a_call_and_outcomes_reset() -> None:
+    bounce = scripted("bounce", "bring-about", ["DOWN", "DOWN", "UP", "SIG1"])
+    probe = scripted("probe", "classification", ["DOWN", "SIG0"])
+    env = HierarchicalSMCWrapper(base_env(), [bounce, probe])
+    env.reset(seed=0)
+    obs, reward, *_ = act(env, "SMC:bounce")  # +0.5 entering, -0.5 leaving
+    assert reward == 0.0 and obs[OUTCOME] == 1.0
+    obs, reward, *_ = act(env, "SMC:probe")  # from (2, 4) down into the goal, then SIG0
+    assert reward == 0.5 and obs[OUTCOME : OUTCOME + 2].tolist() == [1.0, -1.0]
+    obs, _ = env.reset(seed=1)
+    assert obs[OUTCOME : OUTCOME + 2].tolist() == [0.0, 0.0] and not obs[83:].any()
+
+
+def test_time_accounting_modes_and_the_per_call_cap() -> None:
+    wander = scripted("wander", "bring-about", ["RIGHT", "LEFT"])  # never signals
+    calls = HierarchicalSMCWrapper(base_env(max_steps=3), [wander], call_step_cap=5)
+    calls.reset(seed=0)
+    _, _, _, truncated, info = act(calls, "SMC:wander")
+    assert info["smc_calls"][0]["primitive_steps"] == 5 and info["smc_calls"][0]["outcome"] == 0
+    assert info["elapsed_steps"] == 1 and not truncated
+    act(calls, "SMC:wander")
+    _, _, _, truncated, info = act(calls, "SMC:wander")
+    assert truncated and info["elapsed_steps"] == 3 and not info["is_success"]
+
+    primitive = HierarchicalSMCWrapper(base_env(max_steps=12), [wander], call_step_cap=5,
+                                       count_primitive_steps=True)
+    primitive.reset(seed=0)
+    _, _, _, truncated, info = act(primitive, "SMC:wander")
+    assert info["elapsed_steps"] == 5 and not truncated
+    act(primitive, "DOWN")
+    _, _, _, truncated, info = act(primitive, "SMC:wander")
+    assert info["elapsed_steps"] == 11 and not truncated
+    _, _, _, truncated, info = act(primitive, "SMC:wander")  # cut at the one remaining step
+    assert info["primitive_steps"] == 1 and info["elapsed_steps"] == 12 and truncated
+
+
+def test_three_levels_of_nesting() -> None:
+    into = scripted("into", "bring-about", ["DOWN", "DOWN", "SIG1"])
+    names = smc_action_names("classification", ["into"])
+
+    def check(obs: np.ndarray, step: int) -> int:  # call `into`, then report its outcome
+        return names.index("SMC:into") if step == 0 else names.index("SIG1" if obs[OUTCOME] > 0 else "SIG0")
+
+    checker = SMC("checker", "classification", ScriptedPolicy(len(names), check), children=(into,))
+    assert checker.depth == 2
+    top_names = smc_action_names("bring-about", ["checker"])
+    top = SMC("top", "bring-about", SequencePolicy(len(top_names), [top_names.index("SMC:checker"), 0]),
+              children=(checker,))
+    env = HierarchicalSMCWrapper(base_env(), [top])
+    env.reset(seed=0)
+    obs, reward, terminated, _, info = act(env, "SMC:top")
+    assert [(c["smc"], c["depth"], c["outcome"], c["primitive_steps"]) for c in info["smc_calls"]] == [
+        ("into", 3, 1, 2), ("checker", 2, 1, 2), ("top", 1, 1, 2)]
+    assert reward == 0.5 and not terminated and obs[OUTCOME] == 1.0
+
+
+def test_primitives_can_be_removed() -> None:
+    into = scripted("into", "bring-about", ["DOWN", "DOWN", "SIG1"])
+    env = HierarchicalSMCWrapper(base_env("classification"), [into], include_primitives=False)
+    env.reset(seed=0)
+    _, reward, terminated, _, info = act(env, "SMC:into")
+    assert reward == 0.0 and not terminated and env.base.world.self_position == (3, 4)
+    _, reward, terminated, _, info = act(env, "SIG1")  # the scene's label is 0: the self starts outside
+    assert (reward, terminated) == (-1.0, True)
+
+
+class _Uniform:
+    def __init__(self, n: int) -> None:
+        self.n = n
+
+    def initial_state(self) -> None:
+        return None
+
+    def probabilities(self, observation: np.ndarray, state: None) -> tuple[np.ndarray, None]:
+        return np.full(self.n, 1.0 / self.n), None
+
+
+def test_stochastic_calls_are_seeded() -> None:
+    def trace(seed: int) -> list:
+        random_smc = SMC("random", "classification", _Uniform(len(smc_action_names("classification"))))
+        env = HierarchicalSMCWrapper(base_env(), [random_smc])
+        env.reset(seed=seed)
+        out = []
+        for _ in range(5):
+            _, reward, _, _, info = act(env, "SMC:random")
+            out.append((reward, env.base.world.self_position, info["smc_calls"][0]["primitive_steps"]))
+        return out
+
+    assert trace(3) == trace(3)
+    assert trace(3) != trace(4)
+
+
+def test_policy_with_the_wrong_number_of_actions_is_reported() -> None:
+    bad = SMC("bad", "bring-about", SequencePolicy(3, [0]))
+    env = HierarchicalSMCWrapper(base_env(), [bad])
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match="SMC 'bad': its policy gives 3 action probabilities"):
+        act(env, "SMC:bad")
+
+
+def test_wrapper_passes_gymnasium_and_sb3_checks() -> None:
+    import warnings
+
+    from gymnasium.utils.env_checker import check_env as gym_check_env
+    from stable_baselines3.common.env_checker import check_env as sb3_check_env
+
+    into = scripted("into", "bring-about", ["DOWN", "DOWN", "SIG1"])
+    for kind in ("classification", "bring-about"):
+        env = HierarchicalSMCWrapper(gym.make("PW-cl_self-in-left-corner_vs_on-hline-v0") if kind == "classification"
+                                     else base_env(), [into])
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")  # every warning fails, except Gymnasium's note that this is a wrapper
+            warnings.filterwarnings("ignore", message=".*is different from the unwrapped version")
+            gym_check_env(env, skip_render_check=True)
+            sb3_check_env(env)
