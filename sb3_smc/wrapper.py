@@ -19,7 +19,7 @@ SIGNAL_OUTCOMES = {"SIG1": 1.0, "SIG0": -1.0}
 _SIGNAL, _MOVE, _CALL = 0, 1, 2
 
 
-class HierarchicalSMCWrapper(gym.Wrapper):
+class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
     """A PixelWorld env whose actions are its signals, the four moves and one action per SMC.
 
     Choosing an SMC runs its frozen policy on the same world, from a fresh recurrent state and stochastically
@@ -43,6 +43,9 @@ class HierarchicalSMCWrapper(gym.Wrapper):
 
     def __init__(self, env: gym.Env, smcs: Sequence[SMC] = (), *, include_primitives: bool = True,
                  count_primitive_steps: bool = False, call_step_cap: int = 100) -> None:
+        gym.utils.RecordConstructorArgs.__init__(self, smcs=smcs, include_primitives=include_primitives,
+                                                 count_primitive_steps=count_primitive_steps,
+                                                 call_step_cap=call_step_cap)
         super().__init__(env)
         base = env.unwrapped
         if not isinstance(base, PixelWorldEnv):
