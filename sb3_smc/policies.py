@@ -1,0 +1,476 @@
+"""Step policies: trained SB3 actors re-implemented in numpy, scripted policies, and fast action sampling.
+
+:func:`policy_from_model` copies the actor of a trained Stable-Baselines3 model out of torch once and returns a
+:class:`~sb3_smc.smc.StepPolicy` that evaluates it in numpy, one observation at a time (about 20 times faster than
+``model.predict`` at batch 1, see ``python -m tests.test_policies``):
+
+* ``RecurrentPPO`` with ``MlpLstmPolicy`` -> :class:`NumpyLSTMPolicy` (any hidden size, any number of LSTM layers,
+  shared LSTM or not, any policy ``net_arch``);
+* ``PPO`` / ``TRPO`` (or any other ``ActorCriticPolicy``) with ``MlpPolicy`` -> :class:`NumpyMLPPolicy`.
+
+Only ``Discrete`` action spaces and non-image ``Box`` observations through a ``FlattenExtractor`` are supported.
+The numpy policies hold numpy arrays only (no torch modules), so they pickle small and load without torch.
+
+:class:`ScriptedPolicy` and :class:`SequencePolicy` are deterministic (one-hot) policies for tests and demos;
+:func:`sample_action` draws an action from a probability vector by inverse-CDF sampling.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import numpy as np
+
+__all__ = [
+    "ACTIVATIONS",
+    "NumpyLSTMPolicy",
+    "NumpyMLPPolicy",
+    "ScriptedPolicy",
+    "SequencePolicy",
+    "policy_from_model",
+    "sample_action",
+    "sample_actions",
+]
+
+LSTMState = tuple[np.ndarray, np.ndarray]
+"""Recurrent state of :class:`NumpyLSTMPolicy`: ``(h, c)``, each of shape ``(n_lstm_layers, lstm_hidden_size)``."""
+
+Layer = tuple[str, Any, Any]
+"""One step of a feed-forward stack: ``("linear", weight_T, bias)`` or ``(activation_name, parameter, None)``."""
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Activations
+# ---------------------------------------------------------------------------------------------------------------
+
+def _sigmoid(x: np.ndarray) -> np.ndarray:
+    return 0.5 * np.tanh(0.5 * x) + 0.5
+
+
+def _activate(name: str, param: float, x: np.ndarray) -> np.ndarray:
+    if name == "tanh":
+        return np.tanh(x)
+    if name == "relu":
+        return np.maximum(x, 0.0)
+    if name == "leaky_relu":
+        return np.where(x >= 0.0, x, param * x)
+    if name == "elu":
+        return np.where(x > 0.0, x, param * np.expm1(np.minimum(x, 0.0)))
+    if name == "selu":
+        alpha, scale = 1.6732632423543772, 1.0507009873554805
+        return scale * np.where(x > 0.0, x, alpha * np.expm1(np.minimum(x, 0.0)))
+    if name == "sigmoid":
+        return _sigmoid(x)
+    if name == "silu":
+        return x * _sigmoid(x)
+    if name == "softplus":  # torch's beta=1, threshold=20
+        return np.where(x > 20.0, x, np.logaddexp(0.0, x))
+    if name == "identity":
+        return x
+    raise ValueError(f"unknown activation {name!r}")
+
+
+ACTIVATIONS: dict[str, str] = {"Tanh": "tanh", "ReLU": "relu", "LeakyReLU": "leaky_relu", "ELU": "elu",
+                               "SELU": "selu", "Sigmoid": "sigmoid", "SiLU": "silu", "Softplus": "softplus",
+                               "Identity": "identity"}
+"""Supported ``torch.nn`` activation classes (by class name) -> numpy activation names; any other module in the
+policy network is a ``TypeError``. ``LeakyReLU`` and ``ELU`` keep their parameter, ``Softplus`` needs the
+defaults (beta 1, threshold 20)."""
+
+
+def _activation_spec(module: Any) -> tuple[str, float]:
+    """``(name, parameter)`` of a torch activation module, or a ``TypeError`` for an unsupported one."""
+    from torch import nn
+
+    kind = type(module)
+    name = ACTIVATIONS.get(kind.__name__)
+    if name is None or getattr(nn, kind.__name__, None) is not kind:
+        raise TypeError(f"unsupported activation {kind.__name__} in the policy network "
+                        f"(supported: {sorted(ACTIVATIONS)})")
+    if name == "leaky_relu":
+        return name, float(module.negative_slope)
+    if name == "elu":
+        return name, float(module.alpha)
+    if name == "softplus" and (module.beta != 1 or module.threshold != 20):
+        raise TypeError(f"unsupported Softplus parameters (beta={module.beta}, threshold={module.threshold})")
+    return name, 0.0
+
+
+def _forward(layers: Sequence[Layer], x: np.ndarray) -> np.ndarray:
+    for name, a, b in layers:
+        if name == "linear":
+            x = x @ a
+            x += b
+        elif name == "tanh":
+            x = np.tanh(x)
+        else:
+            x = _activate(name, a, x)
+    return x
+
+
+def _softmax(logits: np.ndarray) -> np.ndarray:
+    """Softmax over the last axis; ``logits`` is overwritten (callers pass a fresh array)."""
+    if logits.ndim == 1:
+        logits -= logits.max()
+        np.exp(logits, out=logits)
+        logits /= logits.sum()
+        return logits
+    logits -= logits.max(axis=-1, keepdims=True)
+    np.exp(logits, out=logits)
+    logits /= logits.sum(axis=-1, keepdims=True)
+    return logits
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Numpy actors
+# ---------------------------------------------------------------------------------------------------------------
+
+class NumpyMLPPolicy:
+    """Feed-forward actor (features -> policy MLP -> ``action_net`` -> softmax) in numpy; state ``None``.
+
+    ``layers`` is a list of ``("linear", weight_T, bias)`` (``x @ weight_T + bias``) and
+    ``(activation_name, parameter, None)`` steps, ending with the action layer.
+    """
+
+    def __init__(self, layers: Sequence[Layer], observation_size: int, dtype: Any = np.float64) -> None:
+        self.dtype = np.dtype(dtype)
+        self.layers = [_cast_layer(layer, self.dtype) for layer in layers]
+        self.observation_size = int(observation_size)
+        self.n_actions = _n_outputs(self.layers)
+
+    def initial_state(self) -> None:
+        return None
+
+    def probabilities(self, observation: np.ndarray, state: None = None) -> tuple[np.ndarray, None]:
+        x = np.asarray(observation, dtype=self.dtype).reshape(-1)
+        return _softmax(_forward(self.layers, x)), None
+
+    def probabilities_batch(self, observations: np.ndarray, states: Sequence[None] | None = None
+                            ) -> tuple[np.ndarray, list[None]]:
+        """Probabilities ``(B, n_actions)`` of ``B`` observations ``(B, observation_size)``."""
+        x = np.asarray(observations, dtype=self.dtype).reshape(len(observations), -1)
+        return _softmax(_forward(self.layers, x)), [None] * len(x)
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}(observation_size={self.observation_size}, n_actions={self.n_actions})"
+
+
+class NumpyLSTMPolicy:
+    """Recurrent actor of an sb3-contrib ``RecurrentActorCriticPolicy`` in numpy.
+
+    features -> ``n_lstm_layers`` stacked LSTM layers -> policy MLP -> ``action_net`` -> softmax. The state is
+    ``(h, c)``, each ``(n_lstm_layers, lstm_hidden_size)``; :meth:`initial_state` is zeros, which is what
+    sb3-contrib uses at an episode start (``episode_starts`` = 1), so a fresh call of the policy behaves like a
+    new episode and later steps like ``episode_starts`` = 0. States are never modified in place.
+
+    ``lstm`` is one ``(w_ih_T, w_hh_T, bias)`` per layer in torch's gate order (i, f, g, o), with
+    ``bias = b_ih + b_hh``; ``head`` is the feed-forward part as in :class:`NumpyMLPPolicy`.
+    """
+
+    def __init__(self, lstm: Sequence[tuple[np.ndarray, np.ndarray, np.ndarray]], head: Sequence[Layer],
+                 observation_size: int, dtype: Any = np.float64) -> None:
+        self.dtype = np.dtype(dtype)
+        if not lstm:
+            raise ValueError("NumpyLSTMPolicy needs at least one LSTM layer")
+        self.hidden_size = int(np.shape(lstm[0][1])[0])
+        self.n_layers = len(lstm)
+        self.observation_size = int(observation_size)
+        # sigmoid(z) = 0.5 * tanh(z / 2) + 0.5: halve the i, f, o rows once so that one tanh serves all gates
+        scale = np.full(4 * self.hidden_size, 0.5)
+        scale[2 * self.hidden_size:3 * self.hidden_size] = 1.0
+        self.lstm = [(np.ascontiguousarray(np.asarray(w_ih, dtype=np.float64) * scale, dtype=self.dtype),
+                      np.ascontiguousarray(np.asarray(w_hh, dtype=np.float64) * scale, dtype=self.dtype),
+                      np.ascontiguousarray(np.asarray(bias, dtype=np.float64) * scale, dtype=self.dtype))
+                     for w_ih, w_hh, bias in lstm]
+        for k, (w_ih, w_hh, bias) in enumerate(self.lstm):
+            expected_in = self.observation_size if k == 0 else self.hidden_size
+            gates = 4 * self.hidden_size
+            if w_ih.shape != (expected_in, gates) or w_hh.shape != (self.hidden_size, gates) or bias.shape != (gates,):
+                raise ValueError(f"LSTM layer {k}: inconsistent weight shapes {w_ih.shape}, {w_hh.shape}, "
+                                 f"{bias.shape}")
+        self.head = [_cast_layer(layer, self.dtype) for layer in head]
+        self.n_actions = _n_outputs(self.head)
+
+    def initial_state(self) -> LSTMState:
+        zeros = np.zeros((self.n_layers, self.hidden_size), dtype=self.dtype)
+        return zeros, zeros.copy()
+
+    def probabilities(self, observation: np.ndarray, state: LSTMState) -> tuple[np.ndarray, LSTMState]:
+        x = np.asarray(observation, dtype=self.dtype).reshape(-1)
+        h_prev, c_prev = state
+        n = self.hidden_size
+        h_next = np.empty_like(h_prev)
+        c_next = np.empty_like(c_prev)
+        for k, (w_ih, w_hh, bias) in enumerate(self.lstm):
+            t = x @ w_ih
+            t += h_prev[k] @ w_hh
+            t += bias
+            np.tanh(t, out=t)
+            s = t * 0.5
+            s += 0.5
+            c = s[n:2 * n] * c_prev[k]
+            c += s[:n] * t[2 * n:3 * n]
+            x = s[3 * n:] * np.tanh(c)
+            h_next[k] = x
+            c_next[k] = c
+        return _softmax(_forward(self.head, x)), (h_next, c_next)
+
+    def probabilities_batch(self, observations: np.ndarray, states: Sequence[LSTMState]
+                            ) -> tuple[np.ndarray, list[LSTMState]]:
+        """Probabilities ``(B, n_actions)`` and next states of ``B`` observations, one state per row."""
+        x = np.asarray(observations, dtype=self.dtype).reshape(len(observations), -1)
+        if len(states) != len(x):
+            raise ValueError(f"{len(x)} observations but {len(states)} states")
+        h_prev = np.stack([s[0] for s in states], axis=1)  # (layers, B, n)
+        c_prev = np.stack([s[1] for s in states], axis=1)
+        n = self.hidden_size
+        h_next = np.empty_like(h_prev)
+        c_next = np.empty_like(c_prev)
+        for k, (w_ih, w_hh, bias) in enumerate(self.lstm):
+            t = np.tanh(x @ w_ih + h_prev[k] @ w_hh + bias)
+            s = 0.5 * t + 0.5
+            c = s[:, n:2 * n] * c_prev[k] + s[:, :n] * t[:, 2 * n:3 * n]
+            x = s[:, 3 * n:] * np.tanh(c)
+            h_next[k] = x
+            c_next[k] = c
+        next_states = [(h_next[:, b].copy(), c_next[:, b].copy()) for b in range(len(x))]
+        return _softmax(_forward(self.head, x)), next_states
+
+    def __repr__(self) -> str:
+        return (f"{type(self).__name__}(observation_size={self.observation_size}, hidden_size={self.hidden_size}, "
+                f"n_layers={self.n_layers}, n_actions={self.n_actions})")
+
+
+def _cast_layer(layer: Layer, dtype: np.dtype) -> Layer:
+    name, a, b = layer
+    if name == "linear":
+        return name, np.ascontiguousarray(a, dtype=dtype), np.ascontiguousarray(b, dtype=dtype)
+    _activate(name, a, np.zeros(1))  # fails early on an unknown name
+    return name, float(a), None
+
+
+def _n_outputs(layers: Sequence[Layer]) -> int:
+    linear = [a for name, a, _ in layers if name == "linear"]
+    if not linear:
+        raise ValueError("the policy head needs at least the action layer")
+    return int(linear[-1].shape[1])
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# From SB3 models
+# ---------------------------------------------------------------------------------------------------------------
+
+def policy_from_model(model: Any, dtype: Any = np.float64) -> NumpyMLPPolicy | NumpyLSTMPolicy:
+    """Numpy copy of the actor of a trained SB3 model (or of its ``policy``), as a :class:`StepPolicy`.
+
+    Supports ``RecurrentPPO`` + ``MlpLstmPolicy`` (:class:`NumpyLSTMPolicy`) and ``PPO`` / ``TRPO`` (any
+    ``ActorCriticPolicy``) + ``MlpPolicy`` (:class:`NumpyMLPPolicy`), with a ``Discrete`` action space and a
+    non-image ``Box`` observation space read through a ``FlattenExtractor``. Raises ``TypeError`` for other
+    algorithms, policies, feature extractors, spaces or activation functions, and ``ValueError`` for unsupported
+    LSTM options (projections, bidirectional, batch-first). The weights are copied once; later training of the
+    model does not change the returned policy. The probabilities follow ``model.action_space`` order (index ``i``
+    is action ``action_space.start + i``).
+    """
+    from gymnasium import spaces
+    from stable_baselines3.common.distributions import CategoricalDistribution
+    from stable_baselines3.common.policies import ActorCriticPolicy
+    from stable_baselines3.common.torch_layers import FlattenExtractor, MlpExtractor
+
+    policy = getattr(model, "policy", model)
+    what = type(model).__name__ + ("" if policy is model else f" ({type(policy).__name__})")
+    if not isinstance(policy, ActorCriticPolicy):
+        raise TypeError(f"policy_from_model supports actor-critic policies (PPO, TRPO, RecurrentPPO), not {what}")
+    if not isinstance(policy.action_space, spaces.Discrete):
+        raise TypeError(f"policy_from_model supports Discrete action spaces only, {what} has "
+                        f"{type(policy.action_space).__name__}")
+    if not isinstance(policy.action_dist, CategoricalDistribution):
+        raise TypeError(f"unsupported action distribution {type(policy.action_dist).__name__} in {what}")
+    space = policy.observation_space
+    if not isinstance(space, spaces.Box):
+        raise TypeError(f"policy_from_model supports Box observations only, {what} has {type(space).__name__}")
+    from stable_baselines3.common.preprocessing import is_image_space
+
+    if policy.normalize_images and is_image_space(space, check_channels=False):
+        raise TypeError(f"image observations (normalised by SB3) are not supported: {space}")
+    extractor = policy.pi_features_extractor
+    if type(extractor) is not FlattenExtractor:
+        raise TypeError(f"policy_from_model supports FlattenExtractor only, {what} uses {type(extractor).__name__} "
+                        "(use MlpPolicy / MlpLstmPolicy)")
+    mlp = policy.mlp_extractor
+    if not isinstance(mlp, MlpExtractor) or type(mlp).forward_actor is not MlpExtractor.forward_actor:
+        raise TypeError(f"unsupported mlp_extractor {type(mlp).__name__} in {what}")
+    observation_size = int(np.prod(space.shape))
+    head = _sequential_layers(mlp.policy_net) + [_linear_layer(policy.action_net)]
+
+    try:
+        from sb3_contrib.common.recurrent.policies import RecurrentActorCriticPolicy
+    except ImportError:  # pragma: no cover - sb3-contrib is a dependency
+        RecurrentActorCriticPolicy = None  # noqa: N806
+
+    if RecurrentActorCriticPolicy is not None and isinstance(policy, RecurrentActorCriticPolicy):
+        _check_overrides(policy, RecurrentActorCriticPolicy, ("get_distribution", "_process_sequence"), what)
+        return NumpyLSTMPolicy(_lstm_layers(policy.lstm_actor), head, observation_size, dtype)
+    if hasattr(policy, "lstm_actor"):
+        raise TypeError(f"unsupported recurrent policy {what}")
+    _check_overrides(policy, ActorCriticPolicy, ("get_distribution", "_get_action_dist_from_latent"), what)
+    return NumpyMLPPolicy(head, observation_size, dtype)
+
+
+def _check_overrides(policy: Any, base: type, methods: Sequence[str], what: str) -> None:
+    for method in methods:
+        if getattr(type(policy), method) is not getattr(base, method):
+            raise TypeError(f"{what} overrides {method}; policy_from_model cannot reproduce it")
+
+
+def _numpy(tensor: Any) -> np.ndarray:
+    return tensor.detach().cpu().double().numpy().copy()
+
+
+def _linear_layer(module: Any) -> Layer:
+    from torch import nn
+
+    if type(module) is not nn.Linear:
+        raise TypeError(f"expected a Linear layer, got {type(module).__name__}")
+    bias = _numpy(module.bias) if module.bias is not None else np.zeros(module.out_features)
+    return "linear", _numpy(module.weight).T, bias
+
+
+def _sequential_layers(net: Any) -> list[Layer]:
+    from torch import nn
+
+    modules = list(net) if isinstance(net, nn.Sequential) else [net]
+    layers: list[Layer] = []
+    for module in modules:
+        if type(module) is nn.Linear:
+            layers.append(_linear_layer(module))
+        elif isinstance(module, nn.Dropout):  # the identity at inference
+            continue
+        else:
+            name, param = _activation_spec(module)
+            if name != "identity":
+                layers.append((name, param, None))
+    return layers
+
+
+def _lstm_layers(lstm: Any) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+    from torch import nn
+
+    if type(lstm) is not nn.LSTM:
+        raise TypeError(f"expected torch.nn.LSTM as lstm_actor, got {type(lstm).__name__}")
+    if lstm.bidirectional or lstm.proj_size or lstm.batch_first:
+        raise ValueError("unsupported LSTM options (bidirectional, proj_size or batch_first) in lstm_actor")
+    layers = []
+    for k in range(lstm.num_layers):
+        w_ih = _numpy(getattr(lstm, f"weight_ih_l{k}"))
+        w_hh = _numpy(getattr(lstm, f"weight_hh_l{k}"))
+        bias = np.zeros(w_ih.shape[0])
+        if lstm.bias:
+            bias = _numpy(getattr(lstm, f"bias_ih_l{k}")) + _numpy(getattr(lstm, f"bias_hh_l{k}"))
+        layers.append((w_ih.T, w_hh.T, bias))
+    return layers
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Scripted policies
+# ---------------------------------------------------------------------------------------------------------------
+
+class ScriptedPolicy:
+    """Deterministic policy: ``choose(observation, step_in_call) -> action`` with one-hot probabilities.
+
+    The state is the number of steps since the start of the call (``initial_state()`` is 0). Picklable when
+    ``choose`` is (a module-level function, not a lambda or closure).
+    """
+
+    def __init__(self, n_actions: int, choose: Callable[[np.ndarray, int], int]) -> None:
+        if n_actions < 1:
+            raise ValueError(f"n_actions must be positive, got {n_actions}")
+        self.n_actions = int(n_actions)
+        self.choose = choose
+
+    def initial_state(self) -> int:
+        return 0
+
+    def probabilities(self, observation: np.ndarray, state: int) -> tuple[np.ndarray, int]:
+        return _one_hot(int(self.choose(observation, state)), self.n_actions), state + 1
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}(n_actions={self.n_actions}, choose={getattr(self.choose, '__name__', '?')})"
+
+
+class SequencePolicy:
+    """Plays ``actions`` in order, one per step of the call, ignoring observations.
+
+    After the last action it keeps repeating that action (``when_exhausted="repeat"``, the default) or raises
+    ``IndexError`` (``when_exhausted="raise"``). The state is the number of steps since the start of the call.
+    """
+
+    def __init__(self, n_actions: int, actions: Sequence[int], when_exhausted: str = "repeat") -> None:
+        if n_actions < 1:
+            raise ValueError(f"n_actions must be positive, got {n_actions}")
+        if when_exhausted not in ("repeat", "raise"):
+            raise ValueError(f"when_exhausted must be 'repeat' or 'raise', got {when_exhausted!r}")
+        self.n_actions = int(n_actions)
+        self.actions = tuple(int(a) for a in actions)
+        if not self.actions:
+            raise ValueError("SequencePolicy needs at least one action")
+        bad = [a for a in self.actions if not 0 <= a < self.n_actions]
+        if bad:
+            raise ValueError(f"actions {bad} out of range for {self.n_actions} actions")
+        self.when_exhausted = when_exhausted
+
+    def initial_state(self) -> int:
+        return 0
+
+    def probabilities(self, observation: np.ndarray, state: int) -> tuple[np.ndarray, int]:
+        if state >= len(self.actions):
+            if self.when_exhausted == "raise":
+                raise IndexError(f"SequencePolicy exhausted after {len(self.actions)} actions")
+            return _one_hot(self.actions[-1], self.n_actions), state + 1
+        return _one_hot(self.actions[state], self.n_actions), state + 1
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}(n_actions={self.n_actions}, actions={list(self.actions)})"
+
+
+def _one_hot(action: int, n: int) -> np.ndarray:
+    if not 0 <= action < n:
+        raise ValueError(f"action {action} out of range for {n} actions")
+    probs = np.zeros(n)
+    probs[action] = 1.0
+    return probs
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Sampling
+# ---------------------------------------------------------------------------------------------------------------
+
+def sample_action(probabilities: np.ndarray, rng: np.random.Generator) -> int:
+    """Draw an action index from ``probabilities`` (1-D, non-negative, normalised or not) by inverse CDF.
+
+    One ``rng.random()`` per call (much faster than ``rng.choice``); actions of zero probability are never drawn.
+    """
+    cdf = np.cumsum(probabilities)
+    total = cdf[-1]
+    if not total > 0.0:
+        raise ValueError(f"probabilities must have a positive finite sum, got {total}")
+    index = int(np.searchsorted(cdf, rng.random() * total, side="right"))
+    if index >= len(cdf):  # rounding at the top end: the last action of positive probability
+        index = int(np.flatnonzero(np.asarray(probabilities) > 0)[-1])
+    return index
+
+
+def sample_actions(probabilities: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """Draw one action per row of ``probabilities`` ``(B, n_actions)``, as :func:`sample_action` does per row."""
+    p = np.asarray(probabilities, dtype=np.float64)
+    cdf = np.cumsum(p, axis=1)
+    total = cdf[:, -1:]
+    if not np.all(total > 0.0):
+        raise ValueError("every row of probabilities must have a positive finite sum")
+    u = rng.random((len(p), 1)) * total
+    index = (cdf <= u).sum(axis=1)
+    top = index >= p.shape[1]
+    if top.any():
+        last = p.shape[1] - 1 - np.argmax(p[:, ::-1] > 0, axis=1)
+        index[top] = last[top]
+    return index
