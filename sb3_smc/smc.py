@@ -79,6 +79,11 @@ class SMC:
         if _calls(self, self.name):
             raise ValueError(f"SMC {self.name!r} calls itself (directly or through its children)")
 
+    def __deepcopy__(self, memo: dict) -> SMC:
+        # An SMC is frozen once built: copies of env specs, wrappers and configs share it (its model may hold
+        # torch tensors that cannot be deep-copied, and copying a policy per env would waste memory).
+        return self
+
     @property
     def action_names(self) -> tuple[str, ...]:
         return smc_action_names(self.kind, [c.name for c in self.children], self.include_primitives)

@@ -43,7 +43,7 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
 
     def __init__(self, env: gym.Env, smcs: Sequence[SMC] = (), *, include_primitives: bool = True,
                  count_primitive_steps: bool = False, call_step_cap: int = 100) -> None:
-        gym.utils.RecordConstructorArgs.__init__(self, smcs=smcs, include_primitives=include_primitives,
+        gym.utils.RecordConstructorArgs.__init__(self, smcs=tuple(smcs), include_primitives=include_primitives,
                                                  count_primitive_steps=count_primitive_steps,
                                                  call_step_cap=call_step_cap)
         super().__init__(env)

@@ -188,3 +188,23 @@ def test_wrapper_passes_gymnasium_and_sb3_checks() -> None:
             warnings.filterwarnings("ignore", message=".*is different from the unwrapped version")
             gym_check_env(env, skip_render_check=True)
             sb3_check_env(env)
+
+
+def test_wrapping_a_trained_smc_shares_it() -> None:
+    import copy
+
+    from sb3_contrib import RecurrentPPO
+
+    from sb3_smc.policies import policy_from_model
+
+    env = HierarchicalSMCWrapper(base_env())
+    model = RecurrentPPO("MlpLstmPolicy", env, n_steps=32, batch_size=32, seed=0, device="cpu",
+                         policy_kwargs={"lstm_hidden_size": 8})
+    model.learn(32)
+    child = SMC("trained", "bring-about", policy_from_model(model), model=model)
+    wrapped = HierarchicalSMCWrapper(gym.make("PW-ba_self-in-container_from_directly-above-v0"), [child])
+    assert copy.deepcopy(child) is child
+    assert wrapped.spec.additional_wrappers[-1].kwargs["smcs"][0] is child  # the spec shares, never copies
+    wrapped.reset(seed=0)
+    _, _, _, _, info = act(wrapped, "SMC:trained")
+    assert info["smc_calls"][0]["smc"] == "trained"

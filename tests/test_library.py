@@ -1,0 +1,466 @@
+"""SMCLibrary: save/load round trip in a fresh process, validation errors, atomic saves."""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+import pytest
+import torch
+from sb3_contrib import TRPO, RecurrentPPO
+from stable_baselines3 import PPO
+
+import pixelworld_env  # noqa: F401  (registers the PW-* ids)
+from sb3_smc.library import (
+    FORMAT,
+    FORMAT_VERSION,
+    CorruptModelError,
+    LayoutMismatchError,
+    LibraryError,
+    ManifestError,
+    MissingChildError,
+    SMCLibrary,
+    UnknownSMCError,
+)
+from sb3_smc.policies import ScriptedPolicy, policy_from_model
+from sb3_smc.smc import SMC
+from sb3_smc.wrapper import HierarchicalSMCWrapper
+
+CL_ID = "PW-cl_self-in-left-corner_vs_on-hline-v0"
+BA_ID = "PW-ba_self-in-container_from_on-floor-v0"
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _metadata(env_id: str, algo: str, seed: int) -> dict:
+    return {"env_id": env_id, "datasets": list(gym.spec(env_id).kwargs["datasets"]), "algo": algo,
+            "seed": seed, "selected_update": np.int64(3), "training_return": np.float32(0.25), "test_score": 0.5,
+            "total_timesteps": 64, "hyperparameters": {"gamma": 0.99, "policy_kwargs": {"net_arch": (32,)}}}
+
+
+def _smc(name: str, env_id: str, algo: type, children=(), seed: int = 0, learn: bool = False) -> SMC:
+    """An SMC with an untrained model whose weights are perturbed (far from uniform probabilities), or trained."""
+    env = HierarchicalSMCWrapper(gym.make(env_id), children)
+    policy = "MlpLstmPolicy" if algo is RecurrentPPO else "MlpPolicy"
+    kwargs = {"policy_kwargs": {"lstm_hidden_size": 32}} if algo is RecurrentPPO else {}
+    model = algo(policy, env, n_steps=32, batch_size=32, seed=seed, device="cpu", **kwargs)
+    if learn:
+        model.learn(32)
+    generator = torch.Generator().manual_seed(seed)
+    with torch.no_grad():
+        for parameter in model.policy.parameters():
+            parameter.add_(0.3 * torch.randn(parameter.shape, generator=generator))
+    return SMC(name, env.unwrapped.kind, policy_from_model(model), children=children, model=model,
+               metadata=_metadata(env_id, algo.__name__, seed))
+
+
+@pytest.fixture(scope="module")
+def smcs() -> dict[str, SMC]:
+    torch.set_num_threads(1)
+    corner = _smc("corner", CL_ID, RecurrentPPO)                       # recurrent, classification
+    container = _smc("container", BA_ID, TRPO, seed=1)                  # MLP, bring-about
+    corner_ppo = _smc("corner-ppo", CL_ID, PPO, seed=2)                 # PPO
+    climber = _smc("climber", BA_ID, RecurrentPPO, children=(corner, container), seed=3, learn=True)  # two levels
+    return {s.name: s for s in (corner, container, corner_ppo, climber)}
+
+
+@pytest.fixture(scope="module")
+def saved(smcs, tmp_path_factory) -> Path:
+    library = SMCLibrary([smcs["climber"], smcs["corner-ppo"]])
+    return library.save(tmp_path_factory.mktemp("saved") / "library")
+
+
+@pytest.fixture
+def copy(saved, tmp_path) -> Path:
+    """A private copy of the saved library, to break."""
+    return Path(shutil.copytree(saved, tmp_path / "library"))
+
+
+def _edit(path: Path, change) -> None:
+    manifest = json.loads((path / "manifest.json").read_text())
+    change(manifest)
+    (path / "manifest.json").write_text(json.dumps(manifest))
+
+
+def _observations(size: int, n: int = 6, seed: int = 0) -> np.ndarray:
+    return np.random.default_rng(seed).integers(0, 2, size=(n, size)).astype(np.float32)
+
+
+def _trace(policy, observations: np.ndarray) -> np.ndarray:
+    """Probabilities of ``policy`` along ``observations`` (one call: the state carries over)."""
+    state, rows = policy.initial_state(), []
+    for obs in observations:
+        probabilities, state = policy.probabilities(obs, state)
+        rows.append(probabilities)
+    return np.array(rows)
+
+
+# ------------------------------------------------------------------------------------------------ round trip
+
+def test_round_trip_in_a_fresh_process(smcs, saved, tmp_path):
+    expected = {}
+    for name, smc in smcs.items():
+        observations = _observations(smc.observation_size, seed=len(name))
+        expected[f"{name}/obs"] = observations
+        expected[f"{name}/probs"] = _trace(smc.policy, observations)
+    np.savez(tmp_path / "expected.npz", **expected)
+    metadata = {name: SMCLibrary([smc]).entry(name)["metadata"] for name, smc in smcs.items()}
+    (tmp_path / "metadata.json").write_text(json.dumps(metadata))
+    script = textwrap.dedent(f"""
+        import json, sys
+        import torch
+        torch.set_num_threads(1)
+        import gymnasium as gym
+        import numpy as np
+        import pixelworld_env
+        from sb3_smc.library import SMCLibrary
+
+        library = SMCLibrary.load({str(saved)!r})
+        assert library.names == ("corner", "container", "climber", "corner-ppo"), library.names
+        expected = np.load({str(tmp_path / "expected.npz")!r})
+        metadata = json.load(open({str(tmp_path / "metadata.json")!r}))
+        for name in library.names:
+            smc = library[name]
+            state, rows = smc.policy.initial_state(), []
+            for obs in expected[name + "/obs"]:
+                p, state = smc.policy.probabilities(obs, state)
+                rows.append(p)
+            np.testing.assert_allclose(np.array(rows), expected[name + "/probs"], rtol=0, atol=1e-12)
+            assert smc.metadata == metadata[name], (smc.metadata, metadata[name])
+        climber = library["climber"]
+        assert [c.name for c in climber.children] == ["corner", "container"]
+        assert climber.children[0] is library["corner"] and climber.children[1] is library["container"]
+        assert type(climber.model).__name__ == "RecurrentPPO" and type(library["container"].model).__name__ == "TRPO"
+        assert type(library["corner-ppo"].model).__name__ == "PPO"
+        assert climber.action_names[-2:] == ("SMC:corner", "SMC:container")
+        # the two-level SMC runs as an action, calling its own children
+        env = library.wrap(gym.make({BA_ID!r}), ["climber"], call_step_cap=20)
+        env.reset(seed=0)
+        _, _, _, _, info = env.step(env.action_names.index("SMC:climber"))
+        assert info["smc_calls"][-1]["smc"] == "climber", info
+        print("ok")
+    """)
+    result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, cwd=ROOT, timeout=120)
+    assert result.returncode == 0, result.stdout + result.stderr
+    assert result.stdout.strip().endswith("ok")
+
+
+def test_manifest_records_each_smc(saved, smcs):
+    manifest = json.loads((saved / "manifest.json").read_text())
+    assert manifest["format"] == FORMAT and manifest["version"] == FORMAT_VERSION
+    assert {"sb3_smc", "stable_baselines3", "sb3_contrib", "torch"} <= set(manifest["created_with"])
+    entry = manifest["smcs"]["climber"]
+    assert entry["kind"] == "bring-about" and entry["algo"] == "RecurrentPPO"
+    assert entry["env_id"] == BA_ID and entry["datasets"] == ["ba_self-in-container_from_on-floor"]
+    assert entry["children"] == ["corner", "container"]
+    assert entry["action_names"] == list(smcs["climber"].action_names)
+    assert entry["observation"] == {"size": 81 + 2 + 7, "window": 81, "outcomes": 2, "previous_action": 7}
+    assert (entry["seed"], entry["selected_update"], entry["training_return"], entry["test_score"]) == (3, 3, 0.25, 0.5)
+    assert entry["model"] == "models/climber.zip" and (saved / entry["model"]).is_file()
+    assert len(entry["sha256"]) == 64
+    assert manifest["smcs"]["corner"]["action_names"] == ["SIG0", "SIG1", "DOWN", "RIGHT", "UP", "LEFT"]
+
+
+def test_mapping_interface_and_add(smcs):
+    library = SMCLibrary()
+    stored = library.add(smcs["climber"])  # children first, recursively
+    assert library.names == ("corner", "container", "climber") and len(library) == 3
+    assert stored is smcs["climber"] and "corner" in library and "nope" not in library
+    library.add(smcs["corner"])  # the same SMC again: nothing changes
+    assert library.names == ("corner", "container", "climber")
+    with pytest.raises(LibraryError, match="child of"):
+        library.remove("corner")
+    assert library.remove("climber") is smcs["climber"]
+
+
+def test_unknown_name_suggests_close_names(smcs):
+    library = SMCLibrary([smcs["climber"]])
+    with pytest.raises(UnknownSMCError, match="did you mean 'corner'") as info:
+        library["coner"]
+    assert isinstance(info.value, KeyError) and "no SMC named 'coner'" in str(info.value)
+    with pytest.raises(UnknownSMCError, match="did you mean 'climber'"):
+        library.wrap(gym.make(BA_ID), ["climbr"])
+
+
+def test_conflicting_and_replaced_smcs(smcs):
+    library = SMCLibrary([smcs["climber"]])
+    other_corner = _smc("corner", CL_ID, RecurrentPPO, seed=7)
+    with pytest.raises(LibraryError, match="different SMC named 'corner'"):
+        library.add(other_corner)
+    library.add(other_corner, replace=True)
+    assert library["corner"] is other_corner
+    assert library["climber"].children[0] is other_corner  # the parent calls the new child by name
+
+
+def test_scripted_smcs_cannot_be_stored():
+    scripted = SMC("walker", "bring-about", ScriptedPolicy(5, lambda obs, step: 1))
+    with pytest.raises(LibraryError, match="'walker' has no model .*scripted"):
+        SMCLibrary().add(scripted)
+    env = HierarchicalSMCWrapper(gym.make(BA_ID), [scripted])
+    model = PPO("MlpPolicy", env, n_steps=32, batch_size=32, device="cpu")
+    parent = SMC("parent", "bring-about", policy_from_model(model), children=[scripted], model=model)
+    library = SMCLibrary()
+    with pytest.raises(LibraryError, match="'walker' has no model"):
+        library.add(parent)
+    assert len(library) == 0
+
+
+def test_add_is_all_or_nothing(smcs):
+    corner, container = smcs["corner"], smcs["container"]
+    scripted = SMC("walker", "bring-about", ScriptedPolicy(5, lambda obs, step: 1))
+    env = HierarchicalSMCWrapper(gym.make(BA_ID), [corner, scripted])
+    model = PPO("MlpPolicy", env, n_steps=32, batch_size=32, device="cpu")
+    parent = SMC("parent", "bring-about", policy_from_model(model), children=[corner, scripted], model=model)
+    library = SMCLibrary([container])
+    with pytest.raises(LibraryError, match="'walker' has no model"):
+        library.add(parent)
+    assert library.names == ("container",)  # 'corner' was not left behind
+
+
+def test_model_that_does_not_fit_the_smc_is_refused(smcs):
+    corner = smcs["corner"]
+    wrong = SMC("corner", "bring-about", corner.policy, model=corner.model)  # 5 actions, the model has 6
+    with pytest.raises(LayoutMismatchError, match="has 6 actions"):
+        SMCLibrary().add(wrong)
+
+
+# ------------------------------------------------------------------------------------------------ environments
+
+def test_wrap_and_env_for(saved):
+    library = SMCLibrary.load(saved)
+    env = library.wrap(gym.make(CL_ID), ["container", "climber"], include_primitives=False)
+    assert env.action_names == ("SIG0", "SIG1", "SMC:container", "SMC:climber")
+    assert env.observation_space.shape == (81 + 2 + 4,)
+    own = library.env_for("climber", gym.make(BA_ID))
+    assert own.action_names == library["climber"].action_names
+    obs, _ = own.reset(seed=0)
+    action, _ = library["climber"].model.predict(obs)
+    assert own.action_space.contains(int(action))
+
+
+def test_env_of_the_other_kind_is_a_layout_mismatch(saved):
+    library = SMCLibrary.load(saved)
+    with pytest.raises(LayoutMismatchError, match="'corner' acts on classification tasks.*bring-about task"):
+        library.env_for("corner", gym.make(BA_ID))
+    with pytest.raises(LayoutMismatchError, match="'container' acts on bring-about tasks.*classification task"):
+        library.env_for("container", gym.make(CL_ID))
+    with pytest.raises(LayoutMismatchError, match="PixelWorld environments; got CartPoleEnv"):
+        library.wrap(gym.make("CartPole-v1"), ["corner"])
+    with pytest.raises(LayoutMismatchError, match="already wrapped"):
+        library.wrap(library.wrap(gym.make(CL_ID), ["corner"]), ["container"])
+
+
+# ------------------------------------------------------------------------------------------------ broken libraries
+
+@pytest.mark.parametrize("damage", ["truncated", "random"])
+def test_corrupt_model_file(copy, damage):
+    model = copy / "models" / "corner.zip"
+    data = model.read_bytes()
+    model.write_bytes(data[: len(data) // 2] if damage == "truncated" else os.urandom(len(data)))
+    with pytest.raises(CorruptModelError, match=r"'corner': model file .*corner\.zip is corrupt or truncated"):
+        SMCLibrary.load(copy)
+
+
+def test_modified_model_file_fails_its_checksum(copy):
+    shutil.copyfile(copy / "models" / "climber.zip", copy / "models" / "corner.zip")
+    with pytest.raises(CorruptModelError, match="does not match the SHA-256"):
+        SMCLibrary.load(copy)
+
+
+def test_missing_model_file(copy):
+    (copy / "models" / "container.zip").unlink()
+    with pytest.raises(CorruptModelError, match="'container': model file .* is missing"):
+        SMCLibrary.load(copy)
+
+
+@pytest.mark.parametrize(("version", "message"), [
+    (2, "version 2 is newer than this sb3_smc reads .*upgrade sb3_smc"),
+    (0, "incompatible manifest version 0"),
+    ("1", "version must be an integer"),
+])
+def test_incompatible_manifest_version(copy, version, message):
+    _edit(copy, lambda m: m.update(version=version))
+    with pytest.raises(ManifestError, match=message):
+        SMCLibrary.load(copy)
+
+
+def test_not_a_manifest(copy, tmp_path):
+    _edit(copy, lambda m: m.update(format="something-else"))
+    with pytest.raises(ManifestError, match="not an SMC library manifest"):
+        SMCLibrary.load(copy)
+    (copy / "manifest.json").write_text('{"format": "sb3-smc-library", "vers')
+    with pytest.raises(ManifestError, match="not valid JSON"):
+        SMCLibrary.load(copy)
+    with pytest.raises(ManifestError, match="no SMC library at .*manifest.json not found"):
+        SMCLibrary.load(tmp_path / "nowhere")
+
+
+def test_missing_field(copy):
+    _edit(copy, lambda m: m["smcs"]["corner"].pop("algo"))
+    with pytest.raises(ManifestError, match=r"entry 'corner' lacks the field\(s\) \['algo'\]"):
+        SMCLibrary.load(copy)
+
+
+def test_missing_child(copy):
+    def rename(manifest):
+        manifest["smcs"]["corner-v2"] = manifest["smcs"].pop("corner")
+
+    _edit(copy, rename)
+    with pytest.raises(MissingChildError, match="'climber' calls child 'corner', which is not in the library; "
+                                                "did you mean 'corner-v2'"):
+        SMCLibrary.load(copy)
+
+
+def test_cycle(copy):
+    def cycle(manifest):
+        corner = manifest["smcs"]["corner"]
+        corner["children"] = ["climber"]
+        corner["action_names"].append("SMC:climber")
+        corner["observation"] = {"size": 81 + 1 + 7, "window": 81, "outcomes": 1, "previous_action": 7}
+
+    _edit(copy, cycle)
+    with pytest.raises(LibraryError, match="cycle: (corner -> climber -> corner|climber -> corner -> climber)"):
+        SMCLibrary.load(copy)
+
+
+def test_manifest_layout_disagrees_with_kind_and_children(copy):
+    _edit(copy, lambda m: m["smcs"]["climber"]["action_names"].reverse())
+    with pytest.raises(LayoutMismatchError, match="'climber': action names .* do not match its kind"):
+        SMCLibrary.load(copy)
+
+
+def test_manifest_observation_size_disagrees(copy):
+    _edit(copy, lambda m: m["smcs"]["container"]["observation"].update(size=90))
+    with pytest.raises(LayoutMismatchError, match="'container': observation .* does not match"):
+        SMCLibrary.load(copy)
+
+
+def test_manifest_actions_disagree_with_the_model(copy):
+    def other_kind(manifest):  # consistent in itself, but the model has 6 actions and 87 inputs
+        entry = manifest["smcs"]["corner-ppo"]
+        entry["kind"] = "bring-about"
+        entry["action_names"] = ["SIG1", "DOWN", "RIGHT", "UP", "LEFT"]
+        entry["observation"] = {"size": 86, "window": 81, "outcomes": 0, "previous_action": 5}
+
+    _edit(copy, other_kind)
+    with pytest.raises(LayoutMismatchError, match=r"'corner-ppo': the PPO model in .* has 6 actions, but its action "
+                                                  r"names are 5"):
+        SMCLibrary.load(copy)
+
+
+def test_manifest_observation_disagrees_with_the_model(copy):
+    _edit(copy, lambda m: m["smcs"]["corner"].update(frame_stack=2))
+    with pytest.raises(LayoutMismatchError, match=r"'corner': .* observation shape \(87,\), but its observation "
+                                                  r"layout is \(174,\)"):
+        SMCLibrary.load(copy)
+
+
+def test_unknown_algorithm(copy):
+    _edit(copy, lambda m: m["smcs"]["corner"].update(algo="A2C"))
+    with pytest.raises(ManifestError, match="unknown algorithm 'A2C'"):
+        SMCLibrary.load(copy)
+
+
+# ------------------------------------------------------------------------------------------------ atomic saves
+
+def _leftovers(folder: Path) -> list[str]:
+    return sorted(p.name for p in folder.iterdir() if p.name.startswith("."))
+
+
+def test_failed_save_keeps_the_previous_library(smcs, tmp_path, monkeypatch):
+    target = tmp_path / "library"
+    SMCLibrary([smcs["corner"]]).save(target)
+    before = (target / "manifest.json").read_bytes()
+
+    def broken_save(self, path, *args, **kwargs):
+        Path(path).write_bytes(b"half a model")
+        raise OSError("disk full")
+
+    monkeypatch.setattr(TRPO, "save", broken_save)
+    library = SMCLibrary([smcs["climber"]])
+    with pytest.raises(OSError, match="disk full"):
+        library.save(target)
+    assert (target / "manifest.json").read_bytes() == before
+    assert SMCLibrary.load(target).names == ("corner",)
+    assert _leftovers(tmp_path) == []
+    monkeypatch.undo()
+    library.save(target)  # and a later save replaces it completely
+    assert SMCLibrary.load(target).names == ("corner", "container", "climber")
+    assert _leftovers(tmp_path) == [] and sorted(os.listdir(target / "models")) == [
+        "climber.zip", "container.zip", "corner.zip"]
+
+
+def test_failed_swap_restores_the_previous_library(smcs, tmp_path, monkeypatch):
+    target = tmp_path / "library"
+    SMCLibrary([smcs["corner"]]).save(target)
+    real_rename = os.rename
+
+    def rename(src, dst):
+        if ".saving-" in str(src):
+            raise OSError("rename failed")
+        real_rename(src, dst)
+
+    monkeypatch.setattr("sb3_smc.library.os.rename", rename)
+    with pytest.raises(OSError, match="rename failed"):
+        SMCLibrary([smcs["container"]]).save(target)
+    assert SMCLibrary.load(target).names == ("corner",)
+    assert _leftovers(tmp_path) == []
+
+
+def test_save_to_own_path_and_refusals(smcs, tmp_path):
+    library = SMCLibrary([smcs["corner"]])
+    with pytest.raises(LibraryError, match="needs a path"):
+        library.save()
+    library.save(tmp_path / "library")
+    library.add(smcs["container"])
+    library.save()
+    assert SMCLibrary.load(tmp_path / "library").names == ("corner", "container")
+    (tmp_path / "notes").mkdir()
+    (tmp_path / "notes" / "todo.txt").write_text("keep me")
+    with pytest.raises(LibraryError, match="refusing to replace .*notes"):
+        library.save(tmp_path / "notes")
+    (tmp_path / "file").write_text("keep me")
+    with pytest.raises(LibraryError, match="it is a file"):
+        library.save(tmp_path / "file")
+    assert (tmp_path / "notes" / "todo.txt").read_text() == "keep me"
+    assert _leftovers(tmp_path) == []
+
+
+def test_interrupted_save_is_reported(saved, tmp_path):
+    shutil.copytree(saved, tmp_path / ".library.saving-abc123")
+    with pytest.raises(ManifestError, match="interrupted: found a complete new library at .*saving-abc123"):
+        SMCLibrary.load(tmp_path / "library")
+
+
+def test_names_that_are_not_file_names(smcs, tmp_path):
+    corner = smcs["corner"]
+    odd = SMC("cl/left corner:v1", corner.kind, corner.policy, model=corner.model, metadata=corner.metadata)
+    path = SMCLibrary([odd]).save(tmp_path / "library")
+    entry = json.loads((path / "manifest.json").read_text())["smcs"]["cl/left corner:v1"]
+    assert entry["model"].startswith("models/cl_left_corner_v1-") and (path / entry["model"]).is_file()
+    assert SMCLibrary.load(path).names == ("cl/left corner:v1",)
+
+
+def test_train_smc_output_round_trips(tmp_path):
+    """What ``train_smc`` returns (here a frame-stacked TRPO SMC) is stored with its provenance and replays."""
+    from sb3_smc.training import train_smc
+
+    smc = train_smc(CL_ID, algo="TRPO", total_timesteps=64, n_envs=1, n_steps=32, batch_size=32, frame_stack=2,
+                    seed=4, printer=lambda line: None)
+    smc.metadata["test_score"] = 0.75
+    library = SMCLibrary([smc])
+    entry = library.entry(smc.name)
+    assert (entry["env_id"], entry["seed"], entry["total_timesteps"], entry["test_score"]) == (CL_ID, 4, 64, 0.75)
+    assert entry["frame_stack"] == 2 and entry["selected_update"] == smc.metadata["selected_update"]
+    loaded = SMCLibrary.load(library.save(tmp_path / "library"))[smc.name]
+    assert type(loaded.policy).__name__ == "FrameStackPolicy" and loaded.policy.n_stack == 2
+    observations = _observations(smc.observation_size)
+    np.testing.assert_allclose(_trace(loaded.policy, observations), _trace(smc.policy, observations), rtol=0,
+                               atol=1e-12)
+    assert loaded.metadata["wrapper"] == smc.metadata["wrapper"]
