@@ -1,5 +1,33 @@
 """Sensorimotor contingencies (SMCs) for Stable-Baselines3: train them, reuse them as actions, save them."""
 
+from sb3_smc.library import (
+    CorruptModelError,
+    LayoutMismatchError,
+    LibraryError,
+    ManifestError,
+    MissingChildError,
+    SMCLibrary,
+    UnknownSMCError,
+)
+from sb3_smc.policies import ScriptedPolicy, SequencePolicy, policy_from_model, sample_action
 from sb3_smc.smc import SMC, StepPolicy, observation_size, smc_action_names
+from sb3_smc.wrapper import HierarchicalSMCWrapper
 
-__all__ = ["SMC", "StepPolicy", "observation_size", "smc_action_names"]
+__all__ = [
+    "SMC",
+    "CorruptModelError",
+    "HierarchicalSMCWrapper",
+    "LayoutMismatchError",
+    "LibraryError",
+    "ManifestError",
+    "MissingChildError",
+    "SMCLibrary",
+    "ScriptedPolicy",
+    "SequencePolicy",
+    "StepPolicy",
+    "UnknownSMCError",
+    "observation_size",
+    "policy_from_model",
+    "sample_action",
+    "smc_action_names",
+]
