@@ -119,11 +119,27 @@ def _lines(cells: list[tuple[int, int]]) -> dict[int, tuple[int, int]]:
     return spans
 
 
-def _directional(a_lines: dict[int, tuple[int, int]], b_lines: dict[int, tuple[int, int]],
-                 shared: range) -> bool:
-    """Every cell of ``a`` precedes every cell of ``b`` on each shared line, on at least one line."""
+def _strictly_before(a: WorldObject, b: WorldObject, axis: int,
+                     lines: Callable[[WorldObject], dict[int, tuple[int, int]]]) -> bool:
+    """``a`` before ``b`` along ``axis`` (1: columns, left of; 0: rows, above) on the lines they share.
+
+    The bboxes must share lines across ``axis``. If they are separated along ``axis`` the bboxes decide;
+    otherwise, on every shared line (``lines`` maps line -> (min, max) position along ``axis``), every cell of
+    ``a`` must precede every cell of ``b``, on at least one line where both have cells.
+    """
+    across = 1 - axis
+    a_lo, b_lo = a.position, b.position
+    a_hi = (a_lo[0] + a.size[0] - 1, a_lo[1] + a.size[1] - 1)
+    b_hi = (b_lo[0] + b.size[0] - 1, b_lo[1] + b.size[1] - 1)
+    if a_lo[across] > b_hi[across] or b_lo[across] > a_hi[across]:
+        return False
+    if a_hi[axis] < b_lo[axis]:
+        return True
+    if b_hi[axis] < a_lo[axis]:
+        return False
+    a_lines, b_lines = lines(a), lines(b)
     found = False
-    for line in shared:
+    for line in range(max(a_lo[across], b_lo[across]), min(a_hi[across], b_hi[across]) + 1):
         a_span, b_span = a_lines.get(line), b_lines.get(line)
         if a_span and b_span:
             if a_span[1] >= b_span[0]:
@@ -132,41 +148,30 @@ def _directional(a_lines: dict[int, tuple[int, int]], b_lines: dict[int, tuple[i
     return found
 
 
+def _rows(o: WorldObject) -> dict[int, tuple[int, int]]:
+    return _lines(list(o.pixels))
+
+
+def _columns(o: WorldObject) -> dict[int, tuple[int, int]]:
+    return _lines([(c, r) for r, c in o.pixels])
+
+
+def _columns_aaai18(o: WorldObject) -> dict[int, tuple[int, int]]:
+    """The original's columns: template cell (i, j) counted as column i + x, row j + y (spec §3.4)."""
+    top, left = o.position
+    return _lines([(i + left, j + top) for i, j in o.cells])
+
+
 def dir_left_of(a: WorldObject, b: WorldObject, ctx: EvalContext) -> bool:
-    at, al, ab, ar = _bbox(a)
-    bt, bl, bb, br = _bbox(b)
-    if at > bb or bt > ab:
-        return False
-    if ar < bl:
-        return True
-    if br < al:
-        return False
-    return _directional(_lines(sorted(a.pixels)), _lines(sorted(b.pixels)), range(max(at, bt), min(ab, bb) + 1))
+    return _strictly_before(a, b, 1, _rows)
 
 
 def dir_right_of(a: WorldObject, b: WorldObject, ctx: EvalContext) -> bool:
     return dir_left_of(b, a, ctx)
 
 
-def _transposed_lines(o: WorldObject, quirk: bool) -> dict[int, tuple[int, int]]:
-    """Cells keyed by column. With the AAAI-18 quirk, template cell (i, j) counts as column i + x, row j + y."""
-    (top, left) = o.position
-    if quirk:
-        return _lines([(i + left, j + top) for i, j in o.cells])
-    return _lines([(c, r) for r, c in o.pixels])
-
-
 def dir_above(a: WorldObject, b: WorldObject, ctx: EvalContext) -> bool:
-    at, al, ab, ar = _bbox(a)
-    bt, bl, bb, br = _bbox(b)
-    if al > br or bl > ar:
-        return False
-    if ab < bt:
-        return True
-    if bb < at:
-        return False
-    quirk = ctx.dir_above_quirk
-    return _directional(_transposed_lines(a, quirk), _transposed_lines(b, quirk), range(max(al, bl), min(ar, br) + 1))
+    return _strictly_before(a, b, 0, _columns_aaai18 if ctx.dir_above_quirk else _columns)
 
 
 def dir_below(a: WorldObject, b: WorldObject, ctx: EvalContext) -> bool:
