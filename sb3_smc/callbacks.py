@@ -1,0 +1,243 @@
+"""Training callbacks for SMCs: per-update task statistics, TensorBoard curves, best-snapshot selection, progress.
+
+:class:`SMCTrainingCallback` watches every rollout (one rollout = one policy update, 2,000 environment steps by
+default) and
+
+* computes the **mean training return** of the episodes that ended during the rollout and keeps a copy of the
+  policy that collected the rollout whenever that mean beats every earlier one (spec §5.4: the paper reports
+  the iteration with the maximum training ``AverageReturn``; ties go to the earliest update), see
+  :class:`BestSnapshot`;
+* records the task's own curves next to SB3's (``rollout/``, ``train/``) in the logger, so they reach
+  TensorBoard when the model has a ``tensorboard_log``:
+
+  ===================================================  ==========================================================
+  ``smc/training_return``                              mean undiscounted return of the episodes ended in the
+                                                       rollout (the selection statistic)
+  ``smc/best_training_return``                         the best mean training return so far
+  ``smc/selected_update``                              its update (0-based; the snapshot kept)
+  ``smc/success_rate``                                 fraction of those episodes with final reward > 0
+  ``smc/accuracy``                                     the same number, for classification tasks only
+  ``smc/episode_length``                               decisions per episode (an SMC call is one decision)
+  ``smc/episode_primitive_steps``                      primitive actions executed on the world per episode
+                                                       (moves, those of calls included, and the final signal)
+  ``smc/episodes``                                     episodes ended in the rollout
+  ``smc_calls/<child>/calls_per_episode``              direct calls of each child SMC per episode
+  ``smc_calls/<child>/call_share``                     fraction of the decisions that called the child
+  ``smc_calls/<child>/call_length``                    mean primitive steps per call of the child
+  ``smc_calls/<child>/sig1_rate``                      fraction of the child's calls that ended with SIG1
+  ===================================================  ==========================================================
+
+* optionally prints one progress line every ``log_every`` updates (``rich`` is not a dependency, so SB3's
+  ``progress_bar`` is not used).
+
+The callback is idempotent at the end of training (rl_zoo3 calls ``on_training_end`` twice).
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from stable_baselines3.common.callbacks import BaseCallback
+
+__all__ = ["BestSnapshot", "RolloutStats", "SMCTrainingCallback"]
+
+
+@dataclass
+class BestSnapshot:
+    """The selection rule of spec §5.4: keep the snapshot of the update with the highest mean training return.
+
+    Call :meth:`update` once per update with that update's mean return; ``snapshot`` (a callable) is only
+    evaluated when the return is a new maximum. Ties keep the earliest update; ``NaN`` returns (no episode ended
+    in the rollout) are recorded but never selected.
+    """
+
+    best_update: int | None = None
+    best_return: float = -math.inf
+    state: Any = None
+    returns: list[float] = field(default_factory=list)
+
+    def update(self, mean_return: float, snapshot: Callable[[], Any] | None = None) -> bool:
+        """Record the next update's mean return; return whether it became the selected one."""
+        index = len(self.returns)
+        value = float(mean_return)
+        self.returns.append(value)
+        if math.isnan(value) or value <= self.best_return:
+            return False
+        self.best_update, self.best_return = index, value
+        self.state = snapshot() if snapshot is not None else None
+        return True
+
+
+@dataclass
+class RolloutStats:
+    """What happened during one rollout (episodes ended in it, SMC calls made in it)."""
+
+    returns: list[float] = field(default_factory=list)
+    lengths: list[int] = field(default_factory=list)
+    primitive_lengths: list[int] = field(default_factory=list)
+    successes: list[bool] = field(default_factory=list)
+    decisions: int = 0
+    calls: dict[str, int] = field(default_factory=dict)
+    call_steps: dict[str, int] = field(default_factory=dict)
+    call_sig1: dict[str, int] = field(default_factory=dict)
+
+    @property
+    def mean_return(self) -> float:
+        return float(np.mean(self.returns)) if self.returns else math.nan
+
+    @property
+    def success_rate(self) -> float:
+        return float(np.mean(self.successes)) if self.successes else math.nan
+
+
+class SMCTrainingCallback(BaseCallback):
+    """Statistics, TensorBoard curves, best-snapshot selection and progress lines for SMC training.
+
+    ``children`` are the names of the SMCs the trained policy can call (their curves are written even when a
+    child is never called, as zeros); ``kind`` is the task kind ("classification" adds ``smc/accuracy``).
+    ``total_updates`` is only used for the progress line. After training, :attr:`best` holds the selection
+    (``best.state``: a deep copy of the policy's ``state_dict`` of the selected update) and :attr:`history`
+    one dict of statistics per update.
+    """
+
+    def __init__(self, *, kind: str, children: Sequence[str] = (), total_updates: int | None = None,
+                 log_every: int = 0, name: str = "smc", printer: Callable[[str], None] = print,
+                 verbose: int = 0) -> None:
+        super().__init__(verbose)
+        self.kind = kind
+        self.children = tuple(children)
+        self.total_updates = total_updates
+        self.log_every = int(log_every)
+        self.name = name
+        self.printer = printer
+        self.best = BestSnapshot()
+        self.history: list[dict[str, float]] = []
+        self.total_primitive_steps = 0
+        self._stats = RolloutStats()
+        self._episode_return: np.ndarray | None = None
+        self._episode_length: np.ndarray | None = None
+        self._episode_primitive: np.ndarray | None = None
+        self._start_time = 0.0
+        self._finished = False
+
+    # -------------------------------------------------------------------------------------------- SB3 hooks
+
+    def _on_training_start(self) -> None:
+        n = self.training_env.num_envs
+        if self._episode_return is None or len(self._episode_return) != n:
+            self._episode_return = np.zeros(n)
+            self._episode_length = np.zeros(n, dtype=np.int64)
+            self._episode_primitive = np.zeros(n, dtype=np.int64)
+        self._start_time = time.perf_counter()
+        self._start_steps = self.num_timesteps
+        self._finished = False
+
+    def _on_rollout_start(self) -> None:
+        self._stats = RolloutStats(calls=dict.fromkeys(self.children, 0), call_steps=dict.fromkeys(self.children, 0),
+                                   call_sig1=dict.fromkeys(self.children, 0))
+
+    def _on_step(self) -> bool:
+        stats = self._stats
+        rewards = self.locals["rewards"]
+        dones = self.locals["dones"]
+        infos = self.locals["infos"]
+        self._episode_return += rewards
+        self._episode_length += 1
+        stats.decisions += len(infos)
+        primitive = self._episode_primitive
+        calls, call_steps, call_sig1 = stats.calls, stats.call_steps, stats.call_sig1
+        for i, info in enumerate(infos):
+            moves = info.get("primitive_steps", 1)
+            smc_calls = info.get("smc_calls", ())
+            # primitive actions executed on the environment: moves (inside calls too) and the SMC's own signals
+            primitive[i] += moves if moves or smc_calls else 1
+            for call in smc_calls:
+                if call["depth"] == 1:
+                    child = call["smc"]
+                    calls[child] = calls.get(child, 0) + 1
+                    call_steps[child] = call_steps.get(child, 0) + call["primitive_steps"]
+                    call_sig1[child] = call_sig1.get(child, 0) + (call["outcome"] > 0)
+        for i in np.flatnonzero(dones):
+            info = infos[i]
+            # VecMonitor's episode record when present (the same numbers), else the callback's own sums
+            episode = info.get("episode")
+            stats.returns.append(float(episode["r"]) if episode else float(self._episode_return[i]))
+            stats.lengths.append(int(episode["l"]) if episode else int(self._episode_length[i]))
+            stats.primitive_lengths.append(int(primitive[i]))
+            stats.successes.append(bool(info.get("is_success", False)))
+            self._episode_return[i] = 0.0
+            self._episode_length[i] = 0
+            self.total_primitive_steps += int(primitive[i])
+            primitive[i] = 0
+        return True
+
+    def _on_rollout_end(self) -> None:
+        stats = self._stats
+        policy = self.model.policy
+        self.best.update(stats.mean_return, lambda: copy.deepcopy(policy.state_dict()))
+        row = self._record(stats)
+        self.history.append(row)
+        update = len(self.best.returns)
+        if self.log_every > 0 and (update % self.log_every == 0 or update == 1):
+            self._print_progress(update, row)
+
+    def _on_training_end(self) -> None:
+        if self._finished:  # idempotent: rl_zoo3 calls it twice
+            return
+        self._finished = True
+        # primitive steps of episodes still running when training stopped
+        if self._episode_primitive is not None:
+            self.total_primitive_steps += int(self._episode_primitive.sum())
+            self._episode_primitive[:] = 0
+        if self.verbose > 0 or self.log_every > 0:
+            best = self.best
+            self.printer(f"[{self.name}] done: {self.num_timesteps:,} steps in {self.elapsed:.0f} s; selected update "
+                         f"{best.best_update} (mean training return {best.best_return:.3f})")
+
+    # -------------------------------------------------------------------------------------------- helpers
+
+    @property
+    def elapsed(self) -> float:
+        """Seconds since the start of training."""
+        return time.perf_counter() - self._start_time
+
+    def _record(self, stats: RolloutStats) -> dict[str, float]:
+        episodes = len(stats.returns)
+        row: dict[str, float] = {
+            "smc/training_return": stats.mean_return,
+            "smc/best_training_return": self.best.best_return if self.best.best_update is not None else math.nan,
+            "smc/selected_update": float(self.best.best_update if self.best.best_update is not None else -1),
+            "smc/success_rate": stats.success_rate,
+            "smc/episode_length": float(np.mean(stats.lengths)) if episodes else math.nan,
+            "smc/episode_primitive_steps": float(np.mean(stats.primitive_lengths)) if episodes else math.nan,
+            "smc/episodes": float(episodes),
+        }
+        if self.kind == "classification":
+            row["smc/accuracy"] = stats.success_rate
+        for child, count in stats.calls.items():
+            row[f"smc_calls/{child}/calls_per_episode"] = count / episodes if episodes else math.nan
+            row[f"smc_calls/{child}/call_share"] = count / stats.decisions if stats.decisions else math.nan
+            row[f"smc_calls/{child}/call_length"] = stats.call_steps[child] / count if count else math.nan
+            row[f"smc_calls/{child}/sig1_rate"] = stats.call_sig1[child] / count if count else math.nan
+        row["time/num_timesteps"] = float(self.num_timesteps)
+        for key, value in row.items():
+            if key.startswith("time/"):
+                continue
+            if not math.isnan(value):  # TensorBoard cannot draw NaN; a missing point is clearer
+                self.logger.record(key, value)
+        return row
+
+    def _print_progress(self, update: int, row: dict[str, float]) -> None:
+        total = f"/{self.total_updates}" if self.total_updates else ""
+        steps = self.num_timesteps - self._start_steps
+        rate = steps / max(self.elapsed, 1e-9)
+        best = self.best
+        self.printer(f"[{self.name}] update {update}{total}  steps {self.num_timesteps:,}  {rate:,.0f} steps/s  "
+                     f"return {row['smc/training_return']:.3f}  success {row['smc/success_rate']:.2f}  "
+                     f"length {row['smc/episode_length']:.1f}  best {best.best_return:.3f} @ {best.best_update}")

@@ -1,0 +1,243 @@
+"""The paper's test protocol (spec §5.4) as a function: :func:`evaluate`.
+
+Every environment of the split (each scene, in order) is run ``repeats`` times (10 in the paper) with the SMC's
+**stochastic** policy; an episode succeeds when its final step's reward is > 0 (classification: the right signal;
+bring-about: SIG1 in the goal, or a time-out on the very step that entered it). The score is the mean over
+environments x repeats: classification accuracy or bring-about success rate.
+
+Seeding: episode ``(environment i, repeat r)`` uses the seed derived from ``(seed, 512 + r, i)`` (the paper seeds
+repeat ``r`` with 512 + r) for the policy's sampling and, through ``reset(seed=...)``, for the child SMCs it
+calls; every episode is reproducible on its own and the whole result is deterministic for a given ``seed``.
+
+Each episode also records the cells the self visited (``(row, col)``, including the moves made inside SMC calls,
+consecutive duplicates removed) for trajectory pictures.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+from sb3_smc.policies import sample_action
+from sb3_smc.smc import SMC
+
+__all__ = ["EnvironmentResult", "EpisodeResult", "EvaluationResult", "REPEAT_SEED_OFFSET", "evaluate", "run_episode"]
+
+REPEAT_SEED_OFFSET = 512
+"""Repeat ``r`` of the paper's test is seeded with ``512 + r``."""
+
+Cell = tuple[int, int]
+
+
+@dataclass
+class EpisodeResult:
+    """One test episode."""
+
+    environment: int
+    repeat: int
+    seed: int
+    success: bool
+    final_reward: float
+    total_reward: float
+    length: int
+    """Decisions of the SMC (an SMC call is one)."""
+    primitive_steps: int
+    """World moves, those made by SMC calls included."""
+    signalled: bool
+    """Whether the episode ended with a signal (not a time-out)."""
+    actions: list[int] = field(default_factory=list)
+    cells: list[Cell] = field(default_factory=list)
+    """The self's cells from the start, in order, consecutive duplicates removed."""
+    calls: dict[str, int] = field(default_factory=dict)
+    """Direct calls of each child SMC."""
+
+
+@dataclass
+class EnvironmentResult:
+    """The repeats of one environment (scene) of the split."""
+
+    index: int
+    score: float
+    label: int | None
+    """The classification label (``None`` for bring-about)."""
+    episodes: list[EpisodeResult]
+
+
+@dataclass
+class EvaluationResult:
+    """Result of :func:`evaluate`: the overall ``score`` and one :class:`EnvironmentResult` per environment."""
+
+    smc: str
+    env_id: str
+    split: str
+    kind: str
+    repeats: int
+    seed: int
+    score: float
+    environments: list[EnvironmentResult]
+    action_names: tuple[str, ...] = ()
+
+    @property
+    def scores(self) -> list[float]:
+        """Per-environment scores, in environment order."""
+        return [env.score for env in self.environments]
+
+    @property
+    def episodes(self) -> list[EpisodeResult]:
+        """Every episode, environment by environment, repeat by repeat."""
+        return [episode for env in self.environments for episode in env.episodes]
+
+    @property
+    def n_episodes(self) -> int:
+        return sum(len(env.episodes) for env in self.environments)
+
+    @property
+    def mean_length(self) -> float:
+        """Mean decisions per episode."""
+        return float(np.mean([e.length for e in self.episodes])) if self.environments else float("nan")
+
+    def call_counts(self) -> dict[str, int]:
+        """Direct calls of each child SMC over all episodes."""
+        total: dict[str, int] = {}
+        for episode in self.episodes:
+            for name, count in episode.calls.items():
+                total[name] = total.get(name, 0) + count
+        return total
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain data (JSON-ready: cells become lists)."""
+        return asdict(self)
+
+    def summary(self) -> str:
+        what = "accuracy" if self.kind == "classification" else "success rate"
+        return (f"{self.smc} on {self.env_id} ({self.split}): {what} {self.score:.3f} over {len(self.environments)} "
+                f"environments x {self.repeats} repeats, mean length {self.mean_length:.1f}")
+
+
+def _episode_seed(seed: int, repeat: int, index: int) -> int:
+    return int(np.random.SeedSequence((seed, REPEAT_SEED_OFFSET + repeat, index)).generate_state(1)[0])
+
+
+def run_episode(smc: SMC, env: gym.Env, *, index: int | None = None, seed: int,
+                record_cells: bool = True) -> EpisodeResult:
+    """Run one episode of ``smc`` on ``env`` (a :class:`~sb3_smc.wrapper.HierarchicalSMCWrapper` built for it).
+
+    ``index`` picks the scene (``None``: the env's own draw). Actions are sampled from the SMC's policy with
+    ``numpy.random.default_rng((seed, 1))``; the env is reset with ``seed``.
+    """
+    base = env.unwrapped
+    cells: list[Cell] = []
+
+    def note() -> None:
+        cell = tuple(int(v) for v in base.world.self_position)
+        if not cells or cells[-1] != cell:
+            cells.append(cell)  # type: ignore[arg-type]
+
+    observation, _ = env.reset(seed=seed, options=None if index is None else {"index": index})
+    recorder = getattr(env, "_evaluation_recorder", None)
+    if recorder is not None:
+        recorder["note"] = note if record_cells else None
+    if record_cells:
+        note()
+    rng = np.random.default_rng((seed, 1))
+    policy = smc.policy
+    state = policy.initial_state()
+    actions: list[int] = []
+    calls: dict[str, int] = {}
+    total = reward = 0.0
+    length = primitive = 0
+    terminated = truncated = False
+    while not (terminated or truncated):
+        probabilities, state = policy.probabilities(observation, state)
+        action = sample_action(probabilities, rng)
+        observation, reward, terminated, truncated, info = env.step(action)
+        actions.append(action)
+        total += reward
+        length += 1
+        primitive += int(info.get("primitive_steps", 1))
+        for call in info.get("smc_calls", ()):
+            if call["depth"] == 1:
+                calls[call["smc"]] = calls.get(call["smc"], 0) + 1
+        if record_cells:
+            note()
+    if recorder is not None:
+        recorder["note"] = None
+    return EpisodeResult(environment=-1 if index is None else index, repeat=-1, seed=seed, success=bool(reward > 0),
+                         final_reward=float(reward), total_reward=float(total), length=length,
+                         primitive_steps=primitive, signalled=bool(terminated), actions=actions, cells=cells,
+                         calls=calls)
+
+
+def make_evaluation_env(smc: SMC, env_id: str, *, split: str = "test", max_steps: int | None = None,
+                        env_kwargs: Mapping[str, Any] | None = None) -> gym.Env:
+    """The environment ``smc`` was trained in (wrapper settings from its metadata), on ``split``.
+
+    The moves made inside SMC calls are reported to :func:`run_episode` for the visited cells.
+    """
+    import pixelworld_env  # noqa: F401  (registers the PW-* ids)
+    from sb3_smc.wrapper import HierarchicalSMCWrapper
+
+    wrapper = dict(smc.metadata.get("wrapper") or {})
+    if max_steps is not None:
+        wrapper["max_steps"] = max_steps
+    kwargs = dict(smc.metadata.get("env_kwargs") or {})
+    kwargs.update(env_kwargs or {})
+    env = gym.make(env_id, split=split, max_steps=int(wrapper.get("max_steps", 100)), **kwargs)
+    base = env.unwrapped
+    recorder: dict[str, Any] = {"note": None}
+    apply_move = base.apply_move
+
+    def recording_apply_move(action: int) -> float:  # the moves of SMC calls (the wrapper calls this)
+        reward = apply_move(action)
+        note = recorder["note"]
+        if note is not None:
+            note()
+        return reward
+
+    base.apply_move = recording_apply_move
+    wrapped = HierarchicalSMCWrapper(env, smc.children, include_primitives=smc.include_primitives,
+                                     count_primitive_steps=bool(wrapper.get("count_primitive_steps", False)),
+                                     call_step_cap=int(wrapper.get("call_step_cap", 100)))
+    wrapped._evaluation_recorder = recorder
+    return wrapped
+
+
+def evaluate(smc: SMC, env_id: str, *, split: str = "test", repeats: int = 10, seed: int = 0,
+             max_steps: int | None = None, record_cells: bool = True,
+             env_kwargs: Mapping[str, Any] | None = None) -> EvaluationResult:
+    """The paper's test (spec §5.4): every environment of ``split`` run ``repeats`` times, stochastic policy.
+
+    Returns an :class:`EvaluationResult` with the overall ``score`` (mean of final-step reward > 0 over
+    environments x repeats), one :class:`EnvironmentResult` per environment (its score, label and episodes) and,
+    per episode, the visited cells. Deterministic for a given ``seed``. The SMC's children, primitive-action
+    setting and wrapper settings (``metadata["wrapper"]``) are those it was trained with.
+    """
+    if repeats < 1:
+        raise ValueError(f"repeats must be >= 1, got {repeats}")
+    env = make_evaluation_env(smc, env_id, split=split, max_steps=max_steps, env_kwargs=env_kwargs)
+    try:
+        base = env.unwrapped
+        if base.kind != smc.kind:
+            raise ValueError(f"SMC {smc.name!r} is a {smc.kind} SMC but {env_id} is a {base.kind} task")
+        if tuple(env.action_names) != tuple(smc.action_names):
+            raise ValueError(f"SMC {smc.name!r} has actions {smc.action_names}, the env {env.action_names}")
+        environments = []
+        for index in range(len(base.scenes)):
+            episodes = []
+            for repeat in range(repeats):
+                episode = run_episode(smc, env, index=index, seed=_episode_seed(seed, repeat, index),
+                                      record_cells=record_cells)
+                episode.repeat = repeat
+                episodes.append(episode)
+            label = base.labels[index] if base.labels is not None else None
+            score = float(np.mean([e.success for e in episodes]))
+            environments.append(EnvironmentResult(index=index, score=score, label=label, episodes=episodes))
+    finally:
+        env.close()
+    score = float(np.mean([e.success for env_result in environments for e in env_result.episodes]))
+    return EvaluationResult(smc=smc.name, env_id=env_id, split=split, kind=smc.kind, repeats=repeats, seed=seed,
+                            score=score, environments=environments, action_names=tuple(smc.action_names))
