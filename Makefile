@@ -25,6 +25,8 @@ lint: $(STAMP)
 bench: $(STAMP)
 	$(PY) -m pip install --quiet minigrid
 	$(PY) benchmarks/bench_env_steps.py
+	$(PY) benchmarks/bench_generation.py
+	$(PY) benchmarks/bench_training.py
 
 clean:
 	rm -rf $(VENV)
