@@ -130,19 +130,8 @@ def run_episode(smc: SMC, env: gym.Env, *, index: int | None = None, seed: int,
     ``numpy.random.default_rng((seed, 1))``; the env is reset with ``seed``.
     """
     base = env.unwrapped
-    cells: list[Cell] = []
-
-    def note() -> None:
-        cell = tuple(int(v) for v in base.world.self_position)
-        if not cells or cells[-1] != cell:
-            cells.append(cell)  # type: ignore[arg-type]
-
     observation, _ = env.reset(seed=seed, options=None if index is None else {"index": index})
-    recorder = getattr(env, "_evaluation_recorder", None)
-    if recorder is not None:
-        recorder["note"] = note if record_cells else None
-    if record_cells:
-        note()
+    cells: list[Cell] = [base.world.self_position] if record_cells else []
     rng = np.random.default_rng((seed, 1))
     policy = smc.policy
     state = policy.initial_state()
@@ -163,9 +152,9 @@ def run_episode(smc: SMC, env: gym.Env, *, index: int | None = None, seed: int,
             if call["depth"] == 1:
                 calls[call["smc"]] = calls.get(call["smc"], 0) + 1
         if record_cells:
-            note()
-    if recorder is not None:
-        recorder["note"] = None
+            for cell in info.get("cells", ()):
+                if cells[-1] != cell:
+                    cells.append(cell)
     return EpisodeResult(environment=-1 if index is None else index, repeat=-1, seed=seed, success=bool(reward > 0),
                          final_reward=float(reward), total_reward=float(total), length=length,
                          primitive_steps=primitive, signalled=bool(terminated), actions=actions, cells=cells,
@@ -176,7 +165,7 @@ def make_evaluation_env(smc: SMC, env_id: str, *, split: str = "test", max_steps
                         env_kwargs: Mapping[str, Any] | None = None) -> gym.Env:
     """The environment ``smc`` was trained in (wrapper settings from its metadata), on ``split``.
 
-    The moves made inside SMC calls are reported to :func:`run_episode` for the visited cells.
+    The wrapper reports the cells of every move (those inside SMC calls too) for :func:`run_episode`.
     """
     import pixelworld_env  # noqa: F401  (registers the PW-* ids)
     from sb3_smc.wrapper import HierarchicalSMCWrapper
@@ -187,23 +176,9 @@ def make_evaluation_env(smc: SMC, env_id: str, *, split: str = "test", max_steps
     kwargs = dict(smc.metadata.get("env_kwargs") or {})
     kwargs.update(env_kwargs or {})
     env = gym.make(env_id, split=split, max_steps=int(wrapper.get("max_steps", 100)), **kwargs)
-    base = env.unwrapped
-    recorder: dict[str, Any] = {"note": None}
-    apply_move = base.apply_move
-
-    def recording_apply_move(action: int) -> float:  # the moves of SMC calls (the wrapper calls this)
-        reward = apply_move(action)
-        note = recorder["note"]
-        if note is not None:
-            note()
-        return reward
-
-    base.apply_move = recording_apply_move
-    wrapped = HierarchicalSMCWrapper(env, smc.children, include_primitives=smc.include_primitives,
-                                     count_primitive_steps=bool(wrapper.get("count_primitive_steps", False)),
-                                     call_step_cap=int(wrapper.get("call_step_cap", 100)))
-    wrapped._evaluation_recorder = recorder
-    return wrapped
+    return HierarchicalSMCWrapper(env, smc.children, include_primitives=smc.include_primitives,
+                                  count_primitive_steps=bool(wrapper.get("count_primitive_steps", False)),
+                                  call_step_cap=int(wrapper.get("call_step_cap", 100)), record_cells=True)
 
 
 def evaluate(smc: SMC, env_id: str, *, split: str = "test", repeats: int = 10, seed: int = 0,

@@ -36,16 +36,17 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
     * ``include_primitives=False`` removes the four moves (the paper's "noprim" ablation); signals stay.
     * ``info`` on every step adds ``primitive_steps`` (moves executed during the step), ``elapsed_steps``
       and ``smc_calls``: one dict per call made during the step, nested calls included, in the order the
-      calls finished: ``{"smc", "depth", "primitive_steps", "outcome", "reward"}``.
+      calls finished: ``{"smc", "depth", "primitive_steps", "outcome", "reward"}``. With ``record_cells=True``
+      it also has ``cells``: the self's cell after each move of the step (moves inside calls included).
 
     Any policy following :class:`sb3_smc.smc.StepPolicy` can stand behind an SMC (scripted ones included).
     """
 
     def __init__(self, env: gym.Env, smcs: Sequence[SMC] = (), *, include_primitives: bool = True,
-                 count_primitive_steps: bool = False, call_step_cap: int = 100) -> None:
+                 count_primitive_steps: bool = False, call_step_cap: int = 100, record_cells: bool = False) -> None:
         gym.utils.RecordConstructorArgs.__init__(self, smcs=tuple(smcs), include_primitives=include_primitives,
                                                  count_primitive_steps=count_primitive_steps,
-                                                 call_step_cap=call_step_cap)
+                                                 call_step_cap=call_step_cap, record_cells=record_cells)
         super().__init__(env)
         base = env.unwrapped
         if not isinstance(base, PixelWorldEnv):
@@ -71,6 +72,8 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         self._rng: np.random.Generator | None = None
         self._elapsed = 0
         self._done = True
+        self.record_cells = record_cells
+        self._cells: list[tuple[int, int]] = []
 
     # ------------------------------------------------------------------------------------------ helpers
 
@@ -124,6 +127,8 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
             if kind == _MOVE:
                 reward += self.base.apply_move(value)
                 moves += 1
+                if self.record_cells:
+                    self._cells.append(self.base.world.self_position)
             else:
                 r, m, o = self.run_call(smc.children[value], depth + 1, calls, cap)
                 outcomes[value] = o
@@ -155,6 +160,7 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
             raise RuntimeError("the episode has ended: call reset() before step()")
         kind, value = self._plan[int(action)]
         calls: list[dict[str, Any]] = []
+        self._cells = []
         if kind == _CALL:
             cap = self.call_step_cap
             if self.count_primitive_steps:
@@ -168,6 +174,8 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
             _, reward, terminated, base_truncated, info = self.env.step(value)
             moves = int(kind == _MOVE)
             cost = 1
+            if moves and self.record_cells:
+                self._cells.append(self.base.world.self_position)
         self._elapsed += cost
         truncated = not terminated and (base_truncated or self._elapsed >= self.base.max_steps)
         self._done = terminated or truncated
@@ -175,4 +183,6 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         self._previous[int(action)] = 1.0
         info = dict(info, is_success=(terminated or truncated) and reward > 0, primitive_steps=moves,
                     elapsed_steps=self._elapsed, smc_calls=calls)
+        if self.record_cells:
+            info["cells"] = self._cells
         return self._observation(), float(reward), terminated, truncated, info

@@ -73,6 +73,20 @@ def test_call_runs_to_the_signal_sums_rewards_and_records_the_outcome() -> None:
         act(env, "DOWN")
 
 
+def test_cells_of_every_move_are_recorded_on_request() -> None:
+    into = scripted("into", "bring-about", ["DOWN", "DOWN", "SIG1"])
+    env = HierarchicalSMCWrapper(base_env(), [into], record_cells=True)
+    env.reset(seed=0)
+    assert act(env, "LEFT")[4]["cells"] == [(1, 3)]
+    assert act(env, "RIGHT")[4]["cells"] == [(1, 4)]
+    assert act(env, "SMC:into")[4]["cells"] == [(2, 4), (3, 4)]
+    assert act(env, "DOWN")[4]["cells"] == [(3, 4)]  # a blocked move still reports where the self is
+    assert act(env, "SIG1")[4]["cells"] == []
+    plain = HierarchicalSMCWrapper(base_env(), [into])
+    plain.reset(seed=0)
+    assert "cells" not in act(plain, "SMC:into")[4]
+
+
 def test_shaping_telescopes_inside_a_call_and_outcomes_reset() -> None:
     bounce = scripted("bounce", "bring-about", ["DOWN", "DOWN", "UP", "SIG1"])
     probe = scripted("probe", "classification", ["DOWN", "SIG0"])
