@@ -26,8 +26,8 @@ from pixelworld_env.concepts import Concept, expand, parse
 from pixelworld_env.concepts.parser import SELF
 from pixelworld_env.concepts.predicates import PREDICATES, EvalContext
 from pixelworld_env.constants import FLOOR_HEIGHT, HEIGHT, PADDING, WIDTH, Color
-from pixelworld_env.generation import COLORS, NUM_SHAPE_IDX, frame_object, library_object
-from pixelworld_env.objects import WorldObject
+from pixelworld_env.generation import COLORS, NUM_SHAPE_IDX, library_object
+from pixelworld_env.objects import WorldObject, frame_object
 from pixelworld_env.scene import Scene
 from pixelworld_env.shapes import FAMILIES, shape_library
 

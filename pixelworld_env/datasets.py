@@ -45,11 +45,10 @@ from pixelworld_env.generation import (
     DatasetSpec,
     GeneratedDataset,
     GeneratorStats,
-    frame_object,
     generate,
     library_object,
 )
-from pixelworld_env.objects import WorldObject
+from pixelworld_env.objects import WorldObject, frame_object
 from pixelworld_env.scene import Scene
 from pixelworld_env.shapes import LibraryParams
 

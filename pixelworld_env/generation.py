@@ -88,8 +88,8 @@ import numpy as np
 from pixelworld_env.concepts import Concept, ConceptError, expand, parse
 from pixelworld_env.concepts.parser import SELF, Clause, Expression
 from pixelworld_env.concepts.predicates import PREDICATES, EvalContext
-from pixelworld_env.constants import FLOOR_HEIGHT, HEIGHT, PADDING, WIDTH, Color, ObjectClass
-from pixelworld_env.objects import WorldObject
+from pixelworld_env.constants import FLOOR_HEIGHT, HEIGHT, PADDING, WIDTH, Color
+from pixelworld_env.objects import WorldObject, frame_object, object_class
 from pixelworld_env.oracle import goal_reachable
 from pixelworld_env.regions import inside_masks
 from pixelworld_env.scene import Scene
@@ -107,7 +107,6 @@ __all__ = [
     "GeneratedDataset",
     "GenerationError",
     "GeneratorStats",
-    "frame_object",
     "generate",
     "library_object",
     "split",
@@ -325,25 +324,11 @@ def _region_box(family: str, template_index: int, supported: bool) -> tuple[int,
 
 
 @cache
-def _frame(height: int, width: int) -> WorldObject:
-    cells = tuple((r, c) for r in range(height) for c in range(width) if r in (0, height - 1) or c in (0, width - 1))
-    return WorldObject(cls=ObjectClass.FRAME, color=Color.PURPLE, position=(0, 0), cells=cells,
-                       size=(height, width), family=None, name=ObjectClass.FRAME.value)
-
-
-def _object_class(is_self: bool, family: str, pushable: bool) -> ObjectClass:
-    if is_self:
-        return ObjectClass.SELF
-    if pushable:
-        return ObjectClass.BASIC if family == "pixel" else ObjectClass.COMPLEX
-    return ObjectClass.IMMOVEABLE if family == "pixel" else ObjectClass.IMMOVEABLE_BIG
-
-
 def _make_object(is_self: bool, family: str, shape_idx: int, color: int, target: bool, pushable: bool,
                  y: int, x: int) -> WorldObject:
     n = len(shape_library()[family])
     cells, size, _ = _template_data(family, shape_idx % n)
-    cls = _object_class(is_self, family, pushable)
+    cls = object_class(family, is_self=is_self, pushable=pushable)
     return WorldObject(cls=cls, color=color, position=(y, x), cells=cells, size=size, family=family,
                        shape_idx=shape_idx, pushable=pushable, is_target=target, name=cls.value)
 
@@ -361,11 +346,6 @@ def library_object(family: str, shape_idx: int, color: int, position: tuple[int,
         raise ValueError(f"unknown shape family {family!r}{hint}")
     return _make_object(is_self, family, int(shape_idx), int(color), bool(is_target), bool(pushable),
                         int(position[0]), int(position[1]))
-
-
-def frame_object(height: int, width: int) -> WorldObject:
-    """The frame of a ``height`` x ``width`` world (colour 7), as appended to every generated scene."""
-    return _frame(height, width)
 
 
 # Bounds: necessary conditions on the top-left (x, y) of the object being placed, from a clause and the
@@ -854,7 +834,7 @@ def generate(spec: DatasetSpec, seed: int = 0, *, max_draws: int | None = None,
     except GenerationError as exc:
         raise GenerationError(f"{exc} (before the first draw; kept {_counts(spec, kept)})") from None
     chooser = random.Random(seed)
-    frame = _frame(spec.height, spec.width)
+    frame = frame_object(spec.height, spec.width)
     classification = spec.kind == "classification"
     quota = spec.num_samples
     seen: set[tuple] = set()

@@ -7,7 +7,7 @@ from functools import cached_property
 
 import numpy as np
 
-from pixelworld_env.constants import MOVEABLE_CLASSES, ObjectClass
+from pixelworld_env.constants import MOVEABLE_CLASSES, Color, ObjectClass
 
 Cell = tuple[int, int]
 
@@ -77,3 +77,20 @@ class WorldObject:
 def cell_extent(cells: tuple[Cell, ...]) -> Cell:
     """The smallest template size that holds ``cells`` (offsets counted from the template's corner)."""
     return (max(r for r, _ in cells) + 1, max(c for _, c in cells) + 1)
+
+
+def object_class(family: str, *, is_self: bool = False, pushable: bool = False) -> ObjectClass:
+    """The engine class of an object (spec §1.2): ``self``, else ``basic``/``complex`` when pushable, else
+    ``immoveable``/``immoveable_big`` (one-pixel ``pixel`` family vs any other family)."""
+    if is_self:
+        return ObjectClass.SELF
+    if pushable:
+        return ObjectClass.BASIC if family == "pixel" else ObjectClass.COMPLEX
+    return ObjectClass.IMMOVEABLE if family == "pixel" else ObjectClass.IMMOVEABLE_BIG
+
+
+def frame_object(height: int, width: int) -> WorldObject:
+    """The frame of a ``height`` x ``width`` world: the border ring, colour 7."""
+    cells = tuple((r, c) for r in range(height) for c in range(width) if r in (0, height - 1) or c in (0, width - 1))
+    return WorldObject(cls=ObjectClass.FRAME, color=Color.PURPLE, position=(0, 0), cells=cells, size=(height, width),
+                       family=None, name=ObjectClass.FRAME.value)

@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from pixelworld_env.constants import FLOOR_HEIGHT, Color, ObjectClass
-from pixelworld_env.objects import Cell, WorldObject, cell_extent
+from pixelworld_env.objects import Cell, WorldObject, cell_extent, frame_object, object_class
 
 _PIXEL_CLASSES = frozenset({ObjectClass.SELF, ObjectClass.BASIC, ObjectClass.IMMOVEABLE})
 _DEFAULT_LETTER_FAMILY = "blob"
@@ -52,24 +52,6 @@ def _template_size(family: str | None, shape_idx: int, cells: tuple[Cell, ...]) 
         if sorted(cells) == sorted(zip(rows.tolist(), cols.tolist(), strict=True)):
             return (int(tmpl.shape[0]), int(tmpl.shape[1]))
     return cell_extent(cells)
-
-
-def _frame(height: int, width: int) -> WorldObject:
-    cells = tuple(
-        (r, c) for r in range(height) for c in range(width) if r in (0, height - 1) or c in (0, width - 1)
-    )
-    return WorldObject(
-        cls=ObjectClass.FRAME, color=Color.PURPLE, position=(0, 0), cells=cells, size=(height, width),
-        family=None, name="frame",
-    )
-
-
-def _moveable_class(family: str) -> ObjectClass:
-    return ObjectClass.BASIC if family == "pixel" else ObjectClass.COMPLEX
-
-
-def _immoveable_class(family: str) -> ObjectClass:
-    return ObjectClass.IMMOVEABLE if family == "pixel" else ObjectClass.IMMOVEABLE_BIG
 
 
 @dataclass(frozen=True)
@@ -204,7 +186,7 @@ class Scene:
         for ch in sorted(cells_of, key=lambda k: (k != "=", k)):
             objects.append(_object_from_letter(ch, cells_of[ch], kinds))
         if frame_cells:
-            frame = _frame(height, width)
+            frame = frame_object(height, width)
             if set(frame_cells) != set(frame.cells):
                 bad = sorted(set(frame_cells) - set(frame.cells)) or sorted(set(frame.cells) - set(frame_cells))
                 raise ValueError(
@@ -265,7 +247,7 @@ def _object_from_letter(ch: str, cells: list[Cell], kinds: Mapping[str, str]) ->
         )
     family = kinds.get(ch, _DEFAULT_LETTER_FAMILY)
     pushable = ch.isupper()
-    klass = _moveable_class(family) if pushable else _immoveable_class(family)
+    klass = object_class(family, pushable=pushable)
     return WorldObject(
         cls=klass, color=Color.WHITE, position=(top, left), cells=offsets, size=cell_extent(offsets),
         family=family, pushable=pushable, name=klass.value,
@@ -283,7 +265,7 @@ def _object_from_dict(raw: Mapping[str, Any], height: int, width: int, index: in
         raise ValueError(f"{where}: unknown class {raw['class']!r}; expected one of {known}") from None
     meta = raw.get("meta", {})
     if klass is ObjectClass.FRAME:
-        frame = _frame(height, width)
+        frame = frame_object(height, width)
         return replace(frame, color=int(raw.get("color", Color.PURPLE)), name=raw.get("name", "frame"))
     if "position" not in raw:
         raise ValueError(f"{where} ({klass}) lacks the field 'position'")
