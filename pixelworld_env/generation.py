@@ -93,7 +93,7 @@ from pixelworld_env.objects import WorldObject, frame_object, object_class
 from pixelworld_env.oracle import goal_reachable
 from pixelworld_env.regions import inside_masks
 from pixelworld_env.scene import Scene
-from pixelworld_env.shapes import FAMILIES, shape_library
+from pixelworld_env.shapes import FAMILIES, check_family, shape_library
 
 if TYPE_CHECKING:
     from pixelworld_env.definitions import DefinitionSet
@@ -340,10 +340,7 @@ def library_object(family: str, shape_idx: int, color: int, position: tuple[int,
     The class follows spec §1.2: ``self`` for the self, ``basic``/``complex`` for pushable objects,
     else ``immoveable`` (pixels) or ``immoveable_big``.
     """
-    if family not in shape_library():
-        close = difflib.get_close_matches(family, FAMILIES, n=3)
-        hint = f"; did you mean {', '.join(close)}?" if close else ""
-        raise ValueError(f"unknown shape family {family!r}{hint}")
+    check_family(family)
     return _make_object(is_self, family, int(shape_idx), int(color), bool(is_target), bool(pushable),
                         int(position[0]), int(position[1]))
 

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import difflib
 import string
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
@@ -28,13 +27,12 @@ ASCII_LEGEND = {
 
 
 def _known_family(family: str, what: str) -> str:
-    from pixelworld_env.shapes import FAMILIES
+    from pixelworld_env.shapes import check_family
 
-    if family not in FAMILIES:
-        close = difflib.get_close_matches(family, FAMILIES, n=3)
-        hint = f"; did you mean {', '.join(close)}?" if close else f"; known families: {', '.join(FAMILIES)}"
-        raise ValueError(f"{what}: unknown shape family {family!r}{hint}")
-    return family
+    try:
+        return check_family(family)
+    except ValueError as exc:
+        raise ValueError(f"{what}: {exc}") from None
 
 
 def _template_size(family: str | None, shape_idx: int, cells: tuple[Cell, ...]) -> Cell:

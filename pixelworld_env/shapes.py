@@ -29,7 +29,7 @@ from functools import cache, partial
 
 import numpy as np
 
-__all__ = ["FAMILIES", "LibraryParams", "build_library", "shape_library", "template"]
+__all__ = ["FAMILIES", "LibraryParams", "build_library", "check_family", "shape_library", "template"]
 
 FAMILIES: tuple[str, ...] = (
     "blob", "box", "chair", "container", "convex_blob", "cross", "d_slob", "enclosure",
@@ -580,12 +580,16 @@ def shape_library() -> dict[str, tuple[np.ndarray, ...]]:
     return build_library()
 
 
+def check_family(family: str) -> str:
+    """``family`` if it is one of :data:`FAMILIES`, else a ``ValueError`` naming it and the closest names."""
+    if family not in FAMILIES:
+        close = difflib.get_close_matches(family, FAMILIES, n=3)
+        hint = f"; did you mean {', '.join(close)}?" if close else f"; known families: {', '.join(FAMILIES)}"
+        raise ValueError(f"unknown shape family {family!r}{hint}")
+    return family
+
+
 def template(family: str, shape_idx: int) -> np.ndarray:
     """Template ``shape_idx`` of ``family``, taken modulo the family size (spec section 3.8)."""
-    library = shape_library()
-    if family not in library:
-        close = difflib.get_close_matches(family, FAMILIES)
-        hint = f"; close matches: {', '.join(close)}" if close else ""
-        raise ValueError(f"unknown shape family {family!r}{hint}")
-    templates = library[family]
+    templates = shape_library()[check_family(family)]
     return templates[shape_idx % len(templates)]
