@@ -11,6 +11,7 @@ from sb3_smc import SMC
 from sb3_smc.policies import ScriptedPolicy, SequencePolicy
 from sb3_smc.smc import smc_action_names
 from sb3_smc.wrapper import HierarchicalSMCWrapper
+from tests.test_evaluation import UniformPolicy
 
 CONTAINER = """
 #########
@@ -153,20 +154,9 @@ def test_primitives_can_be_removed() -> None:
     assert (reward, terminated) == (-1.0, True)
 
 
-class _Uniform:
-    def __init__(self, n: int) -> None:
-        self.n = n
-
-    def initial_state(self) -> None:
-        return None
-
-    def probabilities(self, observation: np.ndarray, state: None) -> tuple[np.ndarray, None]:
-        return np.full(self.n, 1.0 / self.n), None
-
-
 def test_stochastic_calls_are_seeded() -> None:
     def trace(seed: int) -> list:
-        random_smc = SMC("random", "classification", _Uniform(len(smc_action_names("classification"))))
+        random_smc = SMC("random", "classification", UniformPolicy(len(smc_action_names("classification"))))
         env = HierarchicalSMCWrapper(base_env(), [random_smc])
         env.reset(seed=seed)
         out = []
