@@ -14,7 +14,7 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 demo: $(STAMP)
-	$(PY) -m pixelworld_env.demo
+	$(PY) -m sb3_smc.demo
 
 test: $(STAMP)
 	$(PY) -m pytest -q

@@ -20,7 +20,8 @@ generates it (:func:`pixelworld_env.generation.generate`) and writes the file.
   ``shape_idx mod family size``. This is a lean form of :meth:`Scene.to_dict` (which spells out every
   cell): reading the catalog's 9,150 scenes through ``Scene.from_dict`` costs ~0.5 ms a scene (~5 s in
   all); this format loads the whole catalog in ~0.8 s, ~0.17 MB on disk.
-* Writes are atomic: a temporary file in the same folder, ``fsync``, then ``os.replace``.
+* Writes are atomic (:func:`pixelworld_env.atomic.atomic_write`): a temporary file in the same folder, ``fsync``,
+  then ``os.replace``.
 * Reads trust nothing: a file that is not valid gzip or JSON, has another key, fails its checksum, or
   whose counts, labels or objects do not fit the spec is reported with a :class:`CacheWarning` naming
   the file, and the dataset is generated again (and the file rewritten).
@@ -34,12 +35,12 @@ import hashlib
 import json
 import os
 import re
-import tempfile
 import warnings
 import zlib
 from pathlib import Path
 from typing import Any
 
+from pixelworld_env.atomic import atomic_write
 from pixelworld_env.generation import (
     GENERATOR_VERSION,
     DatasetSpec,
@@ -262,18 +263,7 @@ class DatasetCache:
         header = {"format": FORMAT_VERSION, "key": cache_key(spec, dataset.seed), "name": spec.name,
                   "seed": dataset.seed, "count": len(dataset.scenes), "checksum": hashlib.sha256(payload).hexdigest()}
         blob = gzip.compress(json.dumps(header, sort_keys=True).encode() + b"\n" + payload, compresslevel=6, mtime=0)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-        try:
-            with os.fdopen(fd, "wb") as handle:
-                handle.write(blob)
-                handle.flush()
-                os.fsync(handle.fileno())
-            os.replace(tmp, path)
-        except BaseException:
-            Path(tmp).unlink(missing_ok=True)
-            raise
-        _fsync_dir(path.parent)
+        atomic_write(path, blob)
         return path
 
     def load_or_generate(self, spec: DatasetSpec, seed: int = 0) -> GeneratedDataset:
@@ -288,19 +278,6 @@ class DatasetCache:
             warnings.warn(f"pixelworld could not write the dataset cache in {self.directory} ({exc}); "
                           "continuing without caching", CacheWarning, stacklevel=2)
         return dataset
-
-
-def _fsync_dir(directory: Path) -> None:
-    try:
-        fd = os.open(directory, os.O_RDONLY)
-    except OSError:
-        return
-    try:
-        os.fsync(fd)
-    except OSError:
-        pass
-    finally:
-        os.close(fd)
 
 
 def load_or_generate(spec: DatasetSpec, seed: int = 0) -> GeneratedDataset:

@@ -1,9 +1,6 @@
-"""``python -m pixelworld_env.demo`` (``make demo``): play PixelWorld episodes, then train and test a small SMC.
+"""``python -m pixelworld_env.demo``: play PixelWorld episodes (no learning; ``python -m sb3_smc.demo`` adds it).
 
-The embedded default: a hand-drawn scene played with a planner (bring-about) and at random (classification),
-then a short RecurrentPPO training run (12 updates of 2,000 steps) of the SMC
-``ba_self-on-something_from_directly-above`` with the paper's signal-bias initialisation and best-update
-selection, tested with the paper's protocol before and after training.
+A hand-drawn scene played with a breadth-first planner (bring-about) and at random (classification).
 """
 
 from __future__ import annotations
@@ -79,37 +76,12 @@ def play(seed: int = 0, quiet: bool = False) -> tuple[float, float]:
     return ret, total
 
 
-DEMO_ENV = "PW-ba_self-on-something_from_directly-above-v0"
-
-
-def train(seed: int = 0, total_timesteps: int = 24_000) -> tuple[float, float]:
-    """Train a small flat SMC and return its test success rate before and after training."""
-    import torch
-
-    from sb3_smc import evaluate, train_smc
-
-    torch.set_num_threads(1)
-    untrained = train_smc(DEMO_ENV, total_timesteps=0, seed=seed)
-    before = evaluate(untrained, DEMO_ENV, repeats=4, seed=seed).score
-    print(f"\ntraining an SMC on {DEMO_ENV} for {total_timesteps:,} steps (RecurrentPPO, LSTM 32) ...")
-    smc = train_smc(DEMO_ENV, total_timesteps=total_timesteps, seed=seed, log_every=2)
-    after = evaluate(smc, DEMO_ENV, repeats=4, seed=seed).score
-    print(f"test success rate (25 scenes x 4 runs): untrained {before:.2f} -> trained {after:.2f} "
-          f"(selected update {smc.metadata['selected_update']}, training return "
-          f"{smc.metadata['training_return']:.2f})")
-    return before, after
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--quiet", action="store_true", help="print only the episode summaries")
-    parser.add_argument("--no-train", action="store_true", help="only play the episodes")
-    parser.add_argument("--timesteps", type=int, default=24_000, help="training budget of the demo SMC")
     args = parser.parse_args()
     play(seed=args.seed, quiet=args.quiet)
-    if not args.no_train:
-        train(seed=args.seed, total_timesteps=args.timesteps)
 
 
 if __name__ == "__main__":

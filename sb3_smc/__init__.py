@@ -1,40 +1,124 @@
-"""Sensorimotor contingencies (SMCs) for Stable-Baselines3: train them, reuse them as actions, save them."""
+"""Sensorimotor contingencies (SMCs) for Stable-Baselines3: train them, reuse them as actions, save them.
 
-from sb3_smc.evaluation import EvaluationResult, evaluate
-from sb3_smc.library import (
-    CorruptModelError,
-    LayoutMismatchError,
-    LibraryError,
-    ManifestError,
-    MissingChildError,
-    SMCLibrary,
-    UnknownSMCError,
-)
-from sb3_smc.policies import ScriptedPolicy, SequencePolicy, policy_from_model, sample_action
-from sb3_smc.smc import SMC, StepPolicy, observation_size, smc_action_names
-from sb3_smc.training import apply_signal_bias, initial_action_probabilities, train_smc
-from sb3_smc.wrapper import HierarchicalSMCWrapper
+The names below are imported on first use (PEP 562), so ``import sb3_smc.records`` (the typed specs and records)
+loads neither torch nor Stable-Baselines3; ``from sb3_smc import train_smc`` loads them.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+_EXPORTS = {
+    "SMC": "sb3_smc.smc",
+    "StepPolicy": "sb3_smc.smc",
+    "observation_size": "sb3_smc.smc",
+    "smc_action_names": "sb3_smc.smc",
+    "Budget": "sb3_smc.records",
+    "EvaluationRecord": "sb3_smc.records",
+    "RecordError": "sb3_smc.records",
+    "SignalBias": "sb3_smc.records",
+    "TaskSpec": "sb3_smc.records",
+    "TrainingRecord": "sb3_smc.records",
+    "TrainingSpec": "sb3_smc.records",
+    "WrapperSettings": "sb3_smc.records",
+    "DEFAULT_HYPERPARAMETERS": "sb3_smc.hyperparameters",
+    "initial_action_probabilities": "sb3_smc.bias",
+    "apply_signal_bias": "sb3_smc.bias",
+    "HierarchicalSMCWrapper": "sb3_smc.wrapper",
+    "make_smc_env": "sb3_smc.envs",
+    "FrameStackPolicy": "sb3_smc.policies",
+    "ScriptedPolicy": "sb3_smc.policies",
+    "SequencePolicy": "sb3_smc.policies",
+    "policy_from_model": "sb3_smc.policies",
+    "sample_action": "sb3_smc.policies",
+    "train_smc": "sb3_smc.training",
+    "EvaluationResult": "sb3_smc.evaluation",
+    "evaluate": "sb3_smc.evaluation",
+    "SMCLibrary": "sb3_smc.library",
+    "CorruptModelError": "sb3_smc.library",
+    "LayoutMismatchError": "sb3_smc.library",
+    "LibraryError": "sb3_smc.library",
+    "ManifestError": "sb3_smc.library",
+    "MissingChildError": "sb3_smc.library",
+    "UnknownSMCError": "sb3_smc.library",
+}
 
 __all__ = [
-    "SMC",
+    "Budget",
     "CorruptModelError",
+    "DEFAULT_HYPERPARAMETERS",
+    "EvaluationRecord",
     "EvaluationResult",
+    "FrameStackPolicy",
     "HierarchicalSMCWrapper",
     "LayoutMismatchError",
     "LibraryError",
     "ManifestError",
     "MissingChildError",
+    "RecordError",
+    "SMC",
     "SMCLibrary",
     "ScriptedPolicy",
     "SequencePolicy",
+    "SignalBias",
     "StepPolicy",
+    "TaskSpec",
+    "TrainingRecord",
+    "TrainingSpec",
     "UnknownSMCError",
+    "WrapperSettings",
     "apply_signal_bias",
     "evaluate",
     "initial_action_probabilities",
+    "make_smc_env",
     "observation_size",
     "policy_from_model",
     "sample_action",
     "smc_action_names",
     "train_smc",
 ]
+assert set(__all__) == set(_EXPORTS)
+
+
+def __getattr__(name: str) -> Any:
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module 'sb3_smc' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *_EXPORTS})
+
+
+if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs
+    from sb3_smc.bias import apply_signal_bias, initial_action_probabilities
+    from sb3_smc.envs import make_smc_env
+    from sb3_smc.evaluation import EvaluationResult, evaluate
+    from sb3_smc.hyperparameters import DEFAULT_HYPERPARAMETERS
+    from sb3_smc.library import (
+        CorruptModelError,
+        LayoutMismatchError,
+        LibraryError,
+        ManifestError,
+        MissingChildError,
+        SMCLibrary,
+        UnknownSMCError,
+    )
+    from sb3_smc.policies import FrameStackPolicy, ScriptedPolicy, SequencePolicy, policy_from_model, sample_action
+    from sb3_smc.records import (
+        Budget,
+        EvaluationRecord,
+        RecordError,
+        SignalBias,
+        TaskSpec,
+        TrainingRecord,
+        TrainingSpec,
+        WrapperSettings,
+    )
+    from sb3_smc.smc import SMC, StepPolicy, observation_size, smc_action_names
+    from sb3_smc.training import train_smc
+    from sb3_smc.wrapper import HierarchicalSMCWrapper

@@ -15,6 +15,7 @@ consecutive duplicates removed) for trajectory pictures.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping
 from dataclasses import asdict, dataclass, field
 from typing import Any
@@ -22,10 +23,13 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
+from sb3_smc.envs import make_smc_env, spec_for_smc
 from sb3_smc.policies import sample_action
+from sb3_smc.records import EvaluationRecord
 from sb3_smc.smc import SMC
 
-__all__ = ["EnvironmentResult", "EpisodeResult", "EvaluationResult", "REPEAT_SEED_OFFSET", "evaluate", "run_episode"]
+__all__ = ["EnvironmentResult", "EpisodeResult", "EvaluationResult", "REPEAT_SEED_OFFSET", "evaluate",
+           "make_evaluation_env", "run_episode"]
 
 REPEAT_SEED_OFFSET = 512
 """Repeat ``r`` of the paper's test is seeded with ``512 + r``."""
@@ -108,6 +112,14 @@ class EvaluationResult:
                 total[name] = total.get(name, 0) + count
         return total
 
+    @property
+    def record(self) -> EvaluationRecord:
+        """The summary an SMC and its library keep (no episodes)."""
+        return EvaluationRecord(smc=self.smc, env_id=self.env_id, split=self.split, kind=self.kind,
+                                repeats=self.repeats, seed=self.seed, score=self.score,
+                                environment_scores=tuple(self.scores), mean_length=self.mean_length,
+                                call_counts=self.call_counts())
+
     def to_dict(self) -> dict[str, Any]:
         """Plain data (JSON-ready: cells become lists)."""
         return asdict(self)
@@ -161,38 +173,43 @@ def run_episode(smc: SMC, env: gym.Env, *, index: int | None = None, seed: int,
                          calls=calls)
 
 
-def make_evaluation_env(smc: SMC, env_id: str, *, split: str = "test", max_steps: int | None = None,
+def make_evaluation_env(smc: SMC, env_id: str | None = None, *, split: str = "test", max_steps: int | None = None,
                         env_kwargs: Mapping[str, Any] | None = None) -> gym.Env:
-    """The environment ``smc`` was trained in (wrapper settings from its metadata), on ``split``.
+    """The environment ``smc`` was trained in (:func:`sb3_smc.envs.make_smc_env` with its spec), on ``split``.
 
-    The wrapper reports the cells of every move (those inside SMC calls too) for :func:`run_episode`.
+    ``env_id`` defaults to the SMC's own task; ``max_steps`` replaces the episode length it was trained with. The
+    wrapper reports the cells of every move (those inside SMC calls too) for :func:`run_episode`.
     """
-    import pixelworld_env  # noqa: F401  (registers the PW-* ids)
-    from sb3_smc.wrapper import HierarchicalSMCWrapper
-
-    wrapper = dict(smc.metadata.get("wrapper") or {})
-    if max_steps is not None:
-        wrapper["max_steps"] = max_steps
-    kwargs = dict(smc.metadata.get("env_kwargs") or {})
-    kwargs.update(env_kwargs or {})
-    env = gym.make(env_id, split=split, max_steps=int(wrapper.get("max_steps", 100)), **kwargs)
-    return HierarchicalSMCWrapper(env, smc.children, include_primitives=smc.include_primitives,
-                                  count_primitive_steps=bool(wrapper.get("count_primitive_steps", False)),
-                                  call_step_cap=int(wrapper.get("call_step_cap", 100)), record_cells=True)
+    env_id = _env_id(smc, env_id)
+    spec = spec_for_smc(smc, env_id)
+    wrapper = spec.wrapper if max_steps is None else dataclasses.replace(spec.wrapper, max_steps=max_steps)
+    return make_smc_env(spec, smc.children, env_id=env_id, split=split, wrapper=wrapper, env_kwargs=env_kwargs,
+                        record_cells=True)
 
 
-def evaluate(smc: SMC, env_id: str, *, split: str = "test", repeats: int = 10, seed: int = 0,
-             max_steps: int | None = None, record_cells: bool = True,
-             env_kwargs: Mapping[str, Any] | None = None) -> EvaluationResult:
+def _env_id(smc: SMC, env_id: str | None) -> str:
+    if env_id is not None:
+        return env_id
+    if smc.spec is None:
+        raise ValueError(f"SMC {smc.name!r} has no training spec: name the env id to evaluate it on")
+    return smc.spec.task.env_id
+
+
+def evaluate(smc: SMC, env_id: str | None = None, *, split: str = "test", repeats: int = 10, seed: int = 0,
+             max_steps: int | None = None, record_cells: bool = True, env_kwargs: Mapping[str, Any] | None = None,
+             keep: bool = True) -> EvaluationResult:
     """The paper's test (spec §5.4): every environment of ``split`` run ``repeats`` times, stochastic policy.
 
-    Returns an :class:`EvaluationResult` with the overall ``score`` (mean of final-step reward > 0 over
-    environments x repeats), one :class:`EnvironmentResult` per environment (its score, label and episodes) and,
-    per episode, the visited cells. Deterministic for a given ``seed``. The SMC's children, primitive-action
-    setting and wrapper settings (``metadata["wrapper"]``) are those it was trained with.
+    ``env_id`` defaults to the task the SMC was trained on. Returns an :class:`EvaluationResult` with the overall
+    ``score`` (mean of final-step reward > 0 over environments x repeats), one :class:`EnvironmentResult` per
+    environment (its score, label and episodes) and, per episode, the visited cells. Deterministic for a given
+    ``seed``. The SMC's children, primitive-action setting and wrapper settings are those of its spec. With
+    ``keep=True`` (default) the result's :class:`~sb3_smc.records.EvaluationRecord` is added to
+    ``smc.evaluations`` (replacing an earlier one of the same env id and split), so a library saves it.
     """
-    if repeats < 1:
-        raise ValueError(f"repeats must be >= 1, got {repeats}")
+    if isinstance(repeats, bool) or not isinstance(repeats, int | np.integer) or repeats < 1:
+        raise ValueError(f"repeats must be an integer >= 1, got {repeats!r}")
+    env_id = _env_id(smc, env_id)
     env = make_evaluation_env(smc, env_id, split=split, max_steps=max_steps, env_kwargs=env_kwargs)
     try:
         base = env.unwrapped
@@ -214,5 +231,8 @@ def evaluate(smc: SMC, env_id: str, *, split: str = "test", repeats: int = 10, s
     finally:
         env.close()
     score = float(np.mean([e.success for env_result in environments for e in env_result.episodes]))
-    return EvaluationResult(smc=smc.name, env_id=env_id, split=split, kind=smc.kind, repeats=repeats, seed=seed,
-                            score=score, environments=environments, action_names=tuple(smc.action_names))
+    result = EvaluationResult(smc=smc.name, env_id=env_id, split=split, kind=smc.kind, repeats=repeats, seed=seed,
+                              score=score, environments=environments, action_names=tuple(smc.action_names))
+    if keep:
+        smc.add_evaluation(result.record)
+    return result

@@ -11,6 +11,7 @@
 Only ``Discrete`` action spaces and non-image ``Box`` observations through a ``FlattenExtractor`` are supported.
 The numpy policies hold numpy arrays only (no torch modules), so they pickle small and load without torch.
 
+:class:`FrameStackPolicy` replays ``VecFrameStack`` for a policy trained on stacked observations;
 :class:`ScriptedPolicy` and :class:`SequencePolicy` are deterministic (one-hot) policies for tests and demos;
 :func:`sample_action` draws an action from a probability vector by inverse-CDF sampling.
 """
@@ -18,12 +19,16 @@ The numpy policies hold numpy arrays only (no torch modules), so they pickle sma
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+if TYPE_CHECKING:
+    from sb3_smc.smc import StepPolicy
+
 __all__ = [
     "ACTIVATIONS",
+    "FrameStackPolicy",
     "NumpyLSTMPolicy",
     "NumpyMLPPolicy",
     "ScriptedPolicy",
@@ -439,6 +444,37 @@ def _one_hot(action: int, n: int) -> np.ndarray:
     probs = np.zeros(n)
     probs[action] = 1.0
     return probs
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Frame stacking
+# ---------------------------------------------------------------------------------------------------------------
+
+class FrameStackPolicy:
+    """A :class:`~sb3_smc.smc.StepPolicy` for a policy trained under ``VecFrameStack(n_stack)``.
+
+    The inner policy sees the last ``n_stack`` observations concatenated, oldest first, zeros before the start
+    of the call (what ``VecFrameStack`` does for 1-D observations after a reset). Picklable when ``inner`` is.
+    """
+
+    def __init__(self, inner: StepPolicy, n_stack: int, observation_size: int) -> None:
+        if n_stack < 1:
+            raise ValueError(f"n_stack must be >= 1, got {n_stack}")
+        self.inner = inner
+        self.n_stack = int(n_stack)
+        self.observation_size = int(observation_size)
+
+    def initial_state(self) -> tuple[np.ndarray, Any]:
+        return np.zeros(self.n_stack * self.observation_size), self.inner.initial_state()
+
+    def probabilities(self, observation: np.ndarray, state: tuple[np.ndarray, Any]) -> tuple[np.ndarray, Any]:
+        frames, inner_state = state
+        frames = np.concatenate((frames[self.observation_size:], np.asarray(observation, dtype=frames.dtype)))
+        probabilities, inner_state = self.inner.probabilities(frames, inner_state)
+        return probabilities, (frames, inner_state)
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({self.inner!r}, n_stack={self.n_stack})"
 
 
 # ---------------------------------------------------------------------------------------------------------------

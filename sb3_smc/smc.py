@@ -10,10 +10,13 @@ the first step), as the paper's policy input.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, field
-from typing import Any, Protocol, runtime_checkable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from sb3_smc.records import EvaluationRecord, TrainingRecord, TrainingSpec
 
 SIGNALS = {"classification": ("SIG0", "SIG1"), "bring-about": ("SIG1",)}
 """The signal actions of each task kind, in environment order."""
@@ -57,8 +60,11 @@ def observation_size(n_children: int, n_actions: int) -> int:
 class SMC:
     """A sensorimotor contingency: a frozen policy, its action names and the SMCs it calls.
 
-    ``metadata`` records provenance (dataset / env id, algorithm, seed, selected update, training return,
-    test score ...); ``model`` is the trained SB3 model when there is one (``None`` for scripted policies).
+    ``model`` is the trained SB3 model when there is one (``None`` for scripted policies). Trained SMCs carry
+    their provenance as typed records (:mod:`sb3_smc.records`): ``spec`` (how it was trained), ``record`` (what
+    training produced) and ``evaluations`` (the latest :class:`~sb3_smc.records.EvaluationRecord` per env id and
+    split, added by :func:`sb3_smc.evaluate`). A spec must agree with the SMC's kind, children and primitive
+    setting.
     """
 
     name: str
@@ -66,8 +72,10 @@ class SMC:
     policy: StepPolicy
     children: tuple[SMC, ...] = ()
     include_primitives: bool = True
-    metadata: dict[str, Any] = field(default_factory=dict)
     model: Any = None
+    spec: TrainingSpec | None = None
+    record: TrainingRecord | None = None
+    evaluations: tuple[EvaluationRecord, ...] = ()
 
     def __post_init__(self) -> None:
         if self.kind not in SIGNALS:
@@ -78,6 +86,15 @@ class SMC:
             raise ValueError(f"SMC {self.name!r}: child names must be unique, got {names}")
         if _calls(self, self.name):
             raise ValueError(f"SMC {self.name!r} calls itself (directly or through its children)")
+        self.evaluations = tuple(self.evaluations)
+        if self.spec is not None:
+            spec = self.spec
+            found = {"kind": (spec.task.kind, self.kind), "children": (spec.children, tuple(names)),
+                     "include_primitives": (spec.wrapper.include_primitives, self.include_primitives)}
+            wrong = {k: v for k, v in found.items() if v[0] != v[1]}
+            if wrong:
+                detail = "; ".join(f"{k}: spec {a!r}, SMC {b!r}" for k, (a, b) in wrong.items())
+                raise ValueError(f"SMC {self.name!r}: its training spec does not match it ({detail})")
 
     def __deepcopy__(self, memo: dict) -> SMC:
         # An SMC is frozen once built: copies of env specs, wrappers and configs share it (its model may hold
@@ -91,6 +108,20 @@ class SMC:
     @property
     def observation_size(self) -> int:
         return observation_size(len(self.children), len(self.action_names))
+
+    @property
+    def test_score(self) -> float | None:
+        """The score of the latest evaluation on the test split of the SMC's own task (else of any test split)."""
+        tests = [e for e in self.evaluations if e.split == "test"]
+        own = [e for e in tests if self.spec is not None and e.env_id == self.spec.task.env_id]
+        chosen = own or tests
+        return chosen[-1].score if chosen else None
+
+    def add_evaluation(self, evaluation: EvaluationRecord) -> None:
+        """Keep ``evaluation``, replacing an earlier one of the same env id and split."""
+        if evaluation.smc != self.name:
+            raise ValueError(f"evaluation of SMC {evaluation.smc!r} given to SMC {self.name!r}")
+        self.evaluations = (*(e for e in self.evaluations if e.key != evaluation.key), evaluation)
 
     @property
     def depth(self) -> int:

@@ -1,40 +1,22 @@
-"""Shared fixtures: the reference data beside the checkout (``../shared/reference``)."""
+"""Test session set-up: one torch thread, and a dataset cache that is never the user's.
+
+The default run generates what it needs into a temporary ``PIXELWORLD_CACHE`` (removed at the end); set
+``PIXELWORLD_TEST_CACHE=DIR`` to keep and reuse a cache folder between runs (never ``~/.cache/pixelworld`` unless
+named explicitly). Shared helpers live in ``tests/helpers.py``.
+"""
 
 from __future__ import annotations
 
-import gzip
-import json
 import os
+import shutil
+import tempfile
 from pathlib import Path
 
 import pytest
 
-REFERENCE = Path(os.environ.get("PIXELWORLD_REFERENCE",
-                                Path(__file__).resolve().parents[2] / "shared" / "reference"))
-SAMPLES = REFERENCE / "aaai18_samples"
+from tests.helpers import require_reference
 
-
-def require_reference() -> Path:
-    """The reference folder, or a loud failure (never a silent skip) when it is missing."""
-    if not (SAMPLES / "index.json").is_file():
-        pytest.fail(
-            f"reference data not found at {REFERENCE}: these tests need ../shared/reference beside the "
-            "checkout (or PIXELWORLD_REFERENCE pointing at it)",
-            pytrace=False,
-        )
-    return REFERENCE
-
-
-def sample_files() -> list[Path]:
-    """Every decoded dataset file (empty when the reference is missing; the tests then fail loudly)."""
-    return sorted(SAMPLES.glob("*.jsonl.gz")) if SAMPLES.is_dir() else []
-
-
-def read_samples(path: Path) -> tuple[dict, list[dict]]:
-    """The header and the sample records of one decoded dataset file."""
-    with gzip.open(path, "rt", encoding="utf-8") as handle:
-        header = json.loads(handle.readline())
-        return header, [json.loads(line) for line in handle]
+_TEMPORARY_CACHE: str | None = None
 
 
 @pytest.fixture(scope="session")
@@ -43,6 +25,18 @@ def reference() -> Path:
 
 
 def pytest_configure(config: pytest.Config) -> None:
+    global _TEMPORARY_CACHE
     import torch
 
     torch.set_num_threads(1)
+    chosen = os.environ.get("PIXELWORLD_TEST_CACHE")
+    if chosen:
+        os.environ["PIXELWORLD_CACHE"] = chosen
+    else:
+        _TEMPORARY_CACHE = tempfile.mkdtemp(prefix="pixelworld-test-cache-")
+        os.environ["PIXELWORLD_CACHE"] = _TEMPORARY_CACHE
+
+
+def pytest_unconfigure(config: pytest.Config) -> None:
+    if _TEMPORARY_CACHE is not None:
+        shutil.rmtree(_TEMPORARY_CACHE, ignore_errors=True)

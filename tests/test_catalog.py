@@ -11,7 +11,7 @@ import pytest
 
 from pixelworld_env import catalog
 from pixelworld_env.concepts import Concept, ConceptError, expand, parse
-from tests.conftest import REFERENCE, require_reference
+from tests.helpers import REFERENCE, require_reference
 
 ROOT = Path(__file__).resolve().parents[1]
 #: The three generators of bfaw-search.generators that name the undefined `potential-container` (spec §7 item 22).

@@ -9,7 +9,7 @@ from pixelworld_env.csp import sample_generator, satisfies_generator
 from pixelworld_env.datasets import load_or_generate
 from pixelworld_env.loading import dataset_spec
 from pixelworld_env.scene import Scene
-from tests.conftest import SAMPLES, read_samples, require_reference
+from tests.helpers import SAMPLES, read_samples, require_reference
 
 DATASETS = [
     "cl_self-in-container_vs_noncontainer",

@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from pixelworld_env.definitions import DefinitionError, load_definitions, load_experiments
-from tests.conftest import REFERENCE, require_reference
+from tests.helpers import REFERENCE, require_reference
 
 AAAI18 = REFERENCE / "aaai18"
 DATA = AAAI18 / "DATA"

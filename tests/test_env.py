@@ -12,36 +12,12 @@ from gymnasium.utils.env_checker import check_env as gym_check_env
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
 from pixelworld_env import Color, PixelWorldEnv, Scene
+from tests.helpers import CONTAINER, IN_CONTAINER, classification_env, make
 
-CONTAINER = """
-#########
-#...S...#
-#.a...a.#
-#.a...a.#
-#.aaaaa.#
-#=======#
-#.......#
-#########
-"""
-IN_CONTAINER = "?x container(x) & inside_supported(self,x)"
 DOWN, RIGHT, UP, LEFT = "DOWN", "RIGHT", "UP", "LEFT"
-
-
-def make(kind: str = "bring-about", text: str = CONTAINER, **kwargs) -> PixelWorldEnv:
-    scenes = [Scene.from_ascii(text, {"a": "container"})]
-    return PixelWorldEnv(scenes, kind=kind, concept=kwargs.pop("concept", IN_CONTAINER), **kwargs)
-
 
 def act(env: PixelWorldEnv, name: str):
     return env.step(env.action_names.index(name))
-
-
-def classification_env(**kwargs) -> PixelWorldEnv:
-    inside = Scene.from_ascii(CONTAINER.replace("#...S...#", "#.......#").replace("#.a...a.#\n#.aaaaa.#",
-                                                                                    "#.a.S.a.#\n#.aaaaa.#"),
-                              {"a": "container"})
-    outside = Scene.from_ascii(CONTAINER, {"a": "container"})
-    return PixelWorldEnv([inside, outside], kind="classification", concept=IN_CONTAINER, **kwargs)
 
 
 def test_action_names_follow_the_paper() -> None:

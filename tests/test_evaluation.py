@@ -10,6 +10,7 @@ from pixelworld_env.loading import load_dataset
 from sb3_smc.evaluation import evaluate
 from sb3_smc.policies import ScriptedPolicy
 from sb3_smc.smc import SMC, smc_action_names
+from tests.helpers import UniformPolicy
 
 CORNER = "cl_self-in-left-corner_vs_on-hline"
 CORNER_ID = f"PW-{CORNER}-v0"
@@ -35,17 +36,6 @@ def always_sig1(observation: np.ndarray, step: int) -> int:
     return SIG1
 
 
-class UniformPolicy:
-    """Stochastic test policy: uniform over the actions (the evaluation's sampling decides everything)."""
-
-    def __init__(self, n_actions: int) -> None:
-        self.n_actions = n_actions
-
-    def initial_state(self) -> None:
-        return None
-
-    def probabilities(self, observation: np.ndarray, state: None) -> tuple[np.ndarray, None]:
-        return np.full(self.n_actions, 1.0 / self.n_actions), None
 
 
 def parent_rule(observation: np.ndarray, step: int) -> int:

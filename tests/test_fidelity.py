@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 from pixelworld_env import Concept, Scene, catalog
-from tests.conftest import REFERENCE, read_samples, require_reference, sample_files
+from tests.helpers import REFERENCE, read_samples, require_reference, sample_files
 
 FILES = sample_files()
 

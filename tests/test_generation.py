@@ -26,7 +26,7 @@ from pixelworld_env.generation import (
 )
 from pixelworld_env.loading import dataset_spec
 from pixelworld_env.shapes import shape_library
-from tests.conftest import read_samples, require_reference, sample_files
+from tests.helpers import read_samples, require_reference, sample_files
 
 REPRESENTATIVE = (
     "cl_self-in-container_vs_noncontainer",  # containment classification, one generator per label

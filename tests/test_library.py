@@ -18,6 +18,7 @@ from sb3_contrib import TRPO, RecurrentPPO
 from stable_baselines3 import PPO
 
 import pixelworld_env  # noqa: F401  (registers the PW-* ids)
+from sb3_smc.evaluation import evaluate
 from sb3_smc.library import (
     FORMAT,
     FORMAT_VERSION,
@@ -30,6 +31,7 @@ from sb3_smc.library import (
     UnknownSMCError,
 )
 from sb3_smc.policies import ScriptedPolicy, policy_from_model
+from sb3_smc.records import Budget, EvaluationRecord, TaskSpec, TrainingRecord, TrainingSpec, package_versions
 from sb3_smc.smc import SMC
 from sb3_smc.wrapper import HierarchicalSMCWrapper
 
@@ -38,10 +40,18 @@ BA_ID = "PW-ba_self-in-container_from_on-floor-v0"
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def _metadata(env_id: str, algo: str, seed: int) -> dict:
-    return {"env_id": env_id, "datasets": list(gym.spec(env_id).kwargs["datasets"]), "algo": algo,
-            "seed": seed, "selected_update": np.int64(3), "training_return": np.float32(0.25), "test_score": 0.5,
-            "total_timesteps": 64, "hyperparameters": {"gamma": 0.99, "policy_kwargs": {"net_arch": (32,)}}}
+def _records(name: str, env_id: str, algo: str, seed: int, children: tuple[SMC, ...]):
+    """A spec, a training record (numpy numbers included) and a test evaluation, as train_smc / evaluate make."""
+    spec = TrainingSpec(name=name, task=TaskSpec(env_id).resolved(), algo=algo, seed=seed,
+                        hyperparameters={"gamma": 0.99, "policy_kwargs": {"net_arch": (32,)}},
+                        budget=Budget(64, 1, 32), children=tuple(c.name for c in children))
+    record = TrainingRecord(training_returns=(0.1, float("nan"), 0.2, 0.25),
+                            success_rates=(0.0, float("nan"), 0.5, 0.5),
+                            selected_update=np.int64(3), selected_return=np.float32(0.25), total_timesteps=64,
+                            primitive_steps=80, wall_time_s=1.5, versions=package_versions())
+    evaluation = EvaluationRecord(smc=name, env_id=env_id, split="test", kind=spec.task.kind, repeats=10, seed=0,
+                                  score=0.5, environment_scores=(0.5, 0.5), mean_length=3.5, call_counts={})
+    return {"spec": spec, "record": record, "evaluations": (evaluation,)}
 
 
 def _smc(name: str, env_id: str, algo: type, children=(), seed: int = 0, learn: bool = False) -> SMC:
@@ -57,7 +67,7 @@ def _smc(name: str, env_id: str, algo: type, children=(), seed: int = 0, learn: 
         for parameter in model.policy.parameters():
             parameter.add_(0.3 * torch.randn(parameter.shape, generator=generator))
     return SMC(name, env.unwrapped.kind, policy_from_model(model), children=children, model=model,
-               metadata=_metadata(env_id, algo.__name__, seed))
+               **_records(name, env_id, algo.__name__, seed, tuple(children)))
 
 
 @pytest.fixture(scope="module")
@@ -110,8 +120,9 @@ def test_round_trip_in_a_fresh_process(smcs, saved, tmp_path):
         expected[f"{name}/obs"] = observations
         expected[f"{name}/probs"] = _trace(smc.policy, observations)
     np.savez(tmp_path / "expected.npz", **expected)
-    metadata = {name: SMCLibrary([smc]).entry(name)["metadata"] for name, smc in smcs.items()}
-    (tmp_path / "metadata.json").write_text(json.dumps(metadata))
+    records = {name: [smc.spec.to_dict(), smc.record.to_dict(), [e.to_dict() for e in smc.evaluations]]
+               for name, smc in smcs.items()}
+    (tmp_path / "records.json").write_text(json.dumps(records))
     script = textwrap.dedent(f"""
         import json, sys
         import torch
@@ -124,7 +135,7 @@ def test_round_trip_in_a_fresh_process(smcs, saved, tmp_path):
         library = SMCLibrary.load({str(saved)!r})
         assert library.names == ("corner", "container", "climber", "corner-ppo"), library.names
         expected = np.load({str(tmp_path / "expected.npz")!r})
-        metadata = json.load(open({str(tmp_path / "metadata.json")!r}))
+        records = json.load(open({str(tmp_path / "records.json")!r}))
         for name in library.names:
             smc = library[name]
             state, rows = smc.policy.initial_state(), []
@@ -132,7 +143,9 @@ def test_round_trip_in_a_fresh_process(smcs, saved, tmp_path):
                 p, state = smc.policy.probabilities(obs, state)
                 rows.append(p)
             np.testing.assert_allclose(np.array(rows), expected[name + "/probs"], rtol=0, atol=1e-12)
-            assert smc.metadata == metadata[name], (smc.metadata, metadata[name])
+            got = [smc.spec.to_dict(), smc.record.to_dict(), [e.to_dict() for e in smc.evaluations]]
+            assert got == records[name], (got, records[name])
+            assert smc.test_score == 0.5
         climber = library["climber"]
         assert [c.name for c in climber.children] == ["corner", "container"]
         assert climber.children[0] is library["corner"] and climber.children[1] is library["container"]
@@ -280,7 +293,7 @@ def test_missing_model_file(copy):
 
 
 @pytest.mark.parametrize(("version", "message"), [
-    (2, "version 2 is newer than this sb3_smc reads .*upgrade sb3_smc"),
+    (3, "version 3 is newer than this sb3_smc reads .*upgrade sb3_smc"),
     (0, "incompatible manifest version 0"),
     ("1", "version must be an integer"),
 ])
@@ -307,6 +320,20 @@ def test_missing_field(copy):
         SMCLibrary.load(copy)
 
 
+def test_spec_that_disagrees_with_its_entry(copy):
+    _edit(copy, lambda m: m["smcs"]["corner"]["spec"]["wrapper"].update(include_primitives=False))
+    with pytest.raises(ManifestError, match="entry 'corner': .*noprim.* needs children"):
+        SMCLibrary.load(copy)
+    _edit(copy, lambda m: m["smcs"]["climber"]["spec"]["wrapper"].update(include_primitives=False))
+    _edit(copy, lambda m: m["smcs"]["corner"]["spec"]["wrapper"].update(include_primitives=True))
+    with pytest.raises(ManifestError, match="entry 'climber': its training spec disagrees with the entry "
+                                            r"\(include_primitives: spec False, entry True\)"):
+        SMCLibrary.load(copy)
+    _edit(copy, lambda m: m["smcs"]["climber"].update(record={"training_returns": []}))
+    with pytest.raises(ManifestError, match=r"entry 'climber': record: missing field\(s\) \['success_rates'"):
+        SMCLibrary.load(copy)
+
+
 def test_missing_child(copy):
     def rename(manifest):
         manifest["smcs"]["corner-v2"] = manifest["smcs"].pop("corner")
@@ -320,7 +347,7 @@ def test_missing_child(copy):
 def test_cycle(copy):
     def cycle(manifest):
         corner = manifest["smcs"]["corner"]
-        corner["children"] = ["climber"]
+        corner["children"] = corner["spec"]["children"] = ["climber"]
         corner["action_names"].append("SMC:climber")
         corner["observation"] = {"size": 81 + 1 + 7, "window": 81, "outcomes": 1, "previous_action": 7}
 
@@ -344,7 +371,7 @@ def test_manifest_observation_size_disagrees(copy):
 def test_manifest_actions_disagree_with_the_model(copy):
     def other_kind(manifest):  # consistent in itself, but the model has 6 actions and 87 inputs
         entry = manifest["smcs"]["corner-ppo"]
-        entry["kind"] = "bring-about"
+        entry["kind"] = entry["spec"]["task"]["kind"] = "bring-about"
         entry["action_names"] = ["SIG1", "DOWN", "RIGHT", "UP", "LEFT"]
         entry["observation"] = {"size": 86, "window": 81, "outcomes": 0, "previous_action": 5}
 
@@ -406,7 +433,7 @@ def test_failed_swap_restores_the_previous_library(smcs, tmp_path, monkeypatch):
             raise OSError("rename failed")
         real_rename(src, dst)
 
-    monkeypatch.setattr("sb3_smc.library.os.rename", rename)
+    monkeypatch.setattr("pixelworld_env.atomic.os.rename", rename)
     with pytest.raises(OSError, match="rename failed"):
         SMCLibrary([smcs["container"]]).save(target)
     assert SMCLibrary.load(target).names == ("corner",)
@@ -440,7 +467,7 @@ def test_interrupted_save_is_reported(saved, tmp_path):
 
 def test_names_that_are_not_file_names(smcs, tmp_path):
     corner = smcs["corner"]
-    odd = SMC("cl/left corner:v1", corner.kind, corner.policy, model=corner.model, metadata=corner.metadata)
+    odd = SMC("cl/left corner:v1", corner.kind, corner.policy, model=corner.model)
     path = SMCLibrary([odd]).save(tmp_path / "library")
     entry = json.loads((path / "manifest.json").read_text())["smcs"]["cl/left corner:v1"]
     assert entry["model"].startswith("models/cl_left_corner_v1-") and (path / entry["model"]).is_file()
@@ -453,14 +480,82 @@ def test_train_smc_output_round_trips(tmp_path):
 
     smc = train_smc(CL_ID, algo="TRPO", total_timesteps=64, n_envs=1, n_steps=32, batch_size=32, frame_stack=2,
                     seed=4, printer=lambda line: None)
-    smc.metadata["test_score"] = 0.75
+    result = evaluate(smc, repeats=1)
+    assert smc.evaluations == (result.record,) and smc.test_score == result.score
     library = SMCLibrary([smc])
     entry = library.entry(smc.name)
-    assert (entry["env_id"], entry["seed"], entry["total_timesteps"], entry["test_score"]) == (CL_ID, 4, 64, 0.75)
-    assert entry["frame_stack"] == 2 and entry["selected_update"] == smc.metadata["selected_update"]
+    assert (entry["env_id"], entry["seed"], entry["total_timesteps"], entry["test_score"]) == (CL_ID, 4, 64,
+                                                                                               result.score)
+    assert entry["frame_stack"] == 2 and entry["selected_update"] == smc.record.selected_update
     loaded = SMCLibrary.load(library.save(tmp_path / "library"))[smc.name]
     assert type(loaded.policy).__name__ == "FrameStackPolicy" and loaded.policy.n_stack == 2
     observations = _observations(smc.observation_size)
     np.testing.assert_allclose(_trace(loaded.policy, observations), _trace(smc.policy, observations), rtol=0,
                                atol=1e-12)
-    assert loaded.metadata["wrapper"] == smc.metadata["wrapper"]
+    assert (loaded.spec, loaded.record, loaded.evaluations) == (smc.spec, smc.record, smc.evaluations)
+    again = evaluate(loaded, repeats=1)
+    assert again.to_dict() == result.to_dict()
+
+
+# ------------------------------------------------------------------------------------------------ version 1
+
+V1_MANIFEST = Path(__file__).parent / "data" / "library_v1_manifest.json"
+"""The manifest sb3-smc 0.1 wrote for a three-SMC library (a RecurrentPPO child, a frame-stacked TRPO child and a
+noprim level-2 parent whose ``metadata["test_score"]`` was set by hand). The models are trained here from the
+converted specs (the original archives are large); that 0.1's own archives load was checked by hand."""
+
+
+def test_version_1_libraries_load_through_the_conversion(tmp_path):
+    from sb3_smc.library import storage
+    from sb3_smc.training import train_smc
+
+    v1 = json.loads(V1_MANIFEST.read_text())
+    assert v1["version"] == 1
+    converted = storage.check_manifest(json.loads(V1_MANIFEST.read_text()), V1_MANIFEST)
+    root = tmp_path / "library"
+    (root / "models").mkdir(parents=True)
+    trained: dict[str, SMC] = {}
+    for name in storage.topological_order(converted, V1_MANIFEST):
+        spec = converted[name]["spec"]
+        smc = train_smc(spec, children=trained)
+        trained[name] = smc
+        smc.model.save(root / v1["smcs"][name]["model"])
+        v1["smcs"][name]["sha256"] = storage.sha256(root / v1["smcs"][name]["model"])
+    (root / "manifest.json").write_text(json.dumps(v1))
+
+    library = SMCLibrary.load(root)
+    for name, entry in v1["smcs"].items():
+        smc, meta = library[name], entry["metadata"]
+        assert smc.spec == trained[name].spec
+        assert (smc.spec.task.env_id, smc.spec.seed, smc.spec.algo) == (meta["env_id"], meta["seed"], meta["algo"])
+        assert smc.spec.budget.steps_per_update == meta["steps_per_update"]
+        assert smc.spec.hyperparameters["policy"] == meta["policy"] and smc.spec.frame_stack == meta["frame_stack"]
+        assert smc.spec.wrapper.to_dict() == {"include_primitives": entry["include_primitives"], **meta["wrapper"]}
+        assert smc.record.to_dict()["training_returns"] == [None if r != r else r for r in meta["training_returns"]]
+        assert smc.record.selected_update == meta["selected_update"] and smc.record.versions == v1["created_with"]
+    top = library["cl_self-in-container_vs_noncontainer"]
+    assert not top.include_primitives and top.spec.children == tuple(c.name for c in top.children)
+    (evaluation,) = top.evaluations
+    assert (evaluation.split, evaluation.score, evaluation.repeats, evaluation.seed) == ("test", 0.25, None, None)
+    # saved again, it is a version-2 library with the same records
+    again = SMCLibrary.load(library.save(tmp_path / "v2"))
+    assert json.loads((tmp_path / "v2" / "manifest.json").read_text())["version"] == FORMAT_VERSION == 2
+    assert all(again[n].spec == library[n].spec and again[n].evaluations == library[n].evaluations for n in again)
+
+
+def test_version_1_entry_that_cannot_be_converted(tmp_path):
+    from sb3_smc.library import storage
+
+    v1 = json.loads(V1_MANIFEST.read_text())
+    del v1["smcs"]["cl_self-in-left-corner_vs_on-hline"]["metadata"]["wrapper"]
+    with pytest.raises(ManifestError, match="version-1 entry 'cl_self-in-left-corner_vs_on-hline' cannot be "
+                                            "converted .*wrapper"):
+        storage.check_manifest(v1, V1_MANIFEST)
+
+
+def test_version_0_1_models_name_a_policy_class_that_still_imports():
+    """sb3-smc 0.1 pickled its LSTM policy class as sb3_smc.training.SequenceLstmPolicy."""
+    from sb3_smc.common.recurrent import SequenceLstmPolicy
+    from sb3_smc.training import SequenceLstmPolicy as legacy
+
+    assert legacy is SequenceLstmPolicy

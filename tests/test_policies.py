@@ -186,7 +186,7 @@ def test_activations_match_torch(module: nn.Module) -> None:
 
 
 def test_pixelworld_recurrent_and_float32() -> None:
-    from tests.test_env import classification_env
+    from tests.helpers import classification_env
 
     def make_env() -> gym.Env:
         return classification_env(observation="hand")

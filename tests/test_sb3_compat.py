@@ -6,7 +6,7 @@ import pytest
 from sb3_contrib import TRPO, RecurrentPPO
 from stable_baselines3 import PPO
 
-from tests.test_env import classification_env, make
+from tests.helpers import classification_env, make
 
 ALGOS = {"PPO": (PPO, "MlpPolicy"), "TRPO": (TRPO, "MlpPolicy"), "RecurrentPPO": (RecurrentPPO, "MlpLstmPolicy")}
 

@@ -7,7 +7,7 @@ import re
 import pytest
 
 from pixelworld_env import Color, ObjectClass, Scene
-from tests.conftest import read_samples, require_reference, sample_files
+from tests.helpers import read_samples, require_reference, sample_files
 
 ROOM = """
 #########

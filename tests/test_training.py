@@ -22,25 +22,25 @@ from stable_baselines3.common.callbacks import BaseCallback, CallbackList
 from stable_baselines3.common.vec_env import DummyVecEnv, VecFrameStack
 
 import pixelworld_env  # noqa: F401  (registers the PW-* ids)
+from sb3_smc.bias import initial_action_probabilities
 from sb3_smc.callbacks import BestSnapshot, SMCTrainingCallback
+from sb3_smc.common.recurrent import CompactRecurrentRolloutBuffer, SequenceLstmPolicy
+from sb3_smc.envs import make_smc_env
 from sb3_smc.evaluation import evaluate
-from sb3_smc.policies import ScriptedPolicy, policy_from_model
+from sb3_smc.policies import FrameStackPolicy, ScriptedPolicy, policy_from_model
+from sb3_smc.records import TrainingSpec, smc_name_from_env_id
 from sb3_smc.smc import SMC, smc_action_names
-from sb3_smc.training import (
-    CompactRecurrentRolloutBuffer,
-    FrameStackPolicy,
-    SequenceLstmPolicy,
-    initial_action_probabilities,
-    make_training_env,
-    resolve_children,
-    smc_name_from_env_id,
-    train_smc,
-)
+from sb3_smc.training import resolve_children, train_smc
 
 CORNER_ID = "PW-cl_self-in-left-corner_vs_on-hline-v0"
 RIGHT_CORNER_ID = "PW-cl_self-in-right-corner_vs_on-hline-v0"
 ABOVE_ID = "PW-ba_self-on-something_from_directly-above-v0"
 CONTAINER_ID = "PW-cl_self-in-container_vs_noncontainer-v0"
+
+
+def make_training_env(env_id: str, children=()):
+    """The environment a flat SMC (or one calling ``children``) trained on ``env_id`` sees."""
+    return make_smc_env(TrainingSpec.create(env_id, children=[c.name for c in children]), children)
 
 
 # ------------------------------------------------------------------------------------------------ bias rule (§5.2)
@@ -89,8 +89,8 @@ def test_untrained_smc_follows_the_bias(algo: str) -> None:
     observation, _ = env.reset(seed=0)
     probabilities, _ = smc.policy.probabilities(observation, smc.policy.initial_state())
     np.testing.assert_allclose(probabilities, expected, rtol=0.1)
-    assert smc.metadata["initial_action_probabilities"] == pytest.approx(list(expected))
-    assert smc.metadata["selected_update"] is None and smc.metadata["updates"] == 0
+    assert smc.record.initial_action_probabilities == pytest.approx(list(expected))
+    assert smc.record.selected_update is None and smc.record.updates == 0
     unbiased = train_smc(CORNER_ID, algo=algo, total_timesteps=0, signal_bias=False, n_envs=2)
     observation, _ = make_training_env(CORNER_ID).reset(seed=0)
     probabilities, _ = unbiased.policy.probabilities(observation, unbiased.policy.initial_state())
@@ -162,21 +162,23 @@ def test_callback_selects_the_policy_of_the_best_rollout() -> None:
 def test_train_smc_returns_the_selected_snapshot() -> None:
     recorder = StateRecorder()
     smc = train_smc(CORNER_ID, total_timesteps=768, n_envs=4, n_steps=64, seed=1, callback=recorder)
-    meta = smc.metadata
-    assert smc.name == "cl_self-in-left-corner_vs_on-hline" and smc.kind == "classification"
+    spec, record = smc.spec, smc.record
+    assert smc.name == spec.name == "cl_self-in-left-corner_vs_on-hline" and smc.kind == spec.kind == "classification"
     assert smc.action_names == ("SIG0", "SIG1", "DOWN", "RIGHT", "UP", "LEFT") and smc.children == ()
-    for key in ("env_id", "datasets", "kind", "algo", "seed", "hyperparameters", "selected_update",
-                "training_return", "total_timesteps"):
-        assert key in meta
-    assert meta["datasets"] == ["cl_self-in-left-corner_vs_on-hline"] and meta["algo"] == "RecurrentPPO"
-    assert meta["total_timesteps"] == 768 and meta["updates"] == 3 and meta["steps_per_update"] == 256
-    assert meta["hyperparameters"]["gamma"] == 0.99 and meta["hyperparameters"]["gae_lambda"] == 1.0
-    assert meta["hyperparameters"]["policy_kwargs"]["lstm_hidden_size"] == 32
-    returns = meta["training_returns"]
-    assert meta["selected_update"] == int(np.argmax(returns))
-    assert meta["training_return"] == max(returns)
+    assert spec.task.env_id == CORNER_ID and spec.task.split == "train" and spec.algo == "RecurrentPPO"
+    assert spec.task.datasets == ("cl_self-in-left-corner_vs_on-hline",) and spec.seed == 1
+    assert spec.budget.total_timesteps == 768 and spec.budget.steps_per_update == 256 and spec.budget.updates == 3
+    assert record.total_timesteps == 768 and record.updates == 3 and record.action_names == smc.action_names
+    assert spec.hyperparameters["gamma"] == 0.99 and spec.hyperparameters["gae_lambda"] == 1.0
+    assert spec.hyperparameters["policy_kwargs"]["lstm_hidden_size"] == 32
+    assert spec.hyperparameters["batch_size"] == 256  # capped at the steps per update
+    assert record.versions["torch"].startswith("2.13.0") and record.wall_time_s > 0
+    returns = record.training_returns
+    assert record.selected_update == int(np.argmax(returns))
+    assert record.selected_return == max(returns)
+    assert len(record.success_rates) == 3 and all(0 <= r <= 1 for r in record.success_rates)
     state = smc.model.policy.state_dict()
-    assert all(torch.equal(state[k], recorder.states[meta["selected_update"]][k]) for k in state)
+    assert all(torch.equal(state[k], recorder.states[record.selected_update][k]) for k in state)
     # the numpy policy is the selected model's actor
     env = make_training_env(CORNER_ID)
     observation, _ = env.reset(seed=0)
@@ -188,13 +190,32 @@ def test_train_smc_returns_the_selected_snapshot() -> None:
 def test_train_smc_is_deterministic() -> None:
     first = train_smc(CORNER_ID, algo="TRPO", total_timesteps=512, n_envs=4, n_steps=64, seed=3)
     again = train_smc(CORNER_ID, algo="TRPO", total_timesteps=512, n_envs=4, n_steps=64, seed=3)
-    assert first.metadata["training_returns"] == again.metadata["training_returns"]
+    assert first.record.training_returns == again.record.training_returns
+    assert first.spec == again.spec
+
+
+def test_a_spec_trains_what_the_keywords_train() -> None:
+    """train_smc(spec) after a JSON round trip of the spec repeats train_smc(env_id, **keywords) exactly."""
+    child = train_smc(ABOVE_ID, algo="TRPO", total_timesteps=0, n_envs=2, seed=4)
+    keywords = train_smc(CORNER_ID, algo="TRPO", total_timesteps=512, n_envs=4, n_steps=64, seed=3, children=[child],
+                         learning_rate="lin_1e-3")
+    spec = TrainingSpec.from_json(keywords.spec.to_json())
+    assert spec == keywords.spec and spec.children == (child.name,)
+    again = train_smc(spec, children={child.name: child})
+    assert again.record.training_returns == keywords.record.training_returns
+    with pytest.raises(TypeError, match="seed"):
+        train_smc(spec, children=[child], seed=4)
+    with pytest.raises(ValueError, match="children"):
+        train_smc(spec, children=[])
 
 
 def test_children_from_a_library_and_names() -> None:
     a = SMC("a", "bring-about", ScriptedPolicy(5, lambda obs, step: 0))
     b = SMC("b", "bring-about", ScriptedPolicy(5, lambda obs, step: 0))
     assert resolve_children(({"a": a, "b": b}, ["b", "a"])) == (b, a)
+    assert resolve_children({"a": a, "b": b}, ["b"]) == (b,)
+    with pytest.raises(KeyError, match="'c'"):
+        resolve_children({"a": a, "b": b}, ["c"])
     assert resolve_children([a, b]) == (a, b) and resolve_children((a, b)) == (a, b)
     assert resolve_children(None) == ()
     with pytest.raises(TypeError):
@@ -303,10 +324,10 @@ def test_tensorboard_curves(tmp_path: Path) -> None:
                 "smc_calls/walker/sig1_rate", "rollout/ep_rew_mean", "train/loss"}
     assert expected <= tags, expected - tags
     returns = [event.value for event in events.Scalars("smc/training_return")]
-    assert returns == pytest.approx(smc.metadata["training_returns"])
+    assert returns == pytest.approx(smc.record.training_returns)
     lengths = [event.value for event in events.Scalars("smc_calls/walker/call_length")]
     assert lengths == pytest.approx([2.0] * len(lengths))  # the walker always makes two moves
-    assert smc.metadata["primitive_steps"] > 0
+    assert smc.record.primitive_steps > 0
 
 
 # ------------------------------------------------------------------------------------------------ learning
@@ -323,21 +344,42 @@ def test_short_training_beats_the_untrained_policy(algo: str) -> None:
     assert before < 0.2 and after >= before + 0.4, (before, after)
 
 
+REFERENCE_RESULTS = {CORNER_ID: (142, 1.0), RIGHT_CORNER_ID: (36, 0.996), ABOVE_ID: (28, 0.992),
+                     CONTAINER_ID: (73, 0.944)}
+"""(selected update, test score) of seed 0 with the defaults, measured with torch 2.13.0 on the CPU (x86_64) before
+and after the typed-spec refactoring (docs/training.md); other builds may take other floating-point paths."""
+
+
+def _check_reference(env_id: str, smc: SMC, score: float) -> None:
+    if torch.__version__.startswith("2.13.0"):
+        assert (smc.record.selected_update, score) == REFERENCE_RESULTS[env_id], env_id
+
+
 @pytest.mark.slow
 def test_flat_corner_smc_reaches_90_percent() -> None:
     smc = train_smc(CORNER_ID, seed=0)
     result = evaluate(smc, CORNER_ID)
-    print(result.summary(), smc.metadata["selected_update"], smc.metadata["training_return"])
+    print(result.summary(), smc.record.selected_update, smc.record.selected_return)
     assert result.score >= 0.9
+    _check_reference(CORNER_ID, smc, result.score)
 
 
 @pytest.mark.slow
 def test_level2_container_smc_end_to_end() -> None:
-    children = [train_smc(env_id, seed=0) for env_id in (CORNER_ID, RIGHT_CORNER_ID, ABOVE_ID)]
-    for child, env_id in zip(children, (CORNER_ID, RIGHT_CORNER_ID, ABOVE_ID), strict=True):
-        print(evaluate(child, env_id).summary(), child.metadata["selected_update"])
+    """Three level-1 SMCs, then the level-2 container classifier calling them (measured: 1.000, 0.996, 0.992 and
+    0.944; the flat container SMC reaches 0.960, so this is an end-to-end check, not evidence for the hierarchy)."""
+    ids = (CORNER_ID, RIGHT_CORNER_ID, ABOVE_ID)
+    children = [train_smc(env_id, seed=0) for env_id in ids]
+    for child, env_id in zip(children, ids, strict=True):
+        result = evaluate(child)
+        print(result.summary(), child.record.selected_update)
+        assert result.score >= 0.9, env_id
+        _check_reference(env_id, child, result.score)
     smc = train_smc(CONTAINER_ID, seed=0, children=children)
     assert smc.action_names[-3:] == tuple("SMC:" + c.name for c in children)
-    result = evaluate(smc, CONTAINER_ID)
-    print(result.summary(), result.call_counts(), smc.metadata["selected_update"], smc.metadata["training_return"])
-    assert 0.0 <= result.score <= 1.0 and result.n_episodes == 10 * len(result.environments)
+    result = evaluate(smc)
+    print(result.summary(), result.call_counts(), smc.record.selected_update, smc.record.selected_return)
+    assert result.n_episodes == 10 * len(result.environments) == 500
+    assert result.score >= 0.85
+    assert sum(result.call_counts().values()) > 0  # it uses its children
+    _check_reference(CONTAINER_ID, smc, result.score)

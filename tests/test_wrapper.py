@@ -11,7 +11,7 @@ from sb3_smc import SMC
 from sb3_smc.policies import ScriptedPolicy, SequencePolicy
 from sb3_smc.smc import smc_action_names
 from sb3_smc.wrapper import HierarchicalSMCWrapper
-from tests.test_evaluation import UniformPolicy
+from tests.helpers import UniformPolicy
 
 CONTAINER = """
 #########

@@ -1,5 +1,6 @@
-"""The rl_zoo3 hyperparameter files in ``zoo_configs/``: keys, the paper's settings, and that each one builds and
-trains its algorithm on a real PixelWorld env the way rl_zoo3 would (without importing rl_zoo3)."""
+"""The rl_zoo3 hyperparameter files in ``zoo_configs/``: generated from DEFAULT_HYPERPARAMETERS, keys, the paper's
+settings, and that each one builds and trains its algorithm on a real PixelWorld env the way rl_zoo3 would (without
+importing rl_zoo3)."""
 
 from __future__ import annotations
 
@@ -16,9 +17,12 @@ from stable_baselines3.common.env_util import make_vec_env
 from torch import nn
 
 import pixelworld_env  # noqa: F401  (registers the PW-* ids, what --gym-packages pixelworld_env does)
+from sb3_smc.hyperparameters import DEFAULT_HYPERPARAMETERS
 from sb3_smc.library import SMCLibrary
 from sb3_smc.policies import policy_from_model
 from sb3_smc.smc import SMC
+from sb3_smc.wrapper import HierarchicalSMCWrapper
+from sb3_smc.zoo import ZOO_ALGOS, render_config, smc_env
 
 CONFIGS = Path(__file__).resolve().parents[1] / "zoo_configs"
 ALGOS = {"ppo_lstm": (RecurrentPPO, "MlpLstmPolicy"), "trpo": (TRPO, "MlpPolicy"), "ppo": (PPO, "MlpPolicy")}
@@ -43,6 +47,27 @@ def _policy_kwargs(text: str) -> dict:
 
 
 @pytest.mark.parametrize("algo", list(ALGOS))
+def test_configs_are_generated_from_the_defaults(algo):
+    """The shipped file is what `python -m sb3_smc.zoo` writes, and carries every default of its algorithm."""
+    assert (CONFIGS / f"{algo}.yml").read_text() == render_config(algo), "run: python -m sb3_smc.zoo zoo_configs"
+    defaults = DEFAULT_HYPERPARAMETERS[ZOO_ALGOS[algo]]
+    config = _load(algo)["default"]
+    for key, value in defaults.items():
+        if key == "policy_kwargs":
+            assert _policy_kwargs(config[key]) == value
+        elif key != "policy":
+            assert config[key] == value, key
+    assert config["n_envs"] * config["n_steps"] == 2000
+
+
+def test_zoo_env_wrapper_entry(tmp_path):
+    env = smc_env(gym.make(ENV_IDS["trpo"]))
+    assert isinstance(env, HierarchicalSMCWrapper) and env.smcs == ()
+    with pytest.raises(ValueError, match="without the library"):
+        smc_env(gym.make(ENV_IDS["trpo"]), names=["x"])
+
+
+@pytest.mark.parametrize("algo", list(ALGOS))
 def test_config_keys_and_paper_settings(algo):
     cls, policy = ALGOS[algo]
     config = _load(algo)
@@ -58,7 +83,7 @@ def test_config_keys_and_paper_settings(algo):
         assert hyperparams["batch_size"] <= 2000 and 2000 % hyperparams["batch_size"] == 0
         assert int(hyperparams["n_timesteps"]) == 400_000
         assert (hyperparams["gamma"], hyperparams["gae_lambda"]) == (0.99, 1.0)
-        assert _import(hyperparams["env_wrapper"]).__name__ == "HierarchicalSMCWrapper"
+        assert _import(hyperparams["env_wrapper"]) is smc_env
         kwargs = _policy_kwargs(hyperparams["policy_kwargs"])
         if algo == "ppo_lstm":
             assert kwargs["lstm_hidden_size"] == 32 and kwargs["n_lstm_layers"] == 1
@@ -86,6 +111,10 @@ def test_config_trains_and_gives_a_storable_smc(algo, tmp_path):
     assert model.num_timesteps >= 64
     # what rl_zoo3 trains has the flat-SMC layout: it goes into an SMCLibrary as it is
     base = venv.envs[0].unwrapped
-    smc = SMC(algo, base.kind, policy_from_model(model), model=model, metadata={"env_id": env_id, "source": "zoo"})
+    smc = SMC(algo, base.kind, policy_from_model(model), model=model)
     library = SMCLibrary([smc])
-    assert SMCLibrary.load(library.save(tmp_path / "library")).names == (algo,)
+    path = library.save(tmp_path / "library")
+    assert SMCLibrary.load(path).names == (algo,)
+    # and the library's SMC goes back into a zoo run as an action
+    wrapped = smc_env(gym.make(env_id), library=str(path), names=[algo])
+    assert wrapped.action_names[-1] == f"SMC:{algo}"

@@ -1,0 +1,65 @@
+"""The initial action distribution of spec §5.2 ("init" policies) and its installation in a model's action layer."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from sb3_smc.smc import CALL_PREFIX, MOVES
+
+__all__ = ["NONSIGNAL_WEIGHT", "SIGNAL_WEIGHT", "SMC_WEIGHT", "apply_signal_bias", "initial_action_probabilities"]
+
+SIGNAL_WEIGHT, NONSIGNAL_WEIGHT, SMC_WEIGHT = 1.0, 20.0, 20.0
+"""Weights of the bias rule of spec §5.2 (their sum with both groups present is 41)."""
+
+
+def _group(name: str) -> str:
+    if name.startswith("SIG"):
+        return "signal"
+    if name.startswith(CALL_PREFIX):
+        return "smc"
+    if name in MOVES:
+        return "move"
+    raise ValueError(f"unknown action name {name!r}: expected a signal (SIG*), a move {MOVES} or "
+                     f"{CALL_PREFIX}<child>")
+
+
+def initial_action_probabilities(action_names: Sequence[str], *, signal_weight: float = SIGNAL_WEIGHT,
+                                 nonsignal_weight: float = NONSIGNAL_WEIGHT,
+                                 smc_weight: float = SMC_WEIGHT) -> np.ndarray:
+    """The initial action distribution of spec §5.2 ("init" policies).
+
+    Signals share ``signal_weight`` equally, moves share ``nonsignal_weight`` and SMC actions ``smc_weight``;
+    without SMC actions the moves take both shares (``nonsignal_weight + smc_weight``). Absent groups are
+    dropped and the rest renormalised: classification flat SIG0 = SIG1 = 1/82 and each move 10/41;
+    with SMCs the moves share 20/41 and the SMCs 20/41; without moves (noprim) signals 1/21 and SMCs 20/21.
+    """
+    groups = [_group(name) for name in action_names]
+    if not groups:
+        raise ValueError("no actions")
+    counts = {g: groups.count(g) for g in ("signal", "move", "smc")}
+    weights = {"signal": signal_weight, "move": nonsignal_weight, "smc": smc_weight}
+    if counts["smc"] == 0:
+        weights["move"] = nonsignal_weight + smc_weight
+    total = sum(weights[g] for g in weights if counts[g])
+    probabilities = np.array([weights[g] / counts[g] / total for g in groups])
+    return probabilities
+
+
+def apply_signal_bias(model: Any, action_names: Sequence[str], **weights: float) -> np.ndarray:
+    """Set the bias of the policy's action layer to ``log p`` (:func:`initial_action_probabilities`).
+
+    SB3 initialises the action layer orthogonally with gain 0.01, so the initial logits are the bias up to
+    about 1e-2 and the initial policy follows ``p``. Returns ``p``.
+    """
+    import torch
+
+    probabilities = initial_action_probabilities(action_names, **weights)
+    action_net = model.policy.action_net
+    if action_net.out_features != len(probabilities):
+        raise ValueError(f"the action layer has {action_net.out_features} outputs for {len(probabilities)} actions")
+    with torch.no_grad():
+        action_net.bias.copy_(torch.as_tensor(np.log(probabilities), dtype=action_net.bias.dtype))
+    return probabilities

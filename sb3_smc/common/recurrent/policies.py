@@ -1,0 +1,86 @@
+"""``SequenceLstmPolicy``: sb3-contrib's ``MlpLstmPolicy`` with a faster training pass."""
+
+from __future__ import annotations
+
+import torch
+from sb3_contrib.common.recurrent.policies import RecurrentActorCriticPolicy
+
+from sb3_smc.common.recurrent.type_aliases import SequenceStates
+
+__all__ = ["SequenceLstmPolicy"]
+
+
+def _lstm_by_length(lstm: torch.nn.LSTM, features: torch.Tensor, starts: torch.Tensor, lengths: torch.Tensor,
+                    states: tuple[torch.Tensor, torch.Tensor]) -> torch.Tensor:
+    """Run ``lstm`` over the sequences ``features[starts[i] : starts[i] + lengths[i]]`` of a flat batch.
+
+    Sequences whose lengths fall in the same power-of-two bucket run together, padded only to the longest of
+    their bucket, from their initial ``states`` (``(n_layers, n_seq, hidden)`` each). Returns the outputs at the
+    same flat positions as ``features`` (zeros where no sequence covers a row).
+    """
+    n_rows = features.shape[0]
+    positions, outputs = [], []
+    low, high = 0, 1
+    longest_overall = int(lengths.max()) if len(lengths) else 0
+    while low < longest_overall:
+        members = torch.nonzero((lengths > low) & (lengths <= high)).flatten()
+        if len(members):
+            longest = int(lengths[members].max())
+            offsets = torch.arange(longest)
+            index = starts[members, None] + offsets[None, :]  # (n_bucket, longest)
+            valid = offsets[None, :] < lengths[members, None]
+            index = torch.where(valid, index, starts[members, None])  # rows past the end: any row (causal LSTM)
+            output, _ = lstm(features[index].transpose(0, 1), (states[0][:, members], states[1][:, members]))
+            positions.append(index[valid])
+            outputs.append(output.transpose(0, 1)[valid])
+        low, high = high, 2 * high
+    result = features.new_zeros((n_rows, lstm.hidden_size))
+    if positions:
+        result = result.index_put((torch.cat(positions),), torch.cat(outputs))
+    return result
+
+
+class SequenceLstmPolicy(RecurrentActorCriticPolicy):
+    """sb3-contrib's ``MlpLstmPolicy`` with a faster training pass (the same numbers on every real step).
+
+    The stock policy runs its LSTM one time step at a time over padded minibatches whenever an episode starts
+    inside them (a Python loop over up to ``n_steps`` steps, forward and backward). This policy runs it once per
+    power-of-two bucket of sequence lengths, each padded only to its own longest sequence, from the sequences'
+    initial states (zeroed where a sequence starts an episode). It reads compact minibatches of
+    :class:`CompactRecurrentRolloutBuffer` (see :func:`use_compact_buffer`) and sb3-contrib's padded ones
+    (plain ``RecurrentPPO``; the sequence lengths are then read from the padding, whose observations are all
+    zeros, which a one-hot SMC observation never is). Collection and prediction are unchanged, and
+    :func:`sb3_smc.policies.policy_from_model` reads it like ``MlpLstmPolicy``.
+    """
+
+    def evaluate_actions(self, obs, actions, lstm_states, episode_starts):
+        n_seq = lstm_states.pi[0].shape[1]
+        if not self.share_features_extractor or obs.dim() != 2:
+            return super().evaluate_actions(obs, actions, lstm_states, episode_starts)
+        if isinstance(lstm_states, SequenceStates):
+            starts, lengths, resets = lstm_states.starts, lstm_states.lengths, lstm_states.resets
+        else:  # sb3-contrib's padded layout: n_seq sequences of max_len rows, an episode start only first
+            padded = episode_starts.reshape((n_seq, -1))
+            max_len = padded.shape[1]
+            if obs.shape[0] != n_seq * max_len or bool(padded[:, 1:].any()):
+                return super().evaluate_actions(obs, actions, lstm_states, episode_starts)
+            real = obs.reshape(n_seq, max_len, -1).ne(0).any(dim=2)
+            steps = torch.arange(1, max_len + 1, device=obs.device).expand(n_seq, max_len)
+            lengths = (steps * real).amax(dim=1).clamp(min=1)
+            starts = torch.arange(n_seq, device=obs.device) * max_len
+            resets = padded[:, 0]
+        keep = (1.0 - resets).view(1, n_seq, 1)
+        features = self.extract_features(obs)
+        states = (lstm_states.pi[0] * keep, lstm_states.pi[1] * keep)
+        latent_pi = _lstm_by_length(self.lstm_actor, features, starts, lengths, states)
+        if self.lstm_critic is not None:
+            states = (lstm_states.vf[0] * keep, lstm_states.vf[1] * keep)
+            latent_vf = _lstm_by_length(self.lstm_critic, features, starts, lengths, states)
+        elif self.shared_lstm:
+            latent_vf = latent_pi.detach()
+        else:
+            latent_vf = self.critic(features)
+        latent_pi = self.mlp_extractor.forward_actor(latent_pi)
+        latent_vf = self.mlp_extractor.forward_critic(latent_vf)
+        distribution = self._get_action_dist_from_latent(latent_pi)
+        return self.value_net(latent_vf), distribution.log_prob(actions), distribution.entropy()

@@ -1,0 +1,90 @@
+"""The one environment factory: (training spec, children) -> the wrapped environment the SMC sees.
+
+Training (:func:`sb3_smc.train_smc`), evaluation (:func:`sb3_smc.evaluate`), the library
+(:meth:`sb3_smc.SMCLibrary.env_for`) and the rl_zoo3 wrapper entry (:func:`sb3_smc.zoo.smc_env`) all build the
+SMC's environment here, so the observation layout, action list and wrapper settings cannot drift apart.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import gymnasium as gym
+
+from sb3_smc.records import TaskSpec, TrainingSpec, WrapperSettings
+from sb3_smc.smc import SMC
+from sb3_smc.wrapper import HierarchicalSMCWrapper
+
+__all__ = ["make_smc_env", "pixelworld_base", "spec_for_smc", "wrap_with_smcs"]
+
+
+def pixelworld_base(env: gym.Env) -> Any:
+    """The :class:`~pixelworld_env.env.PixelWorldEnv` under ``env``; ``TypeError`` if there is none, ``ValueError``
+    if ``env`` already has SMC actions (a :class:`HierarchicalSMCWrapper` layer)."""
+    from pixelworld_env.env import PixelWorldEnv
+
+    base = getattr(env, "unwrapped", env)
+    if not isinstance(base, PixelWorldEnv):
+        raise TypeError(f"SMCs act on PixelWorld environments; got {type(base).__name__}")
+    layer = env
+    while layer is not base:
+        if isinstance(layer, HierarchicalSMCWrapper):
+            raise ValueError("the environment is already wrapped with SMC actions (HierarchicalSMCWrapper); "
+                             "wrap the PixelWorld environment itself")
+        layer = getattr(layer, "env", base)
+    return base
+
+
+def make_smc_env(spec: TrainingSpec, children: Sequence[SMC] = (), *, env: gym.Env | None = None,
+                 env_id: str | None = None, split: str | None = None, wrapper: WrapperSettings | None = None,
+                 env_kwargs: Mapping[str, Any] | None = None, record_cells: bool = False) -> HierarchicalSMCWrapper:
+    """The environment SMC ``spec`` sees: its task inside :class:`HierarchicalSMCWrapper` with ``children``.
+
+    ``children`` must be the SMCs named by ``spec.children``, in that order. The task is
+    ``gym.make(env_id or spec.task.env_id, split=split or spec.task.split, max_steps=wrapper.max_steps,
+    **spec.task.env_kwargs, **env_kwargs)``, or ``env`` itself when given (a PixelWorld env without SMC actions).
+    ``wrapper`` replaces ``spec.wrapper`` (e.g. another ``call_step_cap``); ``record_cells`` makes the wrapper
+    report the self's cells after every move (for trajectory pictures).
+    """
+    children = tuple(children)
+    names = tuple(child.name for child in children)
+    if names != spec.children:
+        raise ValueError(f"SMC {spec.name!r} calls the children {list(spec.children)} (in that order), but was given "
+                         f"{list(names)}")
+    settings = wrapper or spec.wrapper
+    if env is None:
+        import pixelworld_env  # noqa: F401  (registers the PW-* ids)
+
+        kwargs = {"disable_env_checker": True, **spec.task.env_kwargs, **dict(env_kwargs or {})}
+        env = gym.make(env_id or spec.task.env_id, split=split or spec.task.split, max_steps=settings.max_steps,
+                       **kwargs)
+    elif env_id is not None or split is not None or env_kwargs:
+        raise ValueError("make_smc_env: give either env, or env_id / split / env_kwargs to build one, not both")
+    else:
+        pixelworld_base(env)
+    return wrap_with_smcs(env, children, settings, record_cells=record_cells)
+
+
+def wrap_with_smcs(env: gym.Env, smcs: Sequence[SMC], settings: WrapperSettings, *,
+                   record_cells: bool = False) -> HierarchicalSMCWrapper:
+    """``env`` with ``smcs`` as actions, as ``settings`` say (the one place the wrapper is built from settings).
+
+    :func:`make_smc_env` builds an SMC's own environment through it; on its own it serves a new higher-level policy
+    whose spec does not exist yet (:meth:`sb3_smc.SMCLibrary.wrap`, the rl_zoo3 entry).
+    """
+    return HierarchicalSMCWrapper(env, tuple(smcs), include_primitives=settings.include_primitives,
+                                  count_primitive_steps=settings.count_primitive_steps,
+                                  call_step_cap=settings.call_step_cap, record_cells=record_cells)
+
+
+def spec_for_smc(smc: SMC, env_id: str) -> TrainingSpec:
+    """``smc.spec``, or for an SMC without one (scripted, imported) the default settings on ``env_id``."""
+    if smc.spec is not None:
+        return smc.spec
+    return TrainingSpec(
+        name=smc.name, task=TaskSpec(env_id, kind=smc.kind),
+        wrapper=dataclasses.replace(WrapperSettings(), include_primitives=smc.include_primitives),
+        children=tuple(child.name for child in smc.children))
+

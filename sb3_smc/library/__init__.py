@@ -1,0 +1,30 @@
+"""SMC libraries: trained SMCs in a directory with a versioned manifest.
+
+* :mod:`sb3_smc.library.library` — :class:`SMCLibrary`, the API (a mapping name -> SMC; add, save, load, wrap);
+* :mod:`sb3_smc.library.storage` — the disk format: manifest schema and validation, checksums, model files, the
+  version-1 conversion, the atomic save;
+* :mod:`sb3_smc.library.errors` — the :class:`LibraryError` family.
+"""
+
+from sb3_smc.library.errors import (
+    CorruptModelError,
+    LayoutMismatchError,
+    LibraryError,
+    ManifestError,
+    MissingChildError,
+    UnknownSMCError,
+)
+from sb3_smc.library.library import SMCLibrary
+from sb3_smc.library.storage import FORMAT, FORMAT_VERSION
+
+__all__ = [
+    "FORMAT",
+    "FORMAT_VERSION",
+    "CorruptModelError",
+    "LayoutMismatchError",
+    "LibraryError",
+    "ManifestError",
+    "MissingChildError",
+    "SMCLibrary",
+    "UnknownSMCError",
+]

@@ -1,0 +1,47 @@
+"""Errors of SMC libraries: every one is a :class:`LibraryError` (a ``ValueError``) naming the file and the SMC."""
+
+from __future__ import annotations
+
+import difflib
+from collections.abc import Sequence
+
+__all__ = ["CorruptModelError", "LayoutMismatchError", "LibraryError", "ManifestError", "MissingChildError",
+           "UnknownSMCError", "suggest"]
+
+
+class LibraryError(ValueError):
+    """Any problem with an SMC library (base class of the errors below)."""
+
+
+class ManifestError(LibraryError):
+    """The manifest is missing, unreadable, of another format or version, or has wrong or missing fields."""
+
+
+class UnknownSMCError(LibraryError, KeyError):
+    """No SMC of that name in the library (the message suggests close names)."""
+
+    def __str__(self) -> str:  # KeyError would quote the message
+        return str(self.args[0]) if self.args else ""
+
+
+class MissingChildError(LibraryError):
+    """An SMC's child is not in the library."""
+
+
+class LayoutMismatchError(LibraryError):
+    """Action names or observation size disagree (manifest vs. model, or SMC vs. environment)."""
+
+
+class CorruptModelError(LibraryError):
+    """A model file is missing, truncated, corrupt, modified since it was saved, or not loadable."""
+
+
+def suggest(name: str, names: Sequence[str], empty: str = " (the library is empty)") -> str:
+    """"; did you mean ..." with close names, else a few of ``names`` (``empty`` when there are none)."""
+    close = difflib.get_close_matches(name, list(names), n=3, cutoff=0.5)
+    if close:
+        return f"; did you mean {' or '.join(repr(c) for c in close)}?"
+    if not names:
+        return empty
+    shown = ", ".join(repr(n) for n in list(names)[:10])
+    return f"; it has {len(names)}: {shown}{', ...' if len(names) > 10 else ''}"

@@ -1,0 +1,322 @@
+"""``SMCLibrary``: a directory of trained SMCs with a versioned manifest (the API; the disk format is
+:mod:`sb3_smc.library.storage`).
+
+Each manifest entry records what the SMC is (kind, algorithm, action names, observation layout, children by
+name), how it was trained and what came out (its :class:`~sb3_smc.records.TrainingSpec`,
+:class:`~sb3_smc.records.TrainingRecord` and :class:`~sb3_smc.records.EvaluationRecord` list), plus the SHA-256 of its
+model file. :meth:`SMCLibrary.load` validates all of it and rebuilds every :class:`~sb3_smc.smc.SMC` (children
+first, its policy by :func:`sb3_smc.policies.policy_from_model`); :meth:`SMCLibrary.save` writes a complete copy
+beside the target and swaps it in, so an interrupted save never leaves a half-written library. Libraries of
+version 1 (sb3-smc 0.1) load through :func:`~sb3_smc.library.storage.upgrade_v1`. See ``docs/library.md``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+from collections.abc import Iterator, Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from sb3_smc.envs import make_smc_env, pixelworld_base, wrap_with_smcs
+from sb3_smc.library import storage
+from sb3_smc.library.errors import (
+    CorruptModelError,
+    LayoutMismatchError,
+    LibraryError,
+    UnknownSMCError,
+    suggest,
+)
+from sb3_smc.records import WrapperSettings
+from sb3_smc.smc import SIGNALS, SMC
+
+__all__ = ["SMCLibrary"]
+
+
+def _same_parameters(a: Any, b: Any) -> bool:
+    if type(a) is not type(b):
+        return False
+    sa, sb = a.policy.state_dict(), b.policy.state_dict()
+    return sa.keys() == sb.keys() and all(bool((sa[k] == sb[k]).all()) for k in sa)
+
+
+def _same_smc(a: SMC, b: SMC) -> bool:
+    """Same name, kind, children names, primitives and model parameters (or the very same object)."""
+    if a is b:
+        return True
+    if (a.name, a.kind, a.include_primitives) != (b.name, b.kind, b.include_primitives):
+        return False
+    if [c.name for c in a.children] != [c.name for c in b.children]:
+        return False
+    if a.model is None or b.model is None:
+        return a.model is b.model and a.policy is b.policy
+    return _same_parameters(a.model, b.model)
+
+
+
+class SMCLibrary(Mapping[str, SMC]):
+    """A named collection of trained SMCs that saves to and loads from a directory.
+
+    A read-only mapping ``name -> SMC`` (``library[name]``, ``name in library``, ``len``, iteration over names)
+    plus :meth:`add`, :meth:`remove`, :meth:`save`, :meth:`load`, :meth:`wrap` and :meth:`env_for`.
+    Children live in the same library, by name: :meth:`add` adds an SMC's missing children (recursively) before
+    the SMC itself, so :attr:`names` lists children before their parents. Only SMCs with a trained
+    ``RecurrentPPO``, ``TRPO`` or ``PPO`` model can be stored (scripted SMCs cannot: ``LibraryError``).
+    """
+
+    def __init__(self, smcs: Sequence[SMC] = (), path: str | os.PathLike | None = None) -> None:
+        self._smcs: dict[str, SMC] = {}
+        self.path: Path | None = Path(path) if path is not None else None
+        """Where the library was loaded from or last saved to (the default target of :meth:`save`)."""
+        self.created_with: dict[str, str] = {}
+        """Package versions recorded in the loaded manifest (empty for a library not loaded from disk)."""
+        for smc in smcs:
+            self.add(smc)
+
+    # ------------------------------------------------------------------------------------------ mapping
+
+    def __getitem__(self, name: str) -> SMC:
+        try:
+            return self._smcs[name]
+        except KeyError:
+            raise UnknownSMCError(f"no SMC named {name!r} in the library{suggest(str(name), self.names)}") from None
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._smcs)
+
+    def __len__(self) -> int:
+        return len(self._smcs)
+
+    def __repr__(self) -> str:
+        where = f", path={str(self.path)!r}" if self.path is not None else ""
+        return f"SMCLibrary({list(self._smcs)}{where})"
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """Names of the SMCs, children before their parents (insertion order otherwise)."""
+        return tuple(self._smcs)
+
+    # ------------------------------------------------------------------------------------------ editing
+
+    def add(self, smc: SMC, *, replace: bool = False) -> SMC:
+        """Add ``smc`` and, first, those of its children (recursively) that are not in the library yet.
+
+        A child whose name is already in the library must be the same SMC (the same object, or the same kind,
+        children and model parameters, e.g. an SMC loaded from this library); otherwise ``LibraryError``.
+        ``replace=True`` replaces an SMC of the same name (its own entry only: parents keep calling the new one
+        by name). Adding an SMC that is already stored (same object or same content) changes nothing. Raises
+        ``LibraryError`` for an SMC without a model (scripted), a model of another algorithm, or a model whose
+        spaces do not fit the SMC's action names and observation size. Returns the stored SMC: ``smc`` itself,
+        or a copy calling the library's own child objects when ``smc``'s children are equal but other objects.
+        """
+        if not isinstance(smc, SMC):
+            raise TypeError(f"SMCLibrary.add expects an SMC, got {type(smc).__name__}")
+        before = dict(self._smcs)
+        try:
+            return self._add(smc, replace)
+        except BaseException:
+            self._smcs = before  # all or nothing: no half-added tree
+            raise
+
+    def _add(self, smc: SMC, replace: bool) -> SMC:
+        self._check_storable(smc)
+        for child in smc.children:
+            if child.name not in self._smcs:
+                self._add(child, False)
+            elif not _same_smc(self._smcs[child.name], child):
+                raise LibraryError(
+                    f"SMC {smc.name!r} calls a child {child.name!r} that differs from the SMC of that name already in "
+                    f"the library (other kind, children or model parameters); add the child under another name or "
+                    f"replace it first with library.add(child, replace=True)")
+        existing = self._smcs.get(smc.name)
+        if existing is not None and not replace:
+            if _same_smc(existing, smc):
+                return existing
+            raise LibraryError(f"the library already has a different SMC named {smc.name!r}; pass replace=True to "
+                               "replace it")
+        # the stored SMC calls the library's own child objects
+        stored_children = tuple(self._smcs[c.name] for c in smc.children)
+        if any(a is not b for a, b in zip(stored_children, smc.children, strict=True)):
+            smc = dataclasses.replace(smc, children=stored_children)
+        self._smcs[smc.name] = smc
+        if existing is not None:  # parents of a replaced SMC now call the new object
+            self._relink(smc)
+        return smc
+
+    def _relink(self, new: SMC) -> None:
+        for name, parent in list(self._smcs.items()):
+            if any(c.name == new.name and c is not new for c in parent.children):
+                children = tuple(new if c.name == new.name else c for c in parent.children)
+                updated = dataclasses.replace(parent, children=children)
+                self._smcs[name] = updated
+                self._relink(updated)
+
+    def remove(self, name: str) -> SMC:
+        """Remove and return the SMC ``name``; ``LibraryError`` if another SMC of the library calls it."""
+        smc = self[name]
+        users = [p.name for p in self._smcs.values() if any(c.name == name for c in p.children)]
+        if users:
+            raise LibraryError(f"cannot remove {name!r}: it is a child of {users}; remove those first")
+        del self._smcs[name]
+        return smc
+
+    @staticmethod
+    def _check_storable(smc: SMC) -> None:
+        if smc.model is None:
+            raise LibraryError(
+                f"SMC {smc.name!r} has no model (a scripted policy: {type(smc.policy).__name__}); a library stores "
+                f"only SMCs with a trained {'/'.join(storage.ALGORITHMS)} model")
+        algo = type(smc.model).__name__
+        if algo not in storage.ALGORITHMS or not isinstance(smc.model, storage.algorithm_classes()[algo]):
+            raise LibraryError(f"SMC {smc.name!r}: cannot store a {algo} model (supported: "
+                               f"{', '.join(storage.ALGORITHMS)})")
+        storage.check_model_layout(smc.name, smc.model, smc.action_names, smc.observation_size, f"its {algo} model",
+                                   storage.frame_stack_of(smc))
+
+    # ------------------------------------------------------------------------------------------ manifest
+
+    def entry(self, name: str) -> dict[str, Any]:
+        """The manifest entry of SMC ``name`` (without the ``model`` file and ``sha256`` fields :meth:`save` adds)."""
+        return storage.entry_for(self[name])
+
+    def manifest(self) -> dict[str, Any]:
+        """The manifest :meth:`save` writes (model file names included, checksums not)."""
+        files = storage.model_files(self.names)
+        return storage.new_manifest({name: {"model": files[name], **self.entry(name)} for name in self.names})
+
+    # ------------------------------------------------------------------------------------------ saving
+
+    def save(self, path: str | os.PathLike | None = None) -> Path:
+        """Write the library to directory ``path`` (default: :attr:`path`), atomically; returns the path.
+
+        Everything is written into a temporary directory beside ``path`` (models first, then the manifest, each
+        fsynced); only when it is complete is an existing library at ``path`` renamed aside, the new one renamed
+        into place and the old one deleted. An error while writing deletes the temporary directory and leaves the
+        previous library untouched. ``path`` may be missing, an empty directory or an existing library; anything
+        else is refused.
+        """
+        if path is None:
+            if self.path is None:
+                raise LibraryError("SMCLibrary.save needs a path (this library was not loaded from one)")
+            path = self.path
+        target = Path(path).absolute()
+        if target.exists():
+            if not target.is_dir():
+                raise LibraryError(f"cannot save an SMC library to {target}: it is a file")
+            if any(target.iterdir()) and not (target / storage.MANIFEST).is_file():
+                raise LibraryError(f"refusing to replace {target}: it is a non-empty directory without "
+                                   f"{storage.MANIFEST} (not an SMC library)")
+        for name in self.names:  # an SMC may have been changed since it was added
+            self._check_storable(self._smcs[name])
+        manifest = self.manifest()
+        storage.write_library(target, self._smcs, manifest)
+        self.path = target
+        self.created_with = manifest["created_with"]
+        return target
+
+    # ------------------------------------------------------------------------------------------ loading
+
+    @classmethod
+    def load(cls, path: str | os.PathLike) -> SMCLibrary:
+        """Load and validate the library in directory ``path``.
+
+        Checks the manifest (format, version, fields), that every child is in the library and no SMC calls itself
+        (through any chain), that action names and observation sizes agree with kind/children and with each
+        model's spaces, and that each model file is intact (readable zip, SHA-256 as recorded) and loads with
+        its algorithm's class (``device="cpu"``). Errors are :class:`LibraryError` subclasses naming the file
+        and SMC.
+        """
+        from sb3_smc.policies import FrameStackPolicy, policy_from_model
+
+        root = Path(path)
+        manifest, manifest_path = storage.read_manifest(root)
+        entries = storage.check_manifest(manifest, manifest_path)
+        order = storage.topological_order(entries, manifest_path)
+        library = cls(path=root)
+        library.created_with = dict(manifest.get("created_with") or {})
+        for name in order:
+            entry = entries[name]
+            model = storage.load_model(root, name, entry)
+            size = entry["observation"]["size"]
+            stack = entry.get("frame_stack", 1)
+            storage.check_model_layout(name, model, entry["action_names"], size,
+                                       f"the {entry['algo']} model in {root / entry['model']}", stack)
+            try:
+                policy = policy_from_model(model)
+                if stack > 1:
+                    policy = FrameStackPolicy(policy, stack, size)
+            except (TypeError, ValueError) as err:
+                raise CorruptModelError(
+                    f"SMC {name!r}: cannot run the model in {root / entry['model']}: {err}") from err
+            children = tuple(library._smcs[c] for c in entry["children"])
+            library._smcs[name] = SMC(name, entry["kind"], policy, children, entry["include_primitives"], model=model,
+                                      spec=entry["spec"], record=entry["record"],
+                                      evaluations=tuple(entry["evaluations"]))
+        return library
+
+    # ------------------------------------------------------------------------------------------ environments
+
+    def wrap(self, env: Any, names: Sequence[str] | str, *, include_primitives: bool = True, **kwargs: Any) -> Any:
+        """``env`` with the SMCs ``names`` as actions (:func:`sb3_smc.envs.wrap_with_smcs`), for training a new
+        higher-level policy.
+
+        The SMCs become actions after ``env``'s signals and, unless ``include_primitives=False``, the four moves.
+        SMCs of either task kind may be used on either kind of environment (as in the paper's curricula): an SMC
+        only moves; its signal becomes its outcome. ``kwargs``: the other :class:`~sb3_smc.records.WrapperSettings`
+        (``count_primitive_steps``, ``call_step_cap``) and ``record_cells``.
+        """
+        if isinstance(names, str):
+            names = [names]
+        names = list(names)
+        if len(set(names)) != len(names):
+            duplicates = sorted({n for n in names if names.count(n) > 1})
+            raise LibraryError(f"SMC names given twice: {duplicates}")
+        smcs = [self[n] for n in names]
+        _check_env(env)
+        record_cells = bool(kwargs.pop("record_cells", False))
+        settings = WrapperSettings(include_primitives=include_primitives, **kwargs)
+        return wrap_with_smcs(env, smcs, settings, record_cells=record_cells)
+
+    def env_for(self, name: str, env: Any, **kwargs: Any) -> Any:
+        """``env`` as SMC ``name`` itself sees it (:func:`sb3_smc.envs.make_smc_env` with its spec and children).
+
+        The result's action names and observation size are exactly the SMC's, so ``library[name].model`` or
+        ``.policy`` can act on it (evaluate it, or continue training with ``model.set_env``). Raises
+        :class:`LayoutMismatchError` when ``env`` is of the other task kind (its signals differ) or the layout
+        does not match. ``kwargs`` replace the wrapper settings of the SMC's spec (``count_primitive_steps``,
+        ``call_step_cap``); ``record_cells`` goes to the wrapper.
+        """
+        smc = self[name]
+        base = _check_env(env)
+        if base.kind != smc.kind:
+            raise LayoutMismatchError(
+                f"SMC {name!r} acts on {smc.kind} tasks (actions {list(smc.action_names)}), but the environment "
+                f"{_env_label(env)} is a {base.kind} task (signals {list(SIGNALS[base.kind])}); its action layout "
+                "does not fit")
+        record_cells = bool(kwargs.pop("record_cells", False))
+        trained = (smc.spec.wrapper if smc.spec is not None
+                   else WrapperSettings(include_primitives=smc.include_primitives))
+        settings = dataclasses.replace(trained, **kwargs)
+        if smc.spec is not None:
+            wrapped = make_smc_env(smc.spec, smc.children, env=env, wrapper=settings, record_cells=record_cells)
+        else:
+            wrapped = wrap_with_smcs(env, smc.children, settings, record_cells=record_cells)
+        shape = wrapped.observation_space.shape
+        if tuple(wrapped.action_names) != smc.action_names or shape != (smc.observation_size,):
+            raise LayoutMismatchError(
+                f"SMC {name!r}: the wrapped environment has actions {list(wrapped.action_names)} and observation "
+                f"shape {wrapped.observation_space.shape}; the SMC expects {list(smc.action_names)} and "
+                f"({smc.observation_size},)")
+        return wrapped
+
+
+def _check_env(env: Any) -> Any:
+    try:
+        return pixelworld_base(env)
+    except (TypeError, ValueError) as err:
+        raise LayoutMismatchError(str(err)) from None
+
+
+def _env_label(env: Any) -> str:
+    spec = getattr(env, "spec", None)
+    return repr(spec.id) if spec is not None and getattr(spec, "id", None) else type(env.unwrapped).__name__
