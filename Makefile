@@ -27,6 +27,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_env_steps.py
 	$(PY) benchmarks/bench_generation.py
 	$(PY) benchmarks/bench_training.py
+	$(PY) benchmarks/bench_policies.py
 
 clean:
 	rm -rf $(VENV)

@@ -46,9 +46,9 @@ def measure(env_id: str, *, algo: str, updates: int, threads: int, repeats: int,
     best = None
     for repeat in range(repeats):
         smc = train_smc(env_id, algo=algo, total_timesteps=2000 * updates, seed=repeat, children=children)
-        meta = smc.metadata
-        row = {"decisions/s": meta["total_timesteps"] / meta["wall_time_s"],
-               "primitive/s": meta["primitive_steps"] / meta["wall_time_s"], "seconds": meta["wall_time_s"]}
+        record = smc.record
+        row = {"decisions/s": record.total_timesteps / record.wall_time_s,
+               "primitive/s": record.primitive_steps / record.wall_time_s, "seconds": record.wall_time_s}
         if best is None or row["decisions/s"] > best["decisions/s"]:
             best = row
     torch.set_num_threads(1)

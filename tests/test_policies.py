@@ -1,12 +1,11 @@
 """sb3_smc.policies: numpy actors match SB3's distributions, scripted policies, sampling, pickling.
 
-``python -m tests.test_policies`` prints a micro-benchmark (µs per call, numpy actor vs ``model.predict``).
+The speed of the numpy actors is measured by ``benchmarks/bench_policies.py``.
 """
 
 from __future__ import annotations
 
 import pickle
-import time
 from collections.abc import Callable
 
 import gymnasium as gym
@@ -371,53 +370,3 @@ def test_sample_actions_batch_matches_sample_action() -> None:
     batch = sample_actions(p, np.random.default_rng(3))
     rng = np.random.default_rng(3)
     assert batch.tolist() == [sample_action(row, rng) for row in p]
-
-
-# ----------------------------------------------------------------------------------------------------------------
-# Micro-benchmark: python -m tests.test_policies
-# ----------------------------------------------------------------------------------------------------------------
-
-def _best_us(call: Callable[[int], object], repeats: int, blocks: int = 5) -> float:
-    """Best over ``blocks`` of the mean µs per call of ``call(i)`` over ``repeats`` calls (robust to a busy host)."""
-    best = float("inf")
-    for _ in range(blocks):
-        start = time.perf_counter()
-        for i in range(repeats):
-            call(i)
-        best = min(best, (time.perf_counter() - start) / repeats * 1e6)
-    return best
-
-
-def _benchmark(repeats: int = 1000) -> None:
-    env = GridEnv()
-    observations = [env.reset(seed=s)[0] for s in range(64)]
-    cases = [("RecurrentPPO LSTM-32, net_arch=[]", trained(RecurrentPPO, "MlpLstmPolicy", lstm_hidden_size=32,
-                                                          net_arch=[])),
-             ("RecurrentPPO LSTM-32, default net_arch", trained(RecurrentPPO, "MlpLstmPolicy", lstm_hidden_size=32)),
-             ("PPO MlpPolicy (64, 64)", trained(PPO))]
-    print(f"{'best of 5 x ' + str(repeats) + ' calls':42s} {'numpy probabilities':>20s} {'model.predict':>14s} "
-          f"{'speed-up':>9s}")
-    for name, model in cases:
-        policy = policy_from_model(model)
-        carried = {"numpy": policy.initial_state(), "sb3": None}
-
-        def numpy_step(i: int, policy=policy, carried=carried) -> None:
-            _, carried["numpy"] = policy.probabilities(observations[i % 64], carried["numpy"])
-
-        def predict_step(i: int, model=model, carried=carried) -> None:
-            _, carried["sb3"] = model.predict(observations[i % 64], state=carried["sb3"],
-                                              episode_start=np.array([i == 0]))
-
-        numpy_us, predict_us = _best_us(numpy_step, repeats), _best_us(predict_step, repeats)
-        print(f"{name:42s} {numpy_us:17.1f} µs {predict_us:11.1f} µs {predict_us / numpy_us:8.1f}x")
-    rng = np.random.default_rng(0)
-    p = policy.probabilities(observations[0], None)[0]
-    sample_us = _best_us(lambda i: sample_action(p, rng), repeats * 10)
-    choice_us = _best_us(lambda i: rng.choice(len(p), p=p), repeats * 10)
-    print(f"{'sample_action vs rng.choice':42s} {sample_us:17.1f} µs {choice_us:11.1f} µs "
-          f"{choice_us / sample_us:8.1f}x")
-
-
-if __name__ == "__main__":
-    th.set_num_threads(1)
-    _benchmark()

@@ -1,0 +1,77 @@
+"""Step-policy micro-benchmark: µs per call of the numpy actors of ``sb3_smc.policies`` next to ``model.predict``.
+
+An SMC called as a child runs one observation at a time, so this per-call cost bounds a level-2 SMC's speed. Cases
+(models from ``train_smc(..., total_timesteps=0)`` on a real PixelWorld task; the weights do not change the cost):
+RecurrentPPO with the default LSTM-32 and ``net_arch=[]``, with a (64, 64) head, and PPO with a (64, 64) MLP; then
+``sample_action`` next to ``numpy.random.Generator.choice``. Best of 5 blocks of ``--repeats`` calls.
+
+Run: ``python benchmarks/bench_policies.py [--repeats N]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from collections.abc import Callable
+
+import numpy as np
+import torch
+
+from sb3_smc.envs import make_smc_env
+from sb3_smc.policies import policy_from_model, sample_action
+from sb3_smc.training import train_smc
+
+ENV_ID = "PW-cl_self-in-left-corner_vs_on-hline-v0"
+
+
+def best_us(call: Callable[[int], object], repeats: int, blocks: int = 5) -> float:
+    """Best over ``blocks`` of the mean µs per call of ``call(i)`` over ``repeats`` calls (robust to a busy host)."""
+    best = float("inf")
+    for _ in range(blocks):
+        start = time.perf_counter()
+        for i in range(repeats):
+            call(i)
+        best = min(best, (time.perf_counter() - start) / repeats * 1e6)
+    return best
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--repeats", type=int, default=1000, help="calls per block")
+    args = parser.parse_args()
+    torch.set_num_threads(1)
+    cases = [("RecurrentPPO LSTM-32, net_arch=[] (default)", {}),
+             ("RecurrentPPO LSTM-32, net_arch=[64, 64]", {"policy_kwargs": {"net_arch": [64, 64]}}),
+             ("PPO MlpPolicy (64, 64)", {"algo": "PPO", "policy_kwargs": {"net_arch": [64, 64]}})]
+    rows = []
+    for label, settings in cases:
+        smc = train_smc(ENV_ID, total_timesteps=0, n_envs=1, **settings)
+        env = make_smc_env(smc.spec)
+        observations = [env.reset(seed=s)[0] for s in range(64)]
+        policy, model = policy_from_model(smc.model), smc.model
+        carried = {"numpy": policy.initial_state(), "sb3": None}
+
+        def numpy_step(i: int, policy=policy, carried=carried, observations=observations) -> None:
+            _, carried["numpy"] = policy.probabilities(observations[i % 64], carried["numpy"])
+
+        def predict_step(i: int, model=model, carried=carried, observations=observations) -> None:
+            _, carried["sb3"] = model.predict(observations[i % 64], state=carried["sb3"],
+                                              episode_start=np.array([i == 0]))
+
+        numpy_us, predict_us = best_us(numpy_step, args.repeats), best_us(predict_step, args.repeats)
+        rows.append((label, numpy_us, predict_us))
+    rng = np.random.default_rng(0)
+    p = policy.probabilities(observations[0], policy.initial_state())[0]
+    sample_us = best_us(lambda i: sample_action(p, rng), args.repeats * 10)
+    choice_us = best_us(lambda i: rng.choice(len(p), p=p), args.repeats * 10)
+    rows.append(("sample_action vs Generator.choice", sample_us, choice_us))
+
+    print(f"\nbest of 5 x {args.repeats} calls; torch {torch.__version__}\n")
+    print("| case | numpy (µs/call) | baseline: model.predict / choice (µs/call) | speed-up |")
+    print("|---|---:|---:|---:|")
+    for label, ours, theirs in rows:
+        print(f"| {label} | {ours:.1f} | {theirs:.1f} | {theirs / ours:.1f}x |")
+
+
+if __name__ == "__main__":
+    main()
