@@ -217,8 +217,8 @@ class SMCLibrary(Mapping[str, SMC]):
     # ------------------------------------------------------------------------------------------ loading
 
     @classmethod
-    def load(cls, path: str | os.PathLike) -> SMCLibrary:
-        """Load and validate the library in directory ``path``.
+    def load(cls, path: str | os.PathLike, names: Sequence[str] | None = None) -> SMCLibrary:
+        """Load and validate the library in directory ``path`` (only ``names`` and their descendants if given).
 
         Checks the manifest (format, version, fields), that every child is in the library and no SMC calls itself
         (through any chain), that action names and observation sizes agree with kind/children and with each
@@ -232,6 +232,9 @@ class SMCLibrary(Mapping[str, SMC]):
         manifest, manifest_path = storage.read_manifest(root)
         entries = storage.check_manifest(manifest, manifest_path)
         order = storage.topological_order(entries, manifest_path)
+        if names is not None:
+            wanted = _descendants(entries, names, manifest_path)
+            order = [name for name in order if name in wanted]
         library = cls(path=root)
         library.created_with = dict(manifest.get("created_with") or {})
         for name in order:
@@ -308,6 +311,19 @@ class SMCLibrary(Mapping[str, SMC]):
                 f"shape {wrapped.observation_space.shape}; the SMC expects {list(smc.action_names)} and "
                 f"({smc.observation_size},)")
         return wrapped
+
+
+def _descendants(entries: Mapping[str, Any], names: Sequence[str], where: Path) -> set[str]:
+    seen: set[str] = set()
+    stack = list(names)
+    while stack:
+        name = stack.pop()
+        if name not in entries:
+            raise UnknownSMCError(f"{where}: no SMC named {name!r}{suggest(str(name), list(entries))}")
+        if name not in seen:
+            seen.add(name)
+            stack.extend(entries[name]["children"])
+    return seen
 
 
 def _check_env(env: Any) -> Any:

@@ -77,21 +77,26 @@ def sha256(path: Path) -> str:
     return digest.hexdigest()
 
 
-_SAFE = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.+=-]*")
+_SAFE = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.+=@-]*")
 
 
 def model_files(names: Sequence[str]) -> dict[str, str]:
     """``name -> "models/<stem>.zip"``: the name itself when it is a safe file name, else a cleaned name + hash."""
     files: dict[str, str] = {}
-    taken: set[str] = set()
     for name in names:
-        stem = name
-        if not _SAFE.fullmatch(name) or len(name) > 100 or name.casefold() in taken:
-            cleaned = re.sub(r"[^A-Za-z0-9_.+=-]", "_", name)[:80].lstrip("._") or "smc"
-            stem = f"{cleaned}-{hashlib.sha256(name.encode()).hexdigest()[:10]}"
-        taken.add(stem.casefold())
-        files[name] = f"{MODELS}/{stem}.zip"
+        files[name] = model_file_for(name, list(files.values()))
     return files
+
+
+def model_file_for(name: str, taken: Sequence[str]) -> str:
+    """The model file of a new SMC ``name`` in a library whose model files are ``taken``: the name itself when it is
+    a safe file name not taken (case-insensitively), else a cleaned name + hash."""
+    used = {Path(f).stem.casefold() for f in taken}
+    stem = name
+    if not _SAFE.fullmatch(name) or len(name) > 100 or name.casefold() in used:
+        cleaned = re.sub(r"[^A-Za-z0-9_.+=@-]", "_", name)[:80].lstrip("._") or "smc"
+        stem = f"{cleaned}-{hashlib.sha256(name.encode()).hexdigest()[:10]}"
+    return f"{MODELS}/{stem}.zip"
 
 
 def observation_layout(n_children: int, n_actions: int) -> dict[str, int]:
@@ -145,29 +150,37 @@ def check_model_layout(name: str, model: Any, action_names: Sequence[str], size:
 # ---------------------------------------------------------------------------------------------------------------
 
 def entry_for(smc: SMC) -> dict[str, Any]:
-    """The manifest entry of ``smc`` (without the ``model`` file and ``sha256`` fields the save adds).
+    """The manifest entry of ``smc`` (without the ``model`` file and ``sha256`` fields the save adds)."""
+    return make_entry(smc.kind, type(smc.model).__name__, [c.name for c in smc.children], smc.include_primitives,
+                      frame_stack_of(smc), smc.spec, smc.record, smc.evaluations, smc.test_score)
+
+
+def make_entry(kind: str, algo: str, children: Sequence[str], include_primitives: bool, frame_stack: int,
+               spec: TrainingSpec | None, record: TrainingRecord | None,
+               evaluations: Sequence[EvaluationRecord] = (), test_score: float | None = None) -> dict[str, Any]:
+    """A manifest entry (without ``model`` and ``sha256``).
 
     ``spec``, ``record`` and ``evaluations`` are the typed records; ``env_id`` ... ``total_timesteps`` repeat the
     most-used of their values for people and tools reading the manifest (they are derived, never read back).
     """
-    spec, record = smc.spec, smc.record
+    action_names = smc_action_names(kind, children, include_primitives)
     return {
-        "kind": smc.kind,
-        "algo": type(smc.model).__name__,
-        "children": [c.name for c in smc.children],
-        "include_primitives": smc.include_primitives,
-        "action_names": list(smc.action_names),
-        "observation": observation_layout(len(smc.children), len(smc.action_names)),
-        "frame_stack": frame_stack_of(smc),
+        "kind": kind,
+        "algo": algo,
+        "children": list(children),
+        "include_primitives": include_primitives,
+        "action_names": list(action_names),
+        "observation": observation_layout(len(children), len(action_names)),
+        "frame_stack": frame_stack,
         "spec": spec.to_dict() if spec is not None else None,
         "record": record.to_dict() if record is not None else None,
-        "evaluations": [e.to_dict() for e in smc.evaluations],
+        "evaluations": [e.to_dict() for e in evaluations],
         "env_id": spec.task.env_id if spec is not None else None,
         "datasets": list(spec.task.datasets) if spec is not None else [],
         "seed": spec.seed if spec is not None else None,
         "selected_update": record.selected_update if record is not None else None,
         "training_return": record.selected_return if record is not None else None,
-        "test_score": smc.test_score,
+        "test_score": test_score,
         "total_timesteps": record.total_timesteps if record is not None else None,
     }
 
@@ -200,6 +213,30 @@ def write_library(target: Path, smcs: Mapping[str, SMC], manifest: dict[str, Any
 
 def new_manifest(smcs: dict[str, dict[str, Any]]) -> dict[str, Any]:
     return {"format": FORMAT, "version": FORMAT_VERSION, "created_with": package_versions(), "smcs": smcs}
+
+
+def add_to_library(root: Path, name: str, entry: dict[str, Any], model: bytes) -> None:
+    """Add one SMC to the library directory ``root`` without touching what is already there.
+
+    The model file is written atomically first, then the manifest (read, the entry added, written atomically), so
+    an interruption leaves the library as it was or with the SMC complete; an existing library must be of the
+    current version, and ``name`` must be new. Creates the library when ``root`` has no manifest.
+    """
+    manifest_path = root / MANIFEST
+    if manifest_path.is_file():
+        manifest, _ = read_manifest(root)
+        if _check_version(manifest, manifest_path) != FORMAT_VERSION:
+            raise ManifestError(f"{manifest_path}: version {manifest['version']} library; convert it first "
+                                "(SMCLibrary.load(path).save())")
+    else:
+        manifest = new_manifest({})
+    smcs = manifest["smcs"]
+    if name in smcs:
+        raise LibraryError(f"{manifest_path}: already has an SMC named {name!r}")
+    file = model_file_for(name, [e["model"] for e in smcs.values()])
+    atomic_write(root / file, model)
+    smcs[name] = {"model": file, **entry, "sha256": hashlib.sha256(model).hexdigest()}
+    atomic_write(manifest_path, json.dumps(manifest, indent=2, allow_nan=False) + "\n")
 
 
 # ---------------------------------------------------------------------------------------------------------------

@@ -1,0 +1,107 @@
+"""``sb3-smc``: list curricula, train them into a library (resumable, parallel, on Ray), and inspect runs.
+
+    sb3-smc curricula                      # every shipped curriculum: method, targets, nodes per level
+    sb3-smc curricula con2-cl              # one curriculum's DAG by level (a name or a .yml file)
+    sb3-smc train con2-cl --out runs/con2-cl --targets cl_self-in-container_vs_noncontainer --seeds 2
+    sb3-smc status runs/con2-cl            # done, running, failed and left jobs
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+
+__all__ = ["main"]
+
+
+def _curricula(args: argparse.Namespace) -> int:
+    from sb3_smc.curricula import resolve_curriculum, shipped_curricula
+    from sb3_smc.curricula.trainer import describe
+
+    if args.name:
+        print(describe(resolve_curriculum(args.name)))
+        return 0
+    rows = [("name", "method", "targets", "nodes per level")]
+    for name, curriculum in shipped_curricula().items():
+        levels = " + ".join(str(len(level)) for level in curriculum.levels())
+        rows.append((name, curriculum.method or "", str(len(curriculum.targets)), levels))
+    widths = [max(len(row[i]) for row in rows) for i in range(4)]
+    for row in rows:
+        print("  ".join(cell.ljust(width) for cell, width in zip(row, widths, strict=True)).rstrip())
+    print("\nsb3-smc curricula NAME shows one curriculum; docs/curricula.md describes the file format.")
+    return 0
+
+
+def _train(args: argparse.Namespace) -> int:
+    from sb3_smc.curricula.trainer import train_curriculum
+
+    targets = [t for item in args.targets for t in item.split(",") if t] if args.targets else None
+    run = train_curriculum(args.curriculum, args.out, targets=targets, seeds=args.seeds, timesteps=args.timesteps,
+                           reuse=args.reuse, workers=args.workers, backend=args.backend, algo=args.algo,
+                           ray_address=args.ray_address, tensorboard=not args.no_tensorboard)
+    print(f"library: {run.library}")
+    return 1 if run.failed else 0
+
+
+def _status(args: argparse.Namespace) -> int:
+    from sb3_smc.curricula.trainer import status
+
+    state = status(args.directory)
+    settings = state["settings"]
+    print(f"{args.directory}: curriculum {settings['curriculum']}, {len(settings['nodes'])} nodes x "
+          f"{settings['seeds']} seeds = {len(state['jobs'])} jobs")
+    for key in ("done", "running", "failed", "left"):
+        names = state[key]
+        shown = ", ".join(names[:8]) + (", ..." if len(names) > 8 else "")
+        print(f"  {key:8s} {len(names):4d}  {shown}")
+    return 0
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="sb3-smc", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    p = sub.add_parser("curricula", help="list the shipped curricula, or show one by level")
+    p.add_argument("name", nargs="?", help="a shipped curriculum name or a curriculum .yml file")
+    p.set_defaults(run=_curricula)
+
+    p = sub.add_parser("train", help="train a curriculum into DIR/library (re-run to resume)")
+    p.add_argument("curriculum", help="a shipped curriculum name or a curriculum .yml file")
+    p.add_argument("--out", required=True, help="the run directory")
+    p.add_argument("--targets", action="append", help="node or dataset names (comma-separated; repeatable); "
+                                                      "default: the curriculum's targets")
+    p.add_argument("--seeds", type=int, default=5, help="seeds 0..N-1 per node (default 5, the paper's)")
+    p.add_argument("--timesteps", type=int, default=None,
+                   help="steps per job, replacing the nodes' own (default: the node's, else 400,000)")
+    p.add_argument("--reuse", choices=["two_best", "one_best"], default="two_best",
+                   help="seeds of each lower-level node a caller gets (default two_best)")
+    p.add_argument("--workers", type=int, default=1, help="jobs in parallel (local processes or Ray tasks)")
+    p.add_argument("--backend", choices=["local", "ray"], default="local")
+    p.add_argument("--ray-address", default=None, help="Ray cluster address (default: $RAY_ADDRESS)")
+    p.add_argument("--algo", default=None, help="algorithm of every node (RecurrentPPO, TRPO or PPO)")
+    p.add_argument("--no-tensorboard", action="store_true", help="write no TensorBoard logs")
+    p.set_defaults(run=_train)
+
+    p = sub.add_parser("status", help="what a run directory holds: done, running, failed, left")
+    p.add_argument("directory")
+    p.set_defaults(run=_status)
+
+    args = parser.parse_args(argv)
+    from sb3_smc.curricula.format import CurriculumError
+    from sb3_smc.curricula.trainer import RunSettingsError
+    from sb3_smc.library import LibraryError
+
+    try:
+        return args.run(args)
+    except (CurriculumError, RunSettingsError, LibraryError, ValueError, RuntimeError) as err:
+        print(f"sb3-smc {args.command}: error: {err}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("\ninterrupted: what finished is saved; run the same command again to resume", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

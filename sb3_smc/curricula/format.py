@@ -1,0 +1,391 @@
+"""Curricula as data: a DAG of SMCs to train, read from the project's YAML format (``docs/curricula.md``).
+
+A curriculum names **nodes**; each node is an SMC to train on a PixelWorld task (a catalog dataset or concept pool)
+and may **use** lower-level nodes as actions. Example::
+
+    curriculum: my-containment
+    method: smc-curr                 # optional: smc-base | smc-curr | smc-canon | anything (reports group by it)
+    description: corners, then containment
+    defaults: {timesteps: 200000}    # optional: algo, timesteps, primitives, hyperparameters for every node
+    nodes:
+      - name: cl_self-in-left-corner_vs_on-hline
+        task: cl_self-in-left-corner_vs_on-hline
+      - name: cl_self-in-right-corner_vs_on-hline
+        task: cl_self-in-right-corner_vs_on-hline
+      - name: container
+        task: cl_self-in-container_vs_noncontainer
+        uses: [cl_self-in-left-corner_vs_on-hline, cl_self-in-right-corner_vs_on-hline]
+        primitives: false            # the "noprim" ablation: signals and SMCs only
+    targets: [container]             # optional; default: the nodes no other node uses
+
+:func:`load_curriculum` validates everything before any training and names the file, the line and the node in
+every error (:class:`CurriculumError`). Nothing here imports torch.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import difflib
+import os
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from sb3_smc.hyperparameters import ALGORITHMS
+
+__all__ = ["FORMAT_KEYS", "NODE_KEYS", "SEED_SEPARATOR", "Curriculum", "CurriculumError", "Node", "load_curriculum",
+           "merge", "parse_curriculum"]
+
+FORMAT_KEYS = ("curriculum", "method", "description", "defaults", "nodes", "targets")
+"""Top-level keys of a curriculum file."""
+NODE_KEYS = ("name", "task", "uses", "primitives", "algo", "timesteps", "hyperparameters")
+"""Keys of a node (``defaults`` takes the last four)."""
+SEED_SEPARATOR = "@"
+"""SMC names in a curriculum's library are ``<node>@<seed>``; node names may not contain it."""
+
+
+class CurriculumError(ValueError):
+    """A curriculum file or object is malformed; the message names the file, the line where known, and the node."""
+
+
+@dataclass(frozen=True)
+class Node:
+    """One SMC to train: ``task`` (a dataset or concept-pool name) with the nodes it ``uses`` as actions.
+
+    ``algo`` / ``timesteps`` ``None``: the run's settings (``train_curriculum``'s ``algo`` and ``timesteps``).
+    ``line`` is where the node was defined (not part of its identity).
+    """
+
+    name: str
+    task: str
+    uses: tuple[str, ...] = ()
+    include_primitives: bool = True
+    algo: str | None = None
+    timesteps: int | None = None
+    hyperparameters: dict[str, Any] = field(default_factory=dict)
+    line: int | None = field(default=None, compare=False)
+
+    @property
+    def env_id(self) -> str:
+        return f"PW-{self.task}-v0"
+
+    def settings(self) -> dict[str, Any]:
+        """What decides the trained SMCs (two nodes of the same name must agree on it)."""
+        return {"task": self.task, "uses": list(self.uses), "primitives": self.include_primitives,
+                "algo": self.algo, "timesteps": self.timesteps, "hyperparameters": self.hyperparameters}
+
+
+@dataclass(frozen=True)
+class Curriculum:
+    """A validated DAG of :class:`Node` s (in file order) with its ``targets``."""
+
+    name: str
+    nodes: tuple[Node, ...]
+    targets: tuple[str, ...]
+    method: str | None = None
+    description: str = ""
+    source: str | None = None
+
+    def __post_init__(self) -> None:
+        _validate(self)
+
+    @property
+    def by_name(self) -> dict[str, Node]:
+        return {node.name: node for node in self.nodes}
+
+    def node(self, name: str) -> Node:
+        nodes = self.by_name
+        if name not in nodes:
+            raise CurriculumError(f"{self._where()}: no node named {name!r}{_suggest(name, nodes)}")
+        return nodes[name]
+
+    def level(self, name: str) -> int:
+        """1 for a node that uses nothing, else 1 + the deepest used node's level."""
+        node = self.node(name)
+        return 1 + max((self.level(u) for u in node.uses), default=0)
+
+    def levels(self) -> list[list[str]]:
+        """Node names by level, lowest first (file order within a level)."""
+        out: dict[int, list[str]] = {}
+        for node in self.nodes:
+            out.setdefault(self.level(node.name), []).append(node.name)
+        return [out[k] for k in sorted(out)]
+
+    def order(self, names: Iterable[str] | None = None) -> list[str]:
+        """``names`` (default: every node) and the nodes they use, lower levels first (reverse topological)."""
+        wanted = self.closure(self.by_name if names is None else names)
+        return [n.name for n in sorted(self.nodes, key=lambda n: self.level(n.name)) if n.name in wanted]
+
+    def closure(self, names: Iterable[str]) -> set[str]:
+        """``names`` and every node they use, directly or not."""
+        seen: set[str] = set()
+        stack = list(names)
+        while stack:
+            name = stack.pop()
+            if name not in seen:
+                seen.add(name)
+                stack.extend(self.node(name).uses)
+        return seen
+
+    def select(self, targets: Sequence[str] | None) -> list[str]:
+        """Node names for ``targets``: target or node names, or dataset names (every target training that dataset;
+        else the node of that name or the nodes training it). ``None``: the curriculum's targets."""
+        if targets is None:
+            return list(self.targets)
+        chosen: list[str] = []
+        nodes = self.by_name
+        for target in targets:
+            training = [n for n in self.targets if nodes[n].task == target]
+            if target in self.targets or (target in nodes and not training):
+                found = [target]
+            else:
+                found = training or [n.name for n in self.nodes if n.task == target]
+            if not found:
+                raise CurriculumError(f"{self._where()}: --targets {target!r} is neither a node nor the dataset of a "
+                                      f"node{_suggest(target, [*nodes, *{n.task for n in self.nodes}])}")
+            chosen.extend(n for n in found if n not in chosen)
+        return chosen
+
+    def _where(self) -> str:
+        return self.source or f"curriculum {self.name!r}"
+
+    def to_yaml(self) -> str:
+        """The curriculum in the file format (round-trips through :func:`parse_curriculum`)."""
+        nodes = []
+        for node in self.nodes:
+            item: dict[str, Any] = {"name": node.name, "task": node.task}
+            if node.uses:
+                item["uses"] = list(node.uses)
+            if not node.include_primitives:
+                item["primitives"] = False
+            for key in ("algo", "timesteps"):
+                if getattr(node, key) is not None:
+                    item[key] = getattr(node, key)
+            if node.hyperparameters:
+                item["hyperparameters"] = node.hyperparameters
+            nodes.append(item)
+        data: dict[str, Any] = {"curriculum": self.name}
+        if self.method:
+            data["method"] = self.method
+        if self.description:
+            data["description"] = self.description
+        data["nodes"] = nodes
+        data["targets"] = list(self.targets)
+        return yaml.safe_dump(data, sort_keys=False, width=120)
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Reading
+# ---------------------------------------------------------------------------------------------------------------
+
+def _suggest(name: str, names: Iterable[str]) -> str:
+    close = difflib.get_close_matches(name, list(names), n=3, cutoff=0.6)
+    return f"; did you mean {' or '.join(repr(c) for c in close)}?" if close else ""
+
+
+def _plain(node: yaml.Node, where: str) -> Any:
+    """A composed YAML node as Python data; duplicate mapping keys are an error (PyYAML would keep the last)."""
+    if isinstance(node, yaml.MappingNode):
+        out: dict[Any, Any] = {}
+        for key_node, value_node in node.value:
+            key = _plain(key_node, where)
+            if key in out:
+                raise CurriculumError(f"{where}:{key_node.start_mark.line + 1}: key {key!r} given twice")
+            out[key] = _plain(value_node, where)
+        return out
+    if isinstance(node, yaml.SequenceNode):
+        return [_plain(item, where) for item in node.value]
+    loader = yaml.SafeLoader("")
+    try:
+        return loader.construct_object(node, deep=True)
+    finally:
+        loader.dispose()
+
+
+def load_curriculum(path: str | os.PathLike) -> Curriculum:
+    """Read and validate the curriculum file ``path`` (errors name the file, the line and the node)."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as err:
+        raise CurriculumError(f"cannot read curriculum file {path}: {err}") from None
+    return parse_curriculum(text, str(path))
+
+
+def parse_curriculum(text: str, source: str = "<curriculum>") -> Curriculum:
+    """Parse and validate curriculum YAML ``text``; ``source`` names it in errors."""
+    try:
+        root = yaml.compose(text, Loader=yaml.SafeLoader)
+    except yaml.YAMLError as err:
+        mark = getattr(err, "problem_mark", None)
+        line = f":{mark.line + 1}" if mark is not None else ""
+        raise CurriculumError(f"{source}{line}: malformed YAML: {getattr(err, 'problem', None) or err}") from None
+    if not isinstance(root, yaml.MappingNode):
+        raise CurriculumError(f"{source}: a curriculum file is a mapping with the keys {list(FORMAT_KEYS)}")
+    data = _plain(root, source)
+    lines = {}
+    for key_node, value_node in root.value:
+        lines[key_node.value] = (key_node.start_mark.line + 1, value_node)
+    unknown = [k for k in data if k not in FORMAT_KEYS]
+    if unknown:
+        key = unknown[0]
+        raise CurriculumError(f"{source}:{lines[key][0]}: unknown key {key!r} (a curriculum file has "
+                              f"{list(FORMAT_KEYS)}){_suggest(str(key), FORMAT_KEYS)}")
+    for key in ("curriculum", "nodes"):
+        if key not in data:
+            raise CurriculumError(f"{source}: missing key {key!r}")
+    name = data["curriculum"]
+    if not isinstance(name, str) or not name:
+        raise CurriculumError(f"{source}:{lines['curriculum'][0]}: 'curriculum' must be a name, got {name!r}")
+    defaults = data.get("defaults") or {}
+    if not isinstance(defaults, dict):
+        raise CurriculumError(f"{source}:{lines['defaults'][0]}: 'defaults' must be a mapping, got {defaults!r}")
+    bad = [k for k in defaults if k not in NODE_KEYS[3:]]
+    if bad:
+        raise CurriculumError(f"{source}:{lines['defaults'][0]}: unknown default {bad[0]!r} (defaults may set "
+                              f"{list(NODE_KEYS[3:])})")
+    items = data["nodes"]
+    if not isinstance(items, list) or not items:
+        raise CurriculumError(f"{source}:{lines['nodes'][0]}: 'nodes' must be a non-empty list of nodes")
+    item_nodes = lines["nodes"][1].value
+    nodes = [_node(item, item_node.start_mark.line + 1, defaults, source)
+             for item, item_node in zip(items, item_nodes, strict=True)]
+    targets = data.get("targets")
+    if targets is None:
+        used = {u for node in nodes for u in node.uses}
+        targets = [node.name for node in nodes if node.name not in used]
+    elif not isinstance(targets, list) or not all(isinstance(t, str) for t in targets):
+        raise CurriculumError(f"{source}:{lines['targets'][0]}: 'targets' must be a list of node names")
+    method = data.get("method")
+    if method is not None and not isinstance(method, str):
+        raise CurriculumError(f"{source}:{lines['method'][0]}: 'method' must be a string, got {method!r}")
+    description = data.get("description") or ""
+    return Curriculum(name=name, nodes=tuple(nodes), targets=tuple(targets), method=method,
+                      description=str(description), source=source)
+
+
+def _node(item: Any, line: int, defaults: Mapping[str, Any], source: str) -> Node:
+    where = f"{source}:{line}"
+    if not isinstance(item, dict):
+        raise CurriculumError(f"{where}: a node is a mapping with the keys {list(NODE_KEYS)}, got {item!r}")
+    name = item.get("name")
+    label = f"node {name!r}" if isinstance(name, str) else "node"
+    unknown = [k for k in item if k not in NODE_KEYS]
+    if unknown:
+        raise CurriculumError(f"{where}: {label}: unknown key {unknown[0]!r} (a node has {list(NODE_KEYS)})"
+                              f"{_suggest(str(unknown[0]), NODE_KEYS)}")
+    for key in ("name", "task"):
+        if not isinstance(item.get(key), str) or not item.get(key):
+            raise CurriculumError(f"{where}: {label}: {key!r} must be a non-empty string, got {item.get(key)!r}")
+    settings = {**defaults, **{k: v for k, v in item.items() if k in NODE_KEYS[3:]}}
+    uses = item.get("uses", [])
+    if not isinstance(uses, list) or not all(isinstance(u, str) for u in uses):
+        raise CurriculumError(f"{where}: {label}: 'uses' must be a list of node names, got {uses!r}")
+    primitives = settings.get("primitives", True)
+    if not isinstance(primitives, bool):
+        raise CurriculumError(f"{where}: {label}: 'primitives' must be true or false, got {primitives!r}")
+    timesteps = settings.get("timesteps")
+    if timesteps is not None and (isinstance(timesteps, bool) or not isinstance(timesteps, int) or timesteps < 1):
+        raise CurriculumError(f"{where}: {label}: 'timesteps' must be a positive integer, got {timesteps!r}")
+    hyper = settings.get("hyperparameters") or {}
+    if not isinstance(hyper, dict):
+        raise CurriculumError(f"{where}: {label}: 'hyperparameters' must be a mapping, got {hyper!r}")
+    try:
+        return Node(name=item["name"], task=item["task"], uses=tuple(uses), include_primitives=primitives,
+                    algo=settings.get("algo"), timesteps=timesteps, hyperparameters=hyper, line=line)
+    except CurriculumError as err:
+        raise CurriculumError(f"{where}: {label}: {err}") from None
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Validation (also of curricula built in Python)
+# ---------------------------------------------------------------------------------------------------------------
+
+def _tasks() -> set[str]:
+    from pixelworld_env import catalog
+
+    return {*catalog.dataset_names(), *catalog.concept_pools()}
+
+
+def _validate(curriculum: Curriculum) -> None:
+    source = curriculum.source or f"curriculum {curriculum.name!r}"
+
+    def at(node: Node) -> str:
+        return f"{source}:{node.line}" if node.line is not None else source
+
+    tasks = _tasks()
+    seen: dict[str, Node] = {}
+    for node in curriculum.nodes:
+        if node.name in seen:
+            first = seen[node.name]
+            where = f" (first defined at line {first.line})" if first.line is not None else ""
+            raise CurriculumError(f"{at(node)}: node {node.name!r} is defined twice{where}")
+        seen[node.name] = node
+        if SEED_SEPARATOR in node.name:
+            raise CurriculumError(f"{at(node)}: node {node.name!r}: names may not contain {SEED_SEPARATOR!r} "
+                                  f"(library SMCs are named <node>{SEED_SEPARATOR}<seed>)")
+        if node.task not in tasks:
+            raise CurriculumError(f"{at(node)}: node {node.name!r}: unknown dataset or concept pool "
+                                  f"{node.task!r}{_suggest(node.task, tasks)}")
+        if node.algo is not None and node.algo not in ALGORITHMS:
+            raise CurriculumError(f"{at(node)}: node {node.name!r}: algo must be one of {ALGORITHMS}, got "
+                                  f"{node.algo!r}")
+        if node.name in node.uses:
+            raise CurriculumError(f"{at(node)}: node {node.name!r} uses itself")
+        if len(set(node.uses)) != len(node.uses):
+            twice = sorted({u for u in node.uses if node.uses.count(u) > 1})
+            raise CurriculumError(f"{at(node)}: node {node.name!r} uses {twice} twice")
+        if not node.include_primitives and not node.uses:
+            raise CurriculumError(f"{at(node)}: node {node.name!r} has primitives: false (noprim) but uses no "
+                                  "nodes: it could only signal")
+    for node in curriculum.nodes:
+        for used in node.uses:
+            if used not in seen:
+                raise CurriculumError(f"{at(node)}: node {node.name!r} uses an unknown node {used!r}"
+                                      f"{_suggest(used, seen)}")
+    _check_cycles(curriculum.nodes, seen, at)
+    for target in curriculum.targets:
+        if target not in seen:
+            raise CurriculumError(f"{source}: target {target!r} is not a node{_suggest(target, seen)}")
+
+
+def _check_cycles(nodes: Sequence[Node], by_name: Mapping[str, Node], at: Any) -> None:
+    state: dict[str, int] = {}
+
+    def visit(name: str, path: list[str]) -> None:
+        if state.get(name) == 2:
+            return
+        if state.get(name) == 1:
+            cycle = path[path.index(name):] + [name]
+            raise CurriculumError(f"{at(by_name[name])}: nodes use each other in a cycle: {' -> '.join(cycle)}")
+        state[name] = 1
+        for used in by_name[name].uses:
+            visit(used, [*path, name])
+        state[name] = 2
+
+    for node in nodes:
+        visit(node.name, [])
+
+
+def merge(curricula: Sequence[Curriculum]) -> Curriculum:
+    """One curriculum holding every node of ``curricula`` (a node defined by several must be defined alike)."""
+    if len(curricula) == 1:
+        return curricula[0]
+    nodes: dict[str, Node] = {}
+    origin: dict[str, str] = {}
+    for curriculum in curricula:
+        for node in curriculum.nodes:
+            if node.name in nodes and nodes[node.name].settings() != node.settings():
+                raise CurriculumError(
+                    f"node {node.name!r} is defined differently by {origin[node.name]} and {curriculum.name} "
+                    f"({nodes[node.name].settings()} vs {node.settings()})")
+            if node.name not in nodes:
+                nodes[node.name] = dataclasses.replace(node, line=None)
+                origin[node.name] = curriculum.name
+    targets = [t for c in curricula for t in c.targets]
+    return Curriculum(name="+".join(c.name for c in curricula), nodes=tuple(nodes.values()),
+                      targets=tuple(dict.fromkeys(targets)), method=None,
+                      description="; ".join(c.description for c in curricula if c.description))

@@ -1,0 +1,611 @@
+"""``train_curriculum``: every node x seed of a curriculum trained level by level into one SMC library.
+
+A **job** is one node with one seed: a :class:`~sb3_smc.records.TrainingSpec` named ``<node>@<seed>`` whose children
+are, for every node it uses, the ``k`` best seeds of that node (``reuse="two_best"``: k = 2; ranked by the
+selected training return, ties to the lower seed; spec §5.5), as distinct SMC actions. A job becomes ready once
+every seed of every node it uses is trained. Jobs carry picklable specs and the path of the run's library, where
+the worker loads the children by name (never torch objects), and return the trained model as bytes: the same
+function runs in this process, in local worker processes or as a Ray task, and gives the same SMC.
+
+Run directory::
+
+    DIR/run.json        the settings; re-running with other settings is refused (the differences are listed)
+    DIR/library/        an SMCLibrary: one SMC per finished job, with its spec and training record
+    DIR/tensorboard/    SB3 and SMC curves, one run per job (``<node>@<seed>_1``)
+    DIR/failed/         ``<job>.txt``: the traceback of a job that raised (retried by the next run)
+    DIR/state.json      the jobs running now and the coordinator's pid (for ``sb3-smc status``)
+
+Crash safety: a finished job is one whose SMC is in the library manifest; the model file and then the manifest are
+written atomically by the coordinator (the only writer), so killing the process at any moment loses at most the
+jobs that were running, which the next run starts again from scratch. Finished jobs are never trained again and
+their files never rewritten.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import os
+import shutil
+import time
+import traceback
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from pixelworld_env.atomic import atomic_write
+from sb3_smc.curricula.format import SEED_SEPARATOR, Curriculum, CurriculumError, Node, merge
+from sb3_smc.hyperparameters import STEPS_PER_UPDATE
+from sb3_smc.library import storage
+from sb3_smc.records import Budget, TaskSpec, TrainingRecord, TrainingSpec, WrapperSettings
+
+__all__ = ["REUSE", "Job", "JobResult", "RunSettingsError", "TrainingRun", "describe", "job_name", "rank_seeds",
+           "run_job", "run_settings", "status", "train_curriculum"]
+
+REUSE = {"one_best": 1, "two_best": 2}
+"""SMC filters of the paper: how many seeds of each lower-level node a caller gets."""
+DEFAULT_SEEDS = 5
+DEFAULT_TIMESTEPS = 400_000
+RUN_FORMAT = "sb3-smc-run"
+RUN_VERSION = 1
+
+
+class RunSettingsError(ValueError):
+    """The run directory was started with other settings (the message lists the differences)."""
+
+
+def job_name(node: str, seed: int) -> str:
+    """The library name of node ``node`` trained with ``seed``."""
+    return f"{node}{SEED_SEPARATOR}{seed}"
+
+
+@dataclass(frozen=True)
+class Job:
+    """One node x seed to train: picklable, torch-free (the worker loads the children from ``library`` by name)."""
+
+    spec: TrainingSpec
+    library: str
+    tensorboard_log: str | None = None
+
+
+@dataclass(frozen=True)
+class JobResult:
+    """What a worker returns: the spec, the training record and the SB3 model archive."""
+
+    spec: TrainingSpec
+    record: TrainingRecord
+    algo: str
+    model: bytes
+
+
+def run_job(job: Job) -> JobResult:
+    """Train ``job`` (one torch thread) and return its result; the same in any process or Ray worker."""
+    import torch
+
+    from sb3_smc.library import SMCLibrary
+    from sb3_smc.training import train_smc
+
+    torch.set_num_threads(1)
+    spec = job.spec
+    children = SMCLibrary.load(job.library, names=spec.children) if spec.children else {}
+    smc = train_smc(spec, children=children, tensorboard_log=job.tensorboard_log, log_every=0)
+    buffer = io.BytesIO()
+    smc.model.save(buffer)
+    return JobResult(spec=smc.spec, record=smc.record, algo=spec.algo, model=buffer.getvalue())
+
+
+def rank_seeds(records: dict[int, TrainingRecord]) -> list[int]:
+    """Seeds best first: by selected training return (a seed that never selected an update last), ties to the
+    lower seed (spec §5.5)."""
+    def key(seed: int) -> tuple[int, float, int]:
+        value = records[seed].selected_return
+        return (1, 0.0, seed) if value is None else (0, -value, seed)
+
+    return sorted(records, key=key)
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Settings
+# ---------------------------------------------------------------------------------------------------------------
+
+def run_settings(curriculum: Curriculum, nodes: Sequence[str], targets: Sequence[str], seeds: int,
+                 timesteps: int | None, reuse: str, algo: str | None) -> dict[str, Any]:
+    """What decides a run's SMCs (``DIR/run.json``): backend and worker count do not."""
+    return {"format": RUN_FORMAT, "version": RUN_VERSION, "curriculum": curriculum.name, "targets": list(targets),
+            "seeds": seeds, "timesteps": timesteps, "reuse": reuse, "algo": algo,
+            "nodes": {name: curriculum.node(name).settings() for name in nodes}}
+
+
+def _differences(old: dict[str, Any], new: dict[str, Any]) -> list[str]:
+    out = []
+    for key in sorted(set(old) | set(new)):
+        if key == "nodes":
+            continue
+        if old.get(key) != new.get(key):
+            out.append(f"{key}: {old.get(key)!r} in the directory, {new.get(key)!r} now")
+    old_nodes, new_nodes = old.get("nodes", {}), new.get("nodes", {})
+    for name in sorted(set(old_nodes) | set(new_nodes)):
+        if name not in new_nodes:
+            out.append(f"node {name!r}: in the directory, not in this run")
+        elif name not in old_nodes:
+            out.append(f"node {name!r}: new in this run")
+        elif old_nodes[name] != new_nodes[name]:
+            out.append(f"node {name!r}: {old_nodes[name]} in the directory, {new_nodes[name]} now")
+    return out
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# The run
+# ---------------------------------------------------------------------------------------------------------------
+
+@dataclass
+class TrainingRun:
+    """The outcome of :func:`train_curriculum`: where the library is, and one row per job."""
+
+    directory: Path
+    library: Path
+    rows: list[dict[str, Any]]
+    failed: dict[str, str]
+
+    def table(self) -> str:
+        """The summary table (node, seed, selected update, training return, wall time)."""
+        lines = ["| node | seed | selected update | training return | wall s |", "|---|---:|---:|---:|---:|"]
+        for row in self.rows:
+            ret = "-" if row["training_return"] is None else f"{row['training_return']:.3f}"
+            upd = "-" if row["selected_update"] is None else str(row["selected_update"])
+            lines.append(f"| {row['node']} | {row['seed']} | {upd} | {ret} | {row['wall_time_s']:.0f} |")
+        return "\n".join(lines)
+
+
+class _Scheduler:
+    def __init__(self, curriculum: Curriculum, order: list[str], seeds: int, timesteps: int | None, k: int,
+                 algo: str | None, directory: Path) -> None:
+        self.curriculum, self.order, self.seeds, self.timesteps, self.k = curriculum, order, seeds, timesteps, k
+        self.algo = algo
+        self.directory = directory
+        self.library = directory / "library"
+        self.records: dict[str, dict[int, TrainingRecord]] = {name: {} for name in order}
+        self.running: set[str] = set()
+        self.failed: dict[str, str] = {}
+        self.wall: dict[str, float] = {}
+
+    def jobs(self) -> list[tuple[str, int]]:
+        return [(node, seed) for node in self.order for seed in range(self.seeds)]
+
+    def done(self, node: str, seed: int) -> bool:
+        return seed in self.records[node]
+
+    def budget(self, node: Node) -> int:
+        return self.timesteps or node.timesteps or DEFAULT_TIMESTEPS
+
+    def children(self, node: Node) -> tuple[str, ...]:
+        names = []
+        for used in node.uses:
+            best = rank_seeds(self.records[used])[: min(self.k, self.seeds)]
+            names.extend(job_name(used, seed) for seed in best)
+        return tuple(names)
+
+    def ready(self) -> list[tuple[str, int]]:
+        out = []
+        for node_name, seed in self.jobs():
+            name = job_name(node_name, seed)
+            if self.done(node_name, seed) or name in self.running or name in self.failed:
+                continue
+            node = self.curriculum.node(node_name)
+            if all(len(self.records[u]) == self.seeds for u in node.uses):
+                out.append((node_name, seed))
+        return out
+
+    def blocked(self) -> list[str]:
+        """Jobs that cannot run because a node they need has a failed job."""
+        bad = {name.rpartition(SEED_SEPARATOR)[0] for name in self.failed}
+        out = []
+        for node_name, seed in self.jobs():
+            if not self.done(node_name, seed) and job_name(node_name, seed) not in self.failed:
+                needed = self.curriculum.closure([node_name]) - {node_name}
+                if needed & bad:
+                    out.append(job_name(node_name, seed))
+        return out
+
+    def spec(self, node: Node, seed: int, children: tuple[str, ...]) -> TrainingSpec:
+        return TrainingSpec(name=job_name(node.name, seed), task=TaskSpec(node.env_id).resolved(),
+                            algo=self.algo or node.algo or "RecurrentPPO", hyperparameters=dict(node.hyperparameters),
+                            seed=seed, budget=Budget(self.budget(node)),
+                            wrapper=WrapperSettings(include_primitives=node.include_primitives), children=children)
+
+    def check_specs(self) -> None:
+        """Every node's settings make a valid spec (checked before any training)."""
+        from sb3_smc.records import RecordError
+
+        for name in self.order:
+            node = self.curriculum.node(name)
+            placeholder = tuple(job_name(u, 0) for u in node.uses)
+            try:
+                self.spec(node, 0, placeholder)
+            except RecordError as err:
+                where = f"{self.curriculum.source}:{node.line}: " if node.line is not None and self.curriculum.source \
+                    else ""
+                raise CurriculumError(f"{where}node {name!r}: {err}") from None
+
+    def job(self, node_name: str, seed: int, tensorboard: bool) -> Job:
+        node = self.curriculum.node(node_name)
+        name = job_name(node_name, seed)
+        spec = self.spec(node, seed, self.children(node))
+        log = None
+        if tensorboard:
+            folder = self.directory / "tensorboard"
+            for stale in folder.glob(f"{_glob_escape(name)}_*"):  # a half-finished earlier attempt
+                shutil.rmtree(stale, ignore_errors=True)
+            log = str(folder)
+        return Job(spec=spec, library=str(self.library.absolute()), tensorboard_log=log)
+
+
+def _glob_escape(text: str) -> str:
+    return "".join(f"[{c}]" if c in "*?[" else c for c in text)
+
+
+def _write_state(directory: Path, running: Sequence[str], started: float) -> None:
+    atomic_write(directory / "state.json", json.dumps({"pid": os.getpid(), "running": sorted(running),
+                                                      "started": started, "updated": time.time()}) + "\n")
+
+
+def train_curriculum(
+    curriculum: str | Path | Curriculum | Sequence[str | Path | Curriculum],
+    out: str | Path,
+    *,
+    targets: Sequence[str] | None = None,
+    seeds: int = DEFAULT_SEEDS,
+    timesteps: int | None = None,
+    reuse: str = "two_best",
+    workers: int = 1,
+    backend: str = "local",
+    algo: str | None = None,
+    ray_address: str | None = None,
+    tensorboard: bool = True,
+    progress: bool = True,
+    printer: Callable[[str], None] = print,
+) -> TrainingRun:
+    """Train ``curriculum`` (a shipped name, a file, a :class:`Curriculum`, or several: their nodes are merged, a
+    node shared by several is trained once) into ``out``, resuming whatever ``out`` already holds.
+
+    ``targets``: node or dataset names (default: the curriculum's targets); they and every node they use are
+    trained, each with seeds ``0 .. seeds-1``. ``timesteps`` / ``algo`` replace every node's own; ``reuse``:
+    ``"two_best"`` or ``"one_best"``. ``workers`` > 1 runs independent jobs in that many local processes;
+    ``backend="ray"`` submits them to a Ray cluster (``ray_address`` or ``RAY_ADDRESS``; ``workers`` caps the
+    jobs in flight). The trained SMCs are the same whatever the backend and worker count. Jobs that fail are
+    reported (``DIR/failed/``) and retried by the next run; jobs needing them wait. Returns a :class:`TrainingRun`.
+    """
+    from sb3_smc.curricula import resolve_curriculum
+
+    items = curriculum if isinstance(curriculum, list | tuple) else [curriculum]
+    merged = merge([resolve_curriculum(item) for item in items])
+    if reuse not in REUSE:
+        raise ValueError(f"reuse must be one of {list(REUSE)}, got {reuse!r}")
+    if isinstance(seeds, bool) or not isinstance(seeds, int) or seeds < 1:
+        raise ValueError(f"seeds must be a positive integer, got {seeds!r}")
+    if timesteps is not None and (isinstance(timesteps, bool) or not isinstance(timesteps, int) or timesteps < 1):
+        raise ValueError(f"timesteps must be a positive integer, got {timesteps!r}")
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise ValueError(f"workers must be a positive integer, got {workers!r}")
+    if backend not in ("local", "ray"):
+        raise ValueError(f"backend must be 'local' or 'ray', got {backend!r}")
+    if algo is not None:
+        from sb3_smc.hyperparameters import ALGORITHMS
+
+        if algo not in ALGORITHMS:
+            raise ValueError(f"algo must be one of {ALGORITHMS}, got {algo!r}")
+    selected = merged.select(targets)
+    order = merged.order(selected)
+    directory = Path(out)
+    settings = run_settings(merged, order, selected, seeds, timesteps, reuse, algo)
+    _check_or_write_settings(directory, settings)
+
+    scheduler = _Scheduler(merged, order, seeds, timesteps, REUSE[reuse], algo, directory)
+    scheduler.check_specs()
+    _load_done(scheduler)
+    failed_dir = directory / "failed"
+    total = len(scheduler.jobs())
+    done_before = sum(len(r) for r in scheduler.records.values())
+    steps_total = sum(_rounded(scheduler.budget(merged.node(n))) for n, _ in scheduler.jobs())
+    steps_done = sum(_rounded(scheduler.budget(merged.node(n))) for n, s in scheduler.jobs() if scheduler.done(n, s))
+    if progress:
+        printer(f"{merged.name}: {len(order)} nodes x {seeds} seeds = {total} jobs ({done_before} already done) "
+                f"in {directory}, backend {backend}, {workers} worker{'s' * (workers > 1)}")
+    bar = _Progress(total, done_before, steps_total, steps_done, printer if progress else None)
+    started = time.time()
+    executor = _executor(backend, workers, ray_address)
+    try:
+        pending: dict[Any, str] = {}
+        while True:
+            for node_name, seed in scheduler.ready():
+                if len(pending) >= workers:
+                    break
+                job = scheduler.job(node_name, seed, tensorboard)
+                name = job.spec.name
+                (failed_dir / f"{name}.txt").unlink(missing_ok=True)
+                pending[executor.submit(job)] = name
+                scheduler.running.add(name)
+            _write_state(directory, scheduler.running, started)
+            bar.show(len(scheduler.running))
+            if not pending:
+                break
+            for handle, outcome in executor.wait(list(pending)):
+                name = pending.pop(handle)
+                scheduler.running.discard(name)
+                node_name, _, seed_text = name.rpartition(SEED_SEPARATOR)
+                if isinstance(outcome, BaseException):
+                    text = "".join(traceback.format_exception(outcome))
+                    scheduler.failed[name] = text.strip().splitlines()[-1]
+                    atomic_write(failed_dir / f"{name}.txt", text)
+                    bar.note(f"job {name} failed: {scheduler.failed[name]}")
+                    continue
+                _store(scheduler, outcome)
+                scheduler.records[node_name][int(seed_text)] = outcome.record
+                bar.running = len(scheduler.running)
+                bar.finished(_rounded(scheduler.budget(merged.node(node_name))))
+    finally:
+        executor.shutdown()
+        _write_state(directory, [], started)
+        bar.close()
+    run = TrainingRun(directory=directory, library=scheduler.library, rows=_rows(scheduler),
+                      failed=dict(scheduler.failed))
+    blocked = scheduler.blocked()
+    if progress:
+        printer(run.table())
+        if scheduler.failed:
+            printer(f"{len(scheduler.failed)} job(s) failed (tracebacks in {failed_dir}); {len(blocked)} job(s) wait "
+                    "for them; run the same command again to retry")
+    return run
+
+
+def _rounded(timesteps: int) -> int:
+    return -(-timesteps // STEPS_PER_UPDATE) * STEPS_PER_UPDATE
+
+
+def _check_or_write_settings(directory: Path, settings: dict[str, Any]) -> None:
+    path = directory / "run.json"
+    if path.is_file():
+        try:
+            old = json.loads(path.read_text(encoding="utf-8"))
+        except json.JSONDecodeError as err:
+            raise RunSettingsError(f"{path} is not valid JSON ({err}); it records the run's settings") from None
+        differences = _differences(old, settings)
+        if differences:
+            listed = "\n  ".join(differences)
+            raise RunSettingsError(f"{directory} holds a run with other settings:\n  {listed}\nuse another --out "
+                                   "directory, or the settings of that run")
+        return
+    if directory.exists() and any(p.name != "run.json" for p in directory.iterdir()):
+        raise RunSettingsError(f"{directory} is not empty and holds no run.json: not a curriculum run directory")
+    atomic_write(path, json.dumps(settings, indent=2) + "\n")
+
+
+def _load_done(scheduler: _Scheduler) -> None:
+    """Read the finished jobs from the library manifest (the only record of what is done)."""
+    root = scheduler.library
+    if not (root / storage.MANIFEST).is_file():
+        return
+    manifest, where = storage.read_manifest(root)
+    entries = storage.check_manifest(manifest, where)
+    for name, entry in entries.items():
+        node_name, sep, seed_text = name.rpartition(SEED_SEPARATOR)
+        if sep and node_name in scheduler.records and seed_text.isdigit() and entry["record"] is not None:
+            scheduler.records[node_name][int(seed_text)] = entry["record"]
+
+
+def _store(scheduler: _Scheduler, result: JobResult) -> None:
+    spec = result.spec
+    entry = storage.make_entry(spec.task.kind, result.algo, spec.children, spec.wrapper.include_primitives,
+                               spec.frame_stack, spec, result.record)
+    storage.add_to_library(scheduler.library, spec.name, entry, result.model)
+
+
+def _rows(scheduler: _Scheduler) -> list[dict[str, Any]]:
+    rows = []
+    for node_name, seed in scheduler.jobs():
+        record = scheduler.records[node_name].get(seed)
+        if record is not None:
+            rows.append({"node": node_name, "seed": seed, "selected_update": record.selected_update,
+                         "training_return": record.selected_return, "wall_time_s": record.wall_time_s})
+    return rows
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Executors: in process, local processes, Ray
+# ---------------------------------------------------------------------------------------------------------------
+
+class _InProcess:
+    def __init__(self) -> None:
+        self._results: dict[int, Any] = {}
+        self._next = 0
+
+    def submit(self, job: Job) -> int:
+        handle = self._next
+        self._next += 1
+        try:
+            self._results[handle] = run_job(job)
+        except Exception as err:  # noqa: BLE001 - reported as the job's failure
+            self._results[handle] = err
+        return handle
+
+    def wait(self, handles: list[int]) -> list[tuple[int, Any]]:
+        return [(h, self._results.pop(h)) for h in handles]
+
+    def shutdown(self) -> None:
+        pass
+
+
+class _Processes:
+    def __init__(self, workers: int) -> None:
+        import multiprocessing
+        from concurrent.futures import ProcessPoolExecutor
+
+        self._pool = ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"))
+
+    def submit(self, job: Job) -> Any:
+        return self._pool.submit(run_job, job)
+
+    def wait(self, handles: list[Any]) -> list[tuple[Any, Any]]:
+        from concurrent.futures import FIRST_COMPLETED, wait
+
+        done, _ = wait(handles, return_when=FIRST_COMPLETED)
+        out = []
+        for future in done:
+            error = future.exception()
+            out.append((future, error if error is not None else future.result()))
+        return out
+
+    def shutdown(self) -> None:
+        self._pool.shutdown(wait=True, cancel_futures=True)
+
+
+class _Ray:
+    def __init__(self, address: str | None) -> None:
+        try:
+            import ray
+        except ImportError:
+            raise RuntimeError("backend='ray' needs Ray: pip install 'sb3-smc[ray]'") from None
+        self._ray = ray
+        if not ray.is_initialized():
+            address = address or os.environ.get("RAY_ADDRESS")
+            if address is None:
+                raise RuntimeError("backend='ray' runs on an existing Ray cluster: pass ray_address (--ray-address) "
+                                   "or set RAY_ADDRESS (e.g. 'auto' on a node of the cluster, or ray://host:10001)")
+            ray.init(address=address, log_to_driver=False)
+        self._remote = ray.remote(num_cpus=1, max_retries=0)(run_job)
+
+    def submit(self, job: Job) -> Any:
+        return self._remote.remote(job)
+
+    def wait(self, handles: list[Any]) -> list[tuple[Any, Any]]:
+        ready, _ = self._ray.wait(handles, num_returns=1)
+        out = []
+        for ref in ready:
+            try:
+                out.append((ref, self._ray.get(ref)))
+            except Exception as err:  # noqa: BLE001 - a task's error, reported as the job's failure
+                out.append((ref, err))
+        return out
+
+    def shutdown(self) -> None:
+        pass
+
+
+def _executor(backend: str, workers: int, address: str | None) -> Any:
+    if backend == "ray":
+        return _Ray(address)
+    return _Processes(workers) if workers > 1 else _InProcess()
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Progress
+# ---------------------------------------------------------------------------------------------------------------
+
+class _Progress:
+    """One live line: jobs done / total, running, steps/s, ETA (``\\r``-refreshed on a terminal, else one line per
+    finished job)."""
+
+    def __init__(self, total: int, done: int, steps_total: int, steps_done: int,
+                 printer: Callable[[str], None] | None) -> None:
+        import sys
+
+        self.total, self.done, self.steps_total, self.steps_done = total, done, steps_total, steps_done
+        self.printer = printer
+        self.start = time.perf_counter()
+        self.steps_at_start = steps_done
+        self.tty = printer is print and sys.stdout.isatty()
+        self.running = 0
+
+    def line(self) -> str:
+        elapsed = time.perf_counter() - self.start
+        rate = (self.steps_done - self.steps_at_start) / elapsed if elapsed > 0 else 0.0
+        left = self.steps_total - self.steps_done
+        eta = f"{left / rate / 60:.0f} min" if rate > 0 else "?"
+        return (f"jobs {self.done}/{self.total}, running {self.running}, {rate:,.0f} steps/s, "
+                f"ETA {eta if left else '0 min'}")
+
+    def show(self, running: int) -> None:
+        self.running = running
+        if self.printer is not None and self.tty:
+            print("\r" + self.line() + " " * 8, end="", flush=True)
+
+    def finished(self, steps: int) -> None:
+        self.done += 1
+        self.steps_done += steps
+        if self.printer is not None and not self.tty:
+            self.printer(self.line())
+
+    def note(self, text: str) -> None:
+        if self.printer is not None:
+            if self.tty:
+                print()
+            self.printer(text)
+
+    def close(self) -> None:
+        if self.printer is not None and self.tty:
+            print()
+
+
+def status(directory: str | Path) -> dict[str, Any]:
+    """What a run directory holds: ``done``, ``running``, ``failed`` and ``left`` job names (and the settings)."""
+    directory = Path(directory)
+    path = directory / "run.json"
+    if not path.is_file():
+        raise RunSettingsError(f"{directory} is not a curriculum run directory (no run.json)")
+    settings = json.loads(path.read_text(encoding="utf-8"))
+    jobs = [job_name(node, seed) for node in settings["nodes"] for seed in range(settings["seeds"])]
+    done: set[str] = set()
+    manifest_path = directory / "library" / storage.MANIFEST
+    if manifest_path.is_file():
+        done = set(json.loads(manifest_path.read_text(encoding="utf-8"))["smcs"])
+    running: list[str] = []
+    state_path = directory / "state.json"
+    if state_path.is_file():
+        state = json.loads(state_path.read_text(encoding="utf-8"))
+        if state.get("running") and _alive(int(state.get("pid", -1))):
+            running = [n for n in state["running"] if n not in done]
+    failed = sorted(p.stem for p in (directory / "failed").glob("*.txt")) if (directory / "failed").is_dir() else []
+    failed = [n for n in failed if n not in done and n not in running]
+    left = [n for n in jobs if n not in done and n not in running and n not in failed]
+    return {"settings": settings, "jobs": jobs, "done": [n for n in jobs if n in done], "running": running,
+            "failed": failed, "left": left}
+
+
+def _alive(pid: int) -> bool:
+    if pid <= 0:
+        return False
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def describe(curriculum: Curriculum) -> str:
+    """A curriculum's DAG by level (what ``sb3-smc curricula NAME`` prints)."""
+    lines = [curriculum.name + (f" ({curriculum.method})" if curriculum.method else "")]
+    if curriculum.description:
+        lines.append(curriculum.description)
+    targets = set(curriculum.targets)
+    for level, names in enumerate(curriculum.levels(), start=1):
+        lines.append(f"level {level}: {len(names)} node{'s' * (len(names) != 1)}")
+        for name in names:
+            node = curriculum.node(name)
+            mark = "*" if name in targets else " "
+            extra = []
+            if node.task != name:
+                extra.append(f"task {node.task}")
+            if not node.include_primitives:
+                extra.append("noprim")
+            if node.algo:
+                extra.append(node.algo)
+            if node.timesteps:
+                extra.append(f"{node.timesteps:,} steps")
+            head = f"  {mark} {name}" + (f" ({', '.join(extra)})" if extra else "")
+            lines.append(head + (f" uses {', '.join(node.uses)}" if node.uses else ""))
+    lines.append("(* = target)")
+    return "\n".join(lines)
+

@@ -1,0 +1,310 @@
+"""Curricula: the shipped files, validation errors with file / line / node, seed ranking, training a tiny two-level
+curriculum end to end, resuming after a kill, settings changes, and the same library from 1 or 2 workers and Ray."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
+
+import pytest
+import torch
+
+from sb3_smc.curricula import (
+    Curriculum,
+    CurriculumError,
+    Node,
+    load_curriculum,
+    parse_curriculum,
+    resolve_curriculum,
+    shipped_curricula,
+)
+from sb3_smc.curricula.shipped import build_shipped, render
+from sb3_smc.curricula.trainer import RunSettingsError, job_name, rank_seeds, status, train_curriculum
+from sb3_smc.library import SMCLibrary
+from sb3_smc.records import TrainingRecord
+
+ROOT = Path(__file__).resolve().parents[1]
+DATA = ROOT / "sb3_smc" / "curricula" / "data"
+LEFT, RIGHT, ABOVE = ("cl_self-in-left-corner_vs_on-hline", "cl_self-in-right-corner_vs_on-hline",
+                      "ba_self-on-something_from_directly-above")
+CONTAINER = "cl_self-in-container_vs_noncontainer"
+TINY = f"""\
+curriculum: tiny
+description: two corners and a container
+nodes:
+  - name: left
+    task: {LEFT}
+  - name: above
+    task: {ABOVE}
+  - name: container
+    task: {CONTAINER}
+    uses: [left, above]
+"""
+
+
+# ------------------------------------------------------------------------------------------------ shipped
+
+def test_shipped_files_are_generated_from_the_catalog():
+    built = build_shipped()
+    assert sorted(p.stem for p in DATA.glob("*.yml")) == sorted(built), "run: python -m sb3_smc.curricula"
+    for name, curriculum in built.items():
+        assert (DATA / f"{name}.yml").read_text() == render(curriculum), f"{name}: run python -m sb3_smc.curricula"
+
+
+def test_shipped_curricula_match_the_paper():
+    curricula = shipped_curricula()
+    assert len(curricula) == 31 and {"con2-cl", "obj-con2-cl", "con2-ba-canon", "con2-cl-noprim"} <= set(curricula)
+    curr = [c for c in curricula.values() if c.method == "smc-curr"]
+    assert sum(len(c.targets) for c in curr) == 83  # hand-designed entries
+    assert len({c.node(t).task for c in curr for t in c.targets}) == 51  # level-2 targets
+    lower = {u for c in curricula.values() for n in c.nodes for u in n.uses}
+    assert len(lower) == 62  # lower-level nodes (the paper's 68 group x dataset references)
+    canon = {c.name: sorted({len(c.node(t).uses) for t in c.targets}) for c in curricula.values()
+             if c.method == "smc-canon"}
+    assert canon == {"con2-ba-canon": [13], "con2-cl-canon": [13], "search2-canon": [13], "objects2-ba-canon": [11],
+                     "objects2-cl-canon": [11], "obj-con2-canon-cl": [3, 11, 15]}
+    noprim = curricula["con2-cl-noprim"]
+    assert all(not noprim.node(t).include_primitives for t in noprim.targets)
+    assert [n.uses for n in noprim.nodes] == [n.uses for n in curricula["con2-cl"].nodes]
+    base = curricula["con1-cl"]
+    assert base.method == "smc-base" and base.levels() == [list(base.targets)]
+    # a flat node is one node wherever it is used
+    assert curricula["con2-cl"].node(LEFT) == curricula["con2-cl-canon"].node(LEFT) == Node(LEFT, LEFT)
+
+
+def test_targets_by_node_or_dataset_name():
+    curriculum = shipped_curricula()["con2-cl"]
+    by_dataset = curriculum.select([CONTAINER])
+    assert by_dataset == ["con2-cl/cl_self-in-container_vs_noncontainer",
+                          "con2-cl/cl_self-in-container_vs_noncontainer_curr1"]
+    assert curriculum.select(["con2-cl/cl_self-in-container_vs_noncontainer"]) == by_dataset[:1]
+    assert curriculum.order(by_dataset[:1]) == [LEFT, RIGHT, by_dataset[0]]
+    with pytest.raises(CurriculumError, match="--targets 'cl_self-in-container' is neither"):
+        curriculum.select(["cl_self-in-container"])
+
+
+# ------------------------------------------------------------------------------------------------ validation
+
+@pytest.mark.parametrize(("text", "message"), [
+    (TINY.replace("uses: [left, above]", "uses: [left, container]"), r"tiny.yml:8: node 'container' uses itself"),
+    (TINY + "  - name: cycle-a\n    task: " + LEFT + "\n    uses: [cycle-b]\n  - name: cycle-b\n    task: " + LEFT
+     + "\n    uses: [cycle-a]\n", r"tiny.yml:\d+: nodes use each other in a cycle: cycle-a -> cycle-b -> cycle-a"),
+    (TINY.replace(f"task: {ABOVE}", "task: ba_self-on-somthing"),
+     r"tiny.yml:6: node 'above': unknown dataset or concept pool 'ba_self-on-somthing'; did you mean"),
+    (TINY.replace("uses: [left, above]", "uses: [left, abov]"),
+     r"tiny.yml:8: node 'container' uses an unknown node 'abov'; did you mean 'above'"),
+    (TINY.replace("- name: above", "- name: left"), r"tiny.yml:6: node 'left' is defined twice \(first defined at "
+                                                    r"line 4\)"),
+    (TINY.replace("- name: above\n    task", "- name: above\n    primitives: false\n    task"),
+     r"tiny.yml:6: node 'above' has primitives: false \(noprim\) but uses no nodes"),
+    (TINY.replace("uses: [left, above]", "uses: [left, above"), r"tiny.yml:\d+: malformed YAML"),
+    (TINY.replace("  - name: above\n", "  - name: above\n    usses: [left]\n"),
+     r"tiny.yml:6: node 'above': unknown key 'usses' .*did you mean 'uses'"),
+    (TINY.replace("description:", "descriptin:"), r"tiny.yml:2: unknown key 'descriptin'"),
+    (TINY.replace("    task: " + LEFT, "    task: " + LEFT + "\n    task: " + RIGHT), r"tiny.yml:6: key 'task' given twice"),
+    (TINY + "targets: [containr]\n", r"target 'containr' is not a node; did you mean 'container'"),
+    (TINY.replace("  - name: left\n", "  - name: left@2\n"), r"tiny.yml:4: node 'left@2': names may not contain '@'"),
+    (TINY.replace("  - name: above\n", "  - name: above\n    timesteps: -5\n"),
+     r"tiny.yml:6: node 'above': 'timesteps' must be a positive integer, got -5"),
+    ("nodes: []\n", r"tiny.yml: missing key 'curriculum'"),
+    ("- a\n- b\n", r"tiny.yml: a curriculum file is a mapping"),
+])
+def test_invalid_curricula_name_file_line_and_node(tmp_path, text, message):
+    path = tmp_path / "tiny.yml"
+    path.write_text(text)
+    with pytest.raises(CurriculumError, match=message):
+        load_curriculum(path)
+
+
+def test_a_valid_file_round_trips_and_resolves(tmp_path):
+    path = tmp_path / "tiny.yml"
+    path.write_text(TINY)
+    curriculum = resolve_curriculum(str(path))
+    assert curriculum.targets == ("container",) and curriculum.levels() == [["left", "above"], ["container"]]
+    again = parse_curriculum(curriculum.to_yaml(), "again")
+    assert again.nodes == curriculum.nodes and again.targets == curriculum.targets
+    with pytest.raises(CurriculumError, match="no shipped curriculum named 'con2-c'; did you mean 'con2-cl'"):
+        resolve_curriculum("con2-c")
+
+
+def test_bad_hyperparameters_stop_before_any_training(tmp_path):
+    path = tmp_path / "tiny.yml"
+    path.write_text(TINY.replace("    uses: [left, above]", "    uses: [left, above]\n    hyperparameters: "
+                                                                "{n_steps: 5}"))
+    with pytest.raises(CurriculumError, match=r"tiny.yml:8: node 'container': hyperparameter 'n_steps'"):
+        train_curriculum(str(path), tmp_path / "run", seeds=1, timesteps=2000, progress=False)
+    assert not (tmp_path / "run" / "library").exists()
+
+
+# ------------------------------------------------------------------------------------------------ reuse
+
+def _record(value: float | None) -> TrainingRecord:
+    returns = (0.0,) if value is None else (value,)
+    return TrainingRecord(training_returns=(float("nan"),) if value is None else returns, success_rates=(0.0,),
+                          selected_update=None if value is None else 0, selected_return=value, total_timesteps=2000,
+                          primitive_steps=2000, wall_time_s=1.0)
+
+
+def test_seeds_rank_by_selected_training_return():
+    records = {0: _record(0.2), 1: _record(0.9), 2: _record(None), 3: _record(0.9), 4: _record(0.5)}
+    assert rank_seeds(records) == [1, 3, 4, 0, 2]  # ties to the lower seed, never-selected last
+    assert rank_seeds(records)[:2] == [1, 3]  # two_best
+    assert rank_seeds(records)[:1] == [1]  # one_best
+
+
+# ------------------------------------------------------------------------------------------------ training
+
+def _tiny(tmp_path: Path) -> Path:
+    path = tmp_path / "tiny.yml"
+    path.write_text(TINY)
+    return path
+
+
+def _library_summary(path: Path) -> dict:
+    library = SMCLibrary.load(path)
+    out = {}
+    for name in library:
+        smc = library[name]
+        state = smc.model.policy.state_dict()
+        out[name] = (smc.spec.to_json(), smc.record.to_dict()["training_returns"], smc.record.selected_update,
+                     sorted((k, v.sum().item()) for k, v in state.items()))
+    return out
+
+
+def test_tiny_two_level_curriculum_end_to_end(tmp_path):
+    run = train_curriculum(str(_tiny(tmp_path)), tmp_path / "run", seeds=2, timesteps=2000, progress=False)
+    library = SMCLibrary.load(run.library)
+    assert library.names == ("left@0", "left@1", "above@0", "above@1", "container@0", "container@1")
+    records = {s: library[job_name("left", s)].record for s in (0, 1)}
+    best_left = rank_seeds(records)
+    container = library["container@1"]
+    assert container.spec.children == tuple(job_name("left", s) for s in best_left) + tuple(
+        job_name("above", s) for s in rank_seeds({s: library[job_name("above", s)].record for s in (0, 1)}))
+    assert container.action_names[-4:] == tuple(f"SMC:{c}" for c in container.spec.children)
+    assert container.spec.budget.total_timesteps == 2000 and container.spec.seed == 1
+    assert [(r["node"], r["seed"]) for r in run.rows] == [(n, s) for n in ("left", "above", "container")
+                                                         for s in (0, 1)]
+    assert len(list((tmp_path / "run" / "tensorboard").glob("container@1_*"))) == 1
+    assert "| container | 1 |" in run.table()
+    state = status(tmp_path / "run")
+    assert len(state["done"]) == 6 and state["left"] == state["running"] == state["failed"] == []
+    # one_best: a caller gets one seed of each node
+    one = train_curriculum(str(_tiny(tmp_path)), tmp_path / "one", seeds=2, timesteps=2000, reuse="one_best",
+                           targets=["container"], progress=False)
+    assert len(SMCLibrary.load(one.library)["container@0"].spec.children) == 2
+
+
+def test_changed_settings_are_refused_with_the_differences(tmp_path):
+    path = _tiny(tmp_path)
+    train_curriculum(str(path), tmp_path / "run", seeds=1, timesteps=2000, targets=["left"], progress=False)
+    with pytest.raises(RunSettingsError, match=r"seeds: 1 in the directory, 2 now"):
+        train_curriculum(str(path), tmp_path / "run", seeds=2, timesteps=2000, targets=["left"], progress=False)
+    with pytest.raises(RunSettingsError, match=r"node 'above': new in this run"):
+        train_curriculum(str(path), tmp_path / "run", seeds=1, timesteps=2000, targets=["left", "above"],
+                         progress=False)
+    (tmp_path / "other").mkdir()
+    (tmp_path / "other" / "notes.txt").write_text("mine")
+    with pytest.raises(RunSettingsError, match="not empty and holds no run.json"):
+        train_curriculum(str(path), tmp_path / "other", seeds=1, timesteps=2000, progress=False)
+
+
+def test_a_failing_job_is_reported_and_retried(tmp_path):
+    path = tmp_path / "tiny.yml"
+    path.write_text(TINY.replace("  - name: above\n", "  - name: above\n    hyperparameters: {learning_rate: lin_x}\n"))
+    run = train_curriculum(str(path), tmp_path / "run", seeds=1, timesteps=2000, progress=False)
+    assert set(run.failed) == {"above@0"} and "lin_x" in run.failed["above@0"]
+    assert (tmp_path / "run" / "failed" / "above@0.txt").is_file()
+    state = status(tmp_path / "run")
+    assert state["done"] == ["left@0"] and state["failed"] == ["above@0"] and state["left"] == ["container@0"]
+
+
+def test_workers_and_ray_give_the_same_library(tmp_path):
+    import ray
+
+    path = _tiny(tmp_path)
+    sequential = train_curriculum(str(path), tmp_path / "one", seeds=2, timesteps=2000, progress=False)
+    parallel = train_curriculum(str(path), tmp_path / "two", seeds=2, timesteps=2000, workers=2, progress=False)
+    ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False)
+    try:
+        on_ray = train_curriculum(str(path), tmp_path / "ray", seeds=2, timesteps=2000, workers=2, backend="ray",
+                                  progress=False)
+    finally:
+        ray.shutdown()
+    expected = _library_summary(sequential.library)
+    assert len(expected) == 6
+    assert _library_summary(parallel.library) == expected
+    assert _library_summary(on_ray.library) == expected
+
+
+def test_ray_without_a_cluster_says_how_to_connect(tmp_path, monkeypatch):
+    monkeypatch.delenv("RAY_ADDRESS", raising=False)
+    with pytest.raises(RuntimeError, match="existing Ray cluster: pass ray_address"):
+        train_curriculum(str(_tiny(tmp_path)), tmp_path / "run", seeds=1, timesteps=2000, backend="ray",
+                         progress=False)
+
+
+def test_kill_and_resume_trains_no_job_twice(tmp_path):
+    """SIGKILL the CLI while it trains, run it again: finished jobs keep their files, the rest is trained once."""
+    path = _tiny(tmp_path)
+    out = tmp_path / "run"
+    command = [sys.executable, "-m", "sb3_smc.cli", "train", str(path), "--out", str(out), "--seeds", "2",
+               "--timesteps", "4000"]
+    manifest = out / "library" / "manifest.json"
+    process = subprocess.Popen(command, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
+    deadline = time.time() + 120
+    while time.time() < deadline:
+        if manifest.is_file() and len(json.loads(manifest.read_text())["smcs"]) >= 2:
+            break
+        time.sleep(0.05)
+    process.send_signal(signal.SIGKILL)
+    process.wait()
+    finished = json.loads(manifest.read_text())["smcs"]
+    assert 2 <= len(finished) < 6, "the run ended before it could be killed"
+    files = {name: (out / "library" / e["model"]).stat().st_mtime_ns for name, e in finished.items()}
+    state = status(out)
+    assert state["running"] == [] and len(state["done"]) == len(finished)  # the dead coordinator runs nothing
+
+    result = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, timeout=300)
+    assert result.returncode == 0, result.stdout + result.stderr
+    assert f"({len(finished)} already done)" in result.stdout
+    progress = [line for line in result.stdout.splitlines() if line.startswith("jobs ")]
+    assert len(progress) == 6 - len(finished)  # one progress line per job trained now
+    after = json.loads(manifest.read_text())["smcs"]
+    assert len(after) == 6
+    assert all(after[name]["record"] == finished[name]["record"] for name in finished)  # never trained again
+    assert all((out / "library" / after[n]["model"]).stat().st_mtime_ns == files[n] for n in finished)
+    assert _library_summary(out / "library") == _library_summary(
+        train_curriculum(str(path), tmp_path / "fresh", seeds=2, timesteps=4000, progress=False).library)
+
+
+def test_cli_lists_shows_trains_and_reports(tmp_path):
+    def cli(*args: str) -> subprocess.CompletedProcess:
+        return subprocess.run([sys.executable, "-m", "sb3_smc.cli", *args], cwd=ROOT, capture_output=True,
+                              text=True, timeout=300)
+
+    listed = cli("curricula")
+    assert listed.returncode == 0 and "con2-cl " in listed.stdout and "smc-curr" in listed.stdout
+    shown = cli("curricula", "con2-cl")
+    assert "level 2: 15 nodes" in shown.stdout and "* con2-cl/cl_self-in-container_vs_noncontainer" in shown.stdout
+    bad = cli("curricula", str(tmp_path / "missing.yml"))
+    assert bad.returncode == 2 and "cannot read curriculum file" in bad.stderr and "Traceback" not in bad.stderr
+    trained = cli("train", str(_tiny(tmp_path)), "--out", str(tmp_path / "run"), "--targets", "left,above",
+                  "--seeds", "1", "--timesteps", "2000", "--no-tensorboard")
+    assert trained.returncode == 0, trained.stderr
+    assert "| left | 0 |" in trained.stdout and "library:" in trained.stdout
+    assert not (tmp_path / "run" / "tensorboard").exists()
+    report = cli("status", str(tmp_path / "run"))
+    assert "done        2" in report.stdout and "left        0" in report.stdout
+
+
+def test_curriculum_objects_are_validated_too():
+    with pytest.raises(CurriculumError, match="curriculum 'x': node 'a' uses an unknown node 'b'"):
+        Curriculum("x", (Node("a", LEFT, ("b",)),), ("a",))
+    assert os.environ.get("PIXELWORLD_CACHE")  # the suite never writes into the user's cache
+    assert torch.get_num_threads() == 1
