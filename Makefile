@@ -28,6 +28,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_generation.py
 	$(PY) benchmarks/bench_training.py
 	$(PY) benchmarks/bench_policies.py
+	$(PY) benchmarks/bench_curriculum.py
 
 clean:
 	rm -rf $(VENV)

@@ -1,0 +1,103 @@
+"""What the paper's whole protocol costs on this machine: measured jobs, then the estimated wall time.
+
+Measures ``--updates`` updates (2,000 steps each, one torch thread) of three kinds of curriculum job, through the
+same ``run_job`` the curriculum trainer ships to workers:
+
+* a flat job (``cl_self-in-container_vs_noncontainer``, no children);
+* a hand-designed level-2 job: 4 lower-level nodes x 2 seeds (``two_best``) = 8 SMC actions, the median size of
+  the smc-curr entries;
+* a canonical level-2 job: the 13 nodes of the canonical containment list x 2 seeds = 26 SMC actions.
+
+Children are untrained (signal-biased) SMCs, whose calls last ~41 decisions as early in training: trained children
+answer in a few steps, so level-2 rates later in training are higher and the estimate is an upper bound.
+
+Then it counts the jobs of the protocol of spec §5 from the shipped curricula (every level-2 target; the flat
+lower-level nodes and the flat baseline of every target (smc-base), smc-curr, smc-canon and both noprim variants;
+5 seeds; 400,000 steps per job) and prints the estimated wall time with 1 and 2 workers (jobs packed perfectly, a
+second worker on the second core).
+
+Run: ``python benchmarks/bench_curriculum.py [--updates N]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import tempfile
+from pathlib import Path
+
+import torch
+
+from pixelworld_env import catalog
+from sb3_smc.curricula import shipped_curricula
+from sb3_smc.curricula.trainer import Job, job_name, run_job
+from sb3_smc.library import SMCLibrary
+from sb3_smc.records import Budget, TaskSpec, TrainingSpec
+from sb3_smc.training import train_smc
+
+TARGET = "cl_self-in-container_vs_noncontainer"
+SEEDS = 5
+TIMESTEPS = 400_000
+
+
+def measure(library: Path, children: tuple[str, ...], updates: int) -> float:
+    """Decisions per second of one job with ``children`` (names in ``library``)."""
+    spec = TrainingSpec(name="bench", task=TaskSpec(f"PW-{TARGET}-v0").resolved(), children=children,
+                        budget=Budget(2000 * updates))
+    result = run_job(Job(spec=spec, library=str(library)))
+    return result.record.total_timesteps / result.record.wall_time_s
+
+
+def protocol_jobs() -> dict[str, int]:
+    """Jobs (node x seed) of the whole protocol, by kind (the noprim curricula included)."""
+    curricula = shipped_curricula()
+    two_level = [c for c in curricula.values() if c.method and c.method.split("-")[1] in ("curr", "canon")]
+    targets = {c.node(t).task for c in two_level for t in c.targets}
+    flat = {u for c in two_level for t in c.targets for u in c.node(t).uses} | targets  # + the smc-base of targets
+    curr = sum(len(c.targets) for c in two_level if c.method.startswith("smc-curr"))
+    canon = sum(len(c.targets) for c in two_level if c.method.startswith("smc-canon"))
+    return {"flat": len(flat) * SEEDS, "curr": curr * SEEDS, "canon": canon * SEEDS}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--updates", type=int, default=10, help="updates (2,000 steps) per measured job")
+    args = parser.parse_args()
+    torch.set_num_threads(1)
+    canonical = [dataset for _, dataset in catalog.canonical_smc_lists()["canonical_containment_curriculum"]]
+    curr_sizes = [len(c.node(t).uses) for c in shipped_curricula().values() if c.method == "smc-curr"
+                  for t in c.targets]
+    with tempfile.TemporaryDirectory() as tmp:
+        library = SMCLibrary()
+        for k, name in enumerate(canonical):
+            for seed in (0, 1):
+                smc = train_smc(f"PW-{name}-v0", total_timesteps=0, n_envs=1, seed=10 * k + seed,
+                                name=job_name(name, seed))
+                library.add(smc)
+        path = library.save(Path(tmp) / "library")
+        curr_children = tuple(job_name(n, s) for n in canonical[:4] for s in (0, 1))
+        canon_children = tuple(job_name(n, s) for n in canonical for s in (0, 1))
+        rates = {"flat": measure(path, (), args.updates),
+                 "curr": measure(path, curr_children, args.updates),
+                 "canon": measure(path, canon_children, args.updates)}
+    jobs = protocol_jobs()
+    seconds = {kind: TIMESTEPS / rates[kind] for kind in rates}
+    print(f"\nmeasured: {args.updates} updates of 2,000 steps per job, 1 torch thread, torch {torch.__version__}; "
+          f"smc-curr entries use {statistics.median(curr_sizes):.0f} nodes (median; {min(curr_sizes)}-"
+          f"{max(curr_sizes)})\n")
+    print("| job | decisions/s | s per 400k-step job | jobs in the protocol (x 5 seeds) | CPU hours |")
+    print("|---|---:|---:|---:|---:|")
+    labels = {"flat": "flat (lower-level nodes + smc-base targets)", "curr": "smc-curr (+ noprim), 8 SMC actions",
+              "canon": "smc-canon (+ noprim), 26 SMC actions"}
+    total = 0.0
+    for kind in ("flat", "curr", "canon"):
+        count = jobs[kind]
+        hours = count * seconds[kind] / 3600
+        total += hours
+        print(f"| {labels[kind]} | {rates[kind]:,.0f} | {seconds[kind]:,.0f} | {count} | {hours:,.1f} |")
+    print(f"\nestimated wall time of the whole protocol: {total:,.1f} h with 1 worker, {total / 2:,.1f} h with 2 "
+          "workers (upper bound: untrained children)")
+
+
+if __name__ == "__main__":
+    main()
