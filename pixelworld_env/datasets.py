@@ -52,6 +52,7 @@ from pixelworld_env.generation import (
 from pixelworld_env.objects import WorldObject, frame_object
 from pixelworld_env.scene import Scene
 from pixelworld_env.shapes import LibraryParams
+from pixelworld_env.validation import check_seed
 
 __all__ = [
     "CACHE_ENV",
@@ -268,6 +269,7 @@ class DatasetCache:
 
     def load_or_generate(self, spec: DatasetSpec, seed: int = 0) -> GeneratedDataset:
         """The cached dataset, or a freshly generated one (then cached; a write failure only warns)."""
+        seed = check_seed(seed)
         cached = self.load(spec, seed)
         if cached is not None:
             return cached

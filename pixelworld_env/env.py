@@ -16,6 +16,7 @@ from pixelworld_env.constants import NUM_COLORS
 from pixelworld_env.objects import Cell
 from pixelworld_env.render import rgb_image
 from pixelworld_env.scene import Scene
+from pixelworld_env.validation import check_action, check_int
 from pixelworld_env.world import MOVES, World
 
 CLASSIFICATION = "classification"
@@ -74,13 +75,14 @@ class PixelWorldEnv(gym.Env):
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode must be None or one of {self.metadata['render_modes']}, "
                              f"got {render_mode!r}")
-        if max_steps < 1:
-            raise ValueError(f"max_steps must be >= 1, got {max_steps}")
+        max_steps = check_int(max_steps, "max_steps", 1)
         self.scenes: tuple[Scene, ...] = tuple(scenes)
         if not self.scenes:
             raise ValueError("PixelWorldEnv needs at least one scene")
         self.kind = kind
         self.concept = concept if isinstance(concept, Concept) else Concept(concept, macros)
+        if kind == BRING_ABOUT and labels is not None:
+            raise ValueError("labels are for classification tasks; a bring-about task's goal is its concept")
         if kind == CLASSIFICATION:
             if labels is None:
                 labels = [int(self.concept.holds(s)) for s in self.scenes]
@@ -170,8 +172,11 @@ class PixelWorldEnv(gym.Env):
         super().reset(seed=seed)
         if seed is not None:
             self._draws = []
+        unknown = sorted(set(options or {}) - {"index"})
+        if unknown:
+            raise ValueError(f"unknown reset option(s) {unknown}; PixelWorldEnv.reset takes options={{'index': i}}")
         if options and "index" in options:
-            index = int(options["index"])
+            index = check_int(options["index"], "options['index']")
             if not 0 <= index < len(self.scenes):
                 raise IndexError(f"scene index {index} out of range (0..{len(self.scenes) - 1})")
         else:
@@ -196,10 +201,7 @@ class PixelWorldEnv(gym.Env):
     def step(self, action):
         if self._done:
             raise RuntimeError("the episode has ended: call reset() before step()")
-        try:
-            effect = self._effects[action]
-        except (IndexError, TypeError):
-            raise ValueError(f"invalid action {action!r}; actions are {list(enumerate(self.action_names))}") from None
+        effect = self._effects[check_action(action, self.action_names)]
         self._steps += 1
         terminated = False
         if effect.__class__ is tuple:  # a move

@@ -94,6 +94,7 @@ from pixelworld_env.oracle import goal_reachable
 from pixelworld_env.regions import inside_masks
 from pixelworld_env.scene import Scene
 from pixelworld_env.shapes import FAMILIES, check_family, shape_library
+from pixelworld_env.validation import check_seed
 
 if TYPE_CHECKING:
     from pixelworld_env.definitions import DefinitionSet
@@ -819,6 +820,7 @@ def generate(spec: DatasetSpec, seed: int = 0, *, max_draws: int | None = None,
     unsatisfiable generator, raises :class:`GenerationError`. ``progress(kept, target, draws)`` is
     called after every kept scene.
     """
+    seed = check_seed(seed)
     if max_draws is None:
         max_draws = DRAWS_PER_SAMPLE * spec.num_samples
     try:

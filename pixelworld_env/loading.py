@@ -9,6 +9,7 @@ from pixelworld_env import catalog, generation
 from pixelworld_env.datasets import load_or_generate
 from pixelworld_env.generation import DatasetSpec
 from pixelworld_env.scene import Scene
+from pixelworld_env.validation import check_seed
 
 Split = Literal["all", "train", "test"]
 SPLITS = ("all", "train", "test")
@@ -44,11 +45,13 @@ def dataset_spec(name: str) -> DatasetSpec:
 def load_dataset(name: str, split: Split = "all", seed: int = 0) -> Dataset:
     """The scenes and labels of dataset ``name`` (``split`` "all", "train" or "test").
 
-    Generated with ``seed`` on first use and cached on disk (``$PIXELWORLD_CACHE`` or the user cache
-    directory). The train/test split is the stratified 50/50 split of spec §3.7 (fixed split seed 521).
+    Generated with ``seed`` (an integer in ``[0, 2**63 - 1]``; nothing else is converted) on first use and cached
+    on disk (``$PIXELWORLD_CACHE`` or the user cache directory). The train/test split is the stratified 50/50 split
+    of spec §3.7 (fixed split seed 521).
     """
     if split not in SPLITS:
         raise ValueError(f"split must be one of {SPLITS}, got {split!r}")
+    seed = check_seed(seed, "dataset seed")
     info = catalog.dataset(name)
     generated = load_or_generate(dataset_spec(name), seed)
     if split == "all":

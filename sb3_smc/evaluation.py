@@ -23,6 +23,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
+from pixelworld_env.validation import check_int, check_seed
 from sb3_smc.envs import make_smc_env, spec_for_smc
 from sb3_smc.policies import sample_action
 from sb3_smc.records import EvaluationRecord
@@ -207,9 +208,10 @@ def evaluate(smc: SMC, env_id: str | None = None, *, split: str = "test", repeat
     ``keep=True`` (default) the result's :class:`~sb3_smc.records.EvaluationRecord` is added to
     ``smc.evaluations`` (replacing an earlier one of the same env id and split), so a library saves it.
     """
-    if isinstance(repeats, bool) or not isinstance(repeats, int | np.integer) or repeats < 1:
-        raise ValueError(f"repeats must be an integer >= 1, got {repeats!r}")
+    repeats = check_int(repeats, "repeats", 1)
+    seed = check_seed(seed, "evaluation seed")
     env_id = _env_id(smc, env_id)
+    smc.check_layout()
     env = make_evaluation_env(smc, env_id, split=split, max_steps=max_steps, env_kwargs=env_kwargs)
     try:
         base = env.unwrapped

@@ -368,7 +368,7 @@ class TrainingSpec(_Record):
             if not isinstance(getattr(self, name), cls):
                 raise RecordError(f"{name} must be a {cls.__name__}, got {getattr(self, name)!r}")
         _str(self.algo, "algo", ALGORITHMS)
-        _set(self, "seed", _int(self.seed, "seed"))
+        _set(self, "seed", _int(self.seed, "seed", 0))
         _set(self, "frame_stack", _int(self.frame_stack, "frame_stack", 1))
         if self.algo == "RecurrentPPO" and self.frame_stack != 1:
             raise RecordError("frame_stack is meant for memoryless policies (TRPO); RecurrentPPO has an LSTM")

@@ -123,6 +123,31 @@ class SMC:
             raise ValueError(f"evaluation of SMC {evaluation.smc!r} given to SMC {self.name!r}")
         self.evaluations = (*(e for e in self.evaluations if e.key != evaluation.key), evaluation)
 
+    def check_layout(self, caller: str | None = None) -> None:
+        """``ValueError`` unless this SMC's policy and those of its descendants take the observation and give the
+        actions they will get as SMCs (checked from the policy's ``observation_size`` / ``n_actions`` where it
+        declares them; a ``FrameStackPolicy`` declares its frame size and stack)."""
+        where = f"SMC {self.name!r}" + (f" (called by {caller!r})" if caller else "")
+        size, n_actions = self.observation_size, len(self.action_names)
+        policy = self.policy
+        layout = (f"{HAND_SIZE} window + {len(self.children)} outcome{'s' * (len(self.children) != 1)} + "
+                  f"{n_actions} previous action")
+        declared = getattr(policy, "observation_size", None)
+        stack = getattr(policy, "n_stack", None)
+        inner = getattr(getattr(policy, "inner", None), "observation_size", None)
+        if stack is not None and inner is not None and inner != stack * size:
+            raise ValueError(f"{where}: its policy stacks {stack} frames of {declared} values into {inner} inputs, but "
+                             f"as an SMC it gets frames of {size} ({layout})")
+        if declared is not None and declared != size:
+            raise ValueError(f"{where}: its policy expects observations of {declared} values, but as an SMC it gets "
+                             f"{size} ({layout}); was it trained with other children or actions?")
+        declared_actions = getattr(policy, "n_actions", None)
+        if declared_actions is not None and declared_actions != n_actions:
+            raise ValueError(f"{where}: its policy gives {declared_actions} action probabilities, but its actions are "
+                             f"{n_actions}: {list(self.action_names)}")
+        for child in self.children:
+            child.check_layout(self.name)
+
     @property
     def depth(self) -> int:
         """1 for an SMC without children, else 1 + the deepest child's depth."""

@@ -10,6 +10,7 @@ import numpy as np
 from gymnasium import spaces
 
 from pixelworld_env.env import PixelWorldEnv
+from pixelworld_env.validation import check_action
 from sb3_smc.policies import sample_action
 from sb3_smc.smc import CALL_PREFIX, MOVES, SMC, observation_size, smc_action_names
 
@@ -58,6 +59,11 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         names = [smc.name for smc in self.smcs]
         if len(set(names)) != len(names):
             raise ValueError(f"SMC names must be unique, got {names}")
+        if base.observation != "hand":
+            raise ValueError(f"HierarchicalSMCWrapper builds SMC observations from the one-hot 3 x 3 window: the "
+                             f"environment needs observation='hand', got {base.observation!r}")
+        for smc in self.smcs:
+            smc.check_layout()
         self.include_primitives = include_primitives
         self.count_primitive_steps = count_primitive_steps
         self.call_step_cap = int(call_step_cap)
@@ -158,7 +164,8 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
     def step(self, action):
         if self._done:
             raise RuntimeError("the episode has ended: call reset() before step()")
-        kind, value = self._plan[int(action)]
+        action = check_action(action, self.action_names)
+        kind, value = self._plan[action]
         calls: list[dict[str, Any]] = []
         self._cells = []
         if kind == _CALL:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -171,10 +173,45 @@ def test_stochastic_calls_are_seeded() -> None:
 
 def test_policy_with_the_wrong_number_of_actions_is_reported() -> None:
     bad = SMC("bad", "bring-about", SequencePolicy(3, [0]))
-    env = HierarchicalSMCWrapper(base_env(), [bad])
+    with pytest.raises(ValueError, match="SMC 'bad': its policy gives 3 action probabilities"):
+        HierarchicalSMCWrapper(base_env(), [bad])  # when the wrapper is built, not at the first call
+
+    class Undeclared:  # declares neither n_actions nor observation_size: caught at its first call
+        def initial_state(self):
+            return None
+
+        def probabilities(self, observation, state):
+            return np.full(3, 1 / 3), None
+
+    env = HierarchicalSMCWrapper(base_env(), [SMC("bad", "bring-about", Undeclared())])
     env.reset(seed=0)
     with pytest.raises(ValueError, match="SMC 'bad': its policy gives 3 action probabilities"):
         act(env, "SMC:bad")
+
+
+def test_children_with_the_wrong_observation_layout_are_refused_at_construction() -> None:
+    """A child (at any depth) whose policy was built for other children is named with what it expects and gets."""
+    from sb3_smc.policies import FrameStackPolicy
+
+    walker = SMC("walker", "bring-about", SequencePolicy(5, [1]))
+    mlp = SimpleNamespace(observation_size=90, n_actions=6, initial_state=lambda: None)
+    parent = SMC("parent", "bring-about", mlp, children=[walker])  # gets 81 + 1 + 6 = 88 values
+    with pytest.raises(ValueError, match=r"SMC 'parent': its policy expects observations of 90 values, but as an "
+                                         r"SMC it gets 88 \(81 window \+ 1 outcome \+ 6 previous action\)"):
+        HierarchicalSMCWrapper(base_env(), [parent])
+    deep = SMC("deep", "bring-about", SequencePolicy(6, [1]), children=[parent])
+    with pytest.raises(ValueError, match=r"SMC 'parent' \(called by 'deep'\): its policy expects observations of 90"):
+        HierarchicalSMCWrapper(base_env(), [deep])
+    stacked = SMC("stacked", "bring-about", FrameStackPolicy(SimpleNamespace(observation_size=170, n_actions=5), 2, 86))
+    with pytest.raises(ValueError, match="stacks 2 frames of 86 values into 170 inputs"):
+        HierarchicalSMCWrapper(base_env(), [SMC("x", "bring-about", SequencePolicy(6, [1]), children=[stacked])])
+    ok = SMC("ok", "bring-about", FrameStackPolicy(SimpleNamespace(observation_size=172, n_actions=5), 2, 86))
+    assert HierarchicalSMCWrapper(base_env(), [ok]).smcs == (ok,)
+
+
+def test_the_wrapper_needs_the_one_hot_window() -> None:
+    with pytest.raises(ValueError, match="needs observation='hand', got 'full'"):
+        HierarchicalSMCWrapper(base_env(observation="full"), [])
 
 
 def test_wrapper_passes_gymnasium_and_sb3_checks() -> None:

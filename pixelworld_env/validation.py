@@ -1,0 +1,56 @@
+"""Checks of user input shared by the environment, the dataset loaders and the agents: one rule per kind of value,
+with messages that say what was given and what is expected."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+__all__ = ["MAX_SEED", "check_action", "check_int", "check_seed"]
+
+MAX_SEED = 2**63 - 1
+"""Seeds are integers in ``[0, 2**63 - 1]`` (they are stored in JSON records and numpy ``int64`` arrays)."""
+
+
+def _as_int(value: Any) -> int | None:
+    """``value`` as an int when it is an integer (Python or numpy, or a 0-d integer array), else ``None``."""
+    if isinstance(value, bool | np.bool_):
+        return None
+    if isinstance(value, int | np.integer):
+        return int(value)
+    if isinstance(value, np.ndarray) and value.shape == () and value.dtype.kind in "iu":
+        return int(value)
+    return None
+
+
+def check_int(value: Any, name: str, minimum: int | None = None) -> int:
+    """``value`` as an int; ``TypeError`` if it is not an integer (bools and floats included), ``ValueError`` below
+    ``minimum``."""
+    number = _as_int(value)
+    if number is None:
+        raise TypeError(f"{name} must be an integer, got {value!r} ({type(value).__name__})")
+    if minimum is not None and number < minimum:
+        raise ValueError(f"{name} must be >= {minimum}, got {number}")
+    return number
+
+
+def check_seed(seed: Any, name: str = "seed") -> int:
+    """A seed: an integer (numpy integers too) in ``[0, 2**63 - 1]``; anything else raises, nothing is converted."""
+    number = check_int(seed, name)
+    if not 0 <= number <= MAX_SEED:
+        raise ValueError(f"{name} must be in [0, 2**63 - 1], got {number}")
+    return number
+
+
+def check_action(action: Any, action_names: Sequence[str]) -> int:
+    """An action index: an integer (numpy integers and 0-d integer arrays too) in ``[0, len(action_names))``.
+
+    Negative indices, bools, floats and anything else raise ``ValueError`` listing the actions.
+    """
+    index = _as_int(action)
+    if index is None or not 0 <= index < len(action_names):
+        raise ValueError(f"invalid action {action!r}: expected an integer in [0, {len(action_names)}); the actions "
+                         f"are {list(enumerate(action_names))}")
+    return index

@@ -1,0 +1,112 @@
+"""Bad input never passes silently: actions, seeds, observation settings, reset options, environment arguments.
+
+Each case raises with a message that says what was given and what is expected (nothing is converted)."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import pixelworld_env  # noqa: F401  (registers the PW-* ids)
+from pixelworld_env import PixelWorldEnv, Scene
+from pixelworld_env.loading import load_dataset
+from pixelworld_env.validation import MAX_SEED, check_action, check_seed
+from sb3_smc.policies import SequencePolicy
+from sb3_smc.smc import SMC
+from sb3_smc.wrapper import HierarchicalSMCWrapper
+from tests.helpers import CONTAINER, IN_CONTAINER, classification_env, make
+
+DATASET = "cl_self-in-left-corner_vs_on-hline"
+ENV_ID = f"PW-{DATASET}-v0"
+
+
+# ------------------------------------------------------------------------------------------------ actions
+
+@pytest.mark.parametrize("action", [-1, -5, 6, True, False, 1.0, "1", None, np.array([1]), np.float32(2)])
+def test_actions_outside_the_action_space_raise(action):
+    env = classification_env()
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match=r"invalid action .*expected an integer in \[0, 6\)"):
+        env.step(action)
+    made = gym.make(ENV_ID)
+    made.reset(seed=0)
+    with pytest.raises(ValueError, match="invalid action"):
+        made.step(action)
+    wrapped = HierarchicalSMCWrapper(classification_env(), [SMC("walker", "bring-about", SequencePolicy(5, [1]))])
+    wrapped.reset(seed=0)
+    with pytest.raises(ValueError, match=r"invalid action .*expected an integer in \[0, 7\)"):
+        wrapped.step(7 if isinstance(action, int) and action == 6 else action)  # 6 calls the SMC
+
+
+@pytest.mark.parametrize("action", [0, 5, np.int64(3), np.uint8(2), np.array(4)])
+def test_integer_actions_of_any_integer_type_work(action):
+    env = classification_env()
+    env.reset(seed=0)
+    env.step(action)
+    assert check_action(action, env.action_names) == int(action)
+
+
+# ------------------------------------------------------------------------------------------------ seeds
+
+@pytest.mark.parametrize(("seed", "error", "message"), [
+    (1.5, TypeError, "dataset seed must be an integer, got 1.5"),
+    ("1", TypeError, "dataset seed must be an integer, got '1'"),
+    (True, TypeError, "dataset seed must be an integer, got True"),
+    ("abc", TypeError, "dataset seed must be an integer, got 'abc'"),
+    (None, TypeError, "dataset seed must be an integer, got None"),
+    (-1, ValueError, r"dataset seed must be in \[0, 2\*\*63 - 1\], got -1"),
+    (MAX_SEED + 1, ValueError, "dataset seed must be in"),
+])
+def test_seeds_are_integers_only(seed, error, message):
+    with pytest.raises(error, match=message):
+        load_dataset(DATASET, seed=seed)
+    with pytest.raises(error, match=message):
+        gym.make(ENV_ID, seed=seed)
+
+
+def test_numpy_integer_seeds_are_seeds():
+    assert load_dataset(DATASET, seed=np.int64(0)).scenes == load_dataset(DATASET, seed=0).scenes
+    assert check_seed(np.uint32(7)) == 7 and type(check_seed(np.uint32(7))) is int
+
+
+def test_training_and_evaluation_seeds_are_checked():
+    from sb3_smc.evaluation import evaluate
+    from sb3_smc.records import RecordError, TrainingSpec
+
+    with pytest.raises(RecordError, match="seed must be >= 0, got -2"):
+        TrainingSpec.create(ENV_ID, seed=-2)
+    smc = SMC("walker", "classification", SequencePolicy(6, [1]))
+    with pytest.raises(TypeError, match="evaluation seed must be an integer, got 0.5"):
+        evaluate(smc, ENV_ID, seed=0.5)
+    with pytest.raises(TypeError, match="repeats must be an integer, got 2.0"):
+        evaluate(smc, ENV_ID, repeats=2.0)
+
+
+# ------------------------------------------------------------------------------------------------ observations
+
+@pytest.mark.parametrize("observation", ["hand_raw", "full"])
+def test_smcs_refuse_observations_they_cannot_use(observation):
+    from sb3_smc.training import train_smc
+
+    with pytest.raises(ValueError, match=f"needs observation='hand', got '{observation}'"):
+        train_smc(ENV_ID, total_timesteps=0, n_envs=1, env_kwargs={"observation": observation})
+    with pytest.raises(ValueError, match="needs observation='hand'"):
+        HierarchicalSMCWrapper(gym.make(ENV_ID, observation=observation))
+
+
+# ------------------------------------------------------------------------------------------------ environment arguments
+
+def test_reset_options_max_steps_and_labels_are_checked():
+    env = make()
+    with pytest.raises(ValueError, match=r"unknown reset option\(s\) \['indx'\]"):
+        env.reset(options={"indx": 0})
+    with pytest.raises(TypeError, match="options\\['index'\\] must be an integer, got 0.5"):
+        env.reset(options={"index": 0.5})
+    with pytest.raises(TypeError, match="max_steps must be an integer, got 1.5"):
+        make(max_steps=1.5)
+    with pytest.raises(ValueError, match="max_steps must be >= 1, got 0"):
+        make(max_steps=0)
+    scenes = [Scene.from_ascii(CONTAINER, {"a": "container"})]
+    with pytest.raises(ValueError, match="labels are for classification tasks"):
+        PixelWorldEnv(scenes, kind="bring-about", concept=IN_CONTAINER, labels=[1])
