@@ -16,10 +16,23 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import BinaryIO
 
-__all__ = ["OLD_MARKER", "atomic_write", "fsync_dir", "fsync_file", "replace_directory"]
+__all__ = ["OLD_MARKER", "atomic_write", "fsync_dir", "fsync_file", "make_temporary_directory", "replace_directory"]
 
 OLD_MARKER = ".old-"
 """A directory being replaced is renamed to ``.<name>.old-<random>`` beside it until the new one is in place."""
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+def make_temporary_directory(parent: str | os.PathLike, prefix: str) -> Path:
+    """A new directory in ``parent`` with the permissions of the user's umask (``mkdtemp`` would make it 0700)."""
+    path = Path(tempfile.mkdtemp(prefix=prefix, dir=parent))
+    os.chmod(path, 0o777 & ~_umask())
+    return path
 
 
 def fsync_dir(directory: str | os.PathLike) -> None:
@@ -45,14 +58,15 @@ def fsync_file(path: str | os.PathLike) -> None:
 def atomic_write(path: str | os.PathLike, data: bytes | str | Callable[[BinaryIO], None]) -> Path:
     """Write ``data`` (bytes, text as UTF-8, or a function writing to a binary handle) to ``path`` atomically.
 
-    The content goes to ``.<name>.<random>.tmp`` in the same folder (created if missing), is flushed with
-    ``fsync`` and renamed over ``path``; any error (Ctrl-C included) deletes the temporary file and leaves an
-    existing ``path`` untouched. Returns ``path``.
+    The content goes to ``.<name>.<random>.tmp`` in the same folder (created if missing), with the permissions
+    of the user's umask, is flushed with ``fsync`` and renamed over ``path``; any error (Ctrl-C included) deletes
+    the temporary file and leaves an existing ``path`` untouched. Returns ``path``.
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
     try:
+        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; the file is for whoever may read the folder
         with os.fdopen(fd, "wb") as handle:
             if callable(data):
                 data(handle)

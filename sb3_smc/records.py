@@ -45,6 +45,7 @@ __all__ = [
     "WrapperSettings",
     "package_versions",
     "smc_name_from_env_id",
+    "test_score_of",
 ]
 
 SPLITS = ("train", "test", "all")
@@ -67,6 +68,14 @@ def package_versions() -> dict[str, str]:
     return {"sb3_smc": version("sb3-smc"), "stable_baselines3": version("stable-baselines3"),
             "sb3_contrib": version("sb3-contrib"), "torch": version("torch"), "gymnasium": version("gymnasium"),
             "numpy": version("numpy"), "python": platform.python_version()}
+
+
+def test_score_of(spec: TrainingSpec | None, evaluations: Sequence[EvaluationRecord]) -> float | None:
+    """The latest test-split score on the spec's own task (else on any task); ``None`` without one."""
+    tests = [e for e in evaluations if e.split == "test"]
+    own = [e for e in tests if spec is not None and e.env_id == spec.task.env_id]
+    chosen = own or tests
+    return chosen[-1].score if chosen else None
 
 
 def smc_name_from_env_id(env_id: str) -> str:

@@ -112,10 +112,9 @@ class SMC:
     @property
     def test_score(self) -> float | None:
         """The score of the latest evaluation on the test split of the SMC's own task (else of any test split)."""
-        tests = [e for e in self.evaluations if e.split == "test"]
-        own = [e for e in tests if self.spec is not None and e.env_id == self.spec.task.env_id]
-        chosen = own or tests
-        return chosen[-1].score if chosen else None
+        from sb3_smc.records import test_score_of
+
+        return test_score_of(self.spec, self.evaluations)
 
     def add_evaluation(self, evaluation: EvaluationRecord) -> None:
         """Keep ``evaluation``, replacing an earlier one of the same env id and split."""

@@ -382,9 +382,16 @@ def test_manifest_actions_disagree_with_the_model(copy):
 
 
 def test_manifest_observation_disagrees_with_the_model(copy):
-    _edit(copy, lambda m: m["smcs"]["corner"].update(frame_stack=2))
-    with pytest.raises(LayoutMismatchError, match=r"'corner': .* observation shape \(87,\), but its observation "
-                                                  r"layout is \(174,\)"):
+    def stacked(manifest):  # the TRPO SMC claims 2 stacked frames (spec and entry agree), its model takes one
+        entry = manifest["smcs"]["container"]
+        entry["frame_stack"] = entry["spec"]["frame_stack"] = 2
+
+    _edit(copy, stacked)
+    with pytest.raises(LayoutMismatchError, match=r"'container': .* observation shape \(86,\), but its observation "
+                                                  r"layout is \(172,\)"):
+        SMCLibrary.load(copy)
+    _edit(copy, lambda m: m["smcs"]["container"]["spec"].update(frame_stack=1))
+    with pytest.raises(ManifestError, match="frame_stack: spec 1, entry 2"):
         SMCLibrary.load(copy)
 
 
@@ -559,3 +566,77 @@ def test_version_0_1_models_name_a_policy_class_that_still_imports():
     from sb3_smc.training import SequenceLstmPolicy as legacy
 
     assert legacy is SequenceLstmPolicy
+
+
+# ------------------------------------------------------------------------------------------------ manifest gaps
+
+def test_a_missing_checksum_is_an_error_not_a_skipped_check(copy):
+    _edit(copy, lambda m: m["smcs"]["corner"].pop("sha256"))
+    with pytest.raises(ManifestError, match=r"entry 'corner' lacks the field\(s\) \['sha256'\]"):
+        SMCLibrary.load(copy)
+    _edit(copy, lambda m: m["smcs"]["corner"].update(sha256="abc"))
+    with pytest.raises(ManifestError, match="'sha256' must be the 64 hex digits"):
+        SMCLibrary.load(copy)
+
+
+def test_a_model_of_another_algorithm_is_refused(copy):
+    def relabel(manifest):
+        manifest["smcs"]["corner"]["algo"] = manifest["smcs"]["corner"]["spec"]["algo"] = "PPO"
+
+    _edit(copy, relabel)
+    with pytest.raises(CorruptModelError, match="'corner': .*(manifest says PPO, but .* holds a|cannot load)"):
+        SMCLibrary.load(copy)
+    _edit(copy, lambda m: m["smcs"]["corner"]["spec"].update(algo="RecurrentPPO"))
+    with pytest.raises(ManifestError, match="training spec disagrees with the entry .*algo: spec 'RecurrentPPO', "
+                                            "entry 'PPO'"):
+        SMCLibrary.load(copy)
+
+
+@pytest.mark.parametrize(("field", "value", "message"), [
+    ("seed", "zero", "'seed' is 'zero', but its records say 0"),
+    ("test_score", "high", "'test_score' is 'high', but its records say 0.5"),
+    ("selected_update", 7, "'selected_update' is 7, but its records say 3"),
+])
+def test_summary_fields_must_agree_with_the_records(copy, field, value, message):
+    _edit(copy, lambda m: m["smcs"]["corner"].update({field: value}))
+    with pytest.raises(ManifestError, match=f"entry 'corner': {message}"):
+        SMCLibrary.load(copy)
+
+
+@pytest.mark.parametrize(("change", "message"), [
+    (lambda e: e.update(metadata=5), "version-1 entry .*'metadata' must be an object, got 5"),
+    (lambda e: e.update(seed="zero"), "version-1 entry .*'seed' must be int or null, got 'zero'"),
+    (lambda e: e.update(test_score="high"), "version-1 entry .*'test_score' must be int or float or null, got 'high'"),
+])
+def test_bad_version_1_entries_name_the_entry_and_field(change, message):
+    from sb3_smc.library import storage
+
+    v1 = json.loads(V1_MANIFEST.read_text())
+    change(v1["smcs"]["cl_self-in-left-corner_vs_on-hline"])
+    with pytest.raises(ManifestError, match=message):
+        storage.check_manifest(v1, V1_MANIFEST)
+
+
+def test_bare_observation_models_are_explained(tmp_path):
+    """What rl_zoo3 trains without the shipped configs (the bare 81-value window) cannot be an SMC: say why."""
+    env = gym.make(CL_ID)
+    model = PPO("MlpPolicy", env, n_steps=32, batch_size=32, device="cpu")
+    smc = SMC("bare", "classification", ScriptedPolicy(6, lambda obs, step: 0), model=model)
+    with pytest.raises(LayoutMismatchError, match="observation shape \\(81,\\).*the bare PixelWorld observation.*"
+                                                  "sb3_smc.zoo.smc_env"):
+        SMCLibrary([smc])
+
+
+def test_saved_files_follow_the_umask(smcs, tmp_path):
+    old = os.umask(0o022)
+    try:
+        path = SMCLibrary([smcs["corner"]]).save(tmp_path / "library")
+        from pixelworld_env.atomic import atomic_write
+
+        cache_file = atomic_write(tmp_path / "cache" / "x.json.gz", b"data")
+    finally:
+        os.umask(old)
+    assert (path.stat().st_mode & 0o777) == 0o755
+    assert ((path / "manifest.json").stat().st_mode & 0o777) == 0o644
+    assert ((path / "models" / "corner.zip").stat().st_mode & 0o777) == 0o644
+    assert (cache_file.stat().st_mode & 0o777) == 0o644

@@ -16,13 +16,19 @@ import hashlib
 import json
 import re
 import shutil
-import tempfile
 import zipfile
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from pixelworld_env.atomic import OLD_MARKER, atomic_write, fsync_dir, fsync_file, replace_directory
+from pixelworld_env.atomic import (
+    OLD_MARKER,
+    atomic_write,
+    fsync_dir,
+    fsync_file,
+    make_temporary_directory,
+    replace_directory,
+)
 from sb3_smc.library.errors import (
     CorruptModelError,
     LayoutMismatchError,
@@ -41,6 +47,7 @@ from sb3_smc.records import (
     TrainingSpec,
     WrapperSettings,
     package_versions,
+    test_score_of,
 )
 from sb3_smc.smc import HAND_SIZE, SIGNALS, SMC, observation_size, smc_action_names
 
@@ -139,10 +146,13 @@ def check_model_layout(name: str, model: Any, action_names: Sequence[str], size:
         have = f"observation shape {shape}" if shape is not None else \
             f"observation space {getattr(model, 'observation_space', None)}"
         stacked = f", {frame_stack} stacked" if frame_stack > 1 else ""
+        bare = (" — the bare PixelWorld observation: the model was trained without HierarchicalSMCWrapper (e.g. by "
+                "rl_zoo3 without -conf zoo_configs/<algo>.yml); train it inside sb3_smc.zoo.smc_env so that it sees "
+                "the window, the outcomes and its previous action") if shape in ((HAND_SIZE,), (9,)) else ""
         raise LayoutMismatchError(
             f"SMC {name!r}: {where} has {have}, but its observation layout is ({frame_stack * size},) "
             f"({HAND_SIZE} window + {size - HAND_SIZE - len(action_names)} outcomes + "
-            f"{len(action_names)} previous action{stacked})")
+            f"{len(action_names)} previous action{stacked}){bare}")
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -193,7 +203,7 @@ def write_library(target: Path, smcs: Mapping[str, SMC], manifest: dict[str, Any
     deletes the temporary directory and leaves the previous library untouched.
     """
     target.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{target.name}{SAVING_MARKER}", dir=target.parent))
+    tmp = make_temporary_directory(target.parent, f".{target.name}{SAVING_MARKER}")
     try:
         (tmp / MODELS).mkdir()
         for name, entry in manifest["smcs"].items():
@@ -336,7 +346,7 @@ def check_manifest(manifest: Any, where: Path) -> dict[str, dict[str, Any]]:
 def _check_entry(name: str, entry: Any, where: Path) -> None:
     if not isinstance(entry, dict):
         raise ManifestError(f"{where}: entry {name!r} must be an object, got {type(entry).__name__}")
-    missing = [f for f in (*_ENTRY_FIELDS, "spec", "record", "evaluations") if f not in entry]
+    missing = [f for f in (*_ENTRY_FIELDS, "sha256", "spec", "record", "evaluations") if f not in entry]
     if missing:
         raise ManifestError(f"{where}: entry {name!r} lacks the field(s) {missing}")
     for field, types in _ENTRY_FIELDS.items():
@@ -349,6 +359,9 @@ def _check_entry(name: str, entry: Any, where: Path) -> None:
     if entry["algo"] not in ALGORITHMS:
         raise ManifestError(f"{where}: entry {name!r}: unknown algorithm {entry['algo']!r} (supported: "
                             f"{list(ALGORITHMS)})")
+    if not isinstance(entry["sha256"], str) or not re.fullmatch(r"[0-9a-f]{64}", entry["sha256"]):
+        raise ManifestError(f"{where}: entry {name!r}: 'sha256' must be the 64 hex digits of the model file's "
+                            f"SHA-256, got {entry['sha256']!r}")
     model = entry["model"]
     if Path(model).is_absolute() or ".." in Path(model).parts:
         raise ManifestError(f"{where}: entry {name!r}: model path {model!r} must be relative, inside the library")
@@ -387,14 +400,43 @@ def _parse_records(name: str, entry: dict[str, Any], where: Path) -> None:
         except RecordError as err:
             raise ManifestError(f"{where}: entry {name!r}: {err}") from None
     entry["evaluations"] = parsed
+    _check_summary(name, entry, where)
     spec = entry["spec"]
     if spec is not None:
         found = {"kind": (spec.task.kind, entry["kind"]), "children": (list(spec.children), entry["children"]),
+                 "algo": (spec.algo, entry["algo"]), "frame_stack": (spec.frame_stack, entry.get("frame_stack", 1)),
                  "include_primitives": (spec.wrapper.include_primitives, entry["include_primitives"])}
         wrong = [f"{k}: spec {a!r}, entry {b!r}" for k, (a, b) in found.items() if a != b]
         if wrong:
             raise ManifestError(f"{where}: entry {name!r}: its training spec disagrees with the entry "
                                 f"({'; '.join(wrong)})")
+
+
+SUMMARY_FIELDS = ("env_id", "datasets", "seed", "selected_update", "training_return", "test_score", "total_timesteps")
+"""Fields of an entry that repeat values of its records (for people and tools reading the manifest)."""
+
+
+def _check_summary(name: str, entry: dict[str, Any], where: Path) -> None:
+    """The summary fields must say what the records say (they are never read back, so a wrong one is an error)."""
+    spec, record, evaluations = entry["spec"], entry["record"], entry["evaluations"]
+    derived = make_entry(entry["kind"], entry["algo"], entry["children"], entry["include_primitives"],
+                         entry.get("frame_stack", 1), spec, record, evaluations, test_score_of(spec, evaluations))
+    for field in SUMMARY_FIELDS:
+        if field in entry and entry[field] != derived[field]:
+            raise ManifestError(f"{where}: entry {name!r}: {field!r} is {entry[field]!r}, but its records say "
+                                f"{derived[field]!r}")
+
+
+_V1_SUMMARY_TYPES = {"env_id": (str,), "datasets": (list,), "seed": (int,), "selected_update": (int,),
+                     "training_return": (int, float), "test_score": (int, float), "total_timesteps": (int,)}
+
+
+def _check_v1_summary(name: str, entry: dict[str, Any], where: Path) -> None:
+    for field, types in _V1_SUMMARY_TYPES.items():
+        value = entry.get(field)
+        if value is not None and (isinstance(value, bool) or not isinstance(value, types)):
+            raise ManifestError(f"{where}: version-1 entry {name!r}: {field!r} must be "
+                                f"{' or '.join(t.__name__ for t in types)} or null, got {value!r}")
 
 
 def upgrade_v1(manifest: dict[str, Any], where: Path) -> dict[str, Any]:
@@ -414,8 +456,11 @@ def upgrade_v1(manifest: dict[str, Any], where: Path) -> dict[str, Any]:
     for name, entry in smcs.items():
         if not isinstance(entry, dict):
             raise ManifestError(f"{where}: entry {name!r} must be an object, got {type(entry).__name__}")
-        new = {k: v for k, v in entry.items() if k != "metadata"}
+        new = {k: v for k, v in entry.items() if k != "metadata" and k not in SUMMARY_FIELDS}
         meta = entry.get("metadata") or {}
+        if not isinstance(meta, dict):
+            raise ManifestError(f"{where}: version-1 entry {name!r}: 'metadata' must be an object, got {meta!r}")
+        _check_v1_summary(name, entry, where)
         try:
             spec, record = _v1_records(name, entry, meta, versions)
             evaluations = []
@@ -500,13 +545,18 @@ def load_model(root: Path, name: str, entry: Mapping[str, Any]) -> Any:
     if "data" not in members or "policy.pth" not in members:
         raise CorruptModelError(f"SMC {name!r}: model file {file} is not a Stable-Baselines3 model archive "
                                 f"(members: {sorted(members)})")
-    expected = entry.get("sha256")
-    if expected is not None and sha256(file) != expected:
+    if sha256(file) != entry["sha256"]:
         raise CorruptModelError(f"SMC {name!r}: model file {file} does not match the SHA-256 recorded in the "
                                 "manifest (modified or corrupt since it was saved)")
     cls = algorithm_classes()[entry["algo"]]
     try:
-        return cls.load(file, device="cpu")
+        model = cls.load(file, device="cpu")
     except Exception as err:  # noqa: BLE001 - SB3 raises many kinds of errors for a bad archive
         raise CorruptModelError(f"SMC {name!r}: cannot load model file {file} as {entry['algo']}: "
                                 f"{type(err).__name__}: {err}") from err
+    from sb3_contrib.common.recurrent.policies import RecurrentActorCriticPolicy
+
+    if isinstance(model.policy, RecurrentActorCriticPolicy) != (entry["algo"] == "RecurrentPPO"):
+        raise CorruptModelError(f"SMC {name!r}: the manifest says {entry['algo']}, but {file} holds a "
+                                f"{type(model.policy).__name__} (a model of another algorithm)")
+    return model
