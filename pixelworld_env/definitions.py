@@ -28,6 +28,7 @@ Every error is a :class:`DefinitionError` whose message names the file and, wher
 
 from __future__ import annotations
 
+import difflib
 import itertools
 from collections.abc import Iterable
 from dataclasses import dataclass, field
@@ -134,6 +135,9 @@ class DefinitionSet:
     includes: dict[str, list[str]] = field(default_factory=dict)
     #: Concepts/generators defined more than once, as (replaced, replacing) pairs; the later one is kept.
     redefinitions: list[tuple[Definition, Definition]] = field(default_factory=list)
+    #: Concepts / generators no dataset uses that name relations defined nowhere -> those names (the original
+    #: files have three); a dataset that uses one is an error.
+    unresolved: dict[str, tuple[str, ...]] = field(default_factory=dict)
 
     @property
     def macros(self) -> dict[str, str]:
@@ -238,6 +242,7 @@ def load_definitions(paths: str | Path | Iterable[str | Path]) -> DefinitionSet:
     clash = sorted(set(result.concepts) & set(result.generators))
     if clash:
         raise DefinitionError(f"names defined both as concept and as generator: {', '.join(clash)}")
+    _check_expressions(result)
     for item in pending:
         entry = item.resolve(result)
         if entry.dataset not in result.datasets:
@@ -251,6 +256,33 @@ def load_definitions(paths: str | Path | Iterable[str | Path]) -> DefinitionSet:
                                   "same stem (curricula are keyed by file stem)")
         entries.append(entry)
     return result
+
+
+def _check_expressions(result: DefinitionSet) -> None:
+    """Parse every concept and generator and compile those the datasets use (macros expanded, predicates and
+    arities checked); errors name the file and line of the definition."""
+    from pixelworld_env.concepts import PREDICATES, Concept, ConceptError, UnknownPredicateError, parse
+
+    macros = result.macros
+    used = {name for d in result.datasets.values() for name in (d.concept, *d.generators)}
+    for section in ("concepts", "generators"):
+        for key, definition in getattr(result, section).items():
+            what = f"{definition.source}, line {definition.line}: {section[:-1]} {key!r}"
+            try:
+                expression = parse(definition.logic)
+                names = {c.name for c in expression.positives} | {c.name for g in expression.negations for c in g}
+                unknown = sorted(n for n in names if n not in PREDICATES and n not in macros)
+                if unknown and key not in used:
+                    result.unresolved[key] = tuple(unknown)
+                    continue
+                Concept(definition.logic, macros)
+            except UnknownPredicateError as err:
+                if key not in used:
+                    result.unresolved[key] = (str(err),)
+                    continue
+                raise DefinitionError(f"{what}: {err}") from None
+            except ConceptError as err:
+                raise DefinitionError(f"{what}: {err}") from None
 
 
 def _read_file(path: Path, result: DefinitionSet, stack: tuple[Path, ...], pending: list[_PendingEntry]) -> None:
@@ -318,6 +350,11 @@ def _read_file(path: Path, result: DefinitionSet, stack: tuple[Path, ...], pendi
         key = key_node.value if isinstance(key_node, yaml.ScalarNode) else None
         if not key or key in SECTIONS or key.startswith("__"):
             continue
+        if not isinstance(value_node, yaml.SequenceNode):
+            close = difflib.get_close_matches(str(key), SECTIONS, n=1, cutoff=0.6)
+            hint = f"; did you mean {close[0]!r}?" if close else ""
+            raise DefinitionError(f"{_where(path, key_node)}: unknown section {key!r} (the sections are "
+                                  f"{', '.join(SECTIONS)}; other top-level keys are named lists){hint}")
         items = _str_list(value_node)
         if items is not None:
             lines = tuple(_line(item) for item in value_node.value)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import pytest
@@ -185,7 +186,7 @@ __gen_curriculum:
                 - cl_one
                 - +@shared_list
 """
-LISTS = "shared_list:\n  - out/aaai18/g/ba_z/big+sig+v\n  - out/aaai18/h/cl_w/big+c+v\nnot_a_list: 3\n"
+LISTS = "shared_list:\n  - out/aaai18/g/ba_z/big+sig+v\n  - out/aaai18/h/cl_w/big+c+v\nnot_a_list: [[1, 2]]\n"
 
 
 def _curriculum(tmp_path: Path, text: str) -> Path:
@@ -268,3 +269,33 @@ def test_experiment_file_errors(tmp_path: Path) -> None:
         load_experiments(exp)
     with pytest.raises(DefinitionError, match="exactly one"):
         load_experiments(_write(tmp_path, "no-curr", "__include__: [common.exp]\n"))
+
+
+@pytest.mark.parametrize(("old", "new", "words"), [
+    ('logic: "?x container(x) & inside(self,x)"', 'logic: "?x container(x) &"',
+     "good.datasets, line 2: concept 'c1': syntax error"),
+    ('logic: "?x container(x) & inside(self,x)"', 'logic: "?x contianer(x)"',
+     "good.datasets, line 2: concept 'c1': unknown predicate or macro 'contianer'"),
+    ('logic: "?x container(x)"', 'logic: "?x container(x,x)"',
+     "good.datasets, line 6: generator 'g1': predicate 'container' takes 1 argument"),
+    ("concepts:\n", "concept:\n", "good.datasets, line 1: unknown section 'concept' .*did you mean 'concepts'"),
+])
+def test_expressions_and_sections_are_checked_at_load_time(tmp_path: Path, old: str, new: str, words: str) -> None:
+    assert old in GOOD
+    message = _error(_write(tmp_path, "good.datasets", GOOD.replace(old, new, 1)))
+    assert re.search(words, message), message
+
+
+def test_unused_definitions_with_undefined_relations_are_recorded(tmp_path: Path) -> None:
+    """The original files define three generators over a relation defined nowhere; no dataset uses them."""
+    unused = "generators:\n    unused:\n        logic: \"?x potential-container(x)\"\n"
+    defs = load_definitions(_write(tmp_path, "good.datasets", GOOD.replace("generators:\n", unused, 1)))
+    assert defs.unresolved == {"unused": ("potential-container",)}
+    used = GOOD.replace("generators:\n", unused, 1).replace("        - [g1]", "        - [g1, unused]")
+    assert "generator 'unused': unknown predicate or macro 'potential-container'" in _error(
+        _write(tmp_path, "used.datasets", used))
+    require_reference()
+    reference = load_definitions(sorted(DATA.glob("*.datasets")))
+    assert sorted(reference.unresolved) == ["bfaw-self-and-two-potential-containers-in-left-nontarget",
+                                            "bfaw-self-and-two-potential-containers-in-nontarget",
+                                            "bfaw-self-and-two-potential-containers-in-right-nontarget"]
