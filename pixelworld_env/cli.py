@@ -48,24 +48,54 @@ def _env(args: argparse.Namespace, render_mode: str | None) -> PixelWorldEnv:
     return make_env(members, split=args.split, seed=args.seed, render_mode=render_mode)
 
 
+LABEL_HEIGHT = 12
+"""Pixels above each tile of a ``show --png`` sheet for its index and label."""
+LABEL_COLORS = {1: (0, 150, 0), 0: (200, 0, 0), None: (60, 60, 60)}
+
+
+def _sheet(env: PixelWorldEnv, count: int) -> np.ndarray:
+    """The first ``count`` scenes as a sheet of tiles, each captioned with its index (and label: positives framed
+    green, negatives red)."""
+    from PIL import Image, ImageDraw
+
+    from pixelworld_env.render import rgb_image
+
+    tiles = [rgb_image(s.grid(), cell_size=4) for s in env.scenes[:count]]
+    cols = min(4, count)
+    rows = -(-count // cols)
+    h, w, _ = tiles[0].shape
+    cell_h, cell_w = h + 4 + LABEL_HEIGHT, w + 4
+    sheet = Image.new("RGB", (cols * cell_w, rows * cell_h), (255, 255, 255))
+    draw = ImageDraw.Draw(sheet)
+    for k, tile in enumerate(tiles):
+        r, c = divmod(k, cols)
+        x, y = c * cell_w, r * cell_h
+        label = env.labels[k] if env.labels is not None else None
+        caption = f"{k}" if label is None else f"{k}: {'positive' if label else 'negative'}"
+        draw.text((x + 2, y), caption, fill=LABEL_COLORS[label])
+        if label is not None:
+            draw.rectangle((x, y + LABEL_HEIGHT, x + w + 3, y + LABEL_HEIGHT + h + 3), outline=LABEL_COLORS[label],
+                           width=2)
+        sheet.paste(Image.fromarray(tile), (x + 2, y + LABEL_HEIGHT + 2))
+    return np.asarray(sheet)
+
+
 def cmd_show(args: argparse.Namespace, out: TextIO) -> None:
+    if args.count < 1:
+        raise SystemExit(f"pixelworld show: --count must be >= 1, got {args.count}")
     env = _env(args, "ansi")
     indices = range(len(env.scenes)) if args.all else [args.index]
     if args.png:
+        from pathlib import Path
+
         from PIL import Image
 
-        from pixelworld_env.render import rgb_image
-
+        path = Path(args.png)
+        if path.suffix.lower() != ".png":
+            raise SystemExit(f"pixelworld show: --png needs a file name ending in .png, got {args.png!r}")
+        path.parent.mkdir(parents=True, exist_ok=True)
         count = min(args.count, len(env.scenes))
-        tiles = [rgb_image(s.grid(), cell_size=4) for s in env.scenes[:count]]
-        cols = min(4, count)
-        rows = -(-count // cols)
-        h, w, _ = tiles[0].shape
-        sheet = np.full((rows * (h + 4), cols * (w + 4), 3), 255, dtype=np.uint8)
-        for k, tile in enumerate(tiles):
-            r, c = divmod(k, cols)
-            sheet[r * (h + 4) : r * (h + 4) + h, c * (w + 4) : c * (w + 4) + w] = tile
-        Image.fromarray(sheet).save(args.png)
+        Image.fromarray(_sheet(env, count)).save(path)
         out.write(f"wrote {count} scenes of {args.id} ({args.split}) to {args.png}\n")
         return
     for index in indices:
@@ -84,31 +114,63 @@ def cmd_generate(args: argparse.Namespace, out: TextIO) -> None:
     names = catalog.dataset_names() if args.all else [n for name in args.names for n in _resolve(name)[1]]
     if not names:
         raise SystemExit("pixelworld generate: name datasets or ids, or pass --all")
-    for name in (bar := tqdm(names, unit="dataset", file=sys.stderr)):
-        bar.set_postfix_str(name[:40])
-        load_or_generate(dataset_spec(name), args.seed)
-    out.write(f"{len(names)} dataset(s) ready (seed {args.seed})\n")
+    import warnings
+
+    from pixelworld_env.datasets import CacheWarning, cache_dir
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", CacheWarning)
+        for name in (bar := tqdm(names, unit="dataset", file=sys.stderr)):
+            bar.set_postfix_str(name[:40])
+            load_or_generate(dataset_spec(name), args.seed)
+    unwritten = [str(w.message) for w in caught if "could not write" in str(w.message)]
+    for warning in caught:
+        if not issubclass(warning.category, CacheWarning):
+            warnings.warn_explicit(warning.message, warning.category, warning.filename, warning.lineno)
+    if unwritten:
+        raise SystemExit(f"pixelworld generate: {len(names)} dataset(s) generated but {len(unwritten)} could not be "
+                         f"cached in {cache_dir()}: {unwritten[0]}")
+    out.write(f"{len(names)} dataset(s) ready (seed {args.seed}) in {cache_dir()}\n")
 
 
 def cmd_play(args: argparse.Namespace, out: TextIO, keys: TextIO) -> None:
+    from pixelworld_env.constants import Color
+
     env = _env(args, "ansi")
-    env.reset(seed=args.episode_seed, options=None if args.index is None else {"index": args.index})
+    _, info = env.reset(seed=args.episode_seed, options=None if args.index is None else {"index": args.index})
     names = env.action_names
     help_line = "keys: " + ", ".join(f"{k}={v}" for k, v in KEYS.items() if v in names) + ", q=quit"
+    legend = ", ".join(f"{c.value}={c.name.lower()}" for c in Color)
+    task = (f"classify: SIG1 if the concept holds, else SIG0 (label of this scene: {info['label']})"
+            if env.labels is not None else "bring it about: move until the concept holds, then SIG1")
+    out.write(f"{args.id}, scene {info['scene_index']}: {task}\nconcept: {env.concept.text}\n")
     total, step = 0.0, 0
+    pending: list[str] = []
     while True:
-        out.write(env.render())
-        window = env.world.window()
-        out.write("window:\n" + "\n".join(" ".join(str(int(v)) for v in row) for row in window) + "\n")
-        out.write(f"step {step}, return {total:+.1f}. {help_line}\n> ")
-        out.flush()
-        line = keys.readline()
-        if not line or line.strip() == "q":
+        if not pending:
+            out.write(env.render())
+            window = env.world.window()
+            out.write(f"window: 3 x 3 around the self ({legend})\n"
+                      + "\n".join(" ".join(str(int(v)) for v in row) for row in window) + "\n")
+            goal = f", goal holds: {'yes' if env.goal_holds() else 'no'}" if env.labels is None else ""
+            out.write(f"step {step}, return {total:+.1f}{goal}. {help_line} (several keys on a line play in order)"
+                      "\n> ")
+            out.flush()
+            line = keys.readline()
+            if not line:
+                out.write("\nquit\n")
+                return
+            pending = [ch for ch in line.strip() if not ch.isspace()]
+            if not pending:
+                continue
+        key = pending.pop(0)
+        if key == "q":
             out.write("\nquit\n")
             return
-        action = KEYS.get(line.strip()[:1])
+        action = KEYS.get(key)
         if action not in names:
-            out.write(f"unknown key {line.strip()!r}\n")
+            out.write(f"unknown key {key!r}; {help_line}\n")
+            pending = []
             continue
         _, reward, terminated, truncated, info = env.step(names.index(action))
         total += reward
@@ -161,6 +223,9 @@ def main(argv: Sequence[str] | None = None, out: TextIO | None = None, keys: Tex
             cmd_generate(args, out)
         else:
             cmd_play(args, out, keys or sys.stdin)
+    except KeyboardInterrupt:
+        out.write("\ninterrupted\n")
+        sys.exit(130)
     except BrokenPipeError:  # e.g. `pixelworld list | head`: stop quietly
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         sys.exit(1)

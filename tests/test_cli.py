@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import io
+import os
 from pathlib import Path
 
+import numpy as np
 import pytest
 from PIL import Image
 
@@ -33,7 +35,7 @@ def test_show_text_and_png(tmp_path: Path) -> None:
     assert len(text.strip().splitlines()) == 1 + 18 and text.count("S") == 1
     png = tmp_path / "sheet.png"
     assert "wrote 6 scenes" in run("show", ID, "--png", str(png), "--count", "6")
-    assert Image.open(png).size == (4 * (35 * 4 + 4), 2 * (18 * 4 + 4))
+    assert Image.open(png).size == (4 * (35 * 4 + 4), 2 * (18 * 4 + 4 + 12))  # 12 pixels of caption per row
     with pytest.raises(SystemExit, match="did you mean PW-ba_self-in-container_from_directly-above-v0"):
         run("show", "PW-ba_self-in-container_from_directly-abov-v0")
 
@@ -48,3 +50,65 @@ def test_play_from_the_keyboard() -> None:
     assert "window:" in out and "DOWN: reward +0.0" in out and "unknown key 'x'" in out
     assert "episode over (signalled) after 2 steps" in out
     assert run("play", ID, keys="q\n").rstrip().endswith("quit")
+
+
+def test_show_refuses_bad_counts_and_names(tmp_path: Path) -> None:
+    for count in ("0", "-3"):
+        with pytest.raises(SystemExit, match=f"--count must be >= 1, got {count}"):
+            run("show", ID, "--png", str(tmp_path / "x.png"), "--count", count)
+    with pytest.raises(SystemExit, match="--png needs a file name ending in .png, got"):
+        run("show", ID, "--png", str(tmp_path / "sheet"))
+    nested = tmp_path / "new" / "folder" / "sheet.png"
+    assert "wrote 2 scenes" in run("show", ID, "--png", str(nested), "--count", "2")
+    assert nested.is_file()
+
+
+def test_png_sheets_caption_each_scene_with_its_label(tmp_path: Path) -> None:
+    png = tmp_path / "cl.png"
+    run("show", "PW-cl_self-in-left-corner_vs_on-hline-v0", "--png", str(png), "--count", "8")
+    from pixelworld_env.registration import make_env
+
+    labels = make_env(["cl_self-in-left-corner_vs_on-hline"]).labels[:8]
+    pixels = np.asarray(Image.open(png).convert("RGB"))
+    tile_h, tile_w = 18 * 4 + 4 + 12, 35 * 4 + 4
+    for k, label in enumerate(labels):
+        r, c = divmod(k, 4)
+        frame = pixels[r * tile_h + 12, c * tile_w + 1]  # the top edge of the tile's frame
+        assert tuple(frame) == ((0, 150, 0) if label else (200, 0, 0)), (k, label, frame)
+        caption = pixels[r * tile_h : r * tile_h + 10, c * tile_w : c * tile_w + 60]
+        assert (caption != 255).any()  # the index and label are written above the tile
+
+
+def test_generate_fails_when_nothing_can_be_cached(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    locked = tmp_path / "locked"
+    locked.mkdir()
+    locked.chmod(0o500)
+    monkeypatch.setenv("PIXELWORLD_CACHE", str(locked))
+    try:
+        if os.access(locked, os.W_OK):  # root ignores permissions: make writing fail another way
+            monkeypatch.setattr("pixelworld_env.datasets.atomic_write",
+                                lambda *a, **k: (_ for _ in ()).throw(PermissionError(13, "Permission denied")))
+        with pytest.raises(SystemExit, match=r"1 dataset\(s\) generated but 1 could not be cached in .*locked"):
+            run("generate", "cl_self-in-right-corner_vs_on-hline")
+    finally:
+        locked.chmod(0o700)
+
+
+def test_play_reads_every_key_of_a_line_and_explains_the_task() -> None:
+    out = run("play", "PW-cl_self-in-left-corner_vs_on-hline-v0", "--index", "0", "--episode-seed", "0",
+              keys="ssaa\nq\n")
+    assert out.count("DOWN: reward") == 2 and out.count("LEFT: reward") == 2
+    assert "concept: " in out and "classify: SIG1 if the concept holds" in out and "0=empty" in out
+    ba = run("play", ID, "--index", "0", keys="q\n")
+    assert "bring it about" in ba and "goal holds: no" in ba
+
+
+def test_play_ctrl_c_is_not_a_traceback() -> None:
+    class Interrupt(io.StringIO):
+        def readline(self, *args):
+            raise KeyboardInterrupt
+
+    out = io.StringIO()
+    with pytest.raises(SystemExit) as info:
+        main(["play", ID], out=out, keys=Interrupt())
+    assert info.value.code == 130 and out.getvalue().endswith("interrupted\n")
