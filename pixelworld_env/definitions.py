@@ -33,9 +33,13 @@ import itertools
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 from pathlib import Path, PurePosixPath
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import yaml
+
+if TYPE_CHECKING:
+    from pixelworld_env.env import PixelWorldEnv
+    from pixelworld_env.generation import DatasetSpec
 
 #: Top-level keys with a meaning of their own (everything else that is a list of strings is a named list).
 SECTIONS = ("concepts", "generators", "datasets", "curriculum")
@@ -145,6 +149,40 @@ class DefinitionSet:
         table = {key: d.logic for key, d in self.concepts.items()}
         table.update({key: d.logic for key, d in self.generators.items()})
         return table
+
+    def dataset_spec(self, name: str, num_samples: int = 50) -> DatasetSpec:
+        """The generation spec of dataset ``name`` (for :func:`pixelworld_env.generation.generate`)."""
+        from pixelworld_env.generation import DatasetSpec
+
+        if name not in self.datasets:
+            close = difflib.get_close_matches(name, list(self.datasets), n=3)
+            hint = f"; did you mean {', '.join(repr(c) for c in close)}?" if close else ""
+            raise KeyError(f"no dataset {name!r} in these definitions{hint}")
+        dataset = self.datasets[name]
+        macros = self.macros
+        return DatasetSpec(name=name, kind=dataset.kind, concept=macros[dataset.concept],
+                           generators=tuple((g, macros[g]) for g in dataset.generators), macros=macros,
+                           settings=dataset.settings, num_samples=num_samples)
+
+    def make_env(self, name: str, *, split: str = "train", seed: int = 0, num_samples: int = 50,
+                 **kwargs: Any) -> PixelWorldEnv:
+        """A :class:`~pixelworld_env.env.PixelWorldEnv` over dataset ``name``: generated with ``seed`` (not
+        cached), split 50/50 stratified like the catalog's (``split`` "train", "test" or "all"); ``kwargs`` go to
+        the environment."""
+        from pixelworld_env.env import PixelWorldEnv
+        from pixelworld_env.generation import generate
+        from pixelworld_env.generation import split as stratified_split
+
+        if split not in ("train", "test", "all"):
+            raise ValueError(f"split must be 'train', 'test' or 'all', got {split!r}")
+        spec = self.dataset_spec(name, num_samples)
+        generated = generate(spec, seed)
+        indices = range(len(generated.scenes)) if split == "all" else \
+            stratified_split(generated.labels)[0 if split == "train" else 1]
+        scenes = [generated.scenes[i] for i in indices]
+        labels = [generated.labels[i] for i in indices] if spec.kind == "classification" else None
+        return PixelWorldEnv(scenes, kind=spec.kind, concept=spec.concept, labels=labels, macros=self.macros,
+                             **kwargs)
 
     def scope(self, source: str) -> set[str]:
         """``source`` and every file it includes, directly or not."""

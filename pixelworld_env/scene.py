@@ -143,6 +143,8 @@ class Scene:
         ``kinds`` maps object letters to shape families (default ``blob``). Blank leading/trailing lines
         and surrounding whitespace of each row are ignored.
         """
+        if not isinstance(text, str):
+            raise TypeError(f"Scene.from_ascii needs the scene drawn as a string, got {type(text).__name__}")
         kinds = dict(kinds or {})
         rows = [line.strip() for line in text.strip("\n").splitlines()]
         while rows and not rows[0]:

@@ -14,7 +14,7 @@ from pixelworld_env import (
     UnknownPredicateError,
     holds,
 )
-from pixelworld_env.concepts import MacroRecursionError, parse
+from pixelworld_env.concepts import MacroNameError, MacroRecursionError, parse
 
 CONTAINER = """
 #########
@@ -191,3 +191,20 @@ def test_catalog_macros_are_the_default() -> None:
     assert holds("?x self-in-container(x)", s)
     with pytest.raises(UnknownPredicateError, match="container-on-floor"):
         holds("?f ?x container-on-floor(f,x)", s, macros={})
+
+
+@pytest.mark.parametrize(("call", "error", "message"), [
+    (lambda scene: holds(None, scene), TypeError, "a concept is an expression string .*got None"),
+    (lambda scene: holds(b"?x container(x)", scene), TypeError, "got b'\\?x container\\(x\\)' \\(bytes\\)"),
+    (lambda scene: holds("?x container(x)", None), TypeError, "holds needs a Scene, got None"),
+    (lambda scene: Scene.from_ascii(123), TypeError, "needs the scene drawn as a string, got int"),
+    (lambda scene: Concept("?x container(x)", {"m": 3}), TypeError, "macro 'm' must be an expression string, got 3"),
+    (lambda scene: Concept("?x container(x)", ["m"]), TypeError, "macros must map names to expression strings"),
+    (lambda scene: Concept("?x ?x container(x)", {}), ConceptSyntaxError, "'x', declared twice"),
+    (lambda scene: Concept("?x container(x)", {"container": "?y hline(y)"}), MacroNameError,
+     "macro 'container' has the name of a built-in predicate"),
+])
+def test_bad_arguments_raise_clear_errors(call, error, message):
+    scene = Scene.from_ascii("#####\n#.S.#\n#####\n")
+    with pytest.raises(error, match=message):
+        call(scene)

@@ -299,3 +299,34 @@ def test_unused_definitions_with_undefined_relations_are_recorded(tmp_path: Path
     assert sorted(reference.unresolved) == ["bfaw-self-and-two-potential-containers-in-left-nontarget",
                                             "bfaw-self-and-two-potential-containers-in-nontarget",
                                             "bfaw-self-and-two-potential-containers-in-right-nontarget"]
+
+
+MINE = """\
+concepts:
+  self-left-of-container:
+    logic: "?x container(x) & left_of(self,x)"
+generators:
+  container-on-floor:
+    logic: "?f ?x floor(f) & container(x) & on_top(x,f)"
+datasets:
+  cl_self-left-of-container:
+    - self-left-of-container
+    - [container-on-floor]
+"""
+
+
+def test_a_definitions_file_becomes_an_environment(tmp_path: Path) -> None:
+    from pixelworld_env.concepts import Concept
+
+    defs = load_definitions(_write(tmp_path, "my.datasets", MINE))
+    spec = defs.dataset_spec("cl_self-left-of-container", num_samples=4)
+    assert spec.kind == "classification" and spec.generators == (
+        ("container-on-floor", "?f ?x floor(f) & container(x) & on_top(x,f)"),)
+    train = defs.make_env("cl_self-left-of-container", num_samples=4, seed=3)
+    test = defs.make_env("cl_self-left-of-container", split="test", num_samples=4, seed=3)
+    assert len(train.scenes) == len(test.scenes) == 4 and sorted(train.labels) == [0, 0, 1, 1]
+    concept = Concept("?x container(x) & left_of(self,x)")
+    assert [int(concept.holds(s)) for s in train.scenes] == list(train.labels)
+    assert set(train.scenes).isdisjoint(test.scenes)
+    with pytest.raises(KeyError, match="no dataset 'cl_self-left-of-containr'.*did you mean"):
+        defs.dataset_spec("cl_self-left-of-containr")

@@ -57,3 +57,12 @@ class MacroRecursionError(ConceptError):
     def __init__(self, chain: list[str]) -> None:
         self.chain = chain
         super().__init__(f"macro expansion does not terminate: {' -> '.join(chain)}")
+
+
+class MacroNameError(ConceptError):
+    """A macro is named like a built-in predicate (it would shadow it)."""
+
+    def __init__(self, name: str) -> None:
+        self.name = name
+        super().__init__(f"macro {name!r} has the name of a built-in predicate (it would shadow the predicate); "
+                         "rename the macro")

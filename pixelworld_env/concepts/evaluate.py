@@ -6,7 +6,7 @@ import difflib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
-from pixelworld_env.concepts.errors import ArityError, UnknownPredicateError
+from pixelworld_env.concepts.errors import ArityError, MacroNameError, UnknownPredicateError
 from pixelworld_env.concepts.parser import SELF, Clause, Expression, expand, parse
 from pixelworld_env.concepts.predicates import PREDICATES, EvalContext, Predicate
 from pixelworld_env.objects import WorldObject
@@ -33,6 +33,9 @@ class Concept:
 
     def __init__(self, text: str | Expression, macros: Macros | None = None, *,
                  dir_above_quirk: bool = False) -> None:
+        if not isinstance(text, str | Expression):
+            raise TypeError(f"a concept is an expression string (or a parsed Expression), got {text!r} "
+                            f"({type(text).__name__})")
         self._source = text
         expression = parse(text) if isinstance(text, str) else text
         self.text = str(text)
@@ -40,6 +43,13 @@ class Concept:
             from pixelworld_env.catalog import macros as catalog_macros
 
             macros = catalog_macros()
+        if not isinstance(macros, Mapping):
+            raise TypeError(f"macros must map names to expression strings, got {type(macros).__name__}")
+        for name, body in macros.items():
+            if not isinstance(body, str | Expression):
+                raise TypeError(f"macro {name!r} must be an expression string, got {body!r} ({type(body).__name__})")
+            if name in PREDICATES:
+                raise MacroNameError(name)
         self.macros = dict(macros)
         self.dir_above_quirk = dir_above_quirk
         self.expression = expand(expression, self.macros)
@@ -140,5 +150,7 @@ def holds(expression: str | Concept, scene: Scene, macros: Macros | None = None)
     ``macros`` maps macro names (concept or generator keys) to expressions; by default the benchmark
     catalog's table (every AAAI-18 concept and generator, :func:`pixelworld_env.catalog.macros`).
     """
+    if not isinstance(scene, Scene):
+        raise TypeError(f"holds needs a Scene, got {scene!r} ({type(scene).__name__})")
     concept = expression if isinstance(expression, Concept) else Concept(expression, macros)
     return concept.holds(scene)

@@ -115,6 +115,9 @@ class _Parser:
             if name == SELF:
                 raise ConceptSyntaxError(self.text, self.tokens[self.i - 1][2], "a variable other than self",
                                          "'self' (self is implicit)")
+            if name in variables:
+                raise ConceptSyntaxError(self.text, self.tokens[self.i - 1][2], "a new variable name",
+                                         f"{name!r}, declared twice")
             variables.append(name)
         positives: list[Clause] = []
         negations: list[tuple[Clause, ...]] = []
