@@ -29,6 +29,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_training.py
 	$(PY) benchmarks/bench_policies.py
 	$(PY) benchmarks/bench_curriculum.py
+	$(PY) benchmarks/bench_concepts.py
 
 clean:
 	rm -rf $(VENV)

@@ -13,6 +13,8 @@ from pixelworld_env.objects import WorldObject
 from pixelworld_env.scene import Scene
 
 Macros = Mapping[str, "str | Expression"]
+FORWARD_CHECKING_FROM = 4
+"""Concepts with this many variables (``self`` included) or more are searched with forward checking."""
 
 
 @dataclass(frozen=True)
@@ -69,6 +71,18 @@ class Concept:
         for group in self.expression.negations:
             checks = [_Check(self._resolve(c), tuple(slot[a] for a in c.args)) for c in group]
             self._negations[max(max(c.slots) for c in checks)].append(checks)
+        # For the forward-checking search: the multi-variable clauses and negated groups touching each variable.
+        self._clauses_of: list[list[_Check]] = [[] for _ in self.variables]
+        self._groups_of: list[list[tuple[frozenset[int], list[_Check]]]] = [[] for _ in self.variables]
+        for checks in self._checks:
+            for check in checks:
+                for s in set(check.slots):
+                    self._clauses_of[s].append(check)
+        for groups in self._negations:
+            for group in groups:
+                slots = frozenset(s for c in group for s in c.slots)
+                for s in slots:
+                    self._groups_of[s].append((slots, group))
 
     def _resolve(self, clause: Clause) -> Predicate:
         spec = PREDICATES.get(clause.name)
@@ -102,6 +116,73 @@ class Concept:
         planning) is cheaper than calling :meth:`holds_objects` for each.
         """
         return SelfEvaluator(self, objects, floor_row)
+
+    def _satisfiable(self, domains: list[list[WorldObject]], ctx: EvalContext) -> bool:
+        """Whether the variables (``self`` in slot 0) can be bound to distinct objects of their ``domains``.
+
+        Up to two variables besides ``self``: depth-first in declaration order, each clause tested once its last
+        variable is bound. More: forward checking (after each binding, the candidates of every variable that a
+        clause now ties to bound variables alone are filtered) with the smallest remaining domain bound next, which
+        keeps long chains of relations (5 variables over 50 objects) to milliseconds.
+        """
+        if len(domains) < FORWARD_CHECKING_FROM:
+            return self._search(0, domains, [], ctx)
+        return self._forward(domains, [None] * len(domains), set(), ctx)
+
+    def _forward(self, domains: list[list[WorldObject]], binding: list[WorldObject | None], used: set[int],
+                 ctx: EvalContext) -> bool:
+        unbound = [v for v, obj in enumerate(binding) if obj is None]
+        if not unbound:
+            return True
+        var = min(unbound, key=lambda v: len(domains[v]))
+        for obj in domains[var]:
+            if id(obj) in used:
+                continue
+            binding[var] = obj
+            if self._consistent(var, binding, ctx):
+                narrowed = self._narrow(var, domains, binding, ctx)
+                if narrowed is not None:
+                    used.add(id(obj))
+                    if self._forward(narrowed, binding, used, ctx):
+                        return True
+                    used.discard(id(obj))
+            binding[var] = None
+        return False
+
+    def _consistent(self, var: int, binding: list[WorldObject | None], ctx: EvalContext) -> bool:
+        for check in self._clauses_of[var]:
+            args = [binding[s] for s in check.slots]
+            if None not in args and not check.fn(*args, ctx):
+                return False
+        for slots, group in self._groups_of[var]:
+            if all(binding[s] is not None for s in slots) and all(
+                    c.fn(*(binding[s] for s in c.slots), ctx) for c in group):
+                return False
+        return True
+
+    def _narrow(self, var: int, domains: list[list[WorldObject]], binding: list[WorldObject | None],
+                ctx: EvalContext) -> list[list[WorldObject]] | None:
+        """``domains`` with the candidates of each unbound variable that a clause of ``var`` now determines
+        filtered (a new list; ``None`` if one becomes empty)."""
+        pending: dict[int, list[_Check]] = {}
+        for check in self._clauses_of[var]:
+            free = {s for s in check.slots if binding[s] is None}
+            if len(free) == 1:
+                pending.setdefault(free.pop(), []).append(check)
+        if not pending:
+            return domains
+        narrowed = list(domains)
+        for u, checks in pending.items():
+            kept = []
+            for candidate in domains[u]:
+                binding[u] = candidate
+                if all(c.fn(*(binding[s] for s in c.slots), ctx) for c in checks):
+                    kept.append(candidate)
+            binding[u] = None
+            if not kept:
+                return None
+            narrowed[u] = kept
+        return narrowed
 
     def _search(self, depth: int, domains: list[list[WorldObject]], binding: list[WorldObject],
                 ctx: EvalContext) -> bool:
@@ -137,7 +218,7 @@ class SelfEvaluator:
         if not self.satisfiable or not all(t(me, self.ctx) for t in self.concept._unary[0]):
             return False
         self.domains[0] = [me]
-        return self.concept._search(0, self.domains, [], self.ctx)
+        return self.concept._satisfiable(self.domains, self.ctx)
 
 
 def _rebuild(source: str | Expression, macros: Macros, dir_above_quirk: bool) -> Concept:

@@ -65,9 +65,8 @@ class Expression:
 def _tokenize(text: str) -> list[tuple[str, str, int]]:
     tokens: list[tuple[str, str, int]] = []
     pos = 0
-    while pos < len(text):
-        if text[pos:].strip() == "":
-            break
+    end = len(text.rstrip())  # trailing whitespace ends the text (checked once: slicing per token is quadratic)
+    while pos < end:
         match = _TOKEN.match(text, pos)
         if match is None:
             start = len(text) - len(text[pos:].lstrip())
