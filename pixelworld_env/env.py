@@ -92,6 +92,9 @@ class PixelWorldEnv(gym.Env):
                 raise ValueError("classification labels must be 0 or 1")
         self.labels: tuple[int, ...] | None = tuple(int(x) for x in labels) if labels is not None else None
         self.max_steps = int(max_steps)
+        self.split: str | None = None
+        """The dataset split the scenes come from, when known (``gym.make`` of a ``PW-*`` id sets it); reported in
+        the ``info`` of every ``reset`` so that evaluations say which split they ran on."""
         self.observation = observation
         self.render_mode = render_mode
         self.aaai18_reset_bug = aaai18_reset_bug
@@ -159,6 +162,10 @@ class PixelWorldEnv(gym.Env):
             info["goal"] = self._goal
         return info
 
+    def __repr__(self) -> str:
+        split = f", split={self.split!r}" if self.split is not None else ""
+        return f"{type(self).__name__}({self.kind}, {len(self.scenes)} scenes{split}, concept={self.concept.text!r})"
+
     @property
     def world(self) -> World:
         """The live world of the current episode."""
@@ -196,7 +203,10 @@ class PixelWorldEnv(gym.Env):
         self._steps = 0
         self._done = False
         self._goal = self.goal_holds() if self.kind == BRING_ABOUT else False
-        return self._observe(), self._info()
+        info = self._info()
+        if self.split is not None:
+            info["split"] = self.split
+        return self._observe(), info
 
     def step(self, action):
         if self._done:

@@ -38,11 +38,13 @@ def make_env(datasets: Sequence[str], *, split: Split = "train", seed: int = 0, 
     concepts = {d.concept for d in loaded}
     if len(kinds) != 1 or len(concepts) != 1:
         raise ValueError(f"datasets {list(datasets)} do not share one kind and concept")
-    return PixelWorldEnv(
+    env = PixelWorldEnv(
         [s for d in loaded for s in d.scenes], kind=loaded[0].kind, concept=loaded[0].concept,
         labels=[label for d in loaded for label in d.labels] if loaded[0].kind == "classification" else None,
         macros=catalog.macros(), max_steps=max_steps, observation=observation, render_mode=render_mode, **kwargs,
     )
+    env.split = split
+    return env
 
 
 def registered_ids() -> dict[str, tuple[str, ...]]:

@@ -110,3 +110,14 @@ def test_reset_options_max_steps_and_labels_are_checked():
     scenes = [Scene.from_ascii(CONTAINER, {"a": "container"})]
     with pytest.raises(ValueError, match="labels are for classification tasks"):
         PixelWorldEnv(scenes, kind="bring-about", concept=IN_CONTAINER, labels=[1])
+
+
+def test_environments_state_their_split():
+    """What rl_zoo3 enjoy and any evaluation run on is visible: the split is in every reset's info and the repr."""
+    env = gym.make(ENV_ID)
+    _, info = env.reset(seed=0)
+    assert info["split"] == "train" and env.unwrapped.split == "train"
+    assert "split='train'" in repr(env.unwrapped)
+    _, info = gym.make(ENV_ID, split="test").reset(seed=0)
+    assert info["split"] == "test"
+    assert "split" not in classification_env().reset(seed=0)[1]  # hand-made scenes have no split
