@@ -4,6 +4,8 @@
     sb3-smc curricula con2-cl              # one curriculum's DAG by level (a name or a .yml file)
     sb3-smc train con2-cl --out runs/con2-cl --targets cl_self-in-container_vs_noncontainer --seeds 2
     sb3-smc status runs/con2-cl            # done, running, failed and left jobs
+    sb3-smc experiment --out runs/headline --targets cl_self-left-of-two-objects-vs-one
+    sb3-smc report runs/headline           # report.md and figures/, the paper's numbers beside ours
 """
 
 from __future__ import annotations
@@ -58,6 +60,26 @@ def _status(args: argparse.Namespace) -> int:
     return 0
 
 
+def _experiment(args: argparse.Namespace) -> int:
+    from sb3_smc.experiments.runner import run_experiment
+
+    methods = [m for item in args.methods.split(",") if (m := item.strip())]
+    targets = [t for item in args.targets for t in item.split(",") if t] if args.targets else None
+    run_experiment(args.out, methods=methods, targets=targets, category=args.category, seeds=args.seeds,
+                   timesteps=args.timesteps, repeats=args.repeats, workers=args.workers, backend=args.backend,
+                   ray_address=args.ray_address)
+    print(f"next: sb3-smc report {args.out}")
+    return 0
+
+
+def _report(args: argparse.Namespace) -> int:
+    from sb3_smc.experiments.report import write_report
+
+    for path in write_report(args.directories, trajectories=args.trajectories, behaviour=not args.no_behaviour):
+        print(f"wrote {path}")
+    return 0
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="sb3-smc", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -84,6 +106,29 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--no-tensorboard", action="store_true", help="write no TensorBoard logs")
     p.set_defaults(run=_train)
 
+    p = sub.add_parser("experiment", help="the paper's protocol: train, evaluate, results.csv / results.json")
+    p.add_argument("--out", required=True, help="the experiment directory (re-run to resume)")
+    p.add_argument("--methods", default="cnn,base,curr,canon,curr-noprim,canon-noprim",
+                   help="comma-separated: cnn, base, curr, canon, curr-noprim, canon-noprim (default: all)")
+    group = p.add_mutually_exclusive_group()
+    group.add_argument("--targets", action="append", help="level-2 target datasets (comma-separated; repeatable)")
+    group.add_argument("--category", choices=["containment", "objcon", "objects", "search", "all"],
+                       help="the level-2 targets of a category (default: all 51)")
+    p.add_argument("--seeds", type=int, default=5)
+    p.add_argument("--timesteps", type=int, default=None, help="steps per SMC (default 400,000)")
+    p.add_argument("--repeats", type=int, default=10, help="test repeats per environment (default 10)")
+    p.add_argument("--workers", type=int, default=1)
+    p.add_argument("--backend", choices=["local", "ray"], default="local")
+    p.add_argument("--ray-address", default=None)
+    p.set_defaults(run=_experiment)
+
+    p = sub.add_parser("report", help="report.md and figures/ from experiment directories")
+    p.add_argument("directories", nargs="+")
+    p.add_argument("--trajectories", default=None, help="the target of the trajectory and timeline figures "
+                                                        "(default: the first target)")
+    p.add_argument("--no-behaviour", action="store_true", help="skip the trajectory and timeline figures")
+    p.set_defaults(run=_report)
+
     p = sub.add_parser("status", help="what a run directory holds: done, running, failed, left")
     p.add_argument("directory")
     p.set_defaults(run=_status)
@@ -95,7 +140,8 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     try:
         return args.run(args)
-    except (CurriculumError, RunSettingsError, LibraryError, ValueError, RuntimeError) as err:
+    except (CurriculumError, RunSettingsError, LibraryError, ValueError, RuntimeError, FileNotFoundError,
+            KeyError) as err:
         print(f"sb3-smc {args.command}: error: {err}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:

@@ -30,7 +30,7 @@ from sb3_smc.records import EvaluationRecord
 from sb3_smc.smc import SMC
 
 __all__ = ["EnvironmentResult", "EpisodeResult", "EvaluationResult", "REPEAT_SEED_OFFSET", "evaluate",
-           "make_evaluation_env", "run_episode"]
+           "episode_seed", "make_evaluation_env", "run_episode"]
 
 REPEAT_SEED_OFFSET = 512
 """Repeat ``r`` of the paper's test is seeded with ``512 + r``."""
@@ -59,6 +59,13 @@ class EpisodeResult:
     """The self's cells from the start, in order, consecutive duplicates removed."""
     calls: dict[str, int] = field(default_factory=dict)
     """Direct calls of each child SMC."""
+    moves: list[tuple[tuple[str, ...], str]] = field(default_factory=list)
+    """Each primitive move in order: the chain of SMCs that made it (outermost first; empty: the SMC itself) and
+    the move (recorded with the cells)."""
+    move_decisions: list[int] = field(default_factory=list)
+    """For each move of ``moves``, the decision (0-based step of the episode) it belongs to."""
+    call_log: list[dict[str, Any]] = field(default_factory=list)
+    """Every SMC call of the episode, nested ones included, in the order they finished (``info["smc_calls"]``)."""
 
 
 @dataclass
@@ -131,7 +138,8 @@ class EvaluationResult:
                 f"environments x {self.repeats} repeats, mean length {self.mean_length:.1f}")
 
 
-def _episode_seed(seed: int, repeat: int, index: int) -> int:
+def episode_seed(seed: int, repeat: int, index: int) -> int:
+    """The seed of episode (environment ``index``, repeat ``repeat``) of an evaluation with ``seed``."""
     return int(np.random.SeedSequence((seed, REPEAT_SEED_OFFSET + repeat, index)).generate_state(1)[0])
 
 
@@ -150,6 +158,9 @@ def run_episode(smc: SMC, env: gym.Env, *, index: int | None = None, seed: int,
     state = policy.initial_state()
     actions: list[int] = []
     calls: dict[str, int] = {}
+    moves: list[tuple[tuple[str, ...], str]] = []
+    move_decisions: list[int] = []
+    call_log: list[dict[str, Any]] = []
     total = reward = 0.0
     length = primitive = 0
     terminated = truncated = False
@@ -164,14 +175,19 @@ def run_episode(smc: SMC, env: gym.Env, *, index: int | None = None, seed: int,
         for call in info.get("smc_calls", ()):
             if call["depth"] == 1:
                 calls[call["smc"]] = calls.get(call["smc"], 0) + 1
+            if record_cells:
+                call_log.append(dict(call, decision=length - 1))
         if record_cells:
+            step_moves = info.get("moves", ())
+            moves.extend(step_moves)
+            move_decisions.extend([length - 1] * len(step_moves))
             for cell in info.get("cells", ()):
                 if cells[-1] != cell:
                     cells.append(cell)
     return EpisodeResult(environment=-1 if index is None else index, repeat=-1, seed=seed, success=bool(reward > 0),
                          final_reward=float(reward), total_reward=float(total), length=length,
                          primitive_steps=primitive, signalled=bool(terminated), actions=actions, cells=cells,
-                         calls=calls)
+                         calls=calls, moves=moves, move_decisions=move_decisions, call_log=call_log)
 
 
 def make_evaluation_env(smc: SMC, env_id: str | None = None, *, split: str = "test", max_steps: int | None = None,
@@ -223,7 +239,7 @@ def evaluate(smc: SMC, env_id: str | None = None, *, split: str = "test", repeat
         for index in range(len(base.scenes)):
             episodes = []
             for repeat in range(repeats):
-                episode = run_episode(smc, env, index=index, seed=_episode_seed(seed, repeat, index),
+                episode = run_episode(smc, env, index=index, seed=episode_seed(seed, repeat, index),
                                       record_cells=record_cells)
                 episode.repeat = repeat
                 episodes.append(episode)

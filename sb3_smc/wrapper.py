@@ -38,7 +38,9 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
     * ``info`` on every step adds ``primitive_steps`` (moves executed during the step), ``elapsed_steps``
       and ``smc_calls``: one dict per call made during the step, nested calls included, in the order the
       calls finished: ``{"smc", "depth", "primitive_steps", "outcome", "reward"}``. With ``record_cells=True``
-      it also has ``cells``: the self's cell after each move of the step (moves inside calls included).
+      it also has ``cells``: the self's cell after each move of the step (moves inside calls included), and
+      ``moves``: for each of those moves, the chain of SMCs that made it (outermost first; empty for a move of
+      the policy itself) and the move's name.
 
     Any policy following :class:`sb3_smc.smc.StepPolicy` can stand behind an SMC (scripted ones included).
     """
@@ -80,6 +82,8 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         self._done = True
         self.record_cells = record_cells
         self._cells: list[tuple[int, int]] = []
+        self._moves: list[tuple[tuple[str, ...], str]] = []
+        self._stack: list[str] = []
 
     # ------------------------------------------------------------------------------------------ helpers
 
@@ -119,6 +123,7 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         previous = np.zeros(n_actions, dtype=np.float32)
         state = smc.policy.initial_state()
         reward, moves, outcome = 0.0, 0, 0.0
+        self._stack.append(smc.name)
         for _ in range(cap):
             obs = np.concatenate((self.base.hand_observation(), outcomes, previous))
             probabilities, state = smc.policy.probabilities(obs, state)
@@ -135,6 +140,7 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
                 moves += 1
                 if self.record_cells:
                     self._cells.append(self.base.world.self_position)
+                    self._moves.append((tuple(self._stack), smc.action_names[action]))
             else:
                 r, m, o = self.run_call(smc.children[value], depth + 1, calls, cap)
                 outcomes[value] = o
@@ -142,6 +148,7 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
                 moves += m
             previous[:] = 0.0
             previous[action] = 1.0
+        self._stack.pop()
         calls.append({"smc": smc.name, "depth": depth, "primitive_steps": moves, "outcome": int(outcome),
                       "reward": reward})
         return reward, moves, outcome
@@ -168,6 +175,8 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         kind, value = self._plan[action]
         calls: list[dict[str, Any]] = []
         self._cells = []
+        self._moves = []
+        self._stack = []
         if kind == _CALL:
             cap = self.call_step_cap
             if self.count_primitive_steps:
@@ -183,6 +192,7 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
             cost = 1
             if moves and self.record_cells:
                 self._cells.append(self.base.world.self_position)
+                self._moves.append(((), self.action_names[action]))
         self._elapsed += cost
         truncated = not terminated and (base_truncated or self._elapsed >= self.base.max_steps)
         self._done = terminated or truncated
@@ -192,4 +202,5 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
                     elapsed_steps=self._elapsed, smc_calls=calls)
         if self.record_cells:
             info["cells"] = self._cells
+            info["moves"] = self._moves
         return self._observation(), float(reward), terminated, truncated, info

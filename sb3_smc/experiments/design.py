@@ -1,0 +1,98 @@
+"""The paper's experiment design (spec §5.4, §6): methods, level-2 targets by category, and the curriculum nodes
+that train each target with each method. Torch-free.
+
+Methods: ``cnn`` (the passive CNN baseline, classification targets only), ``base`` (a flat SMC on the target),
+``curr`` (the hand-designed smc-curr entries, 1-3 per target), ``canon`` (the canonical smc-canon entry) and their
+``-noprim`` variants. Every SMC method's jobs are nodes of shipped curricula; :func:`plan` merges them so that a
+lower-level node shared by several methods is trained once.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from sb3_smc.curricula.format import Curriculum, CurriculumError, Node, merge
+
+__all__ = ["CATEGORIES", "METHODS", "SMC_METHODS", "ExperimentPlan", "level2_targets", "plan"]
+
+METHODS = ("cnn", "base", "curr", "canon", "curr-noprim", "canon-noprim")
+SMC_METHODS = METHODS[1:]
+CATEGORIES = ("containment", "objcon", "objects", "search")
+_SHIPPED_METHOD = {"curr": "smc-curr", "canon": "smc-canon", "curr-noprim": "smc-curr-noprim",
+                   "canon-noprim": "smc-canon-noprim"}
+
+
+def level2_targets(category: str = "all") -> list[str]:
+    """The paper's level-2 target datasets (51: 34 classification, 17 bring-about), of one category or all."""
+    from pixelworld_env import catalog
+    from sb3_smc.curricula import shipped_curricula
+
+    if category != "all" and category not in CATEGORIES:
+        raise ValueError(f"category must be one of {(*CATEGORIES, 'all')}, got {category!r}")
+    targets = {c.node(t).task for c in shipped_curricula().values() if c.method in ("smc-curr", "smc-canon")
+               for t in c.targets}
+    return sorted(t for t in targets if category == "all" or catalog.dataset(t).category == category)
+
+
+@dataclass(frozen=True)
+class ExperimentPlan:
+    """What an experiment trains: the merged curriculum, and for every (target, method) the nodes whose seeds are
+    that method's candidates (``curr``: one node per hand-designed entry)."""
+
+    targets: tuple[str, ...]
+    methods: tuple[str, ...]
+    curriculum: Curriculum | None
+    nodes: dict[tuple[str, str], tuple[str, ...]]
+
+    @property
+    def training_targets(self) -> list[str]:
+        """The node names to train (their lower-level nodes follow)."""
+        return [n for key in sorted(self.nodes) for n in self.nodes[key]]
+
+
+def plan(targets: Sequence[str], methods: Sequence[str]) -> ExperimentPlan:
+    """The curricula and nodes of ``methods`` for ``targets`` (dataset names)."""
+    from pixelworld_env import catalog
+    from sb3_smc.curricula import shipped_curricula
+
+    unknown = [m for m in methods if m not in METHODS]
+    if unknown:
+        raise ValueError(f"unknown method(s) {unknown}; methods are {list(METHODS)}")
+    if not targets:
+        raise ValueError("no targets")
+    for target in targets:
+        catalog.dataset(target)  # UnknownDatasetError with close names
+    shipped = shipped_curricula()
+    nodes: dict[tuple[str, str], tuple[str, ...]] = {}
+    used: list[Curriculum] = []
+    if "base" in methods:
+        flat = Curriculum("smc-base", tuple(Node(t, t) for t in targets), tuple(targets), method="smc-base",
+                          description="flat SMCs on the experiment's targets")
+        used.append(flat)
+        nodes.update({(t, "base"): (t,) for t in targets})
+    for method in methods:
+        if method in ("cnn", "base"):
+            continue
+        found: dict[str, list[str]] = {t: [] for t in targets}
+        for curriculum in shipped.values():
+            if curriculum.method != _SHIPPED_METHOD[method]:
+                continue
+            chosen = [n for n in curriculum.targets if curriculum.node(n).task in found]
+            if chosen:
+                used.append(curriculum)
+                for name in chosen:
+                    found[curriculum.node(name).task].append(name)
+        for target, names in found.items():
+            if names:
+                nodes[(target, method)] = tuple(names)
+    if "cnn" in methods:
+        classification = [t for t in targets if catalog.dataset(t).kind == "classification"]
+        nodes.update({(t, "cnn"): () for t in classification})
+    missing = [(t, m) for t in targets for m in methods if m != "cnn" and (t, m) not in nodes]
+    if missing:
+        raise CurriculumError(f"no shipped curriculum trains {missing[0][0]!r} with method {missing[0][1]!r} "
+                              f"({len(missing)} target x method pair(s) missing); the level-2 targets are "
+                              "sb3_smc.experiments.level2_targets()")
+    return ExperimentPlan(targets=tuple(targets), methods=tuple(methods),
+                          curriculum=merge(used) if used else None, nodes=nodes)

@@ -1,0 +1,154 @@
+"""The paper's pictures of behaviour: Fig. 4-style trajectories and a Fig. 1-style timeline of one episode.
+
+* :func:`trajectory_figure`: test environments as rows, methods as columns; each cell is the scene with the cells
+  the self visited over the repeats as a heat overlay (brighter orange = more visits), a green (positive) or red
+  (negative) frame for the ground truth of a classification task, and for a bring-about task the cells where the
+  self would satisfy the goal marked with blue dots.
+* :func:`timeline_figure`: one episode of a hierarchical SMC: at each primitive move, which SMC (at which depth) or
+  the policy itself was acting, and the outcome of every SMC call.
+"""
+
+from __future__ import annotations
+
+import io
+from collections import Counter
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from pixelworld_env.atomic import atomic_write
+
+__all__ = ["goal_cells", "trajectory_figure", "timeline_figure"]
+
+
+def _pyplot() -> Any:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _save(fig: Any, path: Path) -> Path:
+    plt = _pyplot()
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png", dpi=120)
+    plt.close(fig)
+    return atomic_write(path, buffer.getvalue())
+
+
+def goal_cells(env: Any, index: int) -> list[tuple[int, int]]:
+    """Cells where the self (moved there, nothing else moved) satisfies a bring-about env's concept in scene
+    ``index``."""
+    scene = env.scenes[index]
+    me = next(o for o in scene.objects if o.is_self)
+    evaluator = env.concept.self_evaluator(scene.objects, scene.floor_row)
+    occupied = {p for o in scene.objects if not o.is_self for p in o.pixels}
+    out = []
+    for row in range(scene.height):
+        for col in range(scene.width):
+            moved = me.moved_to((row, col))
+            if not (moved.pixels & occupied) and all(0 <= r < scene.height and 0 <= c < scene.width
+                                                     for r, c in moved.pixels) and evaluator(moved):
+                out.append((row, col))
+    return out
+
+
+def trajectory_figure(smcs: Mapping[str, Any], target: str, path: str | Path, *, environments: int = 6,
+                      repeats: int = 10, seed: int = 0) -> Path:
+    """Fig. 4: the visited cells of ``repeats`` test episodes of each SMC (``method -> SMC``) on the first
+    ``environments`` test environments of ``target``."""
+    import gymnasium as gym
+
+    import pixelworld_env  # noqa: F401  (registers the PW-* ids)
+    from pixelworld_env.render import rgb_image
+    from sb3_smc.evaluation import episode_seed, make_evaluation_env, run_episode
+
+    plt = _pyplot()
+    env = gym.make(f"PW-{target}-v0", split="test").unwrapped
+    count = min(environments, len(env.scenes))
+    visits: dict[str, list[Counter]] = {}
+    for method, smc in smcs.items():  # the episodes of evaluate(smc, split="test", seed=seed), first environments
+        wrapped = make_evaluation_env(smc, f"PW-{target}-v0")
+        visits[method] = [Counter(cell for r in range(repeats)
+                                  for cell in run_episode(smc, wrapped, index=i, seed=episode_seed(seed, r, i)).cells)
+                          for i in range(count)]
+    fig, axes = plt.subplots(count, len(smcs), figsize=(2.6 * len(smcs), 1.5 * count), squeeze=False)
+    for i in range(count):
+        scene = env.scenes[i]
+        base = rgb_image(scene.grid(), cell_size=1).astype(float) / 255.0
+        label = env.labels[i] if env.labels is not None else None
+        goals = goal_cells(env, i) if label is None else []
+        for j, method in enumerate(smcs):
+            ax = axes[i][j]
+            heat = np.zeros(base.shape[:2])
+            for (r, c), n in visits[method][i].items():
+                heat[r, c] = n
+            image = base.copy()
+            if heat.max() > 0:
+                alpha = 0.25 + 0.75 * heat / heat.max()
+                mask = heat > 0
+                image[mask] = (1 - alpha[mask, None]) * image[mask] + alpha[mask, None] * np.array([1.0, 0.55, 0.0])
+            ax.imshow(image, interpolation="nearest")
+            if goals:
+                rows, cols = zip(*goals, strict=True)
+                ax.scatter(cols, rows, s=2, c="#1f77b4", marker="o")
+            if label is not None:
+                for spine in ax.spines.values():
+                    spine.set_edgecolor("#2ca02c" if label else "#d62728")
+                    spine.set_linewidth(2.5)
+            ax.set_xticks([])
+            ax.set_yticks([])
+            if i == 0:
+                ax.set_title(method, fontsize=8)
+            if j == 0:
+                ax.set_ylabel(f"env {i}", fontsize=7)
+    fig.suptitle(f"{target}: visited cells over {repeats} test episodes", fontsize=8)
+    fig.tight_layout()
+    return _save(fig, Path(path))
+
+
+def timeline_figure(smc: Any, target: str, path: str | Path, *, index: int = 0, seed: int = 0) -> Path:
+    """Fig. 1: one test episode of ``smc`` on environment ``index`` of ``target``: a row per depth (0 = the SMC
+    itself), a bar per primitive move coloured by the acting SMC, each call's outcome written at its end."""
+    import gymnasium as gym
+
+    import pixelworld_env  # noqa: F401
+    from sb3_smc.envs import make_smc_env, spec_for_smc
+    from sb3_smc.evaluation import run_episode
+
+    plt = _pyplot()
+    env = make_smc_env(spec_for_smc(smc, f"PW-{target}-v0"), smc.children,
+                       env=gym.make(f"PW-{target}-v0", split="test", disable_env_checker=True), record_cells=True)
+    episode = run_episode(smc, env, index=index, seed=seed)
+    names = sorted({name for chain, _ in episode.moves for name in chain})
+    colors = {name: plt.cm.tab20(k % 20) for k, name in enumerate(names)}
+    depth = max((len(chain) for chain, _ in episode.moves), default=0)
+    fig, ax = plt.subplots(figsize=(max(5.0, 0.12 * len(episode.moves) + 2), 1.2 + 0.5 * (depth + 1)))
+    for t, (chain, move) in enumerate(episode.moves):
+        ax.barh(0, 1, left=t, color="#444444" if not chain else "#dddddd", edgecolor="none")
+        for level, name in enumerate(chain, start=1):
+            ax.barh(level, 1, left=t, color=colors[name], edgecolor="none")
+        ax.text(t + 0.5, -0.45, move[0], ha="center", va="center", fontsize=5)
+    for call in episode.call_log:  # the outcome of each direct call, written where its moves end
+        if call["depth"] != 1:
+            continue
+        own = [t for t, (d, (chain, _)) in enumerate(zip(episode.move_decisions, episode.moves, strict=True))
+               if d == call["decision"] and chain]
+        later = [t for t, d in enumerate(episode.move_decisions) if d >= call["decision"]]
+        end = own[-1] + 1 if own else (later[0] if later else len(episode.moves))
+        outcome = {1: "SIG1", -1: "SIG0", 0: "cut"}[call["outcome"]]
+        ax.text(end, 1.45, outcome, fontsize=5, ha="right")
+    ax.set_yticks(range(depth + 1), ["policy", *[f"depth {d}" for d in range(1, depth + 1)]], fontsize=7)
+    ax.set_xlabel("primitive move", fontsize=7)
+    handles = [plt.Rectangle((0, 0), 1, 1, color=colors[n]) for n in names]
+    if handles:
+        ax.legend(handles, names, fontsize=5, loc="upper left", bbox_to_anchor=(1.0, 1.0))
+    result = "success" if episode.success else "failure"
+    ax.set_title(f"{smc.name} on {target}, test environment {index}: {len(episode.moves)} moves, "
+                 f"{episode.length} decisions, {result}", fontsize=7)
+    fig.tight_layout()
+    return _save(fig, Path(path))

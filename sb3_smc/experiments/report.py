@@ -1,0 +1,268 @@
+"""``write_report``: ``DIR/report.md`` and ``DIR/figures/*.png`` from an experiment's ``results.json``.
+
+The report puts the paper's numbers (spec §6, :mod:`sb3_smc.experiments.paper`) beside ours: per concept where the
+paper gives them, per kind (classification / bring-about) and per category for every method that ran, the paired
+t-tests across concepts (scipy), the noprim table of §6.3 when those methods ran, and the settings, machine, wall
+time and command. Figures (matplotlib, headless): Fig. 5-style bars per category and per concept with standard
+errors (across concepts, resp. across seeds).
+"""
+
+from __future__ import annotations
+
+import math
+from collections import defaultdict
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from pixelworld_env.atomic import atomic_write
+from sb3_smc.experiments.design import CATEGORIES, METHODS
+from sb3_smc.experiments.paper import PAPER_CONCEPTS, PAPER_MEANS, PAPER_NOPRIM, PAPER_TTESTS
+from sb3_smc.experiments.runner import read_results
+
+__all__ = ["paired_ttest", "write_report"]
+
+KINDS = ("classification", "bring-about")
+COLORS = {"cnn": "#888888", "base": "#4c72b0", "curr": "#dd8452", "canon": "#55a868", "curr-noprim": "#f2b48a",
+          "canon-noprim": "#a5d6a7"}
+
+
+def paired_ttest(ours: Sequence[float], theirs: Sequence[float]) -> tuple[int, float, float] | None:
+    """``(df, t, p)`` of the paired t-test of ``ours`` against ``theirs`` (two-sided); ``None`` below 2 pairs or
+    when every difference is equal (t undefined)."""
+    from scipy import stats
+
+    a, b = np.asarray(ours, dtype=float), np.asarray(theirs, dtype=float)
+    if len(a) < 2 or np.allclose(a - b, (a - b)[0]):
+        return None
+    result = stats.ttest_rel(a, b)
+    return len(a) - 1, float(result.statistic), float(result.pvalue)
+
+
+def _pct(value: float | None) -> str:
+    return "-" if value is None or (isinstance(value, float) and math.isnan(value)) else f"{100 * value:.1f}"
+
+
+def _diff(ours: float | None, paper: float | None) -> str:
+    if ours is None or paper is None:
+        return ""
+    return f"{100 * ours - paper:+.1f}"
+
+
+def write_report(directories: str | Path | Sequence[str | Path], *, trajectories: str | None = None,
+                 behaviour: bool = True) -> list[Path]:
+    """Write ``report.md`` and ``figures/`` into each experiment directory; returns the report paths.
+
+    ``behaviour``: also draw the Fig. 4 trajectories of the best SMC of each method and the Fig. 1 timeline of the
+    best hierarchical SMC, on ``trajectories`` (a target; default: the first one).
+    """
+    items = [directories] if isinstance(directories, str | Path) else list(directories)
+    return [_write(Path(d), trajectories, behaviour) for d in items]
+
+
+def _behaviour(directory: Path, reported: Sequence[dict[str, Any]], target: str) -> list[Path]:
+    from sb3_smc.curricula.trainer import job_name
+    from sb3_smc.experiments.figures import timeline_figure, trajectory_figure
+    from sb3_smc.library import SMCLibrary
+
+    best = {r["method"]: job_name(r["curriculum"], r["seed"]) for r in reported
+            if r["target"] == target and r["method"] != "cnn"}
+    if not best:
+        return []
+    library = SMCLibrary.load(directory / "library", names=sorted(set(best.values())))
+    smcs = {method: library[name] for method, name in best.items()}
+    paths = [trajectory_figure(smcs, target, directory / "figures" / "trajectories.png")]
+    hierarchical = [m for m in ("curr", "canon", "curr-noprim", "canon-noprim") if m in smcs]
+    if hierarchical:
+        paths.append(timeline_figure(smcs[hierarchical[0]], target, directory / "figures" / "timeline.png"))
+    return paths
+
+
+def _write(directory: Path, trajectories: str | None, behaviour: bool) -> Path:
+    results = read_results(directory)
+    reported = results["reported"]
+    methods = [m for m in METHODS if any(r["method"] == m for r in reported)]
+    score = {(r["target"], r["method"]): r["test_score"] for r in reported}
+    targets = sorted({r["target"] for r in reported})
+    kind_of = {r["target"]: r["kind"] for r in reported}
+    category_of = {r["target"]: r["category"] for r in reported}
+    figures = _figures(directory, results, methods, targets, score, category_of)
+    if behaviour:
+        chosen = trajectories or targets[0]
+        if chosen not in targets:
+            raise ValueError(f"--trajectories {chosen!r} is not a target of {directory} ({', '.join(targets)})")
+        figures += _behaviour(directory, reported, chosen)
+    settings = results["settings"]
+    lines = [f"# Experiment report: {directory.name}", "",
+             f"Methods {', '.join(methods)}; {len(targets)} target(s); {settings['seeds']} seed(s); "
+             f"{settings['timesteps']:,} steps per SMC; test: {settings['repeats']} repeats per test environment, "
+             "stochastic policy, the update with the best training return. Scores in %; the paper's numbers "
+             "(Hay et al., AAAI-18, spec §6) beside ours where it gives them.", ""]
+    # per concept
+    lines += ["## Per concept (best seed; curr: best curriculum)", "",
+              "| target | kind | category | " + " | ".join(methods) + " | paper (base / curr / canon) |",
+              "|---|---|---|" + "---:|" * len(methods) + "---|"]
+    for target in targets:
+        cells = [_pct(score.get((target, m))) for m in methods]
+        paper = PAPER_CONCEPTS.get(target)
+        paper_text = " / ".join(f"{paper[m]:.1f}" for m in ("base", "curr", "canon")) if paper else ""
+        lines.append(f"| {target} | {kind_of[target]} | {category_of[target]} | " + " | ".join(cells)
+                     + f" | {paper_text} |")
+    # differences to the paper per concept
+    given = [t for t in targets if t in PAPER_CONCEPTS]
+    if given:
+        lines += ["", "Differences to the paper (ours - paper, points):", ""]
+        for target in given:
+            parts = [f"{m} {_diff(score.get((target, m)), PAPER_CONCEPTS[target].get(m))}"
+                     for m in ("base", "curr", "canon") if (target, m) in score]
+            lines.append(f"- {target}: " + ", ".join(parts))
+    # per kind and category
+    lines += ["", "## Means per kind and category", "",
+              "| kind | category | concepts | " + " | ".join(methods) + " |",
+              "|---|---|---:|" + "---:|" * len(methods)]
+    for kind in KINDS:
+        in_kind = [t for t in targets if kind_of[t] == kind]
+        if not in_kind:
+            continue
+        groups = [(c, [t for t in in_kind if category_of[t] == c]) for c in CATEGORIES]
+        for label, members in [*[(c, m) for c, m in groups if m], ("all", in_kind)]:
+            means = [_mean([score.get((t, m)) for t in members]) for m in methods]
+            lines.append(f"| {kind} | {label} | {len(members)} | " + " | ".join(_pct(x) for x in means) + " |")
+        paper = PAPER_MEANS[kind]
+        lines.append(f"| {kind} | **paper** (all) | {34 if kind == 'classification' else 17} | "
+                     + " | ".join(f"{paper[m]:.1f}" if m in paper else "" for m in methods) + " |")
+        lines.append(f"| {kind} | ours - paper | | " + " | ".join(
+            _diff(_mean([score.get((t, m)) for t in in_kind]), paper.get(m)) for m in methods) + " |")
+    # t-tests
+    lines += ["", "## Paired t-tests across concepts", "",
+              "| kind / category | comparison | concepts | t | df | p | paper |",
+              "|---|---|---:|---:|---:|---:|---|"]
+    for kind in KINDS:
+        in_kind = [t for t in targets if kind_of[t] == kind]
+        if not in_kind:
+            continue
+        for a, b in (("curr", "base"), ("canon", "base")):
+            lines.append(_ttest_row(kind, f"{a} vs {b}", in_kind, a, b, score, PAPER_TTESTS[kind].get(f"{a} vs {b}")))
+        if kind == "classification":
+            for category in CATEGORIES:
+                members = [t for t in in_kind if category_of[t] == category]
+                if members:
+                    best_smc = "curr" if "curr" in methods else "canon"
+                    lines.append(_ttest_row(f"{kind} / {category}", f"{best_smc} vs cnn", members, best_smc, "cnn",
+                                            score, None))
+    # noprim
+    noprim = [m for m in ("curr-noprim", "canon-noprim") if m in methods]
+    if noprim:
+        lines += ["", "## The role of hierarchy: without primitive moves (spec §6.3)", "",
+                  "| kind | method | with primitives | without | paper with | paper without |",
+                  "|---|---|---:|---:|---:|---:|"]
+        for kind in KINDS:
+            in_kind = [t for t in targets if kind_of[t] == kind]
+            for method in ("curr", "canon"):
+                if f"{method}-noprim" not in methods or not in_kind:
+                    continue
+                paper = PAPER_NOPRIM[kind]
+                lines.append(f"| {kind} | {method} | {_pct(_mean([score.get((t, method)) for t in in_kind]))} | "
+                             f"{_pct(_mean([score.get((t, method + '-noprim')) for t in in_kind]))} | "
+                             f"{paper[method]:.1f} | {paper[method + '-noprim']:.1f} |")
+    # figures and provenance
+    lines += ["", "## Figures", ""] + [f"![{p.stem}](figures/{p.name})" for p in figures]
+    machine = results.get("machine", {})
+    lines += ["", "## How this was run", "",
+              f"- budget: {settings['timesteps']:,} steps per SMC, seeds 0-{settings['seeds'] - 1}, "
+              f"{settings['repeats']} test repeats; {settings['workers']} worker(s), backend {settings['backend']}",
+              f"- machine: {machine.get('platform', '?')}, Python {machine.get('python', '?')}",
+              f"- wall time of the last `sb3-smc experiment` run: {results.get('wall_time_s', 0) / 3600:.2f} h",
+              f"- command: `{results.get('command') or _command(settings)}`",
+              "- rows: `results.csv` (one per target x method x curriculum x seed), `results.json`"]
+    path = directory / "report.md"
+    atomic_write(path, "\n".join(lines) + "\n")
+    return path
+
+
+def _command(settings: dict[str, Any]) -> str:
+    return (f"sb3-smc experiment --out DIR --methods {','.join(settings['methods'])} --targets "
+            f"{','.join(settings['targets'])} --seeds {settings['seeds']} --timesteps {settings['timesteps']}")
+
+
+def _mean(values: Sequence[float | None]) -> float | None:
+    present = [v for v in values if v is not None]
+    return float(np.mean(present)) if present and len(present) == len(values) else None
+
+
+def _ttest_row(label: str, comparison: str, members: Sequence[str], a: str, b: str,
+               score: dict[tuple[str, str], float], paper: tuple[int, float, float] | None) -> str:
+    pairs = [(score[(t, a)], score[(t, b)]) for t in members if (t, a) in score and (t, b) in score]
+    test = paired_ttest([p[0] for p in pairs], [p[1] for p in pairs]) if pairs else None
+    paper_text = f"t({paper[0]}) = {paper[1]}, p = {paper[2]}" if paper else ""
+    if test is None:
+        return f"| {label} | {comparison} | {len(pairs)} | - | - | - | {paper_text} |"
+    df, t, p = test
+    return f"| {label} | {comparison} | {len(pairs)} | {t:.2f} | {df} | {p:.2g} | {paper_text} |"
+
+
+def _figures(directory: Path, results: dict[str, Any], methods: list[str], targets: list[str],
+             score: dict[tuple[str, str], float], category_of: dict[str, str]) -> list[Path]:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    folder = directory / "figures"
+    folder.mkdir(exist_ok=True)
+    paths = []
+    # per category: mean of the reported scores across concepts, standard error across concepts
+    groups = [c for c in CATEGORIES if any(category_of[t] == c for t in targets)]
+    fig, ax = plt.subplots(figsize=(1.8 + 1.4 * len(groups) * max(1, len(methods)) / 3, 3.2))
+    width = 0.8 / max(1, len(methods))
+    for k, method in enumerate(methods):
+        means, errors = [], []
+        for category in groups:
+            values = [score[(t, method)] for t in targets if category_of[t] == category and (t, method) in score]
+            means.append(100 * np.mean(values) if values else np.nan)
+            errors.append(100 * np.std(values, ddof=1) / np.sqrt(len(values)) if len(values) > 1 else 0.0)
+        ax.bar(np.arange(len(groups)) + k * width, means, width, yerr=errors, label=method,
+               color=COLORS.get(method), capsize=2)
+    ax.set_xticks(np.arange(len(groups)) + width * (len(methods) - 1) / 2, groups)
+    ax.set_ylabel("test score (%)")
+    ax.set_ylim(0, 100)
+    ax.legend(fontsize=7, ncol=3)
+    ax.set_title("per category (best seed; error: s.e. across concepts)", fontsize=9)
+    fig.tight_layout()
+    paths.append(_save(fig, folder / "categories.png"))
+    # per concept: the reported score, standard error across seeds of the reported curriculum
+    by_seed: dict[tuple[str, str], list[float]] = defaultdict(list)
+    best_curriculum = {(r["target"], r["method"]): r["curriculum"] for r in results["reported"]}
+    for row in results["rows"]:
+        if row["curriculum"] == best_curriculum.get((row["target"], row["method"])):
+            by_seed[(row["target"], row["method"])].append(row["test_score"])
+    fig, ax = plt.subplots(figsize=(max(4.0, 0.9 * len(targets) * max(1, len(methods)) / 2), 3.6))
+    for k, method in enumerate(methods):
+        values = [100 * score.get((t, method), np.nan) for t in targets]
+        errors = [100 * np.std(by_seed[(t, method)], ddof=1) / np.sqrt(len(by_seed[(t, method)]))
+                  if len(by_seed[(t, method)]) > 1 else 0.0 for t in targets]
+        ax.bar(np.arange(len(targets)) + k * width, values, width, yerr=errors, label=method,
+               color=COLORS.get(method), capsize=2)
+    ax.set_xticks(np.arange(len(targets)) + width * (len(methods) - 1) / 2, targets, rotation=30, ha="right",
+                  fontsize=6)
+    ax.set_ylabel("test score (%)")
+    ax.set_ylim(0, 100)
+    ax.legend(fontsize=7, ncol=3)
+    ax.set_title("per concept (best seed; error: s.e. across seeds)", fontsize=9)
+    fig.tight_layout()
+    paths.append(_save(fig, folder / "concepts.png"))
+    return paths
+
+
+def _save(fig: Any, path: Path) -> Path:
+    import io
+
+    import matplotlib.pyplot as plt
+
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png", dpi=120)
+    plt.close(fig)
+    atomic_write(path, buffer.getvalue())
+    return path

@@ -1,0 +1,169 @@
+"""``run_experiment``: curricula -> trained SMCs -> the paper's test protocol -> ``results.csv`` / ``results.json``.
+
+1. Every SMC method's nodes (:func:`sb3_smc.experiments.design.plan`) are trained with every seed by the curriculum
+   trainer into ``DIR`` (``DIR/library``; lower-level nodes once, shared by every method; resumable, parallel, Ray).
+2. Every target x method x curriculum node x seed is evaluated on the test split with the paper's protocol
+   (10 repeats, stochastic policy, the snapshot selected by training return): :func:`sb3_smc.evaluate`. Each
+   evaluation is saved as ``DIR/evaluations/<node>@<seed>.json`` (atomically) and not repeated by a later run.
+3. The CNN baseline (``cnn``) is trained and tested per classification target and seed
+   (``DIR/cnn/<target>@<seed>.json``).
+4. ``DIR/results.csv`` / ``results.json``: one row per target x method x curriculum x seed (training return,
+   selected update, test score, wall time), and the reported score per target x method as the paper reports it:
+   the best seed (for ``curr`` and ``curr-noprim`` also the best curriculum).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import platform
+import sys
+import time
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any
+
+from pixelworld_env.atomic import atomic_write
+from sb3_smc.curricula.trainer import DEFAULT_SEEDS, job_name, train_curriculum
+from sb3_smc.experiments.design import METHODS, level2_targets, plan
+
+__all__ = ["RESULT_FIELDS", "read_results", "run_experiment"]
+
+RESULT_FIELDS = ("target", "kind", "category", "method", "curriculum", "seed", "training_return", "selected_update",
+                 "test_score", "wall_time_s")
+
+
+def run_experiment(
+    out: str | Path,
+    *,
+    methods: Sequence[str] = METHODS,
+    targets: Sequence[str] | None = None,
+    category: str | None = None,
+    seeds: int = DEFAULT_SEEDS,
+    timesteps: int | None = None,
+    repeats: int = 10,
+    workers: int = 1,
+    backend: str = "local",
+    ray_address: str | None = None,
+    progress: bool = True,
+    printer: Callable[[str], None] = print,
+) -> dict[str, Any]:
+    """Run the paper's protocol for ``methods`` on ``targets`` (dataset names) or a ``category`` of the level-2
+    targets (default: all 51) into ``out``; returns the ``results.json`` content. Resumable: re-run to continue."""
+    from pixelworld_env import catalog
+
+    if targets is not None and category is not None:
+        raise ValueError("give targets or a category, not both")
+    chosen = list(targets) if targets is not None else level2_targets(category or "all")
+    design = plan(chosen, list(methods))
+    directory = Path(out)
+    directory.mkdir(parents=True, exist_ok=True)
+    start = time.time()
+    if design.curriculum is not None:
+        train_curriculum(design.curriculum, directory, targets=design.training_targets, seeds=seeds,
+                         timesteps=timesteps, workers=workers, backend=backend, ray_address=ray_address,
+                         progress=progress, printer=printer)
+    rows: list[dict[str, Any]] = []
+    for (target, method), nodes in sorted(design.nodes.items()):
+        info = catalog.dataset(target)
+        if method == "cnn":
+            for seed in range(seeds):
+                result = _cnn(directory, target, seed)
+                rows.append(_row(target, info, method, "cnn", seed, None, None, result["test_score"],
+                                 result["wall_time_s"]))
+            continue
+        for node in nodes:
+            for seed in range(seeds):
+                evaluation = _evaluation(directory, job_name(node, seed), repeats)
+                rows.append(_row(target, info, method, node, seed, evaluation["training_return"],
+                                 evaluation["selected_update"], evaluation["test_score"], evaluation["wall_time_s"]))
+        if progress:
+            printer(f"evaluated {target} / {method}")
+    results = {
+        "format": "sb3-smc-results", "version": 1,
+        "settings": {"methods": list(methods), "targets": chosen, "seeds": seeds, "timesteps": timesteps or 400_000,
+                     "repeats": repeats, "workers": workers, "backend": backend},
+        "command": " ".join(sys.argv) if sys.argv and "sb3-smc" in sys.argv[0] else None,
+        "machine": {"platform": platform.platform(), "python": platform.python_version(),
+                    "processor": platform.processor() or platform.machine()},
+        "wall_time_s": time.time() - start,
+        "rows": rows,
+        "reported": reported(rows),
+    }
+    atomic_write(directory / "results.json", json.dumps(results, indent=2) + "\n")
+    atomic_write(directory / "results.csv", _csv(rows))
+    if progress:
+        printer(f"results: {directory / 'results.csv'} ({len(rows)} rows)")
+    return results
+
+
+def _row(target: str, info: Any, method: str, curriculum: str, seed: int, training_return: float | None,
+         selected_update: int | None, test_score: float, wall: float) -> dict[str, Any]:
+    return {"target": target, "kind": info.kind, "category": info.category, "method": method,
+            "curriculum": curriculum, "seed": seed, "training_return": training_return,
+            "selected_update": selected_update, "test_score": test_score, "wall_time_s": wall}
+
+
+def reported(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Per target x method: the best test score over seeds and curricula (the paper's "best seed", and for curr
+    the best of the 1-3 curricula), with the seed and curriculum it came from."""
+    best: dict[tuple[str, str], dict[str, Any]] = {}
+    for row in rows:
+        key = (row["target"], row["method"])
+        if key not in best or row["test_score"] > best[key]["test_score"]:
+            best[key] = row
+    return [{"target": t, "kind": r["kind"], "category": r["category"], "method": m, "test_score": r["test_score"],
+             "seed": r["seed"], "curriculum": r["curriculum"]} for (t, m), r in sorted(best.items())]
+
+
+def _csv(rows: Sequence[dict[str, Any]]) -> str:
+    buffer = io.StringIO()
+    writer = csv.DictWriter(buffer, fieldnames=RESULT_FIELDS, lineterminator="\n")
+    writer.writeheader()
+    for row in rows:
+        writer.writerow({k: ("" if row[k] is None else row[k]) for k in RESULT_FIELDS})
+    return buffer.getvalue()
+
+
+def _evaluation(directory: Path, name: str, repeats: int) -> dict[str, Any]:
+    path = directory / "evaluations" / f"{name.replace('/', '__')}.json"
+    if path.is_file():
+        saved = json.loads(path.read_text(encoding="utf-8"))
+        if saved.get("repeats") == repeats:
+            return saved
+    import torch
+
+    from sb3_smc.evaluation import evaluate
+    from sb3_smc.library import SMCLibrary
+
+    torch.set_num_threads(1)
+    smc = SMCLibrary.load(directory / "library", names=[name])[name]
+    result = evaluate(smc, repeats=repeats, seed=0, record_cells=False)
+    record = smc.record
+    saved = {"smc": name, "repeats": repeats, "test_score": result.score,
+             "training_return": record.selected_return if record is not None else None,
+             "selected_update": record.selected_update if record is not None else None,
+             "wall_time_s": record.wall_time_s if record is not None else None,
+             "evaluation": result.record.to_dict()}
+    atomic_write(path, json.dumps(saved, indent=2) + "\n")
+    return saved
+
+
+def _cnn(directory: Path, target: str, seed: int) -> dict[str, Any]:
+    path = directory / "cnn" / f"{target}@{seed}.json"
+    if path.is_file():
+        return json.loads(path.read_text(encoding="utf-8"))
+    from sb3_smc.experiments.cnn import train_cnn
+
+    result = train_cnn(target, seed).to_dict()
+    atomic_write(path, json.dumps(result, indent=2) + "\n")
+    return result
+
+
+def read_results(directory: str | Path) -> dict[str, Any]:
+    """The ``results.json`` of an experiment directory."""
+    path = Path(directory) / "results.json"
+    if not path.is_file():
+        raise FileNotFoundError(f"{path} not found: run `sb3-smc experiment --out {directory}` first")
+    return json.loads(path.read_text(encoding="utf-8"))

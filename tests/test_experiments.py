@@ -1,0 +1,120 @@
+"""The paper's experiments: the design (methods, targets, nodes), the CNN baseline, a tiny run end to end with its
+results table, resuming, and the report with its t-tests and figures."""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from sb3_smc.experiments import CATEGORIES, level2_targets, plan
+from sb3_smc.experiments.cnn import CHANNELS, encode, train_cnn
+from sb3_smc.experiments.report import paired_ttest, write_report
+from sb3_smc.experiments.runner import RESULT_FIELDS, reported, run_experiment
+
+ROOT = Path(__file__).resolve().parents[1]
+LEFT_OF = "cl_self-left-of-two-objects-vs-one"
+IN_CONTAINER = "ba_self-in-container_from_between-potential-containers"
+
+
+def test_level2_targets_match_the_paper():
+    everything = level2_targets()
+    assert len(everything) == 51
+    sizes = {c: len(level2_targets(c)) for c in CATEGORIES}
+    assert sizes == {"containment": 19, "objcon": 16, "objects": 15, "search": 1}
+    with pytest.raises(ValueError, match="category must be one of"):
+        level2_targets("shapes")
+
+
+def test_plan_names_the_nodes_of_every_method():
+    design = plan([LEFT_OF, IN_CONTAINER], ["cnn", "base", "curr", "canon", "curr-noprim", "canon-noprim"])
+    assert design.nodes[(LEFT_OF, "base")] == (LEFT_OF,)
+    assert design.nodes[(LEFT_OF, "curr")] == tuple(f"obj-con2-cl/{LEFT_OF}-curr{s}" for s in ("", "1", "2"))
+    assert design.nodes[(LEFT_OF, "canon")] == (f"obj-con2-canon-cl/{LEFT_OF}-curr",)
+    assert design.nodes[(IN_CONTAINER, "canon-noprim")] == (f"con2-ba-canon-noprim/{IN_CONTAINER}_canon",)
+    assert (LEFT_OF, "cnn") in design.nodes and (IN_CONTAINER, "cnn") not in design.nodes  # CNN classifies only
+    order = design.curriculum.order(design.training_targets)
+    assert len(order) == len(set(order))  # a lower-level node shared by several methods is one node
+    assert design.curriculum.node(f"obj-con2-canon-cl/{LEFT_OF}-curr").uses[0] in order
+    with pytest.raises(ValueError, match=r"unknown method\(s\) \['flat'\]"):
+        plan([LEFT_OF], ["flat"])
+    with pytest.raises(KeyError, match="did you mean"):
+        plan(["cl_self-left-of-two-objects"], ["base"])
+
+
+def test_paired_ttest_against_a_hand_computed_case():
+    ours, theirs = [0.9, 0.8, 0.7, 0.95], [0.5, 0.6, 0.7, 0.55]
+    d = np.array(ours) - np.array(theirs)  # 0.4, 0.2, 0.0, 0.4: mean 0.25, sd 0.19149
+    t_by_hand = d.mean() / (math.sqrt(((d - d.mean()) ** 2).sum() / 3) / 2)
+    df, t, p = paired_ttest(ours, theirs)
+    assert df == 3 and t == pytest.approx(t_by_hand) == pytest.approx(2.61116, abs=1e-4)
+    assert p == pytest.approx(0.079605, abs=1e-5)  # two-sided, Student's t with 3 degrees of freedom
+    assert paired_ttest([0.5], [0.4]) is None and paired_ttest([0.5, 0.6], [0.4, 0.5]) is None
+
+
+def test_cnn_input_and_it_beats_chance_on_an_easy_concept():
+    grid = np.array([[7, 7, 7], [7, 2, 0], [7, 3, 3]])
+    x = encode([grid])
+    assert x.shape == (1, len(CHANNELS), 3, 3) and x.sum() == 9 and x[0, CHANNELS.index(2), 1, 1] == 1
+    result = train_cnn("cl_self-in-left-corner_vs_on-hline", seed=0)
+    assert result.train_accuracy == 1.0 and result.test_score >= 0.8  # measured 0.96
+    assert train_cnn("cl_self-in-left-corner_vs_on-hline", seed=0).test_score == result.test_score  # seeded
+    with pytest.raises(ValueError, match="bring-about dataset"):
+        train_cnn(IN_CONTAINER, seed=0)
+
+
+def test_reported_scores_are_the_best_seed_and_curriculum():
+    rows = [{"target": "t", "kind": "classification", "category": "objcon", "method": "curr", "curriculum": c,
+             "seed": s, "test_score": v} for c, s, v in (("a", 0, 0.5), ("a", 1, 0.7), ("b", 0, 0.9), ("b", 1, 0.1))]
+    assert reported(rows) == [{"target": "t", "kind": "classification", "category": "objcon", "method": "curr",
+                               "test_score": 0.9, "seed": 0, "curriculum": "b"}]
+
+
+def test_a_tiny_experiment_end_to_end(tmp_path):
+    out = tmp_path / "exp"
+    results = run_experiment(out, methods=["cnn", "base", "curr"], targets=[LEFT_OF], seeds=1, timesteps=2000,
+                             repeats=1, progress=False)
+    rows = list(csv.DictReader((out / "results.csv").open()))
+    assert list(rows[0]) == list(RESULT_FIELDS)
+    assert sorted((r["method"], r["curriculum"]) for r in rows) == sorted(
+        [("cnn", "cnn"), ("base", LEFT_OF)] + [("curr", f"obj-con2-cl/{LEFT_OF}-curr{s}") for s in ("", "1", "2")])
+    assert all(0.0 <= float(r["test_score"]) <= 1.0 for r in rows)
+    assert {r["method"] for r in results["reported"]} == {"cnn", "base", "curr"}
+    smc_rows = [r for r in results["rows"] if r["method"] != "cnn"]
+    assert all(r["selected_update"] is not None and r["training_return"] is not None for r in smc_rows)
+    evaluations = sorted((out / "evaluations").glob("*.json"))
+    assert len(evaluations) == 4 and json.loads(evaluations[0].read_text())["evaluation"]["repeats"] == 1
+    stamps = {p: p.stat().st_mtime_ns for p in [*evaluations, *(out / "cnn").glob("*.json")]}
+
+    again = run_experiment(out, methods=["cnn", "base", "curr"], targets=[LEFT_OF], seeds=1, timesteps=2000,
+                           repeats=1, progress=False)
+    assert again["rows"] == results["rows"]  # nothing trained or evaluated again
+    assert all(p.stat().st_mtime_ns == stamp for p, stamp in stamps.items())
+
+    [report] = write_report(out)
+    text = report.read_text()
+    for method in ("cnn", "base", "curr"):
+        assert f"| {method} " in text or f" {method} |" in text
+    assert "52.6 / 90.4 / 89.0" in text and "Paired t-tests" in text and "## How this was run" in text
+    for name in ("categories", "concepts", "trajectories", "timeline"):
+        image = np.asarray(Image.open(out / "figures" / f"{name}.png").convert("L"))
+        assert image.size > 10_000 and image.std() > 5, name  # written and not blank
+        assert f"figures/{name}.png" in text
+
+
+def test_cli_experiment_and_report_errors(tmp_path):
+    def cli(*args: str) -> subprocess.CompletedProcess:
+        return subprocess.run([sys.executable, "-m", "sb3_smc.cli", *args], cwd=ROOT, capture_output=True,
+                              text=True, timeout=120)
+
+    bad = cli("experiment", "--out", str(tmp_path / "x"), "--methods", "base,flat", "--targets", LEFT_OF)
+    assert bad.returncode == 2 and "unknown method(s) ['flat']" in bad.stderr and "Traceback" not in bad.stderr
+    missing = cli("report", str(tmp_path / "nothing"))
+    assert missing.returncode == 2 and "results.json not found" in missing.stderr
