@@ -1,62 +1,62 @@
-"""``python -m sb3_smc.demo`` (``make demo``): play PixelWorld episodes, then train, test, store and reload an SMC.
+"""``python -m sb3_smc.demo`` (``make demo``): from a pixel world to a report of the paper's experiment, in minutes.
 
 1. :func:`pixelworld_env.demo.play`: a hand-drawn scene played with a planner (bring-about) and at random
    (classification).
-2. A short RecurrentPPO run (12 updates of 2,000 steps) of the SMC ``ba_self-on-something_from_directly-above``
-   described by a :class:`~sb3_smc.records.TrainingSpec`, with the paper's signal-bias initialisation and
-   best-update selection, tested with the paper's protocol before and after training.
-3. The trained SMC saved in an :class:`~sb3_smc.library.SMCLibrary` (spec, training record and evaluation
-   included) and loaded back.
+2. The paper's experiment on one level-2 concept, ``cl_self-in-container_vs_noncontainer``, at a reduced budget
+   (one seed, 60,000 steps per SMC instead of five and 400,000): the CNN baseline, a flat SMC (base) and the
+   hand-designed curricula (curr: two curricula calling the corner and on-something SMCs, trained first), every
+   SMC tested with the paper's protocol (50 test environments x 10 stochastic repeats).
+3. The report: ``<out>/report.md`` with the paper's numbers beside ours and the figures (bars, trajectories, the
+   timeline of a hierarchical episode) in ``<out>/figures/``.
+
+Re-running continues where it stopped (the run is resumable); ``--out`` chooses the folder (default
+``demo-output``), ``--no-train`` only plays the episodes.
 """
 
 from __future__ import annotations
 
 import argparse
-import tempfile
+import time
 from pathlib import Path
 
 from pixelworld_env.demo import play
 
-DEMO_ENV = "PW-ba_self-on-something_from_directly-above-v0"
+TARGET = "cl_self-in-container_vs_noncontainer"
+METHODS = ("cnn", "base", "curr")
 
 
-def train(seed: int = 0, total_timesteps: int = 24_000) -> tuple[float, float]:
-    """Train a small flat SMC, return its test success rate before and after training; store it in a library."""
+def experiment(out: str | Path = "demo-output", seed_count: int = 1, timesteps: int = 60_000) -> Path:
+    """Run the small experiment into ``out`` and write its report; returns the report's path."""
     import torch
 
-    from sb3_smc import SMCLibrary, TrainingSpec, evaluate, train_smc
+    from sb3_smc.experiments.report import write_report
+    from sb3_smc.experiments.runner import run_experiment
 
     torch.set_num_threads(1)
-    spec = TrainingSpec.create(DEMO_ENV, seed=seed, total_timesteps=total_timesteps)
-    untrained = train_smc(TrainingSpec.create(DEMO_ENV, seed=seed, total_timesteps=0))
-    before = evaluate(untrained, repeats=4, seed=seed).score
-    print(f"\ntraining SMC {spec.name!r} on {DEMO_ENV} for {spec.budget.total_timesteps:,} steps "
-          f"({spec.algo}, {spec.budget.updates} updates of {spec.budget.steps_per_update:,} steps) ...")
-    smc = train_smc(spec, log_every=2)
-    result = evaluate(smc, repeats=4, seed=seed)
-    record = smc.record
-    print(f"test success rate (25 scenes x 4 runs): untrained {before:.2f} -> trained {result.score:.2f} "
-          f"(selected update {record.selected_update}, training return {record.selected_return:.2f}, "
-          f"{record.wall_time_s:.0f} s)")
-
-    with tempfile.TemporaryDirectory() as tmp:
-        path = SMCLibrary([smc]).save(Path(tmp) / "demo-library")
-        loaded = SMCLibrary.load(path)[smc.name]
-        print(f"saved to and loaded from an SMCLibrary: {loaded.name!r}, actions {list(loaded.action_names)}, "
-              f"spec equal {loaded.spec == spec}, test score {loaded.test_score:.2f}")
-    return before, result.score
+    start = time.perf_counter()
+    print(f"\nthe paper's experiment on {TARGET}: methods {', '.join(METHODS)}, {seed_count} seed(s), "
+          f"{timesteps:,} steps per SMC (the paper: 5 seeds, 400,000 steps) -> {out}/")
+    results = run_experiment(out, methods=METHODS, targets=[TARGET], seeds=seed_count, timesteps=timesteps)
+    [report] = write_report(out)
+    print(f"\n{'method':8s} {'test score':>10s}  (best seed; curr: best of its curricula)")
+    for row in results["reported"]:
+        print(f"{row['method']:8s} {100 * row['test_score']:9.1f}%  {row['curriculum']}")
+    print(f"\nreport: {report} (figures in {Path(out) / 'figures'}); library of trained SMCs: {Path(out) / 'library'}; "
+          f"{time.perf_counter() - start:.0f} s")
+    return report
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--seed", type=int, default=0, help="episode seed of the played episodes")
     parser.add_argument("--quiet", action="store_true", help="print only the episode summaries")
     parser.add_argument("--no-train", action="store_true", help="only play the episodes")
-    parser.add_argument("--timesteps", type=int, default=24_000, help="training budget of the demo SMC")
+    parser.add_argument("--out", default="demo-output", help="the experiment folder (default demo-output)")
+    parser.add_argument("--timesteps", type=int, default=60_000, help="steps per SMC (default 60,000)")
     args = parser.parse_args()
     play(seed=args.seed, quiet=args.quiet)
     if not args.no_train:
-        train(seed=args.seed, total_timesteps=args.timesteps)
+        experiment(args.out, timesteps=args.timesteps)
 
 
 if __name__ == "__main__":
