@@ -22,10 +22,18 @@ OLD_MARKER = ".old-"
 """A directory being replaced is renamed to ``.<name>.old-<random>`` beside it until the new one is in place."""
 
 
-def _umask() -> int:
+def _read_umask() -> int:
     mask = os.umask(0)
     os.umask(mask)
     return mask
+
+
+_UMASK = _read_umask()
+"""The process's umask, read once at import (reading it sets it for a moment, which other threads would see)."""
+
+
+def _umask() -> int:
+    return _UMASK
 
 
 def make_temporary_directory(parent: str | os.PathLike, prefix: str) -> Path:
@@ -66,8 +74,8 @@ def atomic_write(path: str | os.PathLike, data: bytes | str | Callable[[BinaryIO
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
     try:
-        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; the file is for whoever may read the folder
         with os.fdopen(fd, "wb") as handle:
+            os.fchmod(handle.fileno(), 0o666 & ~_umask())  # mkstemp makes 0600; others may read the folder
             if callable(data):
                 data(handle)
             else:

@@ -500,6 +500,8 @@ class TrainingRecord(_Record):
         out = super().to_dict()
         out["training_returns"] = _nan_to_none(self.training_returns)
         out["success_rates"] = _nan_to_none(self.success_rates)
+        if self.initial_action_probabilities is not None:
+            out["initial_action_probabilities"] = _nan_to_none(self.initial_action_probabilities)
         return out
 
 
@@ -538,6 +540,11 @@ class EvaluationRecord(_Record):
             _set(self, "mean_length", _float(self.mean_length, "mean_length"))
         counts = _json_mapping(self.call_counts, "call_counts")
         _set(self, "call_counts", {k: _int(v, f"call_counts.{k}", 0) for k, v in counts.items()})
+
+    def to_dict(self) -> dict[str, Any]:
+        out = super().to_dict()
+        out["environment_scores"] = _nan_to_none(self.environment_scores)
+        return out
 
     @property
     def key(self) -> tuple[str, str]:

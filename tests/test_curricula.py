@@ -113,6 +113,7 @@ def test_targets_by_node_or_dataset_name():
     (TINY.replace("  - name: above\n", "  - name: above\n    timesteps: -5\n"),
      r"tiny.yml:6: node 'above': 'timesteps' must be a positive integer, got -5"),
     ("nodes: []\n", r"tiny.yml: missing key 'curriculum'"),
+    (TINY + "1: x\n", r"tiny.yml: top-level keys must be names, got 1"),
     ("- a\n- b\n", r"tiny.yml: a curriculum file is a mapping"),
 ])
 def test_invalid_curricula_name_file_line_and_node(tmp_path, text, message):
@@ -216,12 +217,41 @@ def test_changed_settings_are_refused_with_the_differences(tmp_path):
 
 def test_a_failing_job_is_reported_and_retried(tmp_path):
     path = tmp_path / "tiny.yml"
-    path.write_text(TINY.replace("  - name: above\n", "  - name: above\n    hyperparameters: {learning_rate: lin_x}\n"))
+    path.write_text(TINY.replace("name: container", "name: tiny/container").replace("[left, above]", "[left, above]\n"
+                                 "    hyperparameters: {not_an_argument: 1}"))
     run = train_curriculum(str(path), tmp_path / "run", seeds=1, timesteps=2000, progress=False)
-    assert set(run.failed) == {"above@0"} and "lin_x" in run.failed["above@0"]
-    assert (tmp_path / "run" / "failed" / "above@0.txt").is_file()
+    assert set(run.failed) == {"tiny/container@0"} and "not_an_argument" in run.failed["tiny/container@0"]
+    assert (tmp_path / "run" / "failed" / "tiny%2Fcontainer@0.txt").is_file()
     state = status(tmp_path / "run")
-    assert state["done"] == ["left@0"] and state["failed"] == ["above@0"] and state["left"] == ["container@0"]
+    assert state["done"] == ["left@0", "above@0"] and state["failed"] == ["tiny/container@0"] and state["left"] == []
+
+
+def test_hyperparameters_that_do_not_decode_stop_before_training(tmp_path):
+    path = tmp_path / "tiny.yml"
+    path.write_text(TINY.replace("  - name: above\n", "  - name: above\n    hyperparameters: {learning_rate: lin_x}\n"))
+    with pytest.raises(CurriculumError, match="tiny.yml:6: node 'above': hyperparameter learning_rate: 'lin_x'"):
+        train_curriculum(str(path), tmp_path / "run", seeds=1, timesteps=2000, progress=False)
+    assert not (tmp_path / "run" / "run.json").exists()  # nothing written: the fixed file can use the same --out
+
+
+def test_one_coordinator_per_run_directory(tmp_path):
+    import fcntl
+
+    out = tmp_path / "run"
+    train_curriculum(str(_tiny(tmp_path)), out, seeds=1, timesteps=2000, targets=["left"], progress=False)
+    with open(out / ".lock", "a+") as held:
+        fcntl.flock(held.fileno(), fcntl.LOCK_EX)
+        with pytest.raises(RunSettingsError, match="being trained by another process"):
+            train_curriculum(str(_tiny(tmp_path)), out, seeds=1, timesteps=2000, targets=["left"], progress=False)
+
+
+def test_a_partial_library_cannot_replace_the_whole(tmp_path):
+    run = train_curriculum(str(_tiny(tmp_path)), tmp_path / "run", seeds=1, timesteps=2000, progress=False)
+    partial = SMCLibrary.load(run.library, names=["left@0"])
+    assert partial.names == ("left@0",) and partial.path is None
+    with pytest.raises(Exception, match="needs a path"):
+        partial.save()
+    assert len(SMCLibrary.load(run.library)) == 3
 
 
 def test_workers_and_ray_give_the_same_library(tmp_path):

@@ -181,3 +181,11 @@ def test_pixelworld_env_never_imports_sb3_smc():
     offenders = [str(path.relative_to(ROOT)) for path in (ROOT / "pixelworld_env").rglob("*.py")
                  if re.search(r"^\s*(import|from) sb3_smc", path.read_text(encoding="utf-8"), re.M)]
     assert offenders == []
+
+
+def test_every_nan_field_is_null_in_json():
+    evaluation = dataclasses.replace(_evaluation(), environment_scores=(0.5, float("nan")))
+    assert evaluation.to_dict()["environment_scores"] == [0.5, None]
+    assert EvaluationRecord.from_json(evaluation.to_json()) == evaluation
+    record = dataclasses.replace(_record(), initial_action_probabilities=(0.5, float("nan")))
+    assert TrainingRecord.from_json(record.to_json()).to_dict()["initial_action_probabilities"] == [0.5, None]

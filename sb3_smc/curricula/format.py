@@ -226,6 +226,9 @@ def parse_curriculum(text: str, source: str = "<curriculum>") -> Curriculum:
     if not isinstance(root, yaml.MappingNode):
         raise CurriculumError(f"{source}: a curriculum file is a mapping with the keys {list(FORMAT_KEYS)}")
     data = _plain(root, source)
+    odd = [k for k in data if not isinstance(k, str)]
+    if odd:
+        raise CurriculumError(f"{source}: top-level keys must be names, got {odd[0]!r}")
     lines = {}
     for key_node, value_node in root.value:
         lines[key_node.value] = (key_node.start_mark.line + 1, value_node)

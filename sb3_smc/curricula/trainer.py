@@ -12,8 +12,9 @@ Run directory::
     DIR/run.json        the settings; re-running with other settings is refused (the differences are listed)
     DIR/library/        an SMCLibrary: one SMC per finished job, with its spec and training record
     DIR/tensorboard/    SB3 and SMC curves, one run per job (``<node>@<seed>_1``)
-    DIR/failed/         ``<job>.txt``: the traceback of a job that raised (retried by the next run)
+    DIR/failed/         ``<job>.txt``: the traceback of a job that raised (retried by the next run; ``/`` as ``%2F``)
     DIR/state.json      the jobs running now and the coordinator's pid (for ``sb3-smc status``)
+    DIR/.lock           held by the coordinator while it runs (a second one on the same directory is refused)
 
 Crash safety: a finished job is one whose SMC is in the library manifest; the model file and then the manifest are
 written atomically by the coordinator (the only writer), so killing the process at any moment loses at most the
@@ -40,8 +41,8 @@ from sb3_smc.hyperparameters import STEPS_PER_UPDATE
 from sb3_smc.library import storage
 from sb3_smc.records import Budget, TaskSpec, TrainingRecord, TrainingSpec, WrapperSettings
 
-__all__ = ["REUSE", "Job", "JobResult", "RunSettingsError", "TrainingRun", "describe", "job_name", "rank_seeds",
-           "run_job", "run_settings", "status", "train_curriculum"]
+__all__ = ["REUSE", "Job", "JobResult", "RunSettingsError", "TrainingRun", "describe", "file_stem", "job_name",
+           "name_of_file", "rank_seeds", "run_job", "run_settings", "status", "train_curriculum"]
 
 REUSE = {"one_best": 1, "two_best": 2}
 """SMC filters of the paper: how many seeds of each lower-level node a caller gets."""
@@ -58,6 +59,16 @@ class RunSettingsError(ValueError):
 def job_name(node: str, seed: int) -> str:
     """The library name of node ``node`` trained with ``seed``."""
     return f"{node}{SEED_SEPARATOR}{seed}"
+
+
+def file_stem(name: str) -> str:
+    """A job name as a file name (``/`` and ``%`` percent-encoded: reversible, no collisions)."""
+    return name.replace("%", "%25").replace("/", "%2F")
+
+
+def name_of_file(stem: str) -> str:
+    """The inverse of :func:`file_stem`."""
+    return stem.replace("%2F", "/").replace("%25", "%")
 
 
 @dataclass(frozen=True)
@@ -168,7 +179,6 @@ class _Scheduler:
         self.records: dict[str, dict[int, TrainingRecord]] = {name: {} for name in order}
         self.running: set[str] = set()
         self.failed: dict[str, str] = {}
-        self.wall: dict[str, float] = {}
 
     def jobs(self) -> list[tuple[str, int]]:
         return [(node, seed) for node in self.order for seed in range(self.seeds)]
@@ -215,15 +225,15 @@ class _Scheduler:
                             wrapper=WrapperSettings(include_primitives=node.include_primitives), children=children)
 
     def check_specs(self) -> None:
-        """Every node's settings make a valid spec (checked before any training)."""
-        from sb3_smc.records import RecordError
+        """Every node's settings make a valid spec whose hyperparameters decode (checked before any training)."""
+        from sb3_smc.hyperparameters import constructor_arguments
 
         for name in self.order:
             node = self.curriculum.node(name)
             placeholder = tuple(job_name(u, 0) for u in node.uses)
             try:
-                self.spec(node, 0, placeholder)
-            except RecordError as err:
+                constructor_arguments(self.spec(node, 0, placeholder).hyperparameters)
+            except ValueError as err:
                 where = f"{self.curriculum.source}:{node.line}: " if node.line is not None and self.curriculum.source \
                     else ""
                 raise CurriculumError(f"{where}node {name!r}: {err}") from None
@@ -299,10 +309,35 @@ def train_curriculum(
     order = merged.order(selected)
     directory = Path(out)
     settings = run_settings(merged, order, selected, seeds, timesteps, reuse, algo)
-    _check_or_write_settings(directory, settings)
-
     scheduler = _Scheduler(merged, order, seeds, timesteps, REUSE[reuse], algo, directory)
     scheduler.check_specs()
+    _check_or_write_settings(directory, settings)
+    lock = _lock(directory)
+    try:
+        return _run(merged, scheduler, order, directory, seeds, backend, workers, ray_address, tensorboard, progress,
+                    printer)
+    finally:
+        lock.close()
+
+
+def _lock(directory: Path) -> Any:
+    """Hold ``DIR/.lock`` for the run: a second coordinator on the same directory is refused (it would write the
+    same manifest)."""
+    import fcntl
+
+    handle = open(directory / ".lock", "a+")  # noqa: SIM115 - held open for the whole run
+    try:
+        fcntl.flock(handle.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        handle.close()
+        raise RunSettingsError(f"{directory} is being trained by another process (sb3-smc status {directory} shows "
+                               "it); wait for it or stop it first") from None
+    return handle
+
+
+def _run(merged: Curriculum, scheduler: _Scheduler, order: list[str], directory: Path, seeds: int, backend: str,
+         workers: int, ray_address: str | None, tensorboard: bool, progress: bool,
+         printer: Callable[[str], None]) -> TrainingRun:
     _load_done(scheduler)
     failed_dir = directory / "failed"
     total = len(scheduler.jobs())
@@ -323,9 +358,10 @@ def train_curriculum(
                     break
                 job = scheduler.job(node_name, seed, tensorboard)
                 name = job.spec.name
-                (failed_dir / f"{name}.txt").unlink(missing_ok=True)
-                pending[executor.submit(job)] = name
+                (failed_dir / f"{file_stem(name)}.txt").unlink(missing_ok=True)
                 scheduler.running.add(name)
+                _write_state(directory, scheduler.running, started)  # before: the in-process executor trains here
+                pending[executor.submit(job)] = name
             _write_state(directory, scheduler.running, started)
             bar.show(len(scheduler.running))
             if not pending:
@@ -337,7 +373,7 @@ def train_curriculum(
                 if isinstance(outcome, BaseException):
                     text = "".join(traceback.format_exception(outcome))
                     scheduler.failed[name] = text.strip().splitlines()[-1]
-                    atomic_write(failed_dir / f"{name}.txt", text)
+                    atomic_write(failed_dir / f"{file_stem(name)}.txt", text)
                     bar.note(f"job {name} failed: {scheduler.failed[name]}")
                     continue
                 _store(scheduler, outcome)
@@ -441,19 +477,29 @@ class _Processes:
         import multiprocessing
         from concurrent.futures import ProcessPoolExecutor
 
-        self._pool = ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"))
+        def make() -> ProcessPoolExecutor:
+            return ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"))
+
+        self._make = make
+        self._pool = make()
 
     def submit(self, job: Job) -> Any:
         return self._pool.submit(run_job, job)
 
     def wait(self, handles: list[Any]) -> list[tuple[Any, Any]]:
         from concurrent.futures import FIRST_COMPLETED, wait
+        from concurrent.futures.process import BrokenProcessPool
 
         done, _ = wait(handles, return_when=FIRST_COMPLETED)
         out = []
+        broken = False
         for future in done:
             error = future.exception()
+            broken = broken or isinstance(error, BrokenProcessPool)
             out.append((future, error if error is not None else future.result()))
+        if broken:  # a worker died (e.g. killed for memory): its jobs count as failed, the run goes on
+            self._pool.shutdown(wait=False, cancel_futures=True)
+            self._pool = self._make()
         return out
 
     def shutdown(self) -> None:
@@ -474,14 +520,18 @@ class _Ray:
                                    "or set RAY_ADDRESS (e.g. 'auto' on a node of the cluster, or ray://host:10001)")
             ray.init(address=address, log_to_driver=False)
         self._remote = ray.remote(num_cpus=1, max_retries=0)(run_job)
+        self._pending: set[Any] = set()
 
     def submit(self, job: Job) -> Any:
-        return self._remote.remote(job)
+        ref = self._remote.remote(job)
+        self._pending.add(ref)
+        return ref
 
     def wait(self, handles: list[Any]) -> list[tuple[Any, Any]]:
         ready, _ = self._ray.wait(handles, num_returns=1)
         out = []
         for ref in ready:
+            self._pending.discard(ref)
             try:
                 out.append((ref, self._ray.get(ref)))
             except Exception as err:  # noqa: BLE001 - a task's error, reported as the job's failure
@@ -489,7 +539,9 @@ class _Ray:
         return out
 
     def shutdown(self) -> None:
-        pass
+        for ref in self._pending:  # after an interrupt or an error: free the cluster
+            self._ray.cancel(ref)
+        self._pending.clear()
 
 
 def _executor(backend: str, workers: int, address: str | None) -> Any:
@@ -565,7 +617,8 @@ def status(directory: str | Path) -> dict[str, Any]:
         state = json.loads(state_path.read_text(encoding="utf-8"))
         if state.get("running") and _alive(int(state.get("pid", -1))):
             running = [n for n in state["running"] if n not in done]
-    failed = sorted(p.stem for p in (directory / "failed").glob("*.txt")) if (directory / "failed").is_dir() else []
+    failed = sorted(name_of_file(p.stem) for p in (directory / "failed").glob("*.txt")) \
+        if (directory / "failed").is_dir() else []
     failed = [n for n in failed if n not in done and n not in running]
     left = [n for n in jobs if n not in done and n not in running and n not in failed]
     return {"settings": settings, "jobs": jobs, "done": [n for n in jobs if n in done], "running": running,

@@ -85,11 +85,9 @@ def train_cnn(target: str, seed: int, *, dataset_seed: int = 0) -> CNNResult:
     best_loss, best_state, since, epochs = float("inf"), None, 0, 0
     for epoch in range(EPOCHS):
         optimiser.zero_grad()
-        loss = loss_fn(net(x_train), y_train)
-        loss.backward()
-        optimiser.step()
-        epochs = epoch + 1
+        loss = loss_fn(net(x_train), y_train)  # the loss of the current weights: snapshot them before the step
         value = float(loss.detach())
+        epochs = epoch + 1
         if value < best_loss - MIN_DELTA:
             best_loss, since = value, 0
             best_state = {k: v.detach().clone() for k, v in net.state_dict().items()}
@@ -97,6 +95,8 @@ def train_cnn(target: str, seed: int, *, dataset_seed: int = 0) -> CNNResult:
             since += 1
             if since >= PATIENCE:
                 break
+        loss.backward()
+        optimiser.step()
     if best_state is not None:
         net.load_state_dict(best_state)
     with torch.no_grad():

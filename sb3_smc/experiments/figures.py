@@ -114,15 +114,11 @@ def trajectory_figure(smcs: Mapping[str, Any], target: str, path: str | Path, *,
 def timeline_figure(smc: Any, target: str, path: str | Path, *, index: int = 0, seed: int = 0) -> Path:
     """Fig. 1: one test episode of ``smc`` on environment ``index`` of ``target``: a row per depth (0 = the SMC
     itself), a bar per primitive move coloured by the acting SMC, each call's outcome written at its end."""
-    import gymnasium as gym
-
     import pixelworld_env  # noqa: F401
-    from sb3_smc.envs import make_smc_env, spec_for_smc
-    from sb3_smc.evaluation import run_episode
+    from sb3_smc.evaluation import make_evaluation_env, run_episode
 
     plt = _pyplot()
-    env = make_smc_env(spec_for_smc(smc, f"PW-{target}-v0"), smc.children,
-                       env=gym.make(f"PW-{target}-v0", split="test", disable_env_checker=True), record_cells=True)
+    env = make_evaluation_env(smc, f"PW-{target}-v0")  # the SMC's own settings (max_steps included), test split
     episode = run_episode(smc, env, index=index, seed=seed)
     names = sorted({name for chain, _ in episode.moves for name in chain})
     colors = {name: plt.cm.tab20(k % 20) for k, name in enumerate(names)}

@@ -83,6 +83,8 @@ def _behaviour(directory: Path, reported: Sequence[dict[str, Any]], target: str)
 def _write(directory: Path, trajectories: str | None, behaviour: bool) -> Path:
     results = read_results(directory)
     reported = results["reported"]
+    if not reported:
+        raise ValueError(f"{directory / 'results.json'} holds no results")
     methods = [m for m in METHODS if any(r["method"] == m for r in reported)]
     score = {(r["target"], r["method"]): r["test_score"] for r in reported}
     targets = sorted({r["target"] for r in reported})

@@ -4,7 +4,8 @@
    trainer into ``DIR`` (``DIR/library``; lower-level nodes once, shared by every method; resumable, parallel, Ray).
 2. Every target x method x curriculum node x seed is evaluated on the test split with the paper's protocol
    (10 repeats, stochastic policy, the snapshot selected by training return): :func:`sb3_smc.evaluate`. Each
-   evaluation is saved as ``DIR/evaluations/<node>@<seed>.json`` (atomically) and not repeated by a later run.
+   evaluation is saved as ``DIR/evaluations/<node>@<seed>.json`` (``/`` in node names as ``%2F``; atomically)
+   and not repeated by a later run.
 3. The CNN baseline (``cnn``) is trained and tested per classification target and seed
    (``DIR/cnn/<target>@<seed>.json``).
 4. ``DIR/results.csv`` / ``results.json``: one row per target x method x curriculum x seed (training return,
@@ -25,7 +26,7 @@ from pathlib import Path
 from typing import Any
 
 from pixelworld_env.atomic import atomic_write
-from sb3_smc.curricula.trainer import DEFAULT_SEEDS, job_name, train_curriculum
+from sb3_smc.curricula.trainer import DEFAULT_SEEDS, file_stem, job_name, train_curriculum
 from sb3_smc.experiments.design import METHODS, level2_targets, plan
 
 __all__ = ["RESULT_FIELDS", "read_results", "run_experiment"]
@@ -61,9 +62,13 @@ def run_experiment(
     directory.mkdir(parents=True, exist_ok=True)
     start = time.time()
     if design.curriculum is not None:
-        train_curriculum(design.curriculum, directory, targets=design.training_targets, seeds=seeds,
-                         timesteps=timesteps, workers=workers, backend=backend, ray_address=ray_address,
-                         progress=progress, printer=printer)
+        run = train_curriculum(design.curriculum, directory, targets=design.training_targets, seeds=seeds,
+                               timesteps=timesteps, workers=workers, backend=backend, ray_address=ray_address,
+                               progress=progress, printer=printer)
+        if run.failed:
+            raise RuntimeError(f"{len(run.failed)} training job(s) failed ({', '.join(sorted(run.failed)[:5])}; "
+                               f"tracebacks in {directory / 'failed'}): nothing evaluated; run the same command "
+                               "again to retry them")
     rows: list[dict[str, Any]] = []
     for (target, method), nodes in sorted(design.nodes.items()):
         info = catalog.dataset(target)
@@ -127,7 +132,7 @@ def _csv(rows: Sequence[dict[str, Any]]) -> str:
 
 
 def _evaluation(directory: Path, name: str, repeats: int) -> dict[str, Any]:
-    path = directory / "evaluations" / f"{name.replace('/', '__')}.json"
+    path = directory / "evaluations" / f"{file_stem(name)}.json"
     if path.is_file():
         saved = json.loads(path.read_text(encoding="utf-8"))
         if saved.get("repeats") == repeats:

@@ -218,7 +218,8 @@ class SMCLibrary(Mapping[str, SMC]):
 
     @classmethod
     def load(cls, path: str | os.PathLike, names: Sequence[str] | None = None) -> SMCLibrary:
-        """Load and validate the library in directory ``path`` (only ``names`` and their descendants if given).
+        """Load and validate the library in directory ``path`` (only ``names`` and their descendants if given; such a
+        partial library has no default save path, so ``save()`` cannot replace the whole library with it).
 
         Checks the manifest (format, version, fields), that every child is in the library and no SMC calls itself
         (through any chain), that action names and observation sizes agree with kind/children and with each
@@ -235,7 +236,7 @@ class SMCLibrary(Mapping[str, SMC]):
         if names is not None:
             wanted = _descendants(entries, names, manifest_path)
             order = [name for name in order if name in wanted]
-        library = cls(path=root)
+        library = cls(path=root if names is None else None)  # a partial copy must not replace the whole library
         library.created_with = dict(manifest.get("created_with") or {})
         for name in order:
             entry = entries[name]
