@@ -29,6 +29,7 @@ from pixelworld_env.atomic import (
     make_temporary_directory,
     replace_directory,
 )
+from sb3_smc.hyperparameters import ALGORITHMS as TRAINED_ALGORITHMS
 from sb3_smc.library.errors import (
     CorruptModelError,
     LayoutMismatchError,
@@ -64,16 +65,15 @@ MANIFEST = "manifest.json"
 MODELS = "models"
 SAVING_MARKER = ".saving-"
 
-ALGORITHMS = ("RecurrentPPO", "TRPO", "PPO")
-"""Algorithms whose models a library stores (loaded with the class of the same name, ``device="cpu"``)."""
+ALGORITHMS = TRAINED_ALGORITHMS
+"""Algorithms whose models a library stores (those ``train_smc`` trains; loaded with their class, ``device="cpu"``)."""
 
 
 def algorithm_classes() -> dict[str, type]:
-    """Algorithm name (as in the manifest's ``algo``) -> SB3 class."""
-    from sb3_contrib import TRPO, RecurrentPPO
-    from stable_baselines3 import PPO
+    """Algorithm name (as in the manifest's ``algo``) -> SB3 class (:data:`sb3_smc.training.ALGORITHM_CLASSES`)."""
+    from sb3_smc.training import ALGORITHM_CLASSES
 
-    return {"RecurrentPPO": RecurrentPPO, "TRPO": TRPO, "PPO": PPO}
+    return ALGORITHM_CLASSES
 
 
 def sha256(path: Path) -> str:
