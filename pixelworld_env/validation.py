@@ -8,13 +8,13 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["MAX_SEED", "check_action", "check_int", "check_seed"]
+__all__ = ["MAX_SEED", "as_integer", "check_action", "check_int", "check_seed"]
 
 MAX_SEED = 2**63 - 1
 """Seeds are integers in ``[0, 2**63 - 1]`` (they are stored in JSON records and numpy ``int64`` arrays)."""
 
 
-def _as_int(value: Any) -> int | None:
+def as_integer(value: Any) -> int | None:
     """``value`` as an int when it is an integer (Python or numpy, or a 0-d integer array), else ``None``."""
     if isinstance(value, bool | np.bool_):
         return None
@@ -28,7 +28,7 @@ def _as_int(value: Any) -> int | None:
 def check_int(value: Any, name: str, minimum: int | None = None) -> int:
     """``value`` as an int; ``TypeError`` if it is not an integer (bools and floats included), ``ValueError`` below
     ``minimum``."""
-    number = _as_int(value)
+    number = as_integer(value)
     if number is None:
         raise TypeError(f"{name} must be an integer, got {value!r} ({type(value).__name__})")
     if minimum is not None and number < minimum:
@@ -49,7 +49,7 @@ def check_action(action: Any, action_names: Sequence[str]) -> int:
 
     Negative indices, bools, floats and anything else raise ``ValueError`` listing the actions.
     """
-    index = _as_int(action)
+    index = as_integer(action)
     if index is None or not 0 <= index < len(action_names):
         raise ValueError(f"invalid action {action!r}: expected an integer in [0, {len(action_names)}); the actions "
                          f"are {list(enumerate(action_names))}")

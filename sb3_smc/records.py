@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 from importlib import metadata as importlib_metadata
 from typing import Any, ClassVar, TypeVar
 
+from pixelworld_env.validation import as_integer
 from sb3_smc.hyperparameters import (
     ALGORITHMS,
     DEFAULT_N_ENVS,
@@ -94,13 +95,12 @@ def smc_name_from_env_id(env_id: str) -> str:
 # ---------------------------------------------------------------------------------------------------------------
 
 def _int(value: Any, where: str, minimum: int | None = None) -> int:
-    if isinstance(value, bool) or not isinstance(value, int) and not (
-            type(value).__module__ == "numpy" and hasattr(value, "dtype") and value.dtype.kind in "iu"):
+    number = as_integer(value)  # the package's one integer rule (bools and floats are not integers)
+    if number is None:
         raise RecordError(f"{where} must be an integer, got {value!r}")
-    value = int(value)
-    if minimum is not None and value < minimum:
-        raise RecordError(f"{where} must be >= {minimum}, got {value}")
-    return value
+    if minimum is not None and number < minimum:
+        raise RecordError(f"{where} must be >= {minimum}, got {number}")
+    return number
 
 
 def _float(value: Any, where: str, allow_nan: bool = False) -> float:
