@@ -20,10 +20,11 @@ import numpy as np
 
 from pixelworld_env.atomic import atomic_write
 
-__all__ = ["goal_cells", "trajectory_figure", "timeline_figure"]
+__all__ = ["goal_cells", "pyplot", "save_figure", "trajectory_figure", "timeline_figure"]
 
 
-def _pyplot() -> Any:
+def pyplot() -> Any:
+    """matplotlib.pyplot on the headless Agg backend."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -32,8 +33,9 @@ def _pyplot() -> Any:
     return plt
 
 
-def _save(fig: Any, path: Path) -> Path:
-    plt = _pyplot()
+def save_figure(fig: Any, path: Path) -> Path:
+    """Write ``fig`` as a PNG atomically and close it."""
+    plt = pyplot()
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", dpi=120)
     plt.close(fig)
@@ -67,7 +69,7 @@ def trajectory_figure(smcs: Mapping[str, Any], target: str, path: str | Path, *,
     from pixelworld_env.render import rgb_image
     from sb3_smc.evaluation import episode_seed, make_evaluation_env, run_episode
 
-    plt = _pyplot()
+    plt = pyplot()
     env = gym.make(f"PW-{target}-v0", split="test").unwrapped
     count = min(environments, len(env.scenes))
     visits: dict[str, list[Counter]] = {}
@@ -108,7 +110,7 @@ def trajectory_figure(smcs: Mapping[str, Any], target: str, path: str | Path, *,
                 ax.set_ylabel(f"env {i}", fontsize=7)
     fig.suptitle(f"{target}: visited cells over {repeats} test episodes", fontsize=8)
     fig.tight_layout()
-    return _save(fig, Path(path))
+    return save_figure(fig, Path(path))
 
 
 def timeline_figure(smc: Any, target: str, path: str | Path, *, index: int = 0, seed: int = 0) -> Path:
@@ -117,7 +119,7 @@ def timeline_figure(smc: Any, target: str, path: str | Path, *, index: int = 0, 
     import pixelworld_env  # noqa: F401
     from sb3_smc.evaluation import make_evaluation_env, run_episode
 
-    plt = _pyplot()
+    plt = pyplot()
     env = make_evaluation_env(smc, f"PW-{target}-v0")  # the SMC's own settings (max_steps included), test split
     episode = run_episode(smc, env, index=index, seed=seed)
     names = sorted({name for chain, _ in episode.moves for name in chain})
@@ -147,4 +149,4 @@ def timeline_figure(smc: Any, target: str, path: str | Path, *, index: int = 0, 
     ax.set_title(f"{smc.name} on {target}, test environment {index}: {len(episode.moves)} moves, "
                  f"{episode.length} decisions, {result}", fontsize=7)
     fig.tight_layout()
-    return _save(fig, Path(path))
+    return save_figure(fig, Path(path))

@@ -19,6 +19,7 @@ import numpy as np
 
 from pixelworld_env.atomic import atomic_write
 from sb3_smc.experiments.design import CATEGORIES, METHODS
+from sb3_smc.experiments.figures import pyplot, save_figure
 from sb3_smc.experiments.paper import PAPER_CONCEPTS, PAPER_MEANS, PAPER_NOPRIM, PAPER_TTESTS
 from sb3_smc.experiments.runner import read_results
 
@@ -205,66 +206,58 @@ def _ttest_row(label: str, comparison: str, members: Sequence[str], a: str, b: s
     return f"| {label} | {comparison} | {len(pairs)} | {t:.2f} | {df} | {p:.2g} | {paper_text} |"
 
 
-def _figures(directory: Path, results: dict[str, Any], methods: list[str], targets: list[str],
-             score: dict[tuple[str, str], float], category_of: dict[str, str]) -> list[Path]:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    folder = directory / "figures"
-    folder.mkdir(exist_ok=True)
-    paths = []
-    # per category: mean of the reported scores across concepts, standard error across concepts
-    groups = [c for c in CATEGORIES if any(category_of[t] == c for t in targets)]
-    fig, ax = plt.subplots(figsize=(1.8 + 1.4 * len(groups) * max(1, len(methods)) / 3, 3.2))
+def _bars(labels: Sequence[str], methods: Sequence[str], values: dict[str, list[float]],
+          errors: dict[str, list[float]], title: str, path: Path, *, size: tuple[float, float],
+          rotate: bool = False) -> Path:
+    """Grouped bars (one group per label, one bar per method) with error bars, in percent."""
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=size)
     width = 0.8 / max(1, len(methods))
     for k, method in enumerate(methods):
-        means, errors = [], []
-        for category in groups:
-            values = [score[(t, method)] for t in targets if category_of[t] == category and (t, method) in score]
-            means.append(100 * np.mean(values) if values else np.nan)
-            errors.append(100 * np.std(values, ddof=1) / np.sqrt(len(values)) if len(values) > 1 else 0.0)
-        ax.bar(np.arange(len(groups)) + k * width, means, width, yerr=errors, label=method,
+        ax.bar(np.arange(len(labels)) + k * width, values[method], width, yerr=errors[method], label=method,
                color=COLORS.get(method), capsize=2)
-    ax.set_xticks(np.arange(len(groups)) + width * (len(methods) - 1) / 2, groups)
+    ticks = np.arange(len(labels)) + width * (len(methods) - 1) / 2
+    if rotate:
+        ax.set_xticks(ticks, labels, rotation=30, ha="right", fontsize=6)
+    else:
+        ax.set_xticks(ticks, labels)
     ax.set_ylabel("test score (%)")
     ax.set_ylim(0, 100)
     ax.legend(fontsize=7, ncol=3)
-    ax.set_title("per category (best seed; error: s.e. across concepts)", fontsize=9)
+    ax.set_title(title, fontsize=9)
     fig.tight_layout()
-    paths.append(_save(fig, folder / "categories.png"))
+    return save_figure(fig, path)
+
+
+def _sem(values: Sequence[float]) -> float:
+    """Standard error of the mean, in percent (0 for fewer than two values)."""
+    return 100 * float(np.std(values, ddof=1)) / math.sqrt(len(values)) if len(values) > 1 else 0.0
+
+
+def _figures(directory: Path, results: dict[str, Any], methods: list[str], targets: list[str],
+             score: dict[tuple[str, str], float], category_of: dict[str, str]) -> list[Path]:
+    folder = directory / "figures"
+    folder.mkdir(exist_ok=True)
+    # per category: mean of the reported scores across concepts, standard error across concepts
+    groups = [c for c in CATEGORIES if any(category_of[t] == c for t in targets)]
+    members = {(c, m): [score[(t, m)] for t in targets if category_of[t] == c and (t, m) in score]
+               for c in groups for m in methods}
+    categories = _bars(
+        groups, methods,
+        {m: [100 * np.mean(members[(c, m)]) if members[(c, m)] else np.nan for c in groups] for m in methods},
+        {m: [_sem(members[(c, m)]) for c in groups] for m in methods},
+        "per category (best seed; error: s.e. across concepts)", folder / "categories.png",
+        size=(1.8 + 1.4 * len(groups) * max(1, len(methods)) / 3, 3.2))
     # per concept: the reported score, standard error across seeds of the reported curriculum
     by_seed: dict[tuple[str, str], list[float]] = defaultdict(list)
     best_curriculum = {(r["target"], r["method"]): r["curriculum"] for r in results["reported"]}
     for row in results["rows"]:
         if row["curriculum"] == best_curriculum.get((row["target"], row["method"])):
             by_seed[(row["target"], row["method"])].append(row["test_score"])
-    fig, ax = plt.subplots(figsize=(max(4.0, 0.9 * len(targets) * max(1, len(methods)) / 2), 3.6))
-    for k, method in enumerate(methods):
-        values = [100 * score.get((t, method), np.nan) for t in targets]
-        errors = [100 * np.std(by_seed[(t, method)], ddof=1) / np.sqrt(len(by_seed[(t, method)]))
-                  if len(by_seed[(t, method)]) > 1 else 0.0 for t in targets]
-        ax.bar(np.arange(len(targets)) + k * width, values, width, yerr=errors, label=method,
-               color=COLORS.get(method), capsize=2)
-    ax.set_xticks(np.arange(len(targets)) + width * (len(methods) - 1) / 2, targets, rotation=30, ha="right",
-                  fontsize=6)
-    ax.set_ylabel("test score (%)")
-    ax.set_ylim(0, 100)
-    ax.legend(fontsize=7, ncol=3)
-    ax.set_title("per concept (best seed; error: s.e. across seeds)", fontsize=9)
-    fig.tight_layout()
-    paths.append(_save(fig, folder / "concepts.png"))
-    return paths
-
-
-def _save(fig: Any, path: Path) -> Path:
-    import io
-
-    import matplotlib.pyplot as plt
-
-    buffer = io.BytesIO()
-    fig.savefig(buffer, format="png", dpi=120)
-    plt.close(fig)
-    atomic_write(path, buffer.getvalue())
-    return path
+    concepts = _bars(
+        targets, methods,
+        {m: [100 * score.get((t, m), np.nan) for t in targets] for m in methods},
+        {m: [_sem(by_seed[(t, m)]) for t in targets] for m in methods},
+        "per concept (best seed; error: s.e. across seeds)", folder / "concepts.png",
+        size=(max(4.0, 0.9 * len(targets) * max(1, len(methods)) / 2), 3.6), rotate=True)
+    return [categories, concepts]
