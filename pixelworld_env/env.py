@@ -120,6 +120,8 @@ class PixelWorldEnv(gym.Env):
         self._last_self: dict[int, Cell] = {}
         # Per scene: the goal's truth per self cell, and the concept's test for a moved self.
         self._goal_memo: dict[int, tuple[dict[Cell, bool], SelfEvaluator]] = {}
+        # Per scene: the one-hot positions of the window per self cell (worlds where only the self moves).
+        self._hot_memo: dict[int, dict[Cell, np.ndarray]] = {}
         self._world: World | None = None
         self._index = 0
         self._steps = 0
@@ -135,10 +137,23 @@ class PixelWorldEnv(gym.Env):
             return self.world.window().astype(np.int64).reshape(-1)
         return self.world.state().astype(np.uint8)
 
-    def hand_observation(self) -> np.ndarray:
-        """The one-hot 3 x 3 window of the current state (81 float32), whatever ``observation`` is."""
-        obs = np.zeros(9 * NUM_COLORS, dtype=np.float32)
-        obs[_ONE_HOT_OFFSETS + self._world.window().ravel()] = 1.0  # type: ignore[union-attr]
+    def hand_observation(self, out: np.ndarray | None = None) -> np.ndarray:
+        """The one-hot 3 x 3 window of the current state (81 float32), whatever ``observation`` is.
+
+        With ``out`` (zeros in its first 81 entries), the ones are written there and ``out`` is returned.
+        """
+        obs = np.zeros(9 * NUM_COLORS, dtype=np.float32) if out is None else out
+        world = self._world
+        assert world is not None
+        if world.self_only:  # only the self moves: the window is a function of its cell (memoised per scene)
+            memo = self._hot_memo[self._index]
+            position = world.positions[world.self_index]
+            hot = memo.get(position)
+            if hot is None:
+                hot = memo[position] = _ONE_HOT_OFFSETS + world.window().ravel()
+        else:
+            hot = _ONE_HOT_OFFSETS + world.window().ravel()
+        obs[hot] = 1.0
         return obs
 
     def goal_holds(self) -> bool:
@@ -198,6 +213,7 @@ class PixelWorldEnv(gym.Env):
             world = self._worlds[index] = World(self.scenes[index])
             scene = self.scenes[index]
             self._goal_memo[index] = ({}, self.concept.self_evaluator(scene.objects, scene.floor_row))
+            self._hot_memo[index] = {}
         world.reset(self._last_self.get(index) if self.aaai18_reset_bug else None)
         self._world = world
         self._steps = 0
@@ -209,9 +225,18 @@ class PixelWorldEnv(gym.Env):
         return self._observe(), info
 
     def step(self, action):
+        reward, terminated, truncated, info = self.transition(check_action(action, self.action_names))
+        return self._observe(), reward, terminated, truncated, info
+
+    def transition(self, action: int) -> tuple[float, bool, bool, dict[str, Any]]:
+        """:meth:`step` without building the observation: ``(reward, terminated, truncated, info)``.
+
+        ``action`` must be a valid action index (:meth:`step` checks it); for wrappers that build their own
+        observation (:class:`sb3_smc.HierarchicalSMCWrapper`).
+        """
         if self._done:
             raise RuntimeError("the episode has ended: call reset() before step()")
-        effect = self._effects[check_action(action, self.action_names)]
+        effect = self._effects[action]
         self._steps += 1
         terminated = False
         if effect.__class__ is tuple:  # a move
@@ -226,7 +251,7 @@ class PixelWorldEnv(gym.Env):
         truncated = not terminated and self._steps >= self.max_steps
         self._done = terminated or truncated
         info = self._info(success=self._done and reward > 0, signalled=terminated)
-        return self._observe(), reward, terminated, truncated, info
+        return reward, terminated, truncated, info
 
     def _move(self, delta: Cell) -> float:
         if self._world.move(delta) and self.kind == BRING_ABOUT:  # type: ignore[union-attr]

@@ -223,24 +223,29 @@ class NumpyLSTMPolicy:
 
     def probabilities_batch(self, observations: np.ndarray, states: Sequence[LSTMState]
                             ) -> tuple[np.ndarray, list[LSTMState]]:
-        """Probabilities ``(B, n_actions)`` and next states of ``B`` observations, one state per row."""
+        """Probabilities ``(B, n_actions)`` and next states of ``B`` observations, one state per row (the same
+        arithmetic as :meth:`probabilities`, batched)."""
         x = np.asarray(observations, dtype=self.dtype).reshape(len(observations), -1)
         if len(states) != len(x):
             raise ValueError(f"{len(x)} observations but {len(states)} states")
-        h_prev = np.stack([s[0] for s in states], axis=1)  # (layers, B, n)
-        c_prev = np.stack([s[1] for s in states], axis=1)
+        h_prev = np.array([s[0] for s in states])  # (B, layers, n)
+        c_prev = np.array([s[1] for s in states])
         n = self.hidden_size
         h_next = np.empty_like(h_prev)
         c_next = np.empty_like(c_prev)
         for k, (w_ih, w_hh, bias) in enumerate(self.lstm):
-            t = np.tanh(x @ w_ih + h_prev[k] @ w_hh + bias)
-            s = 0.5 * t + 0.5
-            c = s[:, n:2 * n] * c_prev[k] + s[:, :n] * t[:, 2 * n:3 * n]
+            t = x @ w_ih
+            t += h_prev[:, k] @ w_hh
+            t += bias
+            np.tanh(t, out=t)
+            s = t * 0.5
+            s += 0.5
+            c = s[:, n:2 * n] * c_prev[:, k]
+            c += s[:, :n] * t[:, 2 * n:3 * n]
             x = s[:, 3 * n:] * np.tanh(c)
-            h_next[k] = x
-            c_next[k] = c
-        next_states = [(h_next[:, b].copy(), c_next[:, b].copy()) for b in range(len(x))]
-        return _softmax(_forward(self.head, x)), next_states
+            h_next[:, k] = x
+            c_next[:, k] = c
+        return _softmax(_forward(self.head, x)), list(zip(h_next, c_next, strict=True))
 
     def __repr__(self) -> str:
         return (f"{type(self).__name__}(observation_size={self.observation_size}, hidden_size={self.hidden_size}, "
@@ -486,11 +491,11 @@ def sample_action(probabilities: np.ndarray, rng: np.random.Generator) -> int:
 
     One ``rng.random()`` per call (much faster than ``rng.choice``); actions of zero probability are never drawn.
     """
-    cdf = np.cumsum(probabilities)
+    cdf = np.asarray(probabilities).cumsum()  # array methods: no numpy dispatch wrappers on this hot path
     total = cdf[-1]
     if not total > 0.0:
         raise ValueError(f"probabilities must have a positive finite sum, got {total}")
-    index = int(np.searchsorted(cdf, rng.random() * total, side="right"))
+    index = int(cdf.searchsorted(rng.random() * total, side="right"))
     if index >= len(cdf):  # rounding at the top end: the last action of positive probability
         index = int(np.flatnonzero(np.asarray(probabilities) > 0)[-1])
     return index

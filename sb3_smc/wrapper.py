@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from typing import Any
+from collections.abc import Generator, Sequence
+from typing import Any, TypeVar
 
 import gymnasium as gym
 import numpy as np
@@ -12,12 +12,27 @@ from gymnasium import spaces
 from pixelworld_env.env import PixelWorldEnv
 from pixelworld_env.validation import check_action
 from sb3_smc.policies import sample_action
-from sb3_smc.smc import CALL_PREFIX, MOVES, SMC, observation_size, smc_action_names
+from sb3_smc.smc import CALL_PREFIX, HAND_SIZE, MOVES, SMC, StepPolicy, observation_size, smc_action_names
 
 SIGNAL_OUTCOMES = {"SIG1": 1.0, "SIG0": -1.0}
 """The outcome an SMC call records for each signal (0 = not called in this episode, or timed out)."""
 
 _SIGNAL, _MOVE, _CALL = 0, 1, 2
+
+PolicyRequest = tuple[StepPolicy, np.ndarray, Any]
+"""What a wrapper coroutine yields when a policy must decide: ``(policy, observation, state)``."""
+_Result = TypeVar("_Result")
+
+
+def _only_order_checks(env: gym.Env, base: gym.Env) -> bool:
+    from gymnasium.wrappers import OrderEnforcing, PassiveEnvChecker
+
+    layer = env
+    while layer is not base:
+        if type(layer) not in (OrderEnforcing, PassiveEnvChecker):
+            return False
+        layer = layer.env
+    return True
 
 
 class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
@@ -76,7 +91,10 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         self._plan = self._action_plan(self.action_names, self.action_names.index)
         self._child_plans: dict[int, list[tuple[int, Any]]] = {}
         self._outcomes = np.zeros(len(self.smcs), dtype=np.float32)
-        self._previous = np.zeros(len(self.action_names), dtype=np.float32)
+        self._previous_action = -1
+        # Moves and signals may skip the layers between this wrapper and the base env when those only check the
+        # call order (gym.make's OrderEnforcing / PassiveEnvChecker), which the wrapper checks itself.
+        self._direct = _only_order_checks(env, base)
         self._rng: np.random.Generator | None = None
         self._elapsed = 0
         self._done = True
@@ -112,21 +130,29 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         return self._outcomes.copy()
 
     def _observation(self) -> np.ndarray:
-        return np.concatenate((self.base.hand_observation(), self._outcomes, self._previous))
+        return self._call_observation(self._outcomes, self._previous_action, len(self.action_names))
 
-    def run_call(self, smc: SMC, depth: int, calls: list[dict[str, Any]], cap: int) -> tuple[float, int, float]:
-        """Run one call of ``smc`` on the live world: ``(reward, primitive steps, outcome)``."""
+    def call_coroutine(self, smc: SMC, depth: int, calls: list[dict[str, Any]],
+                       cap: int) -> Generator[PolicyRequest, tuple[np.ndarray, Any], tuple[float, int, float]]:
+        """One call of ``smc`` on the live world as a coroutine; returns ``(reward, primitive steps, outcome)``.
+
+        It yields ``(policy, observation, state)`` whenever a policy must decide (``smc``'s or, inside a child's
+        call, the child's) and expects ``policy.probabilities(observation, state)`` back: :meth:`run_call` answers
+        at once; :class:`sb3_smc.vec_env.SMCVecEnv` answers the requests of many environments with one batched
+        evaluation per policy. The draws from this env's generator are the same either way.
+        """
         assert self._rng is not None
         plan = self._plan_of(smc)
         n_actions = len(plan)
+        policy = smc.policy
         outcomes = np.zeros(len(smc.children), dtype=np.float32)
-        previous = np.zeros(n_actions, dtype=np.float32)
-        state = smc.policy.initial_state()
+        previous = -1
+        state = policy.initial_state()
         reward, moves, outcome = 0.0, 0, 0.0
         self._stack.append(smc.name)
         for _ in range(cap):
-            obs = np.concatenate((self.base.hand_observation(), outcomes, previous))
-            probabilities, state = smc.policy.probabilities(obs, state)
+            obs = self._call_observation(outcomes, previous, n_actions)
+            probabilities, state = yield policy, obs, state
             if len(probabilities) != n_actions:
                 raise ValueError(f"SMC {smc.name!r}: its policy gives {len(probabilities)} action probabilities, "
                                  f"but its actions are {smc.action_names}")
@@ -142,16 +168,27 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
                     self._cells.append(self.base.world.self_position)
                     self._moves.append((tuple(self._stack), smc.action_names[action]))
             else:
-                r, m, o = self.run_call(smc.children[value], depth + 1, calls, cap)
+                r, m, o = yield from self.call_coroutine(smc.children[value], depth + 1, calls, cap)
                 outcomes[value] = o
                 reward += r
                 moves += m
-            previous[:] = 0.0
-            previous[action] = 1.0
+            previous = action
         self._stack.pop()
         calls.append({"smc": smc.name, "depth": depth, "primitive_steps": moves, "outcome": int(outcome),
                       "reward": reward})
         return reward, moves, outcome
+
+    def _call_observation(self, outcomes: np.ndarray, previous: int, n_actions: int) -> np.ndarray:
+        obs = np.zeros(HAND_SIZE + len(outcomes) + n_actions, dtype=np.float32)
+        self.base.hand_observation(out=obs)
+        obs[HAND_SIZE:HAND_SIZE + len(outcomes)] = outcomes
+        if previous >= 0:
+            obs[HAND_SIZE + len(outcomes) + previous] = 1.0
+        return obs
+
+    def run_call(self, smc: SMC, depth: int, calls: list[dict[str, Any]], cap: int) -> tuple[float, int, float]:
+        """Run one call of ``smc`` on the live world: ``(reward, primitive steps, outcome)``."""
+        return run_coroutine(self.call_coroutine(smc, depth, calls, cap))
 
     # ------------------------------------------------------------------------------------------ gym API
 
@@ -162,13 +199,18 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         elif self._rng is None:
             self._rng = np.random.default_rng()
         self._outcomes[:] = 0.0
-        self._previous[:] = 0.0
+        self._previous_action = -1
         self._elapsed = 0
         self._done = False
         info = dict(info, primitive_steps=0, elapsed_steps=0, smc_calls=[])
         return self._observation(), info
 
     def step(self, action):
+        return run_coroutine(self.step_coroutine(action))
+
+    def step_coroutine(self, action) -> Generator[PolicyRequest, tuple[np.ndarray, Any], tuple]:
+        """:meth:`step` as a coroutine that yields the policy decisions of SMC calls (see :meth:`call_coroutine`)
+        and returns the step's ``(observation, reward, terminated, truncated, info)``."""
         if self._done:
             raise RuntimeError("the episode has ended: call reset() before step()")
         action = check_action(action, self.action_names)
@@ -181,13 +223,16 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
             cap = self.call_step_cap
             if self.count_primitive_steps:
                 cap = max(1, min(cap, self.base.max_steps - self._elapsed))
-            reward, moves, outcome = self.run_call(self.smcs[value], 1, calls, cap)
+            reward, moves, outcome = yield from self.call_coroutine(self.smcs[value], 1, calls, cap)
             self._outcomes[value] = outcome
             terminated, base_truncated = False, False
             info = self.base.step_info()
             cost = max(1, moves) if self.count_primitive_steps else 1
         else:
-            _, reward, terminated, base_truncated, info = self.env.step(value)
+            if self._direct:  # the base env's step without the observation the wrapper would discard
+                reward, terminated, base_truncated, info = self.base.transition(value)
+            else:
+                _, reward, terminated, base_truncated, info = self.env.step(value)
             moves = int(kind == _MOVE)
             cost = 1
             if moves and self.record_cells:
@@ -196,11 +241,20 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         self._elapsed += cost
         truncated = not terminated and (base_truncated or self._elapsed >= self.base.max_steps)
         self._done = terminated or truncated
-        self._previous[:] = 0.0
-        self._previous[int(action)] = 1.0
+        self._previous_action = action
         info = dict(info, is_success=(terminated or truncated) and reward > 0, primitive_steps=moves,
                     elapsed_steps=self._elapsed, smc_calls=calls)
         if self.record_cells:
             info["cells"] = self._cells
             info["moves"] = self._moves
         return self._observation(), float(reward), terminated, truncated, info
+
+
+def run_coroutine(coroutine: Generator[PolicyRequest, tuple[np.ndarray, Any], _Result]) -> _Result:
+    """Drive a wrapper coroutine to its end, answering each decision with the policy's own ``probabilities``."""
+    try:
+        policy, observation, state = next(coroutine)
+        while True:
+            policy, observation, state = coroutine.send(policy.probabilities(observation, state))
+    except StopIteration as stop:
+        return stop.value

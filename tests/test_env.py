@@ -287,3 +287,19 @@ def test_oracle_plans_with_and_without_pushing() -> None:
                            kind="bring-about", concept="?x small_blob(x) & touches(self,x)")
     walled.reset(seed=0)
     assert plan_to_goal(walled) is None
+
+
+@pytest.mark.parametrize("env_id", ["PW-cl_self-in-container_vs_noncontainer-v0",
+                                    "PW-ba_self-in-container_from_between-potential-containers-v0"])
+def test_hand_observation_is_the_one_hot_window_after_any_moves(env_id: str) -> None:
+    env = gym.make(env_id, observation="hand", disable_env_checker=True).unwrapped
+    rng = np.random.default_rng(0)
+    for episode in range(6):
+        env.reset(seed=episode)
+        for _ in range(40):  # moves only (each memoised window is checked against a fresh one)
+            env.apply_move(int(rng.integers(env.action_names.index("DOWN"), env.action_names.index("LEFT") + 1)))
+            expected = np.zeros((9, 9), dtype=np.float32)
+            expected[np.arange(9), env.world.window().ravel()] = 1.0
+            np.testing.assert_array_equal(env.hand_observation(), expected.reshape(-1))
+            out = np.zeros(90, dtype=np.float32)
+            assert env.hand_observation(out=out) is out and np.array_equal(out[:81], expected.reshape(-1))
