@@ -80,6 +80,15 @@ def _report(args: argparse.Namespace) -> int:
     return 0
 
 
+def _import_zoo(args: argparse.Namespace) -> int:
+    from sb3_smc.zoo import import_zoo_model
+
+    smc = import_zoo_model(args.run_dir, args.library, name=args.name, model_file=args.model)
+    calls = f", calling {[c.name for c in smc.children]}" if smc.children else ""
+    print(f"added SMC {smc.name!r} ({smc.kind}, {type(smc.model).__name__}{calls}) to {args.library}")
+    return 0
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="sb3-smc", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -128,6 +137,14 @@ def main(argv: Sequence[str] | None = None) -> int:
                                                         "(default: the first target)")
     p.add_argument("--no-behaviour", action="store_true", help="skip the trajectory and timeline figures")
     p.set_defaults(run=_report)
+
+    p = sub.add_parser("import-zoo", help="add a model trained by rl_zoo3 to an SMC library")
+    p.add_argument("run_dir", help="the zoo's run directory, e.g. logs/trpo/PW-...-v0_1")
+    p.add_argument("--library", required=True, help="the library directory (created if missing)")
+    p.add_argument("--name", default=None, help="the SMC's name (default: the env id's dataset name)")
+    p.add_argument("--model", choices=("final", "best"), default="final",
+                   help="the zoo's final model (<env id>.zip) or its best_model.zip")
+    p.set_defaults(run=_import_zoo)
 
     p = sub.add_parser("status", help="what a run directory holds: done, running, failed, left")
     p.add_argument("directory")

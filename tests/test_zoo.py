@@ -101,14 +101,16 @@ def test_config_trains_and_gives_a_storable_smc(algo, tmp_path):
     for key in ("n_timesteps", "n_envs", "normalize"):
         hyperparams.pop(key)
     wrapper = _import(hyperparams.pop("env_wrapper"))
+    callback = _import(hyperparams.pop("callback"))()
     policy = hyperparams.pop("policy")
     policy_kwargs = _policy_kwargs(hyperparams.pop("policy_kwargs"))
     hyperparams.update(n_steps=64, batch_size=min(hyperparams["batch_size"], 64))
     env_id = ENV_IDS[algo]
     venv = make_vec_env(env_id, n_envs=1, seed=0, wrapper_class=wrapper)
     model = cls(policy, venv, policy_kwargs=policy_kwargs, seed=0, device="cpu", **hyperparams)
-    model.learn(64)
+    model.learn(64, callback=callback)
     assert model.num_timesteps >= 64
+    assert callback.kind == venv.envs[0].unwrapped.kind and callback.history  # the smc/ curves were computed
     # what rl_zoo3 trains has the flat-SMC layout: it goes into an SMCLibrary as it is
     base = venv.envs[0].unwrapped
     smc = SMC(algo, base.kind, policy_from_model(model), model=model)

@@ -147,7 +147,7 @@ def check_model_layout(name: str, model: Any, action_names: Sequence[str], size:
             f"observation space {getattr(model, 'observation_space', None)}"
         stacked = f", {frame_stack} stacked" if frame_stack > 1 else ""
         bare = (" — the bare PixelWorld observation: the model was trained without HierarchicalSMCWrapper (e.g. by "
-                "rl_zoo3 without -conf zoo_configs/<algo>.yml); train it inside sb3_smc.zoo.smc_env so that it sees "
+                "rl_zoo3 without -conf sb3_smc.zoo.<algo>); train it inside sb3_smc.zoo.smc_env so that it sees "
                 "the window, the outcomes and its previous action") if shape in ((HAND_SIZE,), (9,)) else ""
         raise LayoutMismatchError(
             f"SMC {name!r}: {where} has {have}, but its observation layout is ({frame_stack * size},) "

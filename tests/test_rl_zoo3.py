@@ -1,0 +1,153 @@
+"""rl_zoo3 as users type it, against sb3-smc installed from a wheel (not the editable install of the checkout).
+
+A module fixture builds the wheel and installs it (``--no-deps``) into a fresh virtual environment whose other
+packages come from this interpreter's site-packages; every command then runs in that environment. Runs are short
+(2,000 steps) but real: the literal ``rl_zoo3 train`` line, the conf modules, ``enjoy``, ``record_video``, the
+TensorBoard curves, ``sb3-smc import-zoo`` and a level-2 zoo run calling an imported SMC.
+"""
+
+from __future__ import annotations
+
+import os
+import site
+import subprocess
+import sys
+import sysconfig
+import venv
+from pathlib import Path
+
+import pytest
+import yaml
+
+pytest.importorskip("rl_zoo3", reason="rl_zoo3 is in the [test] extra: pip install -e '.[test]'")
+
+ROOT = Path(__file__).resolve().parents[1]
+FLAT = "PW-cl_self-in-left-corner_vs_on-hline-v0"
+LEVEL2 = "PW-cl_self-in-container_vs_noncontainer-v0"
+
+
+class Installed:
+    """A virtual environment with the sb3-smc wheel; ``run`` executes Python code or a console entry in it."""
+
+    def __init__(self, root: Path) -> None:
+        self.root = root
+        self.python = root / "bin" / "python"
+        self.work = root / "work"
+        self.work.mkdir()
+
+    def run(self, code: str, *args: str, env: dict[str, str] | None = None, check: bool = True
+            ) -> subprocess.CompletedProcess:
+        result = subprocess.run([str(self.python), "-c", code, *args], cwd=self.work, capture_output=True, text=True,
+                                env={**os.environ, **(env or {})}, timeout=600)
+        if check and result.returncode != 0:
+            raise AssertionError(f"exit {result.returncode}\n--- stdout\n{result.stdout[-3000:]}\n--- stderr\n"
+                                 f"{result.stderr[-3000:]}")
+        return result
+
+    def zoo(self, *args: str, **kwargs) -> subprocess.CompletedProcess:
+        """``rl_zoo3 ARGS`` (the console script's entry point, ``rl_zoo3.cli:main``)."""
+        return self.run("import sys; from rl_zoo3.cli import main; sys.argv = ['rl_zoo3', *sys.argv[1:]]; main()",
+                        *args, **kwargs)
+
+    def module(self, name: str, *args: str, **kwargs) -> subprocess.CompletedProcess:
+        """``python -m NAME ARGS``."""
+        return self.run("import runpy, sys; sys.argv = [sys.argv[1], *sys.argv[2:]]; "
+                        "runpy.run_module(sys.argv[0], run_name='__main__', alter_sys=True)", name, *args, **kwargs)
+
+
+@pytest.fixture(scope="module")
+def installed(tmp_path_factory) -> Installed:
+    root = tmp_path_factory.mktemp("wheel-env")
+    wheels = root / "wheels"
+    subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q", "-w",
+                    str(wheels), str(ROOT)], check=True, capture_output=True, cwd=root)
+    (wheel,) = wheels.glob("sb3_smc-*.whl")
+    env_dir = root / "venv"
+    venv.EnvBuilder(with_pip=False).create(env_dir)
+    purelib = Path(sysconfig.get_path("purelib", vars={"base": str(env_dir), "platbase": str(env_dir)}))
+    # the dependencies come from this interpreter's site-packages (a path line; its .pth files, among them the
+    # editable install of the checkout, are not run there)
+    (purelib / "_dependencies.pth").write_text("\n".join(site.getsitepackages()) + "\n")
+    subprocess.run([sys.executable, "-m", "pip", "install", "--no-deps", "-q", "--target", str(purelib), str(wheel)],
+                   check=True, capture_output=True)
+    assert (purelib / "sb3_smc_gym_hook.pth").is_file()
+    return Installed(env_dir)
+
+
+def test_the_hook_registers_the_ids_when_gymnasium_is_imported_and_not_before(installed: Installed) -> None:
+    probe = ("import sys\n"
+             "heavy = sorted(m for m in ('torch', 'pixelworld_env', 'sb3_smc', 'gymnasium') if m in sys.modules)\n"
+             "import gymnasium, sb3_smc\n"
+             "print(heavy, 'PW-cl_self-in-left-corner_vs_on-hline-v0' in gymnasium.registry,\n"
+             "      sb3_smc.__file__.startswith(sys.prefix))\n")
+    assert installed.run(probe).stdout.split() == ["[]", "True", "True"]  # nothing loaded at start; the wheel's copy
+    off = installed.run(probe, env={"SB3_SMC_GYM_HOOK": "0"}).stdout.split()
+    assert off[1] == "False"
+
+
+@pytest.mark.parametrize("algo", ["trpo", "ppo"])
+def test_the_literal_train_command(installed: Installed, algo: str) -> None:
+    installed.zoo("train", "--algo", algo, "--env", FLAT, "-n", "2000", "--num-threads", "1", "-f", f"literal-{algo}")
+    assert (installed.work / f"literal-{algo}" / algo / f"{FLAT}_1" / f"{FLAT}.zip").is_file()
+
+
+def test_conf_module_trains_with_the_shipped_settings_and_tensorboard_curves(installed: Installed) -> None:
+    from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
+
+    installed.zoo("train", "--algo", "ppo_lstm", "--env", FLAT, "-conf", "sb3_smc.zoo.ppo_lstm", "-n", "4000",
+                  "--num-threads", "1", "-f", "logs", "--tensorboard-log", "tb")
+    config = (installed.work / "logs" / "ppo_lstm" / f"{FLAT}_1" / FLAT / "config.yml").read_text()
+    assert "sb3_smc.zoo.smc_env" in config and "MlpLstmPolicy" in config and "lstm_hidden_size=32" in config
+    (events,) = (installed.work / "tb").rglob("events.out.tfevents.*")
+    tags = EventAccumulator(str(events)).Reload().Tags()["scalars"]
+    assert {"smc/accuracy", "smc/training_return", "smc/episode_length", "rollout/ep_rew_mean"} <= set(tags)
+
+
+def test_enjoy_states_the_split_and_record_video_writes_an_mp4(installed: Installed) -> None:
+    if not (installed.work / "logs" / "ppo_lstm").is_dir():
+        installed.zoo("train", "--algo", "ppo_lstm", "--env", FLAT, "-conf", "sb3_smc.zoo.ppo_lstm", "-n", "2000",
+                      "--num-threads", "1", "-f", "logs")
+    out = installed.zoo("enjoy", "--algo", "ppo_lstm", "--env", FLAT, "-f", "logs", "--no-render", "-n", "60",
+                        "--env-kwargs", "split:'test'")
+    assert f"sb3-smc: {FLAT} serves the 'test' split: 50 environments" in out.stderr
+    installed.module("rl_zoo3.record_video", "--algo", "ppo_lstm", "--env", FLAT, "-f", "logs", "-n", "30",
+                     "-o", "videos", "--deterministic")
+    videos = list((installed.work / "videos").rglob("*.mp4"))
+    assert videos and videos[0].stat().st_size > 1000
+
+
+def test_import_zoo_then_a_level2_zoo_run_calling_it(installed: Installed) -> None:
+    installed.zoo("train", "--algo", "trpo", "--env", FLAT, "-conf", "sb3_smc.zoo.trpo", "-n", "2000",
+                  "--num-threads", "1", "-f", "child")
+    out = installed.run("import sys; from sb3_smc.cli import main; sys.exit(main(sys.argv[1:]))", "import-zoo",
+                        f"child/trpo/{FLAT}_1", "--library", "lib", "--name", "corner")
+    assert "added SMC 'corner' (classification, TRPO)" in out.stdout
+    # a level-2 run: the shipped TRPO settings with the imported SMC as an extra action
+    settings = yaml.safe_load((ROOT / "zoo_configs" / "trpo.yml").read_text())["default"]
+    settings["env_wrapper"] = [{"sb3_smc.zoo.smc_env": {"library": str(installed.work / "lib"),
+                                                        "names": ["corner"]}}]
+    (installed.work / "level2.yml").write_text(yaml.safe_dump({LEVEL2: settings}))
+    installed.zoo("train", "--algo", "trpo", "--env", LEVEL2, "-conf", "level2.yml", "-n", "2000", "--num-threads",
+                  "1", "-f", "parent")
+    check = ("import sys\n"
+             "from sb3_smc import SMCLibrary, evaluate\n"
+             "from sb3_smc.zoo import import_zoo_model\n"
+             "smc = import_zoo_model(sys.argv[1], 'lib', name='container')\n"
+             "library = SMCLibrary.load('lib')\n"
+             "parent = library['container']\n"
+             "result = evaluate(parent, sys.argv[2], repeats=1)\n"
+             "print(library.names, [c.name for c in parent.children], parent.action_names[-1],\n"
+             "      result.call_counts().get('corner', 0) > 0, result.n_episodes)\n")
+    out = installed.run(check, f"parent/trpo/{LEVEL2}_1", LEVEL2).stdout
+    assert out.split() == ["('corner',", "'container')", "['corner']", "SMC:corner", "True", "50"]
+
+
+def test_import_zoo_refuses_a_run_without_the_smc_wrapper(installed: Installed) -> None:
+    if not (installed.work / "literal-trpo").is_dir():
+        installed.zoo("train", "--algo", "trpo", "--env", FLAT, "-n", "2000", "--num-threads", "1", "-f",
+                      "literal-trpo")
+    out = installed.run("import sys; from sb3_smc.cli import main; sys.exit(main(sys.argv[1:]))", "import-zoo",
+                        f"literal-trpo/trpo/{FLAT}_1", "--library", "lib2", check=False)
+    assert out.returncode == 2
+    assert "did not use sb3-smc's wrapper" in out.stderr and "-conf sb3_smc.zoo.trpo" in out.stderr
+    assert not (installed.work / "lib2").exists()
