@@ -80,6 +80,9 @@ Overrides replace these key by key, ``policy_kwargs`` key by key too. RecurrentP
 settings of ``docs/training.md``; PPO (memoryless; minibatches of 250, 10 epochs, learning rate 3e-4, the settings
 of the earlier hand-written rl_zoo3 file) is offered for comparison, untuned."""
 
+RECURRENT_POLICIES = {"lstm": "SequenceLstmPolicy", "gru": "SequenceGruPolicy"}
+"""``rnn`` option of ``train_smc`` -> the recurrent policy (by name) of ``RecurrentPPO``."""
+
 CLASS_KEY = "__class__"
 SCHEDULE_KEYS = ("learning_rate", "clip_range")
 _RESERVED = {"n_steps": "the budget's n_steps", "seed": "the spec's seed", "env": "the environment factory",
@@ -172,13 +175,13 @@ def resolve_hyperparameters(algo: str, overrides: Mapping[str, Any] | None = Non
 def constructor_arguments(hyperparameters: Mapping[str, Any]) -> tuple[Any, dict[str, Any]]:
     """``(policy, keyword arguments)`` for the algorithm's constructor from stored hyperparameters.
 
-    ``"SequenceLstmPolicy"`` becomes :class:`sb3_smc.common.recurrent.policies.SequenceLstmPolicy` (SB3 only
-    knows its own policy names); classes are imported and ``"lin_<x>"`` schedules built.
+    ``"SequenceLstmPolicy"`` / ``"SequenceGruPolicy"`` become the classes of :mod:`sb3_smc.common.recurrent` (SB3
+    only knows its own policy names); classes are imported and ``"lin_<x>"`` schedules built.
     """
     kwargs = {key: decode_value(value, key) for key, value in hyperparameters.items()}
     policy = kwargs.pop("policy")
-    if policy == "SequenceLstmPolicy":
-        from sb3_smc.common.recurrent.policies import SequenceLstmPolicy
+    if policy in RECURRENT_POLICIES.values():
+        from sb3_smc.common import recurrent
 
-        policy = SequenceLstmPolicy
+        policy = getattr(recurrent, policy)
     return policy, kwargs

@@ -29,6 +29,7 @@ if TYPE_CHECKING:
 __all__ = [
     "ACTIVATIONS",
     "FrameStackPolicy",
+    "NumpyGRUPolicy",
     "NumpyLSTMPolicy",
     "NumpyMLPPolicy",
     "ScriptedPolicy",
@@ -252,6 +253,71 @@ class NumpyLSTMPolicy:
                 f"n_layers={self.n_layers}, n_actions={self.n_actions})")
 
 
+class NumpyGRUPolicy:
+    """Recurrent actor of a :class:`~sb3_smc.common.recurrent.SequenceGruPolicy` in numpy (the paper's GRU).
+
+    features -> stacked GRU layers -> policy MLP -> ``action_net`` -> softmax, with torch's GRU equations (gate
+    order r, z, n; ``n = tanh(W_in x + b_in + r * (W_hn h + b_hn))``, ``h' = (1 - z) * n + z * h``). The state is
+    ``h``, shape ``(n_layers, hidden_size)``; :meth:`initial_state` is zeros, as at an episode start. States are
+    never modified in place. ``gru`` is one ``(w_ih_T, w_hh_T, b_ih, b_hh)`` per layer.
+    """
+
+    def __init__(self, gru: Sequence[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]], head: Sequence[Layer],
+                 observation_size: int, dtype: Any = np.float64) -> None:
+        self.dtype = np.dtype(dtype)
+        if not gru:
+            raise ValueError("NumpyGRUPolicy needs at least one GRU layer")
+        self.hidden_size = int(np.shape(gru[0][1])[0])
+        self.n_layers = len(gru)
+        self.observation_size = int(observation_size)
+        self.gru = [tuple(np.ascontiguousarray(a, dtype=self.dtype) for a in layer) for layer in gru]
+        for k, (w_ih, w_hh, b_ih, b_hh) in enumerate(self.gru):
+            expected_in = self.observation_size if k == 0 else self.hidden_size
+            gates = 3 * self.hidden_size
+            if (w_ih.shape != (expected_in, gates) or w_hh.shape != (self.hidden_size, gates)
+                    or b_ih.shape != (gates,) or b_hh.shape != (gates,)):
+                raise ValueError(f"GRU layer {k}: inconsistent weight shapes {w_ih.shape}, {w_hh.shape}, "
+                                 f"{b_ih.shape}, {b_hh.shape}")
+        self.head = [_cast_layer(layer, self.dtype) for layer in head]
+        self.n_actions = _n_outputs(self.head)
+
+    def initial_state(self) -> np.ndarray:
+        return np.zeros((self.n_layers, self.hidden_size), dtype=self.dtype)
+
+    def _layers(self, x: np.ndarray, h_prev: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The stacked GRU on ``x`` (``(..., input)``) from ``h_prev`` (``(layers, ..., n)``)."""
+        n = self.hidden_size
+        h_next = np.empty_like(h_prev)
+        for k, (w_ih, w_hh, b_ih, b_hh) in enumerate(self.gru):
+            gi = x @ w_ih
+            gi += b_ih
+            gh = h_prev[k] @ w_hh
+            gh += b_hh
+            rz = _sigmoid(gi[..., :2 * n] + gh[..., :2 * n])
+            candidate = np.tanh(gi[..., 2 * n:] + rz[..., :n] * gh[..., 2 * n:])
+            x = candidate + rz[..., n:] * (h_prev[k] - candidate)
+            h_next[k] = x
+        return x, h_next
+
+    def probabilities(self, observation: np.ndarray, state: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        x, h_next = self._layers(np.asarray(observation, dtype=self.dtype).reshape(-1), state)
+        return _softmax(_forward(self.head, x)), h_next
+
+    def probabilities_batch(self, observations: np.ndarray, states: Sequence[np.ndarray]
+                            ) -> tuple[np.ndarray, list[np.ndarray]]:
+        """Probabilities ``(B, n_actions)`` and next states of ``B`` observations, one state per row."""
+        x = np.asarray(observations, dtype=self.dtype).reshape(len(observations), -1)
+        if len(states) != len(x):
+            raise ValueError(f"{len(x)} observations but {len(states)} states")
+        h_prev = np.array(states).transpose(1, 0, 2)  # (layers, B, n)
+        x, h_next = self._layers(x, h_prev)
+        return _softmax(_forward(self.head, x)), list(h_next.transpose(1, 0, 2))
+
+    def __repr__(self) -> str:
+        return (f"{type(self).__name__}(observation_size={self.observation_size}, hidden_size={self.hidden_size}, "
+                f"n_layers={self.n_layers}, n_actions={self.n_actions})")
+
+
 def _cast_layer(layer: Layer, dtype: np.dtype) -> Layer:
     name, a, b = layer
     if name == "linear":
@@ -271,10 +337,11 @@ def _n_outputs(layers: Sequence[Layer]) -> int:
 # From SB3 models
 # ---------------------------------------------------------------------------------------------------------------
 
-def policy_from_model(model: Any, dtype: Any = np.float64) -> NumpyMLPPolicy | NumpyLSTMPolicy:
+def policy_from_model(model: Any, dtype: Any = np.float64) -> NumpyMLPPolicy | NumpyLSTMPolicy | NumpyGRUPolicy:
     """Numpy copy of the actor of a trained SB3 model (or of its ``policy``), as a :class:`StepPolicy`.
 
-    Supports ``RecurrentPPO`` + ``MlpLstmPolicy`` (:class:`NumpyLSTMPolicy`) and ``PPO`` / ``TRPO`` (any
+    Supports ``RecurrentPPO`` + ``MlpLstmPolicy`` (:class:`NumpyLSTMPolicy`) or ``SequenceGruPolicy``
+    (:class:`NumpyGRUPolicy`) and ``PPO`` / ``TRPO`` (any
     ``ActorCriticPolicy``) + ``MlpPolicy`` (:class:`NumpyMLPPolicy`), with a ``Discrete`` action space and a
     non-image ``Box`` observation space read through a ``FlattenExtractor``. Raises ``TypeError`` for other
     algorithms, policies, feature extractors, spaces or activation functions, and ``ValueError`` for unsupported
@@ -320,6 +387,10 @@ def policy_from_model(model: Any, dtype: Any = np.float64) -> NumpyMLPPolicy | N
 
     if RecurrentActorCriticPolicy is not None and isinstance(policy, RecurrentActorCriticPolicy):
         _check_overrides(policy, RecurrentActorCriticPolicy, ("get_distribution", "_process_sequence"), what)
+        from sb3_smc.common.recurrent.gru import GRUAsLSTM
+
+        if isinstance(policy.lstm_actor, GRUAsLSTM):
+            return NumpyGRUPolicy(_gru_layers(policy.lstm_actor.gru), head, observation_size, dtype)
         return NumpyLSTMPolicy(_lstm_layers(policy.lstm_actor), head, observation_size, dtype)
     if hasattr(policy, "lstm_actor"):
         raise TypeError(f"unsupported recurrent policy {what}")
@@ -378,6 +449,18 @@ def _lstm_layers(lstm: Any) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
         if lstm.bias:
             bias = _numpy(getattr(lstm, f"bias_ih_l{k}")) + _numpy(getattr(lstm, f"bias_hh_l{k}"))
         layers.append((w_ih.T, w_hh.T, bias))
+    return layers
+
+
+def _gru_layers(gru: Any) -> list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
+    layers = []
+    for k in range(gru.num_layers):
+        w_ih = _numpy(getattr(gru, f"weight_ih_l{k}"))
+        w_hh = _numpy(getattr(gru, f"weight_hh_l{k}"))
+        zeros = np.zeros(w_ih.shape[0])
+        b_ih = _numpy(getattr(gru, f"bias_ih_l{k}")) if gru.bias else zeros
+        b_hh = _numpy(getattr(gru, f"bias_hh_l{k}")) if gru.bias else zeros
+        layers.append((w_ih.T, w_hh.T, b_ih, b_hh))
     return layers
 
 

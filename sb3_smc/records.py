@@ -407,10 +407,21 @@ class TrainingSpec(_Record):
                total_timesteps: int = 400_000, n_envs: int = DEFAULT_N_ENVS, children: Sequence[str] = (),
                include_primitives: bool = True, count_primitive_steps: bool = False, call_step_cap: int = 100,
                max_steps: int = 100, signal_bias: bool | SignalBias = True, frame_stack: int = 1,
-               split: str = "train", env_kwargs: Mapping[str, Any] | None = None,
+               split: str = "train", env_kwargs: Mapping[str, Any] | None = None, rnn: str | None = None,
                **hyperparameters: Any) -> TrainingSpec:
-        """The spec of ``train_smc``'s keyword interface (``n_steps`` in ``hyperparameters`` goes to the budget)."""
+        """The spec of ``train_smc``'s keyword interface (``n_steps`` in ``hyperparameters`` goes to the budget;
+        ``rnn="lstm"`` or ``"gru"`` picks the recurrent policy of a recurrent algorithm)."""
         n_steps = hyperparameters.pop("n_steps", None)
+        if rnn is not None:
+            from sb3_smc.hyperparameters import RECURRENT_POLICIES
+
+            if rnn not in RECURRENT_POLICIES:
+                raise RecordError(f"rnn must be one of {sorted(RECURRENT_POLICIES)}, got {rnn!r}")
+            if algo != "RecurrentPPO":
+                raise RecordError(f"rnn={rnn!r} needs a recurrent algorithm (RecurrentPPO); {algo} has no recurrence")
+            if "policy" in hyperparameters and hyperparameters["policy"] != RECURRENT_POLICIES[rnn]:
+                raise RecordError(f"rnn={rnn!r} and policy={hyperparameters['policy']!r} disagree: give one of them")
+            hyperparameters["policy"] = RECURRENT_POLICIES[rnn]
         bias = signal_bias if isinstance(signal_bias, SignalBias) else SignalBias(enabled=_bool(signal_bias,
                                                                                                  "signal_bias"))
         return cls(

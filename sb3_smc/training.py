@@ -116,6 +116,7 @@ def train_smc(
     count_primitive_steps: bool = False,
     call_step_cap: int = 100,
     env_kwargs: Mapping[str, Any] | None = None,
+    rnn: str | None = None,
     **hyperparams: Any,
 ) -> SMC:
     """Train an SMC and return the snapshot with the best mean training return.
@@ -124,7 +125,9 @@ def train_smc(
     arguments (:meth:`TrainingSpec.create <sb3_smc.records.TrainingSpec.create>`; passing a spec and any of them is
     an error):
 
-    * ``algo``: ``"RecurrentPPO"`` (LSTM 32), ``"TRPO"`` (MLP 32) or ``"PPO"`` (MLP 32); ``hyperparams`` override
+    * ``algo``: ``"RecurrentPPO"`` (LSTM 32), ``"TRPO"`` (MLP 32) or ``"PPO"`` (MLP 32); ``rnn="gru"`` gives
+      RecurrentPPO a GRU (:class:`~sb3_smc.common.recurrent.SequenceGruPolicy`, the paper's cell) instead of the
+      default LSTM (``rnn="lstm"``); ``hyperparams`` override
       :data:`~sb3_smc.hyperparameters.DEFAULT_HYPERPARAMETERS` (``policy_kwargs`` key by key); ``n_steps``
       defaults to ``2000 // n_envs``.
     * ``include_primitives=False`` drops the moves (the "noprim" ablation); ``count_primitive_steps`` /
@@ -148,7 +151,7 @@ def train_smc(
                                          include_primitives=include_primitives, name=name, n_envs=n_envs,
                                          signal_bias=signal_bias, frame_stack=frame_stack, max_steps=max_steps,
                                          count_primitive_steps=count_primitive_steps, call_step_cap=call_step_cap,
-                                         env_kwargs=env_kwargs).items()
+                                         env_kwargs=env_kwargs, rnn=rnn).items()
                  if v != _KEYWORD_DEFAULTS[k]}
         if given or hyperparams:
             raise TypeError(f"train_smc got a TrainingSpec and the settings {sorted({*given, *hyperparams})}; "
@@ -161,7 +164,7 @@ def train_smc(
             task, name=name, algo=algo, seed=seed, total_timesteps=total_timesteps, n_envs=n_envs,
             children=[c.name for c in kids], include_primitives=include_primitives,
             count_primitive_steps=count_primitive_steps, call_step_cap=call_step_cap, max_steps=max_steps,
-            signal_bias=signal_bias, frame_stack=frame_stack, env_kwargs=env_kwargs, **hyperparams)
+            signal_bias=signal_bias, frame_stack=frame_stack, env_kwargs=env_kwargs, rnn=rnn, **hyperparams)
     else:
         raise TypeError(f"train_smc needs an env id or a TrainingSpec, got {type(task).__name__}")
     return _train(spec, kids, tensorboard_log=tensorboard_log, log_every=log_every, callback=callback,
@@ -170,7 +173,7 @@ def train_smc(
 
 _KEYWORD_DEFAULTS = {"algo": "RecurrentPPO", "total_timesteps": 400_000, "seed": 0, "include_primitives": True,
                      "name": None, "n_envs": DEFAULT_N_ENVS, "signal_bias": True, "frame_stack": 1, "max_steps": 100,
-                     "count_primitive_steps": False, "call_step_cap": 100, "env_kwargs": None}
+                     "count_primitive_steps": False, "call_step_cap": 100, "env_kwargs": None, "rnn": None}
 
 
 def _train(spec: TrainingSpec, children: tuple[SMC, ...], *, tensorboard_log: str | None, log_every: int | None,

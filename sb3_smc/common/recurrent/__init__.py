@@ -1,11 +1,15 @@
-"""Fast recurrent training for sb3-contrib's ``RecurrentPPO``: a sequence LSTM policy and a compact rollout buffer.
+"""Fast recurrent training for sb3-contrib's ``RecurrentPPO``: sequence LSTM and GRU policies and a compact rollout
+buffer.
 
-Neither changes a number: :class:`SequenceLstmPolicy` computes what ``MlpLstmPolicy`` computes on every real step,
-and :class:`CompactRecurrentRolloutBuffer` yields the stock minibatches without padding (tested to 1e-6).
+:class:`SequenceLstmPolicy` computes what ``MlpLstmPolicy`` computes on every real step of its training pass (its
+one-step collection path equals it up to float rounding); :class:`CompactRecurrentRolloutBuffer` yields the stock
+minibatches without padding (tested to 1e-6); :class:`SequenceGruPolicy` is the same policy with GRUs.
 """
 
 from sb3_smc.common.recurrent.buffers import CompactRecurrentRolloutBuffer, use_compact_buffer
+from sb3_smc.common.recurrent.gru import GRUAsLSTM, SequenceGruPolicy
 from sb3_smc.common.recurrent.policies import SequenceLstmPolicy
 from sb3_smc.common.recurrent.type_aliases import SequenceStates
 
-__all__ = ["CompactRecurrentRolloutBuffer", "SequenceLstmPolicy", "SequenceStates", "use_compact_buffer"]
+__all__ = ["CompactRecurrentRolloutBuffer", "GRUAsLSTM", "SequenceGruPolicy", "SequenceLstmPolicy", "SequenceStates",
+           "use_compact_buffer"]

@@ -48,10 +48,13 @@ def _steppable(lstm: torch.nn.LSTM) -> bool:
     return not lstm.batch_first and not lstm.proj_size and not (lstm.dropout and lstm.training)
 
 
-def _lstm_step(lstm: torch.nn.LSTM, x: torch.Tensor, states: tuple[torch.Tensor, torch.Tensor]
+def _lstm_step(lstm: torch.nn.Module, x: torch.Tensor, states: tuple[torch.Tensor, torch.Tensor]
                ) -> tuple[torch.Tensor, tuple[torch.Tensor, torch.Tensor]]:
     """One time step of ``lstm`` for a batch ``x`` ``(batch, input)``: the last layer's output and the new
-    ``(h, c)``, each ``(n_layers, batch, hidden)``."""
+    ``(h, c)``, each ``(n_layers, batch, hidden)`` (a module with its own ``step``, such as a GRU behind the LSTM
+    interface, does it itself)."""
+    if hasattr(lstm, "step"):
+        return lstm.step(x, states)
     hs, cs = [], []
     for k in range(lstm.num_layers):
         bias = (getattr(lstm, f"bias_ih_l{k}"), getattr(lstm, f"bias_hh_l{k}")) if lstm.bias else (None, None)

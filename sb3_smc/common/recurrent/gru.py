@@ -1,0 +1,77 @@
+"""GRU recurrence for sb3-contrib's ``RecurrentPPO`` (the paper's GRU-32 policy; sb3-contrib only has LSTMs).
+
+sb3-contrib's recurrent machinery (rollout buffer, ``RNNStates``, ``predict``) carries an LSTM's ``(h, c)`` pair.
+:class:`GRUAsLSTM` runs a ``torch.nn.GRU`` behind that interface: it takes ``(h, c)``, uses ``h`` and returns the
+GRU's new ``h`` with ``c`` unchanged (zeros from the first step on, so the buffers stay valid and never matter).
+:class:`SequenceGruPolicy` is :class:`~sb3_smc.common.recurrent.policies.SequenceLstmPolicy` (fast training pass,
+lean collection step, compact buffer) with GRUs in place of the LSTMs.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import torch
+from torch import nn
+
+from sb3_smc.common.recurrent.policies import SequenceLstmPolicy
+
+__all__ = ["GRUAsLSTM", "SequenceGruPolicy"]
+
+
+class GRUAsLSTM(nn.Module):
+    """A ``torch.nn.GRU`` with ``nn.LSTM``'s call signature: ``forward(x, (h, c)) -> (output, (h_n, c))``."""
+
+    def __init__(self, input_size: int, hidden_size: int, num_layers: int = 1, **gru_kwargs: Any) -> None:
+        super().__init__()
+        unsupported = sorted(set(gru_kwargs) - {"bias", "dropout"})
+        if unsupported:
+            raise ValueError(f"GRU options {unsupported} are not supported (bias and dropout are)")
+        self.gru = nn.GRU(input_size, hidden_size, num_layers=num_layers, **gru_kwargs)
+
+    # the attributes sb3-contrib and sb3-smc read from an nn.LSTM
+    input_size = property(lambda self: self.gru.input_size)
+    hidden_size = property(lambda self: self.gru.hidden_size)
+    num_layers = property(lambda self: self.gru.num_layers)
+    bias = property(lambda self: self.gru.bias)
+    dropout = property(lambda self: self.gru.dropout)
+    batch_first = False
+    bidirectional = False
+    proj_size = 0
+
+    def forward(self, x: torch.Tensor, states: tuple[torch.Tensor, torch.Tensor]
+                ) -> tuple[torch.Tensor, tuple[torch.Tensor, torch.Tensor]]:
+        h, c = states
+        output, h_n = self.gru(x, h.contiguous())
+        return output, (h_n, c)
+
+    def step(self, x: torch.Tensor, states: tuple[torch.Tensor, torch.Tensor]
+             ) -> tuple[torch.Tensor, tuple[torch.Tensor, torch.Tensor]]:
+        """One time step for a batch ``x`` ``(batch, input)`` with ``torch.gru_cell`` per layer."""
+        gru, hs = self.gru, []
+        for k in range(gru.num_layers):
+            bias = (getattr(gru, f"bias_ih_l{k}"), getattr(gru, f"bias_hh_l{k}")) if gru.bias else (None, None)
+            x = torch.gru_cell(x, states[0][k], getattr(gru, f"weight_ih_l{k}"), getattr(gru, f"weight_hh_l{k}"),
+                               *bias)
+            hs.append(x)
+        return x, (torch.stack(hs), states[1])
+
+
+class SequenceGruPolicy(SequenceLstmPolicy):
+    """:class:`~sb3_smc.common.recurrent.policies.SequenceLstmPolicy` with one (or ``n_lstm_layers``) GRU layers of
+    ``lstm_hidden_size`` units instead of LSTMs, for the actor and, with ``enable_critic_lstm``, the critic.
+
+    Select it with ``train_smc(..., rnn="gru")``; it saves and loads through ``RecurrentPPO.load`` like any SB3
+    policy, and :func:`sb3_smc.policies.policy_from_model` turns it into a
+    :class:`~sb3_smc.policies.NumpyGRUPolicy`.
+    """
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        size, layers = self.lstm_output_dim, self.lstm_hidden_state_shape[0]
+        self.lstm_actor = GRUAsLSTM(self.features_dim, size, layers, **self.lstm_kwargs)
+        if self.lstm_critic is not None:
+            self.lstm_critic = GRUAsLSTM(self.features_dim, size, layers, **self.lstm_kwargs)
+        # the optimizer the parent built holds the LSTMs' parameters: rebuild it over the GRUs'
+        learning_rate = self.optimizer.param_groups[0]["lr"]  # lr_schedule(1), as the parent used
+        self.optimizer = self.optimizer_class(self.parameters(), lr=learning_rate, **self.optimizer_kwargs)
