@@ -41,7 +41,7 @@ def _train(args: argparse.Namespace) -> int:
     targets = [t for item in args.targets for t in item.split(",") if t] if args.targets else None
     run = train_curriculum(args.curriculum, args.out, targets=targets, seeds=args.seeds, timesteps=args.timesteps,
                            reuse=args.reuse, workers=args.workers, backend=args.backend, algo=args.algo,
-                           ray_address=args.ray_address, tensorboard=not args.no_tensorboard)
+                           rnn=args.rnn, ray_address=args.ray_address, tensorboard=not args.no_tensorboard)
     print(f"library: {run.library}")
     return 1 if run.failed else 0
 
@@ -67,7 +67,7 @@ def _experiment(args: argparse.Namespace) -> int:
     targets = [t for item in args.targets for t in item.split(",") if t] if args.targets else None
     run_experiment(args.out, methods=methods, targets=targets, category=args.category, seeds=args.seeds,
                    timesteps=args.timesteps, repeats=args.repeats, workers=args.workers, backend=args.backend,
-                   ray_address=args.ray_address)
+                   ray_address=args.ray_address, algo=args.algo, rnn=args.rnn)
     print(f"next: sb3-smc report {args.out}")
     return 0
 
@@ -87,6 +87,16 @@ def _import_zoo(args: argparse.Namespace) -> int:
     calls = f", calling {[c.name for c in smc.children]}" if smc.children else ""
     print(f"added SMC {smc.name!r} ({smc.kind}, {type(smc.model).__name__}{calls}) to {args.library}")
     return 0
+
+
+def _learner_arguments(parser: argparse.ArgumentParser) -> None:
+    from sb3_smc.hyperparameters import ALGORITHMS, RECURRENT_POLICIES
+
+    parser.add_argument("--algo", default=None, choices=ALGORITHMS,
+                        help="algorithm of every SMC (default: each node's, else RecurrentPPO)")
+    parser.add_argument("--rnn", default=None, choices=sorted(RECURRENT_POLICIES),
+                        help="recurrent cell of every SMC (recurrent algorithms; default lstm); the paper's learner "
+                             "is --algo RecurrentTRPO --rnn gru")
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -111,7 +121,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--workers", type=int, default=1, help="jobs in parallel (local processes or Ray tasks)")
     p.add_argument("--backend", choices=["local", "ray"], default="local")
     p.add_argument("--ray-address", default=None, help="Ray cluster address (default: $RAY_ADDRESS)")
-    p.add_argument("--algo", default=None, help="algorithm of every node (RecurrentPPO, TRPO or PPO)")
+    _learner_arguments(p)
     p.add_argument("--no-tensorboard", action="store_true", help="write no TensorBoard logs")
     p.set_defaults(run=_train)
 
@@ -129,6 +139,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--workers", type=int, default=1)
     p.add_argument("--backend", choices=["local", "ray"], default="local")
     p.add_argument("--ray-address", default=None)
+    _learner_arguments(p)
     p.set_defaults(run=_experiment)
 
     p = sub.add_parser("report", help="report.md and figures/ from experiment directories")

@@ -38,7 +38,7 @@ STEPS_PER_UPDATE = 2000
 DEFAULT_N_ENVS = 16
 """Environments stepped together (``n_steps = STEPS_PER_UPDATE // n_envs`` each)."""
 
-ALGORITHMS = ("RecurrentPPO", "TRPO", "PPO")
+ALGORITHMS = ("RecurrentPPO", "TRPO", "PPO", "RecurrentTRPO")
 """Algorithms :func:`~sb3_smc.training.train_smc` trains."""
 
 DEFAULT_HYPERPARAMETERS: dict[str, dict[str, Any]] = {
@@ -63,6 +63,20 @@ DEFAULT_HYPERPARAMETERS: dict[str, dict[str, Any]] = {
         "learning_rate": 1e-3,
         "policy_kwargs": {"net_arch": {"pi": [32], "vf": [32]}},
     },
+    "RecurrentTRPO": {
+        "policy": "SequenceLstmPolicy",
+        "gamma": 0.99,
+        "gae_lambda": 1.0,
+        "batch_size": STEPS_PER_UPDATE,
+        "target_kl": 0.01,
+        "learning_rate": 1e-3,
+        "n_critic_updates": 10,
+        "cg_max_steps": 15,
+        "cg_damping": 0.1,
+        "baseline": "critic",
+        "policy_kwargs": {"lstm_hidden_size": 32, "n_lstm_layers": 1, "net_arch": [],
+                          "shared_lstm": False, "enable_critic_lstm": False},
+    },
     "PPO": {
         "policy": "MlpPolicy",
         "gamma": 0.99,
@@ -78,10 +92,14 @@ DEFAULT_HYPERPARAMETERS: dict[str, dict[str, Any]] = {
 """Constructor arguments of each algorithm (``n_steps`` comes from the budget: ``STEPS_PER_UPDATE // n_envs``).
 Overrides replace these key by key, ``policy_kwargs`` key by key too. RecurrentPPO and TRPO are the measured
 settings of ``docs/training.md``; PPO (memoryless; minibatches of 250, 10 epochs, learning rate 3e-4, the settings
-of the earlier hand-written rl_zoo3 file) is offered for comparison, untuned."""
+of the earlier hand-written rl_zoo3 file) is offered for comparison, untuned. RecurrentTRPO
+(:mod:`sb3_smc.recurrent_trpo`, the paper's learner with ``rnn="gru"``) has TRPO's trust region (KL 0.01) and
+critic learning rate on RecurrentPPO's recurrent policy; ``baseline="linear_feature"`` gives spec §5.3's linear
+feature baseline instead of the critic."""
 
 RECURRENT_POLICIES = {"lstm": "SequenceLstmPolicy", "gru": "SequenceGruPolicy"}
-"""``rnn`` option of ``train_smc`` -> the recurrent policy (by name) of ``RecurrentPPO``."""
+"""``rnn`` option of ``train_smc`` -> the recurrent policy (by name) of the recurrent algorithms."""
+RECURRENT_ALGORITHMS = ("RecurrentPPO", "RecurrentTRPO")
 
 CLASS_KEY = "__class__"
 SCHEDULE_KEYS = ("learning_rate", "clip_range")

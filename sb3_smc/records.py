@@ -413,12 +413,13 @@ class TrainingSpec(_Record):
         ``rnn="lstm"`` or ``"gru"`` picks the recurrent policy of a recurrent algorithm)."""
         n_steps = hyperparameters.pop("n_steps", None)
         if rnn is not None:
-            from sb3_smc.hyperparameters import RECURRENT_POLICIES
+            from sb3_smc.hyperparameters import RECURRENT_ALGORITHMS, RECURRENT_POLICIES
 
             if rnn not in RECURRENT_POLICIES:
                 raise RecordError(f"rnn must be one of {sorted(RECURRENT_POLICIES)}, got {rnn!r}")
-            if algo != "RecurrentPPO":
-                raise RecordError(f"rnn={rnn!r} needs a recurrent algorithm (RecurrentPPO); {algo} has no recurrence")
+            if algo not in RECURRENT_ALGORITHMS:
+                raise RecordError(f"rnn={rnn!r} needs a recurrent algorithm ({' or '.join(RECURRENT_ALGORITHMS)}); "
+                                  f"{algo} has no recurrence")
             if "policy" in hyperparameters and hyperparameters["policy"] != RECURRENT_POLICIES[rnn]:
                 raise RecordError(f"rnn={rnn!r} and policy={hyperparameters['policy']!r} disagree: give one of them")
             hyperparameters["policy"] = RECURRENT_POLICIES[rnn]

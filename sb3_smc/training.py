@@ -45,12 +45,14 @@ from sb3_smc.envs import make_smc_env
 from sb3_smc.hyperparameters import ALGORITHMS, DEFAULT_N_ENVS, constructor_arguments
 from sb3_smc.policies import FrameStackPolicy, policy_from_model
 from sb3_smc.records import TrainingRecord, TrainingSpec, package_versions
+from sb3_smc.recurrent_trpo import RecurrentTRPO
 from sb3_smc.smc import SMC, StepPolicy
 from sb3_smc.vec_env import SMCVecEnv
 
 __all__ = ["ALGORITHM_CLASSES", "make_vec_env", "resolve_children", "train_smc"]
 
-ALGORITHM_CLASSES: dict[str, type] = {"RecurrentPPO": RecurrentPPO, "TRPO": TRPO, "PPO": PPO}
+ALGORITHM_CLASSES: dict[str, type] = {"RecurrentPPO": RecurrentPPO, "TRPO": TRPO, "PPO": PPO,
+                                      "RecurrentTRPO": RecurrentTRPO}
 """The SB3 class of each algorithm name of :data:`~sb3_smc.hyperparameters.ALGORITHMS`."""
 assert tuple(ALGORITHM_CLASSES) == ALGORITHMS
 
@@ -125,9 +127,10 @@ def train_smc(
     arguments (:meth:`TrainingSpec.create <sb3_smc.records.TrainingSpec.create>`; passing a spec and any of them is
     an error):
 
-    * ``algo``: ``"RecurrentPPO"`` (LSTM 32), ``"TRPO"`` (MLP 32) or ``"PPO"`` (MLP 32); ``rnn="gru"`` gives
-      RecurrentPPO a GRU (:class:`~sb3_smc.common.recurrent.SequenceGruPolicy`, the paper's cell) instead of the
-      default LSTM (``rnn="lstm"``); ``hyperparams`` override
+    * ``algo``: ``"RecurrentPPO"`` (LSTM 32), ``"TRPO"`` (MLP 32), ``"PPO"`` (MLP 32) or ``"RecurrentTRPO"``
+      (:mod:`sb3_smc.recurrent_trpo`: TRPO's trust region on the recurrent policy); ``rnn="gru"`` gives the
+      recurrent algorithms a GRU (:class:`~sb3_smc.common.recurrent.SequenceGruPolicy`, the paper's cell) instead
+      of the default LSTM (``rnn="lstm"``); ``hyperparams`` override
       :data:`~sb3_smc.hyperparameters.DEFAULT_HYPERPARAMETERS` (``policy_kwargs`` key by key); ``n_steps``
       defaults to ``2000 // n_envs``.
     * ``include_primitives=False`` drops the moves (the "noprim" ablation); ``count_primitive_steps`` /

@@ -201,6 +201,29 @@ def test_tiny_two_level_curriculum_end_to_end(tmp_path):
     assert len(SMCLibrary.load(one.library)["container@0"].spec.children) == 2
 
 
+def test_the_learner_of_every_node_is_chosen_by_algo_and_rnn(tmp_path):
+    from sb3_smc.common.recurrent import SequenceGruPolicy
+    from sb3_smc.recurrent_trpo import RecurrentTRPO
+
+    path = _tiny(tmp_path)
+    with pytest.raises(ValueError, match="rnn must be one of"):
+        train_curriculum(str(path), tmp_path / "bad", seeds=1, timesteps=2000, rnn="rnn", progress=False)
+    with pytest.raises(CurriculumError, match="node 'left': rnn='gru' needs a recurrent algorithm"):
+        train_curriculum(str(path), tmp_path / "bad", seeds=1, timesteps=2000, algo="TRPO", rnn="gru",
+                         progress=False)
+    run = train_curriculum(str(path), tmp_path / "run", seeds=1, timesteps=2000, algo="RecurrentTRPO", rnn="gru",
+                           progress=False)
+    library = SMCLibrary.load(run.library)
+    for name in ("left@0", "above@0", "container@0"):
+        smc = library[name]
+        assert isinstance(smc.model, RecurrentTRPO) and isinstance(smc.model.policy, SequenceGruPolicy), name
+        assert smc.spec.algo == "RecurrentTRPO" and smc.spec.hyperparameters["policy"] == "SequenceGruPolicy"
+    settings = json.loads((tmp_path / "run" / "run.json").read_text())
+    assert (settings["algo"], settings["rnn"]) == ("RecurrentTRPO", "gru")
+    with pytest.raises(RunSettingsError, match="rnn"):
+        train_curriculum(str(path), tmp_path / "run", seeds=1, timesteps=2000, algo="RecurrentTRPO", progress=False)
+
+
 def test_changed_settings_are_refused_with_the_differences(tmp_path):
     path = _tiny(tmp_path)
     train_curriculum(str(path), tmp_path / "run", seeds=1, timesteps=2000, targets=["left"], progress=False)

@@ -103,6 +103,7 @@ def test_a_tiny_experiment_end_to_end(tmp_path):
     for method in ("cnn", "base", "curr"):
         assert f"| {method} " in text or f" {method} |" in text
     assert "52.6 / 90.4 / 89.0" in text and "Paired t-tests" in text and "## How this was run" in text
+    assert "- learner: RecurrentPPO (LSTM)" in text
     for name in ("categories", "concepts", "trajectories", "timeline"):
         image = np.asarray(Image.open(out / "figures" / f"{name}.png").convert("L"))
         assert image.size > 10_000 and image.std() > 5, name  # written and not blank
@@ -116,5 +117,7 @@ def test_cli_experiment_and_report_errors(tmp_path):
 
     bad = cli("experiment", "--out", str(tmp_path / "x"), "--methods", "base,flat", "--targets", LEFT_OF)
     assert bad.returncode == 2 and "unknown method(s) ['flat']" in bad.stderr and "Traceback" not in bad.stderr
+    wrong = cli("experiment", "--out", str(tmp_path / "x"), "--targets", LEFT_OF, "--rnn", "rnn")
+    assert wrong.returncode == 2 and "invalid choice: 'rnn'" in wrong.stderr
     missing = cli("report", str(tmp_path / "nothing"))
     assert missing.returncode == 2 and "results.json not found" in missing.stderr

@@ -121,11 +121,15 @@ def rank_seeds(records: dict[int, TrainingRecord]) -> list[int]:
 # ---------------------------------------------------------------------------------------------------------------
 
 def run_settings(curriculum: Curriculum, nodes: Sequence[str], targets: Sequence[str], seeds: int,
-                 timesteps: int | None, reuse: str, algo: str | None) -> dict[str, Any]:
-    """What decides a run's SMCs (``DIR/run.json``): backend and worker count do not."""
-    return {"format": RUN_FORMAT, "version": RUN_VERSION, "curriculum": curriculum.name, "targets": list(targets),
-            "seeds": seeds, "timesteps": timesteps, "reuse": reuse, "algo": algo,
-            "nodes": {name: curriculum.node(name).settings() for name in nodes}}
+                 timesteps: int | None, reuse: str, algo: str | None, rnn: str | None = None) -> dict[str, Any]:
+    """What decides a run's SMCs (``DIR/run.json``): backend and worker count do not (``rnn`` is written only when
+    given, so run directories from before the option resume)."""
+    settings = {"format": RUN_FORMAT, "version": RUN_VERSION, "curriculum": curriculum.name,
+                "targets": list(targets), "seeds": seeds, "timesteps": timesteps, "reuse": reuse, "algo": algo,
+                "nodes": {name: curriculum.node(name).settings() for name in nodes}}
+    if rnn is not None:
+        settings["rnn"] = rnn
+    return settings
 
 
 def _differences(old: dict[str, Any], new: dict[str, Any]) -> list[str]:
@@ -171,9 +175,9 @@ class TrainingRun:
 
 class _Scheduler:
     def __init__(self, curriculum: Curriculum, order: list[str], seeds: int, timesteps: int | None, k: int,
-                 algo: str | None, directory: Path) -> None:
+                 algo: str | None, directory: Path, rnn: str | None = None) -> None:
         self.curriculum, self.order, self.seeds, self.timesteps, self.k = curriculum, order, seeds, timesteps, k
-        self.algo = algo
+        self.algo, self.rnn = algo, rnn
         self.directory = directory
         self.library = directory / "library"
         self.records: dict[str, dict[int, TrainingRecord]] = {name: {} for name in order}
@@ -219,8 +223,17 @@ class _Scheduler:
         return out
 
     def spec(self, node: Node, seed: int, children: tuple[str, ...]) -> TrainingSpec:
+        algo = self.algo or node.algo or "RecurrentPPO"
+        hyperparameters = dict(node.hyperparameters)
+        if self.rnn is not None:
+            from sb3_smc.hyperparameters import RECURRENT_ALGORITHMS, RECURRENT_POLICIES
+
+            if algo not in RECURRENT_ALGORITHMS:
+                raise ValueError(f"rnn={self.rnn!r} needs a recurrent algorithm ({' or '.join(RECURRENT_ALGORITHMS)}), "
+                                 f"but the node trains with {algo}")
+            hyperparameters["policy"] = RECURRENT_POLICIES[self.rnn]
         return TrainingSpec(name=job_name(node.name, seed), task=TaskSpec(node.env_id).resolved(),
-                            algo=self.algo or node.algo or "RecurrentPPO", hyperparameters=dict(node.hyperparameters),
+                            algo=algo, hyperparameters=hyperparameters,
                             seed=seed, budget=Budget(self.budget(node)),
                             wrapper=WrapperSettings(include_primitives=node.include_primitives), children=children)
 
@@ -271,6 +284,7 @@ def train_curriculum(
     workers: int = 1,
     backend: str = "local",
     algo: str | None = None,
+    rnn: str | None = None,
     ray_address: str | None = None,
     tensorboard: bool = True,
     progress: bool = True,
@@ -280,7 +294,8 @@ def train_curriculum(
     node shared by several is trained once) into ``out``, resuming whatever ``out`` already holds.
 
     ``targets``: node or dataset names (default: the curriculum's targets); they and every node they use are
-    trained, each with seeds ``0 .. seeds-1``. ``timesteps`` / ``algo`` replace every node's own; ``reuse``:
+    trained, each with seeds ``0 .. seeds-1``. ``timesteps`` / ``algo`` replace every node's own, ``rnn``
+    (``"lstm"`` or ``"gru"``) sets the recurrent cell of every node (recurrent algorithms only); ``reuse``:
     ``"two_best"`` or ``"one_best"``. ``workers`` > 1 runs independent jobs in that many local processes;
     ``backend="ray"`` submits them to a Ray cluster (``ray_address`` or ``RAY_ADDRESS``; ``workers`` caps the
     jobs in flight). The trained SMCs are the same whatever the backend and worker count. Jobs that fail are
@@ -305,11 +320,16 @@ def train_curriculum(
 
         if algo not in ALGORITHMS:
             raise ValueError(f"algo must be one of {ALGORITHMS}, got {algo!r}")
+    if rnn is not None:
+        from sb3_smc.hyperparameters import RECURRENT_POLICIES
+
+        if rnn not in RECURRENT_POLICIES:
+            raise ValueError(f"rnn must be one of {sorted(RECURRENT_POLICIES)}, got {rnn!r}")
     selected = merged.select(targets)
     order = merged.order(selected)
     directory = Path(out)
-    settings = run_settings(merged, order, selected, seeds, timesteps, reuse, algo)
-    scheduler = _Scheduler(merged, order, seeds, timesteps, REUSE[reuse], algo, directory)
+    settings = run_settings(merged, order, selected, seeds, timesteps, reuse, algo, rnn)
+    scheduler = _Scheduler(merged, order, seeds, timesteps, REUSE[reuse], algo, directory, rnn)
     scheduler.check_specs()
     _check_or_write_settings(directory, settings)
     lock = _lock(directory)

@@ -176,6 +176,7 @@ def _write(directory: Path, trajectories: str | None, behaviour: bool) -> Path:
     lines += ["", "## How this was run", "",
               f"- budget: {settings['timesteps']:,} steps per SMC, seeds 0-{settings['seeds'] - 1}, "
               f"{settings['repeats']} test repeats; {settings['workers']} worker(s), backend {settings['backend']}",
+              f"- learner: {_learner(settings)}",
               f"- machine: {machine.get('platform', '?')}, Python {machine.get('python', '?')}",
               f"- wall time of the last `sb3-smc experiment` run: {results.get('wall_time_s', 0) / 3600:.2f} h",
               f"- command: `{results.get('command') or _command(settings)}`",
@@ -185,9 +186,20 @@ def _write(directory: Path, trajectories: str | None, behaviour: bool) -> Path:
     return path
 
 
+def _learner(settings: dict[str, Any]) -> str:
+    """The algorithm and cell of the run's SMCs (runs from before the ``--algo`` / ``--rnn`` options: the
+    defaults, RecurrentPPO with an LSTM)."""
+    from sb3_smc.hyperparameters import RECURRENT_ALGORITHMS
+
+    algo = settings.get("algo", "RecurrentPPO")
+    return f"{algo} ({settings.get('rnn', 'lstm').upper() if algo in RECURRENT_ALGORITHMS else 'MLP'})"
+
+
 def _command(settings: dict[str, Any]) -> str:
+    learner = "".join(f" --{key} {settings[key]}" for key in ("algo", "rnn") if key in settings)
     return (f"sb3-smc experiment --out DIR --methods {','.join(settings['methods'])} --targets "
-            f"{','.join(settings['targets'])} --seeds {settings['seeds']} --timesteps {settings['timesteps']}")
+            f"{','.join(settings['targets'])} --seeds {settings['seeds']} --timesteps {settings['timesteps']}"
+            f"{learner}")
 
 
 def _mean(values: Sequence[float | None]) -> float | None:

@@ -47,11 +47,15 @@ def run_experiment(
     workers: int = 1,
     backend: str = "local",
     ray_address: str | None = None,
+    algo: str | None = None,
+    rnn: str | None = None,
     progress: bool = True,
     printer: Callable[[str], None] = print,
 ) -> dict[str, Any]:
     """Run the paper's protocol for ``methods`` on ``targets`` (dataset names) or a ``category`` of the level-2
-    targets (default: all 51) into ``out``; returns the ``results.json`` content. Resumable: re-run to continue."""
+    targets (default: all 51) into ``out``; returns the ``results.json`` content. Resumable: re-run to continue.
+    ``algo`` / ``rnn`` choose the learner of every SMC (default: RecurrentPPO with an LSTM; the paper's is
+    ``algo="RecurrentTRPO", rnn="gru"``)."""
     from pixelworld_env import catalog
 
     if targets is not None and category is not None:
@@ -64,7 +68,7 @@ def run_experiment(
     if design.curriculum is not None:
         run = train_curriculum(design.curriculum, directory, targets=design.training_targets, seeds=seeds,
                                timesteps=timesteps, workers=workers, backend=backend, ray_address=ray_address,
-                               progress=progress, printer=printer)
+                               algo=algo, rnn=rnn, progress=progress, printer=printer)
         if run.failed:
             raise RuntimeError(f"{len(run.failed)} training job(s) failed ({', '.join(sorted(run.failed)[:5])}; "
                                f"tracebacks in {directory / 'failed'}): nothing evaluated; run the same command "
@@ -88,7 +92,8 @@ def run_experiment(
     results = {
         "format": "sb3-smc-results", "version": 1,
         "settings": {"methods": list(methods), "targets": chosen, "seeds": seeds, "timesteps": timesteps or 400_000,
-                     "repeats": repeats, "workers": workers, "backend": backend},
+                     "repeats": repeats, "workers": workers, "backend": backend,
+                     "algo": algo or "RecurrentPPO", "rnn": rnn or "lstm"},
         "command": " ".join(sys.argv) if sys.argv and "sb3-smc" in sys.argv[0] else None,
         "machine": {"platform": platform.platform(), "python": platform.python_version(),
                     "processor": platform.processor() or platform.machine()},

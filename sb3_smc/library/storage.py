@@ -556,7 +556,9 @@ def load_model(root: Path, name: str, entry: Mapping[str, Any]) -> Any:
                                 f"{type(err).__name__}: {err}") from err
     from sb3_contrib.common.recurrent.policies import RecurrentActorCriticPolicy
 
-    if isinstance(model.policy, RecurrentActorCriticPolicy) != (entry["algo"] == "RecurrentPPO"):
+    from sb3_smc.hyperparameters import RECURRENT_ALGORITHMS
+
+    if isinstance(model.policy, RecurrentActorCriticPolicy) != (entry["algo"] in RECURRENT_ALGORITHMS):
         raise CorruptModelError(f"SMC {name!r}: the manifest says {entry['algo']}, but {file} holds a "
                                 f"{type(model.policy).__name__} (a model of another algorithm)")
     return model

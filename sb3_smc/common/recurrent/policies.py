@@ -103,16 +103,25 @@ class SequenceLstmPolicy(RecurrentActorCriticPolicy):
         return actions, values, distribution.log_prob(actions), RNNStates(states_pi, states_pi)
 
     def evaluate_actions(self, obs, actions, lstm_states, episode_starts):
+        evaluated = self.evaluate_sequences(obs, lstm_states, episode_starts)
+        if evaluated is None:
+            return super().evaluate_actions(obs, actions, lstm_states, episode_starts)
+        distribution, values = evaluated
+        return values, distribution.log_prob(actions), distribution.entropy()
+
+    def evaluate_sequences(self, obs, lstm_states, episode_starts):
+        """``(action distribution, values)`` of every row of a compact or padded minibatch (the fast training
+        pass), or ``None`` for layouts only sb3-contrib's stock pass reads (then ``evaluate_actions`` uses it)."""
         n_seq = lstm_states.pi[0].shape[1]
         if not self.share_features_extractor or obs.dim() != 2:
-            return super().evaluate_actions(obs, actions, lstm_states, episode_starts)
+            return None
         if isinstance(lstm_states, SequenceStates):
             starts, lengths, resets = lstm_states.starts, lstm_states.lengths, lstm_states.resets
         else:  # sb3-contrib's padded layout: n_seq sequences of max_len rows, an episode start only first
             padded = episode_starts.reshape((n_seq, -1))
             max_len = padded.shape[1]
             if obs.shape[0] != n_seq * max_len or bool(padded[:, 1:].any()):
-                return super().evaluate_actions(obs, actions, lstm_states, episode_starts)
+                return None
             real = obs.reshape(n_seq, max_len, -1).ne(0).any(dim=2)
             steps = torch.arange(1, max_len + 1, device=obs.device).expand(n_seq, max_len)
             lengths = (steps * real).amax(dim=1).clamp(min=1)
@@ -131,5 +140,4 @@ class SequenceLstmPolicy(RecurrentActorCriticPolicy):
             latent_vf = self.critic(features)
         latent_pi = self.mlp_extractor.forward_actor(latent_pi)
         latent_vf = self.mlp_extractor.forward_critic(latent_vf)
-        distribution = self._get_action_dist_from_latent(latent_pi)
-        return self.value_net(latent_vf), distribution.log_prob(actions), distribution.entropy()
+        return self._get_action_dist_from_latent(latent_pi), self.value_net(latent_vf)

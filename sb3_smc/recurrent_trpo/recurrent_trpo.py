@@ -1,0 +1,264 @@
+"""Recurrent TRPO: sb3-contrib's TRPO update on recurrent (LSTM or GRU) policies, over whole-episode sequences.
+
+The paper trained GRU-32 policies with rllab's NPO/TRPO (spec §5.2-5.3). sb3-contrib's ``TRPO`` is feed-forward
+and its ``RecurrentPPO`` has no trust region. :class:`RecurrentTRPO` collects rollouts like ``RecurrentPPO``
+(recurrent states, episode starts, ``predict`` with state) and updates like ``TRPO``: the surrogate objective and
+the mean KL between the old and the new policy are computed over the whole batch with the recurrent policy run
+along each episode (the fast sequence pass of :class:`~sb3_smc.common.recurrent.SequenceLstmPolicy`); the
+natural-gradient direction comes from conjugate gradient on Fisher-vector products (double backward of the KL);
+a backtracking line search accepts the largest step with KL below ``target_kl`` (0.01, the paper's step size) that
+improves the surrogate, and reverts otherwise. The critic is fitted afterwards, or replaced by the linear feature
+baseline of spec §5.3 (``baseline="linear_feature"``, rllab's ``LinearFeatureBaseline``).
+"""
+
+from __future__ import annotations
+
+import copy
+from functools import partial
+from typing import Any, ClassVar, TypeVar
+
+import numpy as np
+import torch
+from sb3_contrib import RecurrentPPO
+from sb3_contrib.common.utils import conjugate_gradient_solver, flat_grad
+from stable_baselines3.common.utils import explained_variance
+from torch.distributions import kl_divergence
+from torch.nn import functional as F
+
+from sb3_smc.common.recurrent import SequenceGruPolicy, SequenceLstmPolicy, use_compact_buffer
+
+__all__ = ["BASELINES", "LinearFeatureBaseline", "RecurrentTRPO"]
+
+SelfRecurrentTRPO = TypeVar("SelfRecurrentTRPO", bound="RecurrentTRPO")
+BASELINES = ("critic", "linear_feature")
+
+
+class LinearFeatureBaseline:
+    """rllab's ``LinearFeatureBaseline``: values linear in ``[o, o^2, t, t^2, t^3, 1]`` (observation clipped to
+    [-10, 10], ``t`` = step in the episode / 100), fitted to the returns of the last batch by ridge-regularised
+    least squares (the regulariser grows tenfold until the solution is finite). Predicts zeros before the first
+    fit."""
+
+    def __init__(self, reg_coeff: float = 1e-5) -> None:
+        self.reg_coeff = float(reg_coeff)
+        self.coefficients: np.ndarray | None = None
+
+    @staticmethod
+    def features(observations: np.ndarray, steps: np.ndarray) -> np.ndarray:
+        o = np.clip(np.asarray(observations, dtype=np.float64).reshape(len(observations), -1), -10, 10)
+        t = np.asarray(steps, dtype=np.float64).reshape(-1, 1) / 100.0
+        return np.concatenate([o, o ** 2, t, t ** 2, t ** 3, np.ones_like(t)], axis=1)
+
+    def predict(self, observations: np.ndarray, steps: np.ndarray) -> np.ndarray:
+        if self.coefficients is None:
+            return np.zeros(len(observations))
+        return self.features(observations, steps) @ self.coefficients
+
+    def fit(self, observations: np.ndarray, steps: np.ndarray, returns: np.ndarray) -> None:
+        x = self.features(observations, steps)
+        gram, target = x.T @ x, x.T @ np.asarray(returns, dtype=np.float64).reshape(-1)
+        reg = self.reg_coeff
+        for _ in range(5):
+            solution = np.linalg.lstsq(gram + reg * np.eye(len(gram)), target, rcond=None)[0]
+            if np.all(np.isfinite(solution)):
+                self.coefficients = solution
+                return
+            reg *= 10
+
+
+class RecurrentTRPO(RecurrentPPO):
+    """TRPO with a recurrent policy (``"MlpLstmPolicy"`` or ``"MlpGruPolicy"``), sb3-contrib style.
+
+    :param target_kl: the trust region: the mean KL between old and new policy after a step (0.01)
+    :param cg_max_steps: conjugate-gradient iterations for the step direction
+    :param cg_damping: damping added to the Fisher-vector products
+    :param line_search_shrinking_factor: step shrinking per backtracking iteration
+    :param line_search_max_iter: backtracking iterations before the step is abandoned
+    :param n_critic_updates: passes over the batch (in minibatches of ``batch_size``) fitting the critic
+    :param normalize_advantage: normalise the advantages of each batch
+    :param baseline: ``"critic"`` (the policy's value head, trained by regression on the returns) or
+        ``"linear_feature"`` (:class:`LinearFeatureBaseline`, the paper's; the value head is then not used)
+    :param learning_rate: the critic's learning rate (the policy moves by the natural gradient)
+
+    Other arguments are ``RecurrentPPO``'s (``n_steps``, ``batch_size``, ``gamma``, ``gae_lambda``,
+    ``policy_kwargs``, ``seed``, ...). Learning, saving, loading and ``predict`` (with recurrent state and
+    episode starts) work as for ``RecurrentPPO``.
+    """
+
+    policy_aliases: ClassVar[dict[str, type]] = {"MlpLstmPolicy": SequenceLstmPolicy, "MlpGruPolicy": SequenceGruPolicy}
+
+    def __init__(self, policy: str | type[SequenceLstmPolicy], env: Any, learning_rate: float = 1e-3,
+                 n_steps: int = 2048, batch_size: int | None = None, gamma: float = 0.99, gae_lambda: float = 0.95,
+                 cg_max_steps: int = 15, cg_damping: float = 0.1, line_search_shrinking_factor: float = 0.8,
+                 line_search_max_iter: int = 10, n_critic_updates: int = 10, normalize_advantage: bool = True,
+                 target_kl: float = 0.01, baseline: str = "critic", stats_window_size: int = 100,
+                 tensorboard_log: str | None = None, policy_kwargs: dict[str, Any] | None = None, verbose: int = 0,
+                 seed: int | None = None, device: torch.device | str = "auto", _init_setup_model: bool = True
+                 ) -> None:
+        if baseline not in BASELINES:
+            raise ValueError(f"baseline must be one of {BASELINES}, got {baseline!r}")
+        if not target_kl > 0:
+            raise ValueError(f"target_kl must be > 0, got {target_kl}")
+        self.cg_max_steps = cg_max_steps
+        self.cg_damping = cg_damping
+        self.line_search_shrinking_factor = line_search_shrinking_factor
+        self.line_search_max_iter = line_search_max_iter
+        self.n_critic_updates = n_critic_updates
+        self.baseline = baseline
+        self.linear_baseline = LinearFeatureBaseline() if baseline == "linear_feature" else None
+        self._episode_steps: np.ndarray | None = None
+        super().__init__(policy, env, learning_rate=learning_rate, n_steps=n_steps,
+                         batch_size=batch_size or n_steps * env_count(env), n_epochs=1, gamma=gamma,
+                         gae_lambda=gae_lambda, normalize_advantage=normalize_advantage, target_kl=target_kl,
+                         stats_window_size=stats_window_size, tensorboard_log=tensorboard_log,
+                         policy_kwargs=policy_kwargs, verbose=verbose, seed=seed, device=device,
+                         _init_setup_model=False)
+        if _init_setup_model:
+            self._setup_model()
+
+    def _setup_model(self) -> None:
+        super()._setup_model()
+        if not isinstance(self.policy, SequenceLstmPolicy):
+            raise TypeError(f"RecurrentTRPO needs a SequenceLstmPolicy or SequenceGruPolicy (\"MlpLstmPolicy\" / "
+                            f"\"MlpGruPolicy\"), got {type(self.policy).__name__}")
+        use_compact_buffer(self)
+
+    # ------------------------------------------------------------------------------------ the linear baseline
+
+    def collect_rollouts(self, env, callback, rollout_buffer, n_rollout_steps: int) -> bool:
+        if self.linear_baseline is None:
+            return super().collect_rollouts(env, callback, rollout_buffer, n_rollout_steps)
+        if self._episode_steps is None:
+            self._episode_steps = np.zeros(env.num_envs, dtype=np.int64)
+        start_steps = self._episode_steps.copy()
+        if not super().collect_rollouts(env, callback, rollout_buffer, n_rollout_steps):
+            return False
+        # the step in the episode of every stored transition (episodes continue across rollouts)
+        starts = rollout_buffer.episode_starts.astype(bool)
+        steps = np.empty(starts.shape, dtype=np.int64)
+        previous = start_steps - 1
+        for t in range(n_rollout_steps):
+            steps[t] = previous = np.where(starts[t], 0, previous + 1)
+        last_starts = self._last_episode_starts.astype(bool)
+        self._episode_steps = np.where(last_starts, 0, steps[-1] + 1)
+        observations = rollout_buffer.observations.reshape(n_rollout_steps * env.num_envs, -1)
+        values = self.linear_baseline.predict(observations, steps.reshape(-1)).reshape(n_rollout_steps, env.num_envs)
+        rollout_buffer.values[:] = values
+        last = self.linear_baseline.predict(self._last_obs.reshape(env.num_envs, -1), self._episode_steps)
+        rollout_buffer.compute_returns_and_advantage(last_values=torch.as_tensor(last, dtype=torch.float32),
+                                                     dones=self._last_episode_starts)
+        self.linear_baseline.fit(observations, steps.reshape(-1), rollout_buffer.returns.reshape(-1))
+        return True
+
+    # ------------------------------------------------------------------------------------------ the update
+
+    def _actor_gradients(self, kl_div: torch.Tensor, objective: torch.Tensor):
+        """The parameters the KL depends on, the objective's gradient and the KL's (with its graph), flattened."""
+        params, objective_grads, kl_grads, shapes = [], [], [], []
+        for param in self.policy.parameters():
+            kl_grad, *_ = torch.autograd.grad(kl_div, param, create_graph=True, retain_graph=True, allow_unused=True)
+            if kl_grad is None:  # the critic's parameters
+                continue
+            objective_grad, *_ = torch.autograd.grad(objective, param, retain_graph=True, allow_unused=True)
+            if objective_grad is None:
+                objective_grad = torch.zeros_like(param)
+            params.append(param)
+            shapes.append(param.shape)
+            kl_grads.append(kl_grad.reshape(-1))
+            objective_grads.append(objective_grad.reshape(-1))
+        return params, torch.cat(objective_grads), torch.cat(kl_grads), shapes
+
+    def hessian_vector_product(self, params: list[torch.nn.Parameter], grad_kl: torch.Tensor, vector: torch.Tensor,
+                               retain_graph: bool = True) -> torch.Tensor:
+        """Fisher-vector product (the Hessian of the mean KL times ``vector``) plus damping."""
+        return flat_grad((grad_kl * vector).sum(), params, retain_graph=retain_graph) + self.cg_damping * vector
+
+    def train(self) -> None:
+        self.policy.set_training_mode(True)
+        self._update_learning_rate(self.policy.optimizer)
+        objectives, kls, successes, value_losses = [], [], [], []
+        actor_params: list[torch.nn.Parameter] = []
+        for data in self.rollout_buffer.get(batch_size=None):  # the whole batch, sequence after sequence
+            actions = data.actions.long().flatten()
+
+            def evaluate(data=data):
+                evaluated = self.policy.evaluate_sequences(data.observations, data.lstm_states, data.episode_starts)
+                if evaluated is None:
+                    raise RuntimeError("RecurrentTRPO needs the compact recurrent buffer's minibatches")
+                return evaluated[0]
+
+            with torch.no_grad():
+                old = copy.copy(evaluate())
+            distribution = evaluate()
+            advantages = data.advantages
+            if self.normalize_advantage and len(advantages) > 1:
+                advantages = (advantages - advantages.mean()) / (advantages.std() + 1e-8)
+            ratio = torch.exp(distribution.log_prob(actions) - data.old_log_prob)
+            objective = (advantages * ratio).mean()
+            kl_div = kl_divergence(distribution.distribution, old.distribution).mean()
+            self.policy.optimizer.zero_grad()
+            actor_params, objective_grad, grad_kl, shapes = self._actor_gradients(kl_div, objective)
+            fisher = partial(self.hessian_vector_product, actor_params, grad_kl)
+            direction = conjugate_gradient_solver(fisher, objective_grad, max_iter=self.cg_max_steps)
+            curvature = float(torch.dot(direction, fisher(direction, retain_graph=False)))
+            max_step = np.sqrt(2 * self.target_kl / curvature) if curvature > 0 else 0.0
+            originals = [param.detach().clone() for param in actor_params]
+            success, coefficient = False, 1.0
+            with torch.no_grad():
+                for _ in range(self.line_search_max_iter):
+                    offset = 0
+                    for param, original, shape in zip(actor_params, originals, shapes, strict=True):
+                        n = param.numel()
+                        param.data = original + coefficient * max_step * direction[offset:offset + n].view(shape)
+                        offset += n
+                    candidate = evaluate()
+                    new_objective = (advantages * torch.exp(candidate.log_prob(actions) - data.old_log_prob)).mean()
+                    new_kl = kl_divergence(candidate.distribution, old.distribution).mean()
+                    if new_kl < self.target_kl and new_objective > objective:
+                        success = True
+                        break
+                    coefficient *= self.line_search_shrinking_factor
+                if not success:
+                    for param, original in zip(actor_params, originals, strict=True):
+                        param.data = original.clone()
+            successes.append(success)
+            objectives.append(float((new_objective if success else objective).detach()))
+            kls.append(float(new_kl) if success else 0.0)
+
+        if self.linear_baseline is None:
+            for _ in range(self.n_critic_updates):
+                for data in self.rollout_buffer.get(self.batch_size):
+                    evaluated = self.policy.evaluate_sequences(data.observations, data.lstm_states,
+                                                               data.episode_starts)
+                    value_loss = F.mse_loss(data.returns, evaluated[1].flatten())
+                    value_losses.append(value_loss.item())
+                    self.policy.optimizer.zero_grad()
+                    value_loss.backward()
+                    for param in actor_params:  # the critic's regression must not move the policy
+                        param.grad = None
+                    self.policy.optimizer.step()
+
+        self._n_updates += 1
+        explained = explained_variance(self.rollout_buffer.values.flatten(), self.rollout_buffer.returns.flatten())
+        self.logger.record("train/policy_objective", float(np.mean(objectives)))
+        self.logger.record("train/kl_divergence_loss", float(np.mean(kls)))
+        self.logger.record("train/is_line_search_success", float(np.mean(successes)))
+        if value_losses:
+            self.logger.record("train/value_loss", float(np.mean(value_losses)))
+        self.logger.record("train/explained_variance", explained)
+        self.logger.record("train/n_updates", self._n_updates, exclude="tensorboard")
+
+    def learn(self: SelfRecurrentTRPO, total_timesteps: int, callback: Any = None, log_interval: int = 1,
+              tb_log_name: str = "RecurrentTRPO", reset_num_timesteps: bool = True,
+              progress_bar: bool = False) -> SelfRecurrentTRPO:
+        return super().learn(total_timesteps=total_timesteps, callback=callback, log_interval=log_interval,
+                             tb_log_name=tb_log_name, reset_num_timesteps=reset_num_timesteps,
+                             progress_bar=progress_bar)
+
+    def _excluded_save_params(self) -> list[str]:
+        return [*super()._excluded_save_params(), "_episode_steps"]
+
+
+def env_count(env: Any) -> int:
+    """Environments in ``env`` (a VecEnv, a gym env, or an env id that SB3 will wrap into one)."""
+    return int(getattr(env, "num_envs", 1))
