@@ -1,10 +1,13 @@
-"""Registers the PixelWorld ``PW-*`` ids with Gymnasium as soon as Gymnasium is imported, in any program.
+"""Registers the PixelWorld ``PW-*`` ids with Gymnasium as soon as Gymnasium is imported, in any program, and
+sb3-smc's ``RecurrentTRPO`` as rl_zoo3's ``--algo recurrent_trpo`` as soon as rl_zoo3 is imported.
 
 Installed wheels of sb3-smc put ``sb3_smc_gym_hook.pth`` in site-packages; its one line imports this module at
 interpreter start. That costs a few microseconds: nothing is imported here except ``importlib`` and ``os``. When a
 program later imports ``gymnasium``, the ids are registered right after it (importing ``pixelworld_env``, no
 torch, no datasets), so ``rl_zoo3 train --env PW-...`` and ``gymnasium.make("PW-...")`` work without
-``--gym-packages pixelworld_env`` or ``import pixelworld_env``.
+``--gym-packages pixelworld_env`` or ``import pixelworld_env``. When rl_zoo3 loads its algorithm table
+(``rl_zoo3.utils.ALGOS``), ``recurrent_trpo`` is added to it (importing ``sb3_smc.recurrent_trpo``; rl_zoo3 has
+already loaded torch and SB3 by then).
 
 Set ``SB3_SMC_GYM_HOOK=0`` to switch it off. A failure while registering is reported as a warning and never
 breaks the import of Gymnasium.
@@ -19,10 +22,10 @@ import os
 import sys
 
 ENVIRONMENT_SWITCH = "SB3_SMC_GYM_HOOK"
-_TARGET = "gymnasium"
+ZOO_ALGORITHM = "recurrent_trpo"
 
 
-def _register() -> None:
+def _register(module) -> None:
     try:
         from pixelworld_env.registration import register_envs
 
@@ -34,39 +37,67 @@ def _register() -> None:
                       f"use `import pixelworld_env` (or rl_zoo3's --gym-packages pixelworld_env)", stacklevel=2)
 
 
-class _RegisterAfter(importlib.abc.Loader):
-    """Runs Gymnasium's own loader, then registers the ids."""
+def _add_zoo_algorithm(module) -> None:
+    try:
+        from sb3_smc.recurrent_trpo import RecurrentTRPO
 
-    def __init__(self, loader: importlib.abc.Loader) -> None:
-        self.loader = loader
+        module.ALGOS.setdefault(ZOO_ALGORITHM, RecurrentTRPO)
+    except Exception as error:  # never break rl_zoo3
+        import warnings
+
+        warnings.warn(f"sb3-smc could not add --algo {ZOO_ALGORITHM} to rl_zoo3 ({type(error).__name__}: {error})",
+                      stacklevel=2)
+
+
+_TARGETS = {"gymnasium": _register, "rl_zoo3.utils": _add_zoo_algorithm}
+"""Module -> what to run right after it is imported."""
+
+
+class _RunAfter(importlib.abc.Loader):
+    """Runs a module's own loader, then ``after(module)``."""
+
+    def __init__(self, loader: importlib.abc.Loader, after) -> None:
+        self.loader, self.after = loader, after
 
     def create_module(self, spec: importlib.machinery.ModuleSpec):
         return self.loader.create_module(spec)
 
     def exec_module(self, module) -> None:
         self.loader.exec_module(module)
-        _register()
+        self.after(module)
 
 
-class _GymnasiumWatcher(importlib.abc.MetaPathFinder):
-    """A meta-path finder that only answers for ``gymnasium``, once, by wrapping the real spec's loader."""
+class _ImportWatcher(importlib.abc.MetaPathFinder):
+    """A meta-path finder that only answers for the modules of ``_TARGETS``, once each, by wrapping the real
+    spec's loader; it leaves ``sys.meta_path`` when none is left."""
+
+    def __init__(self, pending: set[str]) -> None:
+        self.pending = pending
 
     def find_spec(self, name: str, path=None, target=None):
-        if name != _TARGET:
+        if name not in self.pending:
             return None
-        if self in sys.meta_path:
+        self.pending.discard(name)  # also keeps the lookup below from coming back here
+        if not self.pending and self in sys.meta_path:
             sys.meta_path.remove(self)
         spec = importlib.util.find_spec(name)
         if spec is not None and spec.loader is not None:
-            spec.loader = _RegisterAfter(spec.loader)
+            spec.loader = _RunAfter(spec.loader, _TARGETS[name])
         return spec
 
 
 def install() -> None:
-    """Register the ids now if Gymnasium is loaded, else right after it is imported (no-op when switched off)."""
+    """Register the ids now if Gymnasium is loaded, else right after it is imported; the same for rl_zoo3's
+    algorithm table (no-op when switched off)."""
     if os.environ.get(ENVIRONMENT_SWITCH, "1").strip().lower() in ("0", "false", "no", "off"):
         return
-    if _TARGET in sys.modules:
-        _register()
-    elif not any(isinstance(finder, _GymnasiumWatcher) for finder in sys.meta_path):
-        sys.meta_path.insert(0, _GymnasiumWatcher())
+    if any(isinstance(finder, _ImportWatcher) for finder in sys.meta_path):
+        return
+    pending = set()
+    for name, action in _TARGETS.items():
+        if name in sys.modules:
+            action(sys.modules[name])
+        else:
+            pending.add(name)
+    if pending:
+        sys.meta_path.insert(0, _ImportWatcher(pending))

@@ -142,6 +142,24 @@ def test_import_zoo_then_a_level2_zoo_run_calling_it(installed: Installed) -> No
     assert out.split() == ["('corner',", "'container')", "['corner']", "SMC:corner", "True", "50"]
 
 
+def test_recurrent_trpo_with_a_gru_trains_enjoys_and_imports(installed: Installed) -> None:
+    """``--algo recurrent_trpo`` exists in rl_zoo3 once the package is installed (the start-up hook); the paper's
+    learner is the shipped settings with ``policy: MlpGruPolicy``."""
+    settings = yaml.safe_load((ROOT / "zoo_configs" / "recurrent_trpo.yml").read_text())["default"]
+    settings["policy"] = "MlpGruPolicy"
+    (installed.work / "trpo_gru.yml").write_text(yaml.safe_dump({FLAT: settings}))
+    installed.zoo("train", "--algo", "recurrent_trpo", "--env", FLAT, "-conf", "trpo_gru.yml", "-n", "2000",
+                  "--num-threads", "1", "-f", "rtrpo")
+    out = installed.zoo("enjoy", "--algo", "recurrent_trpo", "--env", FLAT, "-f", "rtrpo", "--no-render", "-n", "30")
+    assert f"sb3-smc: {FLAT} serves the 'train' split" in out.stderr  # the zoo's default env kwargs
+    check = ("import sys\n"
+             "from sb3_smc.zoo import import_zoo_model\n"
+             "smc = import_zoo_model(sys.argv[1], 'rlib', name='corner')\n"
+             "print(type(smc.model).__name__, type(smc.model.policy).__name__, type(smc.policy).__name__)\n")
+    out = installed.run(check, f"rtrpo/recurrent_trpo/{FLAT}_1").stdout
+    assert out.split() == ["RecurrentTRPO", "SequenceGruPolicy", "NumpyGRUPolicy"]
+
+
 def test_import_zoo_refuses_a_run_without_the_smc_wrapper(installed: Installed) -> None:
     if not (installed.work / "literal-trpo").is_dir():
         installed.zoo("train", "--algo", "trpo", "--env", FLAT, "-n", "2000", "--num-threads", "1", "-f",

@@ -19,8 +19,9 @@ from sb3_smc.hyperparameters import DEFAULT_HYPERPARAMETERS, DEFAULT_N_ENVS, STE
 __all__ = ["CALLBACK", "ENV_WRAPPER", "ZOO_ALGOS", "ZOO_POLICY_NAMES", "hyperparams_for", "render_config",
            "write_configs"]
 
-ZOO_ALGOS = {"ppo_lstm": "RecurrentPPO", "trpo": "TRPO", "ppo": "PPO"}
-"""rl_zoo3's ``--algo`` name -> the algorithm of :data:`DEFAULT_HYPERPARAMETERS`."""
+ZOO_ALGOS = {"ppo_lstm": "RecurrentPPO", "trpo": "TRPO", "ppo": "PPO", "recurrent_trpo": "RecurrentTRPO"}
+"""rl_zoo3's ``--algo`` name -> the algorithm of :data:`DEFAULT_HYPERPARAMETERS` (``recurrent_trpo`` is added to
+rl_zoo3's table by the start-up hook of installed wheels, ``_sb3_smc_gym_hook``)."""
 ZOO_POLICY_NAMES = {"SequenceLstmPolicy": "MlpLstmPolicy"}
 """Policies rl_zoo3 cannot name (it passes the string to SB3) -> the stock policy computing the same numbers."""
 ENV_WRAPPER = "sb3_smc.zoo.smc_env"
@@ -32,6 +33,9 @@ _NOTES = {
                 "MlpLstmPolicy with the same numbers; rl_zoo3 can only name SB3's own policies.",
     "trpo": "TRPO: one hidden layer of 32 tanh units for actor and critic, KL step 0.01 (the paper's NPO step size).",
     "ppo": "PPO: one hidden layer of 32 tanh units for actor and critic (memoryless).",
+    "recurrent_trpo": "RecurrentTRPO (sb3_smc.recurrent_trpo): TRPO's trust-region step (KL 0.01) on a 32-unit "
+                      "LSTM policy; policy: MlpGruPolicy gives the paper's GRU, baseline: linear_feature its "
+                      "linear feature baseline. sb3-smc's start-up hook adds --algo recurrent_trpo to rl_zoo3.",
 }
 
 
