@@ -57,7 +57,7 @@ def test_shipped_files_are_generated_from_the_catalog():
 
 
 def test_shipped_curricula_match_the_paper():
-    curricula = shipped_curricula()
+    curricula = {name: c for name, c in shipped_curricula().items() if name != "pushable"}  # the paper's 31
     assert len(curricula) == 31 and {"con2-cl", "obj-con2-cl", "con2-ba-canon", "con2-cl-noprim"} <= set(curricula)
     curr = [c for c in curricula.values() if c.method == "smc-curr"]
     assert sum(len(c.targets) for c in curr) == 83  # hand-designed entries
@@ -75,6 +75,24 @@ def test_shipped_curricula_match_the_paper():
     assert base.method == "smc-base" and base.levels() == [list(base.targets)]
     # a flat node is one node wherever it is used
     assert curricula["con2-cl"].node(LEFT) == curricula["con2-cl-canon"].node(LEFT) == Node(LEFT, LEFT)
+
+
+def test_the_pushable_curriculum_has_11_concepts_over_6_levels():
+    from pixelworld_env import catalog
+    from sb3_smc.curricula.designed import PUSHABLE, PUSHABLE_TOP
+
+    pushable = shipped_curricula()["pushable"]
+    assert pushable.method == "smc-curr" and len(pushable.nodes) == 11
+    levels = pushable.levels()
+    assert [len(level) for level in levels] == [3, 2, 1, 2, 2, 1]
+    assert levels[-1] == [f"pushable/{PUSHABLE_TOP}"] and pushable.targets == tuple(n for lv in levels[1:] for n in lv)
+    tasks = {node.task for node in pushable.nodes}
+    assert tasks == set(PUSHABLE) == {n for n in catalog.dataset_names() if catalog.dataset(n).category == "pushable"}
+    kinds = {catalog.dataset(t).kind for lv in levels for t in (pushable.node(n).task for n in lv)}
+    assert kinds == {"classification", "bring-about"}
+    # every node above level 1 uses a node of the level just below it (the levels are the DAG's depth)
+    for k, level in enumerate(levels[1:], 1):
+        assert all(set(pushable.node(n).uses) & set(levels[k - 1]) for n in level)
 
 
 def test_targets_by_node_or_dataset_name():

@@ -28,7 +28,7 @@ def test_level2_targets_match_the_paper():
     everything = level2_targets()
     assert len(everything) == 51
     sizes = {c: len(level2_targets(c)) for c in CATEGORIES}
-    assert sizes == {"containment": 19, "objcon": 16, "objects": 15, "search": 1}
+    assert sizes == {"containment": 19, "objcon": 16, "objects": 15, "search": 1, "pushable": 8}
     with pytest.raises(ValueError, match="category must be one of"):
         level2_targets("shapes")
 

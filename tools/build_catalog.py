@@ -2,7 +2,9 @@
 """Build the project's benchmark catalog from the original AAAI-18 definition and experiment files.
 
 Reads ``<reference>/aaai18/DATA/*.datasets`` and ``*.curriculum`` (with everything they include) through
-:mod:`pixelworld_env.definitions`, and the 33 experiment files ``<reference>/aaai18/*``, and writes
+:mod:`pixelworld_env.definitions`, the 33 experiment files ``<reference>/aaai18/*``, and the definitions sb3-smc
+designed in the same format (``pixelworld_env/data/definitions/*.datasets``: the pushable curriculum, category
+``pushable``), and writes
 
 * ``pixelworld_env/data/catalog.json`` -- the catalog (format ``pixelworld-catalog``, version 1), and
 * ``docs/catalog.md`` -- tables generated from it.
@@ -37,6 +39,7 @@ from pixelworld_env.concepts.predicates import PREDICATES  # noqa: E402
 from pixelworld_env.definitions import GOALS, load_definitions, load_experiments  # noqa: E402
 
 CATALOG_PATH = ROOT / "pixelworld_env" / "data" / "catalog.json"
+DESIGNED_PATH = ROOT / "pixelworld_env" / "data" / "definitions"
 DOCS_PATH = ROOT / "docs" / "catalog.md"
 FORMAT = "pixelworld-catalog"
 VERSION = 1
@@ -46,6 +49,7 @@ CATEGORY_BY_FILE = (
     ("bfaw-obj-containment-", "objcon"),
     ("bfaw-objects-", "objects"),
     ("bfaw-search-", "search"),
+    ("pushable", "pushable"),
 )
 KIND_BY_GOAL = {"classification": "classification", "bring-about-signal": "bring-about",
                 "bring-about-direct": "bring-about"}
@@ -101,7 +105,8 @@ def build_catalog(reference: Path) -> dict[str, Any]:
     data = root / "DATA"
     if not data.is_dir():
         raise BuildError(f"original definition files not found at {data} (pass --reference)")
-    defs = load_definitions(sorted(data.glob("*.datasets")) + sorted(data.glob("*.curriculum")))
+    defs = load_definitions(sorted(data.glob("*.datasets")) + sorted(data.glob("*.curriculum"))
+                            + sorted(DESIGNED_PATH.glob("*.datasets")))
     experiments = load_experiments(sorted(p for p in root.iterdir() if p.is_file()))
     if not experiments:
         raise BuildError(f"no experiment files in {root}")
@@ -155,7 +160,8 @@ def build_catalog(reference: Path) -> dict[str, Any]:
         "format": FORMAT,
         "version": VERSION,
         "source": "experiments/aaai18 of vicariousinc/pixelworld (AAAI-18 release): DATA/*.datasets, "
-                  "DATA/*.curriculum and the files they include, and the 33 experiment files",
+                  "DATA/*.curriculum and the files they include, and the 33 experiment files; the pushable "
+                  "curriculum: pixelworld_env/data/definitions/*.datasets (designed by sb3-smc)",
         "split_rule": {"num_samples": num_samples, "stratified": True, "test_fraction": test_fraction},
         "concepts": tables["concepts"],
         "generators": tables["generators"],
@@ -285,6 +291,36 @@ def _smcs(catalog: dict[str, Any], entry: dict[str, Any]) -> list[str]:
     return entry.get("lower_level", [])
 
 
+def _pushable_section(catalog: dict[str, Any]) -> list[str]:
+    """The designed pushable curriculum: its datasets by level with one line each, and why the levels are ordered
+    as they are (the hierarchy itself is ``sb3_smc.curricula.designed.PUSHABLE``)."""
+    from sb3_smc.curricula.designed import PUSHABLE, designed_curricula
+
+    curriculum = designed_curricula()["pushable"]
+    level = {curriculum.node(name).task: k for k, names in enumerate(curriculum.levels(), 1) for name in names}
+    missing = sorted(set(PUSHABLE) ^ {n for n, i in catalog["datasets"].items() if i["category"] == "pushable"})
+    if missing:
+        raise BuildError(f"the pushable curriculum and the pushable datasets disagree on {missing}")
+    out = ["## The pushable curriculum (designed by sb3-smc)", "",
+           "The paper's 11-concept, 6-level pushable curriculum (Fig. 3, Fig. 5c) was never released (spec §5.7). "
+           "sb3-smc's design: a white pixel P lies on the floor; it may be pushable (engine class `basic`) or "
+           "immoveable, and both look the same. An immoveable reference object R (a white small blob on the "
+           "floor) lies to its right; the top level adds a floating distractor. With a 3 x 3 view that moves "
+           "with the self, pushing P looks the same whether P moves or not, so the agent can only tell by "
+           "pushing P towards R and then checking whether P touches R. Every dataset has `allow_pushable`; "
+           "the hierarchy is `sb3_smc.curricula.designed.PUSHABLE`, shipped as the curriculum `pushable`.", "",
+           "**Why this order.** The levels follow how much of a classification the initial state gives away "
+           "without acting (the paper's ordering of Fig. 5c): at level 1 the agent's first 3 x 3 view decides "
+           "it; at levels 2-3 the full initial grid decides it (a passive CNN can answer) but the agent's view "
+           "does not; at levels 5-6 not even the full grid does, because pushable and immoveable pixels are "
+           "the same pixels. The bring-about nodes are the behaviours the classifiers above them call. "
+           "`docs/curricula.md` reports the measurement.", ""]
+    rows = [[level[name], f"`{name}`", catalog["datasets"][name]["kind"],
+             "<br>".join(f"`{u}`" for u in PUSHABLE[name].uses) or "(flat)", PUSHABLE[name].summary]
+            for name in sorted(PUSHABLE, key=lambda n: (level[n], n))]
+    return out + _table(["level", "dataset", "kind", "calls", "what it asks"], rows)
+
+
 def render_docs(catalog: dict[str, Any]) -> str:
     """``docs/catalog.md``: tables of datasets, concept pools, experiment groups, curricula and SMC lists."""
     datasets = catalog["datasets"]
@@ -301,7 +337,8 @@ def render_docs(catalog: dict[str, Any]) -> str:
         "`python tools/build_catalog.py --check` verifies that it is current. -->",
         "",
         f"The catalog (`pixelworld_env/data/catalog.json`, format `{catalog['format']}` version "
-        f"{catalog['version']}) lists the {len(datasets)} datasets of the AAAI-18 release "
+        f"{catalog['version']}) lists the {len(datasets)} datasets of the AAAI-18 release and of the pushable "
+        "curriculum sb3-smc designed "
         f"({', '.join(f'{n} {k}' for k, n in sorted(by_kind.items()))}; "
         f"{', '.join(f'{k} {n}' for k, n in sorted(by_category.items()))}), "
         f"{len(catalog['concepts'])} concepts, {len(catalog['generators'])} generators, "
@@ -310,7 +347,8 @@ def render_docs(catalog: dict[str, Any]) -> str:
         "",
         "* **Kind**: `cl_` classification, `ba_` bring-about. **Category**: by the defining `*.datasets` file "
         "(`bfaw-containment-*` containment, `bfaw-obj-containment-cl` objcon, `bfaw-objects-*` objects, "
-        "`bfaw-search-ba` search).",
+        "`bfaw-search-ba` search; `pixelworld_env/data/definitions/pushable.datasets` pushable, designed by "
+        "sb3-smc: [below](#the-pushable-curriculum-designed-by-sb3-smc)).",
         f"* **Sizes**: `num_samples` = {split['num_samples']}: classification datasets have "
         f"{split['num_samples']} positive + {split['num_samples']} negative environments, bring-about datasets "
         f"{split['num_samples']} (all with the goal initially false); each is split "
@@ -331,6 +369,7 @@ def render_docs(catalog: dict[str, Any]) -> str:
     rows = [[f"`{name}`", info["kind"], info["category"], f"`{info['concept']}`", len(info["generators"]),
              f"{info['train_size']}/{info['test_size']}"] for name, info in datasets.items()]
     out += _table(["dataset", "kind", "category", "concept", "generators", "train/test"], rows)
+    out += ["", *_pushable_section(catalog)]
     pools = catalog["concept_pools"]
     out += ["", f"## Concept pools ({len(pools)})", "",
             "Each pool is one environment over the scenes of all its member datasets (their train or test "

@@ -2,7 +2,8 @@
 
 One file per original curriculum file (``con1-cl``, ``con2-cl``, ``obj-con2-canon-cl``, ...: the flat baselines of
 smc-base, the hand-designed smc-curr and the canonical smc-canon curricula) and one ``<name>-noprim`` variant per
-two-level file (the paper's noprim ablation). Naming:
+two-level file (the paper's noprim ablation), plus the curricula sb3-smc designed
+(:mod:`sb3_smc.curricula.designed`: ``pushable``). Naming:
 
 * a flat (level-1) node is named after its dataset and trains it with the primitive moves; every curriculum that
   uses the dataset as a lower-level SMC names the same node, so it is trained once per seed in a run directory
@@ -70,6 +71,9 @@ def build_shipped() -> dict[str, Curriculum]:
             out[name] = Curriculum(name=name, nodes=(*flat.values(), *upper), targets=tuple(targets),
                                    method=method + ("-noprim" if not primitives else ""), description=description,
                                    source=f"shipped curriculum {name!r}")
+    from sb3_smc.curricula.designed import designed_curricula
+
+    out.update(designed_curricula())
     return dict(sorted(out.items()))
 
 

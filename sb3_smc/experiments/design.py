@@ -14,17 +14,21 @@ from dataclasses import dataclass
 
 from sb3_smc.curricula.format import Curriculum, CurriculumError, Node, merge
 
-__all__ = ["CATEGORIES", "METHODS", "SMC_METHODS", "ExperimentPlan", "level2_targets", "plan"]
+__all__ = ["CATEGORIES", "METHODS", "PAPER_CATEGORIES", "SMC_METHODS", "ExperimentPlan", "level2_targets", "plan"]
 
 METHODS = ("cnn", "base", "curr", "canon", "curr-noprim", "canon-noprim")
 SMC_METHODS = METHODS[1:]
-CATEGORIES = ("containment", "objcon", "objects", "search")
+CATEGORIES = ("containment", "objcon", "objects", "search", "pushable")
+PAPER_CATEGORIES = CATEGORIES[:4]
+"""The categories of the released benchmark (``all``); ``pushable`` is the curriculum sb3-smc designed."""
 _SHIPPED_METHOD = {"curr": "smc-curr", "canon": "smc-canon", "curr-noprim": "smc-curr-noprim",
                    "canon-noprim": "smc-canon-noprim"}
 
 
 def level2_targets(category: str = "all") -> list[str]:
-    """The paper's level-2 target datasets (51: 34 classification, 17 bring-about), of one category or all."""
+    """The higher-level target datasets of one category, or ``all`` the paper's 51 of the released benchmark (34
+    classification, 17 bring-about; ``pushable``: the 8 nodes above level 1 of the designed pushable
+    curriculum)."""
     from pixelworld_env import catalog
     from sb3_smc.curricula import shipped_curricula
 
@@ -32,7 +36,8 @@ def level2_targets(category: str = "all") -> list[str]:
         raise ValueError(f"category must be one of {(*CATEGORIES, 'all')}, got {category!r}")
     targets = {c.node(t).task for c in shipped_curricula().values() if c.method in ("smc-curr", "smc-canon")
                for t in c.targets}
-    return sorted(t for t in targets if category == "all" or catalog.dataset(t).category == category)
+    wanted = PAPER_CATEGORIES if category == "all" else (category,)
+    return sorted(t for t in targets if catalog.dataset(t).category in wanted)
 
 
 @dataclass(frozen=True)
