@@ -56,12 +56,14 @@ def run_one(headline: str, out: str, learner: str, node: str, seed: int, timeste
         smc = SMCLibrary.load(library_dir, names=[headline_job])[headline_job]
     else:
         algo, rnn = LEARNERS[learner]
-        reference = SMCLibrary.load(library_dir, names=[headline_job])[headline_job].spec
-        children = SMCLibrary.load(library_dir, names=reference.children) if reference.children else None
-        smc = train_smc(reference.task.env_id, children=list(children.values()) if children else None,
-                        algo=algo, rnn=rnn, seed=seed, total_timesteps=timesteps,
-                        include_primitives=reference.wrapper.include_primitives,
-                        name=f"{learner}:{headline_job}", log_every=0)
+        env_id, children, primitives = f"PW-{node}-v0", None, True
+        if node in LEVEL2:  # the children the headline run gave this node and seed
+            reference = SMCLibrary.load(library_dir, names=[headline_job])[headline_job].spec
+            library = SMCLibrary.load(library_dir, names=reference.children)
+            env_id, primitives = reference.task.env_id, reference.wrapper.include_primitives
+            children = [library[name] for name in reference.children]
+        smc = train_smc(env_id, children=children, algo=algo, rnn=rnn, seed=seed, total_timesteps=timesteps,
+                        include_primitives=primitives, name=f"{learner}:{headline_job}", log_every=0)
     result = evaluate(smc, repeats=REPEATS, seed=0, record_cells=False)
     record = smc.record
     row = {"learner": learner, "node": node, "seed": seed, "level": 2 if smc.spec.children else 1,

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import torch
 from PIL import Image
 
 from sb3_smc.experiments import CATEGORIES, level2_targets, plan
@@ -63,7 +64,12 @@ def test_cnn_input_and_it_beats_chance_on_an_easy_concept():
     grid = np.array([[7, 7, 7], [7, 2, 0], [7, 3, 3]])
     x = encode([grid])
     assert x.shape == (1, len(CHANNELS), 3, 3) and x.sum() == 9 and x[0, CHANNELS.index(2), 1, 1] == 1
-    result = train_cnn("cl_self-in-left-corner_vs_on-hline", seed=0)
+    torch.set_num_threads(2)
+    try:
+        result = train_cnn("cl_self-in-left-corner_vs_on-hline", seed=0)
+        assert torch.get_num_threads() == 2  # one thread inside, the caller's count back afterwards
+    finally:
+        torch.set_num_threads(1)
     assert result.train_accuracy == 1.0 and result.test_score >= 0.8  # measured 0.96
     assert train_cnn("cl_self-in-left-corner_vs_on-hline", seed=0).test_score == result.test_score  # seeded
     with pytest.raises(ValueError, match="bring-about dataset"):

@@ -91,16 +91,16 @@ class JobResult:
 
 
 def run_job(job: Job) -> JobResult:
-    """Train ``job`` (one torch thread) and return its result; the same in any process or Ray worker."""
-    import torch
-
+    """Train ``job`` (one torch thread; the caller's count is restored) and return its result; the same in any
+    process or Ray worker."""
+    from sb3_smc.common.threads import torch_threads
     from sb3_smc.library import SMCLibrary
     from sb3_smc.training import train_smc
 
-    torch.set_num_threads(1)
     spec = job.spec
     children = SMCLibrary.load(job.library, names=spec.children) if spec.children else {}
-    smc = train_smc(spec, children=children, tensorboard_log=job.tensorboard_log, log_every=0)
+    with torch_threads(1):
+        smc = train_smc(spec, children=children, tensorboard_log=job.tensorboard_log, log_every=0)
     buffer = io.BytesIO()
     smc.model.save(buffer)
     return JobResult(spec=smc.spec, record=smc.record, algo=spec.algo, model=buffer.getvalue())

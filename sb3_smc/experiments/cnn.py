@@ -62,15 +62,22 @@ def _network(height: int, width: int) -> Any:
 
 
 def train_cnn(target: str, seed: int, *, dataset_seed: int = 0) -> CNNResult:
-    """Train the CNN on ``target``'s training split with ``seed`` and test it on the test split."""
-    import torch
-
+    """Train the CNN on ``target``'s training split with ``seed`` and test it on the test split (one torch thread;
+    the caller's count is restored)."""
     from pixelworld_env import catalog
-    from pixelworld_env.loading import load_dataset
+    from sb3_smc.common.threads import torch_threads
 
     if catalog.dataset(target).kind != "classification":
         raise ValueError(f"the CNN baseline classifies: {target!r} is a bring-about dataset")
-    torch.set_num_threads(1)
+    with torch_threads(1):
+        return _train(target, seed, dataset_seed)
+
+
+def _train(target: str, seed: int, dataset_seed: int) -> CNNResult:
+    import torch
+
+    from pixelworld_env.loading import load_dataset
+
     torch.manual_seed(seed)
     train = load_dataset(target, split="train", seed=dataset_seed)
     test = load_dataset(target, split="test", seed=dataset_seed)

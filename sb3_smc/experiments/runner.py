@@ -142,14 +142,13 @@ def _evaluation(directory: Path, name: str, repeats: int) -> dict[str, Any]:
         saved = json.loads(path.read_text(encoding="utf-8"))
         if saved.get("repeats") == repeats:
             return saved
-    import torch
-
+    from sb3_smc.common.threads import torch_threads
     from sb3_smc.evaluation import evaluate
     from sb3_smc.library import SMCLibrary
 
-    torch.set_num_threads(1)
     smc = SMCLibrary.load(directory / "library", names=[name])[name]
-    result = evaluate(smc, repeats=repeats, seed=0, record_cells=False)
+    with torch_threads(1):
+        result = evaluate(smc, repeats=repeats, seed=0, record_cells=False)
     record = smc.record
     saved = {"smc": name, "repeats": repeats, "test_score": result.score,
              "training_return": record.selected_return if record is not None else None,
