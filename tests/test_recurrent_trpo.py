@@ -12,7 +12,7 @@ import torch
 from sb3_contrib import RecurrentPPO
 from stable_baselines3 import PPO
 from stable_baselines3.common.env_util import make_vec_env
-from torch.distributions import kl_divergence
+from torch.distributions import Categorical, kl_divergence
 
 from sb3_smc import SMCLibrary, evaluate, train_smc
 from sb3_smc.common.recurrent import SequenceGruPolicy, SequenceLstmPolicy, use_compact_buffer
@@ -108,10 +108,42 @@ def test_one_update_keeps_the_kl_in_the_trust_region_and_improves_the_surrogate(
     assert model.logger.name_to_value["train/is_line_search_success"] == 1.0
 
 
-def test_a_failed_line_search_leaves_the_policy_unchanged() -> None:
-    model = _recurrent(RecurrentTRPO, seed=1, target_kl=1e-12, line_search_max_iter=2)
-    before = copy.deepcopy(model.policy.lstm_actor.state_dict())
+def test_the_fisher_vector_product_equals_the_hessian_of_the_mean_kl() -> None:
+    """The Gauss-Newton product (central difference + one backward pass) against the exact Hessian-vector product
+    of the mean KL at the collecting policy (double backward, as sb3-contrib's TRPO computes it)."""
+    model = _recurrent(RecurrentTRPO, seed=4)
+    model.learn(64 * 8)  # weights away from their initialisation
+    _, callback = model._setup_learn(64 * 8, callback=None, reset_num_timesteps=False)
+    model.collect_rollouts(model.env, callback, model.rollout_buffer, model.n_steps)
+    (data,) = list(model.rollout_buffer.get(batch_size=None))
+
+    def evaluate():
+        return model.policy.evaluate_sequences(data.observations, data.lstm_states, data.episode_starts)[0]
+
+    params = [*model.policy.lstm_actor.parameters(), *model.policy.action_net.parameters()]
+    distribution = evaluate().distribution  # (SB3 reuses the wrapper object: keep the torch distribution)
+    logits, probs = distribution.logits, distribution.probs.detach()
+    kl = kl_divergence(distribution, Categorical(probs=probs)).mean()
+    grads = torch.autograd.grad(kl, params, create_graph=True)
+    flat = torch.cat([g.reshape(-1) for g in grads])
+    generator = torch.Generator().manual_seed(0)
+    for _ in range(3):
+        vector = torch.randn(flat.shape, generator=generator)
+        exact = torch.cat([g.reshape(-1) for g in torch.autograd.grad(flat @ vector, params, retain_graph=True)])
+        got = model.fisher_vector_product(params, logits, probs, evaluate, vector) - model.cg_damping * vector
+        assert torch.linalg.norm(got - exact) <= 0.02 * torch.linalg.norm(exact), (got[:5], exact[:5])
+
+
+def test_a_step_that_does_not_improve_the_surrogate_is_not_taken() -> None:
+    """Without a learning signal (all advantages 0) no step improves the surrogate: the line search fails and every
+    actor weight stays as it was."""
+    model = _recurrent(RecurrentTRPO, seed=1)
     model.learn(64 * 8)
+    _, callback = model._setup_learn(64 * 8, callback=None, reset_num_timesteps=False)
+    model.collect_rollouts(model.env, callback, model.rollout_buffer, model.n_steps)
+    model.rollout_buffer.advantages[:] = 0.0
+    before = copy.deepcopy(model.policy.lstm_actor.state_dict())
+    model.train()
     assert model.logger.name_to_value["train/is_line_search_success"] == 0.0
     for name, value in model.policy.lstm_actor.state_dict().items():
         assert torch.equal(value, before[name]), name
