@@ -33,6 +33,7 @@ _EXPORTS = {
     "policy_from_model": "sb3_smc.policies",
     "sample_action": "sb3_smc.policies",
     "train_smc": "sb3_smc.training",
+    "RecurrentTRPO": "sb3_smc.recurrent_trpo",
     "EvaluationResult": "sb3_smc.evaluation",
     "evaluate": "sb3_smc.evaluation",
     "SMCLibrary": "sb3_smc.library",
@@ -57,6 +58,7 @@ __all__ = [
     "ManifestError",
     "MissingChildError",
     "RecordError",
+    "RecurrentTRPO",
     "SMC",
     "SMCLibrary",
     "ScriptedPolicy",
@@ -119,6 +121,7 @@ if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs
         TrainingSpec,
         WrapperSettings,
     )
+    from sb3_smc.recurrent_trpo import RecurrentTRPO
     from sb3_smc.smc import SMC, StepPolicy, observation_size, smc_action_names
     from sb3_smc.training import train_smc
     from sb3_smc.wrapper import HierarchicalSMCWrapper
