@@ -4,7 +4,8 @@ Cases (all from freshly initialised, signal-biased policies, ``train_smc`` defau
 steps per update, paper-sized networks):
 
 * flat RecurrentPPO (LSTM 32) and flat TRPO (MLP 32) on ``cl_self-in-left-corner_vs_on-hline``, with 1 and 2
-  torch threads;
+  torch threads; the same task with the other recurrent learners (RecurrentPPO GRU 32, RecurrentTRPO LSTM and
+  GRU 32; docs/learners.md), 1 thread;
 * level-2 RecurrentPPO on ``cl_self-in-container_vs_noncontainer`` with the 13 SMCs of the canonical containment
   curriculum as actions (untrained children: freshly initialised RecurrentPPO models with the bias rule, so a
   call lasts about 41 decisions, as early in the paper's training), and with the three SMCs of the level-2 test.
@@ -41,11 +42,12 @@ def untrained(names: list[str] | tuple[str, ...]):
     return [train_smc(f"PW-{name}-v0", total_timesteps=0, n_envs=1, seed=k) for k, name in enumerate(names)]
 
 
-def measure(env_id: str, *, algo: str, updates: int, threads: int, repeats: int, children=None) -> dict:
+def measure(env_id: str, *, algo: str, updates: int, threads: int, repeats: int, children=None,
+            rnn: str | None = None) -> dict:
     torch.set_num_threads(threads)
     best = None
     for repeat in range(repeats):
-        smc = train_smc(env_id, algo=algo, total_timesteps=2000 * updates, seed=repeat, children=children)
+        smc = train_smc(env_id, algo=algo, total_timesteps=2000 * updates, seed=repeat, children=children, rnn=rnn)
         record = smc.record
         row = {"decisions/s": record.total_timesteps / record.wall_time_s,
                "primitive/s": record.primitive_steps / record.wall_time_s, "seconds": record.wall_time_s}
@@ -68,6 +70,8 @@ def main() -> None:
         for threads in (1,) if args.quick else (1, 2):
             cases.append((f"flat {algo}, {threads} thread{'s' * (threads > 1)}",
                           {"env_id": FLAT, "algo": algo, "threads": threads}))
+    for algo, rnn in (("RecurrentPPO", "gru"), ("RecurrentTRPO", "lstm"), ("RecurrentTRPO", "gru")):
+        cases.append((f"flat {algo} {rnn.upper()}, 1 thread", {"env_id": FLAT, "algo": algo, "threads": 1, "rnn": rnn}))
     children13 = untrained(canonical_children())
     cases.append(("level-2 RecurrentPPO, 13 untrained children, 1 thread",
                   {"env_id": LEVEL2, "algo": "RecurrentPPO", "threads": 1, "children": children13}))
