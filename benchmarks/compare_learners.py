@@ -32,8 +32,11 @@ LEARNERS = {"ppo-lstm": ("RecurrentPPO", "lstm"), "ppo-gru": ("RecurrentPPO", "g
 REPEATS = 10
 
 
-def _stem(text: str) -> str:
-    return text.replace("/", "%2F")
+def result_path(out: str | Path, learner: str, node: str, seed: int) -> Path:
+    """Where one job's result goes (``/`` of a node name encoded as the curriculum trainer encodes it)."""
+    from sb3_smc.curricula.trainer import file_stem
+
+    return Path(out) / f"{learner}__{file_stem(node)}__{seed}.json"
 
 
 def run_one(headline: str, out: str, learner: str, node: str, seed: int, timesteps: int) -> str:
@@ -47,7 +50,7 @@ def run_one(headline: str, out: str, learner: str, node: str, seed: int, timeste
     from sb3_smc.training import train_smc
 
     torch.set_num_threads(1)
-    path = Path(out) / f"{learner}__{_stem(node)}__{seed}.json"
+    path = result_path(out, learner, node, seed)
     if path.is_file():
         return str(path)
     library_dir = Path(headline) / "library"
@@ -130,7 +133,7 @@ def main() -> int:
     jobs = [(learner, node, seed) for node in nodes for learner in learners if learner != "ppo-lstm"
             for seed in range(args.seeds)]
     jobs += [("ppo-lstm", node, seed) for node in nodes if "ppo-lstm" in learners for seed in range(args.seeds)]
-    todo = [job for job in jobs if not (out / f"{job[0]}__{_stem(job[1])}__{job[2]}.json").is_file()]
+    todo = [job for job in jobs if not result_path(out, *job).is_file()]
     print(f"{len(jobs)} jobs, {len(jobs) - len(todo)} done, {args.workers} workers", flush=True)
     with ProcessPoolExecutor(args.workers) as pool:
         futures = {pool.submit(run_one, args.headline, str(out), *job, args.timesteps): job for job in todo}

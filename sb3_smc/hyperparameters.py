@@ -30,6 +30,7 @@ __all__ = [
     "constructor_arguments",
     "decode_value",
     "encode_value",
+    "recurrent_policy",
     "resolve_hyperparameters",
 ]
 
@@ -100,6 +101,17 @@ feature baseline instead of the critic."""
 RECURRENT_POLICIES = {"lstm": "SequenceLstmPolicy", "gru": "SequenceGruPolicy"}
 """``rnn`` option of ``train_smc`` -> the recurrent policy (by name) of the recurrent algorithms."""
 RECURRENT_ALGORITHMS = ("RecurrentPPO", "RecurrentTRPO")
+
+
+def recurrent_policy(rnn: str, algo: str | None = None) -> str:
+    """The policy (by name) of the ``rnn`` option; ``ValueError`` for an unknown cell, or for ``algo`` when given and
+    not recurrent."""
+    if rnn not in RECURRENT_POLICIES:
+        raise ValueError(f"rnn must be one of {sorted(RECURRENT_POLICIES)}, got {rnn!r}")
+    if algo is not None and algo not in RECURRENT_ALGORITHMS:
+        raise ValueError(f"rnn={rnn!r} needs a recurrent algorithm ({' or '.join(RECURRENT_ALGORITHMS)}); "
+                         f"{algo} has no recurrence")
+    return RECURRENT_POLICIES[rnn]
 
 CLASS_KEY = "__class__"
 SCHEDULE_KEYS = ("learning_rate", "clip_range")

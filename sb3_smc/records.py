@@ -413,16 +413,15 @@ class TrainingSpec(_Record):
         ``rnn="lstm"`` or ``"gru"`` picks the recurrent policy of a recurrent algorithm)."""
         n_steps = hyperparameters.pop("n_steps", None)
         if rnn is not None:
-            from sb3_smc.hyperparameters import RECURRENT_ALGORITHMS, RECURRENT_POLICIES
+            from sb3_smc.hyperparameters import recurrent_policy
 
-            if rnn not in RECURRENT_POLICIES:
-                raise RecordError(f"rnn must be one of {sorted(RECURRENT_POLICIES)}, got {rnn!r}")
-            if algo not in RECURRENT_ALGORITHMS:
-                raise RecordError(f"rnn={rnn!r} needs a recurrent algorithm ({' or '.join(RECURRENT_ALGORITHMS)}); "
-                                  f"{algo} has no recurrence")
-            if "policy" in hyperparameters and hyperparameters["policy"] != RECURRENT_POLICIES[rnn]:
+            try:
+                policy = recurrent_policy(rnn, algo)
+            except ValueError as err:
+                raise RecordError(str(err)) from None
+            if "policy" in hyperparameters and hyperparameters["policy"] != policy:
                 raise RecordError(f"rnn={rnn!r} and policy={hyperparameters['policy']!r} disagree: give one of them")
-            hyperparameters["policy"] = RECURRENT_POLICIES[rnn]
+            hyperparameters["policy"] = policy
         bias = signal_bias if isinstance(signal_bias, SignalBias) else SignalBias(enabled=_bool(signal_bias,
                                                                                                  "signal_bias"))
         return cls(

@@ -226,12 +226,9 @@ class _Scheduler:
         algo = self.algo or node.algo or "RecurrentPPO"
         hyperparameters = dict(node.hyperparameters)
         if self.rnn is not None:
-            from sb3_smc.hyperparameters import RECURRENT_ALGORITHMS, RECURRENT_POLICIES
+            from sb3_smc.hyperparameters import recurrent_policy
 
-            if algo not in RECURRENT_ALGORITHMS:
-                raise ValueError(f"rnn={self.rnn!r} needs a recurrent algorithm ({' or '.join(RECURRENT_ALGORITHMS)}), "
-                                 f"but the node trains with {algo}")
-            hyperparameters["policy"] = RECURRENT_POLICIES[self.rnn]
+            hyperparameters["policy"] = recurrent_policy(self.rnn, algo)
         return TrainingSpec(name=job_name(node.name, seed), task=TaskSpec(node.env_id).resolved(),
                             algo=algo, hyperparameters=hyperparameters,
                             seed=seed, budget=Budget(self.budget(node)),
@@ -321,10 +318,9 @@ def train_curriculum(
         if algo not in ALGORITHMS:
             raise ValueError(f"algo must be one of {ALGORITHMS}, got {algo!r}")
     if rnn is not None:
-        from sb3_smc.hyperparameters import RECURRENT_POLICIES
+        from sb3_smc.hyperparameters import recurrent_policy
 
-        if rnn not in RECURRENT_POLICIES:
-            raise ValueError(f"rnn must be one of {sorted(RECURRENT_POLICIES)}, got {rnn!r}")
+        recurrent_policy(rnn)  # a known cell (each node's algorithm is checked with its spec)
     selected = merged.select(targets)
     order = merged.order(selected)
     directory = Path(out)

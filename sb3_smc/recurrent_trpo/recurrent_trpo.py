@@ -153,9 +153,14 @@ class RecurrentTRPO(RecurrentPPO):
 
     # ------------------------------------------------------------------------------------------ the update
 
-    def fisher_vector_product(self, params: list[torch.nn.Parameter], logits: torch.Tensor, probs: torch.Tensor,
-                              evaluate: Callable[[], Any], vector: torch.Tensor) -> torch.Tensor:
+    def fisher_vector_product(self, params: list[torch.nn.Parameter], originals: list[torch.Tensor],
+                              logits: torch.Tensor, probs: torch.Tensor, evaluate: Callable[[], Any],
+                              vector: torch.Tensor) -> torch.Tensor:
         """The Hessian of the mean KL at the collecting policy times ``vector``, plus damping.
+
+        ``params`` hold the collecting policy's values, ``originals`` (detached copies of them) and leave with them;
+        ``logits`` / ``probs`` are that policy's on the batch (``logits`` with its graph), ``evaluate()`` recomputes
+        the action distribution.
 
         At the collecting policy that Hessian is the Fisher matrix ``mean_i J_iᵀ M_i J_i`` (``J_i``: the Jacobian
         of step i's logits, ``M_i = diag(p_i) - p_i p_iᵀ``). ``J v`` is a central difference of the logits along
@@ -163,7 +168,6 @@ class RecurrentTRPO(RecurrentPPO):
         ``logits``: several times cheaper than the double backward through the recurrent net that sb3-contrib's
         feed-forward TRPO uses, and the line search checks the exact KL anyway.
         """
-        originals = [param.detach().clone() for param in params]
         theta = torch.sqrt(sum((o ** 2).sum() for o in originals))
         step = 5e-3 * max(1.0, float(theta)) / max(float(vector.norm()), 1e-12)
         with torch.no_grad():
@@ -226,11 +230,11 @@ class RecurrentTRPO(RecurrentPPO):
             grads = torch.autograd.grad(objective, params, retain_graph=True, allow_unused=True)
             actor_params = [p for p, g in zip(params, grads, strict=True) if g is not None]  # the critic is unused
             objective_grad = torch.cat([g.reshape(-1) for g in grads if g is not None])
-            fisher = partial(self.fisher_vector_product, actor_params, logits, probs, evaluate)
+            originals = [param.detach().clone() for param in actor_params]
+            fisher = partial(self.fisher_vector_product, actor_params, originals, logits, probs, evaluate)
             direction = conjugate_gradient_solver(fisher, objective_grad, max_iter=self.cg_max_steps)
             curvature = float(torch.dot(direction, fisher(direction)))
             max_step = np.sqrt(2 * self.target_kl / curvature) if curvature > 0 else 0.0
-            originals = [param.detach().clone() for param in actor_params]
             success, coefficient, new_kl = False, 1.0, torch.zeros(())
             with torch.no_grad():
                 for _ in range(self.line_search_max_iter):
