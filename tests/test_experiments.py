@@ -127,3 +127,36 @@ def test_cli_experiment_and_report_errors(tmp_path):
     assert wrong.returncode == 2 and "invalid choice: 'rnn'" in wrong.stderr
     missing = cli("report", str(tmp_path / "nothing"))
     assert missing.returncode == 2 and "results.json not found" in missing.stderr
+
+
+def test_the_report_orders_the_pushable_curriculum_by_level(tmp_path):
+    from pixelworld_env import catalog
+    from sb3_smc.experiments.report import pushable_levels
+
+    targets = level2_targets("pushable")
+    levels = pushable_levels()
+    assert sorted(levels.values()) == [1, 1, 1, 2, 2, 3, 4, 4, 5, 5, 6] and min(levels[t] for t in targets) == 2
+    rows, best = [], []
+    for k, target in enumerate(targets):
+        kind = catalog.dataset(target).kind
+        for method in ("cnn", "base", "curr") if kind == "classification" else ("base", "curr"):
+            scores = [0.5 + 0.01 * k + 0.1 * seed for seed in range(2)]
+            curriculum = target if method != "curr" else f"pushable/{target}"
+            rows += [{"target": target, "kind": kind, "category": "pushable", "method": method,
+                      "curriculum": curriculum, "seed": seed, "test_score": v} for seed, v in enumerate(scores)]
+            best.append({"target": target, "kind": kind, "category": "pushable", "method": method,
+                         "curriculum": curriculum, "seed": 1, "test_score": scores[1]})
+    (tmp_path / "results.json").write_text(json.dumps({
+        "rows": rows, "reported": best, "wall_time_s": 60.0, "command": None, "machine": {},
+        "settings": {"methods": ["cnn", "base", "curr"], "targets": targets, "seeds": 2, "timesteps": 400_000,
+                     "repeats": 10, "workers": 2, "backend": "local"}}))
+    [report] = write_report(tmp_path, behaviour=False)
+    text = report.read_text()
+    section = text.split("## The pushable curriculum by level (Fig. 5c)")[1].split("## Figures")[0]
+    table = [line.split(" | ") for line in section.splitlines() if line.startswith("| ") and "---" not in line][1:]
+    assert [int(r[0][2:]) for r in table] == sorted(levels[t] for t in targets)  # ordered by level
+    top = "cl_pushable-floor-pixel_vs_unpushable"
+    assert table[-1][1] == top and table[-1][3] == f"{50 + targets.index(top) + 10:.1f}"  # the cnn's best seed
+    assert "ours - paper" not in text  # the paper gives no pushable numbers
+    image = np.asarray(Image.open(tmp_path / "figures" / "pushable.png").convert("L"))
+    assert image.std() > 5 and "figures/pushable.png" in text
