@@ -30,6 +30,8 @@ import torch
 
 from pixelworld_env import catalog
 from sb3_smc.curricula import shipped_curricula
+from sb3_smc.curricula.designed import designed_curricula
+from sb3_smc.curricula.format import Curriculum
 from sb3_smc.curricula.trainer import Job, job_name, run_job
 from sb3_smc.library import SMCLibrary
 from sb3_smc.records import Budget, TaskSpec, TrainingSpec
@@ -48,9 +50,15 @@ def measure(library: Path, children: tuple[str, ...], updates: int) -> float:
     return result.record.total_timesteps / result.record.wall_time_s
 
 
+def paper_curricula() -> dict[str, Curriculum]:
+    """The shipped curricula of the paper's protocol (not those sb3-smc designed, such as ``pushable``)."""
+    designed = designed_curricula()
+    return {name: c for name, c in shipped_curricula().items() if name not in designed}
+
+
 def protocol_jobs() -> dict[str, int]:
-    """Jobs (node x seed) of the whole protocol, by kind (the noprim curricula included)."""
-    curricula = shipped_curricula()
+    """Jobs (node x seed) of the paper's whole protocol, by kind (the noprim curricula included)."""
+    curricula = paper_curricula()
     two_level = [c for c in curricula.values() if c.method and c.method.split("-")[1] in ("curr", "canon")]
     targets = {c.node(t).task for c in two_level for t in c.targets}
     flat = {u for c in two_level for t in c.targets for u in c.node(t).uses} | targets  # + the smc-base of targets
@@ -65,7 +73,7 @@ def main() -> None:
     args = parser.parse_args()
     torch.set_num_threads(1)
     canonical = [dataset for _, dataset in catalog.canonical_smc_lists()["canonical_containment_curriculum"]]
-    curr_sizes = [len(c.node(t).uses) for c in shipped_curricula().values() if c.method == "smc-curr"
+    curr_sizes = [len(c.node(t).uses) for c in paper_curricula().values() if c.method == "smc-curr"
                   for t in c.targets]
     with tempfile.TemporaryDirectory() as tmp:
         library = SMCLibrary()

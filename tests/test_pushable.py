@@ -145,3 +145,17 @@ def test_only_level_1_is_decided_by_the_agents_first_view() -> None:
     accuracy = {n: module.first_view_accuracy(n) for n in classification}
     assert accuracy.pop("cl_self-ontop-pixel_touches-reference_vs_apart") >= 0.95
     assert len(accuracy) == 5 and all(value <= 0.65 for value in accuracy.values()), accuracy
+
+
+def test_the_papers_protocol_estimate_leaves_the_designed_curriculum_out() -> None:
+    """benchmarks/bench_curriculum.py counts the paper's protocol (docs/benchmarks.md: 101 flat nodes, 166 smc-curr
+    and 102 smc-canon entries with their noprim variants, x 5 seeds), not the pushable curriculum beside it."""
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "benchmarks" / "bench_curriculum.py"
+    spec = importlib.util.spec_from_file_location("bench_curriculum", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    assert "pushable" not in module.paper_curricula()
+    assert module.protocol_jobs() == {"flat": 505, "curr": 830, "canon": 510}
