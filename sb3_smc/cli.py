@@ -67,7 +67,7 @@ def _experiment(args: argparse.Namespace) -> int:
     targets = [t for item in args.targets for t in item.split(",") if t] if args.targets else None
     run_experiment(args.out, methods=methods, targets=targets, category=args.category, seeds=args.seeds,
                    timesteps=args.timesteps, repeats=args.repeats, workers=args.workers, backend=args.backend,
-                   ray_address=args.ray_address, algo=args.algo, rnn=args.rnn)
+                   ray_address=args.ray_address, algo=args.algo, rnn=args.rnn, train=not args.no_train)
     print(f"next: sb3-smc report {args.out}")
     return 0
 
@@ -140,6 +140,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--workers", type=int, default=1)
     p.add_argument("--backend", choices=["local", "ray"], default="local")
     p.add_argument("--ray-address", default=None)
+    p.add_argument("--no-train", action="store_true",
+                   help="train nothing: evaluate and tabulate what the run has finished so far (partial results, "
+                        "marked so; the run may be training meanwhile)")
     _learner_arguments(p)
     p.set_defaults(run=_experiment)
 

@@ -15,6 +15,7 @@ import pytest
 import torch
 from PIL import Image
 
+from sb3_smc.curricula.trainer import RunSettingsError
 from sb3_smc.experiments import CATEGORIES, level2_targets, plan
 from sb3_smc.experiments.cnn import CHANNELS, encode, train_cnn
 from sb3_smc.experiments.report import paired_ttest, write_report
@@ -104,8 +105,37 @@ def test_a_tiny_experiment_end_to_end(tmp_path):
     assert again["rows"] == results["rows"]  # nothing trained or evaluated again
     assert all(p.stat().st_mtime_ns == stamp for p, stamp in stamps.items())
 
+    # partial results while a run is still training: drop one finished SMC, tabulate without training, complete it
+    from sb3_smc.library import SMCLibrary
+
+    dropped = f"obj-con2-cl/{LEFT_OF}-curr2@0"
+    library = SMCLibrary.load(out / "library")
+    library.remove(dropped)
+    library.save(out / "library")
+    (out / "evaluations" / f"obj-con2-cl%2F{LEFT_OF}-curr2@0.json").unlink()
+    partial = run_experiment(out, methods=["cnn", "base", "curr"], targets=[LEFT_OF], seeds=1, timesteps=2000,
+                             repeats=1, progress=False, train=False)
+    assert partial["complete"] is False and partial["missing"] == [dropped]
+    assert partial["rows"] == [r for r in results["rows"] if r["curriculum"] != f"obj-con2-cl/{LEFT_OF}-curr2"]
+    assert dropped not in SMCLibrary.load(out / "library")  # nothing trained
+    [report] = write_report(out, behaviour=False)
+    assert "**Partial results**: 1 SMC(s)" in report.read_text() and f"`{dropped}`" in report.read_text()
+    with pytest.raises(RunSettingsError, match="other settings"):
+        run_experiment(out, methods=["cnn", "base", "curr"], targets=[LEFT_OF], seeds=2, timesteps=2000,
+                       repeats=1, progress=False, train=False)
+    with pytest.raises(RunSettingsError, match="no run.json"):
+        run_experiment(tmp_path / "none", methods=["base"], targets=[LEFT_OF], seeds=1, progress=False, train=False)
+    completed = run_experiment(out, methods=["cnn", "base", "curr"], targets=[LEFT_OF], seeds=1, timesteps=2000,
+                               repeats=1, progress=False)
+    def timeless(rows: list[dict]) -> list[dict]:
+        return [{k: v for k, v in row.items() if k != "wall_time_s"} for row in rows]
+
+    assert completed["complete"] is True
+    assert timeless(completed["rows"]) == timeless(results["rows"])  # retrained alike: deterministic
+
     [report] = write_report(out)
     text = report.read_text()
+    assert "Partial results" not in text
     for method in ("cnn", "base", "curr"):
         assert f"| {method} " in text or f" {method} |" in text
     assert "52.6 / 90.4 / 89.0" in text and "Paired t-tests" in text and "## How this was run" in text

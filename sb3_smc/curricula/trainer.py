@@ -298,6 +298,48 @@ def train_curriculum(
     jobs in flight). The trained SMCs are the same whatever the backend and worker count. Jobs that fail are
     reported (``DIR/failed/``) and retried by the next run; jobs needing them wait. Returns a :class:`TrainingRun`.
     """
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise ValueError(f"workers must be a positive integer, got {workers!r}")
+    if backend not in ("local", "ray"):
+        raise ValueError(f"backend must be 'local' or 'ray', got {backend!r}")
+    merged, order, settings = _resolve_run(curriculum, targets, seeds, timesteps, reuse, algo, rnn)
+    directory = Path(out)
+    scheduler = _Scheduler(merged, order, seeds, timesteps, REUSE[reuse], algo, directory, rnn)
+    scheduler.check_specs()
+    _check_or_write_settings(directory, settings)
+    lock = _lock(directory)
+    try:
+        return _run(merged, scheduler, order, directory, seeds, backend, workers, ray_address, tensorboard, progress,
+                    printer)
+    finally:
+        lock.close()
+
+
+def finished_jobs(
+    curriculum: str | Path | Curriculum | Sequence[str | Path | Curriculum],
+    out: str | Path,
+    *,
+    targets: Sequence[str] | None = None,
+    seeds: int = DEFAULT_SEEDS,
+    timesteps: int | None = None,
+    reuse: str = "two_best",
+    algo: str | None = None,
+    rnn: str | None = None,
+) -> set[str]:
+    """The job names (``<node>@<seed>``) that the run :func:`train_curriculum` would resume in ``out`` has finished,
+    without training or writing anything (the run may be training meanwhile). ``RunSettingsError`` when ``out``
+    holds no run or a run with other settings."""
+    _, _, settings = _resolve_run(curriculum, targets, seeds, timesteps, reuse, algo, rnn)
+    directory = Path(out)
+    if not (directory / "run.json").is_file():
+        raise RunSettingsError(f"{directory} holds no run yet (no run.json): nothing is trained")
+    _check_or_write_settings(directory, settings)
+    return set(status(directory)["done"])
+
+
+def _resolve_run(curriculum: Any, targets: Sequence[str] | None, seeds: int, timesteps: int | None, reuse: str,
+                 algo: str | None, rnn: str | None) -> tuple[Curriculum, list[str], dict[str, Any]]:
+    """The merged curriculum, the nodes to train (lower levels first) and the settings of a run (checked)."""
     from sb3_smc.curricula import resolve_curriculum
 
     items = curriculum if isinstance(curriculum, list | tuple) else [curriculum]
@@ -308,10 +350,6 @@ def train_curriculum(
         raise ValueError(f"seeds must be a positive integer, got {seeds!r}")
     if timesteps is not None and (isinstance(timesteps, bool) or not isinstance(timesteps, int) or timesteps < 1):
         raise ValueError(f"timesteps must be a positive integer, got {timesteps!r}")
-    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
-        raise ValueError(f"workers must be a positive integer, got {workers!r}")
-    if backend not in ("local", "ray"):
-        raise ValueError(f"backend must be 'local' or 'ray', got {backend!r}")
     if algo is not None:
         from sb3_smc.hyperparameters import ALGORITHMS
 
@@ -323,17 +361,7 @@ def train_curriculum(
         recurrent_policy(rnn)  # a known cell (each node's algorithm is checked with its spec)
     selected = merged.select(targets)
     order = merged.order(selected)
-    directory = Path(out)
-    settings = run_settings(merged, order, selected, seeds, timesteps, reuse, algo, rnn)
-    scheduler = _Scheduler(merged, order, seeds, timesteps, REUSE[reuse], algo, directory, rnn)
-    scheduler.check_specs()
-    _check_or_write_settings(directory, settings)
-    lock = _lock(directory)
-    try:
-        return _run(merged, scheduler, order, directory, seeds, backend, workers, ray_address, tensorboard, progress,
-                    printer)
-    finally:
-        lock.close()
+    return merged, order, run_settings(merged, order, selected, seeds, timesteps, reuse, algo, rnn)
 
 
 def _lock(directory: Path) -> Any:

@@ -103,6 +103,13 @@ def _write(directory: Path, trajectories: str | None, behaviour: bool) -> Path:
              f"{settings['timesteps']:,} steps per SMC; test: {settings['repeats']} repeats per test environment, "
              "stochastic policy, the update with the best training return. Scores in %; the paper's numbers "
              "(Hay et al., AAAI-18, spec §6) beside ours where it gives them.", ""]
+    if results.get("complete") is False:
+        missing = results.get("missing", [])
+        lines += [f"**Partial results**: {len(missing)} SMC(s) of the run were not trained yet when these were "
+                  "tabulated (`sb3-smc experiment --no-train`); every score below is the best over the seeds and "
+                  "curricula finished so far, and a target x method with none is absent. Not yet trained: "
+                  + ", ".join(f"`{name}`" for name in missing[:12]) + (", ..." if len(missing) > 12 else "") + ".",
+                  ""]
     # per concept
     lines += ["## Per concept (best seed; curr: best curriculum)", "",
               "| target | kind | category | " + " | ".join(methods) + " | paper (base / curr / canon) |",

@@ -26,7 +26,7 @@ from pathlib import Path
 from typing import Any
 
 from pixelworld_env.atomic import atomic_write
-from sb3_smc.curricula.trainer import DEFAULT_SEEDS, file_stem, job_name, train_curriculum
+from sb3_smc.curricula.trainer import DEFAULT_SEEDS, file_stem, finished_jobs, job_name, train_curriculum
 from sb3_smc.experiments.design import METHODS, level2_targets, plan
 
 __all__ = ["RESULT_FIELDS", "read_results", "run_experiment"]
@@ -49,13 +49,18 @@ def run_experiment(
     ray_address: str | None = None,
     algo: str | None = None,
     rnn: str | None = None,
+    train: bool = True,
     progress: bool = True,
     printer: Callable[[str], None] = print,
 ) -> dict[str, Any]:
     """Run the paper's protocol for ``methods`` on ``targets`` (dataset names) or a ``category`` of the level-2
     targets (default: all 51) into ``out``; returns the ``results.json`` content. Resumable: re-run to continue.
     ``algo`` / ``rnn`` choose the learner of every SMC (default: RecurrentPPO with an LSTM; the paper's is
-    ``algo="RecurrentTRPO", rnn="gru"``)."""
+    ``algo="RecurrentTRPO", rnn="gru"``).
+
+    ``train=False`` trains nothing: it tabulates what the directory's run has finished so far (while it may still be
+    training): the finished SMCs are evaluated (and the CNN trained), the rest are listed in ``missing`` and the
+    results are marked ``"complete": false`` (the report says so). Running with ``train=True`` completes them."""
     from pixelworld_env import catalog
 
     if targets is not None and category is not None:
@@ -65,7 +70,11 @@ def run_experiment(
     directory = Path(out)
     directory.mkdir(parents=True, exist_ok=True)
     start = time.time()
-    if design.curriculum is not None:
+    finished: set[str] | None = None
+    if design.curriculum is not None and not train:
+        finished = finished_jobs(design.curriculum, directory, targets=design.training_targets, seeds=seeds,
+                                 timesteps=timesteps, algo=algo, rnn=rnn)
+    elif design.curriculum is not None:
         run = train_curriculum(design.curriculum, directory, targets=design.training_targets, seeds=seeds,
                                timesteps=timesteps, workers=workers, backend=backend, ray_address=ray_address,
                                algo=algo, rnn=rnn, progress=progress, printer=printer)
@@ -74,6 +83,7 @@ def run_experiment(
                                f"tracebacks in {directory / 'failed'}): nothing evaluated; run the same command "
                                "again to retry them")
     rows: list[dict[str, Any]] = []
+    missing: list[str] = []
     for (target, method), nodes in sorted(design.nodes.items()):
         info = catalog.dataset(target)
         if method == "cnn":
@@ -84,6 +94,9 @@ def run_experiment(
             continue
         for node in nodes:
             for seed in range(seeds):
+                if finished is not None and job_name(node, seed) not in finished:
+                    missing.append(job_name(node, seed))
+                    continue
                 evaluation = _evaluation(directory, job_name(node, seed), repeats)
                 rows.append(_row(target, info, method, node, seed, evaluation["training_return"],
                                  evaluation["selected_update"], evaluation["test_score"], evaluation["wall_time_s"]))
@@ -98,13 +111,16 @@ def run_experiment(
         "machine": {"platform": platform.platform(), "python": platform.python_version(),
                     "processor": platform.processor() or platform.machine()},
         "wall_time_s": time.time() - start,
+        "complete": not missing,
+        "missing": missing,
         "rows": rows,
         "reported": reported(rows),
     }
     atomic_write(directory / "results.json", json.dumps(results, indent=2) + "\n")
     atomic_write(directory / "results.csv", _csv(rows))
     if progress:
-        printer(f"results: {directory / 'results.csv'} ({len(rows)} rows)")
+        printer(f"results: {directory / 'results.csv'} ({len(rows)} rows"
+                + (f"; partial: {len(missing)} SMC(s) not trained yet)" if missing else ")"))
     return results
 
 

@@ -61,7 +61,8 @@ class SMCLibrary(Mapping[str, SMC]):
     plus :meth:`add`, :meth:`remove`, :meth:`save`, :meth:`load`, :meth:`wrap` and :meth:`env_for`.
     Children live in the same library, by name: :meth:`add` adds an SMC's missing children (recursively) before
     the SMC itself, so :attr:`names` lists children before their parents. Only SMCs with a trained
-    ``RecurrentPPO``, ``RecurrentTRPO``, ``TRPO`` or ``PPO`` model can be stored (scripted SMCs cannot: ``LibraryError``).
+    ``RecurrentPPO``, ``RecurrentTRPO``, ``TRPO`` or ``PPO`` model can be stored (scripted SMCs cannot:
+    ``LibraryError``).
     """
 
     def __init__(self, smcs: Sequence[SMC] = (), path: str | os.PathLike | None = None) -> None:
