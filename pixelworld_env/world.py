@@ -35,8 +35,10 @@ class World:
         shape = (scene.height + 2, scene.width + 2)
         self.grid = np.zeros(shape, dtype=np.int8)
         self.owner = np.full(shape, OUTSIDE, dtype=np.int16)
+        self._n_pixels = sum(len(o.cells) for o in scene.objects)
         self._draw()
         self._grid0, self._owner0 = self.grid.copy(), self.owner.copy()
+        self._disjoint0 = self._disjoint
         self._stale = False
 
     @property
@@ -60,6 +62,7 @@ class World:
         self.positions[:] = self._initial
         np.copyto(self.grid, self._grid0)
         np.copyto(self.owner, self._owner0)
+        self._disjoint = self._disjoint0
         self._stale = False
         if stale_cell is not None:
             r, c = stale_cell[0] + 1, stale_cell[1] + 1
@@ -87,6 +90,8 @@ class World:
                 self.grid[r + 1, c + 1] = obj.color
                 self.owner[r + 1, c + 1] = i
         self._stale = False
+        # No two objects share a cell: then a move can redraw only the objects it moves (moves keep it so).
+        self._disjoint = int(np.count_nonzero(self.owner >= 0)) == self._n_pixels
 
     def move(self, delta: Cell) -> bool:
         """Try to move the self by ``delta``, pushing moveable objects; return whether anything moved.
@@ -124,10 +129,25 @@ class World:
                     return False
                 planned.add(other)
                 plan.append(other)
+        if self._stale or not self._disjoint:
+            for index in plan:
+                row, col = self.positions[index]
+                self.positions[index] = (row + dr, col + dc)
+            self._draw()
+            return True
+        # the same arrays as a full redraw: erase the moved objects, then draw them at their new positions
+        for index in plan:
+            for r, c in self._pixels(index):
+                self.grid[r + 1, c + 1] = 0
+                self.owner[r + 1, c + 1] = EMPTY
+        objects = self.scene.objects
         for index in plan:
             row, col = self.positions[index]
             self.positions[index] = (row + dr, col + dc)
-        self._draw()
+            color = objects[index].color
+            for r, c in self._pixels(index):
+                self.grid[r + 1, c + 1] = color
+                self.owner[r + 1, c + 1] = index
         return True
 
     def window(self) -> np.ndarray:

@@ -109,6 +109,35 @@ def test_pushes_against_the_frame_chains_and_immoveable_objects() -> None:
     assert not world.move(RIGHT) and world.positions == before  # A against an immoveable pixel
 
 
+def test_a_move_redraws_the_same_arrays_as_a_full_redraw() -> None:
+    """Moves that push redraw only the moved objects: after every move of random walks in every pushable dataset
+    (and in a scene with a pushable multi-pixel object), the state and owner arrays equal a full redraw."""
+    scenes = [scene for name in PUSHABLE for scene in _dataset(name).scenes[:6]]
+    scenes.append(Scene.from_ascii("""
+##########
+#........#
+#.S.AA...#
+#...AA.B.#
+#========#
+#........#
+##########
+"""))
+    rng = np.random.default_rng(0)
+    pushes = 0
+    for scene in scenes:
+        world = World(scene)
+        for delta in rng.choice(list(MOVES.values()), size=60, p=[0.1, 0.6, 0.2, 0.1]):  # mostly towards P
+            before = list(world.positions)
+            world.move(tuple(delta))
+            moved = [i for i, (a, b) in enumerate(zip(before, world.positions, strict=True)) if a != b]
+            pushes += len(set(moved) - {world.self_index})
+            grid, owner = world.grid.copy(), world.owner.copy()
+            world.set_positions(list(world.positions))  # the full redraw
+            np.testing.assert_array_equal(world.grid, grid)
+            np.testing.assert_array_equal(world.owner, owner)
+    assert pushes > 20  # the walks did push (32 pushes)
+
+
 @pytest.mark.parametrize("name", ["cl_pushable-pixel_vs_unpushable_from_left-touches-one-gap",
                                   "cl_pushable-pixel_vs_unpushable_from_left-on-floor",
                                   "cl_pushable-floor-pixel_vs_unpushable"])
