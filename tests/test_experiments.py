@@ -139,6 +139,11 @@ def test_a_tiny_experiment_end_to_end(tmp_path):
     for method in ("cnn", "base", "curr"):
         assert f"| {method} " in text or f" {method} |" in text
     assert "52.6 / 90.4 / 89.0" in text and "Paired t-tests" in text and "## How this was run" in text
+    base = next(r["test_score"] for r in results["reported"] if r["method"] == "base")
+    subset = next(line for line in text.splitlines() if "ours - paper (the same 1 concept(s)" in line)
+    cells = [cell.strip() for cell in subset.strip("|").split("|")]  # kind, label, concepts, cnn, base, curr
+    assert cells[4] == f"{100 * base - 52.6:+.1f}"  # against the paper's number for this concept, not its mean
+    assert cells[3] == ""  # the paper gives no per-concept CNN number
     assert "- learner: RecurrentPPO (LSTM)" in text
     for name in ("categories", "concepts", "trajectories", "timeline"):
         image = np.asarray(Image.open(out / "figures" / f"{name}.png").convert("L"))
