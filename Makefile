@@ -30,6 +30,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_policies.py
 	$(PY) benchmarks/bench_curriculum.py
 	$(PY) benchmarks/bench_concepts.py
+	$(PY) benchmarks/bench_pushing.py
 	$(PY) benchmarks/bench_level2.py --timesteps 100000
 
 clean:
