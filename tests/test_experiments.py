@@ -192,6 +192,6 @@ def test_the_report_orders_the_pushable_curriculum_by_level(tmp_path):
     assert [int(r[0][2:]) for r in table] == sorted(levels[t] for t in targets)  # ordered by level
     top = "cl_pushable-floor-pixel_vs_unpushable"
     assert table[-1][1] == top and table[-1][3] == f"{50 + targets.index(top) + 10:.1f}"  # the cnn's best seed
-    assert "ours - paper" not in text  # the paper gives no pushable numbers
+    assert "ours - paper" not in text and "t(34)" not in text  # the paper gives no pushable numbers or tests
     image = np.asarray(Image.open(tmp_path / "figures" / "pushable.png").convert("L"))
     assert image.std() > 5 and "figures/pushable.png" in text

@@ -165,7 +165,9 @@ def _write(directory: Path, trajectories: str | None, behaviour: bool) -> Path:
         if not in_kind:
             continue
         for a, b in (("curr", "base"), ("canon", "base")):
-            lines.append(_ttest_row(kind, f"{a} vs {b}", in_kind, a, b, score, PAPER_TTESTS[kind].get(f"{a} vs {b}")))
+            paper_test = PAPER_TTESTS[kind].get(f"{a} vs {b}") if all(
+                category_of[t] in PAPER_CATEGORIES for t in in_kind) else None  # the paper tested its own concepts
+            lines.append(_ttest_row(kind, f"{a} vs {b}", in_kind, a, b, score, paper_test))
         if kind == "classification":
             for category in CATEGORIES:
                 members = [t for t in in_kind if category_of[t] == category]
