@@ -8,6 +8,9 @@ registered id in tests/test_registration.py, these included.
 from __future__ import annotations
 
 import dataclasses
+import importlib.util
+from pathlib import Path
+from types import ModuleType
 
 import numpy as np
 import pytest
@@ -30,6 +33,15 @@ def _dataset(name: str):
 def _floor_pixel(scene: Scene) -> int:
     (index,) = [i for i, o in enumerate(scene.objects) if o.family == "pixel" and not o.is_self]
     return index
+
+
+def _benchmark(name: str) -> ModuleType:
+    """The script ``benchmarks/<name>.py`` imported as a module (benchmarks are not a package)."""
+    path = Path(__file__).resolve().parents[1] / "benchmarks" / f"{name}.py"
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
 
 
 def _reference(scene: Scene) -> int | None:
@@ -163,13 +175,7 @@ def test_only_level_1_is_decided_by_the_agents_first_view() -> None:
     """The order of the levels, measured (benchmarks/pushable_levels.py, docs/curricula.md): a lookup table from
     the first 3 x 3 view to the label answers level 1 and no higher classification (measured: 1.00, then 0.56,
     0.50, 0.50, 0.50, 0.50)."""
-    import importlib.util
-    from pathlib import Path
-
-    path = Path(__file__).resolve().parents[1] / "benchmarks" / "pushable_levels.py"
-    spec = importlib.util.spec_from_file_location("pushable_levels", path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
+    module = _benchmark("pushable_levels")
     classification = [n for n in PUSHABLE if catalog.dataset(n).kind == "classification"]
     accuracy = {n: module.first_view_accuracy(n) for n in classification}
     assert accuracy.pop("cl_self-ontop-pixel_touches-reference_vs_apart") >= 0.95
@@ -179,12 +185,6 @@ def test_only_level_1_is_decided_by_the_agents_first_view() -> None:
 def test_the_papers_protocol_estimate_leaves_the_designed_curriculum_out() -> None:
     """benchmarks/bench_curriculum.py counts the paper's protocol (docs/benchmarks.md: 101 flat nodes, 166 smc-curr
     and 102 smc-canon entries with their noprim variants, x 5 seeds), not the pushable curriculum beside it."""
-    import importlib.util
-    from pathlib import Path
-
-    path = Path(__file__).resolve().parents[1] / "benchmarks" / "bench_curriculum.py"
-    spec = importlib.util.spec_from_file_location("bench_curriculum", path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
+    module = _benchmark("bench_curriculum")
     assert "pushable" not in module.paper_curricula()
     assert module.protocol_jobs() == {"flat": 505, "curr": 830, "canon": 510}
