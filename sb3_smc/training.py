@@ -34,6 +34,7 @@ import numpy as np
 import torch
 from sb3_contrib import TRPO, RecurrentPPO
 from stable_baselines3 import PPO
+from stable_baselines3.common.logger import Logger
 
 from sb3_smc.bias import apply_signal_bias
 from sb3_smc.callbacks import SMCTrainingCallback
@@ -196,6 +197,8 @@ def _train(spec: TrainingSpec, children: tuple[SMC, ...], *, tensorboard_log: st
     policy_class, settings = constructor_arguments(spec.hyperparameters)
     model = ALGORITHM_CLASSES[spec.algo](policy_class, venv, n_steps=spec.budget.n_steps, seed=spec.seed,
                                          device="cpu", tensorboard_log=tensorboard_log, verbose=0, **settings)
+    if tensorboard_log is None:  # SB3's default logger would create an empty /tmp/SB3-<date> folder per run
+        model.set_logger(Logger(folder=None, output_formats=[]))
     if isinstance(model, RecurrentPPO):
         use_compact_buffer(model)
     initial = apply_signal_bias(model, action_names, **spec.signal_bias.weights) if spec.signal_bias.enabled else None

@@ -330,6 +330,19 @@ def test_tensorboard_curves(tmp_path: Path) -> None:
     assert smc.record.primitive_steps > 0
 
 
+
+def test_training_without_tensorboard_writes_no_log_folder(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """SB3's default logger makes an empty ``<tmp>/SB3-<date>`` folder per ``learn``; a curriculum would leave
+    thousands: train_smc gives the model a logger without outputs instead."""
+    import tempfile
+
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    monkeypatch.delenv("SB3_LOGDIR", raising=False)
+    for algo in ("RecurrentPPO", "TRPO"):
+        smc = train_smc(CORNER_ID, algo=algo, total_timesteps=256, n_envs=2, n_steps=128, log_every=0)
+        assert len(smc.record.training_returns) == 1
+    assert list(tmp_path.iterdir()) == []
+
 # ------------------------------------------------------------------------------------------------ learning
 
 @pytest.mark.parametrize("algo", ["TRPO", "RecurrentPPO"])
