@@ -1,13 +1,15 @@
 """Learner comparison (docs/learners.md): RecurrentPPO-LSTM, RecurrentPPO-GRU and RecurrentTRPO-GRU on six level-1
 concepts and the two headline level-2 targets, seeds 0..N-1 at the paper's budget.
 
-The level-2 SMCs get the children the headline experiment gave the same node and seed (its library, trained by the
+The level-2 SMCs get the children a curriculum run gave the same node and seed (its library, trained by the
 curriculum trainer with the default learner), so the comparison isolates the learner of the SMC being trained.
-RecurrentPPO-LSTM, the default learner, is not retrained: its SMCs are the headline run's own nodes, evaluated here
-as the experiment evaluates them (same seed, so the level-2 scores equal the headline's).
+RecurrentPPO-LSTM, the default learner, is not retrained: its SMCs are the curriculum run's own nodes, evaluated
+here as the experiment evaluates them (same seed, so the level-2 scores equal the run's). ``--headline`` names the
+run directories (repeat it): each SMC comes from the first whose library has it.
 
-    python benchmarks/compare_learners.py --headline runs/headline --out runs/learners --workers 2
-    python benchmarks/compare_learners.py --headline runs/headline --out runs/learners --table
+    python benchmarks/compare_learners.py --headline runs/headline --headline runs/headline-ba-curr-in \
+        --out runs/learners --workers 2
+    python benchmarks/compare_learners.py --out runs/learners --table
 
 Every job's result is one JSON file in ``--out`` (re-run to resume); ``--table`` prints the markdown table.
 Each worker uses one torch thread; wall times are those of ``--workers`` jobs side by side.
@@ -39,8 +41,20 @@ def result_path(out: str | Path, learner: str, node: str, seed: int) -> Path:
     return Path(out) / f"{learner}__{file_stem(node)}__{seed}.json"
 
 
-def run_one(headline: str, out: str, learner: str, node: str, seed: int, timesteps: int) -> str:
-    """Train (or, for ppo-lstm, take from the headline run) and evaluate one SMC; writes and returns its JSON."""
+def library_with(headlines: list[str], job: str) -> Path:
+    """The library of the first run directory in ``headlines`` that has the SMC ``job``."""
+    from sb3_smc.library.storage import MANIFEST, check_manifest, read_manifest
+
+    for headline in headlines:
+        library = Path(headline) / "library"
+        if (library / MANIFEST).is_file() and job in check_manifest(*read_manifest(library)):
+            return library
+    raise FileNotFoundError(f"no run in {headlines} has the SMC {job!r} in its library: train its curriculum first "
+                            "(docs/learners.md)")
+
+
+def run_one(headlines: list[str], out: str, learner: str, node: str, seed: int, timesteps: int) -> str:
+    """Train (or, for ppo-lstm, take from the curriculum run) and evaluate one SMC; writes and returns its JSON."""
     import torch
 
     from pixelworld_env.atomic import atomic_write
@@ -53,8 +67,8 @@ def run_one(headline: str, out: str, learner: str, node: str, seed: int, timeste
     path = result_path(out, learner, node, seed)
     if path.is_file():
         return str(path)
-    library_dir = Path(headline) / "library"
     headline_job = job_name(node, seed)
+    library_dir = library_with(headlines, headline_job)
     if learner == "ppo-lstm":
         smc = SMCLibrary.load(library_dir, names=[headline_job])[headline_job]
     else:
@@ -108,7 +122,8 @@ def table(out: Path) -> str:
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--headline", required=True, help="the headline experiment directory (its library)")
+    parser.add_argument("--headline", action="append", default=[],
+                        help="a curriculum run directory whose library has the SMCs (repeatable)")
     parser.add_argument("--out", required=True, help="where each job's JSON goes (re-run to resume)")
     parser.add_argument("--learners", default=",".join(LEARNERS))
     parser.add_argument("--nodes", default=",".join((*LEVEL2, *LEVEL1)), help="a subset of the SMCs compared")
@@ -122,6 +137,8 @@ def main() -> int:
     if args.table:
         print(table(out))
         return 0
+    if not args.headline:
+        parser.error("--headline DIR is needed to train (the run whose library has the SMCs and their children)")
     learners = [name for name in args.learners.split(",") if name]
     unknown = sorted(set(learners) - set(LEARNERS))
     if unknown:

@@ -8,9 +8,6 @@ registered id in tests/test_registration.py, these included.
 from __future__ import annotations
 
 import dataclasses
-import importlib.util
-from pathlib import Path
-from types import ModuleType
 
 import numpy as np
 import pytest
@@ -20,6 +17,7 @@ from pixelworld_env.constants import MOVEABLE_CLASSES, ObjectClass
 from pixelworld_env.datasets import load_or_generate
 from pixelworld_env.loading import dataset_spec
 from pixelworld_env.world import MOVES, World
+from tests.helpers import import_benchmark
 from tests.test_generation import check_dataset
 
 PUSHABLE = sorted(n for n in catalog.dataset_names() if catalog.dataset(n).category == "pushable")
@@ -33,15 +31,6 @@ def _dataset(name: str):
 def _floor_pixel(scene: Scene) -> int:
     (index,) = [i for i, o in enumerate(scene.objects) if o.family == "pixel" and not o.is_self]
     return index
-
-
-def _benchmark(name: str) -> ModuleType:
-    """The script ``benchmarks/<name>.py`` imported as a module (benchmarks are not a package)."""
-    path = Path(__file__).resolve().parents[1] / "benchmarks" / f"{name}.py"
-    spec = importlib.util.spec_from_file_location(name, path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
 
 
 def _reference(scene: Scene) -> int | None:
@@ -175,7 +164,7 @@ def test_only_level_1_is_decided_by_the_agents_first_view() -> None:
     """The order of the levels, measured (benchmarks/pushable_levels.py, docs/curricula.md): a lookup table from
     the first 3 x 3 view to the label answers level 1 and no higher classification (measured: 1.00, then 0.56,
     0.50, 0.50, 0.50, 0.50)."""
-    module = _benchmark("pushable_levels")
+    module = import_benchmark("pushable_levels")
     classification = [n for n in PUSHABLE if catalog.dataset(n).kind == "classification"]
     accuracy = {n: module.first_view_accuracy(n) for n in classification}
     assert accuracy.pop("cl_self-ontop-pixel_touches-reference_vs_apart") >= 0.95
@@ -185,6 +174,6 @@ def test_only_level_1_is_decided_by_the_agents_first_view() -> None:
 def test_the_papers_protocol_estimate_leaves_the_designed_curriculum_out() -> None:
     """benchmarks/bench_curriculum.py counts the paper's protocol (docs/benchmarks.md: 101 flat nodes, 166 smc-curr
     and 102 smc-canon entries with their noprim variants, x 5 seeds), not the pushable curriculum beside it."""
-    module = _benchmark("bench_curriculum")
+    module = import_benchmark("bench_curriculum")
     assert "pushable" not in module.paper_curricula()
     assert module.protocol_jobs() == {"flat": 505, "curr": 830, "canon": 510}
