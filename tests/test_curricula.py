@@ -299,8 +299,15 @@ def test_workers_and_ray_give_the_same_library(tmp_path):
     import ray
 
     path = _tiny(tmp_path)
-    sequential = train_curriculum(str(path), tmp_path / "one", seeds=2, timesteps=2000, progress=False)
-    parallel = train_curriculum(str(path), tmp_path / "two", seeds=2, timesteps=2000, workers=2, progress=False)
+    logs: dict[str, list[str]] = {"one": [], "two": []}
+    sequential = train_curriculum(str(path), tmp_path / "one", seeds=2, timesteps=2000, printer=logs["one"].append)
+    parallel = train_curriculum(str(path), tmp_path / "two", seeds=2, timesteps=2000, workers=2,
+                                printer=logs["two"].append)
+    # a log line per round of finished jobs, counting the jobs running once the finished ones' places are refilled
+    progress = {key: [line.split(",")[:2] for line in lines if line.startswith("jobs ")] for key, lines in logs.items()}
+    assert progress["one"] == [[f"jobs {k}/6", " running 0"] for k in range(1, 7)]
+    assert progress["two"][0] in (["jobs 1/6", " running 2"], ["jobs 2/6", " running 2"])
+    assert progress["two"][-1] == ["jobs 6/6", " running 0"]
     ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False)
     try:
         on_ray = train_curriculum(str(path), tmp_path / "ray", seeds=2, timesteps=2000, workers=2, backend="ray",

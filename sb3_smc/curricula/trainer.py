@@ -391,9 +391,10 @@ def _run(merged: Curriculum, scheduler: _Scheduler, order: list[str], directory:
     if progress:
         printer(f"{merged.name}: {len(order)} nodes x {seeds} seeds = {total} jobs ({done_before} already done) "
                 f"in {directory}, backend {backend}, {workers} worker{'s' * (workers > 1)}")
-    bar = _Progress(total, done_before, steps_total, steps_done, printer if progress else None)
     started = time.time()
     executor = _executor(backend, workers, ray_address)
+    bar = _Progress(total, done_before, steps_total, steps_done, printer if progress else None,
+                    after_refill=not isinstance(executor, _InProcess))
     try:
         pending: dict[Any, str] = {}
         while True:
@@ -600,10 +601,13 @@ def _executor(backend: str, workers: int, address: str | None) -> Any:
 
 class _Progress:
     """One live line: jobs done / total, running, steps/s, ETA (``\\r``-refreshed on a terminal, else one line per
-    finished job)."""
+    round of finished jobs)."""
 
     def __init__(self, total: int, done: int, steps_total: int, steps_done: int,
-                 printer: Callable[[str], None] | None) -> None:
+                 printer: Callable[[str], None] | None, after_refill: bool = True) -> None:
+        """``after_refill``: a log line waits until the finished jobs' places are refilled (:meth:`show`), so
+        that it counts the jobs running then; an in-process executor trains while it is given a job, so there
+        the line is printed when the job finishes."""
         import sys
 
         self.total, self.done, self.steps_total, self.steps_done = total, done, steps_total, steps_done
@@ -612,6 +616,8 @@ class _Progress:
         self.steps_at_start = steps_done
         self.tty = printer is print and sys.stdout.isatty()
         self.running = 0
+        self.after_refill = after_refill
+        self.shown = done  # jobs done at the last log line
 
     def line(self) -> str:
         elapsed = time.perf_counter() - self.start
@@ -625,11 +631,18 @@ class _Progress:
         self.running = running
         if self.printer is not None and self.tty:
             print("\r" + self.line() + " " * 8, end="", flush=True)
+        elif self.after_refill:
+            self._log()
 
     def finished(self, steps: int) -> None:
         self.done += 1
         self.steps_done += steps
-        if self.printer is not None and not self.tty:
+        if not self.after_refill:
+            self._log()
+
+    def _log(self) -> None:
+        if self.printer is not None and not self.tty and self.done > self.shown:
+            self.shown = self.done
             self.printer(self.line())
 
     def note(self, text: str) -> None:
