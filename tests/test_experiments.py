@@ -151,6 +151,43 @@ def test_a_tiny_experiment_end_to_end(tmp_path):
         assert f"figures/{name}.png" in text
 
 
+def test_a_run_reduced_to_its_records_resumes_without_model_files(tmp_path):
+    """What docs/results/ commits (run.json + evaluations, no library) is a run that resumes where it stopped."""
+    import shutil
+
+    from sb3_smc.curricula.trainer import file_stem
+    from sb3_smc.library import SMCLibrary
+
+    settings = dict(methods=["base", "curr"], targets=[LEFT_OF], seeds=1, timesteps=2000, repeats=1, progress=False)
+    results = run_experiment(tmp_path / "full", **settings)
+    kept = tmp_path / "kept"
+    kept.mkdir()
+    shutil.copy(tmp_path / "full" / "run.json", kept)
+    shutil.copytree(tmp_path / "full" / "evaluations", kept / "evaluations")
+    curr1 = f"obj-con2-cl/{LEFT_OF}-curr1@0"
+    saved = json.loads((kept / "evaluations" / f"{file_stem(curr1)}.json").read_text())
+    assert saved["spec"]["name"] == curr1 and saved["spec"]["children"]  # the children it was trained with
+
+    again = run_experiment(kept, **settings)
+    assert again["rows"] == results["rows"] and again["complete"] is True
+    assert not (kept / "library").exists()  # nothing trained: every SMC of the table is evaluated already
+
+    (kept / "evaluations" / f"{file_stem(curr1)}.json").unlink()
+    partial = run_experiment(kept, **{**settings}, train=False)
+    assert partial["missing"] == [curr1] and len(partial["rows"]) == len(results["rows"]) - 1
+    completed = run_experiment(kept, **settings)
+    trained = set(SMCLibrary.load(kept / "library").names)
+    assert curr1 in trained and f"{LEFT_OF}@0" not in trained and f"obj-con2-cl/{LEFT_OF}-curr@0" not in trained
+    assert {c for c in saved["spec"]["children"]} <= trained  # its lower levels, retrained
+    def timeless(rows: list[dict]) -> list[dict]:
+        return [{k: v for k, v in row.items() if k != "wall_time_s"} for row in rows]
+
+    assert timeless(completed["rows"]) == timeless(results["rows"])  # the lost SMC retrained alike
+    (kept / "evaluations" / f"{file_stem(curr1)}.json").write_text("{ not json")
+    with pytest.raises(ValueError, match=r"curr1@0.json is not valid JSON"):
+        run_experiment(kept, **settings)
+
+
 def test_cli_experiment_and_report_errors(tmp_path):
     def cli(*args: str) -> subprocess.CompletedProcess:
         return subprocess.run([sys.executable, "-m", "sb3_smc.cli", *args], cwd=ROOT, capture_output=True,

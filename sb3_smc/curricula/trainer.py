@@ -16,6 +16,10 @@ Run directory::
     DIR/state.json      the jobs running now and the coordinator's pid (for ``sb3-smc status``)
     DIR/.lock           held by the coordinator while it runs (a second one on the same directory is refused)
 
+Jobs whose results are kept elsewhere can be skipped (``skip``: e.g. the evaluated top-level SMCs of an experiment
+whose run directory lost its library): only jobs that no other job of the run needs, since their SMC is not in the
+library to serve as a child.
+
 Crash safety: a finished job is one whose SMC is in the library manifest; the model file and then the manifest are
 written atomically by the coordinator (the only writer), so killing the process at any moment loses at most the
 jobs that were running, which the next run starts again from scratch. Finished jobs are never trained again and
@@ -30,7 +34,7 @@ import os
 import shutil
 import time
 import traceback
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Collection, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -42,7 +46,7 @@ from sb3_smc.library import storage
 from sb3_smc.records import Budget, TaskSpec, TrainingRecord, TrainingSpec, WrapperSettings
 
 __all__ = ["REUSE", "Job", "JobResult", "RunSettingsError", "TrainingRun", "describe", "file_stem", "job_name",
-           "name_of_file", "rank_seeds", "run_job", "run_settings", "status", "train_curriculum"]
+           "name_of_file", "rank_seeds", "run_job", "run_settings", "status", "top_nodes", "train_curriculum"]
 
 REUSE = {"one_best": 1, "two_best": 2}
 """SMC filters of the paper: how many seeds of each lower-level node a caller gets."""
@@ -175,9 +179,10 @@ class TrainingRun:
 
 class _Scheduler:
     def __init__(self, curriculum: Curriculum, order: list[str], seeds: int, timesteps: int | None, k: int,
-                 algo: str | None, directory: Path, rnn: str | None = None) -> None:
+                 algo: str | None, directory: Path, rnn: str | None = None, skip: frozenset[str] = frozenset()
+                 ) -> None:
         self.curriculum, self.order, self.seeds, self.timesteps, self.k = curriculum, order, seeds, timesteps, k
-        self.algo, self.rnn = algo, rnn
+        self.algo, self.rnn, self.skip = algo, rnn, skip
         self.directory = directory
         self.library = directory / "library"
         self.records: dict[str, dict[int, TrainingRecord]] = {name: {} for name in order}
@@ -188,7 +193,7 @@ class _Scheduler:
         return [(node, seed) for node in self.order for seed in range(self.seeds)]
 
     def done(self, node: str, seed: int) -> bool:
-        return seed in self.records[node]
+        return seed in self.records[node] or job_name(node, seed) in self.skip
 
     def budget(self, node: Node) -> int:
         return self.timesteps or node.timesteps or DEFAULT_TIMESTEPS
@@ -286,6 +291,7 @@ def train_curriculum(
     tensorboard: bool = True,
     progress: bool = True,
     printer: Callable[[str], None] = print,
+    skip: Collection[str] = (),
 ) -> TrainingRun:
     """Train ``curriculum`` (a shipped name, a file, a :class:`Curriculum`, or several: their nodes are merged, a
     node shared by several is trained once) into ``out``, resuming whatever ``out`` already holds.
@@ -296,7 +302,9 @@ def train_curriculum(
     ``"two_best"`` or ``"one_best"``. ``workers`` > 1 runs independent jobs in that many local processes;
     ``backend="ray"`` submits them to a Ray cluster (``ray_address`` or ``RAY_ADDRESS``; ``workers`` caps the
     jobs in flight). The trained SMCs are the same whatever the backend and worker count. Jobs that fail are
-    reported (``DIR/failed/``) and retried by the next run; jobs needing them wait. Returns a :class:`TrainingRun`.
+    reported (``DIR/failed/``) and retried by the next run; jobs needing them wait. ``skip``: job names not to train
+    (their results are kept elsewhere), each a seed of a node that no other node of the run uses (``ValueError``
+    otherwise); lower-level nodes that only skipped jobs use are not trained. Returns a :class:`TrainingRun`.
     """
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
         raise ValueError(f"workers must be a positive integer, got {workers!r}")
@@ -304,7 +312,9 @@ def train_curriculum(
         raise ValueError(f"backend must be 'local' or 'ray', got {backend!r}")
     merged, order, settings = _resolve_run(curriculum, targets, seeds, timesteps, reuse, algo, rnn)
     directory = Path(out)
-    scheduler = _Scheduler(merged, order, seeds, timesteps, REUSE[reuse], algo, directory, rnn)
+    skipped = _check_skip(merged, order, seeds, skip)
+    order = _needed(merged, order, seeds, skipped)
+    scheduler = _Scheduler(merged, order, seeds, timesteps, REUSE[reuse], algo, directory, rnn, skipped)
     scheduler.check_specs()
     _check_or_write_settings(directory, settings)
     lock = _lock(directory)
@@ -335,6 +345,35 @@ def finished_jobs(
         raise RunSettingsError(f"{directory} holds no run yet (no run.json): nothing is trained")
     _check_or_write_settings(directory, settings)
     return set(status(directory)["done"])
+
+
+def top_nodes(curriculum: Curriculum, order: Sequence[str]) -> list[str]:
+    """The nodes of ``order`` that no node of ``order`` uses: their SMCs are never children in the run."""
+    used = {u for name in order for u in curriculum.node(name).uses}
+    return [name for name in order if name not in used]
+
+
+def _check_skip(curriculum: Curriculum, order: Sequence[str], seeds: int, skip: Collection[str]) -> frozenset[str]:
+    if isinstance(skip, str):
+        raise TypeError(f"skip must be a collection of job names, got the string {skip!r}")
+    top = set(top_nodes(curriculum, order))
+    for name in skip:
+        node, sep, seed = name.rpartition(SEED_SEPARATOR)
+        if not sep or not seed.isdigit() or int(seed) >= seeds or node not in order:
+            raise ValueError(f"skip: {name!r} is not a job of this run (<node>{SEED_SEPARATOR}<seed> with one of its "
+                             f"{len(order)} nodes and a seed below {seeds})")
+        if node not in top:
+            users = sorted(n for n in order if node in curriculum.node(n).uses)
+            raise ValueError(f"skip: {name!r} cannot be skipped: node {node!r} is used by {users[0]!r}"
+                             f"{f' and {len(users) - 1} more' if len(users) > 1 else ''}, which need(s) its SMC")
+    return frozenset(skip)
+
+
+def _needed(curriculum: Curriculum, order: list[str], seeds: int, skipped: frozenset[str]) -> list[str]:
+    """``order`` without the lower-level nodes that only skipped jobs use (nothing left to train needs them)."""
+    top = top_nodes(curriculum, order)
+    live = curriculum.closure([t for t in top if any(job_name(t, s) not in skipped for s in range(seeds))])
+    return [name for name in order if name in live or name in top]
 
 
 def _resolve_run(curriculum: Any, targets: Sequence[str] | None, seeds: int, timesteps: int | None, reuse: str,
@@ -385,11 +424,13 @@ def _run(merged: Curriculum, scheduler: _Scheduler, order: list[str], directory:
     _load_done(scheduler)
     failed_dir = directory / "failed"
     total = len(scheduler.jobs())
-    done_before = sum(len(r) for r in scheduler.records.values())
+    done_before = sum(scheduler.done(n, s) for n, s in scheduler.jobs())
+    skipped = sum(scheduler.done(n, s) and s not in scheduler.records[n] for n, s in scheduler.jobs())
     steps_total = sum(_rounded(scheduler.budget(merged.node(n))) for n, _ in scheduler.jobs())
     steps_done = sum(_rounded(scheduler.budget(merged.node(n))) for n, s in scheduler.jobs() if scheduler.done(n, s))
     if progress:
-        printer(f"{merged.name}: {len(order)} nodes x {seeds} seeds = {total} jobs ({done_before} already done) "
+        printer(f"{merged.name}: {len(order)} nodes x {seeds} seeds = {total} jobs ({done_before} already done"
+                f"{f', {skipped} of them skipped' if skipped else ''}) "
                 f"in {directory}, backend {backend}, {workers} worker{'s' * (workers > 1)}")
     started = time.time()
     executor = _executor(backend, workers, ray_address)

@@ -5,7 +5,10 @@
 2. Every target x method x curriculum node x seed is evaluated on the test split with the paper's protocol
    (10 repeats, stochastic policy, the snapshot selected by training return): :func:`sb3_smc.evaluate`. Each
    evaluation is saved as ``DIR/evaluations/<node>@<seed>.json`` (``/`` in node names as ``%2F``; atomically)
-   and not repeated by a later run.
+   and not repeated by a later run. A top-level SMC (one that no other trained node uses) with a saved evaluation
+   is not trained again either, even when ``DIR/library`` is gone: a run directory reduced to its records
+   (``run.json``, ``evaluations/``, ``cnn/``: no model files) resumes with only the SMCs it still lacks and the
+   lower-level nodes they need, which are retrained alike (training is deterministic for a seed).
 3. The CNN baseline (``cnn``) is trained and tested per classification target and seed
    (``DIR/cnn/<target>@<seed>.json``).
 4. ``DIR/results.csv`` / ``results.json``: one row per target x method x curriculum x seed (training return,
@@ -26,7 +29,15 @@ from pathlib import Path
 from typing import Any
 
 from pixelworld_env.atomic import atomic_write
-from sb3_smc.curricula.trainer import DEFAULT_SEEDS, file_stem, finished_jobs, job_name, train_curriculum
+from sb3_smc.curricula.trainer import (
+    DEFAULT_SEEDS,
+    file_stem,
+    finished_jobs,
+    job_name,
+    name_of_file,
+    top_nodes,
+    train_curriculum,
+)
 from sb3_smc.experiments.design import METHODS, level2_targets, plan
 
 __all__ = ["RESULT_FIELDS", "read_results", "run_experiment"]
@@ -71,13 +82,15 @@ def run_experiment(
     directory.mkdir(parents=True, exist_ok=True)
     start = time.time()
     finished: set[str] | None = None
+    kept = _kept_evaluations(directory, design.curriculum, design.training_targets, seeds, repeats) \
+        if design.curriculum is not None else set()
     if design.curriculum is not None and not train:
-        finished = finished_jobs(design.curriculum, directory, targets=design.training_targets, seeds=seeds,
-                                 timesteps=timesteps, algo=algo, rnn=rnn)
+        finished = kept | finished_jobs(design.curriculum, directory, targets=design.training_targets, seeds=seeds,
+                                        timesteps=timesteps, algo=algo, rnn=rnn)
     elif design.curriculum is not None:
         run = train_curriculum(design.curriculum, directory, targets=design.training_targets, seeds=seeds,
                                timesteps=timesteps, workers=workers, backend=backend, ray_address=ray_address,
-                               algo=algo, rnn=rnn, progress=progress, printer=printer)
+                               algo=algo, rnn=rnn, progress=progress, printer=printer, skip=kept)
         if run.failed:
             raise RuntimeError(f"{len(run.failed)} training job(s) failed ({', '.join(sorted(run.failed)[:5])}; "
                                f"tracebacks in {directory / 'failed'}): nothing evaluated; run the same command "
@@ -152,12 +165,36 @@ def _csv(rows: Sequence[dict[str, Any]]) -> str:
     return buffer.getvalue()
 
 
+def _saved_evaluation(path: Path, repeats: int) -> dict[str, Any] | None:
+    """The evaluation saved at ``path`` if it used ``repeats`` (else None: it is made again)."""
+    if not path.is_file():
+        return None
+    try:
+        saved = json.loads(path.read_text(encoding="utf-8"))
+    except json.JSONDecodeError as err:
+        raise ValueError(f"{path} is not valid JSON ({err}); delete it to evaluate that SMC again") from None
+    if not isinstance(saved, dict) or not isinstance(saved.get("test_score"), int | float):
+        raise ValueError(f"{path} is not an sb3-smc evaluation (no test_score); delete it to evaluate that SMC again")
+    return saved if saved.get("repeats") == repeats else None
+
+
+def _kept_evaluations(directory: Path, curriculum: Any, training_targets: Sequence[str], seeds: int,
+                      repeats: int) -> set[str]:
+    """The top-level jobs of the run that have a saved evaluation with ``repeats``: they need no training."""
+    folder = directory / "evaluations"
+    if not folder.is_dir():
+        return set()
+    top = top_nodes(curriculum, curriculum.order(curriculum.select(training_targets)))
+    wanted = {job_name(node, seed) for node in top for seed in range(seeds)}
+    return {name_of_file(p.stem) for p in folder.glob("*.json")
+            if name_of_file(p.stem) in wanted and _saved_evaluation(p, repeats) is not None}
+
+
 def _evaluation(directory: Path, name: str, repeats: int) -> dict[str, Any]:
     path = directory / "evaluations" / f"{file_stem(name)}.json"
-    if path.is_file():
-        saved = json.loads(path.read_text(encoding="utf-8"))
-        if saved.get("repeats") == repeats:
-            return saved
+    saved = _saved_evaluation(path, repeats)
+    if saved is not None:
+        return saved
     from sb3_smc.common.threads import torch_threads
     from sb3_smc.evaluation import evaluate
     from sb3_smc.library import SMCLibrary
@@ -170,6 +207,7 @@ def _evaluation(directory: Path, name: str, repeats: int) -> dict[str, Any]:
              "training_return": record.selected_return if record is not None else None,
              "selected_update": record.selected_update if record is not None else None,
              "wall_time_s": record.wall_time_s if record is not None else None,
+             "spec": smc.spec.to_dict() if smc.spec is not None else None,
              "evaluation": result.record.to_dict()}
     atomic_write(path, json.dumps(saved, indent=2) + "\n")
     return saved
