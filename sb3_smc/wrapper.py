@@ -39,9 +39,12 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
     """A PixelWorld env whose actions are its signals, the four moves and one action per SMC.
 
     Choosing an SMC runs its frozen policy on the same world, from a fresh recurrent state and stochastically
-    (seeded by ``reset(seed=...)``), until it emits one of its signals or has taken ``call_step_cap`` decisions.
-    Its signal never ends the episode: it becomes the SMC's **outcome** (+1 SIG1, -1 SIG0, 0 timed out). An SMC
-    that has children calls them the same way, each with its own outcome vector, at any depth.
+    (seeded by ``reset(seed=...)``), until it emits one of its signals or ``call_step_cap`` primitive moves have
+    been made under it, the moves of the calls it makes included (spec §7 item 8: "until it chooses a signal or
+    100 primitive steps pass"); each call also takes at most ``call_step_cap`` decisions of its own. Its signal
+    never ends the episode: it becomes the SMC's **outcome** (+1 SIG1, -1 SIG0, 0 timed out). An SMC that has
+    children calls them the same way, each with its own outcome vector, at any depth; a nested call shares the
+    move budget of the top-level call it runs in, so a call of any depth makes at most ``call_step_cap`` moves.
 
     * Observation: the one-hot 3 x 3 window (81), the last outcome of each SMC (0 until called in this
       episode), the one-hot previous action (zeros after reset) — :func:`sb3_smc.smc.observation_size`.
@@ -132,9 +135,14 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
     def _observation(self) -> np.ndarray:
         return self._call_observation(self._outcomes, self._previous_action, len(self.action_names))
 
-    def call_coroutine(self, smc: SMC, depth: int, calls: list[dict[str, Any]],
-                       cap: int) -> Generator[PolicyRequest, tuple[np.ndarray, Any], tuple[float, int, float]]:
+    def call_coroutine(self, smc: SMC, depth: int, calls: list[dict[str, Any]], cap: int,
+                       budget: list[int] | None = None
+                       ) -> Generator[PolicyRequest, tuple[np.ndarray, Any], tuple[float, int, float]]:
         """One call of ``smc`` on the live world as a coroutine; returns ``(reward, primitive steps, outcome)``.
+
+        The call takes at most ``cap`` decisions and makes at most ``budget[0]`` moves (default ``cap``), nested
+        calls included: ``budget`` is the one-element move budget shared by the calls of one top-level call,
+        decreased by every move; the call ends timed out (outcome 0) when it is used up.
 
         It yields ``(policy, observation, state)`` whenever a policy must decide (``smc``'s or, inside a child's
         call, the child's) and expects ``policy.probabilities(observation, state)`` back: :meth:`run_call` answers
@@ -149,8 +157,12 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         previous = -1
         state = policy.initial_state()
         reward, moves, outcome = 0.0, 0, 0.0
+        if budget is None:
+            budget = [cap]
         self._stack.append(smc.name)
         for _ in range(cap):
+            if budget[0] <= 0:  # the moves of the top-level call are used up (by a call this one made)
+                break
             obs = self._call_observation(outcomes, previous, n_actions)
             probabilities, state = yield policy, obs, state
             if len(probabilities) != n_actions:
@@ -164,11 +176,12 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
             if kind == _MOVE:
                 reward += self.base.apply_move(value)
                 moves += 1
+                budget[0] -= 1
                 if self.record_cells:
                     self._cells.append(self.base.world.self_position)
                     self._moves.append((tuple(self._stack), smc.action_names[action]))
             else:
-                r, m, o = yield from self.call_coroutine(smc.children[value], depth + 1, calls, cap)
+                r, m, o = yield from self.call_coroutine(smc.children[value], depth + 1, calls, cap, budget)
                 outcomes[value] = o
                 reward += r
                 moves += m

@@ -126,6 +126,29 @@ def test_time_accounting_modes_and_the_per_call_cap() -> None:
     assert info["primitive_steps"] == 1 and info["elapsed_steps"] == 12 and truncated
 
 
+def test_the_move_cap_is_shared_by_nested_calls() -> None:
+    """Spec §7 item 8: a call runs until a signal or ``call_step_cap`` primitive steps, its nested calls' included
+    (not ``call_step_cap`` moves per nested call: that would let a level-k call make ``cap ** k`` moves)."""
+    wander = scripted("wander", "bring-about", ["RIGHT", "LEFT"])  # never signals
+    checker = scripted("checker", "classification", ["RIGHT", "SMC:wander"], children=(wander,))
+    env = HierarchicalSMCWrapper(base_env(), [checker, wander], call_step_cap=5)
+    env.reset(seed=0)
+    _, _, _, _, info = act(env, "SMC:checker")
+    assert [(c["smc"], c["depth"], c["outcome"], c["primitive_steps"]) for c in info["smc_calls"]] == [
+        ("wander", 2, 0, 4), ("checker", 1, 0, 5)]  # one move of its own, then wander gets the 4 left
+    assert info["primitive_steps"] == 5
+    _, _, _, _, info = act(env, "SMC:wander")  # a new top-level call: a new budget
+    assert [(c["smc"], c["primitive_steps"]) for c in info["smc_calls"]] == [("wander", 5)]
+    # a call that makes no moves is bounded by its own decisions: 5 calls of a child that signals at once
+    quiet = scripted("quiet", "bring-about", ["SIG1"])
+    caller = scripted("caller", "classification", ["SMC:quiet"], children=(quiet,))
+    env = HierarchicalSMCWrapper(base_env(), [caller], call_step_cap=5)
+    env.reset(seed=0)
+    _, _, _, _, info = act(env, "SMC:caller")
+    assert [c["smc"] for c in info["smc_calls"]] == ["quiet"] * 5 + ["caller"]
+    assert info["smc_calls"][-1]["outcome"] == 0 and info["primitive_steps"] == 0
+
+
 def test_three_levels_of_nesting() -> None:
     into = scripted("into", "bring-about", ["DOWN", "DOWN", "SIG1"])
     names = smc_action_names("classification", ["into"])
