@@ -5,9 +5,10 @@ An SMC called as a child runs one observation at a time, so this per-call cost b
 RecurrentPPO with the default LSTM-32 and ``net_arch=[]``, with a (64, 64) head, and PPO with a (64, 64) MLP; then
 ``sample_action`` next to ``numpy.random.Generator.choice``. Best of 5 blocks of ``--repeats`` calls.
 
-A second table times ``probabilities_batch`` on B rows against B single ``probabilities`` calls (LSTM-32 and
-GRU-32 defaults): whether ``sb3_smc.vec_env.SMCVecEnv``'s lockstep batching of a child's pending decisions pays
-from two rows on.
+A second table times the compiled step of the default architectures (``sb3_smc.common.kernels``: LSTM-32 and
+GRU-32, ``net_arch=[]``) against the same policy's numpy code, for one row (``probabilities``) and for
+``probabilities_batch`` on 2 and 4 rows (what ``sb3_smc.vec_env.SMCVecEnv`` asks when several environments wait
+on the same child).
 
 Run: ``python benchmarks/bench_policies.py [--repeats N]``.
 """
@@ -15,6 +16,7 @@ Run: ``python benchmarks/bench_policies.py [--repeats N]``.
 from __future__ import annotations
 
 import argparse
+import copy
 import time
 from collections.abc import Callable
 
@@ -70,28 +72,32 @@ def main() -> None:
     choice_us = best_us(lambda i: rng.choice(len(p), p=p), args.repeats * 10)
     rows.append(("sample_action vs Generator.choice", sample_us, choice_us))
 
-    batch_rows = []
+    compiled_rows = []
     for rnn in ("lstm", "gru"):
-        policy = policy_from_model(train_smc(ENV_ID, total_timesteps=0, n_envs=1, rnn=rnn).model)
-        states = [policy.initial_state()] * 8
-        stacked = np.stack(observations[:8])
-        for rows_in_batch in (1, 2, 3, 4, 6, 8):
-            x, s = stacked[:rows_in_batch], states[:rows_in_batch]
-            batched = best_us(lambda i, x=x, s=s, policy=policy: policy.probabilities_batch(x, s), args.repeats)
-            singles = best_us(lambda i, x=x, s=s, policy=policy: [policy.probabilities(o, st)
-                                                                    for o, st in zip(x, s, strict=True)],
-                              args.repeats)
-            batch_rows.append((rnn.upper(), rows_in_batch, batched, singles))
+        compiled = policy_from_model(train_smc(ENV_ID, total_timesteps=0, n_envs=1, rnn=rnn).model)
+        numpy_code = copy.copy(compiled)
+        numpy_code._compiled = None  # the same weights through the numpy code
+        state = compiled.probabilities(observations[1], compiled.initial_state())[1]
+        for rows_in_batch in (1, 2, 4):
+            times = []
+            for policy in (compiled, numpy_code):
+                if rows_in_batch == 1:
+                    times.append(best_us(lambda i, p=policy, s=state: p.probabilities(observations[i % 64], s),
+                                         args.repeats))
+                else:
+                    x, s = np.stack(observations[:rows_in_batch]), [state] * rows_in_batch
+                    times.append(best_us(lambda i, p=policy, x=x, s=s: p.probabilities_batch(x, s), args.repeats))
+            compiled_rows.append((rnn.upper(), rows_in_batch, *times))
 
     print(f"\nbest of 5 x {args.repeats} calls; torch {torch.__version__}\n")
     print("| case | numpy (µs/call) | baseline: model.predict / choice (µs/call) | speed-up |")
     print("|---|---:|---:|---:|")
     for label, ours, theirs in rows:
         print(f"| {label} | {ours:.1f} | {theirs:.1f} | {theirs / ours:.1f}x |")
-    print("\n| cell | rows | one probabilities_batch (µs) | single calls (µs) | batch / singles |")
+    print("\n| cell | rows | compiled (µs/call) | numpy code (µs/call) | speed-up |")
     print("|---|---:|---:|---:|---:|")
-    for cell, rows_in_batch, batched, singles in batch_rows:
-        print(f"| {cell}-32 | {rows_in_batch} | {batched:.1f} | {singles:.1f} | {batched / singles:.2f} |")
+    for cell, rows_in_batch, ours, theirs in compiled_rows:
+        print(f"| {cell}-32 | {rows_in_batch} | {ours:.1f} | {theirs:.1f} | {theirs / ours:.1f}x |")
 
 
 if __name__ == "__main__":

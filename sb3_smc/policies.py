@@ -197,12 +197,18 @@ class NumpyLSTMPolicy:
                                  f"{bias.shape}")
         self.head = [_cast_layer(layer, self.dtype) for layer in head]
         self.n_actions = _n_outputs(self.head)
+        self._compiled = (*self.lstm[0], *self.head[0][1:]) if _compilable(self) else None
 
     def initial_state(self) -> LSTMState:
         zeros = np.zeros((self.n_layers, self.hidden_size), dtype=self.dtype)
         return zeros, zeros.copy()
 
     def probabilities(self, observation: np.ndarray, state: LSTMState) -> tuple[np.ndarray, LSTMState]:
+        if self._compiled is not None:
+            h_prev, c_prev = state
+            probabilities, h, c = _kernels().lstm_linear_step(np.asarray(observation).reshape(-1), h_prev[0],
+                                                              c_prev[0], *self._compiled)
+            return probabilities, (h, c)
         x = np.asarray(observation, dtype=self.dtype).reshape(-1)
         h_prev, c_prev = state
         n = self.hidden_size
@@ -229,6 +235,12 @@ class NumpyLSTMPolicy:
         x = np.asarray(observations, dtype=self.dtype).reshape(len(observations), -1)
         if len(states) != len(x):
             raise ValueError(f"{len(x)} observations but {len(states)} states")
+        if self._compiled is not None and len(x) < COMPILED_BATCH_FROM:
+            return _one_by_one(self, x, states)
+        if self._compiled is not None:
+            probabilities, h, c = _kernels().lstm_linear_batch(x, np.array([s[0][0] for s in states]),
+                                                               np.array([s[1][0] for s in states]), *self._compiled)
+            return probabilities, list(zip(h, c, strict=True))
         h_prev = np.array([s[0] for s in states])  # (B, layers, n)
         c_prev = np.array([s[1] for s in states])
         n = self.hidden_size
@@ -280,6 +292,7 @@ class NumpyGRUPolicy:
                                  f"{b_ih.shape}, {b_hh.shape}")
         self.head = [_cast_layer(layer, self.dtype) for layer in head]
         self.n_actions = _n_outputs(self.head)
+        self._compiled = (*self.gru[0], *self.head[0][1:]) if _compilable(self) else None
 
     def initial_state(self) -> np.ndarray:
         return np.zeros((self.n_layers, self.hidden_size), dtype=self.dtype)
@@ -300,6 +313,8 @@ class NumpyGRUPolicy:
         return x, h_next
 
     def probabilities(self, observation: np.ndarray, state: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        if self._compiled is not None:
+            return _kernels().gru_linear_step(np.asarray(observation).reshape(-1), state[0], *self._compiled)
         x, h_next = self._layers(np.asarray(observation, dtype=self.dtype).reshape(-1), state)
         return _softmax(_forward(self.head, x)), h_next
 
@@ -309,6 +324,11 @@ class NumpyGRUPolicy:
         x = np.asarray(observations, dtype=self.dtype).reshape(len(observations), -1)
         if len(states) != len(x):
             raise ValueError(f"{len(x)} observations but {len(states)} states")
+        if self._compiled is not None and len(x) < COMPILED_BATCH_FROM:
+            return _one_by_one(self, x, states)
+        if self._compiled is not None:
+            probabilities, h = _kernels().gru_linear_batch(x, np.array([s[0] for s in states]), *self._compiled)
+            return probabilities, list(h)
         h_prev = np.array(states).transpose(1, 0, 2)  # (layers, B, n)
         x, h_next = self._layers(x, h_prev)
         return _softmax(_forward(self.head, x)), list(h_next.transpose(1, 0, 2))
@@ -316,6 +336,30 @@ class NumpyGRUPolicy:
     def __repr__(self) -> str:
         return (f"{type(self).__name__}(observation_size={self.observation_size}, hidden_size={self.hidden_size}, "
                 f"n_layers={self.n_layers}, n_actions={self.n_actions})")
+
+
+def _compilable(policy: NumpyLSTMPolicy | NumpyGRUPolicy) -> bool:
+    """Whether the compiled step of :mod:`sb3_smc.common.kernels` serves ``policy``: float64, one recurrent layer,
+    one linear layer as the head (``net_arch=[]``)."""
+    return policy.dtype == np.float64 and policy.n_layers == 1 and len(policy.head) == 1 \
+        and policy.head[0][0] == "linear"
+
+
+COMPILED_BATCH_FROM = 3
+"""Compiled policies answer ``probabilities_batch`` with the batch kernel from this many rows on, and with single
+steps below: stacking the states costs more than a compiled step (``benchmarks/bench_policies.py``)."""
+
+
+def _one_by_one(policy: Any, x: np.ndarray, states: Sequence[Any]) -> tuple[np.ndarray, list[Any]]:
+    answers = [policy.probabilities(row, state) for row, state in zip(x, states, strict=True)]
+    return np.array([a[0] for a in answers]), [a[1] for a in answers]
+
+
+def _kernels() -> Any:
+    """:mod:`sb3_smc.common.kernels`, imported on first use (numba loads in about a second)."""
+    from sb3_smc.common import kernels
+
+    return kernels
 
 
 def _cast_layer(layer: Layer, dtype: np.dtype) -> Layer:

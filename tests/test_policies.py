@@ -18,6 +18,7 @@ from stable_baselines3.common.vec_env import DummyVecEnv
 from torch import nn
 
 from sb3_smc.policies import (
+    NumpyGRUPolicy,
     NumpyLSTMPolicy,
     NumpyMLPPolicy,
     ScriptedPolicy,
@@ -226,6 +227,65 @@ def test_batches_match_single_steps() -> None:
                     np.testing.assert_allclose(next_states[row][1], single_state[1], atol=1e-12)
             states = next_states
             observations = observations[::-1].copy()
+
+
+def _random_recurrent(cell: str, layers: int = 1, head: int = 0, dtype: type = np.float64, seed: int = 0,
+                      size: int = 87, hidden: int = 32, actions: int = 9) -> NumpyLSTMPolicy | NumpyGRUPolicy:
+    """A recurrent numpy actor with random weights (``head``: a hidden tanh layer of that size before the output)."""
+    rng = np.random.default_rng(seed)
+    gates = (4 if cell == "lstm" else 3) * hidden
+    recurrent = []
+    for k in range(layers):
+        inputs = size if k == 0 else hidden
+        weights = [rng.normal(0, 0.3, (inputs, gates)), rng.normal(0, 0.3, (hidden, gates)), rng.normal(0, 0.1, gates)]
+        recurrent.append(tuple(weights) if cell == "lstm" else (*weights, rng.normal(0, 0.1, gates)))
+    layers_out = [("linear", rng.normal(0, 0.5, (hidden, head)), rng.normal(0, 0.1, head)), ("tanh", 0.0, None)] \
+        if head else []
+    layers_out.append(("linear", rng.normal(0, 0.5, (head or hidden, actions)), rng.normal(0, 0.1, actions)))
+    cls = NumpyLSTMPolicy if cell == "lstm" else NumpyGRUPolicy
+    return cls(recurrent, layers_out, size, dtype=dtype)
+
+
+@pytest.mark.parametrize("cell", ["lstm", "gru"])
+def test_the_compiled_step_equals_the_numpy_code(cell: str) -> None:
+    """The default architecture (float64, one recurrent layer, linear head) runs compiled; its probabilities and
+    states equal the numpy code's to rounding, for one-hot float32 observations and dense float64 ones."""
+    import copy
+
+    policy = _random_recurrent(cell)
+    assert policy._compiled is not None
+    numpy_code = copy.copy(policy)
+    numpy_code._compiled = None
+    rng = np.random.default_rng(1)
+    observations = []
+    for step in range(12):
+        obs = np.zeros(87, dtype=np.float32)
+        obs[rng.choice(81, 9, replace=False)] = 1.0
+        obs[81 + step % 6] = rng.choice([-1.0, 1.0])
+        observations.append(obs if step % 2 else rng.normal(size=87))
+    state, reference = policy.initial_state(), numpy_code.initial_state()
+    for obs in observations:
+        p, state = policy.probabilities(obs, state)
+        q, reference = numpy_code.probabilities(obs, reference)
+        np.testing.assert_allclose(p, q, rtol=0, atol=1e-14)
+        for ours, theirs in zip(state if cell == "lstm" else (state,), reference if cell == "lstm" else (reference,),
+                                strict=True):
+            assert ours.shape == theirs.shape == (1, 32)
+            np.testing.assert_allclose(ours, theirs, rtol=0, atol=1e-14)
+    for rows in (1, 2, 4):  # single steps below COMPILED_BATCH_FROM rows, the batch kernel from there on
+        batch, states = policy.probabilities_batch(np.stack(observations[:rows]), [state] * rows)
+        single = [policy.probabilities(obs, state) for obs in observations[:rows]]
+        np.testing.assert_array_equal(batch, np.stack([s[0] for s in single]))
+        for ours, theirs in zip(states, single, strict=True):
+            for a, b in zip(ours if cell == "lstm" else (ours,), theirs[1] if cell == "lstm" else (theirs[1],),
+                            strict=True):
+                assert a.shape == (1, 32)
+                np.testing.assert_array_equal(a, b)
+    with pytest.raises(ValueError, match="4 observations but 3 states"):
+        policy.probabilities_batch(np.stack(observations[:4]), [state] * 3)
+    for other in (_random_recurrent(cell, layers=2), _random_recurrent(cell, head=16),
+                  _random_recurrent(cell, dtype=np.float32)):
+        assert other._compiled is None  # any other architecture: the numpy code
 
 
 def test_states_are_not_modified_in_place() -> None:
