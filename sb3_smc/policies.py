@@ -199,6 +199,11 @@ class NumpyLSTMPolicy:
         self.n_actions = _n_outputs(self.head)
         self._compiled = (*self.lstm[0], *self.head[0][1:]) if _compilable(self) else None
 
+    @property
+    def batch_from(self) -> int:
+        """The fewest pending decisions worth one :meth:`probabilities_batch` call instead of single calls."""
+        return COMPILED_BATCH_FROM if self._compiled is not None else 2
+
     def initial_state(self) -> LSTMState:
         zeros = np.zeros((self.n_layers, self.hidden_size), dtype=self.dtype)
         return zeros, zeros.copy()
@@ -235,8 +240,6 @@ class NumpyLSTMPolicy:
         x = np.asarray(observations, dtype=self.dtype).reshape(len(observations), -1)
         if len(states) != len(x):
             raise ValueError(f"{len(x)} observations but {len(states)} states")
-        if self._compiled is not None and len(x) < COMPILED_BATCH_FROM:
-            return _one_by_one(self, x, states)
         if self._compiled is not None:
             probabilities, h, c = _kernels().lstm_linear_batch(x, np.array([s[0][0] for s in states]),
                                                                np.array([s[1][0] for s in states]), *self._compiled)
@@ -294,6 +297,11 @@ class NumpyGRUPolicy:
         self.n_actions = _n_outputs(self.head)
         self._compiled = (*self.gru[0], *self.head[0][1:]) if _compilable(self) else None
 
+    @property
+    def batch_from(self) -> int:
+        """The fewest pending decisions worth one :meth:`probabilities_batch` call instead of single calls."""
+        return COMPILED_BATCH_FROM if self._compiled is not None else 2
+
     def initial_state(self) -> np.ndarray:
         return np.zeros((self.n_layers, self.hidden_size), dtype=self.dtype)
 
@@ -324,8 +332,6 @@ class NumpyGRUPolicy:
         x = np.asarray(observations, dtype=self.dtype).reshape(len(observations), -1)
         if len(states) != len(x):
             raise ValueError(f"{len(x)} observations but {len(states)} states")
-        if self._compiled is not None and len(x) < COMPILED_BATCH_FROM:
-            return _one_by_one(self, x, states)
         if self._compiled is not None:
             probabilities, h = _kernels().gru_linear_batch(x, np.array([s[0] for s in states]), *self._compiled)
             return probabilities, list(h)
@@ -346,13 +352,8 @@ def _compilable(policy: NumpyLSTMPolicy | NumpyGRUPolicy) -> bool:
 
 
 COMPILED_BATCH_FROM = 3
-"""Compiled policies answer ``probabilities_batch`` with the batch kernel from this many rows on, and with single
-steps below: stacking the states costs more than a compiled step (``benchmarks/bench_policies.py``)."""
-
-
-def _one_by_one(policy: Any, x: np.ndarray, states: Sequence[Any]) -> tuple[np.ndarray, list[Any]]:
-    answers = [policy.probabilities(row, state) for row, state in zip(x, states, strict=True)]
-    return np.array([a[0] for a in answers]), [a[1] for a in answers]
+"""``batch_from`` of a compiled policy: below this many rows, single compiled steps cost less than stacking the
+observations and states for one batch call (``benchmarks/bench_policies.py``)."""
 
 
 def _kernels() -> Any:

@@ -26,7 +26,8 @@ __all__ = ["SMCVecEnv", "answer_in_batches"]
 
 def answer_in_batches(requests: dict[int, tuple[Any, np.ndarray, Any]]) -> dict[int, tuple[np.ndarray, Any]]:
     """Answer pending policy decisions ``{key: (policy, observation, state)}`` with ``{key: (probabilities,
-    next state)}``: one ``probabilities_batch`` call per policy with more than one decision pending."""
+    next state)}``: one ``probabilities_batch`` call per policy with at least ``policy.batch_from`` decisions
+    pending (default 2; compiled numpy actors batch from 3), single calls otherwise."""
     if len(requests) == 1:
         (key, (policy, observation, state)), = requests.items()
         return {key: policy.probabilities(observation, state)}
@@ -37,7 +38,7 @@ def answer_in_batches(requests: dict[int, tuple[Any, np.ndarray, Any]]) -> dict[
     for keys in groups.values():
         policy = requests[keys[0]][0]
         batch = getattr(policy, "probabilities_batch", None)
-        if batch is None or len(keys) == 1:
+        if batch is None or len(keys) < getattr(policy, "batch_from", 2):
             for key in keys:
                 _, observation, state = requests[key]
                 answers[key] = policy.probabilities(observation, state)
