@@ -171,6 +171,10 @@ def test_a_run_reduced_to_its_records_resumes_without_model_files(tmp_path):
     again = run_experiment(kept, **settings)
     assert again["rows"] == results["rows"] and again["complete"] is True
     assert not (kept / "library").exists()  # nothing trained: every SMC of the table is evaluated already
+    [report] = write_report(kept)  # the tables and bar charts from the records; the pictures need models
+    text = report.read_text()
+    assert "figures/concepts.png" in text and "figures/trajectories.png" not in text
+    assert f"this directory does not hold `{LEFT_OF}@0`" in text and "retrain them alike" in text
 
     (kept / "evaluations" / f"{file_stem(curr1)}.json").unlink()
     partial = run_experiment(kept, **{**settings}, train=False)

@@ -9,6 +9,7 @@ errors (across concepts, resp. across seeds).
 
 from __future__ import annotations
 
+import json
 import math
 from collections import defaultdict
 from collections.abc import Sequence
@@ -65,22 +66,32 @@ def write_report(directories: str | Path | Sequence[str | Path], *, trajectories
     return [_write(Path(d), trajectories, behaviour) for d in items]
 
 
-def _behaviour(directory: Path, reported: Sequence[dict[str, Any]], target: str) -> list[Path]:
+def _behaviour(directory: Path, reported: Sequence[dict[str, Any]], target: str) -> tuple[list[Path], str | None]:
+    """The Fig. 4 / Fig. 1 pictures of the best SMCs of ``target``; or none and the reason, when the run directory
+    does not hold their models (a run kept as records: ``docs/experiments.md``)."""
     from sb3_smc.curricula.trainer import job_name
     from sb3_smc.experiments.figures import timeline_figure, trajectory_figure
-    from sb3_smc.library import SMCLibrary
+    from sb3_smc.library import SMCLibrary, storage
 
     best = {r["method"]: job_name(r["curriculum"], r["seed"]) for r in reported
             if r["target"] == target and r["method"] != "cnn"}
     if not best:
-        return []
+        return [], None
+    manifest = directory / "library" / storage.MANIFEST
+    held = set(json.loads(manifest.read_text(encoding="utf-8"))["smcs"]) if manifest.is_file() else set()
+    absent = sorted(set(best.values()) - held)
+    if absent:
+        return [], (f"The trajectory and timeline pictures of `{target}` need the models of its best SMCs; this "
+                    f"directory does not hold {', '.join(f'`{n}`' for n in absent)} (trained in an earlier session "
+                    "of a run kept as records). Delete their files in `evaluations/` and run the experiment again "
+                    "to retrain them alike, then make the report again.")
     library = SMCLibrary.load(directory / "library", names=sorted(set(best.values())))
     smcs = {method: library[name] for method, name in best.items()}
     paths = [trajectory_figure(smcs, target, directory / "figures" / "trajectories.png")]
     hierarchical = [m for m in ("curr", "canon", "curr-noprim", "canon-noprim") if m in smcs]
     if hierarchical:
         paths.append(timeline_figure(smcs[hierarchical[0]], target, directory / "figures" / "timeline.png"))
-    return paths
+    return paths, None
 
 
 def _write(directory: Path, trajectories: str | None, behaviour: bool) -> Path:
@@ -94,11 +105,13 @@ def _write(directory: Path, trajectories: str | None, behaviour: bool) -> Path:
     kind_of = {r["target"]: r["kind"] for r in reported}
     category_of = {r["target"]: r["category"] for r in reported}
     figures = _figures(directory, results, methods, targets, score, category_of)
+    behaviour_note = None
     if behaviour:
         chosen = trajectories or targets[0]
         if chosen not in targets:
             raise ValueError(f"--trajectories {chosen!r} is not a target of {directory} ({', '.join(targets)})")
-        figures += _behaviour(directory, reported, chosen)
+        pictures, behaviour_note = _behaviour(directory, reported, chosen)
+        figures += pictures
     settings = results["settings"]
     lines = [f"# Experiment report: {directory.name}", "",
              f"Methods {', '.join(methods)}; {len(targets)} target(s); {settings['seeds']} seed(s); "
@@ -207,6 +220,8 @@ def _write(directory: Path, trajectories: str | None, behaviour: bool) -> Path:
                          + " | ".join(_pct(score.get((target, m))) for m in methods) + " |")
     # figures and provenance
     lines += ["", "## Figures", ""] + [f"![{p.stem}](figures/{p.name})" for p in figures]
+    if behaviour_note:
+        lines += ["", behaviour_note]
     machine = results.get("machine", {})
     lines += ["", "## How this was run", "",
               f"- budget: {settings['timesteps']:,} steps per SMC, seeds 0-{settings['seeds'] - 1}, "
