@@ -356,11 +356,17 @@ COMPILED_BATCH_FROM = 3
 observations and states for one batch call (``benchmarks/bench_policies.py``)."""
 
 
+_KERNELS: Any = None
+
+
 def _kernels() -> Any:
     """:mod:`sb3_smc.common.kernels`, imported on first use (numba loads in about a second)."""
-    from sb3_smc.common import kernels
+    global _KERNELS
+    if _KERNELS is None:
+        from sb3_smc.common import kernels
 
-    return kernels
+        _KERNELS = kernels
+    return _KERNELS
 
 
 def _cast_layer(layer: Layer, dtype: np.dtype) -> Layer:
@@ -618,10 +624,17 @@ def sample_action(probabilities: np.ndarray, rng: np.random.Generator) -> int:
     """Draw an action index from ``probabilities`` (1-D, non-negative, normalised or not) by inverse CDF.
 
     One ``rng.random()`` per call (much faster than ``rng.choice``); actions of zero probability are never drawn.
+    A 1-D float64 array (what the numpy actors return) is drawn by the compiled
+    :func:`sb3_smc.common.kernels.sample_index`, the same index as the numpy code below.
     """
+    if type(probabilities) is np.ndarray and probabilities.dtype == np.float64 and probabilities.ndim == 1:
+        index = (_KERNELS or _kernels()).sample_index(probabilities, rng.random())
+        if index < 0:
+            raise ValueError(f"probabilities must have a positive finite sum, got {probabilities.sum()}")
+        return index
     cdf = np.asarray(probabilities).cumsum()  # array methods: no numpy dispatch wrappers on this hot path
     total = cdf[-1]
-    if not total > 0.0:
+    if not 0.0 < total < np.inf:
         raise ValueError(f"probabilities must have a positive finite sum, got {total}")
     index = int(cdf.searchsorted(rng.random() * total, side="right"))
     if index >= len(cdf):  # rounding at the top end: the last action of positive probability

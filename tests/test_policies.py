@@ -422,8 +422,34 @@ def test_sample_action_is_deterministic_and_handles_edges() -> None:
     assert sample_actions(np.array([[0.1, 0.2, 0.7, 0.0], [0.5, 0.0, 0.0, 0.5]]), TopRng()).tolist() == [2, 3]
     with pytest.raises(ValueError):
         sample_action(np.zeros(3), rng)
-    with pytest.raises(ValueError):
-        sample_action(np.array([np.nan, 1.0]), rng)
+    for bad in (np.array([np.nan, 1.0]), np.array([np.inf, 1.0])):
+        for form in (bad, bad.astype(np.float32)):  # the compiled draw and the numpy code
+            with pytest.raises(ValueError, match="positive finite sum"):
+                sample_action(form, rng)
+
+
+def test_the_compiled_draw_equals_the_numpy_code() -> None:
+    """float64 vectors are drawn by the compiled kernel; a list takes the numpy code: the same index for the same
+    uniform draw, on random vectors with zeros and on draws exactly at the CDF's steps."""
+    rng = np.random.default_rng(3)
+    for _ in range(3000):
+        p = rng.random(rng.integers(1, 12)) * (rng.random() < 0.5 or 1e-3)
+        p[rng.random(len(p)) < 0.3] = 0.0
+        if not p.any():
+            continue
+        seed = int(rng.integers(1 << 30))
+        assert sample_action(p, np.random.default_rng(seed)) == sample_action(list(p), np.random.default_rng(seed))
+
+    class Fixed:
+        def __init__(self, u: float) -> None:
+            self.u = u
+
+        def random(self) -> float:
+            return self.u
+
+    steps = np.array([0.25, 0.0, 0.25, 0.5])
+    for u in (0.0, 0.25, 0.5, 0.75, 1.0, 0.2499999, 0.5000001):
+        assert sample_action(steps, Fixed(u)) == sample_action(list(steps), Fixed(u))
 
 
 def test_sample_actions_batch_matches_sample_action() -> None:

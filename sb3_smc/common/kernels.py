@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["gru_linear_batch", "gru_linear_step", "lstm_linear_batch", "lstm_linear_step"]
+__all__ = ["gru_linear_batch", "gru_linear_step", "lstm_linear_batch", "lstm_linear_step", "sample_index"]
 
 
 @njit(cache=True)
@@ -138,3 +138,26 @@ def gru_linear_batch(x: np.ndarray, h: np.ndarray, w_ih: np.ndarray, w_hh: np.nd
     for row in range(rows):
         _gru_row(x[row], h[row], w_ih, w_hh, b_ih, b_hh, w_out, b_out, probabilities[row], h_next[row, 0])
     return probabilities, h_next
+
+
+@njit(cache=True)
+def sample_index(probabilities: np.ndarray, u: float) -> int:  # pragma: no cover
+    """The inverse-CDF draw of :func:`sb3_smc.policies.sample_action` for a uniform ``u`` in [0, 1): the first index
+    whose running sum exceeds ``u`` times the total (numpy's ``cumsum`` adds in the same order, so the index is the
+    same as ``searchsorted(..., side="right")``); the last positive entry if rounding passes the end; -1 if the total
+    is not positive and finite."""
+    total = 0.0
+    for value in probabilities:
+        total += value
+    if not (total > 0.0 and total < np.inf):
+        return -1
+    target = u * total
+    running = 0.0
+    for i in range(probabilities.shape[0]):
+        running += probabilities[i]
+        if running > target:
+            return i
+    for i in range(probabilities.shape[0] - 1, -1, -1):
+        if probabilities[i] > 0.0:
+            return i
+    return -1
