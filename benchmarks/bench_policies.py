@@ -7,8 +7,7 @@ RecurrentPPO with the default LSTM-32 and ``net_arch=[]``, with a (64, 64) head,
 
 A second table times the compiled step of the default architectures (``sb3_smc.common.kernels``: LSTM-32 and
 GRU-32, ``net_arch=[]``) against the same policy's numpy code, for one row (``probabilities``) and for
-``probabilities_batch`` on 2 and 4 rows (what ``sb3_smc.vec_env.SMCVecEnv`` asks when several environments wait
-on the same child).
+``probabilities_batch`` on 2 and 4 rows (compiled: row by row; numpy code: one batched evaluation).
 
 Run: ``python benchmarks/bench_policies.py [--repeats N]``.
 """

@@ -200,8 +200,9 @@ class NumpyLSTMPolicy:
         self._compiled = (*self.lstm[0], *self.head[0][1:]) if _compilable(self) else None
 
     @property
-    def batch_from(self) -> int:
-        """The fewest pending decisions worth one :meth:`probabilities_batch` call instead of single calls."""
+    def batch_from(self) -> int | None:
+        """The fewest pending decisions worth one :meth:`probabilities_batch` call instead of single calls (None:
+        never, for a compiled policy; see :data:`COMPILED_BATCH_FROM`)."""
         return COMPILED_BATCH_FROM if self._compiled is not None else 2
 
     def initial_state(self) -> LSTMState:
@@ -241,9 +242,7 @@ class NumpyLSTMPolicy:
         if len(states) != len(x):
             raise ValueError(f"{len(x)} observations but {len(states)} states")
         if self._compiled is not None:
-            probabilities, h, c = _kernels().lstm_linear_batch(x, np.array([s[0][0] for s in states]),
-                                                               np.array([s[1][0] for s in states]), *self._compiled)
-            return probabilities, list(zip(h, c, strict=True))
+            return _one_by_one(self, x, states)
         h_prev = np.array([s[0] for s in states])  # (B, layers, n)
         c_prev = np.array([s[1] for s in states])
         n = self.hidden_size
@@ -298,8 +297,9 @@ class NumpyGRUPolicy:
         self._compiled = (*self.gru[0], *self.head[0][1:]) if _compilable(self) else None
 
     @property
-    def batch_from(self) -> int:
-        """The fewest pending decisions worth one :meth:`probabilities_batch` call instead of single calls."""
+    def batch_from(self) -> int | None:
+        """The fewest pending decisions worth one :meth:`probabilities_batch` call instead of single calls (None:
+        never, for a compiled policy; see :data:`COMPILED_BATCH_FROM`)."""
         return COMPILED_BATCH_FROM if self._compiled is not None else 2
 
     def initial_state(self) -> np.ndarray:
@@ -333,8 +333,7 @@ class NumpyGRUPolicy:
         if len(states) != len(x):
             raise ValueError(f"{len(x)} observations but {len(states)} states")
         if self._compiled is not None:
-            probabilities, h = _kernels().gru_linear_batch(x, np.array([s[0] for s in states]), *self._compiled)
-            return probabilities, list(h)
+            return _one_by_one(self, x, states)
         h_prev = np.array(states).transpose(1, 0, 2)  # (layers, B, n)
         x, h_next = self._layers(x, h_prev)
         return _softmax(_forward(self.head, x)), list(h_next.transpose(1, 0, 2))
@@ -351,9 +350,16 @@ def _compilable(policy: NumpyLSTMPolicy | NumpyGRUPolicy) -> bool:
         and policy.head[0][0] == "linear"
 
 
-COMPILED_BATCH_FROM = 3
-"""``batch_from`` of a compiled policy: below this many rows, single compiled steps cost less than stacking the
-observations and states for one batch call (``benchmarks/bench_policies.py``)."""
+COMPILED_BATCH_FROM: int | None = None
+"""``batch_from`` of a compiled policy: never. A compiled single step costs less than stacking the observations
+and states of a group for one batch call, even for the groups of 4-6 decisions of a 16-environment level-2 job
+(measured in ``SMCVecEnv``: 24.5 against 27-28.6 µs per child decision; ``docs/benchmarks.md``)."""
+
+
+def _one_by_one(policy: Any, x: np.ndarray, states: Sequence[Any]) -> tuple[np.ndarray, list[Any]]:
+    """``probabilities_batch`` of a compiled policy: its single steps, row by row."""
+    answers = [policy.probabilities(row, state) for row, state in zip(x, states, strict=True)]
+    return np.array([a[0] for a in answers]), [a[1] for a in answers]
 
 
 _KERNELS: Any = None

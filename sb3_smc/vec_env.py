@@ -4,9 +4,10 @@ A level-2 SMC spends most of its time in its children: each call runs a child po
 Stepped one environment after another, every decision of every environment is one small policy evaluation.
 Here the calls of all environments advance together: at each round, the pending decisions of the environments
 are grouped by policy and each group is answered by one ``probabilities_batch`` call (policies without one, such
-as scripted ones, answer one by one). Every environment samples from its own generator as before, so a seed gives
-the same episodes; only the rounding of batched matrix products can differ from unbatched ones (see
-``docs/benchmarks.md``).
+as scripted ones, answer one by one, and so do the compiled numpy actors of the default architecture, whose
+single steps cost less than stacking a group: ``batch_from``). Every environment samples from its own generator
+as before, so a seed gives the same episodes; only the rounding of batched matrix products can differ from
+unbatched ones (see ``docs/benchmarks.md``).
 """
 
 from __future__ import annotations
@@ -27,7 +28,7 @@ __all__ = ["SMCVecEnv", "answer_in_batches"]
 def answer_in_batches(requests: dict[int, tuple[Any, np.ndarray, Any]]) -> dict[int, tuple[np.ndarray, Any]]:
     """Answer pending policy decisions ``{key: (policy, observation, state)}`` with ``{key: (probabilities,
     next state)}``: one ``probabilities_batch`` call per policy with at least ``policy.batch_from`` decisions
-    pending (default 2; compiled numpy actors batch from 3), single calls otherwise."""
+    pending (default 2; ``None``: never, as for the compiled numpy actors), single calls otherwise."""
     if len(requests) == 1:
         (key, (policy, observation, state)), = requests.items()
         return {key: policy.probabilities(observation, state)}
@@ -38,7 +39,8 @@ def answer_in_batches(requests: dict[int, tuple[Any, np.ndarray, Any]]) -> dict[
     for keys in groups.values():
         policy = requests[keys[0]][0]
         batch = getattr(policy, "probabilities_batch", None)
-        if batch is None or len(keys) < getattr(policy, "batch_from", 2):
+        threshold = getattr(policy, "batch_from", 2)
+        if batch is None or threshold is None or len(keys) < threshold:
             for key in keys:
                 _, observation, state = requests[key]
                 answers[key] = policy.probabilities(observation, state)

@@ -273,8 +273,8 @@ def test_the_compiled_step_equals_the_numpy_code(cell: str) -> None:
                                 strict=True):
             assert ours.shape == theirs.shape == (1, 32)
             np.testing.assert_allclose(ours, theirs, rtol=0, atol=1e-14)
-    assert policy.batch_from == COMPILED_BATCH_FROM and numpy_code.batch_from == 2  # SMCVecEnv batches from there
-    for rows in (1, 2, 4):  # the batch kernel: the single steps' numbers
+    assert policy.batch_from is COMPILED_BATCH_FROM is None and numpy_code.batch_from == 2  # SMCVecEnv: singles
+    for rows in (1, 2, 4):  # row by row: the single steps' numbers
         batch, states = policy.probabilities_batch(np.stack(observations[:rows]), [state] * rows)
         single = [policy.probabilities(obs, state) for obs in observations[:rows]]
         np.testing.assert_array_equal(batch, np.stack([s[0] for s in single]))

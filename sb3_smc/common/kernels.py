@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["gru_linear_batch", "gru_linear_step", "lstm_linear_batch", "lstm_linear_step", "sample_index"]
+__all__ = ["gru_linear_step", "lstm_linear_step", "sample_index"]
 
 
 @njit(cache=True)
@@ -83,22 +83,6 @@ def lstm_linear_step(x: np.ndarray, h: np.ndarray, c: np.ndarray, w_ih: np.ndarr
 
 
 @njit(cache=True)
-def lstm_linear_batch(x: np.ndarray, h: np.ndarray, c: np.ndarray, w_ih: np.ndarray, w_hh: np.ndarray,
-                      bias: np.ndarray, w_out: np.ndarray, b_out: np.ndarray
-                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # pragma: no cover
-    """:func:`lstm_linear_step` on the rows of ``x`` / ``h`` / ``c`` (``(B, ...)``): probabilities ``(B, actions)``,
-    states ``(B, 1, n)``."""
-    rows = x.shape[0]
-    probabilities = np.empty((rows, b_out.shape[0]))
-    h_next = np.empty((rows, 1, h.shape[1]))
-    c_next = np.empty((rows, 1, h.shape[1]))
-    for row in range(rows):
-        _lstm_row(x[row], h[row], c[row], w_ih, w_hh, bias, w_out, b_out, probabilities[row], h_next[row, 0],
-                  c_next[row, 0])
-    return probabilities, h_next, c_next
-
-
-@njit(cache=True)
 def _gru_row(x: np.ndarray, h: np.ndarray, w_ih: np.ndarray, w_hh: np.ndarray, b_ih: np.ndarray, b_hh: np.ndarray,
              w_out: np.ndarray, b_out: np.ndarray, probabilities: np.ndarray, h_next: np.ndarray
              ) -> None:  # pragma: no cover
@@ -124,19 +108,6 @@ def gru_linear_step(x: np.ndarray, h: np.ndarray, w_ih: np.ndarray, w_hh: np.nda
     probabilities = np.empty(b_out.shape[0])
     h_next = np.empty((1, h.shape[0]))
     _gru_row(x, h, w_ih, w_hh, b_ih, b_hh, w_out, b_out, probabilities, h_next[0])
-    return probabilities, h_next
-
-
-@njit(cache=True)
-def gru_linear_batch(x: np.ndarray, h: np.ndarray, w_ih: np.ndarray, w_hh: np.ndarray, b_ih: np.ndarray,
-                     b_hh: np.ndarray, w_out: np.ndarray, b_out: np.ndarray
-                     ) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover
-    """:func:`gru_linear_step` on the rows of ``x`` / ``h``: probabilities ``(B, actions)``, states ``(B, 1, n)``."""
-    rows = x.shape[0]
-    probabilities = np.empty((rows, b_out.shape[0]))
-    h_next = np.empty((rows, 1, h.shape[1]))
-    for row in range(rows):
-        _gru_row(x[row], h[row], w_ih, w_hh, b_ih, b_hh, w_out, b_out, probabilities[row], h_next[row, 0])
     return probabilities, h_next
 
 
