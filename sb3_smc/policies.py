@@ -212,7 +212,7 @@ class NumpyLSTMPolicy:
     def probabilities(self, observation: np.ndarray, state: LSTMState) -> tuple[np.ndarray, LSTMState]:
         if self._compiled is not None:
             h_prev, c_prev = state
-            probabilities, h, c = _kernels().lstm_linear_step(np.asarray(observation).reshape(-1), h_prev[0],
+            probabilities, h, c = _kernels().lstm_linear_step(_flat(observation, self.observation_size), h_prev[0],
                                                               c_prev[0], *self._compiled)
             return probabilities, (h, c)
         x = np.asarray(observation, dtype=self.dtype).reshape(-1)
@@ -322,7 +322,7 @@ class NumpyGRUPolicy:
 
     def probabilities(self, observation: np.ndarray, state: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         if self._compiled is not None:
-            return _kernels().gru_linear_step(np.asarray(observation).reshape(-1), state[0], *self._compiled)
+            return _kernels().gru_linear_step(_flat(observation, self.observation_size), state[0], *self._compiled)
         x, h_next = self._layers(np.asarray(observation, dtype=self.dtype).reshape(-1), state)
         return _softmax(_forward(self.head, x)), h_next
 
@@ -363,6 +363,14 @@ def _one_by_one(policy: Any, x: np.ndarray, states: Sequence[Any]) -> tuple[np.n
 
 
 _KERNELS: Any = None
+
+
+def _flat(observation: np.ndarray, size: int) -> np.ndarray:
+    """``observation`` as a 1-D array of ``size`` entries (the compiled steps read exactly that many)."""
+    x = np.asarray(observation).reshape(-1)
+    if x.shape[0] != size:
+        raise ValueError(f"observation of {x.shape[0]} values, but the policy takes {size}")
+    return x
 
 
 def _kernels() -> Any:

@@ -285,6 +285,11 @@ def test_the_compiled_step_equals_the_numpy_code(cell: str) -> None:
                 np.testing.assert_array_equal(a, b)
     with pytest.raises(ValueError, match="4 observations but 3 states"):
         policy.probabilities_batch(np.stack(observations[:4]), [state] * 3)
+    with pytest.raises(ValueError, match="observation of 86 values, but the policy takes 87"):
+        policy.probabilities(observations[0][:86], state)
+    short = (state[0][:, :31], state[1][:, :31]) if cell == "lstm" else state[:, :31]
+    with pytest.raises(ValueError, match="state or observation of the wrong size"):
+        policy.probabilities(observations[0], short)
     for other in (_random_recurrent(cell, layers=2), _random_recurrent(cell, head=16),
                   _random_recurrent(cell, dtype=np.float32)):
         assert other._compiled is None  # any other architecture: the numpy code

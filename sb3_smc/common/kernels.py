@@ -75,6 +75,8 @@ def lstm_linear_step(x: np.ndarray, h: np.ndarray, c: np.ndarray, w_ih: np.ndarr
     ``w_ih`` / ``w_hh`` / ``bias`` are :class:`~sb3_smc.policies.NumpyLSTMPolicy`'s (transposed, gates i, f, g, o
     with the i, f, o rows halved so that ``sigmoid(z) = 0.5 * tanh(z / 2) + 0.5`` uses one tanh); ``h`` / ``c``
     are the previous state's rows."""
+    if h.shape[0] != w_hh.shape[0] or c.shape[0] != w_hh.shape[0] or x.shape[0] != w_ih.shape[0]:
+        raise ValueError("LSTM state or observation of the wrong size for this policy")
     probabilities = np.empty(b_out.shape[0])
     h_next = np.empty((1, h.shape[0]))
     c_next = np.empty((1, h.shape[0]))
@@ -105,6 +107,8 @@ def gru_linear_step(x: np.ndarray, h: np.ndarray, w_ih: np.ndarray, w_hh: np.nda
                     ) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover
     """One GRU step (torch's equations, gates r, z, n) and the action probabilities: ``(probabilities, h')``,
     ``h'`` of shape ``(1, n)``; the weights are :class:`~sb3_smc.policies.NumpyGRUPolicy`'s (transposed)."""
+    if h.shape[0] != w_hh.shape[0] or x.shape[0] != w_ih.shape[0]:
+        raise ValueError("GRU state or observation of the wrong size for this policy")
     probabilities = np.empty(b_out.shape[0])
     h_next = np.empty((1, h.shape[0]))
     _gru_row(x, h, w_ih, w_hh, b_ih, b_hh, w_out, b_out, probabilities, h_next[0])
