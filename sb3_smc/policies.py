@@ -346,8 +346,11 @@ class NumpyGRUPolicy:
 def _compilable(policy: NumpyLSTMPolicy | NumpyGRUPolicy) -> bool:
     """Whether the compiled step of :mod:`sb3_smc.common.kernels` serves ``policy``: float64, one recurrent layer,
     one linear layer as the head (``net_arch=[]``)."""
-    return policy.dtype == np.float64 and policy.n_layers == 1 and len(policy.head) == 1 \
-        and policy.head[0][0] == "linear"
+    if not (policy.dtype == np.float64 and policy.n_layers == 1 and len(policy.head) == 1
+            and policy.head[0][0] == "linear"):
+        return False
+    _, w_out, b_out = policy.head[0]
+    return np.shape(w_out) == (policy.hidden_size, policy.n_actions) and np.shape(b_out) == (policy.n_actions,)
 
 
 COMPILED_BATCH_FROM: int | None = None
@@ -368,6 +371,8 @@ _KERNELS: Any = None
 def _flat(observation: np.ndarray, size: int) -> np.ndarray:
     """``observation`` as a 1-D array of ``size`` entries (the compiled steps read exactly that many)."""
     x = np.asarray(observation).reshape(-1)
+    if x.dtype != np.float32 and x.dtype != np.float64:  # one compiled variant per input type: keep to these two
+        x = x.astype(np.float64)
     if x.shape[0] != size:
         raise ValueError(f"observation of {x.shape[0]} values, but the policy takes {size}")
     return x

@@ -174,7 +174,7 @@ def test_a_run_reduced_to_its_records_resumes_without_model_files(tmp_path):
     [report] = write_report(kept)  # the tables and bar charts from the records; the pictures need models
     text = report.read_text()
     assert "figures/concepts.png" in text and "figures/trajectories.png" not in text
-    assert f"this directory does not hold `{LEFT_OF}@0`" in text and "retrain them alike" in text
+    assert f"this directory does not hold `{LEFT_OF}@0`" in text and "to retrain them (alike" in text
 
     (kept / "evaluations" / f"{file_stem(curr1)}.json").unlink()
     partial = run_experiment(kept, **{**settings}, train=False)

@@ -26,6 +26,7 @@ from sb3_smc.policies import (
     SequencePolicy,
     _activate,
     _activation_spec,
+    _compilable,
     policy_from_model,
     sample_action,
     sample_actions,
@@ -290,9 +291,15 @@ def test_the_compiled_step_equals_the_numpy_code(cell: str) -> None:
     short = (state[0][:, :31], state[1][:, :31]) if cell == "lstm" else state[:, :31]
     with pytest.raises(ValueError, match="state or observation of the wrong size"):
         policy.probabilities(observations[0], short)
+    integers = (observations[1] != 0).astype(np.int64)  # other input types are converted, as the numpy code does
+    np.testing.assert_allclose(policy.probabilities(integers, state)[0],
+                               numpy_code.probabilities(integers, reference)[0], rtol=0, atol=1e-14)
     for other in (_random_recurrent(cell, layers=2), _random_recurrent(cell, head=16),
                   _random_recurrent(cell, dtype=np.float32)):
         assert other._compiled is None  # any other architecture: the numpy code
+    mismatched = _random_recurrent(cell)
+    mismatched.head = [("linear", mismatched.head[0][1][:31], mismatched.head[0][2])]
+    assert not _compilable(mismatched)  # an inconsistent output layer is left to the numpy code (its shape error)
 
 
 def test_states_are_not_modified_in_place() -> None:

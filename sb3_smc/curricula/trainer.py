@@ -16,9 +16,9 @@ Run directory::
     DIR/state.json      the jobs running now and the coordinator's pid (for ``sb3-smc status``)
     DIR/.lock           held by the coordinator while it runs (a second one on the same directory is refused)
 
-Jobs whose results are kept elsewhere can be skipped (``skip``: e.g. the evaluated top-level SMCs of an experiment
-whose run directory lost its library): only jobs that no other job of the run needs, since their SMC is not in the
-library to serve as a child.
+Jobs whose results are kept elsewhere can be skipped (``skip``: e.g. the evaluated SMCs of an experiment whose run
+directory lost its library); a skipped job is trained all the same when a job still to train needs its node as a
+child (the ranking of a node's seeds needs every seed), and nodes that only skipped jobs need are not trained.
 
 Crash safety: a finished job is one whose SMC is in the library manifest; the model file and then the manifest are
 written atomically by the coordinator (the only writer), so killing the process at any moment loses at most the
@@ -46,7 +46,7 @@ from sb3_smc.library import storage
 from sb3_smc.records import Budget, TaskSpec, TrainingRecord, TrainingSpec, WrapperSettings
 
 __all__ = ["REUSE", "Job", "JobResult", "RunSettingsError", "TrainingRun", "describe", "file_stem", "job_name",
-           "name_of_file", "rank_seeds", "run_job", "run_settings", "status", "top_nodes", "train_curriculum"]
+           "name_of_file", "rank_seeds", "run_job", "run_settings", "status", "train_curriculum"]
 
 REUSE = {"one_best": 1, "two_best": 2}
 """SMC filters of the paper: how many seeds of each lower-level node a caller gets."""
@@ -303,8 +303,8 @@ def train_curriculum(
     ``backend="ray"`` submits them to a Ray cluster (``ray_address`` or ``RAY_ADDRESS``; ``workers`` caps the
     jobs in flight). The trained SMCs are the same whatever the backend and worker count. Jobs that fail are
     reported (``DIR/failed/``) and retried by the next run; jobs needing them wait. ``skip``: job names not to train
-    (their results are kept elsewhere), each a seed of a node that no other node of the run uses (``ValueError``
-    otherwise); lower-level nodes that only skipped jobs use are not trained. Returns a :class:`TrainingRun`.
+    (their results are kept elsewhere); one whose node a job still to train uses is trained all the same, and
+    nodes that only skipped jobs use are not trained. Returns a :class:`TrainingRun`.
     """
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
         raise ValueError(f"workers must be a positive integer, got {workers!r}")
@@ -312,8 +312,7 @@ def train_curriculum(
         raise ValueError(f"backend must be 'local' or 'ray', got {backend!r}")
     merged, order, settings = _resolve_run(curriculum, targets, seeds, timesteps, reuse, algo, rnn)
     directory = Path(out)
-    skipped = _check_skip(merged, order, seeds, skip)
-    order = _needed(merged, order, seeds, skipped)
+    order, skipped = _plan_skip(merged, order, settings["targets"], seeds, skip)
     scheduler = _Scheduler(merged, order, seeds, timesteps, REUSE[reuse], algo, directory, rnn, skipped)
     scheduler.check_specs()
     _check_or_write_settings(directory, settings)
@@ -347,33 +346,27 @@ def finished_jobs(
     return set(status(directory)["done"])
 
 
-def top_nodes(curriculum: Curriculum, order: Sequence[str]) -> list[str]:
-    """The nodes of ``order`` that no node of ``order`` uses: their SMCs are never children in the run."""
-    used = {u for name in order for u in curriculum.node(name).uses}
-    return [name for name in order if name not in used]
-
-
-def _check_skip(curriculum: Curriculum, order: Sequence[str], seeds: int, skip: Collection[str]) -> frozenset[str]:
+def _plan_skip(curriculum: Curriculum, order: list[str], targets: Sequence[str], seeds: int,
+               skip: Collection[str]) -> tuple[list[str], frozenset[str]]:
+    """The nodes to schedule and the jobs to skip. A target job not in ``skip`` is wanted; every node that a wanted
+    job's node uses (at any depth) is trained with every seed, skipped or not; the other skipped jobs are skipped,
+    and nodes that no wanted job needs are left out."""
     if isinstance(skip, str):
         raise TypeError(f"skip must be a collection of job names, got the string {skip!r}")
-    top = set(top_nodes(curriculum, order))
-    for name in skip:
+    names = frozenset(skip)
+    known = set(order)
+    for name in names:
         node, sep, seed = name.rpartition(SEED_SEPARATOR)
-        if not sep or not seed.isdigit() or int(seed) >= seeds or node not in order:
+        if not sep or node not in known or not seed.isdigit() or str(int(seed)) != seed or int(seed) >= seeds:
             raise ValueError(f"skip: {name!r} is not a job of this run (<node>{SEED_SEPARATOR}<seed> with one of its "
                              f"{len(order)} nodes and a seed below {seeds})")
-        if node not in top:
-            users = sorted(n for n in order if node in curriculum.node(n).uses)
-            raise ValueError(f"skip: {name!r} cannot be skipped: node {node!r} is used by {users[0]!r}"
-                             f"{f' and {len(users) - 1} more' if len(users) > 1 else ''}, which need(s) its SMC")
-    return frozenset(skip)
-
-
-def _needed(curriculum: Curriculum, order: list[str], seeds: int, skipped: frozenset[str]) -> list[str]:
-    """``order`` without the lower-level nodes that only skipped jobs use (nothing left to train needs them)."""
-    top = top_nodes(curriculum, order)
-    live = curriculum.closure([t for t in top if any(job_name(t, s) not in skipped for s in range(seeds))])
-    return [name for name in order if name in live or name in top]
+    wanted = [n for n in targets if any(job_name(n, s) not in names for s in range(seeds))]
+    required: set[str] = set()
+    for name in wanted:
+        required |= curriculum.closure([name]) - {name}
+    skipped = frozenset(j for j in names if j.rpartition(SEED_SEPARATOR)[0] not in required)
+    every_seed_skipped = {n for n in order if all(job_name(n, s) in skipped for s in range(seeds))}
+    return [n for n in order if n in required or n in wanted or n in every_seed_skipped], skipped
 
 
 def _resolve_run(curriculum: Any, targets: Sequence[str] | None, seeds: int, timesteps: int | None, reuse: str,

@@ -84,7 +84,7 @@ def _behaviour(directory: Path, reported: Sequence[dict[str, Any]], target: str)
         return [], (f"The trajectory and timeline pictures of `{target}` need the models of its best SMCs; this "
                     f"directory does not hold {', '.join(f'`{n}`' for n in absent)} (trained in an earlier session "
                     "of a run kept as records). Delete their files in `evaluations/` and run the experiment again "
-                    "to retrain them alike, then make the report again.")
+                    "to retrain them (alike on the same kind of CPU), then make the report again.")
     library = SMCLibrary.load(directory / "library", names=sorted(set(best.values())))
     smcs = {method: library[name] for method, name in best.items()}
     paths = [trajectory_figure(smcs, target, directory / "figures" / "trajectories.png")]

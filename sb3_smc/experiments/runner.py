@@ -5,10 +5,11 @@
 2. Every target x method x curriculum node x seed is evaluated on the test split with the paper's protocol
    (10 repeats, stochastic policy, the snapshot selected by training return): :func:`sb3_smc.evaluate`. Each
    evaluation is saved as ``DIR/evaluations/<node>@<seed>.json`` (``/`` in node names as ``%2F``; atomically)
-   and not repeated by a later run. A top-level SMC (one that no other trained node uses) with a saved evaluation
-   is not trained again either, even when ``DIR/library`` is gone: a run directory reduced to its records
-   (``run.json``, ``evaluations/``, ``cnn/``: no model files) resumes with only the SMCs it still lacks and the
-   lower-level nodes they need, which are retrained alike (training is deterministic for a seed).
+   and not repeated by a later run. An SMC with a saved evaluation is not trained again either, even when
+   ``DIR/library`` is gone, unless an SMC still to train needs it as a child: a run directory reduced to its
+   records (``run.json``, ``evaluations/``, ``cnn/``: no model files) resumes with only the SMCs it still lacks and
+   the lower-level nodes they need, retrained alike on the same kind of CPU (training is deterministic for a seed;
+   other CPUs take other floating-point paths, ``docs/training.md``).
 3. The CNN baseline (``cnn``) is trained and tested per classification target and seed
    (``DIR/cnn/<target>@<seed>.json``).
 4. ``DIR/results.csv`` / ``results.json``: one row per target x method x curriculum x seed (training return,
@@ -35,7 +36,6 @@ from sb3_smc.curricula.trainer import (
     finished_jobs,
     job_name,
     name_of_file,
-    top_nodes,
     train_curriculum,
 )
 from sb3_smc.experiments.design import METHODS, level2_targets, plan
@@ -82,7 +82,7 @@ def run_experiment(
     directory.mkdir(parents=True, exist_ok=True)
     start = time.time()
     finished: set[str] | None = None
-    kept = _kept_evaluations(directory, design.curriculum, design.training_targets, seeds, repeats) \
+    kept = _kept_evaluations(directory, design.training_targets, seeds, repeats) \
         if design.curriculum is not None else set()
     if design.curriculum is not None and not train:
         finished = kept | finished_jobs(design.curriculum, directory, targets=design.training_targets, seeds=seeds,
@@ -178,14 +178,13 @@ def _saved_evaluation(path: Path, repeats: int) -> dict[str, Any] | None:
     return saved if saved.get("repeats") == repeats else None
 
 
-def _kept_evaluations(directory: Path, curriculum: Any, training_targets: Sequence[str], seeds: int,
-                      repeats: int) -> set[str]:
-    """The top-level jobs of the run that have a saved evaluation with ``repeats``: they need no training."""
+def _kept_evaluations(directory: Path, training_targets: Sequence[str], seeds: int, repeats: int) -> set[str]:
+    """The jobs of the results table that have a saved evaluation with ``repeats``: they need no training (unless a
+    job still to train uses their node)."""
     folder = directory / "evaluations"
     if not folder.is_dir():
         return set()
-    top = top_nodes(curriculum, curriculum.order(curriculum.select(training_targets)))
-    wanted = {job_name(node, seed) for node in top for seed in range(seeds)}
+    wanted = {job_name(node, seed) for node in training_targets for seed in range(seeds)}
     return {name_of_file(p.stem) for p in folder.glob("*.json")
             if name_of_file(p.stem) in wanted and _saved_evaluation(p, repeats) is not None}
 
