@@ -162,7 +162,20 @@ class NumpyMLPPolicy:
         return f"{type(self).__name__}(observation_size={self.observation_size}, n_actions={self.n_actions})"
 
 
-class NumpyLSTMPolicy:
+class _RecurrentActor:
+    """What the recurrent numpy actors share: the compiled step's weights (``_compiled``, None for the numpy code)
+    and, from them, :attr:`batch_from`."""
+
+    _compiled: tuple[np.ndarray, ...] | None
+
+    @property
+    def batch_from(self) -> int | None:
+        """The fewest pending decisions worth one ``probabilities_batch`` call instead of single calls (None: never,
+        for a compiled policy; see :data:`COMPILED_BATCH_FROM`)."""
+        return COMPILED_BATCH_FROM if self._compiled is not None else 2
+
+
+class NumpyLSTMPolicy(_RecurrentActor):
     """Recurrent actor of an sb3-contrib ``RecurrentActorCriticPolicy`` in numpy.
 
     features -> ``n_lstm_layers`` stacked LSTM layers -> policy MLP -> ``action_net`` -> softmax. The state is
@@ -198,12 +211,6 @@ class NumpyLSTMPolicy:
         self.head = [_cast_layer(layer, self.dtype) for layer in head]
         self.n_actions = _n_outputs(self.head)
         self._compiled = (*self.lstm[0], *self.head[0][1:]) if _compilable(self) else None
-
-    @property
-    def batch_from(self) -> int | None:
-        """The fewest pending decisions worth one :meth:`probabilities_batch` call instead of single calls (None:
-        never, for a compiled policy; see :data:`COMPILED_BATCH_FROM`)."""
-        return COMPILED_BATCH_FROM if self._compiled is not None else 2
 
     def initial_state(self) -> LSTMState:
         zeros = np.zeros((self.n_layers, self.hidden_size), dtype=self.dtype)
@@ -267,7 +274,7 @@ class NumpyLSTMPolicy:
                 f"n_layers={self.n_layers}, n_actions={self.n_actions})")
 
 
-class NumpyGRUPolicy:
+class NumpyGRUPolicy(_RecurrentActor):
     """Recurrent actor of a :class:`~sb3_smc.common.recurrent.SequenceGruPolicy` in numpy (the paper's GRU).
 
     features -> stacked GRU layers -> policy MLP -> ``action_net`` -> softmax, with torch's GRU equations (gate
@@ -295,12 +302,6 @@ class NumpyGRUPolicy:
         self.head = [_cast_layer(layer, self.dtype) for layer in head]
         self.n_actions = _n_outputs(self.head)
         self._compiled = (*self.gru[0], *self.head[0][1:]) if _compilable(self) else None
-
-    @property
-    def batch_from(self) -> int | None:
-        """The fewest pending decisions worth one :meth:`probabilities_batch` call instead of single calls (None:
-        never, for a compiled policy; see :data:`COMPILED_BATCH_FROM`)."""
-        return COMPILED_BATCH_FROM if self._compiled is not None else 2
 
     def initial_state(self) -> np.ndarray:
         return np.zeros((self.n_layers, self.hidden_size), dtype=self.dtype)
@@ -647,7 +648,7 @@ def sample_action(probabilities: np.ndarray, rng: np.random.Generator) -> int:
     :func:`sb3_smc.common.kernels.sample_index`, the same index as the numpy code below.
     """
     if type(probabilities) is np.ndarray and probabilities.dtype == np.float64 and probabilities.ndim == 1:
-        index = (_KERNELS or _kernels()).sample_index(probabilities, rng.random())
+        index = _kernels().sample_index(probabilities, rng.random())
         if index < 0:
             raise ValueError(f"probabilities must have a positive finite sum, got {probabilities.sum()}")
         return index

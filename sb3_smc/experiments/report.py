@@ -9,7 +9,6 @@ errors (across concepts, resp. across seeds).
 
 from __future__ import annotations
 
-import json
 import math
 from collections import defaultdict
 from collections.abc import Sequence
@@ -77,8 +76,8 @@ def _behaviour(directory: Path, reported: Sequence[dict[str, Any]], target: str)
             if r["target"] == target and r["method"] != "cnn"}
     if not best:
         return [], None
-    manifest = directory / "library" / storage.MANIFEST
-    held = set(json.loads(manifest.read_text(encoding="utf-8"))["smcs"]) if manifest.is_file() else set()
+    library_dir = directory / "library"
+    held = set(storage.read_manifest(library_dir)[0]["smcs"]) if (library_dir / storage.MANIFEST).is_file() else set()
     absent = sorted(set(best.values()) - held)
     if absent:
         return [], (f"The trajectory and timeline pictures of `{target}` need the models of its best SMCs; this "
