@@ -3,7 +3,7 @@
     sb3-smc curricula                      # every shipped curriculum: method, targets, nodes per level
     sb3-smc curricula con2-cl              # one curriculum's DAG by level (a name or a .yml file)
     sb3-smc train con2-cl --out runs/con2-cl --targets cl_self-in-container_vs_noncontainer --seeds 2
-    sb3-smc status runs/con2-cl            # done, running, failed and left jobs
+    sb3-smc status runs/con2-cl            # done, running, failed, skipped and left jobs
     sb3-smc experiment --out runs/headline --targets cl_self-left-of-two-objects-vs-one
     sb3-smc report runs/headline           # report.md and figures/, the paper's numbers beside ours
 """
@@ -53,7 +53,7 @@ def _status(args: argparse.Namespace) -> int:
     settings = state["settings"]
     print(f"{args.directory}: curriculum {settings['curriculum']}, {len(settings['nodes'])} nodes x "
           f"{settings['seeds']} seeds = {len(state['jobs'])} jobs")
-    for key in ("done", "running", "failed", "left"):
+    for key in ("done", "running", "failed", "skipped", "left"):
         names = state[key]
         shown = ", ".join(names[:8]) + (", ..." if len(names) > 8 else "")
         print(f"  {key:8s} {len(names):4d}  {shown}")
@@ -161,7 +161,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                    help="the zoo's final model (<env id>.zip) or its best_model.zip")
     p.set_defaults(run=_import_zoo)
 
-    p = sub.add_parser("status", help="what a run directory holds: done, running, failed, left")
+    p = sub.add_parser("status", help="what a run directory holds: done, running, failed, skipped, left")
     p.add_argument("directory")
     p.set_defaults(run=_status)
 

@@ -254,6 +254,8 @@ def test_skipped_jobs_are_not_trained_unless_a_job_to_train_needs_them(tmp_path)
                            printer=lines.append)
     assert SMCLibrary.load(run.library).names == ("left@0", "left@1", "above@0", "above@1", "container@1")
     assert "(1 already done, 1 of them skipped)" in lines[0]
+    state = status(tmp_path / "run")
+    assert state["skipped"] == ["container@0"] and state["left"] == [] and len(state["done"]) == 5
     nothing = train_curriculum(path, tmp_path / "top", seeds=2, timesteps=2000,
                                skip=["container@0", "container@1"], progress=False)
     assert not (nothing.library / "manifest.json").exists()  # no job left: its lower levels are not needed
@@ -267,6 +269,9 @@ def test_skipped_jobs_are_not_trained_unless_a_job_to_train_needs_them(tmp_path)
     alone = train_curriculum(path, tmp_path / "alone", seeds=2, timesteps=2000, targets=both,
                              skip=["left@0", "container@0", "container@1"], progress=False)
     assert SMCLibrary.load(alone.library).names == ("left@1",)  # container needs nothing now: no 'above' either
+    state = status(tmp_path / "alone")
+    assert state["left"] == [] and state["done"] == ["left@1"]
+    assert sorted(state["skipped"]) == ["above@0", "above@1", "container@0", "container@1", "left@0"]
 
 
 def test_changed_settings_are_refused_with_the_differences(tmp_path):

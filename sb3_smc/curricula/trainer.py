@@ -270,9 +270,10 @@ def _glob_escape(text: str) -> str:
     return "".join(f"[{c}]" if c in "*?[" else c for c in text)
 
 
-def _write_state(directory: Path, running: Sequence[str], started: float) -> None:
+def _write_state(directory: Path, running: Sequence[str], started: float, skipped: Collection[str]) -> None:
     atomic_write(directory / "state.json", json.dumps({"pid": os.getpid(), "running": sorted(running),
-                                                      "started": started, "updated": time.time()}) + "\n")
+                                                      "skipped": sorted(skipped), "started": started,
+                                                      "updated": time.time()}) + "\n")
 
 
 def train_curriculum(
@@ -313,6 +314,8 @@ def train_curriculum(
     merged, order, settings = _resolve_run(curriculum, targets, seeds, timesteps, reuse, algo, rnn)
     directory = Path(out)
     order, skipped = _plan_skip(merged, order, settings["targets"], seeds, skip)
+    # the jobs of nodes left out of the plan count as skipped too (sb3-smc status shows them so, not as "left")
+    skipped |= {job_name(n, s) for n in settings["nodes"] if n not in order for s in range(seeds)}
     scheduler = _Scheduler(merged, order, seeds, timesteps, REUSE[reuse], algo, directory, rnn, skipped)
     scheduler.check_specs()
     _check_or_write_settings(directory, settings)
@@ -439,9 +442,10 @@ def _run(merged: Curriculum, scheduler: _Scheduler, order: list[str], directory:
                 name = job.spec.name
                 (failed_dir / f"{file_stem(name)}.txt").unlink(missing_ok=True)
                 scheduler.running.add(name)
-                _write_state(directory, scheduler.running, started)  # before: the in-process executor trains here
+                # before the in-process executor trains here
+                _write_state(directory, scheduler.running, started, scheduler.skip)
                 pending[executor.submit(job)] = name
-            _write_state(directory, scheduler.running, started)
+            _write_state(directory, scheduler.running, started, scheduler.skip)
             bar.show(len(scheduler.running))
             if not pending:
                 break
@@ -461,7 +465,7 @@ def _run(merged: Curriculum, scheduler: _Scheduler, order: list[str], directory:
                 bar.finished(_rounded(scheduler.budget(merged.node(node_name))))
     finally:
         executor.shutdown()
-        _write_state(directory, [], started)
+        _write_state(directory, [], started, scheduler.skip)
         bar.close()
     run = TrainingRun(directory=directory, library=scheduler.library, rows=_rows(scheduler),
                       failed=dict(scheduler.failed))
@@ -691,7 +695,8 @@ class _Progress:
 
 
 def status(directory: str | Path) -> dict[str, Any]:
-    """What a run directory holds: ``done``, ``running``, ``failed`` and ``left`` job names (and the settings)."""
+    """What a run directory holds: ``done``, ``running``, ``failed``, ``skipped`` (by the last run's ``skip``: kept
+    elsewhere, such as an experiment's evaluation records) and ``left`` job names (and the settings)."""
     directory = Path(directory)
     path = directory / "run.json"
     if not path.is_file():
@@ -699,21 +704,23 @@ def status(directory: str | Path) -> dict[str, Any]:
     settings = json.loads(path.read_text(encoding="utf-8"))
     jobs = [job_name(node, seed) for node in settings["nodes"] for seed in range(settings["seeds"])]
     done: set[str] = set()
-    manifest_path = directory / "library" / storage.MANIFEST
-    if manifest_path.is_file():
-        done = set(json.loads(manifest_path.read_text(encoding="utf-8"))["smcs"])
+    if (directory / "library" / storage.MANIFEST).is_file():
+        manifest, where = storage.read_manifest(directory / "library")
+        done = set(storage.check_manifest(manifest, where))
     running: list[str] = []
+    skipped: set[str] = set()
     state_path = directory / "state.json"
     if state_path.is_file():
         state = json.loads(state_path.read_text(encoding="utf-8"))
         if state.get("running") and _alive(int(state.get("pid", -1))):
             running = [n for n in state["running"] if n not in done]
+        skipped = set(state.get("skipped", ())) - done
     failed = sorted(name_of_file(p.stem) for p in (directory / "failed").glob("*.txt")) \
         if (directory / "failed").is_dir() else []
     failed = [n for n in failed if n not in done and n not in running]
-    left = [n for n in jobs if n not in done and n not in running and n not in failed]
+    left = [n for n in jobs if n not in done and n not in running and n not in failed and n not in skipped]
     return {"settings": settings, "jobs": jobs, "done": [n for n in jobs if n in done], "running": running,
-            "failed": failed, "left": left}
+            "failed": failed, "skipped": [n for n in jobs if n in skipped], "left": left}
 
 
 def _alive(pid: int) -> bool:

@@ -83,14 +83,14 @@ def run_experiment(
     start = time.time()
     finished: set[str] | None = None
     kept = _kept_evaluations(directory, design.training_targets, seeds, repeats) \
-        if design.curriculum is not None else set()
+        if design.curriculum is not None else {}
     if design.curriculum is not None and not train:
-        finished = kept | finished_jobs(design.curriculum, directory, targets=design.training_targets, seeds=seeds,
+        finished = set(kept) | finished_jobs(design.curriculum, directory, targets=design.training_targets, seeds=seeds,
                                         timesteps=timesteps, algo=algo, rnn=rnn)
     elif design.curriculum is not None:
         run = train_curriculum(design.curriculum, directory, targets=design.training_targets, seeds=seeds,
                                timesteps=timesteps, workers=workers, backend=backend, ray_address=ray_address,
-                               algo=algo, rnn=rnn, progress=progress, printer=printer, skip=kept)
+                               algo=algo, rnn=rnn, progress=progress, printer=printer, skip=set(kept))
         if run.failed:
             raise RuntimeError(f"{len(run.failed)} training job(s) failed ({', '.join(sorted(run.failed)[:5])}; "
                                f"tracebacks in {directory / 'failed'}): nothing evaluated; run the same command "
@@ -110,7 +110,7 @@ def run_experiment(
                 if finished is not None and job_name(node, seed) not in finished:
                     missing.append(job_name(node, seed))
                     continue
-                evaluation = _evaluation(directory, job_name(node, seed), repeats)
+                evaluation = kept.get(job_name(node, seed)) or _evaluation(directory, job_name(node, seed), repeats)
                 rows.append(_row(target, info, method, node, seed, evaluation["training_return"],
                                  evaluation["selected_update"], evaluation["test_score"], evaluation["wall_time_s"]))
         if progress:
@@ -178,15 +178,17 @@ def _saved_evaluation(path: Path, repeats: int) -> dict[str, Any] | None:
     return saved if saved.get("repeats") == repeats else None
 
 
-def _kept_evaluations(directory: Path, training_targets: Sequence[str], seeds: int, repeats: int) -> set[str]:
-    """The jobs of the results table that have a saved evaluation with ``repeats``: they need no training (unless a
-    job still to train uses their node)."""
+def _kept_evaluations(directory: Path, training_targets: Sequence[str], seeds: int, repeats: int
+                      ) -> dict[str, dict[str, Any]]:
+    """The saved evaluations with ``repeats`` of the results table's jobs, by job name: those jobs need no training
+    (unless a job still to train uses their node)."""
     folder = directory / "evaluations"
     if not folder.is_dir():
-        return set()
+        return {}
     wanted = {job_name(node, seed) for node in training_targets for seed in range(seeds)}
-    return {name_of_file(p.stem) for p in folder.glob("*.json")
-            if name_of_file(p.stem) in wanted and _saved_evaluation(p, repeats) is not None}
+    saved = {name_of_file(p.stem): _saved_evaluation(p, repeats) for p in sorted(folder.glob("*.json"))
+             if name_of_file(p.stem) in wanted}
+    return {name: evaluation for name, evaluation in saved.items() if evaluation is not None}
 
 
 def _evaluation(directory: Path, name: str, repeats: int) -> dict[str, Any]:
