@@ -10,6 +10,10 @@ probabilities agree to 1e-14 (tested; in practice to a few units of the last pla
 only when the uniform draw falls within that distance of a boundary. The module also holds the inverse-CDF draw of
 :func:`~sb3_smc.policies.sample_action`. Imported lazily (numba's import and the first compilation cost about a
 second; the compiled code is cached next to this file).
+
+The ``*_collection_step`` functions are the training side's counterpart: one data-collection step of
+:class:`~sb3_smc.common.recurrent.policies.SequenceLstmPolicy` (or its GRU variant) for all environments at once,
+in place of a dozen small torch calls (see its ``forward``).
 """
 
 from __future__ import annotations
@@ -17,7 +21,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["gru_linear_step", "lstm_linear_step", "sample_index"]
+__all__ = ["gru_collection_step", "gru_linear_step", "lstm_collection_step", "lstm_linear_step", "sample_index"]
 
 
 @njit(cache=True)
@@ -137,3 +141,125 @@ def sample_index(probabilities: np.ndarray, u: float) -> int:  # pragma: no cove
         if probabilities[i] > 0.0:
             return i
     return -1
+
+
+@njit(cache=True)
+def _heads(x: np.ndarray, latent: np.ndarray, uniform: float, deterministic: bool, w_critic: np.ndarray,
+           b_critic: np.ndarray, w_value: np.ndarray, b_value: float, w_action: np.ndarray, b_action: np.ndarray
+           ) -> tuple[int, float, float]:  # pragma: no cover
+    """The heads of one collection row: ``(action, value, log-probability)``. The critic is linear on the
+    features ``x`` (``enable_critic_lstm=False``), the value linear on it; the action is drawn by inverse CDF at
+    ``uniform`` (or the most probable one)."""
+    n_critic = b_critic.shape[0]
+    critic = b_critic.astype(np.float64)
+    for i in range(x.shape[0]):
+        xi = x[i]
+        if xi != 0.0:
+            for j in range(n_critic):
+                critic[j] += xi * w_critic[i, j]
+    value = b_value
+    for j in range(n_critic):
+        value += critic[j] * w_value[j]
+    n_actions = b_action.shape[0]
+    logits = b_action.astype(np.float64)
+    for i in range(latent.shape[0]):
+        for j in range(n_actions):
+            logits[j] += latent[i] * w_action[i, j]
+    top = logits.max()
+    total = 0.0
+    for j in range(n_actions):
+        total += np.exp(logits[j] - top)
+    action = n_actions - 1
+    if deterministic:
+        action = int(np.argmax(logits))
+    else:
+        target = uniform * total
+        running = 0.0
+        for j in range(n_actions):
+            running += np.exp(logits[j] - top)
+            if running > target:
+                action = j
+                break
+    return action, value, logits[action] - top - np.log(total)
+
+
+@njit(cache=True)
+def lstm_collection_step(x: np.ndarray, h: np.ndarray, c: np.ndarray, starts: np.ndarray, uniforms: np.ndarray,
+                         deterministic: bool, w_ih: np.ndarray, w_hh: np.ndarray, bias: np.ndarray,
+                         w_critic: np.ndarray, b_critic: np.ndarray, w_value: np.ndarray, b_value: float,
+                         w_action: np.ndarray, b_action: np.ndarray
+                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:  # pragma: no cover
+    """One collection step of a one-layer LSTM actor with linear heads for ``n`` environments.
+
+    ``x`` ``(n, features)``, ``h`` / ``c`` ``(n, hidden)`` the previous states (zeroed where ``starts`` is 1, as
+    sb3-contrib does at an episode start), ``uniforms`` ``(n,)`` the draws. The weights are transposed
+    (``(inputs, outputs)``), ``bias`` the sum of torch's two LSTM biases, gates i, f, g, o. Returns ``(actions,
+    values (n, 1), log-probabilities, h', c')`` in float32 (int64 actions), computed in float64."""
+    n, hidden = h.shape
+    if x.shape[0] != n or c.shape != h.shape or w_ih.shape[0] != x.shape[1] or w_hh.shape[0] != hidden:
+        raise ValueError("observations or LSTM states of the wrong shape for this policy")
+    actions = np.empty(n, dtype=np.int64)
+    values = np.empty((n, 1), dtype=np.float32)
+    log_probs = np.empty(n, dtype=np.float32)
+    h_next = np.empty((n, hidden), dtype=np.float32)
+    c_next = np.empty((n, hidden), dtype=np.float32)
+    latent = np.empty(hidden)
+    for k in range(n):
+        keep = 1.0 - starts[k]
+        t = bias.astype(np.float64)
+        _add_rows(t, x[k], w_ih)
+        if keep != 0.0:
+            for i in range(hidden):
+                hi = keep * h[k, i]
+                if hi != 0.0:
+                    for j in range(4 * hidden):
+                        t[j] += hi * w_hh[i, j]
+        for j in range(hidden):
+            gate_i = 0.5 * np.tanh(0.5 * t[j]) + 0.5
+            gate_f = 0.5 * np.tanh(0.5 * t[hidden + j]) + 0.5
+            gate_o = 0.5 * np.tanh(0.5 * t[3 * hidden + j]) + 0.5
+            cell = gate_f * (keep * c[k, j]) + gate_i * np.tanh(t[2 * hidden + j])
+            latent[j] = gate_o * np.tanh(cell)
+            c_next[k, j] = cell
+            h_next[k, j] = latent[j]
+        actions[k], value, log_probs[k] = _heads(x[k], latent, uniforms[k], deterministic, w_critic, b_critic,
+                                                 w_value, b_value, w_action, b_action)
+        values[k, 0] = value
+    return actions, values, log_probs, h_next, c_next
+
+
+@njit(cache=True)
+def gru_collection_step(x: np.ndarray, h: np.ndarray, starts: np.ndarray, uniforms: np.ndarray,
+                        deterministic: bool, w_ih: np.ndarray, w_hh: np.ndarray, b_ih: np.ndarray, b_hh: np.ndarray,
+                        w_critic: np.ndarray, b_critic: np.ndarray, w_value: np.ndarray, b_value: float,
+                        w_action: np.ndarray, b_action: np.ndarray
+                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:  # pragma: no cover
+    """:func:`lstm_collection_step` for a one-layer GRU (torch's gates r, z, n): ``(actions, values, log-probabilities,
+    h')``."""
+    n, hidden = h.shape
+    if x.shape[0] != n or w_ih.shape[0] != x.shape[1] or w_hh.shape[0] != hidden:
+        raise ValueError("observations or GRU states of the wrong shape for this policy")
+    actions = np.empty(n, dtype=np.int64)
+    values = np.empty((n, 1), dtype=np.float32)
+    log_probs = np.empty(n, dtype=np.float32)
+    h_next = np.empty((n, hidden), dtype=np.float32)
+    latent = np.empty(hidden)
+    previous = np.empty(hidden)
+    for k in range(n):
+        keep = 1.0 - starts[k]
+        for i in range(hidden):
+            previous[i] = keep * h[k, i]
+        gi = b_ih.astype(np.float64)
+        _add_rows(gi, x[k], w_ih)
+        gh = b_hh.astype(np.float64)
+        _add_rows(gh, previous, w_hh)
+        for j in range(hidden):
+            r = 0.5 * np.tanh(0.5 * (gi[j] + gh[j])) + 0.5
+            z = 0.5 * np.tanh(0.5 * (gi[hidden + j] + gh[hidden + j])) + 0.5
+            candidate = np.tanh(gi[2 * hidden + j] + r * gh[2 * hidden + j])
+            latent[j] = candidate + z * (previous[j] - candidate)
+            h_next[k, j] = latent[j]
+        actions[k], value, log_probs[k] = _heads(x[k], latent, uniforms[k], deterministic, w_critic, b_critic,
+                                                 w_value, b_value, w_action, b_action)
+        values[k, 0] = value
+    return actions, values, log_probs, h_next

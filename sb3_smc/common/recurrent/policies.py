@@ -2,10 +2,16 @@
 
 from __future__ import annotations
 
+from typing import Any
+
+import numpy as np
 import torch
+from gymnasium import spaces
 from sb3_contrib.common.recurrent.policies import RecurrentActorCriticPolicy
 from sb3_contrib.common.recurrent.type_aliases import RNNStates
 from stable_baselines3.common.distributions import CategoricalDistribution
+from stable_baselines3.common.torch_layers import FlattenExtractor
+from torch import nn
 from torch.distributions import Categorical
 
 from sb3_smc.common.recurrent.type_aliases import SequenceStates
@@ -75,20 +81,33 @@ class SequenceLstmPolicy(RecurrentActorCriticPolicy):
     :class:`CompactRecurrentRolloutBuffer` (see :func:`use_compact_buffer`) and sb3-contrib's padded ones
     (plain ``RecurrentPPO``; the sequence lengths are then read from the padding, whose observations are all
     zeros, which a one-hot SMC observation never is): the same numbers on every real step. Data collection takes a
-    lean one-step path (:meth:`forward`; equal up to float rounding). :func:`sb3_smc.policies.policy_from_model`
-    reads it like ``MlpLstmPolicy``.
+    lean one-step path (:meth:`forward`; equal up to float rounding), compiled for the default architecture.
+    :func:`sb3_smc.policies.policy_from_model` reads it like ``MlpLstmPolicy``.
     """
+
+    #: Whether data collection may use the compiled step of :mod:`sb3_smc.common.kernels` (see :meth:`forward`).
+    compiled_collection: bool = True
+    _collection_cache: tuple[Any, tuple[torch.Tensor, ...] | None, tuple[Any, ...] | None] | None = None
 
     def forward(self, obs, lstm_states, episode_starts, deterministic=False):
         """sb3-contrib's forward pass. One step per sequence (data collection) with a categorical action and a
         feed-forward critic takes a lean path: the LSTM as ``torch.lstm_cell`` per layer (a third of the time of
         the sequence kernel for one step; equal to it up to float rounding), no sequence reshaping, and no
-        argument validation in the action distribution."""
+        argument validation in the action distribution.
+
+        Without gradients, for the default architecture (one recurrent layer, linear critic, value and action
+        heads, ``net_arch=[]``, flat float32 observations on the CPU), the whole step is one compiled function
+        (:func:`~sb3_smc.common.kernels.lstm_collection_step`, computed in float64 from float32 weights, equal to
+        the torch step up to float rounding); the action is then drawn by inverse CDF from ``torch.rand``, so
+        seeding torch still seeds the collection. ``compiled_collection = False`` turns that off."""
         n_seq = lstm_states.pi[0].shape[1]
         if (self.lstm_critic is not None or self.shared_lstm or not self.share_features_extractor
                 or not isinstance(self.action_dist, CategoricalDistribution) or obs.shape[0] != n_seq
                 or not _steppable(self.lstm_actor)):
             return super().forward(obs, lstm_states, episode_starts, deterministic)
+        weights = self._collection_weights(obs) if self.compiled_collection and not torch.is_grad_enabled() else None
+        if weights is not None:
+            return self._compiled_forward(weights, obs, lstm_states, episode_starts, deterministic)
         features = self.extract_features(obs)
         states = lstm_states.pi
         if not bool((episode_starts == 0.0).all()):  # as _process_sequence: reset the states of new episodes
@@ -101,6 +120,74 @@ class SequenceLstmPolicy(RecurrentActorCriticPolicy):
         distribution = Categorical(logits=self.action_net(latent_pi), validate_args=False)
         actions = torch.argmax(distribution.probs, dim=1) if deterministic else distribution.sample()
         return actions, values, distribution.log_prob(actions), RNNStates(states_pi, states_pi)
+
+    def _collection_parameters(self) -> tuple[torch.Tensor, ...] | None:
+        """The tensors of the compiled collection step, or ``None`` where the architecture is not the default one:
+        the recurrent layer's (``weight_ih, weight_hh, bias_ih, bias_hh``), then the critic's, value head's and
+        action head's weights and biases."""
+        recurrent = getattr(self.lstm_actor, "gru", self.lstm_actor)
+        linear = (self.critic, self.value_net, self.action_net)
+        if (recurrent.num_layers != 1 or not recurrent.bias or not all(isinstance(m, nn.Linear) and m.bias is not None
+                                                                       for m in linear)
+                or len(self.mlp_extractor.policy_net) or len(self.mlp_extractor.value_net)
+                or type(self.features_extractor) is not FlattenExtractor
+                or not isinstance(self.observation_space, spaces.Box) or len(self.observation_space.shape) != 1):
+            return None
+        tensors = (recurrent.weight_ih_l0, recurrent.weight_hh_l0, recurrent.bias_ih_l0, recurrent.bias_hh_l0,
+                   *(t for m in linear for t in (m.weight, m.bias)))
+        if any(t.dtype != torch.float32 or t.device.type != "cpu" for t in tensors):
+            return None
+        return tensors
+
+    def _collection_weights(self, obs: torch.Tensor) -> tuple[Any, ...] | None:
+        """The compiled step's arrays (transposed float64 copies), rebuilt whenever a parameter changed (the
+        optimizer and ``load_state_dict`` update them in place, which bumps their version; ``.to`` gives them new
+        storage); ``None`` where the compiled step does not apply to this policy or to ``obs``."""
+        if obs.dtype != torch.float32 or obs.device.type != "cpu" or obs.dim() != 2:
+            return None
+        cache = self._collection_cache
+        if cache is not None:
+            tensors = cache[1]
+            if tensors is None:
+                return None
+            key = tuple(t._version for t in tensors), tuple(t.data_ptr() for t in tensors)
+            if key == cache[0]:
+                return cache[2]
+            if key[1] != cache[0][1]:  # new storage (a dtype or device change): check the architecture again
+                cache = None
+        tensors = self._collection_parameters() if cache is None else cache[1]
+        if tensors is None:
+            self._collection_cache = (None, None, None)
+            return None
+        w_ih, w_hh, b_ih, b_hh, w_critic, b_critic, w_value, b_value, w_action, b_action = (
+            t.detach().numpy().astype(np.float64) for t in tensors)
+        biases = (b_ih, b_hh) if hasattr(self.lstm_actor, "gru") else (b_ih + b_hh,)
+        weights = (w_ih.T.copy(), w_hh.T.copy(), *biases, w_critic.T.copy(), b_critic, w_value[0], float(b_value[0]),
+                   w_action.T.copy(), b_action)
+        key = tuple(t._version for t in tensors), tuple(t.data_ptr() for t in tensors)
+        self._collection_cache = (key, tensors, weights)
+        return weights
+
+    def _compiled_forward(self, weights: tuple[Any, ...], obs: torch.Tensor, lstm_states: RNNStates,
+                          episode_starts: torch.Tensor, deterministic: bool):
+        """:meth:`forward`'s compiled step (see there)."""
+        from sb3_smc.common import kernels
+
+        n_seq = obs.shape[0]
+        uniforms = np.zeros(n_seq) if deterministic else torch.rand(n_seq, dtype=torch.float64).numpy()
+        starts = episode_starts.detach().numpy().astype(np.float64, copy=False).reshape(n_seq)
+        h, c = lstm_states.pi[0][0].numpy(), lstm_states.pi[1][0].numpy()
+        if hasattr(self.lstm_actor, "gru"):
+            actions, values, log_probs, h_next = kernels.gru_collection_step(
+                obs.numpy(), h, starts, uniforms, deterministic, *weights)
+            cells = lstm_states.pi[1][0].numpy() * (1.0 - starts[:, None]).astype(np.float32)  # as torch's step
+            states = (torch.from_numpy(h_next)[None], torch.from_numpy(cells)[None])
+        else:
+            actions, values, log_probs, h_next, c_next = kernels.lstm_collection_step(
+                obs.numpy(), h, c, starts, uniforms, deterministic, *weights)
+            states = (torch.from_numpy(h_next)[None], torch.from_numpy(c_next)[None])
+        return torch.from_numpy(actions), torch.from_numpy(values), torch.from_numpy(log_probs), \
+            RNNStates(states, states)
 
     def evaluate_actions(self, obs, actions, lstm_states, episode_starts):
         evaluated = self.evaluate_sequences(obs, lstm_states, episode_starts)
