@@ -6,6 +6,7 @@ from __future__ import annotations
 import csv
 import json
 import math
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -96,6 +97,9 @@ def test_a_tiny_experiment_end_to_end(tmp_path):
     assert {r["method"] for r in results["reported"]} == {"cnn", "base", "curr"}
     smc_rows = [r for r in results["rows"] if r["method"] != "cnn"]
     assert all(r["selected_update"] is not None and r["training_return"] is not None for r in smc_rows)
+    code = json.loads((out / "results.json").read_text())["code"]
+    assert code["versions"]["torch"] == torch.__version__
+    assert code["commit"] is None or re.fullmatch(r"[0-9a-f]{40}(\+changes)?", code["commit"])
     evaluations = sorted((out / "evaluations").glob("*.json"))
     assert len(evaluations) == 4 and json.loads(evaluations[0].read_text())["evaluation"]["repeats"] == 1
     stamps = {p: p.stat().st_mtime_ns for p in [*evaluations, *(out / "cnn").glob("*.json")]}
@@ -139,6 +143,7 @@ def test_a_tiny_experiment_end_to_end(tmp_path):
     for method in ("cnn", "base", "curr"):
         assert f"| {method} " in text or f" {method} |" in text
     assert "52.6 / 90.4 / 89.0" in text and "Paired t-tests" in text and "## How this was run" in text
+    assert f"torch {torch.__version__}," in text and "- code: sb3-smc " in text
     base = next(r["test_score"] for r in results["reported"] if r["method"] == "base")
     subset = next(line for line in text.splitlines() if "ours - paper (the same 1 concept(s)" in line)
     cells = [cell.strip() for cell in subset.strip("|").split("|")]  # kind, label, concepts, cnn, base, curr

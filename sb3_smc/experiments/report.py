@@ -227,12 +227,24 @@ def _write(directory: Path, trajectories: str | None, behaviour: bool) -> Path:
               f"{settings['repeats']} test repeats; {settings['workers']} worker(s), backend {settings['backend']}",
               f"- learner: {_learner(settings)}",
               f"- machine: {machine.get('platform', '?')}, Python {machine.get('python', '?')}",
+              *_code_line(results.get("code")),
               f"- wall time of the last `sb3-smc experiment` run: {results.get('wall_time_s', 0) / 3600:.2f} h",
               f"- command: `{results.get('command') or _command(settings)}`",
               "- rows: `results.csv` (one per target x method x curriculum x seed), `results.json`"]
     path = directory / "report.md"
     atomic_write(path, "\n".join(lines) + "\n")
     return path
+
+
+def _code_line(code: dict[str, Any] | None) -> list[str]:
+    """The report's line on the code that made the results (absent from results of before that was recorded)."""
+    if not code:
+        return []
+    versions = code.get("versions", {})
+    commit = code.get("commit")
+    return [f"- code: sb3-smc {versions.get('sb3_smc', '?')}" + (f", commit `{commit}`" if commit else "")
+            + f"; torch {versions.get('torch', '?')}, stable-baselines3 {versions.get('stable_baselines3', '?')}, "
+              f"sb3-contrib {versions.get('sb3_contrib', '?')} (a resumed run: the code of its last run)"]
 
 
 def pushable_levels() -> dict[str, int]:

@@ -23,6 +23,7 @@ import csv
 import io
 import json
 import platform
+import subprocess
 import sys
 import time
 from collections.abc import Callable, Sequence
@@ -39,6 +40,7 @@ from sb3_smc.curricula.trainer import (
     train_curriculum,
 )
 from sb3_smc.experiments.design import METHODS, level2_targets, plan
+from sb3_smc.records import package_versions
 
 __all__ = ["RESULT_FIELDS", "read_results", "run_experiment"]
 
@@ -123,6 +125,7 @@ def run_experiment(
         "command": " ".join(sys.argv) if sys.argv and "sb3-smc" in sys.argv[0] else None,
         "machine": {"platform": platform.platform(), "python": platform.python_version(),
                     "processor": platform.processor() or platform.machine()},
+        "code": {"versions": package_versions(), "commit": code_commit()},
         "wall_time_s": time.time() - start,
         "complete": not missing,
         "missing": missing,
@@ -135,6 +138,20 @@ def run_experiment(
         printer(f"results: {directory / 'results.csv'} ({len(rows)} rows"
                 + (f"; partial: {len(missing)} SMC(s) not trained yet)" if missing else ")"))
     return results
+
+
+def code_commit() -> str | None:
+    """The git commit of the sb3_smc code that runs (``None`` outside a git checkout), with ``+changes`` when its
+    tracked files differ from that commit: what a resumed run's SMCs were trained with."""
+    here = Path(__file__).resolve().parent
+    try:
+        commit = subprocess.run(["git", "rev-parse", "HEAD"], cwd=here, capture_output=True, text=True, timeout=10,
+                                check=True).stdout.strip()
+        changed = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=here,
+                                 capture_output=True, text=True, timeout=10, check=True).stdout.strip()
+    except (OSError, subprocess.SubprocessError):
+        return None
+    return commit + ("+changes" if changed else "") if commit else None
 
 
 def _row(target: str, info: Any, method: str, curriculum: str, seed: int, training_return: float | None,
