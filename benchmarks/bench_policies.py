@@ -9,6 +9,11 @@ A second table times the compiled step of the default architectures (``sb3_smc.c
 GRU-32, ``net_arch=[]``) against the same policy's numpy code, for one row (``probabilities``) and for
 ``probabilities_batch`` on 2 and 4 rows (compiled: row by row; numpy code: one batched evaluation).
 
+A third table times the learner's data-collection step (``SequenceLstmPolicy.forward`` / its GRU variant under
+``torch.no_grad``, what ``RecurrentPPO.collect_rollouts`` calls once per vector step) for 16 environments: the compiled
+step (``sb3_smc.common.kernels.*_collection_step``) against the same policy's torch step
+(``compiled_collection = False``), each with ``obs_as_tensor`` as SB3 calls it.
+
 Run: ``python benchmarks/bench_policies.py [--repeats N]``.
 """
 
@@ -21,6 +26,8 @@ from collections.abc import Callable
 
 import numpy as np
 import torch
+from sb3_contrib.common.recurrent.type_aliases import RNNStates
+from stable_baselines3.common.utils import obs_as_tensor
 
 from sb3_smc.envs import make_smc_env
 from sb3_smc.policies import policy_from_model, sample_action
@@ -88,6 +95,24 @@ def main() -> None:
                     times.append(best_us(lambda i, p=policy, x=x, s=s: p.probabilities_batch(x, s), args.repeats))
             compiled_rows.append((rnn.upper(), rows_in_batch, *times))
 
+    collection_rows = []
+    for rnn in ("lstm", "gru"):
+        learner = train_smc(ENV_ID, total_timesteps=0, n_envs=16, rnn=rnn).model.policy
+        batch = np.stack(observations[:16])
+        hidden = torch.zeros((1, 16, 32))
+        states = RNNStates((hidden, hidden), (hidden, hidden))
+        starts = torch.zeros(16)
+        times = []
+        for compiled_step in (True, False):
+            learner.compiled_collection = compiled_step
+
+            def collect(i: int, learner=learner, batch=batch, states=states, starts=starts) -> None:
+                with torch.no_grad():
+                    learner.forward(obs_as_tensor(batch, "cpu"), states, starts)
+
+            times.append(best_us(collect, args.repeats))
+        collection_rows.append((rnn.upper(), *times))
+
     print(f"\nbest of 5 x {args.repeats} calls; torch {torch.__version__}\n")
     print("| case | numpy (µs/call) | baseline: model.predict / choice (µs/call) | speed-up |")
     print("|---|---:|---:|---:|")
@@ -97,6 +122,10 @@ def main() -> None:
     print("|---|---:|---:|---:|---:|")
     for cell, rows_in_batch, ours, theirs in compiled_rows:
         print(f"| {cell}-32 | {rows_in_batch} | {ours:.1f} | {theirs:.1f} | {theirs / ours:.1f}x |")
+    print("\n| learner's collection step, 16 environments | compiled (µs/call) | torch (µs/call) | speed-up |")
+    print("|---|---:|---:|---:|")
+    for cell, ours, theirs in collection_rows:
+        print(f"| {cell}-32 | {ours:.1f} | {theirs:.1f} | {theirs / ours:.1f}x |")
 
 
 if __name__ == "__main__":
