@@ -4,8 +4,9 @@ A level-2 SMC spends most of its time in its children: each call runs a child po
 Stepped one environment after another, every decision of every environment is one small policy evaluation.
 Here the calls of all environments advance together: at each round, the pending decisions of the environments
 are grouped by policy and each group is answered by one ``probabilities_batch`` call (policies without one, such
-as scripted ones, answer one by one, and so do the compiled numpy actors of the default architecture, whose
-single steps cost less than stacking a group: ``batch_from``). Every environment samples from its own generator
+as scripted ones, answer one by one; the compiled numpy actors of the default architecture, whose single steps
+cost less than stacking a group, declare ``batch_from = None`` and the wrapper asks them directly, without a round
+trip through here). Every environment samples from its own generator
 as before, so a seed gives the same episodes; only the rounding of batched matrix products can differ from
 unbatched ones (see ``docs/benchmarks.md``).
 """

@@ -147,12 +147,15 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         It yields ``(policy, observation, state)`` whenever a policy must decide (``smc``'s or, inside a child's
         call, the child's) and expects ``policy.probabilities(observation, state)`` back: :meth:`run_call` answers
         at once; :class:`sb3_smc.vec_env.SMCVecEnv` answers the requests of many environments with one batched
-        evaluation per policy. The draws from this env's generator are the same either way.
+        evaluation per policy. A policy that is never batched (``batch_from = None``: the compiled numpy actors,
+        whose single steps cost less than stacking a group) is asked here directly instead, without the round
+        trip. The draws from this env's generator are the same either way.
         """
         assert self._rng is not None
         plan = self._plan_of(smc)
         n_actions = len(plan)
         policy = smc.policy
+        inline = getattr(policy, "batch_from", 2) is None
         outcomes = np.zeros(len(smc.children), dtype=np.float32)
         previous = -1
         state = policy.initial_state()
@@ -164,7 +167,10 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
             if budget[0] <= 0:  # the moves of the top-level call are used up (by a call this one made)
                 break
             obs = self._call_observation(outcomes, previous, n_actions)
-            probabilities, state = yield policy, obs, state
+            if inline:
+                probabilities, state = policy.probabilities(obs, state)
+            else:
+                probabilities, state = yield policy, obs, state
             if len(probabilities) != n_actions:
                 raise ValueError(f"SMC {smc.name!r}: its policy gives {len(probabilities)} action probabilities, "
                                  f"but its actions are {smc.action_names}")
