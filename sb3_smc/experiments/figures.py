@@ -146,7 +146,7 @@ def timeline_figure(smc: Any, target: str, path: str | Path, *, index: int = 0, 
     if handles:
         ax.legend(handles, names, fontsize=5, loc="upper left", bbox_to_anchor=(1.0, 1.0))
     result = "success" if episode.success else "failure"
-    ax.set_title(f"{smc.name} on {target}, test environment {index}: {len(episode.moves)} moves, "
+    ax.set_title(f"{smc.name}\non {target}, test environment {index}: {len(episode.moves)} moves, "
                  f"{episode.length} decisions, {result}", fontsize=7)
     fig.tight_layout()
     return save_figure(fig, Path(path))
