@@ -418,3 +418,15 @@ def test_curriculum_objects_are_validated_too():
         Curriculum("x", (Node("a", LEFT, ("b",)),), ("a",))
     assert os.environ.get("PIXELWORLD_CACHE")  # the suite never writes into the user's cache
     assert torch.get_num_threads() == 1
+
+
+def test_a_script_without_a_main_guard_is_told_what_broke_its_workers(tmp_path):
+    """Workers are spawned and import the calling script again: at its top level the run starts again in every
+    worker, which dies; the failure says so instead of only 'process pool terminated abruptly'."""
+    script = tmp_path / "train_it.py"
+    script.write_text("from sb3_smc.curricula import train_curriculum\n"
+                      f"train_curriculum({str(_tiny(tmp_path))!r}, {str(tmp_path / 'run')!r}, targets=['left'], "
+                      "seeds=1, timesteps=2000, workers=2, progress=False)\n")
+    result = subprocess.run([sys.executable, str(script)], cwd=ROOT, capture_output=True, text=True, timeout=300)
+    failure = (tmp_path / "run" / "failed" / "left@0.txt").read_text()
+    assert 'if __name__ == "__main__":' in failure and "BrokenProcessPool" in failure, result.stderr[-2000:]

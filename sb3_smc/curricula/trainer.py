@@ -578,7 +578,14 @@ class _Processes:
         broken = False
         for future in done:
             error = future.exception()
-            broken = broken or isinstance(error, BrokenProcessPool)
+            if isinstance(error, BrokenProcessPool):
+                broken = True
+                hint = RuntimeError(
+                    "a worker process died abruptly: killed (e.g. for memory), crashed, or, when a script trains with "
+                    "workers > 1, the script starts the run at its top level: workers are spawned and import the "
+                    "script again, so put the call under `if __name__ == \"__main__\":`")
+                hint.__cause__ = error
+                error = hint
             out.append((future, error if error is not None else future.result()))
         if broken:  # a worker died (e.g. killed for memory): its jobs count as failed, the run goes on
             self._pool.shutdown(wait=False, cancel_futures=True)
