@@ -177,6 +177,28 @@ def test_seeds_rank_by_selected_training_return():
     assert rank_seeds(records)[:1] == [1]  # one_best
 
 
+def test_the_longest_chain_starts_first_and_top_nodes_fill_in(tmp_path):
+    from sb3_smc.curricula.trainer import _Scheduler
+
+    deep = parse_curriculum(TINY.replace("curriculum: tiny", "curriculum: deep") + f"""\
+  - name: top
+    task: {RIGHT}
+    uses: [container]
+  - name: flat
+    task: {RIGHT}
+""")
+    order = deep.order()
+    assert order.index("flat") < order.index("container")  # lower levels first: the flat node comes early
+    scheduler = _Scheduler(deep, order, 2, 1000, 2, None, tmp_path)
+    assert scheduler.height == {"left": 2, "above": 2, "container": 1, "top": 0, "flat": 0}
+    first = [job for job in scheduler.ready()]
+    assert first == [("left", 0), ("left", 1), ("above", 0), ("above", 1), ("flat", 0), ("flat", 1)]
+    for node in ("left", "above"):
+        scheduler.records[node] = {0: _record(0.5), 1: _record(0.4)}
+    assert scheduler.ready()[:2] == [("container", 0), ("container", 1)]
+    assert scheduler.jobs()[:2] == [(order[0], 0), (order[0], 1)]  # tables keep the curriculum's order
+
+
 # ------------------------------------------------------------------------------------------------ training
 
 def _tiny(tmp_path: Path) -> Path:

@@ -188,6 +188,7 @@ class _Scheduler:
         self.records: dict[str, dict[int, TrainingRecord]] = {name: {} for name in order}
         self.running: set[str] = set()
         self.failed: dict[str, str] = {}
+        self.height = _heights(curriculum, order)
 
     def jobs(self) -> list[tuple[str, int]]:
         return [(node, seed) for node in self.order for seed in range(self.seeds)]
@@ -206,8 +207,11 @@ class _Scheduler:
         return tuple(names)
 
     def ready(self) -> list[tuple[str, int]]:
+        """The jobs that can start, those with the longest chain of nodes still above them first (then in
+        ``order``): a deep curriculum's critical path starts at once, and top-level nodes (a flat baseline, say)
+        fill idle workers. Which job runs when does not change what is trained."""
         out = []
-        for node_name, seed in self.jobs():
+        for node_name, seed in sorted(self.jobs(), key=lambda job: -self.height[job[0]]):
             name = job_name(node_name, seed)
             if self.done(node_name, seed) or name in self.running or name in self.failed:
                 continue
@@ -264,6 +268,17 @@ class _Scheduler:
                 shutil.rmtree(stale, ignore_errors=True)
             log = str(folder)
         return Job(spec=spec, library=str(self.library.absolute()), tensorboard_log=log)
+
+
+def _heights(curriculum: Curriculum, order: list[str]) -> dict[str, int]:
+    """For each node of ``order`` (lower levels first), the length of the longest chain of nodes of ``order`` that
+    use it, directly or not (0 for a node nothing in the run uses)."""
+    height = dict.fromkeys(order, 0)
+    for name in reversed(order):
+        for used in curriculum.node(name).uses:
+            if used in height:
+                height[used] = max(height[used], height[name] + 1)
+    return height
 
 
 def _glob_escape(text: str) -> str:
