@@ -118,8 +118,8 @@ class PixelWorldEnv(gym.Env):
         self._draws: list[int] = []
         self._worlds: dict[int, World] = {}
         self._last_self: dict[int, Cell] = {}
-        # Per scene: the goal's truth per self cell, and the concept's test for a moved self.
-        self._goal_memo: dict[int, tuple[dict[Cell, bool], SelfEvaluator]] = {}
+        # Per scene: the goal's truth per self cell (-1 not known yet), and the concept's test for a moved self.
+        self._goal_memo: dict[int, tuple[np.ndarray, SelfEvaluator]] = {}
         # Per scene: the one-hot positions of the window per self cell (worlds where only the self moves).
         self._hot_memo: dict[int, dict[Cell, np.ndarray]] = {}
         self._world: World | None = None
@@ -162,12 +162,33 @@ class PixelWorldEnv(gym.Env):
         assert world is not None
         if not world.self_only:
             return self.concept.holds_objects(world.objects, world.scene.floor_row)
-        memo, holds_for = self._goal_memo[self._index]
-        position = world.positions[world.self_index]
-        holds = memo.get(position)
-        if holds is None:
-            holds = memo[position] = holds_for(world.scene.self_object.moved_to(position))
-        return holds
+        return self.goal_at(world.positions[world.self_index])
+
+    @property
+    def goal(self) -> bool:
+        """Whether the goal holds in the current state (bring-about; always False for classification)."""
+        return self._goal
+
+    def goal_at(self, position: Cell) -> bool:
+        """Whether the concept would hold with the self at ``position`` (the rest as in the scene; for worlds where
+        only the self moves), memoised in :meth:`goal_cells`."""
+        cells, holds_for = self._goal_memo[self._index]
+        row, col = position
+        holds = cells[row, col]
+        if holds < 0:
+            holds = cells[row, col] = holds_for(self.world.scene.self_object.moved_to(position))
+        return bool(holds)
+
+    def goal_cells(self) -> np.ndarray:
+        """The current scene's memo of :meth:`goal_at`: one int8 per cell, 1 or 0 where known, -1 where not yet
+        (callers that move the self themselves read it and fill it through :meth:`goal_at`)."""
+        return self._goal_memo[self._index][0]
+
+    def self_moved(self, goal: bool) -> None:
+        """Record the goal's truth after a caller moved the self in the world's arrays itself (compiled option loops
+        in worlds where only the self moves: :func:`sb3_smc.common.kernels.leaf_call`); the caller sets the self's
+        position with :meth:`World.place_self`."""
+        self._goal = goal
 
     def _info(self, success: bool = False, signalled: bool = False) -> dict[str, Any]:
         info: dict[str, Any] = {"scene_index": self._index, "is_success": success, "signalled": signalled}
@@ -212,7 +233,8 @@ class PixelWorldEnv(gym.Env):
         if world is None:
             world = self._worlds[index] = World(self.scenes[index])
             scene = self.scenes[index]
-            self._goal_memo[index] = ({}, self.concept.self_evaluator(scene.objects, scene.floor_row))
+            self._goal_memo[index] = (np.full((scene.height, scene.width), -1, dtype=np.int8),
+                                      self.concept.self_evaluator(scene.objects, scene.floor_row))
             self._hot_memo[index] = {}
         world.reset(self._last_self.get(index) if self.aaai18_reset_bug else None)
         self._world = world

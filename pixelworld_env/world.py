@@ -150,6 +150,16 @@ class World:
                 self.owner[r + 1, c + 1] = index
         return True
 
+    @property
+    def stale(self) -> bool:
+        """Whether the reset bug's stale red pixel (``reset(stale_cell=...)``) is still drawn."""
+        return self._stale
+
+    def place_self(self, position: Cell) -> None:
+        """Record the self's position after a caller moved it in ``grid`` / ``owner`` itself, exactly as
+        :meth:`move` does where only the self moves (``self_only``, no stale pixel); compiled option loops do."""
+        self.positions[self.self_index] = position
+
     def window(self) -> np.ndarray:
         """The 3 x 3 colour codes centred on the self (cells outside the world read 0)."""
         row, col = self.positions[self.self_index]

@@ -174,6 +174,18 @@ class _RecurrentActor:
         for a compiled policy; see :data:`COMPILED_BATCH_FROM`)."""
         return COMPILED_BATCH_FROM if self._compiled is not None else 2
 
+    @property
+    def compiled_weights(self) -> tuple[np.ndarray, ...] | None:
+        """The compiled step's weights as :func:`sb3_smc.common.kernels.leaf_call` takes them: ``(w_ih, w_hh,
+        first bias, second bias, w_out, b_out)`` (an LSTM's one bias first, an empty second), None for the numpy
+        code."""
+        if self._compiled is None:
+            return None
+        if isinstance(self, NumpyGRUPolicy):
+            return self._compiled
+        w_ih, w_hh, bias, w_out, b_out = self._compiled
+        return w_ih, w_hh, bias, np.empty(0), w_out, b_out
+
 
 class NumpyLSTMPolicy(_RecurrentActor):
     """Recurrent actor of an sb3-contrib ``RecurrentActorCriticPolicy`` in numpy.

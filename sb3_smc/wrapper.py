@@ -9,9 +9,11 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from pixelworld_env.env import PixelWorldEnv
+from pixelworld_env.constants import NUM_COLORS
+from pixelworld_env.env import BRING_ABOUT, GOAL_POTENTIAL, PixelWorldEnv
 from pixelworld_env.validation import check_action
-from sb3_smc.policies import sample_action
+from pixelworld_env.world import MOVES as MOVE_OFFSETS
+from sb3_smc.policies import NumpyGRUPolicy, _kernels, sample_action
 from sb3_smc.smc import CALL_PREFIX, HAND_SIZE, MOVES, SMC, StepPolicy, observation_size, smc_action_names
 
 SIGNAL_OUTCOMES = {"SIG1": 1.0, "SIG0": -1.0}
@@ -93,6 +95,7 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         self.observation_space = spaces.Box(-1.0, 1.0, shape=(size,), dtype=np.float32)
         self._plan = self._action_plan(self.action_names, self.action_names.index)
         self._child_plans: dict[int, list[tuple[int, Any]]] = {}
+        self._leaf_plans: dict[int, tuple[Any, ...] | None] = {}
         self._outcomes = np.zeros(len(self.smcs), dtype=np.float32)
         self._previous_action = -1
         # Moves and signals may skip the layers between this wrapper and the base env when those only check the
@@ -127,6 +130,58 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
             plan = self._child_plans[id(smc)] = self._action_plan(smc.action_names, None)
         return plan
 
+    def _leaf_plan(self, smc: SMC) -> tuple[Any, ...] | None:
+        """The constant arguments of a compiled call of ``smc`` (:func:`sb3_smc.common.kernels.leaf_call`): its
+        action kinds, outcomes and move offsets, whether its policy is a GRU, and its weights; None unless ``smc`` is a
+        leaf (no children) whose policy has a compiled step taking exactly its observation and actions."""
+        key = id(smc)
+        if key not in self._leaf_plans:
+            policy = smc.policy
+            weights = getattr(policy, "compiled_weights", None)
+            n_actions = len(smc.action_names)
+            plan = self._plan_of(smc)
+            usable = (weights is not None and not smc.children and all(kind != _CALL for kind, _ in plan)
+                      and policy.observation_size == observation_size(0, n_actions) and policy.n_actions == n_actions)
+            if not usable:
+                self._leaf_plans[key] = None
+            else:
+                effects = [MOVE_OFFSETS.get(name, (0, 0)) for name in smc.action_names]
+                self._leaf_plans[key] = (
+                    np.array([int(kind == _MOVE) for kind, _ in plan], dtype=np.int64),
+                    np.array([value if kind == _SIGNAL else 0.0 for kind, value in plan], dtype=np.float64),
+                    np.array(effects, dtype=np.int64).reshape(n_actions, 2),
+                    isinstance(policy, NumpyGRUPolicy), policy.hidden_size, weights)
+        return self._leaf_plans[key]
+
+    def _compiled_call(self, smc: SMC, leaf: tuple[Any, ...], cap: int, budget: list[int]
+                       ) -> tuple[float, int, float]:
+        """One call of the leaf ``smc`` made by the compiled loop: the same moves, draws and result as the loop of
+        :meth:`call_coroutine`."""
+        kernels = _kernels()
+        kinds, values, deltas, gru, hidden, weights = leaf
+        base = self.base
+        world = base.world
+        row, col = world.positions[world.self_index]
+        counters = np.array([row, col, cap, budget[0], 0, -1, int(base.goal), 0], dtype=np.int64)
+        totals = np.zeros(2)
+        h, c = np.zeros(hidden), np.zeros(hidden)
+        cells = base.goal_cells()
+        bring_about = base.kind == BRING_ABOUT
+        color = int(world.scene.self_object.color)
+        while True:
+            status = kernels.leaf_call(world.grid, world.owner, world.self_index, color, cells, bring_about,
+                                       GOAL_POTENTIAL, NUM_COLORS, kinds, values, deltas, counters, totals, gru, h, c,
+                                       *weights, self._rng)
+            if status != kernels.LEAF_NEEDS_GOAL:
+                break
+            base.goal_at((int(counters[kernels.ROW]), int(counters[kernels.COL])))
+        world.place_self((int(counters[kernels.ROW]), int(counters[kernels.COL])))
+        base.self_moved(bool(counters[kernels.GOAL]))
+        budget[0] = int(counters[kernels.BUDGET])
+        if status == kernels.LEAF_BAD_PROBABILITIES:
+            raise ValueError(f"SMC {smc.name!r}: its policy gave action probabilities without a positive finite sum")
+        return float(totals[0]), int(counters[kernels.MOVES_MADE]), float(totals[1])
+
     @property
     def outcomes(self) -> np.ndarray:
         """The last outcome of each SMC in this episode (a copy)."""
@@ -152,6 +207,16 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         trip. The draws from this env's generator are the same either way.
         """
         assert self._rng is not None
+        if budget is None:
+            budget = [cap]
+        world = self.base.world
+        if not self.record_cells and world.self_only and not world.stale:
+            leaf = self._leaf_plan(smc)
+            if leaf is not None:  # the whole call compiled: no decision to yield
+                reward, moves, outcome = self._compiled_call(smc, leaf, cap, budget)
+                calls.append({"smc": smc.name, "depth": depth, "primitive_steps": moves, "outcome": int(outcome),
+                              "reward": reward})
+                return reward, moves, outcome
         plan = self._plan_of(smc)
         n_actions = len(plan)
         policy = smc.policy
@@ -160,8 +225,6 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         previous = -1
         state = policy.initial_state()
         reward, moves, outcome = 0.0, 0, 0.0
-        if budget is None:
-            budget = [cap]
         self._stack.append(smc.name)
         for _ in range(cap):
             if budget[0] <= 0:  # the moves of the top-level call are used up (by a call this one made)

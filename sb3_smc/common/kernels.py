@@ -21,7 +21,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["gru_collection_step", "gru_linear_step", "lstm_collection_step", "lstm_linear_step", "sample_index"]
+__all__ = ["gru_collection_step", "gru_linear_step", "leaf_call", "lstm_collection_step", "lstm_linear_step",
+           "sample_index"]
 
 
 @njit(cache=True)
@@ -263,3 +264,93 @@ def gru_collection_step(x: np.ndarray, h: np.ndarray, starts: np.ndarray, unifor
                                                  w_value, b_value, w_action, b_action)
         values[k, 0] = value
     return actions, values, log_probs, h_next
+
+
+LEAF_DONE, LEAF_NEEDS_GOAL, LEAF_BAD_PROBABILITIES = 0, 1, 2
+"""What :func:`leaf_call` returns: the call has ended; it stopped after a move into a cell whose goal truth is not
+known yet (fill it in ``goal_cells`` and call again: it resumes); a policy gave probabilities without a positive
+finite sum."""
+
+# the entries of leaf_call's ``counters``
+ROW, COL, DECISIONS_LEFT, BUDGET, MOVES_MADE, PREVIOUS, GOAL, RESUME = range(8)
+
+
+@njit(cache=True)
+def leaf_call(grid: np.ndarray, owner: np.ndarray, me: int, self_color: int, goal_cells: np.ndarray,
+              bring_about: bool, potential: float, n_colors: int, kinds: np.ndarray, values: np.ndarray,
+              deltas: np.ndarray, counters: np.ndarray, totals: np.ndarray, gru: bool, h: np.ndarray, c: np.ndarray,
+              w_ih: np.ndarray, w_hh: np.ndarray, b_first: np.ndarray, b_second: np.ndarray, w_out: np.ndarray,
+              b_out: np.ndarray, rng: np.random.Generator) -> int:  # pragma: no cover
+    """One call of a leaf SMC (no children; its actions are signals and moves) with a compiled actor, made entirely
+    here, in a world where only the one-pixel self moves: the loop of
+    :meth:`sb3_smc.HierarchicalSMCWrapper.call_coroutine` with :meth:`pixelworld_env.World.move`'s self-only move
+    and :class:`pixelworld_env.PixelWorldEnv`'s goal shaping, decision by decision the same arithmetic and the same
+    draws from ``rng`` as that loop, so the same call.
+
+    ``grid`` / ``owner``: the world's live padded arrays (moves are made in them); ``goal_cells``: per self cell
+    the goal's truth (1 / 0, -1 not known yet; bring-about only), ``potential`` the reward of entering the goal
+    (minus that of leaving it); ``n_colors`` the window's one-hot width. Per action ``kinds`` (0 signal, 1 move),
+    ``values`` (a signal's outcome) and ``deltas`` (a move's row/column offsets). ``counters`` (int64, see
+    ``ROW`` ...) and ``totals`` (``[reward, outcome]``) carry the call's state in and out, ``h`` / ``c`` the
+    recurrent state (``c`` unused for a GRU, whose biases are ``b_first`` / ``b_second``; an LSTM's bias is
+    ``b_first``). Returns ``LEAF_DONE``, ``LEAF_NEEDS_GOAL`` or ``LEAF_BAD_PROBABILITIES``."""
+    n_actions = kinds.shape[0]
+    hidden = h.shape[0]
+    x = np.zeros(w_ih.shape[0])
+    first_previous = w_ih.shape[0] - n_actions
+    probabilities = np.empty(n_actions)
+    h_next = np.empty(hidden)
+    c_next = np.empty(hidden)
+    row, col = counters[ROW], counters[COL]
+    if counters[RESUME] == 1:  # the last move entered a cell whose goal truth has been filled in since
+        counters[RESUME] = 0
+        goal = goal_cells[row, col]
+        if goal != counters[GOAL]:
+            counters[GOAL] = goal
+            totals[0] += potential if goal == 1 else -potential
+    while counters[DECISIONS_LEFT] > 0:
+        if counters[BUDGET] <= 0:
+            break
+        counters[DECISIONS_LEFT] -= 1
+        x[:] = 0.0
+        for i in range(3):
+            for j in range(3):
+                x[(3 * i + j) * n_colors + grid[row + i, col + j]] = 1.0
+        if counters[PREVIOUS] >= 0:
+            x[first_previous + counters[PREVIOUS]] = 1.0
+        if gru:
+            _gru_row(x, h, w_ih, w_hh, b_first, b_second, w_out, b_out, probabilities, h_next)
+        else:
+            _lstm_row(x, h, c, w_ih, w_hh, b_first, w_out, b_out, probabilities, h_next, c_next)
+            c[:] = c_next
+        h[:] = h_next
+        action = sample_index(probabilities, rng.random())
+        if action < 0:
+            return LEAF_BAD_PROBABILITIES
+        if kinds[action] == 0:
+            totals[1] = values[action]
+            return LEAF_DONE
+        counters[MOVES_MADE] += 1
+        counters[BUDGET] -= 1
+        counters[PREVIOUS] = action
+        dr, dc = deltas[action, 0], deltas[action, 1]
+        target = owner[row + dr + 1, col + dc + 1]
+        if target != -1 and target != me:
+            continue  # blocked: the move costs a decision and a move, and changes nothing
+        grid[row + 1, col + 1] = 0
+        owner[row + 1, col + 1] = -1
+        row += dr
+        col += dc
+        grid[row + 1, col + 1] = self_color
+        owner[row + 1, col + 1] = me
+        counters[ROW] = row
+        counters[COL] = col
+        if bring_about:
+            goal = goal_cells[row, col]
+            if goal < 0:
+                counters[RESUME] = 1
+                return LEAF_NEEDS_GOAL
+            if goal != counters[GOAL]:
+                counters[GOAL] = goal
+                totals[0] += potential if goal == 1 else -potential
+    return LEAF_DONE
