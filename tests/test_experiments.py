@@ -97,7 +97,13 @@ def test_a_tiny_experiment_end_to_end(tmp_path):
     assert {r["method"] for r in results["reported"]} == {"cnn", "base", "curr"}
     smc_rows = [r for r in results["rows"] if r["method"] != "cnn"]
     assert all(r["selected_update"] is not None and r["training_return"] is not None for r in smc_rows)
-    code = json.loads((out / "results.json").read_text())["code"]
+    saved = json.loads((out / "results.json").read_text())
+    code = saved["code"]
+    assert saved["command"] == (f"sb3-smc experiment --out {out} --methods cnn,base,curr --targets {LEFT_OF} "
+                                "--seeds 1 --timesteps 2000 --repeats 1 --workers 1 --backend local "
+                                "--algo RecurrentPPO --rnn lstm")  # every option, however the run was started
+    assert saved["machine"]["cores"] >= 1 and saved["machine"]["processor"]
+    assert saved["wall_time_total_s"] == saved["wall_time_s"] > 0
     assert code["versions"]["torch"] == torch.__version__
     assert code["commit"] is None or re.fullmatch(r"[0-9a-f]{40}(\+changes)?", code["commit"])
     evaluations = sorted((out / "evaluations").glob("*.json"))
@@ -107,6 +113,7 @@ def test_a_tiny_experiment_end_to_end(tmp_path):
     again = run_experiment(out, methods=["cnn", "base", "curr"], targets=[LEFT_OF], seeds=1, timesteps=2000,
                            repeats=1, progress=False)
     assert again["rows"] == results["rows"]  # nothing trained or evaluated again
+    assert again["wall_time_total_s"] == pytest.approx(saved["wall_time_total_s"] + again["wall_time_s"])
     assert all(p.stat().st_mtime_ns == stamp for p, stamp in stamps.items())
 
     # partial results while a run is still training: drop one finished SMC, tabulate without training, complete it
@@ -208,6 +215,51 @@ def test_cli_experiment_and_report_errors(tmp_path):
     assert wrong.returncode == 2 and "invalid choice: 'rnn'" in wrong.stderr
     missing = cli("report", str(tmp_path / "nothing"))
     assert missing.returncode == 2 and "results.json not found" in missing.stderr
+
+
+def test_cli_experiment_and_report_succeed(tmp_path):
+    """The commands as users type them: a CNN-only experiment (seconds), then its report."""
+    out = tmp_path / "cnn"
+    easy = "cl_self-in-left-corner_vs_on-hline"
+    run = subprocess.run([sys.executable, "-m", "sb3_smc.cli", "experiment", "--out", str(out), "--methods", "cnn",
+                          "--targets", easy, "--seeds", "2", "--workers", "2"], cwd=ROOT, capture_output=True,
+                         text=True, timeout=300)
+    assert run.returncode == 0, run.stderr
+    rows = list(csv.DictReader((out / "results.csv").open()))
+    assert [(r["method"], r["seed"]) for r in rows] == [("cnn", "0"), ("cnn", "1")]
+    assert float(rows[0]["test_score"]) >= 0.8
+    report = subprocess.run([sys.executable, "-m", "sb3_smc.cli", "report", str(out)], cwd=ROOT,
+                            capture_output=True, text=True, timeout=300)
+    assert report.returncode == 0, report.stderr
+    text = (out / "report.md").read_text()
+    assert f"--targets {easy} --seeds 2" in text and "--workers 2" in text and "cores" in text
+
+
+def test_the_report_has_the_noprim_table_and_the_cnn_tests_per_category(tmp_path):
+    """Synthetic results: the §6.3 table (means with and without primitives beside the paper's) and one paired
+    t-test of the best SMC method against the CNN per classification category, with scipy's numbers."""
+    from scipy import stats
+
+    from pixelworld_env import catalog
+
+    targets = [t for t in level2_targets("objcon") if catalog.dataset(t).kind == "classification"][:4]
+    methods = ["cnn", "base", "curr", "curr-noprim"]
+    score = {(t, m): 0.5 + 0.1 * k + 0.05 * j + (0.02 * k * k if m == "cnn" else 0.0)
+             for k, t in enumerate(targets) for j, m in enumerate(methods)}
+    rows = [{"target": t, "kind": "classification", "category": "objcon", "method": m, "curriculum": m, "seed": 0,
+             "test_score": v} for (t, m), v in score.items()]
+    (tmp_path / "results.json").write_text(json.dumps({
+        "rows": rows, "reported": reported(rows), "wall_time_s": 60.0, "command": None, "machine": {},
+        "settings": {"methods": methods, "targets": targets, "seeds": 1, "timesteps": 400_000, "repeats": 10,
+                     "workers": 1, "backend": "local"}}))
+    [report] = write_report(tmp_path, behaviour=False)
+    text = report.read_text()
+    noprim = text.split("## The role of hierarchy")[1].split("##")[0]
+    with_, without = (100 * np.mean([score[(t, m)] for t in targets]) for m in ("curr", "curr-noprim"))
+    assert f"| classification | curr | {with_:.1f} | {without:.1f} | 84.9 | 82.7 |" in noprim
+    t, p = stats.ttest_rel([score[(t, "curr")] for t in targets], [score[(t, "cnn")] for t in targets])
+    row = next(line for line in text.splitlines() if line.startswith("| classification / objcon | curr vs cnn"))
+    assert f"| {t:.2f} | 3 | {p:.2g} |" in row
 
 
 def test_the_report_orders_the_pushable_curriculum_by_level(tmp_path):

@@ -21,7 +21,7 @@ from pixelworld_env.atomic import atomic_write
 from sb3_smc.experiments.design import CATEGORIES, METHODS, PAPER_CATEGORIES
 from sb3_smc.experiments.figures import pyplot, save_figure
 from sb3_smc.experiments.paper import PAPER_CONCEPTS, PAPER_MEANS, PAPER_NOPRIM, PAPER_TTESTS
-from sb3_smc.experiments.runner import read_results
+from sb3_smc.experiments.runner import experiment_command, read_results
 
 __all__ = ["paired_ttest", "pushable_levels", "write_report"]
 
@@ -226,10 +226,12 @@ def _write(directory: Path, trajectories: str | None, behaviour: bool) -> Path:
               f"- budget: {settings['timesteps']:,} steps per SMC, seeds 0-{settings['seeds'] - 1}, "
               f"{settings['repeats']} test repeats; {settings['workers']} worker(s), backend {settings['backend']}",
               f"- learner: {_learner(settings)}",
-              f"- machine: {machine.get('platform', '?')}, Python {machine.get('python', '?')}",
+              f"- machine: {_machine_line(machine)}",
               *_code_line(results.get("code")),
-              f"- wall time of the last `sb3-smc experiment` run: {results.get('wall_time_s', 0) / 3600:.2f} h",
-              f"- command: `{results.get('command') or _command(settings)}`",
+              f"- wall time of the last `sb3-smc experiment` run: {results.get('wall_time_s', 0) / 3600:.2f} h"
+              + (f"; of all its runs recorded here: {results['wall_time_total_s'] / 3600:.2f} h"
+                 if "wall_time_total_s" in results else ""),
+              f"- command: `{results.get('command') or experiment_command('DIR', settings)}`",
               "- rows: `results.csv` (one per target x method x curriculum x seed), `results.json`"]
     path = directory / "report.md"
     atomic_write(path, "\n".join(lines) + "\n")
@@ -277,11 +279,10 @@ def _learner(settings: dict[str, Any]) -> str:
     return f"{algo} ({settings.get('rnn', 'lstm').upper() if algo in RECURRENT_ALGORITHMS else 'MLP'})"
 
 
-def _command(settings: dict[str, Any]) -> str:
-    learner = "".join(f" --{key} {settings[key]}" for key in ("algo", "rnn") if key in settings)
-    return (f"sb3-smc experiment --out DIR --methods {','.join(settings['methods'])} --targets "
-            f"{','.join(settings['targets'])} --seeds {settings['seeds']} --timesteps {settings['timesteps']}"
-            f"{learner}")
+def _machine_line(machine: dict[str, Any]) -> str:
+    cpu = f", {machine['processor']}" if machine.get("processor") else ""
+    cores = f", {machine['cores']} cores" if machine.get("cores") else ""
+    return f"{machine.get('platform', '?')}{cpu}{cores}, Python {machine.get('python', '?')}"
 
 
 def _mean(values: Sequence[float | None]) -> float | None:

@@ -22,9 +22,9 @@ from __future__ import annotations
 import csv
 import io
 import json
+import os
 import platform
 import subprocess
-import sys
 import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -117,16 +117,19 @@ def run_experiment(
                                  evaluation["selected_update"], evaluation["test_score"], evaluation["wall_time_s"]))
         if progress:
             printer(f"evaluated {target} / {method}")
+    settings = {"methods": list(methods), "targets": chosen, "seeds": seeds, "timesteps": timesteps or 400_000,
+                "repeats": repeats, "workers": workers, "backend": backend,
+                "algo": algo or "RecurrentPPO", "rnn": rnn or "lstm"}
+    wall = time.time() - start
     results = {
         "format": "sb3-smc-results", "version": 1,
-        "settings": {"methods": list(methods), "targets": chosen, "seeds": seeds, "timesteps": timesteps or 400_000,
-                     "repeats": repeats, "workers": workers, "backend": backend,
-                     "algo": algo or "RecurrentPPO", "rnn": rnn or "lstm"},
-        "command": " ".join(sys.argv) if sys.argv and "sb3-smc" in sys.argv[0] else None,
-        "machine": {"platform": platform.platform(), "python": platform.python_version(),
-                    "processor": platform.processor() or platform.machine()},
+        "settings": settings,
+        "command": experiment_command(out, settings, category,
+                                      train=train),
+        "machine": machine(),
         "code": {"versions": package_versions(), "commit": code_commit()},
-        "wall_time_s": time.time() - start,
+        "wall_time_s": wall,
+        "wall_time_total_s": _previous_total(directory) + wall,
         "complete": not missing,
         "missing": missing,
         "rows": rows,
@@ -138,6 +141,42 @@ def run_experiment(
         printer(f"results: {directory / 'results.csv'} ({len(rows)} rows"
                 + (f"; partial: {len(missing)} SMC(s) not trained yet)" if missing else ")"))
     return results
+
+
+def experiment_command(out: str | Path, settings: dict[str, Any], category: str | None = None, *,
+                       train: bool = True) -> str:
+    """The ``sb3-smc experiment`` command line that runs (or resumes) an experiment of ``settings`` into ``out``,
+    every option written out (``--category`` where the targets were chosen by it)."""
+    chosen = f"--category {category}" if category else f"--targets {','.join(settings['targets'])}"
+    learner = "".join(f" --{key} {settings[key]}" for key in ("algo", "rnn") if key in settings)
+    return (f"sb3-smc experiment --out {out} --methods {','.join(settings['methods'])} {chosen} "
+            f"--seeds {settings['seeds']} --timesteps {settings['timesteps']} --repeats {settings.get('repeats', 10)} "
+            f"--workers {settings.get('workers', 1)} --backend {settings.get('backend', 'local')}{learner}"
+            + ("" if train else " --no-train"))
+
+
+def machine() -> dict[str, Any]:
+    """What a result was measured on: platform, Python, the CPU model (``/proc/cpuinfo`` where there is one; training
+    is deterministic for a seed on one CPU model) and the number of cores."""
+    cpu = platform.processor() or platform.machine()
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.partition(":")[2].strip()
+                break
+    except OSError:
+        pass
+    return {"platform": platform.platform(), "python": platform.python_version(), "processor": cpu,
+            "cores": os.cpu_count()}
+
+
+def _previous_total(directory: Path) -> float:
+    """The wall time of the runs recorded in ``directory/results.json`` so far (0 without one)."""
+    try:
+        previous = json.loads((directory / "results.json").read_text())
+        return float(previous.get("wall_time_total_s", previous.get("wall_time_s", 0.0)))
+    except (OSError, ValueError, AttributeError, TypeError):
+        return 0.0
 
 
 def code_commit() -> str | None:
