@@ -11,6 +11,7 @@
 from __future__ import annotations
 
 import io
+import textwrap
 from collections import Counter
 from collections.abc import Mapping
 from pathlib import Path
@@ -98,6 +99,9 @@ def trajectory_figure(smcs: Mapping[str, Any], target: str, path: str | Path, *,
             if goals:
                 rows, cols = zip(*goals, strict=True)
                 ax.scatter(cols, rows, s=2, c="#1f77b4", marker="o")
+            elif label is None:  # a goal on other objects (a pushed pixel, say): no cell of the self reaches it
+                ax.text(0.5, 0.02, "goal: not a cell of the self", transform=ax.transAxes, fontsize=5,
+                        ha="center", va="bottom", color="#1f77b4")
             if label is not None:
                 for spine in ax.spines.values():
                     spine.set_edgecolor("#2ca02c" if label else "#d62728")
@@ -108,7 +112,8 @@ def trajectory_figure(smcs: Mapping[str, Any], target: str, path: str | Path, *,
                 ax.set_title(method, fontsize=8)
             if j == 0:
                 ax.set_ylabel(f"env {i}", fontsize=7)
-    fig.suptitle(f"{target}: visited cells over {repeats} test episodes", fontsize=8)
+    title = f"{target}: visited cells over {repeats} test episodes"
+    fig.suptitle(textwrap.fill(title, width=max(30, int(20 * len(smcs)))), fontsize=8)  # narrow figures: lines
     fig.tight_layout()
     return save_figure(fig, Path(path))
 
