@@ -293,3 +293,17 @@ def test_the_report_orders_the_pushable_curriculum_by_level(tmp_path):
     assert "ours - paper" not in text and "t(34)" not in text  # the paper gives no pushable numbers or tests
     image = np.asarray(Image.open(tmp_path / "figures" / "pushable.png").convert("L"))
     assert image.std() > 5 and "figures/pushable.png" in text
+
+
+def test_the_demo_plays_trains_evaluates_and_reports(tmp_path):
+    """What `make demo` runs, at a tiny budget: the played episodes, then the small experiment and its report."""
+    out = tmp_path / "demo"
+    demo = subprocess.run([sys.executable, "-m", "sb3_smc.demo", "--quiet", "--out", str(out), "--timesteps", "2000"],
+                          cwd=ROOT, capture_output=True, text=True, timeout=600)
+    assert demo.returncode == 0, demo.stderr
+    assert f"report: {out / 'report.md'}" in demo.stdout
+    for method in ("cnn", "base", "curr"):
+        assert re.search(rf"^{method} +\d+\.\d%", demo.stdout, re.MULTILINE), method
+    text = (out / "report.md").read_text()
+    assert "## How this was run" in text and "figures/timeline.png" in text
+    assert all((out / "figures" / f"{name}.png").stat().st_size > 1000 for name in ("categories", "trajectories"))
