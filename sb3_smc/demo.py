@@ -3,9 +3,9 @@
 1. :func:`pixelworld_env.demo.play`: a hand-drawn scene played with a planner (bring-about) and at random
    (classification).
 2. The paper's experiment on one level-2 concept, ``cl_self-in-container_vs_noncontainer``, at a reduced budget
-   (one seed, 60,000 steps per SMC instead of five and 400,000): the CNN baseline, a flat SMC (base) and the
-   hand-designed curricula (curr: two curricula calling the corner and on-something SMCs, trained first), every
-   SMC tested with the paper's protocol (50 test environments x 10 stochastic repeats).
+   (two seeds, 100,000 steps per SMC instead of five and 400,000; two workers): the CNN baseline, a flat SMC
+   (base) and the hand-designed curricula (curr: two curricula calling the corner and on-something SMCs, trained
+   first), every SMC tested with the paper's protocol (50 test environments x 10 stochastic repeats).
 3. The report: ``<out>/report.md`` with the paper's numbers beside ours and the figures (bars, trajectories, the
    timeline of a hierarchical episode) in ``<out>/figures/``.
 
@@ -25,7 +25,8 @@ TARGET = "cl_self-in-container_vs_noncontainer"
 METHODS = ("cnn", "base", "curr")
 
 
-def experiment(out: str | Path = "demo-output", seed_count: int = 1, timesteps: int = 60_000) -> Path:
+def experiment(out: str | Path = "demo-output", seed_count: int = 2, timesteps: int = 100_000,
+               workers: int = 2) -> Path:
     """Run the small experiment into ``out`` and write its report; returns the report's path."""
     import torch
 
@@ -36,7 +37,8 @@ def experiment(out: str | Path = "demo-output", seed_count: int = 1, timesteps: 
     start = time.perf_counter()
     print(f"\nthe paper's experiment on {TARGET}: methods {', '.join(METHODS)}, {seed_count} seed(s), "
           f"{timesteps:,} steps per SMC (the paper: 5 seeds, 400,000 steps) -> {out}/")
-    results = run_experiment(out, methods=METHODS, targets=[TARGET], seeds=seed_count, timesteps=timesteps)
+    results = run_experiment(out, methods=METHODS, targets=[TARGET], seeds=seed_count, timesteps=timesteps,
+                             workers=workers)
     [report] = write_report(out)
     print(f"\n{'method':8s} {'test score':>10s}  (best seed; curr: best of its curricula)")
     for row in results["reported"]:
@@ -52,11 +54,13 @@ def main() -> None:
     parser.add_argument("--quiet", action="store_true", help="print only the episode summaries")
     parser.add_argument("--no-train", action="store_true", help="only play the episodes")
     parser.add_argument("--out", default="demo-output", help="the experiment folder (default demo-output)")
-    parser.add_argument("--timesteps", type=int, default=60_000, help="steps per SMC (default 60,000)")
+    parser.add_argument("--timesteps", type=int, default=100_000, help="steps per SMC (default 100,000)")
+    parser.add_argument("--seeds", type=int, default=2, help="seeds per SMC (default 2)")
+    parser.add_argument("--workers", type=int, default=2, help="training processes (default 2)")
     args = parser.parse_args()
     play(seed=args.seed, quiet=args.quiet)
     if not args.no_train:
-        experiment(args.out, timesteps=args.timesteps)
+        experiment(args.out, seed_count=args.seeds, timesteps=args.timesteps, workers=args.workers)
 
 
 if __name__ == "__main__":

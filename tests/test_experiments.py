@@ -298,7 +298,8 @@ def test_the_report_orders_the_pushable_curriculum_by_level(tmp_path):
 def test_the_demo_plays_trains_evaluates_and_reports(tmp_path):
     """What `make demo` runs, at a tiny budget: the played episodes, then the small experiment and its report."""
     out = tmp_path / "demo"
-    demo = subprocess.run([sys.executable, "-m", "sb3_smc.demo", "--quiet", "--out", str(out), "--timesteps", "2000"],
+    demo = subprocess.run([sys.executable, "-m", "sb3_smc.demo", "--quiet", "--out", str(out), "--timesteps", "2000",
+                           "--seeds", "1", "--workers", "1"],
                           cwd=ROOT, capture_output=True, text=True, timeout=600)
     assert demo.returncode == 0, demo.stderr
     assert f"report: {out / 'report.md'}" in demo.stdout
