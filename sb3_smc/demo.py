@@ -30,6 +30,7 @@ def experiment(out: str | Path = "demo-output", seed_count: int = 2, timesteps: 
     """Run the small experiment into ``out`` and write its report; returns the report's path."""
     import torch
 
+    from sb3_smc.curricula.trainer import RunSettingsError
     from sb3_smc.experiments.report import write_report
     from sb3_smc.experiments.runner import run_experiment
 
@@ -37,8 +38,12 @@ def experiment(out: str | Path = "demo-output", seed_count: int = 2, timesteps: 
     start = time.perf_counter()
     print(f"\nthe paper's experiment on {TARGET}: methods {', '.join(METHODS)}, {seed_count} seed(s), "
           f"{timesteps:,} steps per SMC (the paper: 5 seeds, 400,000 steps) -> {out}/")
-    results = run_experiment(out, methods=METHODS, targets=[TARGET], seeds=seed_count, timesteps=timesteps,
-                             workers=workers)
+    try:
+        results = run_experiment(out, methods=METHODS, targets=[TARGET], seeds=seed_count, timesteps=timesteps,
+                                 workers=workers)
+    except RunSettingsError as error:
+        raise SystemExit(f"{out} holds a demo run with other settings (an earlier version's budget?): remove it "
+                         f"(rm -rf {out}) or pass --out DIR.\n{error}") from None
     [report] = write_report(out)
     print(f"\n{'method':8s} {'test score':>10s}  (best seed; curr: best of its curricula)")
     for row in results["reported"]:

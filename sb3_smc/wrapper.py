@@ -95,7 +95,7 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         self.observation_space = spaces.Box(-1.0, 1.0, shape=(size,), dtype=np.float32)
         self._plan = self._action_plan(self.action_names, self.action_names.index)
         self._child_plans: dict[int, list[tuple[int, Any]]] = {}
-        self._leaf_plans: dict[int, tuple[Any, ...] | None] = {}
+        self._leaf_plans: dict[int, tuple[SMC, Any, tuple[Any, ...] | None]] = {}
         self._outcomes = np.zeros(len(self.smcs), dtype=np.float32)
         self._previous_action = -1
         # Moves and signals may skip the layers between this wrapper and the base env when those only check the
@@ -135,23 +135,23 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         action kinds, outcomes and move offsets, whether its policy is a GRU, and its weights; None unless ``smc`` is a
         leaf (no children) whose policy has a compiled step taking exactly its observation and actions."""
         key = id(smc)
-        if key not in self._leaf_plans:
+        cached = self._leaf_plans.get(key)
+        if cached is None or cached[0] is not smc or cached[1] is not smc.policy:  # new, or its policy replaced
             policy = smc.policy
             weights = getattr(policy, "compiled_weights", None)
             n_actions = len(smc.action_names)
             plan = self._plan_of(smc)
             usable = (weights is not None and not smc.children and all(kind != _CALL for kind, _ in plan)
                       and policy.observation_size == observation_size(0, n_actions) and policy.n_actions == n_actions)
-            if not usable:
-                self._leaf_plans[key] = None
-            else:
+            leaf = None
+            if usable:
                 effects = [MOVE_OFFSETS.get(name, (0, 0)) for name in smc.action_names]
-                self._leaf_plans[key] = (
-                    np.array([int(kind == _MOVE) for kind, _ in plan], dtype=np.int64),
-                    np.array([value if kind == _SIGNAL else 0.0 for kind, value in plan], dtype=np.float64),
-                    np.array(effects, dtype=np.int64).reshape(n_actions, 2),
-                    isinstance(policy, NumpyGRUPolicy), policy.hidden_size, weights)
-        return self._leaf_plans[key]
+                leaf = (np.array([int(kind == _MOVE) for kind, _ in plan], dtype=np.int64),
+                        np.array([value if kind == _SIGNAL else 0.0 for kind, value in plan], dtype=np.float64),
+                        np.array(effects, dtype=np.int64).reshape(n_actions, 2),
+                        isinstance(policy, NumpyGRUPolicy), policy.hidden_size, weights)
+            cached = self._leaf_plans[key] = (smc, policy, leaf)  # the SMC kept: its id is not reused meanwhile
+        return cached[2]
 
     def _compiled_call(self, smc: SMC, leaf: tuple[Any, ...], cap: int, budget: list[int]
                        ) -> tuple[float, int, float]:
@@ -168,16 +168,18 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         cells = base.goal_cells()
         bring_about = base.kind == BRING_ABOUT
         color = int(world.scene.self_object.color)
-        while True:
-            status = kernels.leaf_call(world.grid, world.owner, world.self_index, color, cells, bring_about,
-                                       GOAL_POTENTIAL, NUM_COLORS, kinds, values, deltas, counters, totals, gru, h, c,
-                                       *weights, self._rng)
-            if status != kernels.LEAF_NEEDS_GOAL:
-                break
-            base.goal_at((int(counters[kernels.ROW]), int(counters[kernels.COL])))
-        world.place_self((int(counters[kernels.ROW]), int(counters[kernels.COL])))
-        base.self_moved(bool(counters[kernels.GOAL]))
-        budget[0] = int(counters[kernels.BUDGET])
+        try:
+            while True:
+                status = kernels.leaf_call(world.grid, world.owner, world.self_index, color, cells, bring_about,
+                                           GOAL_POTENTIAL, NUM_COLORS, kinds, values, deltas, counters, totals, gru,
+                                           h, c, *weights, self._rng)
+                if status != kernels.LEAF_NEEDS_GOAL:
+                    break
+                base.goal_at((int(counters[kernels.ROW]), int(counters[kernels.COL])))
+        finally:  # the world's arrays hold the moves made so far, whatever happened: keep the rest in step
+            world.place_self((int(counters[kernels.ROW]), int(counters[kernels.COL])))
+            base.self_moved(bool(counters[kernels.GOAL]))
+            budget[0] = int(counters[kernels.BUDGET])
         if status == kernels.LEAF_BAD_PROBABILITIES:
             raise ValueError(f"SMC {smc.name!r}: its policy gave action probabilities without a positive finite sum")
         return float(totals[0]), int(counters[kernels.MOVES_MADE]), float(totals[1])

@@ -5,16 +5,20 @@ same moves, draws, rewards, outcomes and move budgets as the wrapper's Python lo
 
 from __future__ import annotations
 
+import copy
+
+import gymnasium as gym
 import numpy as np
 import pytest
 
+import pixelworld_env  # noqa: F401  (the PW-* ids)
 from pixelworld_env import PixelWorldEnv, Scene
 from pixelworld_env.world import World
 from sb3_smc import SMC
 from sb3_smc.policies import NumpyGRUPolicy, NumpyLSTMPolicy, ScriptedPolicy
 from sb3_smc.smc import observation_size, smc_action_names
 from sb3_smc.wrapper import HierarchicalSMCWrapper
-from tests.helpers import classification_env, make
+from tests.helpers import CONTAINER, IN_CONTAINER, classification_env, make
 
 
 def random_smc(name: str, kind: str, cell: str, children: tuple[SMC, ...] = (), seed: int = 0,
@@ -46,7 +50,10 @@ def episodes(wrapper: HierarchicalSMCWrapper, seed: int, steps: int) -> list:
     for _ in range(steps):
         obs, reward, terminated, truncated, info = wrapper.step(int(rng.integers(wrapper.action_space.n)))
         info = {k: v for k, v in info.items() if k not in ("cells", "moves")}
-        out.append((obs.copy(), reward, terminated, truncated, info, wrapper.base.world.self_position))
+        world = wrapper.base.world
+        out.append((obs.copy(), world.grid.copy(), world.owner.copy(), wrapper.base.goal_cells().copy(), reward,
+                    terminated, truncated, info, world.self_position, wrapper.base.goal,
+                    wrapper._rng.bit_generator.state["state"]))
         if terminated or truncated:
             obs, _ = wrapper.reset()
     return out
@@ -61,8 +68,9 @@ def compare(make_env, smcs, seed: int = 0, steps: int = 150, **kwargs) -> int:
     python = HierarchicalSMCWrapper(make_env(), smcs, record_cells=True, **kwargs)
     fast, slow = episodes(compiled, seed, steps), episodes(python, seed, steps)
     for a, b in zip(fast, slow, strict=True):
-        np.testing.assert_array_equal(a[0], b[0])
-        assert a[1:] == b[1:]
+        for k in range(4):  # observation, the world's arrays, the goal memo
+            np.testing.assert_array_equal(a[k], b[k])
+        assert a[4:] == b[4:]  # rewards, ends, infos, the self's cell, the goal, the generator's state
     return len(made)
 
 
@@ -74,6 +82,35 @@ def test_a_compiled_leaf_call_is_the_python_loop(kind: str, cell: str) -> None:
     make_env = (lambda: classification_env(max_steps=30)) if kind == "classification" else (lambda: make(max_steps=30))
     made = compare(make_env, leaves, seed=4)
     assert made > 30
+
+
+def three_scenes(**kwargs) -> PixelWorldEnv:
+    """A bring-about env over three scenes (the goal memo is per scene)."""
+    texts = [CONTAINER, CONTAINER.replace("#...S...#", "#S......#"), CONTAINER.replace("#...S...#", "#......S#")]
+    return PixelWorldEnv([Scene.from_ascii(t, {"a": "container"}) for t in texts], kind="bring-about",
+                         concept=IN_CONTAINER, **kwargs)
+
+
+def test_scenes_time_modes_and_gym_make_wrappers() -> None:
+    leaves = (random_smc("a", "bring-about", "lstm", seed=11), random_smc("b", "bring-about", "gru", seed=12))
+    assert compare(lambda: three_scenes(max_steps=40), leaves, seed=1, steps=200) > 30
+    assert compare(lambda: three_scenes(max_steps=40), leaves, seed=2, steps=200, count_primitive_steps=True,
+                   call_step_cap=9) > 30
+    target = "cl_self-in-container_vs_noncontainer"
+    classifier = (random_smc("c", "classification", "lstm", seed=13),)
+    assert compare(lambda: gym.make(f"PW-{target}-v0"), classifier, seed=3, steps=100) > 10  # order checks between
+
+
+def test_policies_without_a_compiled_step_keep_the_python_loop() -> None:
+    leaf = random_smc("leaf", "classification", "lstm", seed=1)
+    numpy_code = copy.copy(leaf.policy)
+    numpy_code._compiled = None
+    assert compare(lambda: classification_env(max_steps=30), [SMC("leaf", "classification", numpy_code)],
+                   seed=0, steps=40) == 0
+    wrapper = HierarchicalSMCWrapper(classification_env(), [leaf])
+    assert wrapper._leaf_plan(leaf) is not None
+    leaf.policy = numpy_code  # a replaced policy is looked at again
+    assert wrapper._leaf_plan(leaf) is None
 
 
 def directed_smc(name: str, move: str) -> SMC:

@@ -7,6 +7,7 @@ import csv
 import json
 import math
 import re
+import shlex
 import subprocess
 import sys
 from pathlib import Path
@@ -100,8 +101,7 @@ def test_a_tiny_experiment_end_to_end(tmp_path):
     saved = json.loads((out / "results.json").read_text())
     code = saved["code"]
     assert saved["command"] == (f"sb3-smc experiment --out {out} --methods cnn,base,curr --targets {LEFT_OF} "
-                                "--seeds 1 --timesteps 2000 --repeats 1 --workers 1 --backend local "
-                                "--algo RecurrentPPO --rnn lstm")  # every option, however the run was started
+                                "--seeds 1 --timesteps 2000 --repeats 1 --workers 1 --backend local")  # as given
     assert saved["machine"]["cores"] >= 1 and saved["machine"]["processor"]
     assert saved["wall_time_total_s"] == saved["wall_time_s"] > 0
     assert code["versions"]["torch"] == torch.__version__
@@ -114,6 +114,10 @@ def test_a_tiny_experiment_end_to_end(tmp_path):
                            repeats=1, progress=False)
     assert again["rows"] == results["rows"]  # nothing trained or evaluated again
     assert again["wall_time_total_s"] == pytest.approx(saved["wall_time_total_s"] + again["wall_time_s"])
+    argv = shlex.split(saved["command"])  # the recorded command resumes this very run
+    resumed = subprocess.run([sys.executable, "-m", "sb3_smc.cli", *argv[1:], "--no-train"], cwd=ROOT,
+                             capture_output=True, text=True, timeout=300)
+    assert argv[:2] == ["sb3-smc", "experiment"] and resumed.returncode == 0, resumed.stderr
     assert all(p.stat().st_mtime_ns == stamp for p, stamp in stamps.items())
 
     # partial results while a run is still training: drop one finished SMC, tabulate without training, complete it
@@ -308,3 +312,7 @@ def test_the_demo_plays_trains_evaluates_and_reports(tmp_path):
     text = (out / "report.md").read_text()
     assert "## How this was run" in text and "figures/timeline.png" in text
     assert all((out / "figures" / f"{name}.png").stat().st_size > 1000 for name in ("categories", "trajectories"))
+    other = subprocess.run([sys.executable, "-m", "sb3_smc.demo", "--quiet", "--out", str(out), "--timesteps", "3000",
+                            "--seeds", "1", "--workers", "1"], cwd=ROOT, capture_output=True, text=True, timeout=300)
+    assert other.returncode == 1 and "holds a demo run with other settings" in other.stderr  # say how to go on
+    assert "Traceback" not in other.stderr

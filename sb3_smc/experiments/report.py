@@ -9,6 +9,7 @@ errors (across concepts, resp. across seeds).
 
 from __future__ import annotations
 
+import json
 import math
 from collections import defaultdict
 from collections.abc import Sequence
@@ -231,7 +232,7 @@ def _write(directory: Path, trajectories: str | None, behaviour: bool) -> Path:
               f"- wall time of the last `sb3-smc experiment` run: {results.get('wall_time_s', 0) / 3600:.2f} h"
               + (f"; of all its runs recorded here: {results['wall_time_total_s'] / 3600:.2f} h"
                  if "wall_time_total_s" in results else ""),
-              f"- command: `{results.get('command') or experiment_command('DIR', settings)}`",
+              f"- command: `{results.get('command') or _command(directory, settings)}`",
               "- rows: `results.csv` (one per target x method x curriculum x seed), `results.json`"]
     path = directory / "report.md"
     atomic_write(path, "\n".join(lines) + "\n")
@@ -277,6 +278,19 @@ def _learner(settings: dict[str, Any]) -> str:
 
     algo = settings.get("algo", "RecurrentPPO")
     return f"{algo} ({settings.get('rnn', 'lstm').upper() if algo in RECURRENT_ALGORITHMS else 'MLP'})"
+
+
+def _command(directory: Path, settings: dict[str, Any]) -> str:
+    """The command of results recorded before ``results.json`` kept it: the learner options as ``run.json`` has them
+    (left out where the run took the defaults)."""
+    try:
+        run = json.loads((directory / "run.json").read_text())
+    except (OSError, ValueError):
+        run = {}
+    return experiment_command("DIR", methods=settings["methods"], targets=settings["targets"],
+                              seeds=settings["seeds"], timesteps=run.get("timesteps"),
+                              repeats=settings.get("repeats", 10), workers=settings.get("workers", 1),
+                              backend=settings.get("backend", "local"), algo=run.get("algo"), rnn=run.get("rnn"))
 
 
 def _machine_line(machine: dict[str, Any]) -> str:

@@ -24,6 +24,7 @@ import io
 import json
 import os
 import platform
+import shlex
 import subprocess
 import time
 from collections.abc import Callable, Sequence
@@ -124,8 +125,10 @@ def run_experiment(
     results = {
         "format": "sb3-smc-results", "version": 1,
         "settings": settings,
-        "command": experiment_command(out, settings, category,
-                                      train=train),
+        "command": experiment_command(out, methods=methods, targets=targets,
+                                      category=category or ("all" if targets is None else None), seeds=seeds,
+                                      timesteps=timesteps, repeats=repeats, workers=workers, backend=backend,
+                                      algo=algo, rnn=rnn, train=train),
         "machine": machine(),
         "code": {"versions": package_versions(), "commit": code_commit()},
         "wall_time_s": wall,
@@ -143,15 +146,17 @@ def run_experiment(
     return results
 
 
-def experiment_command(out: str | Path, settings: dict[str, Any], category: str | None = None, *,
+def experiment_command(out: str | Path, *, methods: Sequence[str], targets: Sequence[str] | None = None,
+                       category: str | None = None, seeds: int, timesteps: int | None = None, repeats: int = 10,
+                       workers: int = 1, backend: str = "local", algo: str | None = None, rnn: str | None = None,
                        train: bool = True) -> str:
-    """The ``sb3-smc experiment`` command line that runs (or resumes) an experiment of ``settings`` into ``out``,
-    every option written out (``--category`` where the targets were chosen by it)."""
-    chosen = f"--category {category}" if category else f"--targets {','.join(settings['targets'])}"
-    learner = "".join(f" --{key} {settings[key]}" for key in ("algo", "rnn") if key in settings)
-    return (f"sb3-smc experiment --out {out} --methods {','.join(settings['methods'])} {chosen} "
-            f"--seeds {settings['seeds']} --timesteps {settings['timesteps']} --repeats {settings.get('repeats', 10)} "
-            f"--workers {settings.get('workers', 1)} --backend {settings.get('backend', 'local')}{learner}"
+    """The ``sb3-smc experiment`` command line of a run with these options (as given: ``None`` options are left
+    out, as ``run.json`` records them), which runs it again or resumes it."""
+    chosen = f"--category {category}" if category else f"--targets {','.join(targets or ())}"
+    optional = "".join(f" --{name} {value}" for name, value in (("timesteps", timesteps), ("algo", algo),
+                                                                  ("rnn", rnn)) if value is not None)
+    return (f"sb3-smc experiment --out {shlex.quote(str(out))} --methods {','.join(methods)} {chosen} "
+            f"--seeds {seeds}{optional} --repeats {repeats} --workers {workers} --backend {backend}"
             + ("" if train else " --no-train"))
 
 
