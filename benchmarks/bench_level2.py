@@ -13,7 +13,8 @@ return.
 ``--entry NODE`` measures a real curriculum entry instead (a level-2 node of a shipped curriculum, such as the
 headline's ``con2-ba/ba_self-in-container_from_between-potential-containers_curr-in``): its target, and as children
 its lower-level nodes trained with seeds ``0 .. --child-seeds - 1`` (the trainer gives a level-2 node the two best
-of five seeds of each; here the first ones, the same count of SMC actions). Its children walk across the world, so
+of five seeds of each; here the first ones, the same count of SMC actions), every job with the default
+hyperparameters and primitive moves (what the shipped `curr` entries use). Its children walk across the world, so
 its calls are long, as in the headline runs.
 
 Run: ``python benchmarks/bench_level2.py [--baseline PATH] [--timesteps N] [--repeats R] [--children KIND]
