@@ -206,7 +206,9 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         at once; :class:`sb3_smc.vec_env.SMCVecEnv` answers the requests of many environments with one batched
         evaluation per policy. A policy that is never batched (``batch_from = None``: the compiled numpy actors,
         whose single steps cost less than stacking a group) is asked here directly instead, without the round
-        trip. The draws from this env's generator are the same either way.
+        trip. The draws from this env's generator are the same either way. A call of a leaf SMC (no children, a
+        compiled actor) in a world where only the self moves is made whole by one compiled loop
+        (:func:`sb3_smc.common.kernels.leaf_call`), with the same moves, draws and result, and yields nothing.
         """
         assert self._rng is not None
         if budget is None:
