@@ -27,6 +27,7 @@ from sb3_smc.callbacks import BestSnapshot, SMCTrainingCallback
 from sb3_smc.common.recurrent import CompactRecurrentRolloutBuffer, SequenceLstmPolicy
 from sb3_smc.envs import make_smc_env
 from sb3_smc.evaluation import evaluate
+from sb3_smc.experiments.runner import cpu_model
 from sb3_smc.policies import FrameStackPolicy, ScriptedPolicy, policy_from_model
 from sb3_smc.records import TrainingSpec, smc_name_from_env_id
 from sb3_smc.smc import SMC, smc_action_names
@@ -364,16 +365,8 @@ code takes other floating-point paths on other CPUs. Measured on 2026-11-24 with
 (before it, on this CPU: 131 / 1.0, 46 / 0.996, 28 / 0.992, 87 / 0.932; docs/training.md)."""
 
 
-def _cpu_model() -> str | None:
-    try:
-        with open("/proc/cpuinfo", encoding="utf-8") as cpuinfo:
-            return next((line.split(":", 1)[1].strip() for line in cpuinfo if line.startswith("model name")), None)
-    except OSError:
-        return None
-
-
 def _check_reference(env_id: str, smc: SMC, score: float) -> None:
-    reference = REFERENCE_RESULTS.get(_cpu_model() or "")
+    reference = REFERENCE_RESULTS.get(cpu_model() or "")
     if torch.__version__.startswith("2.13.0") and reference is not None:
         assert (smc.record.selected_update, score) == reference[env_id], env_id
 

@@ -276,6 +276,14 @@ ROW, COL, DECISIONS_LEFT, BUDGET, MOVES_MADE, PREVIOUS, GOAL, RESUME = range(8)
 
 
 @njit(cache=True)
+def _shape(goal: int, counters: np.ndarray, totals: np.ndarray, potential: float) -> None:  # pragma: no cover
+    """The self has entered a cell whose goal truth is ``goal``: the shaping reward of entering or leaving the goal."""
+    if goal != counters[GOAL]:
+        counters[GOAL] = goal
+        totals[0] += potential if goal == 1 else -potential
+
+
+@njit(cache=True)
 def leaf_call(grid: np.ndarray, owner: np.ndarray, me: int, self_color: int, goal_cells: np.ndarray,
               bring_about: bool, potential: float, n_colors: int, kinds: np.ndarray, values: np.ndarray,
               deltas: np.ndarray, counters: np.ndarray, totals: np.ndarray, gru: bool, h: np.ndarray, c: np.ndarray,
@@ -304,10 +312,7 @@ def leaf_call(grid: np.ndarray, owner: np.ndarray, me: int, self_color: int, goa
     row, col = counters[ROW], counters[COL]
     if counters[RESUME] == 1:  # the last move entered a cell whose goal truth has been filled in since
         counters[RESUME] = 0
-        goal = goal_cells[row, col]
-        if goal != counters[GOAL]:
-            counters[GOAL] = goal
-            totals[0] += potential if goal == 1 else -potential
+        _shape(goal_cells[row, col], counters, totals, potential)
     while counters[DECISIONS_LEFT] > 0:
         if counters[BUDGET] <= 0:
             break
@@ -350,7 +355,5 @@ def leaf_call(grid: np.ndarray, owner: np.ndarray, me: int, self_color: int, goa
             if goal < 0:
                 counters[RESUME] = 1
                 return LEAF_NEEDS_GOAL
-            if goal != counters[GOAL]:
-                counters[GOAL] = goal
-                totals[0] += potential if goal == 1 else -potential
+            _shape(goal, counters, totals, potential)
     return LEAF_DONE

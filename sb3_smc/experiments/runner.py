@@ -160,19 +160,21 @@ def experiment_command(out: str | Path, *, methods: Sequence[str], targets: Sequ
             + ("" if train else " --no-train"))
 
 
-def machine() -> dict[str, Any]:
-    """What a result was measured on: platform, Python, the CPU model (``/proc/cpuinfo`` where there is one; training
-    is deterministic for a seed on one CPU model) and the number of cores."""
-    cpu = platform.processor() or platform.machine()
+def cpu_model() -> str | None:
+    """The CPU's model name from ``/proc/cpuinfo`` (None where there is none): training is deterministic for a seed
+    on one CPU model, and other models take other floating-point paths."""
     try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.partition(":")[2].strip()
-                break
+        with open("/proc/cpuinfo", encoding="utf-8") as cpuinfo:
+            return next((line.split(":", 1)[1].strip() for line in cpuinfo if line.startswith("model name")), None)
     except OSError:
-        pass
-    return {"platform": platform.platform(), "python": platform.python_version(), "processor": cpu,
-            "cores": os.cpu_count()}
+        return None
+
+
+def machine() -> dict[str, Any]:
+    """What a result was measured on: platform, Python, the CPU model (:func:`cpu_model`, else the processor) and
+    the number of cores."""
+    return {"platform": platform.platform(), "python": platform.python_version(),
+            "processor": cpu_model() or platform.processor() or platform.machine(), "cores": os.cpu_count()}
 
 
 def _previous_total(directory: Path) -> float:
