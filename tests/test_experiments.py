@@ -53,6 +53,22 @@ def test_plan_names_the_nodes_of_every_method():
         plan(["cl_self-left-of-two-objects"], ["base"])
 
 
+def test_every_level2_target_is_trained_by_every_method():
+    """The whole table plans: the original canonical entry named after ..._vs_corner trains ..._vs_noncontainer (a
+    typo in the curriculum file); it ships as written but the target's canon node is the intended one."""
+    everything = level2_targets()
+    methods = ["cnn", "base", "curr", "canon", "curr-noprim", "canon-noprim"]
+    design = plan(everything, methods)
+    assert len({key for key in design.nodes if key[1] != "cnn"}) == 51 * 5
+    corner, noncontainer = "cl_self-touches-container_vs_corner", "cl_self-touches-container_vs_noncontainer"
+    for method, stem in (("canon", "con2-cl-canon"), ("canon-noprim", "con2-cl-canon-noprim")):
+        (intended,) = design.nodes[(corner, method)]
+        assert intended == f"{stem}/{corner}_canon-intended" and design.curriculum.node(intended).task == corner
+        as_written = design.curriculum.node(f"{stem}/{corner}_canon")
+        assert as_written.task == noncontainer and as_written.uses == design.curriculum.node(intended).uses
+        assert design.nodes[(noncontainer, method)] == (f"{stem}/{noncontainer}_canon",)  # not trained twice
+
+
 def test_paired_ttest_against_a_hand_computed_case():
     ours, theirs = [0.9, 0.8, 0.7, 0.95], [0.5, 0.6, 0.7, 0.55]
     d = np.array(ours) - np.array(theirs)  # 0.4, 0.2, 0.0, 0.4: mean 0.25, sd 0.19149

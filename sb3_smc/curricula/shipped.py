@@ -27,6 +27,10 @@ from sb3_smc.curricula.format import Curriculum, CurriculumError, Node, parse_cu
 __all__ = ["DATA", "build_shipped", "shipped_curricula", "shipped_curriculum", "write_shipped"]
 
 DATA = "data"
+CANON_SUFFIX = "_canon"
+INTENDED_SUFFIX = "-intended"
+"""A canonical entry that trains another dataset than the one it is named after is shipped twice: as written
+(not a target: its training is that of the other dataset's entry) and as ``<entry>-intended`` on its own dataset."""
 HEADER = ("# sb3-smc curriculum (format: docs/curricula.md). Generated from the catalog by\n"
           "# `python -m sb3_smc.curricula`; do not edit by hand.\n")
 
@@ -42,6 +46,17 @@ def _methods() -> dict[str, tuple[str, str]]:
     return out
 
 
+def _intended_dataset(entry: str, dataset: str) -> str | None:
+    """The dataset a canonical entry ``<dataset>_canon`` is named after when it trains another one (the original
+    file's ``cl_self-touches-container_vs_corner_canon`` trains ``..._vs_noncontainer``), else ``None``."""
+    from pixelworld_env import catalog
+
+    named = entry.removesuffix(CANON_SUFFIX)
+    if named in (entry, dataset) or named not in catalog.dataset_names():
+        return None
+    return named
+
+
 def build_shipped() -> dict[str, Curriculum]:
     """Every shipped curriculum, built from the catalog (name -> curriculum)."""
     from pixelworld_env import catalog
@@ -55,6 +70,7 @@ def build_shipped() -> dict[str, Curriculum]:
         for name, primitives in variants:
             flat: dict[str, Node] = {}
             upper: list[Node] = []
+            as_written: list[Node] = []
             for entry in entries:
                 if entry.level == 1:
                     flat.setdefault(entry.dataset, Node(entry.dataset, entry.dataset))
@@ -62,8 +78,18 @@ def build_shipped() -> dict[str, Curriculum]:
                 uses = tuple(dict.fromkeys(smc.dataset for smc in entry.lower_level))
                 for dataset in uses:
                     flat.setdefault(dataset, Node(dataset, dataset))
-                upper.append(Node(f"{name}/{entry.name}", entry.dataset, uses, include_primitives=primitives))
+                node = Node(f"{name}/{entry.name}", entry.dataset, uses, include_primitives=primitives)
+                intended = _intended_dataset(entry.name, entry.dataset)
+                if intended is None:
+                    upper.append(node)
+                    continue
+                # kept as written (a second training of another entry's dataset), but the target trained is the
+                # evident intent: the same lower-level SMCs on the dataset the entry is named after
+                as_written.append(node)
+                upper.append(Node(f"{name}/{entry.name}{INTENDED_SUFFIX}", intended, uses,
+                                  include_primitives=primitives))
             targets = [n.name for n in upper] if two_level else list(flat)
+            upper.extend(as_written)
             lists = sorted({entry.smc_list for entry in entries if entry.smc_list})
             description = (f"{method} ({goal}) from the AAAI-18 curriculum file {stem}.curriculum"
                            + (f"; canonical SMC lists {', '.join(lists)}" if lists else "")
