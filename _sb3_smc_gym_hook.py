@@ -1,16 +1,18 @@
 """Registers the PixelWorld ``PW-*`` ids with Gymnasium as soon as Gymnasium is imported, in any program, and
 sb3-smc's ``RecurrentTRPO`` as rl_zoo3's ``--algo recurrent_trpo`` as soon as rl_zoo3 is imported.
 
-Installed wheels of sb3-smc put ``sb3_smc_gym_hook.pth`` in site-packages; its one line imports this module at
-interpreter start. That costs a few microseconds: nothing is imported here except ``importlib`` and ``os``. When a
-program later imports ``gymnasium``, the ids are registered right after it (importing ``pixelworld_env``, no
-torch, no datasets), so ``rl_zoo3 train --env PW-...`` and ``gymnasium.make("PW-...")`` work without
-``--gym-packages pixelworld_env`` or ``import pixelworld_env``. When rl_zoo3 loads its algorithm table
-(``rl_zoo3.utils.ALGOS``), ``recurrent_trpo`` is added to it (importing ``sb3_smc.recurrent_trpo``; rl_zoo3 has
-already loaded torch and SB3 by then).
+Every install of sb3-smc (a wheel, and ``pip install -e .``, as ``make`` does) puts ``sb3_smc_gym_hook.pth`` in
+site-packages; its one line imports this module at interpreter start. That costs a few microseconds: nothing is
+imported here except ``importlib`` and ``os``. When a program later imports ``gymnasium``, the ids are registered
+right after it (importing ``pixelworld_env``, no torch, no datasets), so ``rl_zoo3 train --env PW-...`` and
+``gymnasium.make("PW-...")`` work without ``--gym-packages pixelworld_env`` or ``import pixelworld_env``. When
+rl_zoo3 loads its algorithm table (``rl_zoo3.utils.ALGOS``), ``recurrent_trpo`` is added to it (importing
+``sb3_smc.recurrent_trpo``; rl_zoo3 has already loaded torch and SB3 by then).
 
-Set ``SB3_SMC_GYM_HOOK=0`` to switch it off. A failure while registering is reported as a warning and never
-breaks the import of Gymnasium.
+When Gymnasium is first imported by ``pixelworld_env`` itself (``import pixelworld_env``, the ``pixelworld`` and
+``sb3-smc`` commands), the hook does nothing: the package registers the ids at the end of its own import. Set
+``SB3_SMC_GYM_HOOK=0`` to switch it off. A failure while registering is reported as a warning and never breaks the
+import of Gymnasium.
 """
 
 from __future__ import annotations
@@ -26,6 +28,8 @@ ZOO_ALGORITHM = "recurrent_trpo"
 
 
 def _register(module) -> None:
+    if "pixelworld_env" in sys.modules:  # Gymnasium was imported by pixelworld_env, which registers the ids itself
+        return  # at the end of its own import (registering now would import it half-initialised)
     try:
         from pixelworld_env.registration import register_envs
 

@@ -1,9 +1,11 @@
-"""rl_zoo3 as users type it, against sb3-smc installed from a wheel (not the editable install of the checkout).
+"""rl_zoo3 as users type it, against sb3-smc installed from a wheel, and the start-up hook of both kinds of install.
 
 A module fixture builds the wheel and installs it (``--no-deps``) into a fresh virtual environment whose other
 packages come from this interpreter's site-packages; every command then runs in that environment. Runs are short
 (2,000 steps) but real: the literal ``rl_zoo3 train`` line, the conf modules, ``enjoy``, ``record_video``, the
-TensorBoard curves, ``sb3-smc import-zoo`` and a level-2 zoo run calling an imported SMC.
+TensorBoard curves, ``sb3-smc import-zoo`` and a level-2 zoo run calling an imported SMC. A second fixture makes the
+editable install ``make`` makes (``pip install -e`` of the checkout) in another fresh environment: both must import
+without a warning and run the README's literal ``rl_zoo3 train`` line on a concept pool.
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ pytest.importorskip("rl_zoo3", reason="rl_zoo3 is in the [test] extra: pip insta
 ROOT = Path(__file__).resolve().parents[1]
 FLAT = "PW-cl_self-in-left-corner_vs_on-hline-v0"
 LEVEL2 = "PW-cl_self-in-container_vs_noncontainer-v0"
+POOL = "PW-ba_self-in-container-v0"
 
 
 class Installed:
@@ -35,10 +38,11 @@ class Installed:
         self.work = root / "work"
         self.work.mkdir()
 
-    def run(self, code: str, *args: str, env: dict[str, str] | None = None, check: bool = True
-            ) -> subprocess.CompletedProcess:
-        result = subprocess.run([str(self.python), "-c", code, *args], cwd=self.work, capture_output=True, text=True,
-                                env={**os.environ, **(env or {})}, timeout=600)
+    def run(self, code: str, *args: str, env: dict[str, str] | None = None, check: bool = True,
+            options: tuple[str, ...] = ()) -> subprocess.CompletedProcess:
+        """``python OPTIONS -c CODE ARGS`` in the environment's work folder."""
+        result = subprocess.run([str(self.python), *options, "-c", code, *args], cwd=self.work, capture_output=True,
+                                text=True, env={**os.environ, **(env or {})}, timeout=600)
         if check and result.returncode != 0:
             raise AssertionError(f"exit {result.returncode}\n--- stdout\n{result.stdout[-3000:]}\n--- stderr\n"
                                  f"{result.stderr[-3000:]}")
@@ -55,6 +59,16 @@ class Installed:
                         "runpy.run_module(sys.argv[0], run_name='__main__', alter_sys=True)", name, *args, **kwargs)
 
 
+def _fresh_environment(root: Path) -> tuple[Path, Path]:
+    """A virtual environment under ``root`` whose dependencies come from this interpreter's site-packages (a path
+    line: its .pth files, among them the editable install of the checkout, are not run there); (folder, purelib)."""
+    env_dir = root / "venv"
+    venv.EnvBuilder(with_pip=False).create(env_dir)
+    purelib = Path(sysconfig.get_path("purelib", vars={"base": str(env_dir), "platbase": str(env_dir)}))
+    (purelib / "_dependencies.pth").write_text("\n".join(site.getsitepackages()) + "\n")
+    return env_dir, purelib
+
+
 @pytest.fixture(scope="module")
 def installed(tmp_path_factory) -> Installed:
     root = tmp_path_factory.mktemp("wheel-env")
@@ -62,16 +76,62 @@ def installed(tmp_path_factory) -> Installed:
     subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q", "-w",
                     str(wheels), str(ROOT)], check=True, capture_output=True, cwd=root)
     (wheel,) = wheels.glob("sb3_smc-*.whl")
-    env_dir = root / "venv"
-    venv.EnvBuilder(with_pip=False).create(env_dir)
-    purelib = Path(sysconfig.get_path("purelib", vars={"base": str(env_dir), "platbase": str(env_dir)}))
-    # the dependencies come from this interpreter's site-packages (a path line; its .pth files, among them the
-    # editable install of the checkout, are not run there)
-    (purelib / "_dependencies.pth").write_text("\n".join(site.getsitepackages()) + "\n")
+    env_dir, purelib = _fresh_environment(root)
     subprocess.run([sys.executable, "-m", "pip", "install", "--no-deps", "-q", "--target", str(purelib), str(wheel)],
                    check=True, capture_output=True)
     assert (purelib / "sb3_smc_gym_hook.pth").is_file()
     return Installed(env_dir)
+
+
+@pytest.fixture(scope="module")
+def editable(tmp_path_factory) -> Installed:
+    """``pip install -e`` of the checkout, as ``make`` does, with the environment's own pip (the one on the path
+    line; it leaves this interpreter's install of sb3-smc alone: "outside environment")."""
+    env_dir, purelib = _fresh_environment(tmp_path_factory.mktemp("editable-env"))
+    subprocess.run([str(env_dir / "bin" / "python"), "-m", "pip", "install", "--no-deps", "--no-build-isolation",
+                    "--no-index", "-q", "-e", str(ROOT)], check=True, capture_output=True)
+    assert (purelib / "sb3_smc_gym_hook.pth").is_file()
+    return Installed(env_dir)
+
+
+INSTALLS = ["installed", "editable"]
+IMPORTS = {
+    "import pixelworld_env": "import pixelworld_env",
+    "import gymnasium": f"import gymnasium; assert '{POOL}' in gymnasium.registry",
+    "import sb3_smc": "import sb3_smc, sb3_smc.training",
+    "pixelworld list": "import sys; from pixelworld_env.cli import main; sys.exit(main(['list']))",
+    "sb3-smc curricula": "import sys; from sb3_smc.cli import main; sys.exit(main(['curricula']))",
+}
+"""What a user runs first -> the code it runs (the console scripts' entry points)."""
+
+
+@pytest.mark.parametrize("install", INSTALLS)
+@pytest.mark.parametrize("what", list(IMPORTS))
+def test_imports_and_commands_warn_nothing(request: pytest.FixtureRequest, install: str, what: str) -> None:
+    """``python -W error``: the hook stays quiet while ``pixelworld_env`` imports Gymnasium itself (it registers
+    the ids at the end of its own import)."""
+    environment: Installed = request.getfixturevalue(install)
+    result = environment.run(IMPORTS[what], options=("-W", "error"), check=False)
+    assert result.returncode == 0, result.stderr[-3000:]
+    assert "Warning" not in result.stderr, result.stderr[-3000:]
+
+
+@pytest.mark.parametrize("install", INSTALLS)
+def test_each_install_imports_its_own_copy(request: pytest.FixtureRequest, install: str) -> None:
+    environment: Installed = request.getfixturevalue(install)
+    where = environment.run("import pixelworld_env, sb3_smc; print(pixelworld_env.__file__, sb3_smc.__file__)")
+    home = ROOT if install == "editable" else environment.root
+    assert all(path.startswith(str(home)) for path in where.stdout.split())
+
+
+@pytest.mark.parametrize("install", INSTALLS)
+def test_the_readme_command_on_a_concept_pool(request: pytest.FixtureRequest, install: str) -> None:
+    """The README's first zoo line, as typed, in a wheel install and in the editable install of a clone."""
+    environment: Installed = request.getfixturevalue(install)
+    result = environment.zoo("train", "--algo", "trpo", "--env", POOL, "-n", "1000", "--num-threads", "1", "-f",
+                             "pool")
+    assert "could not register" not in result.stderr
+    assert (environment.work / "pool" / "trpo" / f"{POOL}_1" / f"{POOL}.zip").is_file()
 
 
 def test_the_hook_registers_the_ids_when_gymnasium_is_imported_and_not_before(installed: Installed) -> None:
