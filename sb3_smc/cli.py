@@ -75,7 +75,8 @@ def _experiment(args: argparse.Namespace) -> int:
 def _report(args: argparse.Namespace) -> int:
     from sb3_smc.experiments.report import write_report
 
-    for path in write_report(args.directories, trajectories=args.trajectories, behaviour=not args.no_behaviour):
+    for path in write_report(args.directories, out=args.out, trajectories=args.trajectories,
+                             behaviour=not args.no_behaviour):
         print(f"wrote {path}")
     return 0
 
@@ -148,6 +149,8 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     p = sub.add_parser("report", help="report.md and figures/ from experiment directories")
     p.add_argument("directories", nargs="+")
+    p.add_argument("--out", default=None, help="one report over all the directories, written into OUT (default: a "
+                                               "report in each directory)")
     p.add_argument("--trajectories", default=None, help="the target of the trajectory and timeline figures "
                                                         "(default: the first target)")
     p.add_argument("--no-behaviour", action="store_true", help="skip the trajectory and timeline figures")
