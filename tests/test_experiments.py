@@ -20,8 +20,9 @@ from PIL import Image
 from sb3_smc.curricula.trainer import RunSettingsError
 from sb3_smc.experiments import CATEGORIES, level2_targets, plan
 from sb3_smc.experiments.cnn import CHANNELS, encode, train_cnn
-from sb3_smc.experiments.report import paired_ttest, write_report
+from sb3_smc.experiments.report import write_report
 from sb3_smc.experiments.runner import RESULT_FIELDS, reported, run_experiment
+from sb3_smc.experiments.statistics import paired_ttest
 
 ROOT = Path(__file__).resolve().parents[1]
 LEFT_OF = "cl_self-left-of-two-objects-vs-one"
@@ -177,7 +178,7 @@ def test_a_tiny_experiment_end_to_end(tmp_path):
     assert cells[4] == f"{100 * base - 52.6:+.1f}"  # against the paper's number for this concept, not its mean
     assert cells[3] == ""  # the paper gives no per-concept CNN number
     assert "- learner: RecurrentPPO (LSTM)" in text
-    for name in ("categories", "concepts", "trajectories", "timeline"):
+    for name in ("categories", "concepts-classification", "trajectories", "timeline"):
         image = np.asarray(Image.open(out / "figures" / f"{name}.png").convert("L"))
         assert image.size > 10_000 and image.std() > 5, name  # written and not blank
         assert f"figures/{name}.png" in text
@@ -205,8 +206,8 @@ def test_a_run_reduced_to_its_records_resumes_without_model_files(tmp_path):
     assert not (kept / "library").exists()  # nothing trained: every SMC of the table is evaluated already
     [report] = write_report(kept)  # the tables and bar charts from the records; the pictures need models
     text = report.read_text()
-    assert "figures/concepts.png" in text and "figures/trajectories.png" not in text
-    assert f"this directory does not hold `{LEFT_OF}@0`" in text and "to retrain them (alike" in text
+    assert "figures/concepts-classification.png" in text and "figures/trajectories.png" not in text
+    assert f"{kept} does not hold `{LEFT_OF}@0`" in text and "to retrain them (alike" in text
 
     (kept / "evaluations" / f"{file_stem(curr1)}.json").unlink()
     partial = run_experiment(kept, **{**settings}, train=False)
@@ -309,7 +310,8 @@ def test_the_report_orders_the_pushable_curriculum_by_level(tmp_path):
     table = [line.split(" | ") for line in section.splitlines() if line.startswith("| ") and "---" not in line][1:]
     assert [int(r[0][2:]) for r in table] == sorted(levels[t] for t in targets)  # ordered by level
     top = "cl_pushable-floor-pixel_vs_unpushable"
-    assert table[-1][1] == top and table[-1][3] == f"{50 + targets.index(top) + 10:.1f}"  # the cnn's best seed
+    best, mean = 50 + targets.index(top) + 10, 50 + targets.index(top) + 5  # the cnn: best seed (mean ± s.d.)
+    assert table[-1][1] == top and table[-1][3] == f"{best:.1f} ({mean:.1f} ± {100 * np.std([0, 0.1], ddof=1):.1f})"
     assert "ours - paper" not in text and "t(34)" not in text  # the paper gives no pushable numbers or tests
     image = np.asarray(Image.open(tmp_path / "figures" / "pushable.png").convert("L"))
     assert image.std() > 5 and "figures/pushable.png" in text
@@ -332,3 +334,90 @@ def test_the_demo_plays_trains_evaluates_and_reports(tmp_path):
                             "--seeds", "1", "--workers", "1"], cwd=ROOT, capture_output=True, text=True, timeout=300)
     assert other.returncode == 1 and "holds a demo run with other settings" in other.stderr  # say how to go on
     assert "Traceback" not in other.stderr
+
+
+def _synthetic_table(directory: Path, targets: list[str], methods: list[str], score) -> None:
+    """A results.json of two seeds per target x method: seed 0 scores ``score(t, m)``, seed 1 ten points less."""
+    from pixelworld_env import catalog
+
+    rows = []
+    for t in targets:
+        info = catalog.dataset(t)
+        for m in methods:
+            if m == "cnn" and info.kind != "classification":
+                continue
+            rows += [{"target": t, "kind": info.kind, "category": info.category, "method": m, "curriculum": m,
+                      "seed": seed, "test_score": score(t, m) - 0.1 * seed} for seed in range(2)]
+    directory.mkdir(parents=True)
+    (directory / "results.json").write_text(json.dumps({
+        "rows": rows, "reported": reported(rows), "wall_time_s": 3600.0, "wall_time_total_s": 7200.0,
+        "command": f"sb3-smc experiment --out {directory}", "machine": {},
+        "settings": {"methods": methods, "targets": targets, "seeds": 2, "timesteps": 400_000, "repeats": 10,
+                     "workers": 2, "backend": "local"}}))
+
+
+def test_the_whole_table_report_over_two_directories(tmp_path):
+    """One report over the paper's 51 targets run as two directories: category means ± s.e. across concepts, the
+    t-tests with the paper's degrees of freedom, the win count, the claims table and the Fig. 5 panels."""
+    from pixelworld_env import catalog
+    from sb3_smc.experiments.statistics import p_at_df
+
+    methods = ["cnn", "base", "curr", "canon", "curr-noprim", "canon-noprim"]
+    everything = level2_targets()
+    offset = {t: 0.01 * (k % 7) for k, t in enumerate(everything)}  # concept-to-concept spread
+    gain = {"cnn": 0.25, "base": 0.2, "curr": 0.4, "canon": 0.35, "curr-noprim": 0.38, "canon-noprim": 0.35}
+
+    def score(t: str, m: str) -> float:
+        worse = m == "canon" and everything.index(t) % 5 == 0  # canon below base on every fifth concept
+        return 0.5 + offset[t] + (0.15 if worse else gain[m]) + (0.005 * everything.index(t) if m == "curr" else 0)
+
+    containment = [t for t in everything if catalog.dataset(t).category == "containment"]
+    rest = [t for t in everything if t not in containment]
+    _synthetic_table(tmp_path / "containment", containment, methods, score)
+    _synthetic_table(tmp_path / "rest", rest, methods, score)
+    [path] = write_report([tmp_path / "containment", tmp_path / "rest"], out=tmp_path / "paper", behaviour=False)
+    text = path.read_text()
+    assert path == tmp_path / "paper" / "report.md" and "51 target(s) from 2 run directories" in text
+    # category means ± s.e. across concepts
+    cl_cont = [t for t in containment if catalog.dataset(t).kind == "classification"]
+    values = 100 * np.array([score(t, "base") for t in cl_cont])
+    mean, se = values.mean(), values.std(ddof=1) / math.sqrt(len(values))
+    row = next(line for line in text.splitlines() if line.startswith("| classification | containment | 9 |"))
+    assert row.split(" | ")[4] == f"{mean:.1f} ± {se:.1f}"
+    # per concept: best seed (mean ± s.d.); seed 1 is ten points below seed 0
+    first = everything[0]
+    concept = next(line for line in text.splitlines() if line.startswith(f"| {first} |"))
+    best = 100 * score(first, "base")
+    assert f"{best:.1f} ({best - 5:.1f} ± {100 * np.std([0, 0.1], ddof=1):.1f})" in concept
+    # t-tests: df = concepts - 1, and our t read at the paper's df; a hand-checked t quantile
+    assert p_at_df(2.032244509, 34) == pytest.approx(0.05, abs=1e-6)  # the 97.5 % point of t(34), from tables
+    cl = [t for t in everything if catalog.dataset(t).kind == "classification"]
+    diffs = np.array([score(t, "curr") - score(t, "base") for t in cl])
+    t_hand = diffs.mean() / (diffs.std(ddof=1) / math.sqrt(len(diffs)))
+    row = next(line for line in text.splitlines() if line.startswith("| classification | curr vs base |"))
+    cells = [c.strip() for c in row.strip("|").split("|")]
+    assert cells[2:5] == ["34", f"{t_hand:.2f}", "33"] and cells[6] == "t(34) = 4.9, p = 2e-05"
+    assert cells[7] == f"{p_at_df(t_hand, 34):.2g}"
+    # wins: canon below base on every fifth concept
+    ba = [t for t in everything if catalog.dataset(t).kind == "bring-about"]
+    canon_wins = sum(everything.index(t) % 5 != 0 for t in ba)
+    assert f"| bring-about | canon | {canon_wins} of 17 |" in text
+    assert "| bring-about | curr or canon | 17 of 17 | 14 of 16 |" in text
+    # the claims table
+    claims = text.split("## The paper's claims")[1].split("\n## ")[0]
+    base_mean = 100 * np.mean([score(t, "base") for t in cl])
+    assert (f"| classification: mean of base (34 concepts) | 74.5 | {base_mean:.1f} ({base_mean - 74.5:+.1f}) |"
+            in claims)
+    assert "| classification: curr > base, paired t-test across concepts | t(34) = 4.9, p = 2e-05 |" in claims
+    assert ("hierarchical SMC (best of curr, canon) beats the flat one | on 14 of 16 concepts | on 17 of 17 concepts "
+            "| yes |") in claims
+    # the figures: Fig. 5a/5d and one Fig. 5b/5e per kind, in the combined report's folder
+    for name in ("categories", "concepts-classification", "concepts-bring-about"):
+        image = np.asarray(Image.open(tmp_path / "paper" / "figures" / f"{name}.png").convert("L"))
+        assert image.std() > 5 and f"figures/{name}.png" in text
+    assert "### ../containment" in text and "Wall time of all runs of the 2 directories: 4.00 h" in text
+    # a target x method in two directories is refused, before anything is written
+    _synthetic_table(tmp_path / "again", containment[:1], ["base"], score)
+    with pytest.raises(ValueError, match=f"{containment[0]} with base is in both"):
+        write_report([tmp_path / "containment", tmp_path / "again"], out=tmp_path / "twice", behaviour=False)
+    assert not (tmp_path / "twice").exists()

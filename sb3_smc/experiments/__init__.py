@@ -3,7 +3,9 @@
 * :mod:`sb3_smc.experiments.design` — methods, the level-2 targets by category, the nodes of each method;
 * :mod:`sb3_smc.experiments.cnn` — the passive CNN baseline;
 * :mod:`sb3_smc.experiments.runner` — :func:`run_experiment`: train, evaluate, ``results.csv`` / ``results.json``;
-* :mod:`sb3_smc.experiments.report` — :func:`write_report`: ``report.md`` and figures, the paper's numbers beside;
+* :mod:`sb3_smc.experiments.report` — :func:`write_report`: ``report.md`` and figures (of one directory or several),
+  the paper's numbers beside;
+* :mod:`sb3_smc.experiments.statistics` — seed summaries, means ± s.e., t-tests, win counts, the claims table;
 * :mod:`sb3_smc.experiments.paper` — the paper's numbers.
 """
 

@@ -6,14 +6,18 @@
   self would satisfy the goal marked with blue dots.
 * :func:`timeline_figure`: one episode of a hierarchical SMC: at each primitive move, which SMC (at which depth) or
   the policy itself was acting, and the outcome of every SMC call.
+* :func:`bar_panels`: Fig. 5-style grouped bars, one panel per kind or category, an error bar only where there is
+  more than one value behind a bar.
 """
 
 from __future__ import annotations
 
 import io
+import math
 import textwrap
 from collections import Counter
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -21,7 +25,17 @@ import numpy as np
 
 from pixelworld_env.atomic import atomic_write
 
-__all__ = ["goal_cells", "pyplot", "save_figure", "trajectory_figure", "timeline_figure"]
+__all__ = ["METHOD_COLORS", "METHOD_LABELS", "Panel", "bar_panels", "goal_cells", "pyplot", "save_figure",
+           "trajectory_figure", "timeline_figure"]
+
+METHOD_COLORS = {"cnn": "#888888", "base": "#4c72b0", "curr": "#dd8452", "canon": "#55a868",
+                 "curr-noprim": "#f2b48a", "canon-noprim": "#a5d6a7"}
+METHOD_LABELS = {"cnn": "cnn (passive CNN)", "base": "base (flat SMC)", "curr": "curr (hand-designed curricula)",
+                 "canon": "canon (canonical curriculum)", "curr-noprim": "curr, no primitive moves",
+                 "canon-noprim": "canon, no primitive moves"}
+TRAJECTORY_KEY = ("orange: cells the self visited (brighter = more episodes); frame: the environment's label "
+                  "(green positive, red negative; classification); blue dots: cells where the self reaches the goal "
+                  "(bring-about)")
 
 
 def pyplot() -> Any:
@@ -114,7 +128,9 @@ def trajectory_figure(smcs: Mapping[str, Any], target: str, path: str | Path, *,
                 ax.set_ylabel(f"env {i}", fontsize=7)
     title = f"{target}: visited cells over {repeats} test episodes"
     fig.suptitle(textwrap.fill(title, width=max(30, int(20 * len(smcs)))), fontsize=8)  # narrow figures: lines
-    fig.tight_layout()
+    key = textwrap.fill(TRAJECTORY_KEY, width=max(40, int(30 * len(smcs))))
+    fig.text(0.5, 0.005, key, ha="center", va="bottom", fontsize=5.5)
+    fig.tight_layout(rect=(0, 0.02 + 0.012 * key.count("\n") + 0.3 / (1.5 * count), 1, 1))
     return save_figure(fig, Path(path))
 
 
@@ -155,3 +171,61 @@ def timeline_figure(smc: Any, target: str, path: str | Path, *, index: int = 0, 
                  f"{episode.length} decisions, {result}", fontsize=7)
     fig.tight_layout()
     return save_figure(fig, Path(path))
+
+
+@dataclass(frozen=True)
+class Panel:
+    """One panel of grouped bars: ``values[method][i]`` (percent, NaN where not run) for ``labels[i]``, with
+    ``errors[method][i]`` (``None``: no error bar, one value behind the bar)."""
+
+    title: str
+    labels: Sequence[str]
+    values: Mapping[str, Sequence[float]]
+    errors: Mapping[str, Sequence[float | None]]
+
+
+def bar_panels(panels: Sequence[Panel], methods: Sequence[str], title: str, path: Path, *,
+               horizontal: bool = False) -> Path:
+    """Grouped bars, one bar per method and label, in one panel per :class:`Panel`: side by side, or stacked with
+    horizontal bars (``horizontal``, for long concept names) in heights proportional to their labels."""
+    plt = pyplot()
+    width = 0.8 / max(1, len(methods))
+    if horizontal:
+        heights = [max(1.2, 0.1 * len(methods) * len(p.labels) + 0.5) for p in panels]
+        fig, axes = plt.subplots(len(panels), 1, figsize=(8.5, sum(heights) + 1.0), squeeze=False,
+                                 gridspec_kw={"height_ratios": heights})
+    else:
+        labels = sum(len(p.labels) for p in panels)
+        fig, axes = plt.subplots(1, len(panels), figsize=(min(11.0, 1.5 + (0.15 * len(methods) + 0.3) * labels), 3.8),
+                                 squeeze=False, gridspec_kw={"width_ratios": [max(1, len(p.labels)) for p in panels]})
+    for ax, panel in zip(axes.flat, panels, strict=True):
+        positions = np.arange(len(panel.labels))
+        for k, method in enumerate(methods):
+            errors = [math.nan if e is None else e for e in panel.errors[method]]
+            offsets = positions + (k - (len(methods) - 1) / 2) * width
+            if horizontal:
+                ax.barh(offsets, panel.values[method], width, xerr=errors, color=METHOD_COLORS.get(method),
+                        capsize=1.5, error_kw={"elinewidth": 0.6}, label=METHOD_LABELS.get(method, method))
+            else:
+                ax.bar(offsets, panel.values[method], width, yerr=errors, color=METHOD_COLORS.get(method),
+                       capsize=2, error_kw={"elinewidth": 0.8}, label=METHOD_LABELS.get(method, method))
+        if horizontal:
+            ax.set_yticks(positions, panel.labels, fontsize=6)
+            ax.invert_yaxis()
+            ax.set_xlim(0, 100)
+            ax.set_xlabel("test score (%)", fontsize=7)
+        else:
+            ax.set_xticks(positions, panel.labels, fontsize=7)
+            ax.set_ylim(0, 100)
+            ax.set_ylabel("test score (%)", fontsize=7)
+        ax.tick_params(labelsize=6)
+        ax.set_title(panel.title, fontsize=8)
+    handles, names = axes.flat[0].get_legend_handles_labels()
+    fig.legend(handles, names, loc="upper center", ncol=min(3, len(methods)), fontsize=6, frameon=False,
+               bbox_to_anchor=(0.5, 1.0))
+    title = textwrap.fill(title, int(14 * fig.get_figwidth()))
+    fig.suptitle(title, fontsize=8, y=0.005, va="bottom")
+    legend_in, title_in = 0.2 + 0.16 * math.ceil(len(methods) / 3), 0.18 * (1 + title.count("\n"))
+    height = fig.get_figheight()
+    fig.tight_layout(rect=(0, title_in / height, 1, 1 - legend_in / height))
+    return save_figure(fig, path)

@@ -1,16 +1,20 @@
-"""``write_report``: ``DIR/report.md`` and ``DIR/figures/*.png`` from an experiment's ``results.json``.
+"""``write_report``: ``report.md`` and ``figures/*.png`` from the ``results.json`` of one experiment directory, or of
+several at once (the paper's whole table, run as one directory per category).
 
-The report puts the paper's numbers (spec §6, :mod:`sb3_smc.experiments.paper`) beside ours: per concept where the
-paper gives them, per kind (classification / bring-about) and per category for every method that ran, the paired
-t-tests across concepts (scipy), the noprim table of §6.3 when those methods ran, and the settings, machine, wall
-time and command. Figures (matplotlib, headless): Fig. 5-style bars per category and per concept with standard
-errors (across concepts, resp. across seeds).
+The report puts the paper's numbers (spec §6, :mod:`sb3_smc.experiments.paper`) beside ours: per concept (best seed,
+and mean ± s.d. over seeds) where the paper gives them, per kind and category (mean ± standard error across
+concepts) for every method that ran, the paired t-tests across concepts (also read at the paper's degrees of
+freedom), how often a hierarchical SMC beats the flat one, a claims table of every quantitative claim of the paper,
+the noprim table of §6.3 when those methods ran, and the settings, machine, wall time and command of every
+directory. Figures (matplotlib, headless): Fig. 5a/5d category means and Fig. 5b/5e every concept in panels by kind
+and category. The numbers: :mod:`sb3_smc.experiments.statistics`.
 """
 
 from __future__ import annotations
 
 import json
 import math
+import os
 from collections import defaultdict
 from collections.abc import Sequence
 from pathlib import Path
@@ -20,29 +24,16 @@ import numpy as np
 
 from pixelworld_env.atomic import atomic_write
 from sb3_smc.experiments.design import CATEGORIES, METHODS, PAPER_CATEGORIES
-from sb3_smc.experiments.figures import pyplot, save_figure
+from sb3_smc.experiments.figures import Panel, bar_panels
 from sb3_smc.experiments.paper import PAPER_CONCEPTS, PAPER_MEANS, PAPER_NOPRIM, PAPER_TTESTS
 from sb3_smc.experiments.runner import experiment_command, read_results
+from sb3_smc.experiments.statistics import claims, mean_se, p_at_df, paired_ttest, seed_summary, wins
 
-__all__ = ["paired_ttest", "pushable_levels", "write_report"]
+__all__ = ["pushable_levels", "write_report"]
 
 KINDS = ("classification", "bring-about")
 PAPER_COUNTS = {"classification": 34, "bring-about": 17}
 """How many level-2 concepts the paper's means are over (spec §6.1, §6.2)."""
-COLORS = {"cnn": "#888888", "base": "#4c72b0", "curr": "#dd8452", "canon": "#55a868", "curr-noprim": "#f2b48a",
-          "canon-noprim": "#a5d6a7"}
-
-
-def paired_ttest(ours: Sequence[float], theirs: Sequence[float]) -> tuple[int, float, float] | None:
-    """``(df, t, p)`` of the paired t-test of ``ours`` against ``theirs`` (two-sided); ``None`` below 2 pairs or
-    when every difference is equal (t undefined)."""
-    from scipy import stats
-
-    a, b = np.asarray(ours, dtype=float), np.asarray(theirs, dtype=float)
-    if len(a) < 2 or np.allclose(a - b, (a - b)[0]):
-        return None
-    result = stats.ttest_rel(a, b)
-    return len(a) - 1, float(result.statistic), float(result.pvalue)
 
 
 def _pct(value: float | None) -> str:
@@ -55,20 +46,45 @@ def _diff(ours: float | None, paper: float | None) -> str:
     return f"{100 * ours - paper:+.1f}"
 
 
-def write_report(directories: str | Path | Sequence[str | Path], *, trajectories: str | None = None,
-                 behaviour: bool = True) -> list[Path]:
-    """Write ``report.md`` and ``figures/`` into each experiment directory; returns the report paths.
+def write_report(directories: str | Path | Sequence[str | Path], *, out: str | Path | None = None,
+                 trajectories: str | None = None, behaviour: bool = True) -> list[Path]:
+    """Write ``report.md`` and ``figures/`` into each experiment directory, or (``out``) one report over all of them
+    into ``out``; returns the report paths.
 
     ``behaviour``: also draw the Fig. 4 trajectories of the best SMC of each method and the Fig. 1 timeline of the
     best hierarchical SMC, on ``trajectories`` (a target; default: the first one).
     """
-    items = [directories] if isinstance(directories, str | Path) else list(directories)
-    return [_write(Path(d), trajectories, behaviour) for d in items]
+    items = [Path(directories)] if isinstance(directories, str | Path) else [Path(d) for d in directories]
+    if not items:
+        raise ValueError("no experiment directories to report on")
+    sources = [(d, read_results(d)) for d in items]  # every directory read before anything is written
+    if out is None:
+        return [_write([source], source[0], trajectories, behaviour) for source in sources]
+    return [_write(sources, Path(out), trajectories, behaviour)]
 
 
-def _behaviour(directory: Path, reported: Sequence[dict[str, Any]], target: str) -> tuple[list[Path], str | None]:
-    """The Fig. 4 / Fig. 1 pictures of the best SMCs of ``target``; or none and the reason, when the run directory
-    does not hold their models (a run kept as records: ``docs/experiments.md``)."""
+def _merge(sources: Sequence[tuple[Path, dict[str, Any]]]) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
+    """The rows and reported scores of several directories; a target x method in two of them is refused."""
+    rows: list[dict[str, Any]] = []
+    reported: list[dict[str, Any]] = []
+    seen: dict[tuple[str, str], Path] = {}
+    for directory, results in sources:
+        for entry in results["reported"]:
+            key = (entry["target"], entry["method"])
+            if key in seen:
+                raise ValueError(f"{key[0]} with {key[1]} is in both {seen[key]} and {directory}: report them "
+                                 "separately, or keep one")
+            seen[key] = directory
+        rows += results["rows"]
+        reported += results["reported"]
+    return rows, reported
+
+
+def _behaviour(directory: Path, figures: Path, reported: Sequence[dict[str, Any]], target: str
+               ) -> tuple[list[Path], str | None]:
+    """The Fig. 4 / Fig. 1 pictures of the best SMCs of ``target`` (trained in ``directory``) into ``figures``; or
+    none and the reason, when the run directory does not hold their models (a run kept as records:
+    ``docs/experiments.md``)."""
     from sb3_smc.curricula.trainer import job_name
     from sb3_smc.experiments.figures import timeline_figure, trajectory_figure
     from sb3_smc.library import SMCLibrary, storage
@@ -81,81 +97,169 @@ def _behaviour(directory: Path, reported: Sequence[dict[str, Any]], target: str)
     held = set(storage.read_manifest(library_dir)[0]["smcs"]) if (library_dir / storage.MANIFEST).is_file() else set()
     absent = sorted(set(best.values()) - held)
     if absent:
-        return [], (f"The trajectory and timeline pictures of `{target}` need the models of its best SMCs; this "
-                    f"directory does not hold {', '.join(f'`{n}`' for n in absent)} (trained in an earlier session "
-                    "of a run kept as records). Delete their files in `evaluations/` and run the experiment again "
-                    "to retrain them (alike on the same kind of CPU), then make the report again.")
+        return [], (f"The trajectory and timeline pictures of `{target}` need the models of its best SMCs; "
+                    f"{directory} does not hold {', '.join(f'`{n}`' for n in absent)} (trained in an earlier "
+                    "session of a run kept as records). Delete their files in `evaluations/` and run the experiment "
+                    "again to retrain them (alike on the same kind of CPU), then make the report again.")
     library = SMCLibrary.load(directory / "library", names=sorted(set(best.values())))
     smcs = {method: library[name] for method, name in best.items()}
-    paths = [trajectory_figure(smcs, target, directory / "figures" / "trajectories.png")]
+    paths = [trajectory_figure(smcs, target, figures / "trajectories.png")]
     hierarchical = [m for m in ("curr", "canon", "curr-noprim", "canon-noprim") if m in smcs]
     if hierarchical:
-        paths.append(timeline_figure(smcs[hierarchical[0]], target, directory / "figures" / "timeline.png"))
+        paths.append(timeline_figure(smcs[hierarchical[0]], target, figures / "timeline.png"))
     return paths, None
 
 
-def _write(directory: Path, trajectories: str | None, behaviour: bool) -> Path:
-    results = read_results(directory)
-    reported = results["reported"]
-    if not reported:
-        raise ValueError(f"{directory / 'results.json'} holds no results")
-    methods = [m for m in METHODS if any(r["method"] == m for r in reported)]
-    score = {(r["target"], r["method"]): r["test_score"] for r in reported}
-    targets = sorted({r["target"] for r in reported})
-    kind_of = {r["target"]: r["kind"] for r in reported}
-    category_of = {r["target"]: r["category"] for r in reported}
-    figures = _figures(directory, results, methods, targets, score, category_of)
+class _Table:
+    """The merged results of a report: reported scores, seed scores, kinds and categories."""
+
+    def __init__(self, rows: Sequence[dict[str, Any]], reported: Sequence[dict[str, Any]]) -> None:
+        if not reported:
+            raise ValueError("no results to report")
+        self.methods = [m for m in METHODS if any(r["method"] == m for r in reported)]
+        self.score = {(r["target"], r["method"]): r["test_score"] for r in reported}
+        self.targets = sorted({r["target"] for r in reported})
+        self.kind_of = {r["target"]: r["kind"] for r in reported}
+        self.category_of = {r["target"]: r["category"] for r in reported}
+        best_curriculum = {(r["target"], r["method"]): r["curriculum"] for r in reported}
+        by_seed: dict[tuple[str, str], list[float]] = defaultdict(list)
+        for row in rows:  # the seeds of the reported curriculum
+            if row["curriculum"] == best_curriculum.get((row["target"], row["method"])):
+                by_seed[(row["target"], row["method"])].append(row["test_score"])
+        self.seeds = dict(by_seed)
+
+    def of_kind(self, kind: str, category: str | None = None) -> list[str]:
+        return [t for t in self.targets if self.kind_of[t] == kind and category in (None, self.category_of[t])]
+
+    def cell(self, target: str, method: str) -> str:
+        """Best seed (mean ± s.d. over seeds)."""
+        if (target, method) not in self.score:
+            return "-"
+        scores = self.seeds.get((target, method)) or [self.score[(target, method)]]
+        return seed_summary(scores).text()
+
+    def mean_cell(self, members: Sequence[str], method: str) -> str:
+        """Mean ± s.e. across ``members`` (all of them must have run)."""
+        values = [self.score[(t, method)] for t in members if (t, method) in self.score]
+        if not values or len(values) < len(members):
+            return "-"
+        mean, se = mean_se(values)
+        return f"{100 * mean:.1f}" + (f" ± {100 * se:.1f}" if se is not None else "")
+
+
+def _write(sources: Sequence[tuple[Path, dict[str, Any]]], out: Path, trajectories: str | None,
+           behaviour: bool) -> Path:
+    rows, reported = _merge(sources)
+    table = _Table(rows, reported)
+    methods, targets = table.methods, table.targets
+    figures_dir = out / "figures"
+    figures_dir.mkdir(parents=True, exist_ok=True)
+    figures = _figures(figures_dir, table)
     behaviour_note = None
     if behaviour:
         chosen = trajectories or targets[0]
         if chosen not in targets:
-            raise ValueError(f"--trajectories {chosen!r} is not a target of {directory} ({', '.join(targets)})")
-        pictures, behaviour_note = _behaviour(directory, reported, chosen)
+            raise ValueError(f"--trajectories {chosen!r} is not a target of the report ({', '.join(targets)})")
+        home = next(d for d, results in sources if any(r["target"] == chosen for r in results["reported"]))
+        pictures, behaviour_note = _behaviour(home, figures_dir, reported, chosen)
         figures += pictures
-    settings = results["settings"]
-    lines = [f"# Experiment report: {directory.name}", "",
-             f"Methods {', '.join(methods)}; {len(targets)} target(s); {settings['seeds']} seed(s); "
-             f"{settings['timesteps']:,} steps per SMC; test: {settings['repeats']} repeats per test environment, "
-             "stochastic policy, the update with the best training return. Scores in %; the paper's numbers "
-             "(Hay et al., AAAI-18, spec §6) beside ours where it gives them.", ""]
-    if results.get("complete") is False:
-        missing = results.get("missing", [])
-        lines += [f"**Partial results**: {len(missing)} SMC(s) of the run were not trained yet when these were "
-                  "tabulated (`sb3-smc experiment --no-train`); every score below is the best over the seeds and "
-                  "curricula finished so far, and a target x method with none is absent. Not yet trained: "
-                  + ", ".join(f"`{name}`" for name in missing[:12]) + (", ..." if len(missing) > 12 else "") + ".",
-                  ""]
-    # per concept
-    lines += ["## Per concept (best seed; curr: best curriculum)", "",
-              "| target | kind | category | " + " | ".join(methods) + " | paper (base / curr / canon) |",
-              "|---|---|---|" + "---:|" * len(methods) + "---|"]
-    for target in targets:
-        cells = [_pct(score.get((target, m))) for m in methods]
+    settings = [results["settings"] for _, results in sources]
+    budget = {(s["seeds"], s["timesteps"], s["repeats"]) for s in settings}
+    seeds, timesteps, repeats = next(iter(budget)) if len(budget) == 1 else (None, None, None)
+    lines = [f"# Experiment report: {out.name}", "",
+             f"Methods {', '.join(methods)}; {len(targets)} target(s)"
+             + (f" from {len(sources)} run directories" if len(sources) > 1 else "") + "; "
+             + (f"{seeds} seed(s); {timesteps:,} steps per SMC; test: {repeats} repeats per test environment"
+                if seeds is not None else "seeds, budgets and repeats per directory below")
+             + ", stochastic policy, the update with the best training return. Scores in %; the paper's numbers "
+               "(Hay et al., AAAI-18, spec §6) beside ours where it gives them.", ""]
+    for directory, results in sources:
+        if results.get("complete") is False:
+            missing = results.get("missing", [])
+            where = f" ({directory.name})" if len(sources) > 1 else ""
+            lines += [f"**Partial results**{where}: {len(missing)} SMC(s) of the run were not trained "
+                      "yet when these were tabulated (`sb3-smc experiment --no-train`); every score below is the best "
+                      "over the seeds and curricula finished so far, and a target x method with none is absent. Not "
+                      "yet trained: " + ", ".join(f"`{name}`" for name in missing[:12])
+                      + (", ..." if len(missing) > 12 else "") + ".", ""]
+    lines += _claims_section(table)
+    lines += _concept_section(table)
+    lines += _means_section(table)
+    lines += _ttest_section(table)
+    lines += _noprim_section(table)
+    pushable = [t for t in targets if table.category_of[t] == "pushable"]
+    if pushable:
+        level = pushable_levels()
+        pushable.sort(key=lambda t: (level[t], t))
+        figures.append(_pushable_figure(figures_dir, table, pushable, level))
+        lines += ["", "## The pushable curriculum by level (Fig. 5c)", "",
+                  "Ordered by level: the higher the level, the less the initial state tells (docs/curricula.md). "
+                  "The paper gives no numbers here, only that the SMCs' advantage over the CNN is \"particularly "
+                  "pronounced\", especially with the curriculum. Best seed (mean ± s.d. over seeds).", "",
+                  "| level | target | kind | " + " | ".join(methods) + " |",
+                  "|---:|---|---|" + "---:|" * len(methods)]
+        for target in pushable:
+            lines.append(f"| {level[target]} | {target} | {table.kind_of[target]} | "
+                         + " | ".join(table.cell(target, m) for m in methods) + " |")
+    lines += ["", "## Figures", ""] + [f"![{p.stem}](figures/{p.name})" for p in figures]
+    if behaviour_note:
+        lines += ["", behaviour_note]
+    lines += _provenance(sources, out)
+    path = out / "report.md"
+    atomic_write(path, "\n".join(lines) + "\n")
+    return path
+
+
+def _claims_section(table: _Table) -> list[str]:
+    found = claims(table.score, table.kind_of, table.category_of)
+    if not any(c.reproduced != "not run" for c in found):
+        return []
+    lines = ["## The paper's claims", "",
+             "Every quantitative claim of the paper's results with ours: a mean is reproduced within 5 points, a "
+             "comparison when it has the paper's direction and is significant (p < 0.05, our degrees of freedom). "
+             "Means over the paper's concepts among this report's targets.", "",
+             "| claim | paper | ours | reproduced |", "|---|---|---|---|"]
+    lines += [f"| {c.claim} | {c.paper} | {c.ours} | {c.reproduced} |" for c in found if c.reproduced != "not run"]
+    return lines + [""]
+
+
+def _concept_section(table: _Table) -> list[str]:
+    methods = table.methods
+    lines = ["## Per concept", "",
+             "Best seed (curr: best curriculum) as the paper reports, then the mean ± s.d. over the seeds of that "
+             "curriculum.", "",
+             "| target | kind | category | " + " | ".join(methods) + " | paper (base / curr / canon) |",
+             "|---|---|---|" + "---:|" * len(methods) + "---|"]
+    for target in table.targets:
         paper = PAPER_CONCEPTS.get(target)
         paper_text = " / ".join(f"{paper[m]:.1f}" for m in ("base", "curr", "canon")) if paper else ""
-        lines.append(f"| {target} | {kind_of[target]} | {category_of[target]} | " + " | ".join(cells)
-                     + f" | {paper_text} |")
-    # differences to the paper per concept
-    given = [t for t in targets if t in PAPER_CONCEPTS]
+        lines.append(f"| {target} | {table.kind_of[target]} | {table.category_of[target]} | "
+                     + " | ".join(table.cell(target, m) for m in methods) + f" | {paper_text} |")
+    given = [t for t in table.targets if t in PAPER_CONCEPTS]
     if given:
         lines += ["", "Differences to the paper (ours - paper, points):", ""]
         for target in given:
-            parts = [f"{m} {_diff(score.get((target, m)), PAPER_CONCEPTS[target].get(m))}"
-                     for m in ("base", "curr", "canon") if (target, m) in score]
+            parts = [f"{m} {_diff(table.score.get((target, m)), PAPER_CONCEPTS[target].get(m))}"
+                     for m in ("base", "curr", "canon") if (target, m) in table.score]
             lines.append(f"- {target}: " + ", ".join(parts))
-    # per kind and category
-    lines += ["", "## Means per kind and category", "",
-              "| kind | category | concepts | " + " | ".join(methods) + " |",
-              "|---|---|---:|" + "---:|" * len(methods)]
+    return lines
+
+
+def _means_section(table: _Table) -> list[str]:
+    methods = table.methods
+    lines = ["", "## Means per kind and category (Fig. 5a/5d)", "",
+             "Mean of the reported scores ± standard error across concepts.", "",
+             "| kind | category | concepts | " + " | ".join(methods) + " |",
+             "|---|---|---:|" + "---:|" * len(methods)]
     for kind in KINDS:
-        in_kind = [t for t in targets if kind_of[t] == kind]
+        in_kind = table.of_kind(kind)
         if not in_kind:
             continue
-        groups = [(c, [t for t in in_kind if category_of[t] == c]) for c in CATEGORIES]
+        groups = [(c, table.of_kind(kind, c)) for c in CATEGORIES]
         for label, members in [*[(c, m) for c, m in groups if m], ("all", in_kind)]:
-            means = [_mean([score.get((t, m)) for t in members]) for m in methods]
-            lines.append(f"| {kind} | {label} | {len(members)} | " + " | ".join(_pct(x) for x in means) + " |")
-        in_paper = [t for t in in_kind if category_of[t] in PAPER_CATEGORIES]
+            lines.append(f"| {kind} | {label} | {len(members)} | "
+                         + " | ".join(table.mean_cell(members, m) for m in methods) + " |")
+        in_paper = [t for t in in_kind if table.category_of[t] in PAPER_CATEGORIES]
         if not in_paper:  # the designed pushable curriculum: the paper gives no numbers (Fig. 5c only)
             continue
         paper = PAPER_MEANS[kind]
@@ -163,80 +267,92 @@ def _write(directory: Path, trajectories: str | None, behaviour: bool) -> Path:
                      + " | ".join(f"{paper[m]:.1f}" if m in paper else "" for m in methods) + " |")
         if len(in_paper) == PAPER_COUNTS[kind]:  # the paper's whole set: its means
             lines.append(f"| {kind} | ours - paper ({len(in_paper)} concepts) | | " + " | ".join(
-                _diff(_mean([score.get((t, m)) for t in in_paper]), paper.get(m)) for m in methods) + " |")
+                _diff(_mean([table.score.get((t, m)) for t in in_paper]), paper.get(m)) for m in methods) + " |")
         else:  # a subset: only against the paper's own numbers for the same concepts, where it gives them
             lines.append(f"| {kind} | ours - paper (the same {len(in_paper)} concept(s), where the paper gives them) "
-                         "| | " + " | ".join(_diff(_mean([score.get((t, m)) for t in in_paper]),
+                         "| | " + " | ".join(_diff(_mean([table.score.get((t, m)) for t in in_paper]),
                                                    _mean([PAPER_CONCEPTS.get(t, {}).get(m) for t in in_paper]))
                                              for m in methods) + " |")
-    # t-tests
-    lines += ["", "## Paired t-tests across concepts", "",
-              "| kind / category | comparison | concepts | t | df | p | paper |",
-              "|---|---|---:|---:|---:|---:|---|"]
+    return lines
+
+
+def _ttest_section(table: _Table) -> list[str]:
+    methods = table.methods
+    lines = ["", "## Paired t-tests across concepts", "",
+             "Two-sided paired t-tests of the reported scores (scipy `ttest_rel`); df = concepts - 1. Where the "
+             "paper tested the same comparison, its t, df and p are beside ours, and the last column reads our t at "
+             "the paper's degrees of freedom (it gives df 34 for 34 classification concepts).", "",
+             "| kind / category | comparison | concepts | t | df | p | paper | p at the paper's df |",
+             "|---|---|---:|---:|---:|---:|---|---:|"]
     for kind in KINDS:
-        in_kind = [t for t in targets if kind_of[t] == kind]
+        in_kind = table.of_kind(kind)
         if not in_kind:
             continue
         for a, b in (("curr", "base"), ("canon", "base")):
             paper_test = PAPER_TTESTS[kind].get(f"{a} vs {b}") if all(
-                category_of[t] in PAPER_CATEGORIES for t in in_kind) else None  # the paper tested its own concepts
-            lines.append(_ttest_row(kind, f"{a} vs {b}", in_kind, a, b, score, paper_test))
+                table.category_of[t] in PAPER_CATEGORIES for t in in_kind) else None  # the paper's own concepts
+            lines.append(_ttest_row(kind, f"{a} vs {b}", in_kind, a, b, table.score, paper_test))
         if kind == "classification":
             for category in CATEGORIES:
-                members = [t for t in in_kind if category_of[t] == category]
+                members = table.of_kind(kind, category)
                 if members:
                     best_smc = "curr" if "curr" in methods else "canon"
                     lines.append(_ttest_row(f"{kind} / {category}", f"{best_smc} vs cnn", members, best_smc, "cnn",
-                                            score, None))
-    # noprim
-    noprim = [m for m in ("curr-noprim", "canon-noprim") if m in methods]
-    if noprim:
-        lines += ["", "## The role of hierarchy: without primitive moves (spec §6.3)", "",
-                  "| kind | method | with primitives | without | paper with | paper without |",
-                  "|---|---|---:|---:|---:|---:|"]
-        for kind in KINDS:
-            in_kind = [t for t in targets if kind_of[t] == kind]
-            for method in ("curr", "canon"):
-                if f"{method}-noprim" not in methods or not in_kind:
-                    continue
-                paper = PAPER_NOPRIM[kind]
-                lines.append(f"| {kind} | {method} | {_pct(_mean([score.get((t, method)) for t in in_kind]))} | "
-                             f"{_pct(_mean([score.get((t, method + '-noprim')) for t in in_kind]))} | "
-                             f"{paper[method]:.1f} | {paper[method + '-noprim']:.1f} |")
-    # the designed pushable curriculum by level (Fig. 5c)
-    pushable = [t for t in targets if category_of[t] == "pushable"]
-    if pushable:
-        level = pushable_levels()
-        pushable.sort(key=lambda t: (level[t], t))
-        figures.append(_pushable_figure(directory, results, pushable, methods, score, level))
-        lines += ["", "## The pushable curriculum by level (Fig. 5c)", "",
-                  "Ordered by level: the higher the level, the less the initial state tells (docs/curricula.md). "
-                  "The paper gives no numbers here, only that the SMCs' advantage over the CNN is \"particularly "
-                  "pronounced\", especially with the curriculum.", "",
-                  "| level | target | kind | " + " | ".join(methods) + " |",
-                  "|---:|---|---|" + "---:|" * len(methods)]
-        for target in pushable:
-            lines.append(f"| {level[target]} | {target} | {kind_of[target]} | "
-                         + " | ".join(_pct(score.get((target, m))) for m in methods) + " |")
-    # figures and provenance
-    lines += ["", "## Figures", ""] + [f"![{p.stem}](figures/{p.name})" for p in figures]
-    if behaviour_note:
-        lines += ["", behaviour_note]
-    machine = results.get("machine", {})
-    lines += ["", "## How this was run", "",
-              f"- budget: {settings['timesteps']:,} steps per SMC, seeds 0-{settings['seeds'] - 1}, "
-              f"{settings['repeats']} test repeats; {settings['workers']} worker(s), backend {settings['backend']}",
-              f"- learner: {_learner(settings)}",
-              f"- machine: {_machine_line(machine)}",
-              *_code_line(results.get("code")),
-              f"- wall time of the last `sb3-smc experiment` run: {results.get('wall_time_s', 0) / 3600:.2f} h"
-              + (f"; of all its runs recorded here: {results['wall_time_total_s'] / 3600:.2f} h"
-                 if "wall_time_total_s" in results else ""),
-              f"- command: `{results.get('command') or _command(directory, settings)}`",
-              "- rows: `results.csv` (one per target x method x curriculum x seed), `results.json`"]
-    path = directory / "report.md"
-    atomic_write(path, "\n".join(lines) + "\n")
-    return path
+                                            table.score, None))
+    counts = []
+    for kind in KINDS:
+        for better, label in ((("curr",), "curr"), (("canon",), "canon"), (("curr", "canon"), "curr or canon")):
+            won, n = wins(table.score, table.of_kind(kind), better, "base")
+            if n:
+                counts.append(f"| {kind} | {label} | {won} of {n} |"
+                              + (" 14 of 16 |" if kind == "bring-about" and label == "curr or canon" else " |"))
+    if counts:
+        lines += ["", "Concepts on which a hierarchical SMC beats the flat one (reported scores):", "",
+                  "| kind | hierarchical | beats base on | paper |", "|---|---|---:|---|", *counts]
+    return lines
+
+
+def _noprim_section(table: _Table) -> list[str]:
+    if not any(m in table.methods for m in ("curr-noprim", "canon-noprim")):
+        return []
+    lines = ["", "## The role of hierarchy: without primitive moves (spec §6.3)", "",
+             "| kind | method | with primitives | without | paper with | paper without |",
+             "|---|---|---:|---:|---:|---:|"]
+    for kind in KINDS:
+        in_kind = table.of_kind(kind)
+        for method in ("curr", "canon"):
+            if f"{method}-noprim" not in table.methods or not in_kind:
+                continue
+            paper = PAPER_NOPRIM[kind]
+            lines.append(f"| {kind} | {method} | {_pct(_mean([table.score.get((t, method)) for t in in_kind]))} | "
+                         f"{_pct(_mean([table.score.get((t, method + '-noprim')) for t in in_kind]))} | "
+                         f"{paper[method]:.1f} | {paper[method + '-noprim']:.1f} |")
+    return lines
+
+
+def _provenance(sources: Sequence[tuple[Path, dict[str, Any]]], out: Path) -> list[str]:
+    """How each directory was run: budget, learner, machine, code, wall time and command."""
+    lines = ["", "## How this was run", ""]
+    total = 0.0
+    for directory, results in sources:
+        settings = results["settings"]
+        machine = results.get("machine", {})
+        if len(sources) > 1:
+            lines += [f"### {os.path.relpath(directory, out)}", ""]
+        lines += [f"- budget: {settings['timesteps']:,} steps per SMC, seeds 0-{settings['seeds'] - 1}, "
+                  f"{settings['repeats']} test repeats; {settings['workers']} worker(s), backend {settings['backend']}",
+                  f"- learner: {_learner(settings)}",
+                  f"- machine: {_machine_line(machine)}",
+                  *_code_line(results.get("code")),
+                  f"- wall time of the last `sb3-smc experiment` run: {results.get('wall_time_s', 0) / 3600:.2f} h"
+                  + (f"; of all its runs recorded here: {results['wall_time_total_s'] / 3600:.2f} h"
+                     if "wall_time_total_s" in results else ""),
+                  f"- command: `{results.get('command') or _command(directory, settings)}`",
+                  "- rows: `results.csv` (one per target x method x curriculum x seed), `results.json`", ""]
+        total += results.get("wall_time_total_s", results.get("wall_time_s", 0))
+    if len(sources) > 1:
+        lines.append(f"Wall time of all runs of the {len(sources)} directories: {total / 3600:.2f} h.")
+    return lines
 
 
 def _code_line(code: dict[str, Any] | None) -> list[str]:
@@ -259,16 +375,13 @@ def pushable_levels() -> dict[str, int]:
             for name in names}
 
 
-def _pushable_figure(directory: Path, results: dict[str, Any], targets: Sequence[str], methods: Sequence[str],
-                     score: dict[tuple[str, str], float], level: dict[str, int]) -> Path:
-    """Fig. 5c: the pushable targets' reported scores ordered by level (error: s.e. across seeds)."""
-    by_seed = _seed_scores(results)
+def _pushable_figure(folder: Path, table: _Table, targets: Sequence[str], level: dict[str, int]) -> Path:
+    """Fig. 5c: the pushable targets' reported scores ordered by level (error bars: s.d. across seeds)."""
+    panel = _concept_panel(table, "the pushable curriculum by level", targets)
     labels = [f"L{level[t]} {t}" for t in targets]
-    return _bars(labels, methods, {m: [100 * score.get((t, m), np.nan) for t in targets] for m in methods},
-                 {m: [_sem(by_seed[(t, m)]) for t in targets] for m in methods},
-                 "the pushable curriculum by level (best seed; error: s.e. across seeds)",
-                 directory / "figures" / "pushable.png",
-                 size=(max(4.0, 0.9 * len(targets) * max(1, len(methods)) / 2), 3.8), rotate=True)
+    return bar_panels([Panel(panel.title, labels, panel.values, panel.errors)], table.methods,
+                      "test score per concept, ordered by level (best seed; error bars: standard deviation across "
+                      "seeds)", folder / "pushable.png", horizontal=True)
 
 
 def _learner(settings: dict[str, Any]) -> str:
@@ -310,69 +423,52 @@ def _ttest_row(label: str, comparison: str, members: Sequence[str], a: str, b: s
     test = paired_ttest([p[0] for p in pairs], [p[1] for p in pairs]) if pairs else None
     paper_text = f"t({paper[0]}) = {paper[1]}, p = {paper[2]}" if paper else ""
     if test is None:
-        return f"| {label} | {comparison} | {len(pairs)} | - | - | - | {paper_text} |"
+        return f"| {label} | {comparison} | {len(pairs)} | - | - | - | {paper_text} | |"
     df, t, p = test
-    return f"| {label} | {comparison} | {len(pairs)} | {t:.2f} | {df} | {p:.2g} | {paper_text} |"
+    at_paper = f"{p_at_df(t, paper[0]):.2g}" if paper else ""
+    return f"| {label} | {comparison} | {len(pairs)} | {t:.2f} | {df} | {p:.2g} | {paper_text} | {at_paper} |"
 
 
-def _bars(labels: Sequence[str], methods: Sequence[str], values: dict[str, list[float]],
-          errors: dict[str, list[float]], title: str, path: Path, *, size: tuple[float, float],
-          rotate: bool = False) -> Path:
-    """Grouped bars (one group per label, one bar per method) with error bars, in percent."""
-    plt = pyplot()
-    fig, ax = plt.subplots(figsize=size)
-    width = 0.8 / max(1, len(methods))
-    for k, method in enumerate(methods):
-        ax.bar(np.arange(len(labels)) + k * width, values[method], width, yerr=errors[method], label=method,
-               color=COLORS.get(method), capsize=2)
-    ticks = np.arange(len(labels)) + width * (len(methods) - 1) / 2
-    if rotate:
-        ax.set_xticks(ticks, labels, rotation=30, ha="right", fontsize=6)
-    else:
-        ax.set_xticks(ticks, labels)
-    ax.set_ylabel("test score (%)")
-    ax.set_ylim(0, 100)
-    ax.legend(fontsize=7, ncol=3)
-    ax.set_title(title, fontsize=9)
-    fig.tight_layout()
-    return save_figure(fig, path)
+def _figures(folder: Path, table: _Table) -> list[Path]:
+    """Fig. 5a/5d (the category means of each kind, s.e. across concepts) and Fig. 5b/5e (every concept of a kind in
+    panels by category, s.d. across seeds)."""
+    methods = table.methods
+    panels = []
+    for kind in KINDS:
+        groups = [c for c in CATEGORIES if table.of_kind(kind, c)]
+        if not groups:
+            continue
+        members = {c: table.of_kind(kind, c) for c in groups}
+        if len(groups) > 1:
+            members["all"] = table.of_kind(kind)
+        values: dict[str, list[float]] = {m: [] for m in methods}
+        errors: dict[str, list[float | None]] = {m: [] for m in methods}
+        for targets in members.values():
+            for m in methods:
+                scores = [table.score[(t, m)] for t in targets if (t, m) in table.score]
+                mean, se = mean_se(scores) if len(scores) == len(targets) else (math.nan, None)
+                values[m].append(100 * mean)
+                errors[m].append(None if se is None else 100 * se)
+        panels.append(Panel(kind, list(members), values, errors))
+    paths = [bar_panels(panels, methods, "Mean test score per category and kind (best seed of each concept; error "
+                        "bars: standard error across the concepts)", folder / "categories.png")]
+    for kind in KINDS:
+        groups = [c for c in CATEGORIES if table.of_kind(kind, c)]
+        if not groups:
+            continue
+        concept_panels = [_concept_panel(table, f"{kind} / {c}", table.of_kind(kind, c)) for c in groups]
+        paths.append(bar_panels(concept_panels, methods, f"{kind}: test score per concept (best seed; error bars: "
+                                "standard deviation across the seeds of the reported curriculum)",
+                                folder / f"concepts-{kind}.png", horizontal=True))
+    return paths
 
 
-def _seed_scores(results: dict[str, Any]) -> dict[tuple[str, str], list[float]]:
-    """(target, method) -> the test scores of every seed of the reported curriculum."""
-    by_seed: dict[tuple[str, str], list[float]] = defaultdict(list)
-    best_curriculum = {(r["target"], r["method"]): r["curriculum"] for r in results["reported"]}
-    for row in results["rows"]:
-        if row["curriculum"] == best_curriculum.get((row["target"], row["method"])):
-            by_seed[(row["target"], row["method"])].append(row["test_score"])
-    return by_seed
+def _concept_panel(table: _Table, title: str, targets: Sequence[str]) -> Panel:
+    values = {m: [100 * table.score.get((t, m), math.nan) for t in targets] for m in table.methods}
+    errors = {m: [_sd(table.seeds.get((t, m), [])) for t in targets] for m in table.methods}
+    return Panel(title, list(targets), values, errors)
 
 
-def _sem(values: Sequence[float]) -> float:
-    """Standard error of the mean, in percent (0 for fewer than two values)."""
-    return 100 * float(np.std(values, ddof=1)) / math.sqrt(len(values)) if len(values) > 1 else 0.0
-
-
-def _figures(directory: Path, results: dict[str, Any], methods: list[str], targets: list[str],
-             score: dict[tuple[str, str], float], category_of: dict[str, str]) -> list[Path]:
-    folder = directory / "figures"
-    folder.mkdir(exist_ok=True)
-    # per category: mean of the reported scores across concepts, standard error across concepts
-    groups = [c for c in CATEGORIES if any(category_of[t] == c for t in targets)]
-    members = {(c, m): [score[(t, m)] for t in targets if category_of[t] == c and (t, m) in score]
-               for c in groups for m in methods}
-    categories = _bars(
-        groups, methods,
-        {m: [100 * np.mean(members[(c, m)]) if members[(c, m)] else np.nan for c in groups] for m in methods},
-        {m: [_sem(members[(c, m)]) for c in groups] for m in methods},
-        "per category (best seed; error: s.e. across concepts)", folder / "categories.png",
-        size=(1.8 + 1.4 * len(groups) * max(1, len(methods)) / 3, 3.2))
-    # per concept: the reported score, standard error across seeds of the reported curriculum
-    by_seed = _seed_scores(results)
-    concepts = _bars(
-        targets, methods,
-        {m: [100 * score.get((t, m), np.nan) for t in targets] for m in methods},
-        {m: [_sem(by_seed[(t, m)]) for t in targets] for m in methods},
-        "per concept (best seed; error: s.e. across seeds)", folder / "concepts.png",
-        size=(max(4.0, 0.9 * len(targets) * max(1, len(methods)) / 2), 3.6), rotate=True)
-    return [categories, concepts]
+def _sd(scores: Sequence[float]) -> float | None:
+    """Sample standard deviation in percent; ``None`` (no error bar) below two seeds."""
+    return 100 * float(np.std(scores, ddof=1)) if len(scores) > 1 else None

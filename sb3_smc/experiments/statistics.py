@@ -1,0 +1,216 @@
+"""The numbers of a report, torch-free: seed summaries, means with standard errors across concepts, paired t-tests
+(also at the paper's degrees of freedom), win counts, and the claims table that sets every quantitative claim of the
+paper beside ours.
+
+Scores are fractions (0-1) as the results hold them; the paper's numbers (:mod:`sb3_smc.experiments.paper`) are
+percentages.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from sb3_smc.experiments.paper import PAPER_CONCEPTS, PAPER_MEANS, PAPER_NOPRIM, PAPER_TTESTS
+
+__all__ = ["ALPHA", "Claim", "SeedSummary", "claims", "mean_se", "paired_ttest", "p_at_df", "seed_summary", "wins"]
+
+ALPHA = 0.05
+"""Significance level of the claims table."""
+Score = Mapping[tuple[str, str], float]
+"""(target, method) -> the reported score (best seed; curr: best curriculum)."""
+
+
+def paired_ttest(ours: Sequence[float], theirs: Sequence[float]) -> tuple[int, float, float] | None:
+    """``(df, t, p)`` of the paired t-test of ``ours`` against ``theirs`` (two-sided); ``None`` below 2 pairs or
+    when every difference is equal (t undefined)."""
+    from scipy import stats
+
+    a, b = np.asarray(ours, dtype=float), np.asarray(theirs, dtype=float)
+    if len(a) < 2 or np.allclose(a - b, (a - b)[0]):
+        return None
+    result = stats.ttest_rel(a, b)
+    return len(a) - 1, float(result.statistic), float(result.pvalue)
+
+
+def p_at_df(t: float, df: int) -> float:
+    """The two-sided p of ``t`` read with ``df`` degrees of freedom (the paper's t(34) on 34 concepts, say)."""
+    from scipy import stats
+
+    return float(2 * stats.t.sf(abs(t), df))
+
+
+@dataclass(frozen=True)
+class SeedSummary:
+    """The seeds of one target x method (of its reported curriculum): the best (what the paper reports), the mean
+    and the sample standard deviation (``None`` for one seed)."""
+
+    best: float
+    mean: float
+    sd: float | None
+    seeds: int
+
+    def text(self) -> str:
+        """``best (mean ± s.d.)`` in percent; the best alone for one seed."""
+        if self.sd is None:
+            return f"{100 * self.best:.1f}"
+        return f"{100 * self.best:.1f} ({100 * self.mean:.1f} ± {100 * self.sd:.1f})"
+
+
+def seed_summary(scores: Sequence[float]) -> SeedSummary:
+    """Best, mean and sample s.d. of the test scores of a target x method's seeds."""
+    if not scores:
+        raise ValueError("no seeds to summarise")
+    values = np.asarray(scores, dtype=float)
+    sd = float(values.std(ddof=1)) if len(values) > 1 else None
+    return SeedSummary(best=float(values.max()), mean=float(values.mean()), sd=sd, seeds=len(values))
+
+
+def mean_se(values: Sequence[float]) -> tuple[float, float | None]:
+    """Mean and standard error of the mean (``None`` below two values: no error bar for a single value)."""
+    if not values:
+        raise ValueError("no values")
+    array = np.asarray(values, dtype=float)
+    se = float(array.std(ddof=1)) / math.sqrt(len(array)) if len(array) > 1 else None
+    return float(array.mean()), se
+
+
+def wins(score: Score, targets: Sequence[str], better: Sequence[str], than: str) -> tuple[int, int]:
+    """On how many of ``targets`` the best of the ``better`` methods scores above ``than``; and over how many
+    targets both were run."""
+    compared = [t for t in targets if (t, than) in score and any((t, m) in score for m in better)]
+    won = sum(max(score[(t, m)] for m in better if (t, m) in score) > score[(t, than)] for t in compared)
+    return won, len(compared)
+
+
+@dataclass(frozen=True)
+class Claim:
+    """One quantitative claim of the paper: what it says, its number, ours, and whether ours reproduces it."""
+
+    claim: str
+    paper: str
+    ours: str
+    reproduced: str
+
+
+def _mean_of(score: Score, targets: Sequence[str], method: str) -> float | None:
+    values = [score[(t, method)] for t in targets if (t, method) in score]
+    return float(np.mean(values)) if values and len(values) == len(targets) else None
+
+
+def _gap(score: Score, targets: Sequence[str], a: str, b: str) -> float | None:
+    """Mean of ``a`` minus mean of ``b`` over ``targets`` (``None`` unless both ran on all of them)."""
+    mean_a, mean_b = _mean_of(score, targets, a), _mean_of(score, targets, b)
+    return None if mean_a is None or mean_b is None else mean_a - mean_b
+
+
+def _mean_claim(kind: str, method: str, paper: float, ours: float | None, n: int, tolerance: float) -> Claim:
+    return _value_claim(f"{kind}: mean of {method} ({n} concepts)", paper, ours, tolerance)
+
+
+def _value_claim(text: str, paper: float, ours: float | None, tolerance: float) -> Claim:
+    """A number of the paper (percent) against ours (a fraction): reproduced within ``tolerance`` points."""
+    if ours is None:
+        return Claim(text, f"{paper:.1f}", "-", "not run")
+    diff = 100 * ours - paper
+    if abs(diff) <= tolerance:
+        return Claim(text, f"{paper:.1f}", f"{100 * ours:.1f} ({diff:+.1f})", f"yes (within {tolerance:g} points)")
+    return Claim(text, f"{paper:.1f}", f"{100 * ours:.1f} ({diff:+.1f})",
+                 f"no: {abs(diff):.1f} points {'above' if diff > 0 else 'below'}")
+
+
+def _test_claim(kind: str, a: str, b: str, score: Score, targets: Sequence[str],
+                paper: tuple[int, float, float]) -> Claim:
+    df_paper, t_paper, p_paper = paper
+    pairs = [(score[(t, a)], score[(t, b)]) for t in targets if (t, a) in score and (t, b) in score]
+    test = paired_ttest([x for x, _ in pairs], [y for _, y in pairs]) if pairs else None
+    text = f"{kind}: {a} > {b}, paired t-test across concepts"
+    if test is None:
+        return Claim(text, f"t({df_paper}) = {t_paper}, p = {p_paper}", "-", "not run")
+    df, t, p = test
+    same_direction = (t > 0) == (t_paper > 0)
+    significant = p < ALPHA
+    verdict = ("yes" if same_direction and significant else
+               "direction only (not significant)" if same_direction else "no: opposite direction")
+    return Claim(text, f"t({df_paper}) = {t_paper}, p = {p_paper}",
+                 f"t({df}) = {t:.2f}, p = {p:.2g} (p at df {df_paper}: {p_at_df(t, df_paper):.2g})", verdict)
+
+
+def _order_claim(text: str, paper_gap: float, ours_gap: float | None, tolerance: float = 2.0) -> Claim:
+    """A claim that one mean is above another: the paper's gap and ours, in points; a gap the paper gives as
+    under one point is a claim of about equal means (reproduced within ``tolerance`` points)."""
+    if ours_gap is None:
+        return Claim(text, f"{paper_gap:+.1f}", "-", "not run")
+    ours = 100 * ours_gap
+    if abs(paper_gap) < 1.0:
+        verdict = "yes (about equal)" if abs(ours) <= tolerance else f"no: {abs(ours):.1f} points apart"
+    else:
+        verdict = "yes" if (ours > 0) == (paper_gap > 0) else "no: opposite direction"
+    return Claim(text, f"{paper_gap:+.1f}", f"{ours:+.1f}", verdict)
+
+
+def claims(score: Score, kind_of: Mapping[str, str], category_of: Mapping[str, str], *,
+           tolerance: float = 5.0) -> list[Claim]:
+    """Every quantitative claim of the paper's results (its §6: means per kind, t-tests, wins, the headline
+    concepts, the CNN by category, the noprim ablation) with ours. A mean is reproduced within ``tolerance``
+    points; a comparison when its direction is the paper's and it is significant at :data:`ALPHA`. Means are over
+    the paper's concepts among ``score``'s targets (all of them once the whole table ran)."""
+    out: list[Claim] = []
+    for kind in ("classification", "bring-about"):
+        targets = sorted(t for t in kind_of if kind_of[t] == kind and category_of[t] != "pushable")
+        if not targets:
+            continue
+        for method, paper in PAPER_MEANS[kind].items():
+            out.append(_mean_claim(kind, method, paper, _mean_of(score, targets, method), len(targets), tolerance))
+        for comparison, paper_test in PAPER_TTESTS[kind].items():
+            a, _, b = comparison.split()
+            out.append(_test_claim(kind, a, b, score, targets, paper_test))
+        if kind == "bring-about":
+            won, n = wins(score, targets, ("curr", "canon"), "base")
+            out.append(Claim("bring-about: a hierarchical SMC (best of curr, canon) beats the flat one",
+                             "on 14 of 16 concepts", f"on {won} of {n} concepts" if n else "-",
+                             ("yes" if won / n >= 14 / 16 - 1e-9 else f"no: {won / n:.0%} of concepts against 88%")
+                             if n else "not run"))
+        else:
+            paper_means = PAPER_MEANS[kind]
+            for a, b in (("cnn", "base"), ("curr", "cnn")):
+                out.append(_order_claim(f"classification: {a} above {b} (mean gap, points)",
+                                        paper_means[a] - paper_means[b], _gap(score, targets, a, b)))
+            out.extend(_cnn_claims(score, targets, category_of))
+        for method in ("curr", "canon"):
+            paper_with, paper_without = PAPER_NOPRIM[kind][method], PAPER_NOPRIM[kind][f"{method}-noprim"]
+            without = _mean_of(score, targets, f"{method}-noprim")
+            out.append(_mean_claim(kind, f"{method}-noprim", paper_without, without, len(targets), tolerance))
+            out.append(_order_claim(f"{kind}: {method} without primitives against with (mean gap, points)",
+                                    paper_without - paper_with, _gap(score, targets, f"{method}-noprim", method)))
+    for target, paper in PAPER_CONCEPTS.items():
+        for method, value in paper.items():
+            out.append(_value_claim(f"{target}: {method}", value, score.get((target, method)), tolerance))
+    return out
+
+
+def _cnn_claims(score: Score, targets: Sequence[str], category_of: Mapping[str, str]) -> list[Claim]:
+    """The qualitative Fig. 5a claims: SMCs clearly ahead of the CNN on containment; the CNN relatively better on
+    objects and objcon (its gap to the best SMC method smaller there than on containment)."""
+    gaps: dict[str, float] = {}
+    for category in ("containment", "objcon", "objects"):
+        members = [t for t in targets if category_of[t] == category]
+        best = [max(score[(t, m)] for m in ("base", "curr", "canon") if (t, m) in score) - score[(t, "cnn")]
+                for t in members if (t, "cnn") in score and any((t, m) in score for m in ("base", "curr", "canon"))]
+        if members and len(best) == len(members):
+            gaps[category] = float(np.mean(best))
+    out = []
+    if "containment" in gaps:
+        out.append(Claim("classification / containment: the best SMC method clearly above the cnn",
+                         "qualitative (Fig. 5a)", f"{100 * gaps['containment']:+.1f} points",
+                         "yes" if gaps["containment"] >= 0.05 else "no"))
+    for category in ("objects", "objcon"):
+        if category in gaps and "containment" in gaps:
+            out.append(Claim(f"classification / {category}: the cnn relatively better than on containment",
+                             "qualitative (Fig. 5a)",
+                             f"SMC lead {100 * gaps[category]:+.1f} against {100 * gaps['containment']:+.1f}",
+                             "yes" if gaps[category] < gaps["containment"] else "no"))
+    return out
