@@ -45,6 +45,14 @@ if TYPE_CHECKING:
 SECTIONS = ("concepts", "generators", "datasets", "curriculum")
 #: Goal codes of the experiment files (``vals_goal``) -> the benchmark's words.
 GOALS = {"c": "classification", "sig": "bring-about-signal", "dir": "bring-about-direct"}
+#: The one defect of the AAAI-18 release that loads: three generators of ``bfaw-search.generators`` name
+#: ``potential-container``, a relation defined nowhere (the predicate is ``potential_container``), and no dataset
+#: uses them. Exactly these (key and unknown names) are recorded in :attr:`DefinitionSet.unresolved`; any other
+#: definition naming an unknown relation is an error at load, whether a dataset uses it or not.
+RELEASE_UNRESOLVED: dict[str, tuple[str, ...]] = {
+    f"bfaw-self-and-two-potential-containers-in-{side}nontarget": ("potential-container",)
+    for side in ("left-", "", "right-")
+}
 
 
 #: The libyaml loader when PyYAML has it (same results, several times faster), else the pure-Python one.
@@ -139,8 +147,8 @@ class DefinitionSet:
     includes: dict[str, list[str]] = field(default_factory=dict)
     #: Concepts/generators defined more than once, as (replaced, replacing) pairs; the later one is kept.
     redefinitions: list[tuple[Definition, Definition]] = field(default_factory=list)
-    #: Concepts / generators no dataset uses that name relations defined nowhere -> those names (the original
-    #: files have three); a dataset that uses one is an error.
+    #: The release's generators that name a relation defined nowhere -> those names (:data:`RELEASE_UNRESOLVED`:
+    #: loaded because no dataset uses them; a dataset that uses one is an error).
     unresolved: dict[str, tuple[str, ...]] = field(default_factory=dict)
 
     @property
@@ -261,9 +269,11 @@ def _str_list(node: yaml.Node | None) -> tuple[str, ...] | None:
 def load_definitions(paths: str | Path | Iterable[str | Path]) -> DefinitionSet:
     """Read definition files (following ``__include__``, each file once) into a :class:`DefinitionSet`.
 
-    Checks after reading: every dataset names a known concept and known generators, no name is both a
-    concept and a generator, every curriculum entry targets a known dataset and every ``+@name`` reference
-    resolves to a named list within the referring file's includes.
+    Checks after reading (once every macro is known): every concept and generator compiles (syntax, predicates
+    and macros, arities; whether a dataset uses it or not, except :data:`RELEASE_UNRESOLVED`), every dataset names
+    a known concept and known generators, no name is both a concept and a generator, every curriculum entry
+    targets a known dataset and every ``+@name`` reference resolves to a named list within the referring file's
+    includes.
     """
     result = DefinitionSet()
     pending: list[_PendingEntry] = []
@@ -297,30 +307,28 @@ def load_definitions(paths: str | Path | Iterable[str | Path]) -> DefinitionSet:
 
 
 def _check_expressions(result: DefinitionSet) -> None:
-    """Parse every concept and generator and compile those the datasets use (macros expanded, predicates and
-    arities checked); errors name the file and line of the definition."""
-    from pixelworld_env.concepts import PREDICATES, Concept, ConceptError, UnknownPredicateError, parse
+    """Compile every concept and generator against the complete macro table (syntax, predicates and macros,
+    arities), used by a dataset or not; errors name the file and line of the definition. Only the release's
+    known defect (:data:`RELEASE_UNRESOLVED`, unused) is recorded instead."""
+    from pixelworld_env.concepts import PREDICATES, Concept, ConceptError, parse
 
     macros = result.macros
     used = {name for d in result.datasets.values() for name in (d.concept, *d.generators)}
     for section in ("concepts", "generators"):
         for key, definition in getattr(result, section).items():
-            what = f"{definition.source}, line {definition.line}: {section[:-1]} {key!r}"
             try:
-                expression = parse(definition.logic)
-                names = {c.name for c in expression.positives} | {c.name for g in expression.negations for c in g}
-                unknown = sorted(n for n in names if n not in PREDICATES and n not in macros)
-                if unknown and key not in used:
-                    result.unresolved[key] = tuple(unknown)
-                    continue
+                if key in RELEASE_UNRESOLVED and key not in used:
+                    expression = parse(definition.logic)
+                    names = {c.name for c in expression.positives} | {c.name for g in expression.negations
+                                                                       for c in g}
+                    unknown = tuple(sorted(n for n in names if n not in PREDICATES and n not in macros))
+                    if unknown == RELEASE_UNRESOLVED[key]:
+                        result.unresolved[key] = unknown
+                        continue
                 Concept(definition.logic, macros)
-            except UnknownPredicateError as err:
-                if key not in used:
-                    result.unresolved[key] = (str(err),)
-                    continue
-                raise DefinitionError(f"{what}: {err}") from None
             except ConceptError as err:
-                raise DefinitionError(f"{what}: {err}") from None
+                raise DefinitionError(f"{definition.source}, line {definition.line}: {section[:-1]} {key!r}: "
+                                      f"{err}") from None
 
 
 def _read_file(path: Path, result: DefinitionSet, stack: tuple[Path, ...], pending: list[_PendingEntry]) -> None:

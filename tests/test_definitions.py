@@ -286,14 +286,34 @@ def test_expressions_and_sections_are_checked_at_load_time(tmp_path: Path, old: 
     assert re.search(words, message), message
 
 
-def test_unused_definitions_with_undefined_relations_are_recorded(tmp_path: Path) -> None:
+@pytest.mark.parametrize(("section", "logic", "words"), [
+    ("concepts", "?x contianer(x)", "concept 'draft': unknown predicate or macro 'contianer'"),
+    ("generators", "?x container(x,x)", "generator 'draft': predicate 'container' takes 1 argument"),
+    ("concepts", "?x later(x,x)", "concept 'draft': macro 'later' takes 1 argument"),
+])
+def test_definitions_no_dataset_uses_are_checked_too(tmp_path: Path, section: str, logic: str, words: str) -> None:
+    """Every definition is compiled once all files are read (macros defined later, in an included file, count)."""
+    _write(tmp_path, "later.generators", 'generators:\n    later:\n        logic: "?y container(y)"\n')
+    text = f'__include__: [later.generators]\n{section}:\n    ok:\n        logic: "?x later(x)"\n' \
+           f'    draft:\n        logic: "{logic}"\n'
+    path = _write(tmp_path, "drafts.concepts", text)
+    assert re.search(f"{re.escape(str(path))}, line 5: {re.escape(words)}", _error(path))
+    defs = load_definitions(_write(tmp_path, "fine.concepts", text.replace(logic, "?x later(x)")))
+    assert set(getattr(defs, section)) >= {"ok", "draft"} and not defs.unresolved
+
+
+def test_only_the_release_generators_naming_an_undefined_relation_load(tmp_path: Path) -> None:
     """The original files define three generators over a relation defined nowhere; no dataset uses them."""
-    unused = "generators:\n    unused:\n        logic: \"?x potential-container(x)\"\n"
+    name = "bfaw-self-and-two-potential-containers-in-nontarget"
+    unused = f'generators:\n    {name}:\n        logic: "?x potential-container(x)"\n'
     defs = load_definitions(_write(tmp_path, "good.datasets", GOOD.replace("generators:\n", unused, 1)))
-    assert defs.unresolved == {"unused": ("potential-container",)}
-    used = GOOD.replace("generators:\n", unused, 1).replace("        - [g1]", "        - [g1, unused]")
-    assert "generator 'unused': unknown predicate or macro 'potential-container'" in _error(
+    assert defs.unresolved == {name: ("potential-container",)}
+    used = GOOD.replace("generators:\n", unused, 1).replace("        - [g1]", f"        - [g1, {name}]")
+    assert f"generator '{name}': unknown predicate or macro 'potential-container'" in _error(
         _write(tmp_path, "used.datasets", used))
+    other = GOOD.replace("generators:\n", unused.replace("potential-container(x)", "potential-containr(x)"), 1)
+    assert f"good.datasets, line 6: generator '{name}': unknown predicate or macro 'potential-containr'" in _error(
+        _write(tmp_path, "good.datasets", other))
     require_reference()
     reference = load_definitions(sorted(DATA.glob("*.datasets")))
     assert sorted(reference.unresolved) == ["bfaw-self-and-two-potential-containers-in-left-nontarget",
