@@ -259,6 +259,14 @@ class SMCLibrary(Mapping[str, SMC]):
                                       evaluations=tuple(entry["evaluations"]))
         return library
 
+    @classmethod
+    def pretrained(cls, curriculum: str) -> SMCLibrary:
+        """The pretrained lower-level SMCs of a shipped curriculum, two best seeds of each node, shipped with the
+        package (:mod:`sb3_smc.library.pretrained`; ``docs/library.md``): ``SMCLibrary.pretrained("search2-canon")``."""
+        from sb3_smc.library.pretrained import load_pretrained
+
+        return load_pretrained(curriculum)
+
     # ------------------------------------------------------------------------------------------ environments
 
     def wrap(self, env: Any, names: Sequence[str] | str, *, include_primitives: bool = True, **kwargs: Any) -> Any:

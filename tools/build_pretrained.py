@@ -1,0 +1,36 @@
+#!/usr/bin/env python
+"""Add the lower-level SMCs of shipped curricula to the package's pretrained library (``sb3_smc/library/data/
+pretrained``) from the libraries of finished runs: the two best seeds of each node, evaluated on the test split and
+stored compact (:func:`sb3_smc.library.pretrained.build_pretrained`).
+
+Usage::
+
+    python tools/build_pretrained.py --run runs/paper-search --curricula search2-canon [--out DIR]
+
+A run is an experiment or curriculum directory whose ``library/`` holds every seed of the curricula's lower-level
+nodes (the ranking needs all of them). What the pretrained library already holds is kept.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from sb3_smc.common.threads import torch_threads
+from sb3_smc.library.pretrained import build_pretrained
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--run", action="append", required=True, help="a run directory (repeatable)")
+    parser.add_argument("--curricula", required=True, help="comma-separated shipped curriculum names")
+    parser.add_argument("--out", default=None, help="the library directory (default: the package's)")
+    args = parser.parse_args(argv)
+    with torch_threads(1):
+        path = build_pretrained(args.run, [c for c in args.curricula.split(",") if c], args.out)
+    print(f"wrote {path}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
