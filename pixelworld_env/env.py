@@ -2,27 +2,30 @@
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping, Sequence
 from typing import Any, Literal
 
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
+from gymnasium.envs.registration import EnvSpec
 
 from pixelworld_env.concepts import Concept
 from pixelworld_env.concepts.evaluate import SelfEvaluator
 from pixelworld_env.concepts.parser import Expression
 from pixelworld_env.constants import NUM_COLORS
 from pixelworld_env.objects import Cell
-from pixelworld_env.render import rgb_image
+from pixelworld_env.render import HUMAN_CELL_SIZE, Window, check_display, rgb_image
 from pixelworld_env.scene import Scene
-from pixelworld_env.validation import check_action, check_int
+from pixelworld_env.validation import check_action, check_bool, check_int
 from pixelworld_env.world import MOVES, World
 
 CLASSIFICATION = "classification"
 BRING_ABOUT = "bring-about"
 KINDS = (CLASSIFICATION, BRING_ABOUT)
-OBSERVATIONS = ("hand", "hand_raw", "full")
+OBSERVATIONS = ("hand", "hand_raw", "full", "image")
+RENDER_MODES = ("human", "rgb_array", "ansi")
 
 CLASSIFICATION_ACTIONS = ("SIG0", "SIG1", "DOWN", "RIGHT", "UP", "LEFT")
 BRING_ABOUT_ACTIONS = ("SIG1", "DOWN", "RIGHT", "UP", "LEFT")
@@ -34,6 +37,26 @@ GOAL_REWARD = 1.0
 """Base reward of SIG1 while the goal holds; SIG1 outside the goal earns 0 (``reward_mistake`` of AAAI-18)."""
 
 _ONE_HOT_OFFSETS = np.arange(9) * NUM_COLORS
+_COLOR_CODES = np.arange(NUM_COLORS, dtype=np.uint8)[:, None, None]
+
+
+def check_settings(*, max_steps: Any = 100, observation: Any = "hand", render_mode: Any = None,
+                   aaai18_reset_bug: Any = False) -> int:
+    """Check the settings of a :class:`PixelWorldEnv` before anything is built or loaded; returns ``max_steps``.
+
+    ``ValueError`` for an unknown observation or render mode or ``max_steps < 1``, ``TypeError`` for a ``max_steps``
+    that is not an integer or an ``aaai18_reset_bug`` that is not a bool; ``render_mode="human"`` also needs pygame
+    and a display (:func:`pixelworld_env.render.check_display`).
+    """
+    if observation not in OBSERVATIONS:
+        raise ValueError(f"observation must be one of {OBSERVATIONS}, got {observation!r}")
+    if render_mode is not None and render_mode not in RENDER_MODES:
+        raise ValueError(f"render_mode must be None or one of {list(RENDER_MODES)}, got {render_mode!r}")
+    check_bool(aaai18_reset_bug, "aaai18_reset_bug")
+    max_steps = check_int(max_steps, "max_steps", 1)
+    if render_mode == "human":
+        check_display()
+    return max_steps
 
 
 class PixelWorldEnv(gym.Env):
@@ -50,10 +73,20 @@ class PixelWorldEnv(gym.Env):
     (whether the episode ended with a signal).
 
     Observations: ``"hand"`` the one-hot (9 colour codes) of the 3 x 3 window, 81 floats; ``"hand_raw"`` the
-    window's 9 raw colour codes row-major (the paper's input); ``"full"`` the whole state array.
+    window's 9 raw colour codes row-major (the paper's input); ``"full"`` the whole state array; ``"image"`` the
+    whole state as a channel-first uint8 image, one channel per colour code, 255 where the cell has that code
+    (``(9, height, width)``; SB3's ``CnnPolicy`` divides by 255, so the network sees the one-hot grid;
+    :class:`sb3_smc.features.PixelWorldCNN` is a features extractor for it).
+
+    Render modes: ``"rgb_array"`` (10 px per cell, the window outlined), ``"ansi"`` (the text format), ``"human"``
+    (the same picture at 20 px per cell in a pygame window, drawn on every ``reset`` and ``step``; pygame is the
+    ``render`` extra).
+
+    ``gym.make`` of a ``PW-*`` id adds no ``TimeLimit``: the env truncates itself, and its ``spec.max_episode_steps``
+    says when (``max_steps``).
     """
 
-    metadata = {"render_modes": ["rgb_array", "ansi"], "render_fps": 10}
+    metadata = {"render_modes": list(RENDER_MODES), "render_fps": 10}
 
     def __init__(
         self,
@@ -70,15 +103,18 @@ class PixelWorldEnv(gym.Env):
     ) -> None:
         if kind not in KINDS:
             raise ValueError(f"kind must be one of {KINDS}, got {kind!r}")
-        if observation not in OBSERVATIONS:
-            raise ValueError(f"observation must be one of {OBSERVATIONS}, got {observation!r}")
-        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ValueError(f"render_mode must be None or one of {self.metadata['render_modes']}, "
-                             f"got {render_mode!r}")
-        max_steps = check_int(max_steps, "max_steps", 1)
+        max_steps = check_settings(max_steps=max_steps, observation=observation, render_mode=render_mode,
+                                   aaai18_reset_bug=aaai18_reset_bug)
         self.scenes: tuple[Scene, ...] = tuple(scenes)
         if not self.scenes:
             raise ValueError("PixelWorldEnv needs at least one scene")
+        height, width = self.scenes[0].height, self.scenes[0].width
+        if any((s.height, s.width) != (height, width) for s in self.scenes):
+            raise ValueError("all scenes of an environment must have the same size")
+        if observation == "image" and min(height, width) < NUM_COLORS:
+            raise ValueError(f"observation='image' needs scenes of at least {NUM_COLORS} x {NUM_COLORS} cells, got "
+                             f"{height} x {width}: SB3 takes an image's smallest dimension for its {NUM_COLORS} "
+                             "channels")
         self.kind = kind
         self.concept = concept if isinstance(concept, Concept) else Concept(concept, macros)
         if kind == BRING_ABOUT and labels is not None:
@@ -97,7 +133,10 @@ class PixelWorldEnv(gym.Env):
         the ``info`` of every ``reset`` so that evaluations say which split they ran on."""
         self.observation = observation
         self.render_mode = render_mode
+        self._window = Window(f"PixelWorld: {self.concept.text}", self.metadata["render_fps"]) \
+            if render_mode == "human" else None
         self.aaai18_reset_bug = aaai18_reset_bug
+        self._spec: EnvSpec | None = None
 
         self.action_names: tuple[str, ...] = CLASSIFICATION_ACTIONS if kind == CLASSIFICATION else BRING_ABOUT_ACTIONS
         self.action_space = spaces.Discrete(len(self.action_names))
@@ -105,15 +144,14 @@ class PixelWorldEnv(gym.Env):
         self._effects: tuple[Cell | int, ...] = tuple(
             MOVES[name] if name in MOVES else int(name == "SIG1") for name in self.action_names
         )
-        height, width = self.scenes[0].height, self.scenes[0].width
-        if any((s.height, s.width) != (height, width) for s in self.scenes):
-            raise ValueError("all scenes of an environment must have the same size")
         if observation == "hand":
             self.observation_space = spaces.Box(0.0, 1.0, shape=(9 * NUM_COLORS,), dtype=np.float32)
         elif observation == "hand_raw":
             self.observation_space = spaces.Box(0, NUM_COLORS - 1, shape=(9,), dtype=np.int64)
-        else:
+        elif observation == "full":
             self.observation_space = spaces.Box(0, NUM_COLORS - 1, shape=(height, width), dtype=np.uint8)
+        else:
+            self.observation_space = spaces.Box(0, 255, shape=(NUM_COLORS, height, width), dtype=np.uint8)
 
         self._draws: list[int] = []
         self._worlds: dict[int, World] = {}
@@ -135,7 +173,9 @@ class PixelWorldEnv(gym.Env):
             return self.hand_observation()
         if self.observation == "hand_raw":
             return self.world.window().astype(np.int64).reshape(-1)
-        return self.world.state().astype(np.uint8)
+        if self.observation == "full":
+            return self.world.state().astype(np.uint8)
+        return (self.world.state() == _COLOR_CODES).astype(np.uint8) * np.uint8(255)
 
     def hand_observation(self, out: np.ndarray | None = None) -> np.ndarray:
         """The one-hot 3 x 3 window of the current state (81 float32), whatever ``observation`` is.
@@ -203,6 +243,19 @@ class PixelWorldEnv(gym.Env):
         return f"{type(self).__name__}({self.kind}, {len(self.scenes)} scenes{split}, concept={self.concept.text!r})"
 
     @property
+    def spec(self) -> EnvSpec | None:
+        """The Gymnasium spec (set by ``gym.make``), its ``max_episode_steps`` this env's own limit ``max_steps``.
+
+        Tools read the limit there; a registered ``max_episode_steps`` would instead make ``gym.make`` wrap the env in
+        a second limit (``TimeLimit``), so the ``PW-*`` ids register none and the env states its own here.
+        """
+        return self._spec
+
+    @spec.setter
+    def spec(self, value: EnvSpec | None) -> None:
+        self._spec = None if value is None else dataclasses.replace(value, max_episode_steps=self.max_steps)
+
+    @property
     def world(self) -> World:
         """The live world of the current episode."""
         if self._world is None:
@@ -244,10 +297,14 @@ class PixelWorldEnv(gym.Env):
         info = self._info()
         if self.split is not None:
             info["split"] = self.split
+        if self._window is not None:
+            self.render()
         return self._observe(), info
 
     def step(self, action):
         reward, terminated, truncated, info = self.transition(check_action(action, self.action_names))
+        if self._window is not None:
+            self.render()
         return self._observe(), reward, terminated, truncated, info
 
     def transition(self, action: int) -> tuple[float, bool, bool, dict[str, Any]]:
@@ -307,9 +364,17 @@ class PixelWorldEnv(gym.Env):
 
     def render(self):
         if self.render_mode is None:
-            gym.logger.warn("render() called without a render_mode; pass render_mode='rgb_array' or 'ansi'")
+            gym.logger.warn("render() called without a render_mode; pass render_mode='rgb_array', 'ansi' or 'human'")
             return None
         world = self.world
         if self.render_mode == "ansi":
             return world.current_scene().to_ascii() + "\n"
-        return rgb_image(world.state(), window=world.self_position)
+        if self._window is None:
+            return rgb_image(world.state(), window=world.self_position)
+        self._window.show(rgb_image(world.state(), cell_size=HUMAN_CELL_SIZE, window=world.self_position))
+        return None
+
+    def close(self) -> None:
+        if self._window is not None:
+            self._window.close()
+        super().close()

@@ -10,12 +10,11 @@ Making an env loads (or generates, once) only the datasets it uses.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any
 
 import gymnasium as gym
 
 from pixelworld_env import catalog
-from pixelworld_env.env import PixelWorldEnv
+from pixelworld_env.env import PixelWorldEnv, check_settings
 from pixelworld_env.loading import Split, load_dataset
 
 ENTRY_POINT = "pixelworld_env.registration:make_env"
@@ -27,12 +26,16 @@ def env_id(name: str) -> str:
 
 
 def make_env(datasets: Sequence[str], *, split: Split = "train", seed: int = 0, max_steps: int = 100,
-             observation: str = "hand", render_mode: str | None = None, **kwargs: Any) -> PixelWorldEnv:
+             observation: str = "hand", render_mode: str | None = None,
+             aaai18_reset_bug: bool = False) -> PixelWorldEnv:
     """A :class:`PixelWorldEnv` over the scenes of one or more catalog datasets sharing kind and concept.
 
     ``seed`` is the dataset-generation seed (the episode seed goes to ``reset``); ``split`` picks the
-    stratified train or test half, or "all". Extra keyword arguments go to :class:`PixelWorldEnv`.
+    stratified train or test half, or "all". The other arguments are :class:`PixelWorldEnv`'s, checked before any
+    dataset is loaded.
     """
+    check_settings(max_steps=max_steps, observation=observation, render_mode=render_mode,
+                   aaai18_reset_bug=aaai18_reset_bug)
     loaded = [load_dataset(name, split=split, seed=seed) for name in datasets]
     kinds = {d.kind for d in loaded}
     concepts = {d.concept for d in loaded}
@@ -41,7 +44,8 @@ def make_env(datasets: Sequence[str], *, split: Split = "train", seed: int = 0, 
     env = PixelWorldEnv(
         [s for d in loaded for s in d.scenes], kind=loaded[0].kind, concept=loaded[0].concept,
         labels=[label for d in loaded for label in d.labels] if loaded[0].kind == "classification" else None,
-        macros=catalog.macros(), max_steps=max_steps, observation=observation, render_mode=render_mode, **kwargs,
+        macros=catalog.macros(), max_steps=max_steps, observation=observation, render_mode=render_mode,
+        aaai18_reset_bug=aaai18_reset_bug,
     )
     env.split = split
     return env

@@ -1,8 +1,12 @@
-"""Rendering of PixelWorld states as RGB images (spec §1.9)."""
+"""Rendering of PixelWorld states as RGB images (spec §1.9), and the window of ``render_mode="human"``."""
 
 from __future__ import annotations
 
+import os
+from typing import Any
+
 import numpy as np
+from gymnasium.error import DependencyNotInstalled
 
 from pixelworld_env.constants import Color
 
@@ -37,3 +41,70 @@ def rgb_image(state: np.ndarray, cell_size: int = 10, window: tuple[int, int] | 
         image[top : bottom + 1, left] = WINDOW_OUTLINE
         image[top : bottom + 1, right] = WINDOW_OUTLINE
     return image
+
+
+HUMAN_CELL_SIZE = 20
+"""Pixels per cell in the ``render_mode="human"`` window (700 x 360 for the catalog's 18 x 35 grid)."""
+HEADLESS_DRIVERS = ("offscreen", "dummy")
+"""SDL video drivers that draw without showing anything: what SDL falls back to on a machine without a display."""
+
+
+def check_display() -> None:
+    """Raise unless ``render_mode="human"`` can show its window here.
+
+    ``DependencyNotInstalled`` without pygame (the ``render`` extra); ``RuntimeError`` without a display, where SDL
+    would silently fall back to an invisible driver. ``SDL_VIDEODRIVER=dummy`` (or ``offscreen``) set on purpose is
+    accepted: frames are drawn, nothing is shown (tests, recording set-ups).
+    """
+    os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
+    try:
+        import pygame
+    except ImportError:
+        raise DependencyNotInstalled('render_mode="human" draws in a pygame window, and pygame is not installed: '
+                                     'pip install "sb3-smc[render]" (or use render_mode="rgb_array")') from None
+    try:
+        pygame.display.init()
+        driver = pygame.display.get_driver()
+    except pygame.error as error:
+        driver = f"none ({error})"
+    if driver in HEADLESS_DRIVERS and driver in os.environ.get("SDL_VIDEODRIVER", ""):
+        return
+    if driver in HEADLESS_DRIVERS or driver.startswith("none"):
+        pygame.display.quit()
+        raise RuntimeError(
+            f'render_mode="human" opens a window, and pygame finds no display here (video driver: {driver}; '
+            f"DISPLAY={os.environ.get('DISPLAY')!r}, WAYLAND_DISPLAY={os.environ.get('WAYLAND_DISPLAY')!r}): run it "
+            'where a screen is attached (or forwarded), or use render_mode="rgb_array"')
+
+
+class Window:
+    """The window of ``render_mode="human"``: a pygame display showing each frame at up to ``fps`` frames per
+    second, opened at the first frame (call :func:`check_display` first)."""
+
+    def __init__(self, title: str, fps: int) -> None:
+        self.title = title
+        self.fps = fps
+        self._screen: Any = None
+        self._clock: Any = None
+
+    def show(self, frame: np.ndarray) -> None:
+        """Draw ``frame`` (``(height, width, 3)`` uint8) in the window."""
+        import pygame
+
+        if self._screen is None:
+            pygame.display.init()
+            self._screen = pygame.display.set_mode((frame.shape[1], frame.shape[0]))
+            pygame.display.set_caption(self.title)
+            self._clock = pygame.time.Clock()
+        pygame.surfarray.blit_array(self._screen, frame.swapaxes(0, 1))
+        pygame.event.pump()
+        pygame.display.flip()
+        self._clock.tick(self.fps)
+
+    def close(self) -> None:
+        """Close the window (the next frame opens a new one)."""
+        if self._screen is not None:
+            import pygame
+
+            pygame.display.quit()
+            self._screen = self._clock = None

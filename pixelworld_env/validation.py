@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["MAX_SEED", "as_integer", "check_action", "check_int", "check_seed"]
+__all__ = ["MAX_SEED", "as_integer", "check_action", "check_bool", "check_int", "check_seed"]
 
 MAX_SEED = 2**63 - 1
 """Seeds are integers in ``[0, 2**63 - 1]`` (they are stored in JSON records and numpy ``int64`` arrays)."""
@@ -34,6 +34,14 @@ def check_int(value: Any, name: str, minimum: int | None = None) -> int:
     if minimum is not None and number < minimum:
         raise ValueError(f"{name} must be >= {minimum}, got {number}")
     return number
+
+
+def check_bool(value: Any, name: str) -> bool:
+    """``value`` when it is ``True`` or ``False`` (numpy bools too); anything else (``1``, ``"yes"``, ``None``) is a
+    ``TypeError`` naming ``name``."""
+    if not isinstance(value, bool | np.bool_):
+        raise TypeError(f"{name} must be a bool (True or False), got {value!r} ({type(value).__name__})")
+    return bool(value)
 
 
 def check_seed(seed: Any, name: str = "seed") -> int:

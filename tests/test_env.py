@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import pickle
+import sys
 import warnings
 
 import gymnasium as gym
@@ -12,6 +13,8 @@ from gymnasium.utils.env_checker import check_env as gym_check_env
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
 from pixelworld_env import Color, PixelWorldEnv, Scene
+from pixelworld_env.constants import NUM_COLORS
+from pixelworld_env.render import HUMAN_CELL_SIZE, rgb_image
 from tests.helpers import CONTAINER, IN_CONTAINER, classification_env, make
 
 DOWN, RIGHT, UP, LEFT = "DOWN", "RIGHT", "UP", "LEFT"
@@ -238,8 +241,72 @@ def test_render_modes() -> None:
     text = make(render_mode="ansi")
     text.reset(seed=0)
     assert text.render() == Scene.from_ascii(CONTAINER, {"a": "container"}).to_ascii() + "\n"
-    with pytest.raises(ValueError, match="render_mode"):
+    with pytest.raises(ValueError, match=r"render_mode must be None or one of \['human', 'rgb_array', 'ansi'\]"):
+        make(render_mode="window")
+
+
+def test_human_rendering_without_pygame_names_the_extra(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setitem(sys.modules, "pygame", None)  # what an install without pygame sees
+    with pytest.raises(gym.error.DependencyNotInstalled,
+                       match=r'pygame is not installed: pip install "sb3-smc\[render\]"'):
         make(render_mode="human")
+
+
+@pytest.fixture
+def pygame_display(monkeypatch: pytest.MonkeyPatch):
+    """pygame with its display shut (each test starts its own), no display variable and no chosen video driver."""
+    pygame = pytest.importorskip("pygame", reason="pygame is in the [test] extra")
+    for name in ("DISPLAY", "WAYLAND_DISPLAY", "SDL_VIDEODRIVER"):
+        monkeypatch.delenv(name, raising=False)
+    pygame.display.quit()
+    yield pygame
+    pygame.display.quit()
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="DISPLAY / WAYLAND_DISPLAY are Linux's displays")
+def test_human_rendering_on_a_machine_without_a_display_says_so(pygame_display) -> None:
+    with pytest.raises(RuntimeError, match=r'render_mode="human" opens a window, and pygame finds no display here '
+                                           r"\(video driver: .*DISPLAY=None, WAYLAND_DISPLAY=None\)"):
+        make(render_mode="human")
+    assert not pygame_display.display.get_init()
+
+
+def test_human_window_shows_the_rgb_frame_on_reset_and_step(pygame_display, monkeypatch: pytest.MonkeyPatch) -> None:
+    """SDL's dummy driver, chosen on purpose, draws the window's frames without a screen."""
+    monkeypatch.setenv("SDL_VIDEODRIVER", "dummy")
+    env = make(render_mode="human")
+    rgb = make(render_mode="rgb_array")
+
+    def shown() -> np.ndarray:
+        return pygame_display.surfarray.array3d(pygame_display.display.get_surface()).swapaxes(0, 1)
+
+    env.reset(seed=0)
+    expected = rgb_image(env.world.state(), cell_size=HUMAN_CELL_SIZE, window=env.world.self_position)
+    assert expected.shape == (8 * HUMAN_CELL_SIZE, 9 * HUMAN_CELL_SIZE, 3)
+    np.testing.assert_array_equal(shown(), expected)
+    rgb.reset(seed=0)
+    np.testing.assert_array_equal(rgb.render(), rgb_image(env.world.state(), window=env.world.self_position))
+    assert env.step(env.action_names.index(DOWN))[1:] == rgb.step(rgb.action_names.index(DOWN))[1:]
+    np.testing.assert_array_equal(shown(), rgb_image(env.world.state(), HUMAN_CELL_SIZE, env.world.self_position))
+    assert env.render() is None and pygame_display.display.get_caption()[0] == f"PixelWorld: {IN_CONTAINER}"
+    env.close()
+    assert not pygame_display.display.get_init()
+
+
+def test_image_observation_is_the_channel_first_one_hot_grid() -> None:
+    env = gym.make("PW-cl_self-in-container_vs_noncontainer-v0", observation="image")
+    obs, _ = env.reset(seed=0)
+    assert env.observation_space == gym.spaces.Box(0, 255, (NUM_COLORS, 18, 35), np.uint8)
+    state = env.unwrapped.world.state()
+    np.testing.assert_array_equal(obs, (np.arange(NUM_COLORS)[:, None, None] == state) * 255)
+    obs, *_ = env.step(env.unwrapped.action_names.index(DOWN))
+    assert env.observation_space.contains(obs) and obs.sum(axis=0).tolist() == np.full((18, 35), 255).tolist()
+    np.testing.assert_array_equal(obs.argmax(axis=0), env.unwrapped.world.state())
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        gym_check_env(env.unwrapped, skip_render_check=True)
+    with pytest.raises(ValueError, match="observation='image' needs scenes of at least 9 x 9 cells, got 8 x 9"):
+        make(observation="image")
 
 
 def test_full_observation() -> None:

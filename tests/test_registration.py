@@ -11,11 +11,12 @@ import gymnasium as gym
 import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
+from gymnasium.wrappers import TimeLimit
 
 import pixelworld_env
-from pixelworld_env import catalog
+from pixelworld_env import catalog, registration
 from pixelworld_env.oracle import plan_to_goal
-from pixelworld_env.registration import registered_ids
+from pixelworld_env.registration import make_env, registered_ids
 
 IDS = sorted(registered_ids())
 BRING_ABOUT = [i for i in IDS if registered_ids()[i][0].startswith("ba_") and len(registered_ids()[i]) == 1]
@@ -76,3 +77,63 @@ def test_bring_about_scenes_are_solvable(env_id: str) -> None:
         assert plan, f"{env_id} scene {index}: the goal cannot be reached by moving the self"
         rewards = [env.step(a)[1] for a in plan]
         assert rewards[-1] == 0.5 and env.step(env.action_names.index("SIG1"))[1] == 0.5
+
+
+def _wrappers(env: gym.Env) -> list[type]:
+    chain = []
+    while isinstance(env, gym.Wrapper):
+        chain.append(type(env))
+        env = env.env
+    return chain
+
+
+def test_the_spec_states_the_limit_and_make_adds_no_time_limit() -> None:
+    """``env.spec.max_episode_steps`` is the env's own limit; gym.make wraps no ``TimeLimit`` around it, so the
+    episodes are those of the bare env (one limit, truncating at the same step)."""
+    env_id = "PW-ba_self-in-container-v0"
+    made = gym.make(env_id)
+    assert made.spec.max_episode_steps == made.unwrapped.spec.max_episode_steps == 100
+    assert TimeLimit not in _wrappers(made) and gym.spec(env_id).max_episode_steps is None
+    assert gym.make(env_id, max_steps=40).spec.max_episode_steps == 40
+    limited = gym.make(env_id, max_episode_steps=30)  # asked for: gym.make's TimeLimit, and the spec says so
+    assert TimeLimit in _wrappers(limited) and limited.spec.max_episode_steps == 30
+    bare = make_env(registered_ids()[env_id])
+    assert bare.spec is None
+    for env in (made, bare):  # only moves: every episode runs into the limit
+        env.action_space.seed(3)
+    traces = []
+    for env in (made, bare):
+        env.reset(seed=5)
+        trace = []
+        for _ in range(350):
+            obs, reward, terminated, truncated, info = env.step(int(env.action_space.sample()) % 4 + 1)
+            trace.append((obs.tobytes(), reward, terminated, truncated, info["scene_index"],
+                          env.unwrapped.elapsed_steps))
+            if terminated or truncated:
+                env.reset()
+        traces.append(trace)
+    assert traces[0] == traces[1]
+    assert [i for i, step in enumerate(traces[0]) if step[3]] == [99, 199, 299]
+
+
+@pytest.mark.parametrize(("kwargs", "error", "message"), [
+    ({"aaai18_reset_bug": "yes"}, TypeError, r"aaai18_reset_bug must be a bool \(True or False\), got 'yes' \(str\)"),
+    ({"aaai18_reset_bug": 1}, TypeError, r"aaai18_reset_bug must be a bool \(True or False\), got 1 \(int\)"),
+    ({"max_steps": 0}, ValueError, "max_steps must be >= 1, got 0"),
+    ({"observation": "imag"}, ValueError, "observation must be one of .*'image'.*got 'imag'"),
+    ({"render_mode": "window"}, ValueError, "render_mode must be None or one of"),
+    ({"max_step": 5}, TypeError, "unexpected keyword argument 'max_step'"),
+])
+def test_settings_are_checked_before_any_dataset_is_loaded(monkeypatch: pytest.MonkeyPatch, kwargs: dict,
+                                                          error: type, message: str) -> None:
+    def no_loading(*args, **kw):
+        raise AssertionError("a dataset was loaded before the settings were checked")
+
+    monkeypatch.setattr(registration, "load_dataset", no_loading)
+    with pytest.raises(error, match=message):
+        gym.make("PW-cl_self-in-left-corner_vs_on-hline-v0", **kwargs)
+
+
+def test_numpy_bools_are_bools() -> None:
+    env = gym.make("PW-cl_self-in-left-corner_vs_on-hline-v0", aaai18_reset_bug=np.bool_(True))
+    assert env.unwrapped.aaai18_reset_bug
