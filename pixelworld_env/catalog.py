@@ -228,12 +228,6 @@ def generators() -> dict[str, str]:
     return {key: d["logic"] for key, d in _data()["generators"].items()}
 
 
-def descriptions() -> dict[str, str]:
-    """Every concept and generator key -> its one-line description."""
-    data = _data()
-    return {key: d["desc"] for section in ("concepts", "generators") for key, d in data[section].items()}
-
-
 def macros() -> dict[str, str]:
     """The merged concept + generator macro table (spec §3.2); a name defined as both is an error."""
     return dict(_macro_table())

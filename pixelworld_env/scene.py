@@ -87,10 +87,6 @@ class Scene:
         return self.objects[self.self_index]
 
     @property
-    def has_frame(self) -> bool:
-        return any(obj.is_frame for obj in self.objects)
-
-    @property
     def floor_row(self) -> int:
         """The row on which the ``floor`` predicate expects the floor's top (``height - 3``)."""
         return self.height - FLOOR_HEIGHT
