@@ -35,7 +35,7 @@ from sb3_smc.curricula.format import Curriculum
 from sb3_smc.curricula.trainer import Job, job_name, run_job
 from sb3_smc.library import SMCLibrary
 from sb3_smc.records import Budget, TaskSpec, TrainingSpec
-from sb3_smc.training import train_smc
+from sb3_smc.training import untrained_smc
 
 TARGET = "cl_self-in-container_vs_noncontainer"
 SEEDS = 5
@@ -79,7 +79,7 @@ def main() -> None:
         library = SMCLibrary()
         for k, name in enumerate(canonical):
             for seed in (0, 1):
-                smc = train_smc(f"PW-{name}-v0", total_timesteps=0, n_envs=1, seed=10 * k + seed,
+                smc = untrained_smc(f"PW-{name}-v0", n_envs=1, seed=10 * k + seed,
                                 name=job_name(name, seed))
                 library.add(smc)
         path = library.save(Path(tmp) / "library")

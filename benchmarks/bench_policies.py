@@ -1,7 +1,7 @@
 """Step-policy micro-benchmark: µs per call of the numpy actors of ``sb3_smc.policies`` next to ``model.predict``.
 
 An SMC called as a child runs one observation at a time, so this per-call cost bounds a level-2 SMC's speed. Cases
-(models from ``train_smc(..., total_timesteps=0)`` on a real PixelWorld task; the weights do not change the cost):
+(models from ``untrained_smc(...)`` on a real PixelWorld task; the weights do not change the cost):
 RecurrentPPO with the default LSTM-32 and ``net_arch=[]``, with a (64, 64) head, and PPO with a (64, 64) MLP; then
 ``sample_action`` next to ``numpy.random.Generator.choice``. Best of 5 blocks of ``--repeats`` calls.
 
@@ -31,7 +31,7 @@ from stable_baselines3.common.utils import obs_as_tensor
 
 from sb3_smc.envs import make_smc_env
 from sb3_smc.policies import policy_from_model, sample_action
-from sb3_smc.training import train_smc
+from sb3_smc.training import untrained_smc
 
 ENV_ID = "PW-cl_self-in-left-corner_vs_on-hline-v0"
 
@@ -57,7 +57,7 @@ def main() -> None:
              ("PPO MlpPolicy (64, 64)", {"algo": "PPO", "policy_kwargs": {"net_arch": [64, 64]}})]
     rows = []
     for label, settings in cases:
-        smc = train_smc(ENV_ID, total_timesteps=0, n_envs=1, **settings)
+        smc = untrained_smc(ENV_ID, n_envs=1, **settings)
         env = make_smc_env(smc.spec)
         observations = [env.reset(seed=s)[0] for s in range(64)]
         policy, model = policy_from_model(smc.model), smc.model
@@ -80,7 +80,7 @@ def main() -> None:
 
     compiled_rows = []
     for rnn in ("lstm", "gru"):
-        compiled = policy_from_model(train_smc(ENV_ID, total_timesteps=0, n_envs=1, rnn=rnn).model)
+        compiled = policy_from_model(untrained_smc(ENV_ID, n_envs=1, rnn=rnn).model)
         numpy_code = copy.copy(compiled)
         numpy_code._compiled = None  # the same weights through the numpy code
         state = compiled.probabilities(observations[1], compiled.initial_state())[1]
@@ -97,7 +97,7 @@ def main() -> None:
 
     collection_rows = []
     for rnn in ("lstm", "gru"):
-        learner = train_smc(ENV_ID, total_timesteps=0, n_envs=16, rnn=rnn).model.policy
+        learner = untrained_smc(ENV_ID, n_envs=16, rnn=rnn).model.policy
         batch = np.stack(observations[:16])
         hidden = torch.zeros((1, 16, 32))
         states = RNNStates((hidden, hidden), (hidden, hidden))

@@ -26,7 +26,7 @@ import torch
 
 import pixelworld_env  # noqa: F401  (registers the PW-* ids)
 from pixelworld_env import catalog
-from sb3_smc.training import train_smc
+from sb3_smc.training import train_smc, untrained_smc
 
 FLAT = "PW-cl_self-in-left-corner_vs_on-hline-v0"
 LEVEL2 = "PW-cl_self-in-container_vs_noncontainer-v0"
@@ -39,7 +39,7 @@ def canonical_children() -> list[str]:
 
 
 def untrained(names: list[str] | tuple[str, ...]):
-    return [train_smc(f"PW-{name}-v0", total_timesteps=0, n_envs=1, seed=k) for k, name in enumerate(names)]
+    return [untrained_smc(f"PW-{name}-v0", n_envs=1, seed=k) for k, name in enumerate(names)]
 
 
 def measure(env_id: str, *, algo: str, updates: int, threads: int, repeats: int, children=None,

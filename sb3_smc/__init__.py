@@ -33,6 +33,7 @@ _EXPORTS = {
     "policy_from_model": "sb3_smc.policies",
     "sample_action": "sb3_smc.policies",
     "train_smc": "sb3_smc.training",
+    "untrained_smc": "sb3_smc.training",
     "RecurrentTRPO": "sb3_smc.recurrent_trpo",
     "EvaluationResult": "sb3_smc.evaluation",
     "evaluate": "sb3_smc.evaluation",
@@ -79,6 +80,7 @@ __all__ = [
     "sample_action",
     "smc_action_names",
     "train_smc",
+    "untrained_smc",
 ]
 assert set(__all__) == set(_EXPORTS)
 
@@ -123,5 +125,5 @@ if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs
     )
     from sb3_smc.recurrent_trpo import RecurrentTRPO
     from sb3_smc.smc import SMC, StepPolicy, observation_size, smc_action_names
-    from sb3_smc.training import train_smc
+    from sb3_smc.training import train_smc, untrained_smc
     from sb3_smc.wrapper import HierarchicalSMCWrapper

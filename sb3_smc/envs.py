@@ -57,14 +57,52 @@ def make_smc_env(spec: TrainingSpec, children: Sequence[SMC] = (), *, env: gym.E
     if env is None:
         import pixelworld_env  # noqa: F401  (registers the PW-* ids)
 
-        kwargs = {"disable_env_checker": True, **spec.task.env_kwargs, **dict(env_kwargs or {})}
-        env = gym.make(env_id or spec.task.env_id, split=split or spec.task.split, max_steps=settings.max_steps,
-                       **kwargs)
+        env_id = env_id or spec.task.env_id
+        kwargs = {"disable_env_checker": True, **_check_env_kwargs(env_id, {**spec.task.env_kwargs,
+                                                                           **_mapping(env_kwargs)})}
+        env = gym.make(env_id, split=split or spec.task.split, max_steps=settings.max_steps, **kwargs)
     elif env_id is not None or split is not None or env_kwargs:
         raise ValueError("make_smc_env: give either env, or env_id / split / env_kwargs to build one, not both")
     else:
         pixelworld_base(env)
     return wrap_with_smcs(env, children, settings, record_cells=record_cells)
+
+
+def _mapping(env_kwargs: Any) -> dict[str, Any]:
+    if env_kwargs is None:
+        return {}
+    if not isinstance(env_kwargs, Mapping) or not all(isinstance(key, str) for key in env_kwargs):
+        raise TypeError(f"env_kwargs must be a mapping of argument names to values, got {env_kwargs!r}")
+    return dict(env_kwargs)
+
+
+def _check_env_kwargs(env_id: str, kwargs: dict[str, Any]) -> dict[str, Any]:
+    """``kwargs`` for ``gym.make(env_id, split=..., max_steps=..., **kwargs)``: ``ValueError`` for ``split`` or
+    ``max_steps`` (set by the spec or make_smc_env's arguments) and, for a PixelWorld id, for a name its
+    environment does not take (the values are checked by the environment)."""
+    import difflib
+    import inspect
+
+    from pixelworld_env.registration import make_env
+
+    clash = sorted({"split", "max_steps"} & set(kwargs))
+    if clash:
+        raise ValueError(f"env_kwargs {clash}: the split is make_smc_env's split= (else the spec's task.split), "
+                         "max_steps the wrapper settings' (wrapper=WrapperSettings(max_steps=...)); give them there")
+    try:
+        entry = gym.spec(env_id).entry_point
+    except gym.error.Error:
+        return kwargs  # not registered: gym.make says so
+    if entry != f"{make_env.__module__}:{make_env.__name__}":
+        return kwargs  # a user's own environment: its arguments are not known here
+    names = {*inspect.signature(gym.make).parameters, *inspect.signature(make_env).parameters}
+    taken = sorted(names - {"id", "datasets", "kwargs", "split", "max_steps"})
+    for key in kwargs:
+        if key not in taken:
+            close = difflib.get_close_matches(key, taken, n=1)
+            raise ValueError(f"env_kwargs: {env_id} takes no argument {key!r} (it takes {taken})"
+                             + (f"; did you mean {close[0]!r}?" if close else ""))
+    return kwargs
 
 
 def wrap_with_smcs(env: gym.Env, smcs: Sequence[SMC], settings: WrapperSettings, *,

@@ -26,10 +26,13 @@ of at most 100 decisions.
 from __future__ import annotations
 
 import dataclasses
+import difflib
+import inspect
 import time
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
 import torch
 from sb3_contrib import TRPO, RecurrentPPO
@@ -50,7 +53,8 @@ from sb3_smc.recurrent_trpo import RecurrentTRPO
 from sb3_smc.smc import SMC, StepPolicy
 from sb3_smc.vec_env import SMCVecEnv
 
-__all__ = ["ALGORITHM_CLASSES", "make_vec_env", "resolve_children", "train_smc"]
+__all__ = ["ALGORITHM_CLASSES", "check_model_settings", "make_vec_env", "resolve_children", "train_smc",
+           "untrained_smc"]
 
 ALGORITHM_CLASSES: dict[str, type] = {"RecurrentPPO": RecurrentPPO, "TRPO": TRPO, "PPO": PPO,
                                       "RecurrentTRPO": RecurrentTRPO}
@@ -83,6 +87,38 @@ def resolve_children(children: Any, names: Sequence[str] | None = None) -> tuple
         raise ValueError(f"the spec's children are {list(names)}, but the SMCs given are "
                          f"{[c.name for c in resolved]}")
     return resolved
+
+
+class _SpacesOnly(gym.Env):
+    """An environment with only the spaces of an SMC's: enough to build its model (never stepped)."""
+
+    def __init__(self, size: int, n_actions: int) -> None:
+        self.observation_space = gym.spaces.Box(-1.0, 1.0, shape=(size,), dtype=np.float32)
+        self.action_space = gym.spaces.Discrete(n_actions)
+
+
+def check_model_settings(spec: TrainingSpec) -> None:
+    """Build the model ``spec`` trains, on an environment with the spaces of the SMC's (its task's kind must be
+    known), without training it: ``ValueError`` naming a hyperparameter the algorithm does not take or what the
+    algorithm or its policy refuses (a value out of range), so a run can refuse it before anything is trained.
+    The caller's torch random state is left as it was."""
+    from stable_baselines3.common.vec_env import DummyVecEnv
+
+    cls = ALGORITHM_CLASSES[spec.algo]
+    policy, settings = constructor_arguments(spec.hyperparameters)
+    accepted = inspect.signature(cls).parameters
+    for key in settings:
+        if key not in accepted:
+            close = difflib.get_close_matches(key, list(accepted), n=1)
+            raise ValueError(f"hyperparameter {key!r} is not an argument of {spec.algo}"
+                             + (f"; did you mean {close[0]!r}?" if close else ""))
+    size, n_actions = spec.frame_stack * spec.observation_size, len(spec.action_names)
+    venv = DummyVecEnv([lambda: _SpacesOnly(size, n_actions)] * spec.budget.n_envs)
+    with torch.random.fork_rng(devices=[]):
+        try:
+            cls(policy, venv, n_steps=spec.budget.n_steps, device="cpu", verbose=0, **settings)
+        except Exception as err:  # noqa: BLE001 - whatever the constructor refuses is the message
+            raise ValueError(f"{spec.algo} refuses its hyperparameters: {type(err).__name__}: {err}") from None
 
 
 def make_vec_env(spec: TrainingSpec, children: Sequence[SMC] = ()) -> Any:
@@ -126,7 +162,7 @@ def train_smc(
 
     ``task`` is a :class:`~sb3_smc.records.TrainingSpec`, or an env id whose spec is built from the keyword
     arguments (:meth:`TrainingSpec.create <sb3_smc.records.TrainingSpec.create>`; passing a spec and any of them is
-    an error):
+    an error). ``total_timesteps`` must be >= 1 (:func:`untrained_smc` gives the SMC before training):
 
     * ``algo``: ``"RecurrentPPO"`` (LSTM 32), ``"TRPO"`` (MLP 32), ``"PPO"`` (MLP 32) or ``"RecurrentTRPO"``
       (:mod:`sb3_smc.recurrent_trpo`: TRPO's trust region on the recurrent policy); ``rnn="gru"`` gives the
@@ -150,29 +186,49 @@ def train_smc(
     The returned SMC's ``policy`` is a numpy copy of the selected snapshot's actor, ``model`` the SB3 model with the
     selected weights loaded, ``spec`` the (resolved) spec and ``record`` the :class:`TrainingRecord`.
     """
+    settings = dict(algo=algo, total_timesteps=total_timesteps, seed=seed, include_primitives=include_primitives,
+                    name=name, n_envs=n_envs, signal_bias=signal_bias, frame_stack=frame_stack, max_steps=max_steps,
+                    count_primitive_steps=count_primitive_steps, call_step_cap=call_step_cap, env_kwargs=env_kwargs,
+                    rnn=rnn)
+    spec, kids = _spec_and_children(task, children, settings, hyperparams)
+    if spec.budget.total_timesteps < 1:
+        raise ValueError(f"SMC {spec.name!r}: total_timesteps must be >= 1, got {spec.budget.total_timesteps} "
+                         "(nothing would be trained); untrained_smc(...) builds an SMC with its initial policy on "
+                         "purpose")
+    return _train(spec, kids, tensorboard_log=tensorboard_log, log_every=log_every, callback=callback,
+                  printer=printer)
+
+
+def untrained_smc(task: str | TrainingSpec, *, children: Any = None, **settings: Any) -> SMC:
+    """The SMC :func:`train_smc` starts from: the model as built (signal bias set), no update run. ``task`` and
+    ``children`` as for ``train_smc``, with its keyword settings and hyperparameters (``total_timesteps`` aside: the
+    returned spec's budget is 0 steps); for tests, benchmarks and baselines that need a model, not a trained
+    one."""
+    if "total_timesteps" in settings:
+        raise TypeError("untrained_smc trains nothing: it takes no total_timesteps")
+    known = {key: settings.pop(key) for key in list(settings) if key in _KEYWORD_DEFAULTS}
     if isinstance(task, TrainingSpec):
-        given = {k: v for k, v in dict(algo=algo, total_timesteps=total_timesteps, seed=seed,
-                                         include_primitives=include_primitives, name=name, n_envs=n_envs,
-                                         signal_bias=signal_bias, frame_stack=frame_stack, max_steps=max_steps,
-                                         count_primitive_steps=count_primitive_steps, call_step_cap=call_step_cap,
-                                         env_kwargs=env_kwargs, rnn=rnn).items()
-                 if v != _KEYWORD_DEFAULTS[k]}
+        task = dataclasses.replace(task, budget=dataclasses.replace(task.budget, total_timesteps=0))
+    else:
+        known["total_timesteps"] = 0
+    spec, kids = _spec_and_children(task, children, {**_KEYWORD_DEFAULTS, **known}, settings)
+    return _train(spec, kids, tensorboard_log=None, log_every=0, callback=None, printer=print)
+
+
+def _spec_and_children(task: str | TrainingSpec, children: Any, settings: dict[str, Any],
+                       hyperparams: dict[str, Any]) -> tuple[TrainingSpec, tuple[SMC, ...]]:
+    """The spec of :func:`train_smc`'s arguments and the child SMCs it names."""
+    if isinstance(task, TrainingSpec):
+        given = {k: v for k, v in settings.items() if v != _KEYWORD_DEFAULTS[k]}
         if given or hyperparams:
             raise TypeError(f"train_smc got a TrainingSpec and the settings {sorted({*given, *hyperparams})}; "
                             "put them in the spec (dataclasses.replace) instead")
-        kids = resolve_children(children, task.children)
-        spec = task
-    elif isinstance(task, str):
+        return task, resolve_children(children, task.children)
+    if isinstance(task, str):
         kids = resolve_children(children)
-        spec = TrainingSpec.create(
-            task, name=name, algo=algo, seed=seed, total_timesteps=total_timesteps, n_envs=n_envs,
-            children=[c.name for c in kids], include_primitives=include_primitives,
-            count_primitive_steps=count_primitive_steps, call_step_cap=call_step_cap, max_steps=max_steps,
-            signal_bias=signal_bias, frame_stack=frame_stack, env_kwargs=env_kwargs, rnn=rnn, **hyperparams)
-    else:
-        raise TypeError(f"train_smc needs an env id or a TrainingSpec, got {type(task).__name__}")
-    return _train(spec, kids, tensorboard_log=tensorboard_log, log_every=log_every, callback=callback,
-                  printer=printer)
+        spec = TrainingSpec.create(task, children=[c.name for c in kids], **settings, **hyperparams)
+        return spec, kids
+    raise TypeError(f"train_smc needs an env id or a TrainingSpec, got {type(task).__name__}")
 
 
 _KEYWORD_DEFAULTS = {"algo": "RecurrentPPO", "total_timesteps": 400_000, "seed": 0, "include_primitives": True,

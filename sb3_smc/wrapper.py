@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Generator, Sequence
+from collections.abc import Generator, Iterable, Sequence
 from typing import Any, TypeVar
 
 import gymnasium as gym
@@ -37,6 +37,19 @@ def _only_order_checks(env: gym.Env, base: gym.Env) -> bool:
     return True
 
 
+def _smc_actions(smcs: Any) -> tuple[SMC, ...]:
+    """``smcs`` as a tuple of SMC objects; ``TypeError`` naming what else was given."""
+    if isinstance(smcs, str | SMC) or not isinstance(smcs, Iterable):
+        raise TypeError(f"smcs must be a sequence of SMCs, got {type(smcs).__name__} {smcs!r}")
+    out = tuple(smcs)
+    for i, smc in enumerate(out):
+        if not isinstance(smc, SMC):
+            hint = (": SMCs are objects, not names; take them from their library (library.wrap(env, names), or "
+                    "[library[name] for name in names])") if isinstance(smc, str) else ""
+            raise TypeError(f"smcs[{i}] must be an SMC, got {type(smc).__name__} {smc!r}{hint}")
+    return out
+
+
 class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
     """A PixelWorld env whose actions are its signals, the four moves and one action per SMC.
 
@@ -67,7 +80,8 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
 
     def __init__(self, env: gym.Env, smcs: Sequence[SMC] = (), *, include_primitives: bool = True,
                  count_primitive_steps: bool = False, call_step_cap: int = 100, record_cells: bool = False) -> None:
-        gym.utils.RecordConstructorArgs.__init__(self, smcs=tuple(smcs), include_primitives=include_primitives,
+        smcs = _smc_actions(smcs)
+        gym.utils.RecordConstructorArgs.__init__(self, smcs=smcs, include_primitives=include_primitives,
                                                  count_primitive_steps=count_primitive_steps,
                                                  call_step_cap=call_step_cap, record_cells=record_cells)
         super().__init__(env)
@@ -77,7 +91,7 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         if call_step_cap < 1:
             raise ValueError(f"call_step_cap must be >= 1, got {call_step_cap}")
         self.base = base
-        self.smcs = tuple(smcs)
+        self.smcs = smcs
         names = [smc.name for smc in self.smcs]
         if len(set(names)) != len(names):
             raise ValueError(f"SMC names must be unique, got {names}")

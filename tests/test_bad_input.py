@@ -1,4 +1,5 @@
-"""Bad input never passes silently: actions, seeds, observation settings, reset options, environment arguments.
+"""Bad input never passes silently: actions, seeds, observation settings, reset options, environment arguments,
+and ``train_smc`` / the wrapper / ``make_smc_env``.
 
 Each case raises with a message that says what was given and what is expected (nothing is converted)."""
 
@@ -87,10 +88,10 @@ def test_training_and_evaluation_seeds_are_checked():
 
 @pytest.mark.parametrize("observation", ["hand_raw", "full"])
 def test_smcs_refuse_observations_they_cannot_use(observation):
-    from sb3_smc.training import train_smc
+    from sb3_smc.training import untrained_smc
 
     with pytest.raises(ValueError, match=f"needs observation='hand', got '{observation}'"):
-        train_smc(ENV_ID, total_timesteps=0, n_envs=1, env_kwargs={"observation": observation})
+        untrained_smc(ENV_ID, n_envs=1, env_kwargs={"observation": observation})
     with pytest.raises(ValueError, match="needs observation='hand'"):
         HierarchicalSMCWrapper(gym.make(ENV_ID, observation=observation))
 
@@ -121,3 +122,39 @@ def test_environments_state_their_split():
     _, info = gym.make(ENV_ID, split="test").reset(seed=0)
     assert info["split"] == "test"
     assert "split" not in classification_env().reset(seed=0)[1]  # hand-made scenes have no split
+
+
+# ------------------------------------------------------------------------------------------------ sb3_smc's API
+
+def test_train_smc_trains_or_says_why_not():
+    from sb3_smc.envs import make_smc_env
+    from sb3_smc.records import TrainingSpec
+    from sb3_smc.training import train_smc, untrained_smc
+
+    with pytest.raises(ValueError, match=r"total_timesteps must be >= 1, got 0 \(nothing would be trained\); "
+                                         r"untrained_smc\(...\)"):
+        train_smc(ENV_ID, total_timesteps=0, n_envs=1)
+    with pytest.raises(ValueError, match="total_timesteps must be >= 1"):
+        train_smc(TrainingSpec.create(ENV_ID, total_timesteps=0, n_envs=1))
+    untrained = untrained_smc(ENV_ID, n_envs=1, seed=3)
+    assert untrained.spec.budget.total_timesteps == 0 and untrained.record.updates == 0
+    with pytest.raises(TypeError, match="untrained_smc trains nothing"):
+        untrained_smc(ENV_ID, total_timesteps=10)
+    with pytest.raises(TypeError, match=r"smcs\[0\] must be an SMC, got str 'corner': SMCs are objects, not names; "
+                                        r"take them from their library \(library.wrap\(env, names\)"):
+        HierarchicalSMCWrapper(gym.make(ENV_ID), ["corner"])
+    with pytest.raises(TypeError, match="smcs must be a sequence of SMCs, got str 'corner'"):
+        HierarchicalSMCWrapper(gym.make(ENV_ID), "corner")
+    spec = untrained.spec
+    with pytest.raises(ValueError, match=r"env_kwargs \['split'\]: the split is make_smc_env's split="):
+        make_smc_env(spec, env_kwargs={"split": "test"})
+    with pytest.raises(ValueError, match=r"env_kwargs \['max_steps'\]: .*WrapperSettings\(max_steps=...\)"):
+        make_smc_env(spec, env_kwargs={"max_steps": 5})
+    with pytest.raises(ValueError, match=f"env_kwargs: {ENV_ID} takes no argument 'obsrvation' .*did you mean "
+                                         "'observation'"):
+        make_smc_env(spec, env_kwargs={"obsrvation": "hand"})
+    with pytest.raises(TypeError, match="aaai18_reset_bug must be a bool"):  # values: the environment's own check
+        make_smc_env(spec, env_kwargs={"aaai18_reset_bug": "yes"})
+    with pytest.raises(TypeError, match="env_kwargs must be a mapping"):
+        make_smc_env(spec, env_kwargs=["seed"])
+    assert make_smc_env(spec, env_kwargs={"seed": 2, "aaai18_reset_bug": True}).unwrapped.aaai18_reset_bug

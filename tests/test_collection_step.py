@@ -8,7 +8,7 @@ import pytest
 import torch
 from sb3_contrib.common.recurrent.type_aliases import RNNStates
 
-from sb3_smc import train_smc
+from sb3_smc import train_smc, untrained_smc
 from sb3_smc.common.recurrent import SequenceLstmPolicy
 
 CORNER_ID = "PW-cl_self-in-left-corner_vs_on-hline-v0"
@@ -105,7 +105,7 @@ def test_with_gradients_the_step_stays_in_torch(policy) -> None:
 
 
 def test_other_architectures_keep_the_torch_step() -> None:
-    smc = train_smc(CORNER_ID, total_timesteps=0, seed=0, policy_kwargs={"net_arch": [16]})
+    smc = untrained_smc(CORNER_ID, seed=0, policy_kwargs={"net_arch": [16]})
     policy = smc.model.policy
     obs, states, starts = _inputs(policy)
     with torch.no_grad():

@@ -59,14 +59,14 @@ def test_the_spec_decides_the_environment():
 def test_training_evaluation_library_and_zoo_build_the_same_environment(tmp_path):
     """Same seed, same actions: the same observations, rewards and call lengths from every builder."""
     from sb3_smc.library import SMCLibrary
-    from sb3_smc.training import train_smc
+    from sb3_smc.training import untrained_smc
 
-    children = [train_smc("PW-ba_self-on-something_from_directly-above-v0", total_timesteps=0, n_envs=1, seed=1),
-                train_smc("PW-cl_self-in-left-corner_vs_on-hline-v0", total_timesteps=0, n_envs=1, seed=2)]
+    children = [untrained_smc("PW-ba_self-on-something_from_directly-above-v0", n_envs=1, seed=1),
+                untrained_smc("PW-cl_self-in-left-corner_vs_on-hline-v0", n_envs=1, seed=2)]
     names = [c.name for c in children]
     spec = TrainingSpec.create(CONTAINER_ID, children=names, call_step_cap=5, max_steps=7, include_primitives=False,
                                total_timesteps=0, n_envs=1)
-    smc = train_smc(spec, children=children)
+    smc = untrained_smc(spec, children=children)
     library = SMCLibrary.load(SMCLibrary([smc]).save(tmp_path / "library"))
     actions = [2, 3, 2, 3, 0]
     reference = _trace(make_smc_env(spec, children), actions)

@@ -8,7 +8,7 @@ import pytest
 import torch
 from sb3_contrib import RecurrentPPO
 
-from sb3_smc import SMCLibrary, evaluate, train_smc
+from sb3_smc import SMCLibrary, evaluate, train_smc, untrained_smc
 from sb3_smc.common.recurrent import GRUAsLSTM, SequenceGruPolicy, SequenceLstmPolicy
 from sb3_smc.policies import NumpyGRUPolicy
 from sb3_smc.records import RecordError, TrainingSpec
@@ -121,7 +121,7 @@ def test_a_gru_child_runs_inside_a_level2_smc(gru_smc) -> None:
 def test_short_gru_training_beats_the_untrained_policy() -> None:
     """As tests/test_training.py does for the LSTM: 24,000 steps on an easy bring-about task lift the test success
     rate from 0.06 (measured, seed 0: GRU 0.84, LSTM 0.66 in the same session)."""
-    untrained = train_smc(ABOVE_ID, rnn="gru", total_timesteps=0, seed=0)
+    untrained = untrained_smc(ABOVE_ID, rnn="gru", seed=0)
     trained = train_smc(ABOVE_ID, rnn="gru", total_timesteps=24_000, seed=0, log_every=0)
     before = evaluate(untrained, ABOVE_ID, repeats=2).score
     after = evaluate(trained, ABOVE_ID, repeats=2).score

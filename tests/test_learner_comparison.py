@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from sb3_smc import SMCLibrary, train_smc
+from sb3_smc import SMCLibrary, untrained_smc
 from tests.helpers import import_benchmark
 
 NODE = "cl_self-in-left-corner_vs_on-hline"
@@ -20,7 +20,7 @@ def compare():
 
 def _run_with(root: Path, names: list[str]) -> Path:
     """A curriculum-run directory whose library holds untrained SMCs of ``NODE`` under ``names``."""
-    library = SMCLibrary([train_smc(f"PW-{NODE}-v0", total_timesteps=0, n_envs=1, seed=0, name=name)
+    library = SMCLibrary([untrained_smc(f"PW-{NODE}-v0", n_envs=1, seed=0, name=name)
                           for name in names])
     library.save(root / "library")
     return root

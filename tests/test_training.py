@@ -31,7 +31,7 @@ from sb3_smc.experiments.runner import cpu_model
 from sb3_smc.policies import FrameStackPolicy, ScriptedPolicy, policy_from_model
 from sb3_smc.records import TrainingSpec, smc_name_from_env_id
 from sb3_smc.smc import SMC, smc_action_names
-from sb3_smc.training import resolve_children, train_smc
+from sb3_smc.training import resolve_children, train_smc, untrained_smc
 
 CORNER_ID = "PW-cl_self-in-left-corner_vs_on-hline-v0"
 RIGHT_CORNER_ID = "PW-cl_self-in-right-corner_vs_on-hline-v0"
@@ -84,7 +84,7 @@ def test_bias_rejects_unknown_actions() -> None:
 @pytest.mark.parametrize("algo", ["RecurrentPPO", "TRPO"])
 def test_untrained_smc_follows_the_bias(algo: str) -> None:
     child = SMC("walker", "classification", ScriptedPolicy(6, lambda obs, step: 0))
-    smc = train_smc(CORNER_ID, algo=algo, total_timesteps=0, children=[child], n_envs=2)
+    smc = untrained_smc(CORNER_ID, algo=algo, children=[child], n_envs=2)
     expected = initial_action_probabilities(smc.action_names)
     env = make_training_env(CORNER_ID, [child])
     observation, _ = env.reset(seed=0)
@@ -92,7 +92,7 @@ def test_untrained_smc_follows_the_bias(algo: str) -> None:
     np.testing.assert_allclose(probabilities, expected, rtol=0.1)
     assert smc.record.initial_action_probabilities == pytest.approx(list(expected))
     assert smc.record.selected_update is None and smc.record.updates == 0
-    unbiased = train_smc(CORNER_ID, algo=algo, total_timesteps=0, signal_bias=False, n_envs=2)
+    unbiased = untrained_smc(CORNER_ID, algo=algo, signal_bias=False, n_envs=2)
     observation, _ = make_training_env(CORNER_ID).reset(seed=0)
     probabilities, _ = unbiased.policy.probabilities(observation, unbiased.policy.initial_state())
     np.testing.assert_allclose(probabilities, np.full(6, 1 / 6), rtol=0.1)
@@ -197,7 +197,7 @@ def test_train_smc_is_deterministic() -> None:
 
 def test_a_spec_trains_what_the_keywords_train() -> None:
     """train_smc(spec) after a JSON round trip of the spec repeats train_smc(env_id, **keywords) exactly."""
-    child = train_smc(ABOVE_ID, algo="TRPO", total_timesteps=0, n_envs=2, seed=4)
+    child = untrained_smc(ABOVE_ID, algo="TRPO", n_envs=2, seed=4)
     keywords = train_smc(CORNER_ID, algo="TRPO", total_timesteps=512, n_envs=4, n_steps=64, seed=3, children=[child],
                          learning_rate="lin_1e-3")
     spec = TrainingSpec.from_json(keywords.spec.to_json())
@@ -238,7 +238,7 @@ def test_trained_smcs_round_trip_through_a_library(tmp_path: Path) -> None:
     before = evaluate(parent, CONTAINER_ID, repeats=1)
     after = evaluate(loaded[parent.name], CONTAINER_ID, repeats=1)
     assert before.to_dict() == after.to_dict()
-    again = train_smc(CONTAINER_ID, total_timesteps=0, children=(loaded, [above.name]))
+    again = untrained_smc(CONTAINER_ID, children=(loaded, [above.name]))
     assert again.action_names[-1] == "SMC:" + above.name and again.children == (loaded[above.name],)
 
 
@@ -351,7 +351,7 @@ def test_short_training_beats_the_untrained_policy(algo: str) -> None:
     """24,000 steps (12 updates) on an easy bring-about task lift the test success rate from 0.06 (measured, seed
     0: TRPO 0.98, RecurrentPPO 0.58; RecurrentPPO 0.72 / 0.68 with seeds 1 / 2, mean 0.66 over seeds 0-9); broken
     learning stays near the untrained rate."""
-    untrained = train_smc(ABOVE_ID, algo=algo, total_timesteps=0, seed=0)
+    untrained = untrained_smc(ABOVE_ID, algo=algo, seed=0)
     trained = train_smc(ABOVE_ID, algo=algo, total_timesteps=24_000, seed=0)
     before = evaluate(untrained, ABOVE_ID, repeats=2).score
     after = evaluate(trained, ABOVE_ID, repeats=2).score
