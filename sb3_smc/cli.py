@@ -11,18 +11,25 @@
 from __future__ import annotations
 
 import argparse
+import errno
+import json
+import shlex
 import sys
 from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
 
 __all__ = ["main"]
 
 
 def _curricula(args: argparse.Namespace) -> int:
     from sb3_smc.curricula import resolve_curriculum, shipped_curricula
-    from sb3_smc.curricula.trainer import describe
+    from sb3_smc.curricula.trainer import check_curriculum, describe
 
     if args.name:
-        print(describe(resolve_curriculum(args.name)))
+        curriculum = resolve_curriculum(args.name)
+        check_curriculum(curriculum)  # what sb3-smc train checks, with its default settings
+        print(describe(curriculum))
         return 0
     rows = [("name", "method", "targets", "nodes per level")]
     for name, curriculum in shipped_curricula().items():
@@ -41,7 +48,8 @@ def _train(args: argparse.Namespace) -> int:
     targets = [t for item in args.targets for t in item.split(",") if t] if args.targets else None
     run = train_curriculum(args.curriculum, args.out, targets=targets, seeds=args.seeds, timesteps=args.timesteps,
                            reuse=args.reuse, workers=args.workers, backend=args.backend, algo=args.algo,
-                           rnn=args.rnn, ray_address=args.ray_address, tensorboard=not args.no_tensorboard)
+                           rnn=args.rnn, ray_address=args.ray_address, tensorboard=not args.no_tensorboard,
+                           accept_changes=args.accept_changes)
     print(f"library: {run.library}")
     return 1 if run.failed else 0
 
@@ -53,11 +61,40 @@ def _status(args: argparse.Namespace) -> int:
     settings = state["settings"]
     print(f"{args.directory}: curriculum {settings['curriculum']}, {len(settings['nodes'])} nodes x "
           f"{settings['seeds']} seeds = {len(state['jobs'])} jobs")
-    for key in ("done", "running", "failed", "skipped", "left"):
-        names = state[key]
+    for key in ("done", "running", "failed", "skipped", "damaged", "left"):
+        names = list(state[key])
         shown = ", ".join(names[:8]) + (", ..." if len(names) > 8 else "")
         print(f"  {key:8s} {len(names):4d}  {shown}")
+    if state["damaged"]:
+        for problem in state["damaged"].values():
+            print(f"  {problem}")
+        print(f"the command that trained {args.directory} trains them again:\n  "
+              f"{_resume_command(Path(args.directory), settings)}")
     return 0
+
+
+def _resume_command(directory: Path, settings: dict[str, Any]) -> str:
+    """The command that resumes the run in ``directory``: an experiment's recorded command, else ``sb3-smc train``
+    with the settings of ``run.json`` (its curriculum named so where it is a file; where curricula were merged, what
+    to look for)."""
+    from sb3_smc.curricula import shipped_curricula
+
+    try:
+        command = json.loads((directory / "results.json").read_text(encoding="utf-8")).get("command")
+    except (OSError, ValueError, AttributeError):
+        command = None
+    if isinstance(command, str):
+        return command
+    name = settings["curriculum"]
+    if "+" in name and name not in shipped_curricula():  # curricula merged: an experiment, or several in Python
+        return (f"the command or call that started it, with the same options (for an experiment: sb3-smc experiment "
+                f"--out {shlex.quote(str(directory))} ...)")
+    curriculum = name if name in shipped_curricula() else f"<the curriculum file of {name!r}>"
+    options = [("--out", str(directory)), ("--targets", ",".join(settings["targets"])), ("--seeds", settings["seeds"]),
+               ("--timesteps", settings.get("timesteps")), ("--reuse", settings.get("reuse")),
+               ("--algo", settings.get("algo")), ("--rnn", settings.get("rnn"))]
+    return f"sb3-smc train {curriculum}" + "".join(f" {flag} {shlex.quote(str(value))}" for flag, value in options
+                                                  if value is not None)
 
 
 def _experiment(args: argparse.Namespace) -> int:
@@ -68,7 +105,7 @@ def _experiment(args: argparse.Namespace) -> int:
     run_experiment(args.out, methods=methods, targets=targets, category=args.category, seeds=args.seeds,
                    timesteps=args.timesteps, repeats=args.repeats, workers=args.workers, backend=args.backend,
                    ray_address=args.ray_address, algo=args.algo, rnn=args.rnn, train=not args.no_train)
-    print(f"next: sb3-smc report {args.out}")
+    print(f"next: sb3-smc report {shlex.quote(args.out)}")
     return 0
 
 
@@ -88,6 +125,17 @@ def _import_zoo(args: argparse.Namespace) -> int:
     calls = f", calling {[c.name for c in smc.children]}" if smc.children else ""
     print(f"added SMC {smc.name!r} ({smc.kind}, {type(smc.model).__name__}{calls}) to {args.library}")
     return 0
+
+
+def _positive(text: str) -> int:
+    """An option's positive integer (argparse reports the error with the option's name)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a positive integer, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be a positive integer, got {value}")
+    return value
 
 
 def _learner_arguments(parser: argparse.ArgumentParser) -> None:
@@ -114,16 +162,19 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--out", required=True, help="the run directory")
     p.add_argument("--targets", action="append", help="node or dataset names (comma-separated; repeatable); "
                                                       "default: the curriculum's targets")
-    p.add_argument("--seeds", type=int, default=5, help="seeds 0..N-1 per node (default 5, the paper's)")
-    p.add_argument("--timesteps", type=int, default=None,
+    p.add_argument("--seeds", type=_positive, default=5, help="seeds 0..N-1 per node (default 5, the paper's)")
+    p.add_argument("--timesteps", type=_positive, default=None,
                    help="steps per job, replacing the nodes' own (default: the node's, else 400,000)")
     p.add_argument("--reuse", choices=["two_best", "one_best"], default="two_best",
                    help="seeds of each lower-level node a caller gets (default two_best)")
-    p.add_argument("--workers", type=int, default=1, help="jobs in parallel (local processes or Ray tasks)")
+    p.add_argument("--workers", type=_positive, default=1, help="jobs in parallel (local processes or Ray tasks)")
     p.add_argument("--backend", choices=["local", "ray"], default="local")
     p.add_argument("--ray-address", default=None, help="Ray cluster address (default: $RAY_ADDRESS)")
     _learner_arguments(p)
     p.add_argument("--no-tensorboard", action="store_true", help="write no TensorBoard logs")
+    p.add_argument("--accept-changes", action="store_true",
+                   help="DIR holds this run with other node settings: train the changed nodes and the nodes above "
+                        "them again (it says which), keep the others' jobs")
     p.set_defaults(run=_train)
 
     p = sub.add_parser("experiment", help="the paper's protocol: train, evaluate, results.csv / results.json")
@@ -135,10 +186,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     group.add_argument("--category", choices=["containment", "objcon", "objects", "search", "pushable", "all"],
                        help="the higher-level targets of a category (default: all, the paper's 51; pushable: "
                             "the 8 of the designed pushable curriculum)")
-    p.add_argument("--seeds", type=int, default=5)
-    p.add_argument("--timesteps", type=int, default=None, help="steps per SMC (default 400,000)")
-    p.add_argument("--repeats", type=int, default=10, help="test repeats per environment (default 10)")
-    p.add_argument("--workers", type=int, default=1)
+    p.add_argument("--seeds", type=_positive, default=5)
+    p.add_argument("--timesteps", type=_positive, default=None, help="steps per SMC (default 400,000)")
+    p.add_argument("--repeats", type=_positive, default=10, help="test repeats per environment (default 10)")
+    p.add_argument("--workers", type=_positive, default=1)
     p.add_argument("--backend", choices=["local", "ray"], default="local")
     p.add_argument("--ray-address", default=None)
     p.add_argument("--no-train", action="store_true",
@@ -179,9 +230,22 @@ def main(argv: Sequence[str] | None = None) -> int:
             KeyError) as err:
         print(f"sb3-smc {args.command}: error: {err}", file=sys.stderr)
         return 2
+    except OSError as err:
+        print(f"sb3-smc {args.command}: error: {_os_error(err)}", file=sys.stderr)
+        return 2
     except KeyboardInterrupt:
         print("\ninterrupted: what finished is saved; run the same command again to resume", file=sys.stderr)
         return 130
+
+
+def _os_error(err: OSError) -> str:
+    """What went wrong with a file, and what to do where it is plain."""
+    where = f" ({err.filename})" if err.filename else ""
+    text = f"{err.strerror or err}{where}"
+    if err.errno == errno.ENOSPC:
+        return (f"{text}: the disk is full. What finished is saved and the run directory is consistent (files are "
+                "written whole or not at all); free some space, then run the same command again to resume")
+    return text
 
 
 if __name__ == "__main__":

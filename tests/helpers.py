@@ -89,3 +89,19 @@ def import_benchmark(name: str) -> ModuleType:
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
+
+
+def sb3_smc_cli(*argv: str) -> tuple[int, str, str]:
+    """``sb3-smc`` run in this process: its exit status, stdout and stderr (argparse's errors included)."""
+    import contextlib
+    import io
+
+    from sb3_smc.cli import main
+
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        try:
+            code = main(list(argv))
+        except SystemExit as exit_:
+            code = exit_.code
+    return code, out.getvalue(), err.getvalue()

@@ -1,10 +1,13 @@
 """Curricula: the shipped files, validation errors with file / line / node, seed ranking, training a tiny two-level
-curriculum end to end, resuming after a kill, settings changes, and the same library from 1 or 2 workers and Ray."""
+curriculum end to end, resuming after a kill, settings changes (refused, or accepted node by node), damaged model
+files trained again, bad node settings and run files reported before anything runs, and the same library from 1 or
+2 workers and Ray."""
 
 from __future__ import annotations
 
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -27,6 +30,7 @@ from sb3_smc.curricula.shipped import build_shipped, render
 from sb3_smc.curricula.trainer import RunSettingsError, job_name, rank_seeds, status, train_curriculum
 from sb3_smc.library import SMCLibrary
 from sb3_smc.records import TrainingRecord
+from tests.helpers import sb3_smc_cli
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / "sb3_smc" / "curricula" / "data"
@@ -310,15 +314,28 @@ def test_changed_settings_are_refused_with_the_differences(tmp_path):
         train_curriculum(str(path), tmp_path / "other", seeds=1, timesteps=2000, progress=False)
 
 
-def test_a_failing_job_is_reported_and_retried(tmp_path):
+def test_a_failing_job_is_reported_and_retried(tmp_path, monkeypatch):
+    from sb3_smc.curricula import trainer
+
     path = tmp_path / "tiny.yml"
-    path.write_text(TINY.replace("name: container", "name: tiny/container").replace("[left, above]", "[left, above]\n"
-                                 "    hyperparameters: {not_an_argument: 1}"))
+    path.write_text(TINY.replace("name: container", "name: tiny/container"))
+
+    def run_job(job):
+        if job.spec.name == "tiny/container@0":
+            raise RuntimeError("out of luck")
+        return real(job)
+
+    real = trainer.run_job
+    monkeypatch.setattr(trainer, "run_job", run_job)
     run = train_curriculum(str(path), tmp_path / "run", seeds=1, timesteps=2000, progress=False)
-    assert set(run.failed) == {"tiny/container@0"} and "not_an_argument" in run.failed["tiny/container@0"]
+    assert set(run.failed) == {"tiny/container@0"} and "out of luck" in run.failed["tiny/container@0"]
     assert (tmp_path / "run" / "failed" / "tiny%2Fcontainer@0.txt").is_file()
     state = status(tmp_path / "run")
     assert state["done"] == ["left@0", "above@0"] and state["failed"] == ["tiny/container@0"] and state["left"] == []
+    monkeypatch.setattr(trainer, "run_job", real)
+    again = train_curriculum(str(path), tmp_path / "run", seeds=1, timesteps=2000, progress=False)
+    assert not again.failed and status(tmp_path / "run")["done"] == ["left@0", "above@0", "tiny/container@0"]
+    assert not (tmp_path / "run" / "failed" / "tiny%2Fcontainer@0.txt").exists()
 
 
 def test_hyperparameters_that_do_not_decode_stop_before_training(tmp_path):
@@ -359,7 +376,8 @@ def test_workers_and_ray_give_the_same_library(tmp_path):
                                 printer=logs["two"].append)
     # a log line per round of finished jobs, counting the jobs running once the finished ones' places are refilled
     progress = {key: [line.split(",")[:2] for line in lines if line.startswith("jobs ")] for key, lines in logs.items()}
-    assert progress["one"] == [[f"jobs {k}/6", " running 0"] for k in range(1, 7)]
+    # one worker: the next job is running when a line is written (the last line: none)
+    assert progress["one"] == [[f"jobs {k}/6", " running 1"] for k in range(1, 6)] + [["jobs 6/6", " running 0"]]
     assert progress["two"][0] in (["jobs 1/6", " running 2"], ["jobs 2/6", " running 2"])
     assert progress["two"][-1] == ["jobs 6/6", " running 0"]
     ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False)
@@ -452,3 +470,166 @@ def test_a_script_without_a_main_guard_is_told_what_broke_its_workers(tmp_path):
     result = subprocess.run([sys.executable, str(script)], cwd=ROOT, capture_output=True, text=True, timeout=300)
     failure = (tmp_path / "run" / "failed" / "left@0.txt").read_text()
     assert 'if __name__ == "__main__":' in failure and "BrokenProcessPool" in failure, result.stderr[-2000:]
+
+
+# ------------------------------------------------------------------------------------------------ bad input and repair
+
+@pytest.mark.parametrize(("setting", "message"), [
+    ("{learning_rate: -1}", r"tiny.yml:8: node 'container': RecurrentPPO refuses its hyperparameters: ValueError: "
+                            r"Invalid learning rate: -1.0"),
+    ("{learnin_rate: 0.001}", r"tiny.yml:8: node 'container': hyperparameter 'learnin_rate' is not an argument of "
+                              r"RecurrentPPO; did you mean 'learning_rate'\?"),
+    ("{policy_kwargs: {lstm_hiden_size: 8}}", r"tiny.yml:8: node 'container': .*unexpected keyword argument "
+                                              r"'lstm_hiden_size'"),
+])
+def test_a_bad_node_hyperparameter_stops_the_run_before_anything_is_trained(tmp_path, setting, message):
+    path = tmp_path / "tiny.yml"
+    path.write_text(TINY.replace("    uses: [left, above]", f"    uses: [left, above]\n    hyperparameters: {setting}"))
+    with pytest.raises(CurriculumError, match=message):
+        train_curriculum(str(path), tmp_path / "run", seeds=1, timesteps=2000, progress=False)
+    code, out, err = sb3_smc_cli("train", str(path), "--out", str(tmp_path / "run"), "--seeds", "1")
+    assert code == 2 and re.search(message, err) and out == "" and "Traceback" not in err
+    assert not (tmp_path / "run").exists()  # nothing written: the fixed file can use the same --out
+    code, _, err = sb3_smc_cli("curricula", str(path))  # the same check
+    assert code == 2 and re.search(message, err)
+
+
+def test_curricula_checks_what_train_checks(tmp_path):
+    path = tmp_path / "tiny.yml"
+    path.write_text(TINY.replace("  - name: above\n", "  - name: above\n    hyperparameters: {n_steps: 0}\n"))
+    code, _, err = sb3_smc_cli("curricula", str(path))
+    assert code == 2 and "tiny.yml:6: node 'above': hyperparameter 'n_steps' is not set through the hyperparameters" \
+        in err
+    path.write_text(TINY + "targets: [container, left, container]\n")
+    with pytest.raises(CurriculumError, match="tiny.yml: target 'container' is listed twice"):
+        load_curriculum(path)
+    binary = tmp_path / "binary.yml"
+    binary.write_bytes(b"\xff\xfe\x00curriculum")
+    code, _, err = sb3_smc_cli("curricula", str(binary))
+    assert code == 2 and "binary.yml: not a curriculum file: not UTF-8 text (byte 0xff at position 0)" in err
+    same = tmp_path / "same.yml"  # a node named after its dataset: the suggestion names it once
+    same.write_text(f"curriculum: same\nnodes:\n  - name: {LEFT}\n    task: {LEFT}\n")
+    with pytest.raises(CurriculumError, match=rf"did you mean '{LEFT}'\?$"):
+        load_curriculum(same).select([LEFT[:-1]])
+    with pytest.raises(CurriculumError, match="--targets names no node"):
+        load_curriculum(same).select([])
+
+
+def test_changed_nodes_are_trained_again_with_accept_changes_the_others_kept(tmp_path):
+    path = _tiny(tmp_path)
+    out = tmp_path / "run"
+    train_curriculum(str(path), out, seeds=1, timesteps=2000, progress=False)
+    before = json.loads((out / "library" / "manifest.json").read_text())["smcs"]
+    files = {name: (out / "library" / e["model"]).stat().st_mtime_ns for name, e in before.items()}
+    path.write_text(TINY.replace("  - name: left\n", "  - name: left\n    hyperparameters: {learning_rate: 0.01}\n"))
+    with pytest.raises(RunSettingsError, match=r"(?s)node 'left': hyperparameters \{\} in the directory, "
+                                               r"\{'learning_rate': 0.01\} now.*sb3-smc train --accept-changes.*"
+                                               r"the jobs of left, container are trained again, the other nodes keep "
+                                               r"theirs"):
+        train_curriculum(str(path), out, seeds=1, timesteps=2000, progress=False)
+    with pytest.raises(RunSettingsError, match="--accept-changes takes changed nodes only; seeds decide every job"):
+        train_curriculum(str(path), out, seeds=2, timesteps=2000, progress=False, accept_changes=True)
+    code, stdout, err = sb3_smc_cli("train", str(path), "--out", str(out), "--seeds", "1", "--timesteps", "2000",
+                             "--accept-changes")
+    assert code == 0, err
+    assert "node 'left' is trained again (changed)" in stdout
+    assert "node 'container' is trained again (uses a changed node)" in stdout and "'above'" not in stdout
+    assert "(1 already done)" in stdout  # above@0
+    after = json.loads((out / "library" / "manifest.json").read_text())["smcs"]
+    assert after["above@0"] == before["above@0"]
+    assert (out / "library" / after["above@0"]["model"]).stat().st_mtime_ns == files["above@0"]
+    assert after["left@0"]["spec"]["hyperparameters"]["learning_rate"] == 0.01
+    [kept] = (out / "replaced").iterdir()  # what was replaced is kept, loadable
+    old = SMCLibrary.load(kept / "library")
+    assert old.names == ("left@0", "above@0", "container@0") and old["left@0"].record.to_dict() == before["left@0"][
+        "record"]
+    assert json.loads((kept / "run.json").read_text())["nodes"]["left"]["hyperparameters"] == {}
+    assert len(list((kept / "tensorboard").glob("*@0_1"))) == 2
+    assert status(out)["done"] == ["left@0", "above@0", "container@0"]
+    assert train_curriculum(str(path), out, seeds=1, timesteps=2000, progress=False).rows  # the run is the new one
+
+
+def test_a_damaged_model_file_is_reported_and_trained_again(tmp_path, monkeypatch):
+    from sb3_smc.curricula import trainer
+
+    path = _tiny(tmp_path)
+    out = tmp_path / "run"
+    train_curriculum(str(path), out, seeds=1, timesteps=2000, targets=["left", "container"], progress=False)
+    manifest = out / "library" / "manifest.json"
+    before = json.loads(manifest.read_text())["smcs"]
+    model = out / "library" / before["left@0"]["model"]
+    model.write_bytes(model.read_bytes()[:300])  # truncated
+    (out / "library" / before["above@0"]["model"]).unlink()  # deleted
+    code, stdout, _ = sb3_smc_cli("status", str(out))
+    assert code == 0 and re.search(r"damaged\s+2\s+left@0, above@0", stdout) and re.search(r"done\s+1\s", stdout)
+    assert "left@0.zip is corrupt or truncated" in stdout and "above@0.zip is missing" in stdout
+    assert (f"trains them again:\n  sb3-smc train <the curriculum file of 'tiny'> --out {out} --targets left,container "
+            "--seeds 1 --timesteps 2000 --reuse two_best") in stdout
+    with pytest.raises(Exception, match="corrupt or truncated"):
+        SMCLibrary.load(out / "library")
+    lines: list[str] = []
+    train_curriculum(str(path), out, seeds=1, timesteps=2000, targets=["left", "container"], printer=lines.append)
+    assert "(1 already done)" in lines[0] and "left@0.zip is corrupt or truncated" in lines[1]
+    after = json.loads(manifest.read_text())["smcs"]
+    assert after["container@0"] == before["container@0"]  # trained alike: what uses them is kept
+    assert {n: after[n]["record"]["training_returns"] for n in after} == {
+        n: before[n]["record"]["training_returns"] for n in before}
+    assert len(SMCLibrary.load(out / "library")) == 3 and status(out)["damaged"] == {}
+    # trained again differently (another CPU, say): what was trained with the damaged copy is trained again too
+    model.write_bytes(b"")
+    monkeypatch.setattr(trainer, "_trained_alike", lambda a, b: False)
+    lines.clear()
+    train_curriculum(str(path), out, seeds=1, timesteps=2000, targets=["left", "container"], printer=lines.append)
+    assert any("left@0 trained again differs from its damaged copy's training" in line and "(container@0)" in line
+               for line in lines)
+    assert [line.split(",")[0] for line in lines if line.startswith("jobs ")] == ["jobs 3/3"]  # 2 + 1 again
+    [kept] = (out / "replaced").iterdir()
+    assert "container@0" in SMCLibrary.load(kept / "library", names=["container@0"])
+    assert status(out)["done"] == ["left@0", "above@0", "container@0"]
+
+
+def test_run_directory_files_and_a_full_disk_are_explained(tmp_path, monkeypatch):
+    import errno
+
+    from sb3_smc.library import storage
+
+    path = str(_tiny(tmp_path))
+    a_file = tmp_path / "a-file"
+    a_file.write_text("x")
+    code, _, err = sb3_smc_cli("train", path, "--out", str(a_file), "--seeds", "1")
+    assert code == 2 and f"{a_file} is a file, not a run directory" in err
+    out = tmp_path / "run"
+    written = []
+
+    def full(target, data):
+        if str(target).endswith(".zip") and written:
+            raise OSError(errno.ENOSPC, "No space left on device", str(target))
+        written.append(target)
+        return real(target, data)
+
+    real = storage.atomic_write
+    monkeypatch.setattr(storage, "atomic_write", full)
+    code, _, err = sb3_smc_cli("train", path, "--out", str(out), "--seeds", "1", "--timesteps", "2000")
+    assert code == 2 and "No space left on device (" in err and "the disk is full" in err
+    assert "run the same command again to resume" in err and "Traceback" not in err
+    state = status(out)
+    assert state["done"] == ["left@0"] and state["running"] == [] and state["damaged"] == {}
+    monkeypatch.setattr(storage, "atomic_write", real)
+    code, stdout, _ = sb3_smc_cli("train", path, "--out", str(out), "--seeds", "1", "--timesteps", "2000")
+    assert code == 0 and "(1 already done)" in stdout
+    (out / "state.json").write_text("")
+    code, _, err = sb3_smc_cli("status", str(out))
+    assert code == 2 and f"{out / 'state.json'} is not valid JSON" in err and "delete it" in err
+    (out / "run.json").write_text('{"format": "sb3-smc-run"')
+    code, _, err = sb3_smc_cli("status", str(out))
+    assert code == 2 and f"{out / 'run.json'} is not valid JSON (corrupt or truncated?)" in err
+    assert "the settings of a curriculum run" in err
+    (out / "run.json").write_text("[]")
+    code, _, err = sb3_smc_cli("status", str(out))
+    assert code == 2 and "is not the settings of an sb3-smc run" in err
+    for option in ("--seeds", "--workers", "--timesteps"):
+        code, _, err = sb3_smc_cli("train", path, "--out", str(tmp_path / "new"), option, "0")
+        assert code == 2 and f"argument {option}: must be a positive integer, got 0" in err
+    code, _, err = sb3_smc_cli("train", path, "--out", str(tmp_path / "new"), "--ray-address", "auto")
+    assert code == 2 and "a Ray address ('auto') is for backend 'ray', not 'local'" in err
+    assert not (tmp_path / "new").exists()

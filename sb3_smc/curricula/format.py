@@ -135,6 +135,8 @@ class Curriculum:
         else the node of that name or the nodes training it). ``None``: the curriculum's targets."""
         if targets is None:
             return list(self.targets)
+        if not targets:
+            raise CurriculumError(f"{self._where()}: --targets names no node: give node or dataset names")
         chosen: list[str] = []
         nodes = self.by_name
         for target in targets:
@@ -182,7 +184,7 @@ class Curriculum:
 # ---------------------------------------------------------------------------------------------------------------
 
 def _suggest(name: str, names: Iterable[str]) -> str:
-    close = difflib.get_close_matches(name, list(names), n=3, cutoff=0.6)
+    close = difflib.get_close_matches(name, list(dict.fromkeys(names)), n=3, cutoff=0.6)
     return f"; did you mean {' or '.join(repr(c) for c in close)}?" if close else ""
 
 
@@ -212,6 +214,9 @@ def load_curriculum(path: str | os.PathLike) -> Curriculum:
         text = path.read_text(encoding="utf-8")
     except OSError as err:
         raise CurriculumError(f"cannot read curriculum file {path}: {err}") from None
+    except UnicodeDecodeError as err:
+        raise CurriculumError(f"{path}: not a curriculum file: not UTF-8 text (byte {err.object[err.start]:#04x} at "
+                              f"position {err.start}); a curriculum is a YAML file (docs/curricula.md)") from None
     return parse_curriculum(text, str(path))
 
 
@@ -350,9 +355,11 @@ def _validate(curriculum: Curriculum) -> None:
                 raise CurriculumError(f"{at(node)}: node {node.name!r} uses an unknown node {used!r}"
                                       f"{_suggest(used, seen)}")
     _check_cycles(curriculum.nodes, seen, at)
-    for target in curriculum.targets:
+    for k, target in enumerate(curriculum.targets):
         if target not in seen:
             raise CurriculumError(f"{source}: target {target!r} is not a node{_suggest(target, seen)}")
+        if target in curriculum.targets[:k]:
+            raise CurriculumError(f"{source}: target {target!r} is listed twice")
 
 
 def _check_cycles(nodes: Sequence[Node], by_name: Mapping[str, Node], at: Any) -> None:

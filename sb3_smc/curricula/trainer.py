@@ -10,10 +10,12 @@ function runs in this process, in local worker processes or as a Ray task, and g
 Run directory::
 
     DIR/run.json        the settings; re-running with other settings is refused (the differences are listed)
+                        unless node changes are accepted (``accept_changes``)
     DIR/library/        an SMCLibrary: one SMC per finished job, with its spec and training record
     DIR/tensorboard/    SB3 and SMC curves, one run per job (``<node>@<seed>_1``)
     DIR/failed/         ``<job>.txt``: the traceback of a job that raised (retried by the next run; ``/`` as ``%2F``)
     DIR/state.json      the jobs running now and the coordinator's pid (for ``sb3-smc status``)
+    DIR/replaced/       ``<time>-<random>/``: the library (and run.json) as it was before SMCs were replaced
     DIR/.lock           held by the coordinator while it runs (a second one on the same directory is refused)
 
 Jobs whose results are kept elsewhere can be skipped (``skip``: e.g. the evaluated SMCs of an experiment whose run
@@ -23,7 +25,10 @@ child (the ranking of a node's seeds needs every seed), and nodes that only skip
 Crash safety: a finished job is one whose SMC is in the library manifest; the model file and then the manifest are
 written atomically by the coordinator (the only writer), so killing the process at any moment loses at most the
 jobs that were running, which the next run starts again from scratch. Finished jobs are never trained again and
-their files never rewritten.
+their files never rewritten, except that a job whose model file is missing or damaged (checked against the
+manifest's SHA-256 by every run and by :func:`status`) is trained again, replacing its entry, and so are the jobs
+above it when that training differs from the recorded one; accepted node changes replace the jobs of the changed
+nodes and of the nodes above them. The working SMCs so replaced stay in ``DIR/replaced/``.
 """
 
 from __future__ import annotations
@@ -39,14 +44,16 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from pixelworld_env.atomic import atomic_write
+from pixelworld_env.atomic import atomic_write, make_temporary_directory
 from sb3_smc.curricula.format import SEED_SEPARATOR, Curriculum, CurriculumError, Node, merge
 from sb3_smc.hyperparameters import STEPS_PER_UPDATE
 from sb3_smc.library import storage
+from sb3_smc.library.errors import CorruptModelError
 from sb3_smc.records import Budget, TaskSpec, TrainingRecord, TrainingSpec, WrapperSettings
 
-__all__ = ["REUSE", "Job", "JobResult", "RunSettingsError", "TrainingRun", "describe", "file_stem", "job_name",
-           "name_of_file", "rank_seeds", "run_job", "run_settings", "status", "train_curriculum"]
+__all__ = ["REUSE", "Job", "JobResult", "RunFileError", "RunSettingsError", "TrainingRun", "check_curriculum",
+           "check_run_options", "describe", "file_stem", "finished_jobs", "job_name", "name_of_file", "node_spec",
+           "rank_seeds", "read_json", "read_settings", "run_job", "run_settings", "status", "train_curriculum"]
 
 REUSE = {"one_best": 1, "two_best": 2}
 """SMC filters of the paper: how many seeds of each lower-level node a caller gets."""
@@ -57,7 +64,23 @@ RUN_VERSION = 1
 
 
 class RunSettingsError(ValueError):
-    """The run directory was started with other settings (the message lists the differences)."""
+    """The run directory was started with other settings (the message lists the differences), or is not a run
+    directory."""
+
+
+class RunFileError(ValueError):
+    """A file of a run or experiment directory is not what it should be (the message names it and what it should
+    hold)."""
+
+
+def read_json(path: Path, holds: str) -> Any:
+    """The JSON content of ``path``; :class:`RunFileError` naming the file and what it ``holds`` when it is not
+    JSON text."""
+    try:
+        return json.loads(path.read_text(encoding="utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError) as err:
+        raise RunFileError(f"{path} is not valid JSON (corrupt or truncated?): {err}; it should hold {holds}") \
+            from None
 
 
 def job_name(node: str, seed: int) -> str:
@@ -124,6 +147,48 @@ def rank_seeds(records: dict[int, TrainingRecord]) -> list[int]:
 # Settings
 # ---------------------------------------------------------------------------------------------------------------
 
+def _budget(node: Node, timesteps: int | None) -> int:
+    return timesteps or node.timesteps or DEFAULT_TIMESTEPS
+
+
+def node_spec(node: Node, seed: int, children: tuple[str, ...], *, timesteps: int | None = None,
+              algo: str | None = None, rnn: str | None = None) -> TrainingSpec:
+    """The spec of job ``<node>@<seed>`` calling ``children``; ``timesteps`` / ``algo`` replace the node's own,
+    ``rnn`` sets its recurrent cell (the run's settings)."""
+    algo = algo or node.algo or "RecurrentPPO"
+    hyperparameters = dict(node.hyperparameters)
+    if rnn is not None:
+        from sb3_smc.hyperparameters import recurrent_policy
+
+        hyperparameters["policy"] = recurrent_policy(rnn, algo)
+    return TrainingSpec(name=job_name(node.name, seed), task=TaskSpec(node.env_id).resolved(),
+                        algo=algo, hyperparameters=hyperparameters, seed=seed, budget=Budget(_budget(node, timesteps)),
+                        wrapper=WrapperSettings(include_primitives=node.include_primitives), children=children)
+
+
+def check_curriculum(curriculum: Curriculum, names: Sequence[str] | None = None, *, timesteps: int | None = None,
+                     algo: str | None = None, rnn: str | None = None, reuse: str = "two_best") -> None:
+    """Check every node of ``names`` (default: all) as a run with these settings would train it, before anything is
+    trained: its settings make a valid spec, and the algorithm takes its hyperparameters (the model is built on an
+    environment with the SMC's spaces, :func:`sb3_smc.training.check_model_settings`). ``CurriculumError`` naming
+    the file, the line and the node. ``sb3-smc curricula FILE`` and :func:`train_curriculum` both check so."""
+    from sb3_smc.training import check_model_settings
+
+    checked: set[str] = set()  # nodes alike in what builds their model are built once
+    for name in curriculum.order() if names is None else names:
+        node = curriculum.node(name)
+        children = tuple(job_name(u, seed) for u in node.uses for seed in range(REUSE[reuse]))
+        try:
+            spec = node_spec(node, 0, children, timesteps=timesteps, algo=algo, rnn=rnn)
+            key = json.dumps([spec.algo, spec.hyperparameters, spec.budget.to_dict(), spec.frame_stack,
+                              spec.observation_size, len(spec.action_names)], sort_keys=True)
+            if key not in checked:
+                check_model_settings(spec)
+                checked.add(key)
+        except ValueError as err:
+            where = f"{curriculum.source}:{node.line}: " if node.line is not None and curriculum.source else ""
+            raise CurriculumError(f"{where}node {name!r}: {err}") from None
+
 def run_settings(curriculum: Curriculum, nodes: Sequence[str], targets: Sequence[str], seeds: int,
                  timesteps: int | None, reuse: str, algo: str | None, rnn: str | None = None) -> dict[str, Any]:
     """What decides a run's SMCs (``DIR/run.json``): backend and worker count do not (``rnn`` is written only when
@@ -150,7 +215,10 @@ def _differences(old: dict[str, Any], new: dict[str, Any]) -> list[str]:
         elif name not in old_nodes:
             out.append(f"node {name!r}: new in this run")
         elif old_nodes[name] != new_nodes[name]:
-            out.append(f"node {name!r}: {old_nodes[name]} in the directory, {new_nodes[name]} now")
+            was, now = old_nodes[name], new_nodes[name]
+            keys = [k for k in sorted(set(was) | set(now)) if was.get(k) != now.get(k)]
+            out.append(f"node {name!r}: " + "; ".join(f"{k} {was.get(k)!r} in the directory, {now.get(k)!r} now"
+                                                      for k in keys))
     return out
 
 
@@ -188,7 +256,9 @@ class _Scheduler:
         self.records: dict[str, dict[int, TrainingRecord]] = {name: {} for name in order}
         self.running: set[str] = set()
         self.failed: dict[str, str] = {}
+        self.damaged: dict[str, TrainingRecord] = {}  # finished jobs whose model file is damaged: their old records
         self.height = _heights(curriculum, order)
+        self.below = {name: curriculum.closure([name]) - {name} for name in order}
 
     def jobs(self) -> list[tuple[str, int]]:
         return [(node, seed) for node in self.order for seed in range(self.seeds)]
@@ -197,7 +267,7 @@ class _Scheduler:
         return seed in self.records[node] or job_name(node, seed) in self.skip
 
     def budget(self, node: Node) -> int:
-        return self.timesteps or node.timesteps or DEFAULT_TIMESTEPS
+        return _budget(node, self.timesteps)
 
     def children(self, node: Node) -> tuple[str, ...]:
         names = []
@@ -209,14 +279,16 @@ class _Scheduler:
     def ready(self) -> list[tuple[str, int]]:
         """The jobs that can start, those with the longest chain of nodes still above them first (then in
         ``order``): a deep curriculum's critical path starts at once, and top-level nodes (a flat baseline, say)
-        fill idle workers. Which job runs when does not change what is trained."""
+        fill idle workers. Which job runs when does not change what is trained. Nothing above a damaged job being
+        trained again starts before it is done (it may be trained again itself: :func:`_store`)."""
+        repairing = {name.rpartition(SEED_SEPARATOR)[0] for name in self.damaged}
         out = []
         for node_name, seed in sorted(self.jobs(), key=lambda job: -self.height[job[0]]):
             name = job_name(node_name, seed)
             if self.done(node_name, seed) or name in self.running or name in self.failed:
                 continue
             node = self.curriculum.node(node_name)
-            if all(len(self.records[u]) == self.seeds for u in node.uses):
+            if all(len(self.records[u]) == self.seeds for u in node.uses) and not self.below[node_name] & repairing:
                 out.append((node_name, seed))
         return out
 
@@ -225,42 +297,15 @@ class _Scheduler:
         bad = {name.rpartition(SEED_SEPARATOR)[0] for name in self.failed}
         out = []
         for node_name, seed in self.jobs():
-            if not self.done(node_name, seed) and job_name(node_name, seed) not in self.failed:
-                needed = self.curriculum.closure([node_name]) - {node_name}
-                if needed & bad:
-                    out.append(job_name(node_name, seed))
+            name = job_name(node_name, seed)
+            if not self.done(node_name, seed) and name not in self.failed and self.below[node_name] & bad:
+                out.append(name)
         return out
-
-    def spec(self, node: Node, seed: int, children: tuple[str, ...]) -> TrainingSpec:
-        algo = self.algo or node.algo or "RecurrentPPO"
-        hyperparameters = dict(node.hyperparameters)
-        if self.rnn is not None:
-            from sb3_smc.hyperparameters import recurrent_policy
-
-            hyperparameters["policy"] = recurrent_policy(self.rnn, algo)
-        return TrainingSpec(name=job_name(node.name, seed), task=TaskSpec(node.env_id).resolved(),
-                            algo=algo, hyperparameters=hyperparameters,
-                            seed=seed, budget=Budget(self.budget(node)),
-                            wrapper=WrapperSettings(include_primitives=node.include_primitives), children=children)
-
-    def check_specs(self) -> None:
-        """Every node's settings make a valid spec whose hyperparameters decode (checked before any training)."""
-        from sb3_smc.hyperparameters import constructor_arguments
-
-        for name in self.order:
-            node = self.curriculum.node(name)
-            placeholder = tuple(job_name(u, 0) for u in node.uses)
-            try:
-                constructor_arguments(self.spec(node, 0, placeholder).hyperparameters)
-            except ValueError as err:
-                where = f"{self.curriculum.source}:{node.line}: " if node.line is not None and self.curriculum.source \
-                    else ""
-                raise CurriculumError(f"{where}node {name!r}: {err}") from None
 
     def job(self, node_name: str, seed: int, tensorboard: bool) -> Job:
         node = self.curriculum.node(node_name)
         name = job_name(node_name, seed)
-        spec = self.spec(node, seed, self.children(node))
+        spec = node_spec(node, seed, self.children(node), timesteps=self.timesteps, algo=self.algo, rnn=self.rnn)
         log = None
         if tensorboard:
             folder = self.directory / "tensorboard"
@@ -308,6 +353,7 @@ def train_curriculum(
     progress: bool = True,
     printer: Callable[[str], None] = print,
     skip: Collection[str] = (),
+    accept_changes: bool = False,
 ) -> TrainingRun:
     """Train ``curriculum`` (a shipped name, a file, a :class:`Curriculum`, or several: their nodes are merged, a
     node shared by several is trained once) into ``out``, resuming whatever ``out`` already holds.
@@ -320,26 +366,59 @@ def train_curriculum(
     jobs in flight). The trained SMCs are the same whatever the backend and worker count. Jobs that fail are
     reported (``DIR/failed/``) and retried by the next run; jobs needing them wait. ``skip``: job names not to train
     (their results are kept elsewhere); one whose node a job still to train uses is trained all the same, and
-    nodes that only skipped jobs use are not trained. Returns a :class:`TrainingRun`.
+    nodes that only skipped jobs use are not trained. A finished job whose model file is missing or damaged is
+    trained again. ``accept_changes``: ``out`` holds this run with other node settings (or other nodes); the jobs
+    of the changed nodes and of every node above them are trained again (the SMCs they replace are kept in
+    ``DIR/replaced/``), the other nodes keep theirs. Every setting and node is checked before anything is written
+    or trained. Returns a :class:`TrainingRun`.
     """
-    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
-        raise ValueError(f"workers must be a positive integer, got {workers!r}")
-    if backend not in ("local", "ray"):
-        raise ValueError(f"backend must be 'local' or 'ray', got {backend!r}")
+    check_run_options(workers=workers, backend=backend, ray_address=ray_address)
     merged, order, settings = _resolve_run(curriculum, targets, seeds, timesteps, reuse, algo, rnn)
     directory = Path(out)
     order, skipped = _plan_skip(merged, order, settings["targets"], seeds, skip)
     # the jobs of nodes left out of the plan count as skipped too (sb3-smc status shows them so, not as "left")
     skipped |= {job_name(n, s) for n in settings["nodes"] if n not in order for s in range(seeds)}
     scheduler = _Scheduler(merged, order, seeds, timesteps, REUSE[reuse], algo, directory, rnn, skipped)
-    scheduler.check_specs()
-    _check_or_write_settings(directory, settings)
+    check_curriculum(merged, order, timesteps=timesteps, algo=algo, rnn=rnn, reuse=reuse)
+    old = read_settings(directory)
+    changes = _Changes.between(old, settings, merged) if old is not None else None
+    if changes is not None and changes.differences:
+        changes.check(directory, accept_changes)
+    directory.mkdir(parents=True, exist_ok=True)
     lock = _lock(directory)
     try:
+        if old is None or changes is not None and changes.differences:
+            if changes is not None:
+                changes.apply(directory, printer if progress else None)
+            atomic_write(directory / "run.json", json.dumps(settings, indent=2) + "\n")
         return _run(merged, scheduler, order, directory, seeds, backend, workers, ray_address, tensorboard, progress,
                     printer)
     finally:
         lock.close()
+
+
+def check_run_options(*, seeds: int = DEFAULT_SEEDS, timesteps: int | None = None, reuse: str = "two_best",
+                      workers: int = 1, backend: str = "local", ray_address: str | None = None,
+                      algo: str | None = None, rnn: str | None = None) -> None:
+    """``ValueError`` naming the first option of a run that is out of range (before anything is done)."""
+    for name, value, optional in (("seeds", seeds, False), ("workers", workers, False), ("timesteps", timesteps, True)):
+        if not (optional and value is None) and (isinstance(value, bool) or not isinstance(value, int) or value < 1):
+            raise ValueError(f"{name} must be a positive integer, got {value!r}")
+    if reuse not in REUSE:
+        raise ValueError(f"reuse must be one of {list(REUSE)}, got {reuse!r}")
+    if backend not in ("local", "ray"):
+        raise ValueError(f"backend must be 'local' or 'ray', got {backend!r}")
+    if ray_address is not None and backend != "ray":
+        raise ValueError(f"a Ray address ({ray_address!r}) is for backend 'ray', not {backend!r}")
+    if algo is not None:
+        from sb3_smc.hyperparameters import ALGORITHMS
+
+        if algo not in ALGORITHMS:
+            raise ValueError(f"algo must be one of {ALGORITHMS}, got {algo!r}")
+    if rnn is not None:
+        from sb3_smc.hyperparameters import recurrent_policy
+
+        recurrent_policy(rnn)  # a known cell (each node's algorithm is checked with its spec)
 
 
 def finished_jobs(
@@ -356,11 +435,12 @@ def finished_jobs(
     """The job names (``<node>@<seed>``) that the run :func:`train_curriculum` would resume in ``out`` has finished,
     without training or writing anything (the run may be training meanwhile). ``RunSettingsError`` when ``out``
     holds no run or a run with other settings."""
-    _, _, settings = _resolve_run(curriculum, targets, seeds, timesteps, reuse, algo, rnn)
+    merged, _, settings = _resolve_run(curriculum, targets, seeds, timesteps, reuse, algo, rnn)
     directory = Path(out)
-    if not (directory / "run.json").is_file():
+    old = read_settings(directory)
+    if old is None:
         raise RunSettingsError(f"{directory} holds no run yet (no run.json): nothing is trained")
-    _check_or_write_settings(directory, settings)
+    _Changes.between(old, settings, merged).check(directory, accept=False)
     return set(status(directory)["done"])
 
 
@@ -392,23 +472,9 @@ def _resolve_run(curriculum: Any, targets: Sequence[str] | None, seeds: int, tim
     """The merged curriculum, the nodes to train (lower levels first) and the settings of a run (checked)."""
     from sb3_smc.curricula import resolve_curriculum
 
+    check_run_options(seeds=seeds, timesteps=timesteps, reuse=reuse, algo=algo, rnn=rnn)
     items = curriculum if isinstance(curriculum, list | tuple) else [curriculum]
     merged = merge([resolve_curriculum(item) for item in items])
-    if reuse not in REUSE:
-        raise ValueError(f"reuse must be one of {list(REUSE)}, got {reuse!r}")
-    if isinstance(seeds, bool) or not isinstance(seeds, int) or seeds < 1:
-        raise ValueError(f"seeds must be a positive integer, got {seeds!r}")
-    if timesteps is not None and (isinstance(timesteps, bool) or not isinstance(timesteps, int) or timesteps < 1):
-        raise ValueError(f"timesteps must be a positive integer, got {timesteps!r}")
-    if algo is not None:
-        from sb3_smc.hyperparameters import ALGORITHMS
-
-        if algo not in ALGORITHMS:
-            raise ValueError(f"algo must be one of {ALGORITHMS}, got {algo!r}")
-    if rnn is not None:
-        from sb3_smc.hyperparameters import recurrent_policy
-
-        recurrent_policy(rnn)  # a known cell (each node's algorithm is checked with its spec)
     selected = merged.select(targets)
     order = merged.order(selected)
     return merged, order, run_settings(merged, order, selected, seeds, timesteps, reuse, algo, rnn)
@@ -432,7 +498,7 @@ def _lock(directory: Path) -> Any:
 def _run(merged: Curriculum, scheduler: _Scheduler, order: list[str], directory: Path, seeds: int, backend: str,
          workers: int, ray_address: str | None, tensorboard: bool, progress: bool,
          printer: Callable[[str], None]) -> TrainingRun:
-    _load_done(scheduler)
+    damaged = _load_done(scheduler)
     failed_dir = directory / "failed"
     total = len(scheduler.jobs())
     done_before = sum(scheduler.done(n, s) for n, s in scheduler.jobs())
@@ -443,10 +509,11 @@ def _run(merged: Curriculum, scheduler: _Scheduler, order: list[str], directory:
         printer(f"{merged.name}: {len(order)} nodes x {seeds} seeds = {total} jobs ({done_before} already done"
                 f"{f', {skipped} of them skipped' if skipped else ''}) "
                 f"in {directory}, backend {backend}, {workers} worker{'s' * (workers > 1)}")
+        for why in damaged.values():
+            printer(f"{why}: it is trained again")
     started = time.time()
     executor = _executor(backend, workers, ray_address)
-    bar = _Progress(total, done_before, steps_total, steps_done, printer if progress else None,
-                    after_refill=not isinstance(executor, _InProcess))
+    bar = _Progress(total, done_before, steps_total, steps_done, printer if progress else None)
     try:
         pending: dict[Any, str] = {}
         while True:
@@ -457,8 +524,6 @@ def _run(merged: Curriculum, scheduler: _Scheduler, order: list[str], directory:
                 name = job.spec.name
                 (failed_dir / f"{file_stem(name)}.txt").unlink(missing_ok=True)
                 scheduler.running.add(name)
-                # before the in-process executor trains here
-                _write_state(directory, scheduler.running, started, scheduler.skip)
                 pending[executor.submit(job)] = name
             _write_state(directory, scheduler.running, started, scheduler.skip)
             bar.show(len(scheduler.running))
@@ -474,10 +539,13 @@ def _run(merged: Curriculum, scheduler: _Scheduler, order: list[str], directory:
                     atomic_write(failed_dir / f"{file_stem(name)}.txt", text)
                     bar.note(f"job {name} failed: {scheduler.failed[name]}")
                     continue
-                _store(scheduler, outcome)
+                earlier = _store(scheduler, outcome)
                 scheduler.records[node_name][int(seed_text)] = outcome.record
                 bar.running = len(scheduler.running)
                 bar.finished(_rounded(scheduler.budget(merged.node(node_name))))
+                if earlier is not None and not _trained_alike(earlier, outcome.record):
+                    for above in _retrain_above(scheduler, node_name, name, bar.note):
+                        bar.undone(_rounded(scheduler.budget(merged.node(above))))
     finally:
         executor.shutdown()
         _write_state(directory, [], started, scheduler.skip)
@@ -497,42 +565,167 @@ def _rounded(timesteps: int) -> int:
     return -(-timesteps // STEPS_PER_UPDATE) * STEPS_PER_UPDATE
 
 
-def _check_or_write_settings(directory: Path, settings: dict[str, Any]) -> None:
+def read_settings(directory: Path) -> dict[str, Any] | None:
+    """The settings in ``directory/run.json``; ``None`` where ``directory`` holds no run yet (missing or empty).
+    :class:`RunSettingsError` for a file, or a directory that holds other things; :class:`RunFileError` for a
+    ``run.json`` that is not one."""
+    if directory.exists() and not directory.is_dir():
+        raise RunSettingsError(f"{directory} is a file, not a run directory: give a new directory or one of this run")
     path = directory / "run.json"
-    if path.is_file():
-        try:
-            old = json.loads(path.read_text(encoding="utf-8"))
-        except json.JSONDecodeError as err:
-            raise RunSettingsError(f"{path} is not valid JSON ({err}); it records the run's settings") from None
-        differences = _differences(old, settings)
-        if differences:
-            listed = "\n  ".join(differences)
-            raise RunSettingsError(f"{directory} holds a run with other settings:\n  {listed}\nuse another --out "
-                                   "directory, or the settings of that run")
-        return
-    if directory.exists() and any(p.name != "run.json" for p in directory.iterdir()):
-        raise RunSettingsError(f"{directory} is not empty and holds no run.json: not a curriculum run directory")
-    atomic_write(path, json.dumps(settings, indent=2) + "\n")
+    if not path.is_file():
+        if directory.is_dir() and any(p.name != ".lock" for p in directory.iterdir()):
+            raise RunSettingsError(f"{directory} is not empty and holds no run.json: not a curriculum run directory")
+        return None
+    settings = read_json(path, "the settings of a curriculum run (sb3-smc train writes it)")
+    if not isinstance(settings, dict) or settings.get("format") != RUN_FORMAT \
+            or not isinstance(settings.get("nodes"), dict) or not isinstance(settings.get("seeds"), int):
+        raise RunFileError(f"{path} is not the settings of an sb3-smc run (a JSON object of format {RUN_FORMAT!r} "
+                           "with its nodes and seeds)")
+    return settings
 
 
-def _load_done(scheduler: _Scheduler) -> None:
-    """Read the finished jobs from the library manifest (the only record of what is done)."""
-    root = scheduler.library
-    if not (root / storage.MANIFEST).is_file():
-        return
-    manifest, where = storage.read_manifest(root)
-    entries = storage.check_manifest(manifest, where)
-    for name, entry in entries.items():
+_NODE_KEYS = ("curriculum", "targets", "nodes")
+"""Settings that ``accept_changes`` takes; the others (seeds, timesteps, reuse, algo, rnn) decide every job."""
+
+
+@dataclass(frozen=True)
+class _Changes:
+    """How a run's settings differ from those its directory holds."""
+
+    differences: list[str]
+    every_job: list[str]  # differing settings that decide every job
+    changed: list[str]  # nodes of both, with other settings
+    removed: list[str]  # nodes of the directory, not of this run
+    retrained: list[str]  # nodes of both whose jobs are trained again: the changed ones and every node using one
+
+    @classmethod
+    def between(cls, old: dict[str, Any], new: dict[str, Any], curriculum: Curriculum) -> _Changes:
+        old_nodes, new_nodes = old["nodes"], new["nodes"]
+        changed = [n for n in new_nodes if n in old_nodes and old_nodes[n] != new_nodes[n]]
+        keys = sorted(set(old) | set(new))
+        return cls(differences=_differences(old, new),
+                   every_job=[k for k in keys if k not in _NODE_KEYS and old.get(k) != new.get(k)],
+                   changed=changed, removed=[n for n in old_nodes if n not in new_nodes],
+                   retrained=[n for n in new_nodes if n in old_nodes and curriculum.closure([n]) & set(changed)])
+
+    def check(self, directory: Path, accept: bool) -> None:
+        """:class:`RunSettingsError` listing the differences, unless there are none or they are accepted."""
+        if not self.differences or accept and not self.every_job:
+            return
+        listed = "\n  ".join(self.differences)
+        if accept:
+            raise RunSettingsError(f"{directory} holds a run with other settings:\n  {listed}\n--accept-changes takes "
+                                   f"changed nodes only; {', '.join(self.every_job)} decide every job: use another "
+                                   "--out directory, or the settings of that run")
+        offer = ""
+        if not self.every_job:
+            trained = f"the jobs of {', '.join(self.retrained)} are trained again" if self.retrained else \
+                "no trained job changes"
+            offer = (f", or accept the changes (sb3-smc train --accept-changes; train_curriculum(..., "
+                     f"accept_changes=True)): {trained}, the other nodes keep theirs")
+        raise RunSettingsError(f"{directory} holds a run with other settings:\n  {listed}\nuse another --out "
+                               f"directory, or the settings of that run{offer}")
+
+    def apply(self, directory: Path, printer: Callable[[str], None] | None) -> None:
+        """Take the jobs of the retrained and removed nodes out of the library (under the run's lock, before the new
+        ``run.json`` is written): :func:`_replace`."""
+        library = directory / "library"
+        going = set(self.retrained) | set(self.removed)
+        names = [n for n in _library_jobs(library) if n.rpartition(SEED_SEPARATOR)[0] in going]
+        lines = [f"accepting the changes in {directory}:", *(f"  {d}" for d in self.differences)]
+        for name in self.retrained:
+            why = "changed" if name in self.changed else "uses a changed node"
+            lines.append(f"  node {name!r} is trained again ({why})")
+        if names:
+            lines.append(_replace(directory, names))
+        if printer is not None:
+            printer("\n".join(lines))
+
+
+def _replace(directory: Path, names: Sequence[str]) -> str:
+    """Take the SMCs ``names`` out of the run's library, to be trained again; the library as it was, ``run.json``
+    and their TensorBoard folders are kept in ``DIR/replaced/<time>-<random>/`` (nothing trained is lost). Returns
+    a line saying so."""
+    library = directory / "library"
+    (directory / "replaced").mkdir(exist_ok=True)
+    kept = make_temporary_directory(directory / "replaced", time.strftime("%Y%m%d-%H%M%S-"))
+    shutil.copy2(directory / "run.json", kept / "run.json")
+    storage.link_copy(library, kept / "library")
+    for name in names:
+        for folder in (directory / "tensorboard").glob(f"{_glob_escape(name)}_*"):
+            (kept / "tensorboard").mkdir(exist_ok=True)
+            folder.rename(kept / "tensorboard" / folder.name)
+    storage.remove_from_library(library, names)
+    shown = ", ".join(names[:6]) + (", ..." if len(names) > 6 else "")
+    return f"  {len(names)} trained SMC(s) to train again ({shown}); the library as it was: {kept / 'library'}"
+
+
+def _load_done(scheduler: _Scheduler) -> dict[str, str]:
+    """Read the finished jobs from the library manifest (the only record of what is done), each checked against its
+    model file: a job whose file is missing or damaged is not done (it is trained again and replaces its entry).
+    Returns those jobs, with what is wrong with each."""
+    damaged: dict[str, str] = {}
+    for name, (entry, problem) in _library_jobs(scheduler.library).items():
         node_name, sep, seed_text = name.rpartition(SEED_SEPARATOR)
         if sep and node_name in scheduler.records and seed_text.isdigit() and entry["record"] is not None:
-            scheduler.records[node_name][int(seed_text)] = entry["record"]
+            if problem is None:
+                scheduler.records[node_name][int(seed_text)] = entry["record"]
+            elif name not in scheduler.skip:
+                scheduler.damaged[name] = entry["record"]
+                damaged[name] = problem
+    return damaged
 
 
-def _store(scheduler: _Scheduler, result: JobResult) -> None:
+def _library_jobs(library: Path) -> dict[str, tuple[dict[str, Any], str | None]]:
+    """Every SMC of a run's library: its manifest entry, and what is wrong with its model file (``None``: nothing;
+    :func:`sb3_smc.library.storage.check_model_file`)."""
+    if not (library / storage.MANIFEST).is_file():
+        return {}
+    manifest, where = storage.read_manifest(library)
+    out: dict[str, tuple[dict[str, Any], str | None]] = {}
+    for name, entry in storage.check_manifest(manifest, where).items():
+        try:
+            storage.check_model_file(library, name, entry)
+            out[name] = (entry, None)
+        except CorruptModelError as err:
+            out[name] = (entry, str(err))
+    return out
+
+
+def _store(scheduler: _Scheduler, result: JobResult) -> TrainingRecord | None:
+    """Add a finished job to the library (replacing the entry of a damaged one); returns the damaged one's record."""
     spec = result.spec
     entry = storage.make_entry(spec.task.kind, result.algo, spec.children, spec.wrapper.include_primitives,
                                spec.frame_stack, spec, result.record)
-    storage.add_to_library(scheduler.library, spec.name, entry, result.model)
+    earlier = scheduler.damaged.pop(spec.name, None)
+    storage.add_to_library(scheduler.library, spec.name, entry, result.model, replace=earlier is not None)
+    return earlier
+
+
+def _trained_alike(a: TrainingRecord, b: TrainingRecord) -> bool:
+    """The same training (returns, selection, steps), whatever the wall time and versions."""
+    def trained(record: TrainingRecord) -> dict[str, Any]:
+        return {k: v for k, v in record.to_dict().items() if k not in ("wall_time_s", "versions")}
+
+    return trained(a) == trained(b)
+
+
+def _retrain_above(scheduler: _Scheduler, node_name: str, name: str, note: Callable[[str], None]) -> list[str]:
+    """A damaged job ``name`` trained again differs from its earlier record (another CPU or code): the finished jobs
+    of every node above its node were trained with the earlier one and are taken out of the library to be trained
+    again (:func:`_replace`). Returns the node of each such job that counted as done."""
+    above = [n for n in scheduler.order if node_name in scheduler.below[n]]
+    jobs = [(n, seed) for n in above for seed in range(scheduler.seeds)
+            if seed in scheduler.records[n] or job_name(n, seed) in scheduler.damaged]
+    if not jobs:
+        return []
+    line = _replace(scheduler.directory, [job_name(n, seed) for n, seed in jobs])
+    finished = [n for n, seed in jobs if scheduler.records[n].pop(seed, None) is not None]
+    for n, seed in jobs:  # a damaged one is trained afresh too: its entry is gone
+        scheduler.damaged.pop(job_name(n, seed), None)
+    note(f"{name} trained again differs from its damaged copy's training (another CPU or code?); the SMCs above it "
+         f"were trained with that copy:\n{line}")
+    return finished
 
 
 def _rows(scheduler: _Scheduler) -> list[dict[str, Any]]:
@@ -550,24 +743,28 @@ def _rows(scheduler: _Scheduler) -> list[dict[str, Any]]:
 # ---------------------------------------------------------------------------------------------------------------
 
 class _InProcess:
+    """Trains a job in this process when it is waited for (as a worker would meanwhile), so the state file and the
+    progress line count it as running while it trains."""
+
     def __init__(self) -> None:
-        self._results: dict[int, Any] = {}
+        self._jobs: dict[int, Job] = {}
         self._next = 0
 
     def submit(self, job: Job) -> int:
         handle = self._next
         self._next += 1
-        try:
-            self._results[handle] = run_job(job)
-        except Exception as err:  # noqa: BLE001 - reported as the job's failure
-            self._results[handle] = err
+        self._jobs[handle] = job
         return handle
 
     def wait(self, handles: list[int]) -> list[tuple[int, Any]]:
-        return [(h, self._results.pop(h)) for h in handles]
+        handle = handles[0]
+        try:
+            return [(handle, run_job(self._jobs.pop(handle)))]
+        except Exception as err:  # noqa: BLE001 - reported as the job's failure
+            return [(handle, err)]
 
     def shutdown(self) -> None:
-        pass
+        self._jobs.clear()
 
 
 class _Processes:
@@ -661,13 +858,11 @@ def _executor(backend: str, workers: int, address: str | None) -> Any:
 
 class _Progress:
     """One live line: jobs done / total, running, steps/s, ETA (``\\r``-refreshed on a terminal, else one line per
-    round of finished jobs)."""
+    round of finished jobs, once their places are refilled (:meth:`show`), so that it counts the jobs running
+    then)."""
 
     def __init__(self, total: int, done: int, steps_total: int, steps_done: int,
-                 printer: Callable[[str], None] | None, after_refill: bool = True) -> None:
-        """``after_refill``: a log line waits until the finished jobs' places are refilled (:meth:`show`), so
-        that it counts the jobs running then; an in-process executor trains while it is given a job, so there
-        the line is printed when the job finishes."""
+                 printer: Callable[[str], None] | None) -> None:
         import sys
 
         self.total, self.done, self.steps_total, self.steps_done = total, done, steps_total, steps_done
@@ -676,7 +871,6 @@ class _Progress:
         self.steps_at_start = steps_done
         self.tty = printer is print and sys.stdout.isatty()
         self.running = 0
-        self.after_refill = after_refill
         self.shown = done  # jobs done at the last log line
 
     def line(self) -> str:
@@ -691,19 +885,19 @@ class _Progress:
         self.running = running
         if self.printer is not None and self.tty:
             print("\r" + self.line() + " " * 8, end="", flush=True)
-        elif self.after_refill:
-            self._log()
+        elif self.printer is not None and self.done > self.shown:
+            self.shown = self.done
+            self.printer(self.line())
 
     def finished(self, steps: int) -> None:
         self.done += 1
         self.steps_done += steps
-        if not self.after_refill:
-            self._log()
 
-    def _log(self) -> None:
-        if self.printer is not None and not self.tty and self.done > self.shown:
-            self.shown = self.done
-            self.printer(self.line())
+    def undone(self, steps: int) -> None:
+        """A finished job is to be trained again."""
+        self.done -= 1
+        self.steps_done -= steps
+        self.shown = min(self.shown, self.done)
 
     def note(self, text: str) -> None:
         if self.printer is not None:
@@ -718,31 +912,36 @@ class _Progress:
 
 def status(directory: str | Path) -> dict[str, Any]:
     """What a run directory holds: ``done``, ``running``, ``failed``, ``skipped`` (by the last run's ``skip``: kept
-    elsewhere, such as an experiment's evaluation records) and ``left`` job names (and the settings)."""
+    elsewhere, such as an experiment's evaluation records), ``damaged`` (finished, but the model file is missing or
+    damaged: job name -> what is wrong; the next run trains them again) and ``left`` job names (and the
+    settings)."""
     directory = Path(directory)
-    path = directory / "run.json"
-    if not path.is_file():
+    settings = read_settings(directory) if directory.is_dir() else None
+    if settings is None:
         raise RunSettingsError(f"{directory} is not a curriculum run directory (no run.json)")
-    settings = json.loads(path.read_text(encoding="utf-8"))
     jobs = [job_name(node, seed) for node in settings["nodes"] for seed in range(settings["seeds"])]
-    done: set[str] = set()
-    if (directory / "library" / storage.MANIFEST).is_file():
-        manifest, where = storage.read_manifest(directory / "library")
-        done = set(storage.check_manifest(manifest, where))
+    library = {name: problem for name, (_, problem) in _library_jobs(directory / "library").items()}
+    done = {name for name, problem in library.items() if problem is None}
     running: list[str] = []
     skipped: set[str] = set()
     state_path = directory / "state.json"
     if state_path.is_file():
-        state = json.loads(state_path.read_text(encoding="utf-8"))
-        if state.get("running") and _alive(int(state.get("pid", -1))):
+        holds = "the coordinator's pid and running jobs; delete it, the next sb3-smc train writes it again"
+        state = read_json(state_path, holds)
+        if not isinstance(state, dict) or not isinstance(state.get("pid", -1), int) \
+                or not isinstance(state.get("running", []), list) or not isinstance(state.get("skipped", []), list):
+            raise RunFileError(f"{state_path} is not the state of an sb3-smc run: it should hold {holds}")
+        if state.get("running") and _alive(state.get("pid", -1)):
             running = [n for n in state["running"] if n not in done]
         skipped = set(state.get("skipped", ())) - done
     failed = sorted(name_of_file(p.stem) for p in (directory / "failed").glob("*.txt")) \
         if (directory / "failed").is_dir() else []
-    failed = [n for n in failed if n not in done and n not in running]
-    left = [n for n in jobs if n not in done and n not in running and n not in failed and n not in skipped]
+    failed = [n for n in failed if n in jobs and n not in done and n not in running]
+    damaged = {n: library[n] for n in jobs if library.get(n) is not None and n not in running}
+    left = [n for n in jobs if n not in done and n not in running and n not in failed and n not in skipped
+            and n not in damaged]
     return {"settings": settings, "jobs": jobs, "done": [n for n in jobs if n in done], "running": running,
-            "failed": failed, "skipped": [n for n in jobs if n in skipped], "left": left}
+            "failed": failed, "skipped": [n for n in jobs if n in skipped], "damaged": damaged, "left": left}
 
 
 def _alive(pid: int) -> bool:

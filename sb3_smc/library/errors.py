@@ -38,7 +38,7 @@ class CorruptModelError(LibraryError):
 
 def suggest(name: str, names: Sequence[str], empty: str = " (the library is empty)") -> str:
     """"; did you mean ..." with close names, else a few of ``names`` (``empty`` when there are none)."""
-    close = difflib.get_close_matches(name, list(names), n=3, cutoff=0.5)
+    close = difflib.get_close_matches(name, list(dict.fromkeys(names)), n=3, cutoff=0.5)
     if close:
         return f"; did you mean {' or '.join(repr(c) for c in close)}?"
     if not names:

@@ -14,10 +14,11 @@ from __future__ import annotations
 
 import hashlib
 import json
+import os
 import re
 import shutil
 import zipfile
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Collection, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -52,9 +53,9 @@ from sb3_smc.records import (
 )
 from sb3_smc.smc import HAND_SIZE, SIGNALS, SMC, observation_size, smc_action_names
 
-__all__ = ["ALGORITHMS", "FORMAT", "FORMAT_VERSION", "MANIFEST", "MODELS", "check_manifest", "entry_for",
-           "interrupted_hint", "load_model", "model_files", "read_manifest", "sha256", "topological_order",
-           "upgrade_v1", "write_library"]
+__all__ = ["ALGORITHMS", "FORMAT", "FORMAT_VERSION", "MANIFEST", "MODELS", "add_to_library", "check_manifest",
+           "check_model_file", "entry_for", "interrupted_hint", "link_copy", "load_model", "model_files",
+           "read_manifest", "remove_from_library", "sha256", "topological_order", "upgrade_v1", "write_library"]
 
 FORMAT = "sb3-smc-library"
 """Value of the manifest's ``format`` field."""
@@ -225,28 +226,67 @@ def new_manifest(smcs: dict[str, dict[str, Any]]) -> dict[str, Any]:
     return {"format": FORMAT, "version": FORMAT_VERSION, "created_with": package_versions(), "smcs": smcs}
 
 
-def add_to_library(root: Path, name: str, entry: dict[str, Any], model: bytes) -> None:
+def _current_manifest(root: Path) -> tuple[dict[str, Any], Path]:
+    """The manifest of the library in ``root`` (a new, empty one where there is none), which must be of the current
+    version to be written."""
+    manifest_path = root / MANIFEST
+    if not manifest_path.is_file():
+        return new_manifest({}), manifest_path
+    manifest, _ = read_manifest(root)
+    if _check_version(manifest, manifest_path) != FORMAT_VERSION:
+        raise ManifestError(f"{manifest_path}: version {manifest['version']} library; convert it first "
+                            "(SMCLibrary.load(path).save())")
+    return manifest, manifest_path
+
+
+def add_to_library(root: Path, name: str, entry: dict[str, Any], model: bytes, *, replace: bool = False) -> None:
     """Add one SMC to the library directory ``root`` without touching what is already there.
 
     The model file is written atomically first, then the manifest (read, the entry added, written atomically), so
     an interruption leaves the library as it was or with the SMC complete; an existing library must be of the
-    current version, and ``name`` must be new. Creates the library when ``root`` has no manifest.
+    current version, and ``name`` must be new. Creates the library when ``root`` has no manifest. ``replace=True``:
+    ``name`` must be there already (an SMC whose model file was damaged, trained again); its model file and entry
+    are replaced the same way.
     """
-    manifest_path = root / MANIFEST
-    if manifest_path.is_file():
-        manifest, _ = read_manifest(root)
-        if _check_version(manifest, manifest_path) != FORMAT_VERSION:
-            raise ManifestError(f"{manifest_path}: version {manifest['version']} library; convert it first "
-                                "(SMCLibrary.load(path).save())")
-    else:
-        manifest = new_manifest({})
+    manifest, manifest_path = _current_manifest(root)
     smcs = manifest["smcs"]
-    if name in smcs:
+    if name in smcs and not replace:
         raise LibraryError(f"{manifest_path}: already has an SMC named {name!r}")
-    file = model_file_for(name, [e["model"] for e in smcs.values()])
+    if replace and name not in smcs:
+        raise LibraryError(f"{manifest_path}: has no SMC named {name!r} to replace")
+    file = smcs[name]["model"] if replace else model_file_for(name, [e["model"] for e in smcs.values()])
     atomic_write(root / file, model)
     smcs[name] = {"model": file, **entry, "sha256": hashlib.sha256(model).hexdigest()}
     atomic_write(manifest_path, json.dumps(manifest, indent=2, allow_nan=False) + "\n")
+
+
+def remove_from_library(root: Path, names: Collection[str]) -> None:
+    """Remove the SMCs ``names`` from the library in ``root``: the manifest first (atomically), then their model
+    files. No SMC left may call one of them."""
+    manifest, manifest_path = _current_manifest(root)
+    smcs = manifest["smcs"]
+    unknown = sorted(set(names) - set(smcs))
+    if unknown:
+        raise LibraryError(f"{manifest_path}: has no SMC named {unknown[0]!r}{suggest(unknown[0], list(smcs))}")
+    callers = sorted(n for n, e in smcs.items() if n not in names and set(e["children"]) & set(names))
+    if callers:
+        raise LibraryError(f"{manifest_path}: cannot remove {sorted(names)}: {callers} call them")
+    files = [smcs.pop(name)["model"] for name in names]
+    atomic_write(manifest_path, json.dumps(manifest, indent=2, allow_nan=False) + "\n")
+    for file in files:
+        (root / file).unlink(missing_ok=True)
+
+
+def link_copy(root: Path, target: Path) -> None:
+    """A copy of the library directory ``root`` at the new path ``target``, its files hard-linked where the file
+    system allows (a library's files are replaced by renames, never rewritten in place), else copied."""
+    def link(source: str, destination: str) -> None:
+        try:
+            os.link(source, destination)
+        except OSError:
+            shutil.copy2(source, destination)
+
+    shutil.copytree(root, target, copy_function=link)
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -528,8 +568,9 @@ def topological_order(entries: Mapping[str, Mapping[str, Any]], where: Path) -> 
     return order
 
 
-def load_model(root: Path, name: str, entry: Mapping[str, Any]) -> Any:
-    """The SB3 model of entry ``name``, after checking its file (a readable SB3 zip with the recorded SHA-256)."""
+def check_model_file(root: Path, name: str, entry: Mapping[str, Any]) -> None:
+    """:class:`CorruptModelError` unless entry ``name``'s model file is there, a readable SB3 zip, with the recorded
+    SHA-256."""
     file = root / entry["model"]
     if not file.is_file():
         raise CorruptModelError(f"SMC {name!r}: model file {file} is missing")
@@ -548,6 +589,12 @@ def load_model(root: Path, name: str, entry: Mapping[str, Any]) -> Any:
     if sha256(file) != entry["sha256"]:
         raise CorruptModelError(f"SMC {name!r}: model file {file} does not match the SHA-256 recorded in the "
                                 "manifest (modified or corrupt since it was saved)")
+
+
+def load_model(root: Path, name: str, entry: Mapping[str, Any]) -> Any:
+    """The SB3 model of entry ``name``, after checking its file (:func:`check_model_file`)."""
+    check_model_file(root, name, entry)
+    file = root / entry["model"]
     cls = algorithm_classes()[entry["algo"]]
     try:
         model = cls.load(file, device="cpu")
