@@ -1,5 +1,5 @@
 """Bad input never passes silently: actions, seeds, observation settings, reset options, environment arguments,
-and ``train_smc`` / the wrapper / ``make_smc_env``.
+the options of ``sb3-smc experiment`` and ``report``, and ``train_smc`` / the wrapper / ``make_smc_env``.
 
 Each case raises with a message that says what was given and what is expected (nothing is converted)."""
 
@@ -16,7 +16,7 @@ from pixelworld_env.validation import MAX_SEED, check_action, check_seed
 from sb3_smc.policies import SequencePolicy
 from sb3_smc.smc import SMC
 from sb3_smc.wrapper import HierarchicalSMCWrapper
-from tests.helpers import CONTAINER, IN_CONTAINER, classification_env, make
+from tests.helpers import CONTAINER, IN_CONTAINER, classification_env, make, sb3_smc_cli
 
 DATASET = "cl_self-in-left-corner_vs_on-hline"
 ENV_ID = f"PW-{DATASET}-v0"
@@ -122,6 +122,69 @@ def test_environments_state_their_split():
     _, info = gym.make(ENV_ID, split="test").reset(seed=0)
     assert info["split"] == "test"
     assert "split" not in classification_env().reset(seed=0)[1]  # hand-made scenes have no split
+
+
+# ------------------------------------------------------------------------------------------------ sb3-smc: experiments
+
+BRING_ABOUT = "ba_self-in-container_from_directly-above"
+
+
+@pytest.mark.parametrize(("argv", "message"), [
+    (["--repeats", "0"], "argument --repeats: must be a positive integer, got 0"),
+    (["--seeds", "-1"], "argument --seeds: must be a positive integer, got -1"),
+    (["--workers", "x"], "argument --workers: must be a positive integer, got 'x'"),
+    (["--methods", ""], "no methods: nothing to run"),
+    (["--methods", "cnn", "--targets", BRING_ABOUT], f"nothing to run: the CNN \\(method cnn\\) classifies only, and "
+                                                     f"{BRING_ABOUT} is a bring-about target"),
+    (["--methods", "base,base", "--targets", DATASET], "method 'base' is given twice"),
+    (["--ray-address", "auto"], "a Ray address \\('auto'\\) is for backend 'ray'"),
+])
+def test_experiment_options_are_checked_before_anything_runs(tmp_path, argv, message):
+    import re
+
+    out = tmp_path / "exp"
+    code, stdout, err = sb3_smc_cli("experiment", "--out", str(out), *argv)
+    assert code == 2 and re.search(message, err) and "Traceback" not in err and stdout == ""
+    assert not out.exists()  # no empty directory left behind
+
+
+def test_experiment_api_checks_options_and_says_what_it_leaves_out(tmp_path):
+    from sb3_smc.curricula.trainer import RunSettingsError
+    from sb3_smc.experiments.runner import run_experiment
+
+    with pytest.raises(ValueError, match="repeats must be a positive integer, got 0"):
+        run_experiment(tmp_path / "exp", methods=["base"], targets=[DATASET], repeats=0, progress=False)
+    with pytest.raises(ValueError, match="workers must be a positive integer, got 0"):
+        run_experiment(tmp_path / "exp", methods=["base"], targets=[DATASET], workers=0, progress=False)
+    (tmp_path / "a-file").write_text("x")
+    with pytest.raises(RunSettingsError, match="a-file is a file, not an experiment directory"):
+        run_experiment(tmp_path / "a-file", methods=["cnn"], targets=[DATASET], progress=False)
+    assert not (tmp_path / "exp").exists()
+    lines: list[str] = []
+    with pytest.raises(RunSettingsError, match="holds no run yet"):  # train=False on an empty directory: nothing
+        run_experiment(tmp_path / "exp", methods=["cnn", "base"], targets=[DATASET, BRING_ABOUT], train=False,
+                       printer=lines.append)
+    assert lines == [f"cnn skipped for 1 bring-about target(s) (it classifies only): {BRING_ABOUT}"]
+
+
+def test_report_errors_name_the_file_and_what_to_do(tmp_path, monkeypatch):
+    import shlex
+
+    truncated = tmp_path / "truncated"
+    truncated.mkdir()
+    (truncated / "results.json").write_text('{"rows": [')
+    code, _, err = sb3_smc_cli("report", str(truncated))
+    assert code == 2 and f"{truncated / 'results.json'} is not valid JSON (corrupt or truncated?)" in err
+    assert "it should hold the results of sb3-smc experiment" in err
+    trained = tmp_path / "trained only"  # a run of sb3-smc train: no results to report, and the report says why
+    trained.mkdir()
+    (trained / "run.json").write_text("{}")
+    code, _, err = sb3_smc_cli("report", str(trained))
+    assert code == 2 and "holds a curriculum run (run.json) but no experiment results" in err
+    assert f"sb3-smc status {shlex.quote(str(trained))}" in err
+    monkeypatch.setattr("sb3_smc.experiments.runner.run_experiment", lambda out, **kwargs: {})
+    code, stdout, _ = sb3_smc_cli("experiment", "--out", str(trained), "--methods", "cnn", "--targets", DATASET)
+    assert code == 0 and f"next: sb3-smc report {shlex.quote(str(trained))}\n" in stdout  # a path with a space
 
 
 # ------------------------------------------------------------------------------------------------ sb3_smc's API

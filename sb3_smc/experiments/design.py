@@ -51,6 +51,11 @@ class ExperimentPlan:
     nodes: dict[tuple[str, str], tuple[str, ...]]
 
     @property
+    def cnn_skipped(self) -> list[str]:
+        """The bring-about targets of a plan with ``cnn``: the CNN classifies only, so it has no row for them."""
+        return [t for t in self.targets if "cnn" in self.methods and (t, "cnn") not in self.nodes]
+
+    @property
     def training_targets(self) -> list[str]:
         """The node names to train (their lower-level nodes follow)."""
         return [n for key in sorted(self.nodes) for n in self.nodes[key]]
@@ -64,8 +69,14 @@ def plan(targets: Sequence[str], methods: Sequence[str]) -> ExperimentPlan:
     unknown = [m for m in methods if m not in METHODS]
     if unknown:
         raise ValueError(f"unknown method(s) {unknown}; methods are {list(METHODS)}")
+    if not methods:
+        raise ValueError(f"no methods: nothing to run; methods are {list(METHODS)}")
     if not targets:
-        raise ValueError("no targets")
+        raise ValueError("no targets: nothing to run")
+    for given, what in ((methods, "method"), (targets, "target")):
+        twice = sorted({x for x in given if list(given).count(x) > 1})
+        if twice:
+            raise ValueError(f"{what} {twice[0]!r} is given twice")
     for target in targets:
         catalog.dataset(target)  # UnknownDatasetError with close names
     shipped = shipped_curricula()
@@ -94,6 +105,10 @@ def plan(targets: Sequence[str], methods: Sequence[str]) -> ExperimentPlan:
     if "cnn" in methods:
         classification = [t for t in targets if catalog.dataset(t).kind == "classification"]
         nodes.update({(t, "cnn"): () for t in classification})
+    if not nodes:
+        raise ValueError(f"nothing to run: the CNN (method cnn) classifies only, and {', '.join(targets)} "
+                         f"{'is a bring-about target' if len(targets) == 1 else 'are bring-about targets'}; add an "
+                         "SMC method (base, curr, ...) or a classification target")
     missing = [(t, m) for t in targets for m in methods if m != "cnn" and (t, m) not in nodes]
     if missing:
         raise CurriculumError(f"no shipped curriculum trains {missing[0][0]!r} with method {missing[0][1]!r} "

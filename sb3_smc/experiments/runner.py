@@ -34,10 +34,14 @@ from typing import Any
 from pixelworld_env.atomic import atomic_write
 from sb3_smc.curricula.trainer import (
     DEFAULT_SEEDS,
+    RunFileError,
+    RunSettingsError,
+    check_run_options,
     file_stem,
     finished_jobs,
     job_name,
     name_of_file,
+    read_json,
     train_curriculum,
 )
 from sb3_smc.experiments.design import METHODS, level2_targets, plan
@@ -79,10 +83,19 @@ def run_experiment(
 
     if targets is not None and category is not None:
         raise ValueError("give targets or a category, not both")
+    if isinstance(repeats, bool) or not isinstance(repeats, int) or repeats < 1:
+        raise ValueError(f"repeats must be a positive integer, got {repeats!r}")
+    check_run_options(seeds=seeds, timesteps=timesteps, workers=workers, backend=backend, ray_address=ray_address,
+                      algo=algo, rnn=rnn)
     chosen = list(targets) if targets is not None else level2_targets(category or "all")
     design = plan(chosen, list(methods))
     directory = Path(out)
-    directory.mkdir(parents=True, exist_ok=True)
+    if directory.exists() and not directory.is_dir():
+        raise RunSettingsError(f"{directory} is a file, not an experiment directory: give a new directory or one of "
+                               "this experiment")
+    if progress and design.cnn_skipped:
+        printer(f"cnn skipped for {len(design.cnn_skipped)} bring-about target(s) (it classifies only): "
+                f"{', '.join(design.cnn_skipped)}")
     start = time.time()
     finished: set[str] | None = None
     kept = _kept_evaluations(directory, design.training_targets, seeds, repeats) \
@@ -280,7 +293,10 @@ def _evaluation(directory: Path, name: str, repeats: int) -> dict[str, Any]:
 def _cnn(directory: Path, target: str, seed: int) -> dict[str, Any]:
     path = directory / "cnn" / f"{target}@{seed}.json"
     if path.is_file():
-        return json.loads(path.read_text(encoding="utf-8"))
+        saved = read_json(path, "a CNN result; delete it to train that CNN again")
+        if not isinstance(saved, dict) or not isinstance(saved.get("test_score"), int | float):
+            raise RunFileError(f"{path} is not a CNN result (no test_score); delete it to train that CNN again")
+        return saved
     from sb3_smc.experiments.cnn import train_cnn
 
     result = train_cnn(target, seed).to_dict()
@@ -289,8 +305,22 @@ def _cnn(directory: Path, target: str, seed: int) -> dict[str, Any]:
 
 
 def read_results(directory: str | Path) -> dict[str, Any]:
-    """The ``results.json`` of an experiment directory."""
-    path = Path(directory) / "results.json"
+    """The ``results.json`` of an experiment directory (errors say which file and what to do)."""
+    directory = Path(directory)
+    path = directory / "results.json"
+    quoted = shlex.quote(str(directory))
     if not path.is_file():
-        raise FileNotFoundError(f"{path} not found: run `sb3-smc experiment --out {directory}` first")
-    return json.loads(path.read_text(encoding="utf-8"))
+        if (directory / "run.json").is_file():
+            raise FileNotFoundError(
+                f"{path} not found: {directory} holds a curriculum run (run.json) but no experiment results. If "
+                f"`sb3-smc experiment --out {quoted} ...` made it, run that command again (the same options) to "
+                f"finish it; a run of `sb3-smc train` has no results to report (`sb3-smc status {quoted}` shows what "
+                "it holds)")
+        raise FileNotFoundError(f"{path} not found: run `sb3-smc experiment --out {quoted} ...` first")
+    holds = ("the results of sb3-smc experiment; its command with the same options writes it again from the saved "
+             "evaluations")
+    results = read_json(path, holds)
+    if not isinstance(results, dict) or not isinstance(results.get("rows"), list) \
+            or not isinstance(results.get("reported"), list):
+        raise RunFileError(f"{path} is not the results of an sb3-smc experiment: it should hold {holds}")
+    return results
