@@ -171,7 +171,7 @@ def test_a_tiny_experiment_end_to_end(tmp_path):
     for method in ("cnn", "base", "curr"):
         assert f"| {method} " in text or f" {method} |" in text
     assert "52.6 / 90.4 / 89.0" in text and "Paired t-tests" in text and "## How this was run" in text
-    assert f"torch {torch.__version__}," in text and "- code: sb3-smc " in text
+    assert f"torch {torch.__version__}," in text and "(a resumed run: the code of its last run)" in text
     base = next(r["test_score"] for r in results["reported"] if r["method"] == "base")
     subset = next(line for line in text.splitlines() if "ours - paper (the same 1 concept(s)" in line)
     cells = [cell.strip() for cell in subset.strip("|").split("|")]  # kind, label, concepts, cnn, base, curr
@@ -254,6 +254,7 @@ def test_cli_experiment_and_report_succeed(tmp_path):
     assert report.returncode == 0, report.stderr
     text = (out / "report.md").read_text()
     assert f"--targets {easy} --seeds 2" in text and "--workers 2" in text and "cores" in text
+    assert "- code: sb3-smc " in text and "a resumed run" not in text  # one run: not called resumed
 
 
 def test_the_report_has_the_noprim_table_and_the_cnn_tests_per_category(tmp_path):

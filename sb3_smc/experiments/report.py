@@ -343,7 +343,7 @@ def _provenance(sources: Sequence[tuple[Path, dict[str, Any]]], out: Path) -> li
                   f"{settings['repeats']} test repeats; {settings['workers']} worker(s), backend {settings['backend']}",
                   f"- learner: {_learner(settings)}",
                   f"- machine: {_machine_line(machine)}",
-                  *_code_line(results.get("code")),
+                  *_code_line(results),
                   f"- wall time of the last `sb3-smc experiment` run: {results.get('wall_time_s', 0) / 3600:.2f} h"
                   + (f"; of all its runs recorded here: {results['wall_time_total_s'] / 3600:.2f} h"
                      if "wall_time_total_s" in results else ""),
@@ -355,15 +355,19 @@ def _provenance(sources: Sequence[tuple[Path, dict[str, Any]]], out: Path) -> li
     return lines
 
 
-def _code_line(code: dict[str, Any] | None) -> list[str]:
-    """The report's line on the code that made the results (absent from results of before that was recorded)."""
+def _code_line(results: dict[str, Any]) -> list[str]:
+    """The report's line on the code that made the results (absent from results of before that was recorded); a
+    directory of several runs (a resumed one) says that this is the code of the last."""
+    code = results.get("code")
     if not code:
         return []
     versions = code.get("versions", {})
     commit = code.get("commit")
+    resumed = results.get("wall_time_total_s", 0.0) > results.get("wall_time_s", 0.0)
     return [f"- code: sb3-smc {versions.get('sb3_smc', '?')}" + (f", commit `{commit}`" if commit else "")
             + f"; torch {versions.get('torch', '?')}, stable-baselines3 {versions.get('stable_baselines3', '?')}, "
-              f"sb3-contrib {versions.get('sb3_contrib', '?')} (a resumed run: the code of its last run)"]
+              f"sb3-contrib {versions.get('sb3_contrib', '?')}"
+            + (" (a resumed run: the code of its last run)" if resumed else "")]
 
 
 def pushable_levels() -> dict[str, int]:
