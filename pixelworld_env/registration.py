@@ -4,20 +4,29 @@
 * ``PW-<cl|ba>_<concept>-v0`` for every concept, pooling the datasets that share the concept and kind,
   e.g. ``PW-ba_self-in-container-v0``.
 
+Every id also has a native vector environment: ``gymnasium.make_vec(id, num_envs=N)`` gives a
+:class:`pixelworld_env.vector.PixelWorldVectorEnv` (``vectorization_mode="sync"`` still gives ``SyncVectorEnv``).
+
 Making an env loads (or generates, once) only the datasets it uses.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import TYPE_CHECKING, Literal
 
 import gymnasium as gym
 
 from pixelworld_env import catalog
 from pixelworld_env.env import PixelWorldEnv, check_settings
 from pixelworld_env.loading import Split, load_dataset
+from pixelworld_env.validation import check_bool, check_int
+
+if TYPE_CHECKING:
+    from pixelworld_env.vector import PixelWorldVectorEnv
 
 ENTRY_POINT = "pixelworld_env.registration:make_env"
+VECTOR_ENTRY_POINT = "pixelworld_env.registration:make_vector_env"
 
 
 def env_id(name: str) -> str:
@@ -51,6 +60,23 @@ def make_env(datasets: Sequence[str], *, split: Split = "train", seed: int = 0, 
     return env
 
 
+def make_vector_env(num_envs: int = 1, *, datasets: Sequence[str], split: Split = "train", seed: int = 0,
+                    max_steps: int = 100, observation: str = "hand", render_mode: str | None = None,
+                    aaai18_reset_bug: bool = False,
+                    render_envs: Literal["all", "first"] = "all") -> PixelWorldVectorEnv:
+    """``num_envs`` environments of :func:`make_env` as one :class:`~pixelworld_env.vector.PixelWorldVectorEnv`
+    (the ids' ``vector_entry_point``); settings the vector env refuses are refused before any dataset is loaded."""
+    from pixelworld_env.vector import RENDER_ENVS, PixelWorldVectorEnv  # numba: only when a vector env is made
+
+    check_int(num_envs, "num_envs", 1)
+    if check_bool(aaai18_reset_bug, "aaai18_reset_bug") or render_mode == "human" or render_envs not in RENDER_ENVS:
+        PixelWorldVectorEnv.check_settings(aaai18_reset_bug=aaai18_reset_bug, render_mode=render_mode,
+                                           render_envs=render_envs)
+    env = make_env(datasets, split=split, seed=seed, max_steps=max_steps, observation=observation,
+                   render_mode=render_mode, aaai18_reset_bug=aaai18_reset_bug)
+    return PixelWorldVectorEnv(env, num_envs, render_envs=render_envs)
+
+
 def registered_ids() -> dict[str, tuple[str, ...]]:
     """Every PixelWorld id -> the datasets it samples from."""
     ids = {env_id(name): (name,) for name in catalog.dataset_names()}
@@ -62,4 +88,5 @@ def register_envs() -> None:
     """Register every id of :func:`registered_ids` with Gymnasium (idempotent)."""
     for name, members in registered_ids().items():
         if name not in gym.registry:
-            gym.register(name, entry_point=ENTRY_POINT, kwargs={"datasets": members})
+            gym.register(name, entry_point=ENTRY_POINT, vector_entry_point=VECTOR_ENTRY_POINT,
+                         kwargs={"datasets": members})

@@ -1,0 +1,398 @@
+"""``PixelWorldVectorEnv``: N PixelWorld environments stepped together in one compiled call (Gymnasium's vector API).
+
+``gymnasium.make_vec("PW-...", num_envs=N)`` builds it (the ids register it as their ``vector_entry_point``). For the
+same seeds, actions and reset options its transitions equal those of ``SyncVectorEnv`` over ``gym.make`` of the same
+id, step by step: observations, rewards, terminations, truncations and infos (tested).
+
+How: the environments' state is a handful of arrays (scene index, self cell, step count, goal truth, autoreset flag,
+the block of scene draws and the PCG64 state of each environment's generator); the scenes are arrays too (initial
+colours and owners, the self's start, labels, and the bring-about goal per self cell, computed per scene the first
+time an environment is reset into it with the single env's own test, ``Concept.self_evaluator``). A step of all
+environments is :func:`pixelworld_env.kernels.step_envs` and their observations :func:`~pixelworld_env.kernels.
+observe_envs`. In worlds where objects besides the self move (the pushable datasets, ``World.self_only`` false)
+each environment's moves go through its own :class:`~pixelworld_env.world.World` in Python and its goal through
+``Concept.holds_objects``, as in the single env; the compiled step still does their signals, truncation and resets.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any, Literal
+
+import gymnasium as gym
+import numpy as np
+from gymnasium.utils import seeding
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import batch_space
+
+from pixelworld_env import kernels
+from pixelworld_env.constants import NUM_COLORS
+from pixelworld_env.env import (
+    BRING_ABOUT,
+    CLASSIFICATION_REWARD,
+    GOAL_POTENTIAL,
+    GOAL_REWARD,
+    PixelWorldEnv,
+)
+from pixelworld_env.objects import Cell
+from pixelworld_env.render import rgb_image
+from pixelworld_env.scene import Scene
+from pixelworld_env.validation import check_int
+from pixelworld_env.world import EMPTY, World
+
+DRAW_BLOCK = 256
+"""Scene indices drawn at a time from an environment's generator, as :meth:`PixelWorldEnv.reset` draws them."""
+RENDER_ENVS = ("all", "first")
+
+_ONE_HOT_OFFSETS = np.arange(9) * NUM_COLORS
+_COLOR_CODES = np.arange(NUM_COLORS, dtype=np.uint8)[:, None, None]
+_MASK64 = (1 << 64) - 1
+
+
+class PixelWorldVectorEnv(VectorEnv):
+    """``num_envs`` copies of a :class:`~pixelworld_env.PixelWorldEnv` (``env``, which is not stepped itself) as one
+    Gymnasium vector environment with next-step autoreset (``metadata["autoreset_mode"]``, as ``SyncVectorEnv``).
+
+    * ``reset(seed=...)``: an int seeds environment ``i`` with ``seed + i``, a list one seed (or ``None``) per
+      environment. ``options``: ``{"index": i}`` resets every environment into scene ``i``, ``{"index": [i_0, ...]}``
+      one index (or ``None``: a drawn scene) per environment; ``{"reset_mask": mask}`` resets only where the bool
+      array ``mask`` is set (``SyncVectorEnv``'s option).
+    * ``step(actions)``: an integer array of ``num_envs`` valid actions. ``info`` holds each key of the single env's
+      ``info`` as an array with its ``_key`` mask (``split`` only for the environments that were reset).
+    * ``render()``: the frames (``"rgb_array"`` or ``"ansi"``) of every environment, or of the first one with
+      ``render_envs="first"``, as a tuple.
+
+    Observations ``"hand"``, ``"hand_raw"``, ``"full"`` and ``"image"`` are all built in the compiled call (the image
+    from the state array); ``render_mode="human"`` and ``aaai18_reset_bug=True`` are for single envs and refused.
+    """
+
+    metadata: dict[str, Any] = {"render_modes": ["rgb_array", "ansi"], "autoreset_mode": AutoresetMode.NEXT_STEP}
+
+    def __init__(self, env: PixelWorldEnv, num_envs: int, *, render_envs: Literal["all", "first"] = "all") -> None:
+        num_envs = check_int(num_envs, "num_envs", 1)
+        self.check_settings(aaai18_reset_bug=env.aaai18_reset_bug, render_mode=env.render_mode,
+                            render_envs=render_envs)
+        self.num_envs = num_envs
+        self.scenes: tuple[Scene, ...] = env.scenes
+        self.concept = env.concept
+        self.kind = env.kind
+        self.labels = env.labels
+        self.action_names = env.action_names
+        self.max_steps = env.max_steps
+        self.observation = env.observation
+        self.split = env.split
+        self.render_mode = env.render_mode
+        self.render_envs = render_envs
+        self.metadata = {**type(self).metadata, "render_fps": env.metadata["render_fps"]}
+        self.single_observation_space = env.observation_space
+        self.observation_space = batch_space(env.observation_space, num_envs)
+        self.single_action_space = env.action_space
+        self.action_space = batch_space(env.action_space, num_envs)
+        self._bring_about = env.kind == BRING_ABOUT
+
+        # actions: kind (0 signal, 1 move), a signal's value, a move's offsets
+        effects = env._effects
+        self._moves: list[Cell | None] = [e if isinstance(e, tuple) else None for e in effects]
+        self._kinds = np.array([int(m is not None) for m in self._moves], dtype=np.int64)
+        self._values = np.array([0 if m is not None else e for m, e in zip(self._moves, effects, strict=True)],
+                                dtype=np.int64)
+        self._deltas = np.array([m if m is not None else (0, 0) for m in self._moves], dtype=np.int64)
+
+        # per scene
+        n_scenes = len(self.scenes)
+        height, width = self.scenes[0].height, self.scenes[0].width
+        worlds = [World(scene) for scene in self.scenes]
+        self._grid0 = np.stack([w.grid for w in worlds])
+        self._owner0 = np.stack([w.owner for w in worlds])
+        self._start = np.array([w.self_position for w in worlds], dtype=np.int64)
+        self._me = np.array([w.self_index for w in worlds], dtype=np.int64)
+        self._self_color = np.array([int(s.self_object.color) for s in self.scenes], dtype=np.int64)
+        self._python_scene = np.array([not w.self_only for w in worlds], dtype=np.bool_)
+        self._labels = np.array(self.labels if self.labels is not None else [0] * n_scenes, dtype=np.int64)
+        table_shape = (n_scenes, height, width) if self._bring_about else (n_scenes, 1, 1)
+        self._goal_table = np.full(table_shape, -1, dtype=np.int8)
+        self._goal0 = np.zeros(n_scenes, dtype=np.int8)
+        self._ready = np.zeros(n_scenes, dtype=np.uint8)
+
+        # per environment
+        self._draws = np.zeros((num_envs, DRAW_BLOCK), dtype=np.int32)
+        self._used = np.full(num_envs, DRAW_BLOCK, dtype=np.int64)
+        self._rng = np.zeros((num_envs, 4), dtype=np.uint64)  # PCG64 state and increment, high and low words
+        self._rng_buffer = np.zeros((num_envs, 2), dtype=np.uint64)  # has_uint32, uinteger
+        self._seeded = np.zeros(num_envs, dtype=np.bool_)
+        self._bit_generator = np.random.PCG64()
+        self._generator = np.random.Generator(self._bit_generator)
+        self._scene, self._row, self._col, self._steps = (np.zeros(num_envs, dtype=np.int64) for _ in range(4))
+        self._goal = np.zeros(num_envs, dtype=np.int8)
+        self._rewards = np.zeros(num_envs, dtype=np.float64)
+        (self._autoreset, self._terminated, self._truncated, self._success, self._was_reset,
+         self._python_move) = (np.zeros(num_envs, dtype=np.bool_) for _ in range(6))
+        self._no_index = np.full(num_envs, -1, dtype=np.int64)
+        self._everyone = np.ones(num_envs, dtype=np.bool_)
+        # worlds where more than the self moves: per environment its World per scene, and the live one
+        self._python = bool(self._python_scene.any())
+        self._worlds: list[dict[int, World]] = [{} for _ in range(num_envs)] if self._python else []
+        self._live: list[World | None] = [None] * num_envs if self._python else []
+        self._started = False
+
+    @staticmethod
+    def check_settings(*, aaai18_reset_bug: bool, render_mode: str | None, render_envs: str) -> None:
+        """``ValueError`` for the settings only single envs have (the reset bug, the pygame window) and an unknown
+        ``render_envs``."""
+        if aaai18_reset_bug:
+            raise ValueError("aaai18_reset_bug=True is not supported by the vector env; use "
+                             "gym.make_vec(id, n, vectorization_mode='sync', aaai18_reset_bug=True)")
+        if render_mode == "human":
+            raise ValueError("render_mode='human' draws one env in a window; use gym.make(id, render_mode='human') "
+                             "or render_mode='rgb_array' here")
+        if render_envs not in RENDER_ENVS:
+            raise ValueError(f"render_envs must be one of {RENDER_ENVS}, got {render_envs!r}")
+
+    def __repr__(self) -> str:
+        name = self.spec.id if self.spec is not None else f"{self.kind}, {len(self.scenes)} scenes"
+        return f"{type(self).__name__}({name}, num_envs={self.num_envs})"
+
+    # ------------------------------------------------------------------------------------------ scenes and draws
+
+    def _prepare_scene(self, s: int) -> None:
+        """The goal's truth in scene ``s``: at the start, and per self cell where only the self moves."""
+        scene = self.scenes[s]
+        if self._python_scene[s]:
+            self._goal0[s] = self.concept.holds_objects(World(scene).objects, scene.floor_row)
+        else:
+            holds_for = self.concept.self_evaluator(scene.objects, scene.floor_row)
+            owner = self._owner0[s, 1:-1, 1:-1]
+            for r, c in np.argwhere((owner == EMPTY) | (owner == self._me[s])):
+                self._goal_table[s, r, c] = holds_for(scene.self_object.moved_to((int(r), int(c))))
+            self._goal0[s] = self._goal_table[s, self._start[s, 0], self._start[s, 1]]
+        self._ready[s] = 1
+
+    def _seed(self, k: int, seed: int | None) -> None:
+        generator, _ = seeding.np_random(seed)
+        self._store_rng(k, generator)
+        self._used[k] = DRAW_BLOCK
+
+    def _store_rng(self, k: int, generator: np.random.Generator) -> None:
+        state = generator.bit_generator.state
+        value, increment = state["state"]["state"], state["state"]["inc"]
+        self._rng[k] = (value >> 64, value & _MASK64, increment >> 64, increment & _MASK64)
+        self._rng_buffer[k] = (state["has_uint32"], state["uinteger"])
+        self._seeded[k] = True
+
+    def _draw_block(self, k: int) -> None:
+        """Environment ``k``'s next block of scene draws, from its generator as the single env draws them."""
+        if not self._seeded[k]:
+            self._seed(k, None)
+        high, low, inc_high, inc_low = (int(x) for x in self._rng[k])
+        self._bit_generator.state = {
+            "bit_generator": "PCG64", "state": {"state": high << 64 | low, "inc": inc_high << 64 | inc_low},
+            "has_uint32": int(self._rng_buffer[k, 0]), "uinteger": int(self._rng_buffer[k, 1]),
+        }
+        self._draws[k] = self._generator.integers(len(self.scenes), size=DRAW_BLOCK)
+        self._used[k] = 0
+        self._store_rng(k, self._generator)
+
+    def _prepare(self, pending: np.ndarray, index: np.ndarray) -> None:
+        """Give every environment about to be reset (``pending``, into scene ``index`` where >= 0) a scene draw,
+        and prepare the scenes they will be reset into."""
+        for k in np.flatnonzero(pending & (index < 0) & (self._used >= DRAW_BLOCK)):
+            self._draw_block(int(k))
+        if self._bring_about:
+            drawn = self._draws[np.arange(self.num_envs), np.minimum(self._used, DRAW_BLOCK - 1)]
+            for s in np.unique(np.where(index >= 0, index, drawn)[pending]):
+                if not self._ready[s]:
+                    self._prepare_scene(int(s))
+
+    # ------------------------------------------------------------------------------------------ Python worlds
+
+    def _reset_worlds(self, mask: np.ndarray) -> None:
+        for k in np.flatnonzero(mask & self._python_scene[self._scene]):
+            s = int(self._scene[k])
+            world = self._worlds[k].get(s)
+            if world is None:
+                world = self._worlds[k][s] = World(self.scenes[s])
+            world.reset()
+            self._live[k] = world
+
+    def _python_moves(self, actions: np.ndarray) -> None:
+        for k in np.flatnonzero(self._python_move):
+            world = self._live[k]
+            assert world is not None
+            if world.move(self._moves[actions[k]]):  # type: ignore[arg-type]
+                self._row[k], self._col[k] = world.self_position
+                if self._bring_about:
+                    goal = self.concept.holds_objects(world.objects, world.scene.floor_row)
+                    if goal != bool(self._goal[k]):
+                        self._goal[k] = goal
+                        self._rewards[k] = GOAL_POTENTIAL if goal else -GOAL_POTENTIAL
+                        self._success[k] = self._truncated[k] and self._rewards[k] > 0
+
+    # ------------------------------------------------------------------------------------------ observations, infos
+
+    def _observe(self) -> np.ndarray:
+        n, observation = self.num_envs, self.observation
+        state = observation in ("full", "image")
+        if state:
+            out = np.empty((n, self.scenes[0].height, self.scenes[0].width), dtype=np.uint8)
+            kernels.observe_states(self._grid0, self._start, self._self_color, self._python_scene, self._scene,
+                                   self._row, self._col, out)
+        else:
+            one_hot = observation == "hand"
+            out = np.empty((n, 9 * NUM_COLORS), dtype=np.float32) if one_hot else np.empty((n, 9), dtype=np.int64)
+            kernels.observe_windows(one_hot, NUM_COLORS, self._grid0, self._start, self._self_color,
+                                    self._python_scene, self._scene, self._row, self._col, out)
+        if self._python:
+            for k in np.flatnonzero(self._python_scene[self._scene]):
+                world = self._live[k]
+                assert world is not None
+                if state:
+                    out[k] = world.state()
+                elif observation == "hand":
+                    out[k] = 0.0
+                    out[k, _ONE_HOT_OFFSETS + world.window().ravel()] = 1.0
+                else:
+                    out[k] = world.window().reshape(-1)
+        if observation == "image":
+            return (out[:, None] == _COLOR_CODES).astype(np.uint8) * np.uint8(255)
+        return out
+
+    def _infos(self, mask: np.ndarray, success: np.ndarray, signalled: np.ndarray,
+               reset: np.ndarray) -> dict[str, Any]:
+        """The vector ``info``: the environments in ``mask`` have the single env's keys, those in ``reset`` also
+        ``split``; each key with its ``_key`` mask (values 0 / False / None outside it, as Gymnasium's)."""
+        everyone = bool(mask.all())
+        columns: dict[str, np.ndarray] = {"scene_index": self._scene.copy(), "is_success": success.copy(),
+                                          "signalled": signalled.copy()}
+        if self.labels is not None:
+            columns["label"] = self._labels[self._scene]
+        if self._bring_about:
+            columns["goal"] = self._goal.astype(np.bool_)
+        info: dict[str, Any] = {}
+        for key, values in columns.items():
+            info[key] = values if everyone else np.where(mask, values, np.zeros_like(values))
+            info[f"_{key}"] = mask.copy()
+        if self.split is not None and reset.any():
+            split = np.full(self.num_envs, None, dtype=object)
+            split[reset] = self.split
+            info["split"], info["_split"] = split, reset.copy()
+        return info
+
+    # ------------------------------------------------------------------------------------------ Gymnasium API
+
+    def reset(self, *, seed: int | Sequence[int | None] | None = None,
+              options: dict[str, Any] | None = None) -> tuple[np.ndarray, dict[str, Any]]:
+        n = self.num_envs
+        if seed is None:
+            seeds: Sequence[int | None] = [None] * n
+        elif isinstance(seed, int):
+            seeds = [seed + i for i in range(n)]
+        else:
+            seeds = list(seed)
+            if len(seeds) != n:
+                raise ValueError(f"If seeds are passed as a list the length must match num_envs={n} but got "
+                                 f"length={len(seeds)}.")
+        options = dict(options or {})
+        mask = self._reset_mask(options.pop("reset_mask", None))
+        index = self._indices(options.pop("index", None))
+        if options:
+            raise ValueError(f"unknown reset option(s) {sorted(options)}; PixelWorldVectorEnv.reset takes "
+                             "options={'index': i or [i, ...], 'reset_mask': mask}")
+        if not self._started and not mask.all():
+            raise RuntimeError("the first reset must reset every environment (no reset_mask)")
+        for k in np.flatnonzero(mask):
+            if seeds[k] is not None:
+                self._seed(int(k), seeds[k])
+        while kernels.reset_envs(mask, index, self._bring_about, self._ready, self._start, self._goal0,
+                                 self._draws, self._used, self._scene, self._row, self._col, self._steps, self._goal,
+                                 self._autoreset) != kernels.OK:
+            self._prepare(mask, index)
+        if self._python:
+            self._reset_worlds(mask)
+        self._terminated[mask] = False
+        self._truncated[mask] = False
+        self._started = True
+        nothing = np.zeros(n, dtype=np.bool_)
+        return self._observe(), self._infos(mask, nothing, nothing, mask)
+
+    def _reset_mask(self, mask: Any) -> np.ndarray:
+        if mask is None:
+            return self._everyone.copy()
+        if not isinstance(mask, np.ndarray):
+            raise TypeError(f"`options['reset_mask']` must be a numpy array, got {type(mask)}")
+        if mask.shape != (self.num_envs,):
+            raise ValueError(f"`options['reset_mask']` must have shape `({self.num_envs},)`, got {mask.shape}")
+        if mask.dtype != np.bool_:
+            raise TypeError(f"`options['reset_mask']` must have `dtype=np.bool_`, got {mask.dtype}")
+        if not mask.any():
+            raise ValueError("`options['reset_mask']` must contain a boolean array with at least one True value, "
+                             f"got reset_mask={mask}")
+        return mask.copy()
+
+    def _indices(self, index: Any) -> np.ndarray:
+        """``options["index"]`` as one scene index per environment (-1: draw one)."""
+        if index is None:
+            return self._no_index
+        if isinstance(index, (list, tuple, np.ndarray)):
+            if len(index) != self.num_envs:
+                raise ValueError(f"options['index'] as a list needs one entry per environment ({self.num_envs}), "
+                                 f"got {len(index)}")
+            values = [-1 if i is None else check_int(i, "options['index']") for i in index]
+        else:
+            values = [check_int(index, "options['index']")] * self.num_envs
+        for value in values:
+            if value != -1 and not 0 <= value < len(self.scenes):
+                raise IndexError(f"scene index {value} out of range (0..{len(self.scenes) - 1})")
+        return np.array(values, dtype=np.int64)
+
+    def step(self, actions: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
+        if not self._started:
+            raise RuntimeError("call reset() first")
+        actions = np.asarray(actions)
+        if actions.shape != (self.num_envs,) or actions.dtype.kind not in "iu":
+            raise ValueError(f"actions must be an integer array of shape ({self.num_envs},), got {actions.dtype} "
+                             f"{actions.shape}")
+        if actions.size and (actions.min() < 0 or actions.max() >= len(self.action_names)):
+            raise ValueError(f"actions must be in [0, {len(self.action_names)}), got {actions}")
+        actions = actions.astype(np.int64, copy=False)
+        while kernels.step_envs(actions, self._kinds, self._values, self._deltas, self._bring_about, self.max_steps,
+                                CLASSIFICATION_REWARD, GOAL_POTENTIAL, GOAL_REWARD, self._owner0, self._me,
+                                self._start, self._labels, self._python_scene, self._goal_table, self._goal0,
+                                self._ready, self._draws, self._used, self._scene, self._row, self._col, self._steps,
+                                self._goal, self._autoreset, self._rewards, self._terminated, self._truncated,
+                                self._success, self._was_reset, self._python_move) != kernels.OK:
+            self._prepare(self._autoreset, self._no_index)
+        if self._python:
+            self._reset_worlds(self._was_reset)
+            self._python_moves(actions)
+        info = self._infos(self._everyone, self._success, self._terminated, self._was_reset)
+        return (self._observe(), self._rewards.copy(), self._terminated.copy(), self._truncated.copy(), info)
+
+    def _state(self, k: int) -> np.ndarray:
+        """Environment ``k``'s state array (colour codes)."""
+        if self._python_scene[self._scene[k]]:
+            return self._live[k].state().copy()  # type: ignore[union-attr]
+        s = self._scene[k]
+        state = self._grid0[s, 1:-1, 1:-1].copy()
+        state[self._start[s, 0], self._start[s, 1]] = 0
+        state[self._row[k], self._col[k]] = self._self_color[s]
+        return state
+
+    def _current_scene(self, k: int) -> Scene:
+        s = int(self._scene[k])
+        if self._python_scene[s]:
+            return self._live[k].current_scene()  # type: ignore[union-attr]
+        scene = self.scenes[s]
+        positions = [obj.position for obj in scene.objects]
+        positions[scene.self_index] = (int(self._row[k]), int(self._col[k]))
+        return scene.with_positions(positions)
+
+    def render(self) -> tuple[Any, ...] | None:
+        if self.render_mode is None:
+            gym.logger.warn("render() called without a render_mode; pass render_mode='rgb_array' or 'ansi'")
+            return None
+        if not self._started:
+            raise RuntimeError("call reset() first")
+        envs = range(self.num_envs) if self.render_envs == "all" else range(1)
+        if self.render_mode == "ansi":
+            return tuple(self._current_scene(k).to_ascii() + "\n" for k in envs)
+        return tuple(rgb_image(self._state(k), window=(int(self._row[k]), int(self._col[k]))) for k in envs)
