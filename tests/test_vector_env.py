@@ -212,3 +212,62 @@ def test_render_first_or_all(mode: str) -> None:
             else:
                 np.testing.assert_array_equal(frame, want)
                 assert one is None or np.array_equal(one, want)
+
+
+def sb3_pair(env_id: str, n: int, **kwargs):
+    from stable_baselines3.common.vec_env import DummyVecEnv
+
+    from sb3_smc.gymnasium_vec_env import GymnasiumVecEnv
+
+    return (GymnasiumVecEnv(native(env_id, n, **kwargs)),
+            DummyVecEnv([lambda: gym.make(env_id, **kwargs) for _ in range(n)]))
+
+
+@pytest.mark.parametrize("env_id", [CLASSIFICATION, PUSHABLE_BA])
+def test_sb3_adapter_steps_as_dummy_vec_env(env_id: str) -> None:
+    a, b = sb3_pair(env_id, 4, max_steps=6)
+    for venv in (a, b):
+        venv.seed(9)
+        venv.set_options({"index": 2})
+    assert np.array_equal(a.reset(), b.reset()) and a.reset_infos == b.reset_infos
+    a.seed(3)
+    b.seed(3)
+    assert np.array_equal(a.reset(), b.reset()) and a.reset_infos == b.reset_infos
+    rng = np.random.default_rng(0)
+    ended = 0
+    for _ in range(60):
+        actions = actions_for(a.env, rng, 0.1)
+        (obs_a, rew_a, done_a, infos_a), (obs_b, rew_b, done_b, infos_b) = a.step(actions), b.step(actions)
+        assert obs_a.dtype == obs_b.dtype and rew_a.dtype == rew_b.dtype and done_a.dtype == done_b.dtype
+        np.testing.assert_array_equal(obs_a, obs_b)
+        np.testing.assert_array_equal(rew_a, rew_b)
+        np.testing.assert_array_equal(done_a, done_b)
+        for info_a, info_b in zip(infos_a, infos_b, strict=True):
+            terminal_a, terminal_b = info_a.pop("terminal_observation", None), info_b.pop("terminal_observation", None)
+            assert info_a == info_b and (terminal_a is None) == (terminal_b is None)
+            if terminal_a is not None:
+                np.testing.assert_array_equal(terminal_a, terminal_b)
+        assert a.reset_infos == b.reset_infos
+        ended += int(done_a.sum())
+    assert ended > 20
+    assert a.get_attr("action_names") == [a.env.action_names] * 4 and a.env_is_wrapped(gym.Wrapper) == [False] * 4
+
+
+def test_ppo_first_rollout_equals_dummy_vec_env_and_trains() -> None:
+    import torch
+    from stable_baselines3 import PPO
+
+    def trained(venv):
+        model = PPO("MlpPolicy", venv, n_steps=64, batch_size=64, n_epochs=2, seed=0, device="cpu")
+        model.learn(256)
+        return model
+
+    a, b = (trained(venv) for venv in sb3_pair(BRING_ABOUT, 4, max_steps=12))
+    for field in ("observations", "actions", "rewards", "episode_starts", "values", "log_probs", "returns"):
+        np.testing.assert_array_equal(getattr(a.rollout_buffer, field), getattr(b.rollout_buffer, field))
+    assert a.num_timesteps == b.num_timesteps == 256
+    fresh = PPO("MlpPolicy", sb3_pair(BRING_ABOUT, 4, max_steps=12)[0], seed=0, device="cpu").policy.state_dict()
+    for key, value in a.policy.state_dict().items():
+        assert torch.equal(value, b.policy.state_dict()[key])
+        if key.endswith("weight"):
+            assert not torch.equal(value, fresh[key])  # it trained
