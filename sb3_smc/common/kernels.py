@@ -21,6 +21,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from pixelworld_env.kernels import self_target_free
+
 __all__ = ["gru_collection_step", "gru_linear_step", "leaf_call", "lstm_collection_step", "lstm_linear_step",
            "sample_index"]
 
@@ -292,8 +294,9 @@ def leaf_call(grid: np.ndarray, owner: np.ndarray, me: int, self_color: int, goa
     """One call of a leaf SMC (no children; its actions are signals and moves) with a compiled actor, made entirely
     here, in a world where only the one-pixel self moves: the loop of
     :meth:`sb3_smc.HierarchicalSMCWrapper.call_coroutine` with :meth:`pixelworld_env.World.move`'s self-only move
-    and :class:`pixelworld_env.PixelWorldEnv`'s goal shaping, decision by decision the same arithmetic and the same
-    draws from ``rng`` as that loop, so the same call.
+    (its rule :func:`pixelworld_env.kernels.self_target_free`, shared with the vector env) and
+    :class:`pixelworld_env.PixelWorldEnv`'s goal shaping, decision by decision the same arithmetic and the same draws
+    from ``rng`` as that loop, so the same call.
 
     ``grid`` / ``owner``: the world's live padded arrays (moves are made in them); ``goal_cells``: per self cell
     the goal's truth (1 / 0, -1 not known yet; bring-about only), ``potential`` the reward of entering the goal
@@ -339,8 +342,7 @@ def leaf_call(grid: np.ndarray, owner: np.ndarray, me: int, self_color: int, goa
         counters[BUDGET] -= 1
         counters[PREVIOUS] = action
         dr, dc = deltas[action, 0], deltas[action, 1]
-        target = owner[row + dr + 1, col + dc + 1]
-        if target != -1 and target != me:
+        if not self_target_free(owner, me, row + dr, col + dc):
             continue  # blocked: the move costs a decision and a move, and changes nothing
         grid[row + 1, col + 1] = 0
         owner[row + 1, col + 1] = -1
