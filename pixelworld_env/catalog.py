@@ -30,6 +30,8 @@ from dataclasses import dataclass, field
 from importlib import resources
 from typing import Any, NamedTuple
 
+from pixelworld_env.constants import Kind
+
 FORMAT = "pixelworld-catalog"
 VERSION = 1
 DATA_FILE = "catalog.json"
@@ -77,7 +79,7 @@ class DatasetInfo:
     """
 
     name: str
-    kind: str
+    kind: Kind
     concept: str
     concept_logic: str
     generators: tuple[str, ...]
@@ -160,7 +162,7 @@ class ExperimentGroup:
     test_schedule: tuple[tuple[str, str], ...] = ()
 
     @property
-    def kind(self) -> str:
+    def kind(self) -> Kind:
         """``classification`` or ``bring-about``: the kind of every target dataset of the group."""
         return "classification" if self.goal == "classification" else "bring-about"
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from enum import IntEnum, StrEnum
+from typing import Literal
 
 HEIGHT = 18
 """World height in cells, frame included (spec §1.1: the paper's 20 counts an extra frame)."""
@@ -12,6 +13,9 @@ FLOOR_HEIGHT = 3
 """The floor's top row is ``height - FLOOR_HEIGHT`` (row 15 in an 18-row world)."""
 PADDING = 2
 """Generated objects keep this distance from the world border (spec §3.8)."""
+
+Kind = Literal["classification", "bring-about"]
+"""The two kinds of task (and of dataset): a label to tell, or a goal to bring about."""
 
 
 class Color(IntEnum):

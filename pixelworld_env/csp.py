@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import random
 from collections.abc import Mapping, Sequence
+from typing import Any
 
 import constraint
 
@@ -72,7 +73,7 @@ def generator_problem(logic: str, macros: Mapping[str, str] | None = None, *, he
     domains = dict(domains or {})
     for term in terms:
         is_self = term == SELF
-        default = {
+        default: dict[str, list[Any]] = {
             "shape": ["pixel"] if is_self else list(FAMILIES),
             "shape_idx": [0] if is_self else list(range(NUM_SHAPE_IDX)),
             "color": [int(Color.RED)] if is_self else list(COLORS),

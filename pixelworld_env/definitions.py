@@ -33,11 +33,12 @@ import itertools
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 from pathlib import Path, PurePosixPath
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 import yaml
 
 if TYPE_CHECKING:
+    from pixelworld_env.constants import Kind
     from pixelworld_env.env import PixelWorldEnv
     from pixelworld_env.generation import DatasetSpec
 
@@ -189,7 +190,8 @@ class DefinitionSet:
             stratified_split(generated.labels)[0 if split == "train" else 1]
         scenes = [generated.scenes[i] for i in indices]
         labels = [generated.labels[i] for i in indices] if spec.kind == "classification" else None
-        return PixelWorldEnv(scenes, kind=spec.kind, concept=spec.concept, labels=labels, macros=self.macros,
+        kind = cast("Kind", spec.kind)  # DatasetSpec checked it
+        return PixelWorldEnv(scenes, kind=kind, concept=spec.concept, labels=labels, macros=self.macros,
                              **kwargs)
 
     def scope(self, source: str) -> set[str]:
@@ -403,8 +405,8 @@ def _read_file(path: Path, result: DefinitionSet, stack: tuple[Path, ...], pendi
                                   f"{', '.join(SECTIONS)}; other top-level keys are named lists){hint}")
         items = _str_list(value_node)
         if items is not None:
-            lines = tuple(_line(item) for item in value_node.value)
-            result.lists[key] = NamedList(key, items, str(path), _line(key_node), lines)
+            item_lines = tuple(_line(item) for item in value_node.value)
+            result.lists[key] = NamedList(key, items, str(path), _line(key_node), item_lines)
     _read_curricula(path, node, pending)
 
 

@@ -64,7 +64,7 @@ def play(seed: int = 0, quiet: bool = False) -> tuple[float, float]:
     rng = np.random.default_rng(seed)
     total, steps = 0.0, 0
     while True:
-        _, reward, terminated, truncated, info = cl.step(int(rng.integers(cl.action_space.n)))
+        _, reward, terminated, truncated, info = cl.step(int(rng.integers(len(cl.action_names))))
         total += reward
         steps += 1
         if terminated or truncated:

@@ -361,6 +361,7 @@ def _reach(r: int) -> _BoundFn:
     """Some cells within distance r: per-axis bbox distance <= r."""
     def bound(args: Sequence[WorldObject | None], role: int, probe: WorldObject, floor_row: int) -> Box | None:
         other = args[1 - role]
+        assert other is not None  # a bound is only used once the clause's other argument is placed
         (oy, ox), (oh, ow) = other.position, other.size
         h, w = probe.size
         return (ox - w + 1 - r, ox + ow - 1 + r, oy - h + 1 - r, oy + oh - 1 + r)
@@ -446,6 +447,7 @@ def _region(supported: bool) -> _BoundFn:
     """inside / inside_supported(a, b): some cell of a in b's region, so the bboxes overlap."""
     def bound(args: Sequence[WorldObject | None], role: int, probe: WorldObject, floor_row: int) -> Box | None:
         container = args[1] if role == 0 else probe
+        assert container is not None  # a bound is only used once the clause's other argument is placed
         if container.family is None:
             return (1, 0, 1, 0)
         n = len(shape_library().get(container.family, ())) or 1
@@ -454,9 +456,11 @@ def _region(supported: bool) -> _BoundFn:
             return (1, 0, 1, 0)
         top, left, bottom, right = box
         if role == 0:  # the object inside is placed now
-            (by, bx), (h, w) = args[1].position, probe.size
+            (by, bx), (h, w) = container.position, probe.size
             return (bx + left - w + 1, bx + right, by + top - h + 1, by + bottom)
-        (ay, ax), (ah, aw) = args[0].position, args[0].size
+        inside = args[0]
+        assert inside is not None
+        (ay, ax), (ah, aw) = inside.position, inside.size
         return (ax - right, ax + aw - 1 - left, ay - bottom, ay + ah - 1 - top)
     return bound
 

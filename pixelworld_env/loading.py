@@ -6,6 +6,7 @@ from dataclasses import dataclass
 from typing import Literal
 
 from pixelworld_env import catalog, generation
+from pixelworld_env.constants import Kind
 from pixelworld_env.datasets import load_or_generate
 from pixelworld_env.generation import DatasetSpec
 from pixelworld_env.scene import Scene
@@ -20,7 +21,7 @@ class Dataset:
     """One split of a generated dataset."""
 
     name: str
-    kind: str
+    kind: Kind
     concept: str
     split: str
     seed: int

@@ -502,9 +502,9 @@ def _convex_blob(size: int, rng: np.random.RandomState) -> np.ndarray:
         for r, c in _raster_line(start, end):
             arr[r, c] = 1
     arr = _crop(arr)
-    for row in arr:
-        cols = np.flatnonzero(row)
-        row[cols[0] : cols[-1] + 1] = 1
+    for line in arr:
+        cols = np.flatnonzero(line)
+        line[cols[0] : cols[-1] + 1] = 1
     return arr
 
 

@@ -79,10 +79,10 @@ class Concept:
                 for s in set(check.slots):
                     self._clauses_of[s].append(check)
         for groups in self._negations:
-            for group in groups:
-                slots = frozenset(s for c in group for s in c.slots)
-                for s in slots:
-                    self._groups_of[s].append((slots, group))
+            for negated in groups:
+                touched = frozenset(s for c in negated for s in c.slots)
+                for s in touched:
+                    self._groups_of[s].append((touched, negated))
 
     def _resolve(self, clause: Clause) -> Predicate:
         spec = PREDICATES.get(clause.name)
