@@ -1,8 +1,12 @@
-"""The learners' hyperparameters in one place (torch-free): defaults, merging, and storage as plain JSON.
+"""The learners in one place (torch-free): the algorithm registry, default hyperparameters, merging, and storage
+as plain JSON.
 
-:data:`DEFAULT_HYPERPARAMETERS` is the single source of the paper's settings (spec §5.2-§5.3): ``train_smc``
-merges a user's overrides into it (:func:`resolve_hyperparameters`), a :class:`~sb3_smc.records.TrainingSpec`
-stores the merged result, and the rl_zoo3 files in ``zoo_configs/`` are generated from it (:mod:`sb3_smc.zoo`).
+:data:`ALGORITHM_REGISTRY` is the single source of what sb3-smc knows of each algorithm (like rl_zoo3's ``ALGOS``,
+but torch-free: classes are imported on first use): its SB3 class, the paper's settings (spec §5.2-§5.3), the
+recurrent cells it takes, its rl_zoo3 name. ``train_smc`` builds the class and merges a user's overrides into the
+defaults (:func:`resolve_hyperparameters`), a :class:`~sb3_smc.records.TrainingSpec` stores the merged result, a
+library loads its models with the class, curricula and the ``sb3-smc`` command take its names, and the rl_zoo3
+files in ``zoo_configs/`` are generated from it (:mod:`sb3_smc.zoo`).
 
 Stored hyperparameters are JSON data. Two non-JSON kinds of value have a JSON form:
 
@@ -20,13 +24,20 @@ import copy
 import importlib
 import math
 from collections.abc import Callable, Mapping
+from dataclasses import dataclass
 from typing import Any
 
 __all__ = [
     "ALGORITHMS",
+    "ALGORITHM_REGISTRY",
+    "DEFAULT_ALGORITHM",
     "DEFAULT_HYPERPARAMETERS",
     "DEFAULT_N_ENVS",
+    "DEFAULT_TIMESTEPS",
+    "RECURRENT_POLICIES",
     "STEPS_PER_UPDATE",
+    "Algorithm",
+    "algorithm",
     "constructor_arguments",
     "decode_value",
     "encode_value",
@@ -38,90 +49,129 @@ STEPS_PER_UPDATE = 2000
 """Environment steps per policy update (the paper's batch size)."""
 DEFAULT_N_ENVS = 16
 """Environments stepped together (``n_steps = STEPS_PER_UPDATE // n_envs`` each)."""
-
-ALGORITHMS = ("RecurrentPPO", "TRPO", "PPO", "RecurrentTRPO")
-"""Algorithms :func:`~sb3_smc.training.train_smc` trains."""
-
-DEFAULT_HYPERPARAMETERS: dict[str, dict[str, Any]] = {
-    "RecurrentPPO": {
-        "policy": "SequenceLstmPolicy",
-        "gamma": 0.99,
-        "gae_lambda": 1.0,
-        "batch_size": STEPS_PER_UPDATE,
-        "n_epochs": 4,
-        "learning_rate": 3e-3,
-        "clip_range": 0.2,
-        "ent_coef": 0.0,
-        "policy_kwargs": {"lstm_hidden_size": 32, "n_lstm_layers": 1, "net_arch": [],
-                          "shared_lstm": False, "enable_critic_lstm": False},
-    },
-    "TRPO": {
-        "policy": "MlpPolicy",
-        "gamma": 0.99,
-        "gae_lambda": 1.0,
-        "batch_size": STEPS_PER_UPDATE,
-        "target_kl": 0.01,
-        "learning_rate": 1e-3,
-        "policy_kwargs": {"net_arch": {"pi": [32], "vf": [32]}},
-    },
-    "RecurrentTRPO": {
-        "policy": "SequenceLstmPolicy",
-        "gamma": 0.99,
-        "gae_lambda": 1.0,
-        "batch_size": STEPS_PER_UPDATE,
-        "target_kl": 0.01,
-        "learning_rate": 1e-3,
-        "n_critic_updates": 10,
-        "cg_max_steps": 15,
-        "cg_damping": 0.1,
-        "baseline": "critic",
-        "policy_kwargs": {"lstm_hidden_size": 32, "n_lstm_layers": 1, "net_arch": [],
-                          "shared_lstm": False, "enable_critic_lstm": False},
-    },
-    "PPO": {
-        "policy": "MlpPolicy",
-        "gamma": 0.99,
-        "gae_lambda": 1.0,
-        "batch_size": 250,
-        "n_epochs": 10,
-        "learning_rate": 3e-4,
-        "clip_range": 0.2,
-        "ent_coef": 0.0,
-        "policy_kwargs": {"net_arch": {"pi": [32], "vf": [32]}},
-    },
-}
-"""Constructor arguments of each algorithm (``n_steps`` comes from the budget: ``STEPS_PER_UPDATE // n_envs``).
-Overrides replace these key by key, ``policy_kwargs`` key by key too. RecurrentPPO and TRPO are the measured
-settings of ``docs/training.md``; PPO (memoryless; minibatches of 250, 10 epochs, learning rate 3e-4, the settings
-of the earlier hand-written rl_zoo3 file) is offered for comparison, untuned. RecurrentTRPO
-(:mod:`sb3_smc.recurrent_trpo`, the paper's learner with ``rnn="gru"``) has TRPO's trust region (KL 0.01) and
-critic learning rate on RecurrentPPO's recurrent policy; ``baseline="linear_feature"`` gives spec §5.3's linear
-feature baseline instead of the critic."""
+DEFAULT_TIMESTEPS = 400_000
+"""Environment steps of one SMC's training when none are given (200 updates of ``STEPS_PER_UPDATE``)."""
 
 RECURRENT_POLICIES = {"lstm": "SequenceLstmPolicy", "gru": "SequenceGruPolicy"}
 """``rnn`` option of ``train_smc`` -> the recurrent policy (by name) of the recurrent algorithms."""
-RECURRENT_ALGORITHMS = ("RecurrentPPO", "RecurrentTRPO")
+
+
+@dataclass(frozen=True)
+class Algorithm:
+    """One algorithm ``train_smc`` trains and a library stores: everything the package knows of it."""
+
+    name: str
+    """Its name in specs, manifests, curricula and ``--algo``."""
+    class_path: str
+    """``module.Class`` of its Stable-Baselines3 class (imported by :meth:`load_class`: this module stays
+    torch-free)."""
+    hyperparameters: dict[str, Any]
+    """Its constructor arguments by default (``n_steps`` comes from the budget: ``STEPS_PER_UPDATE // n_envs``)."""
+    cells: tuple[str, ...] = ()
+    """The ``rnn`` options (:data:`RECURRENT_POLICIES`) it takes; none for a memoryless (MLP) policy."""
+    zoo_name: str | None = None
+    """rl_zoo3's ``--algo`` name: ``zoo_configs/<zoo_name>.yml`` and the conf module ``sb3_smc.zoo.<zoo_name>``
+    (rl_zoo3 lacks none but ``recurrent_trpo``, which the start-up hook ``_sb3_smc_gym_hook`` adds to it)."""
+    zoo_note: str = ""
+    """What ``zoo_configs/<zoo_name>.yml`` says of the settings."""
+
+    @property
+    def recurrent(self) -> bool:
+        """Whether its policy has memory of its own (a recurrent cell)."""
+        return bool(self.cells)
+
+    def load_class(self) -> type:
+        """The Stable-Baselines3 class (imports torch)."""
+        module, _, name = self.class_path.rpartition(".")
+        return getattr(importlib.import_module(module), name)
+
+
+
+
+def _lstm_32() -> dict[str, Any]:
+    """``policy_kwargs`` of one 32-unit recurrent layer, the action layer on it, a critic without memory."""
+    return {"lstm_hidden_size": 32, "n_lstm_layers": 1, "net_arch": [], "shared_lstm": False,
+            "enable_critic_lstm": False}
+
+
+def _mlp_32() -> dict[str, Any]:
+    """``policy_kwargs`` of one hidden layer of 32 units for actor and critic."""
+    return {"net_arch": {"pi": [32], "vf": [32]}}
+
+
+ALGORITHM_REGISTRY: dict[str, Algorithm] = {algo.name: algo for algo in (
+    Algorithm(
+        "RecurrentPPO", "sb3_contrib.RecurrentPPO",
+        {"policy": "SequenceLstmPolicy", "gamma": 0.99, "gae_lambda": 1.0, "batch_size": STEPS_PER_UPDATE,
+         "n_epochs": 4, "learning_rate": 3e-3, "clip_range": 0.2, "ent_coef": 0.0, "policy_kwargs": _lstm_32()},
+        cells=tuple(RECURRENT_POLICIES), zoo_name="ppo_lstm",
+        zoo_note="RecurrentPPO: one 32-unit LSTM (the paper's GRU-32 size) with the action layer directly on it and "
+                 "a critic linear in the observation. train_smc uses SequenceLstmPolicy, a faster subclass of "
+                 "MlpLstmPolicy with the same numbers; rl_zoo3 can only name SB3's own policies."),
+    Algorithm(
+        "TRPO", "sb3_contrib.TRPO",
+        {"policy": "MlpPolicy", "gamma": 0.99, "gae_lambda": 1.0, "batch_size": STEPS_PER_UPDATE, "target_kl": 0.01,
+         "learning_rate": 1e-3, "policy_kwargs": _mlp_32()},
+        zoo_name="trpo",
+        zoo_note="TRPO: one hidden layer of 32 tanh units for actor and critic, KL step 0.01 (the paper's NPO step "
+                 "size)."),
+    Algorithm(
+        "PPO", "stable_baselines3.PPO",
+        {"policy": "MlpPolicy", "gamma": 0.99, "gae_lambda": 1.0, "batch_size": 250, "n_epochs": 10,
+         "learning_rate": 3e-4, "clip_range": 0.2, "ent_coef": 0.0, "policy_kwargs": _mlp_32()},
+        zoo_name="ppo", zoo_note="PPO: one hidden layer of 32 tanh units for actor and critic (memoryless)."),
+    Algorithm(
+        "RecurrentTRPO", "sb3_smc.recurrent_trpo.RecurrentTRPO",
+        {"policy": "SequenceLstmPolicy", "gamma": 0.99, "gae_lambda": 1.0, "batch_size": STEPS_PER_UPDATE,
+         "target_kl": 0.01, "learning_rate": 1e-3, "n_critic_updates": 10, "cg_max_steps": 15, "cg_damping": 0.1,
+         "baseline": "critic", "policy_kwargs": _lstm_32()},
+        cells=tuple(RECURRENT_POLICIES), zoo_name="recurrent_trpo",
+        zoo_note="RecurrentTRPO (sb3_smc.recurrent_trpo): TRPO's trust-region step (KL 0.01) on a 32-unit LSTM "
+                 "policy; policy: MlpGruPolicy gives the paper's GRU, baseline: linear_feature its linear feature "
+                 "baseline. sb3-smc's start-up hook adds --algo recurrent_trpo to rl_zoo3."),
+)}
+"""Every algorithm by name, in the order of :data:`ALGORITHMS`. Overrides replace the defaults key by key,
+``policy_kwargs`` key by key too. RecurrentPPO and TRPO are the measured settings of ``docs/training.md``; PPO
+(memoryless; minibatches of 250, 10 epochs, learning rate 3e-4, the settings of the earlier hand-written rl_zoo3
+file) is offered for comparison, untuned. RecurrentTRPO (:mod:`sb3_smc.recurrent_trpo`, the paper's learner with
+``rnn="gru"``) has TRPO's trust region (KL 0.01) and critic learning rate on RecurrentPPO's recurrent policy;
+``baseline="linear_feature"`` gives spec §5.3's linear feature baseline instead of the critic."""
+
+ALGORITHMS = tuple(ALGORITHM_REGISTRY)
+"""Algorithms :func:`~sb3_smc.training.train_smc` trains."""
+DEFAULT_ALGORITHM = ALGORITHMS[0]
+"""The algorithm of a spec, a curriculum node or a run that names none."""
+DEFAULT_HYPERPARAMETERS: dict[str, dict[str, Any]] = {name: algo.hyperparameters
+                                                       for name, algo in ALGORITHM_REGISTRY.items()}
+"""Constructor arguments of each algorithm (:attr:`Algorithm.hyperparameters`)."""
+
+
+def algorithm(name: str) -> Algorithm:
+    """The registry's entry of ``name``; ``ValueError`` naming the algorithms for an unknown one."""
+    if name not in ALGORITHM_REGISTRY:
+        raise ValueError(f"algo must be one of {ALGORITHMS}, got {name!r}")
+    return ALGORITHM_REGISTRY[name]
 
 
 def recurrent_policy(rnn: str, algo: str | None = None) -> str:
     """The policy (by name) of the ``rnn`` option; ``ValueError`` for an unknown cell, or for ``algo`` when given and
-    not recurrent."""
+    not taking it."""
     if rnn not in RECURRENT_POLICIES:
         raise ValueError(f"rnn must be one of {sorted(RECURRENT_POLICIES)}, got {rnn!r}")
-    if algo is not None and algo not in RECURRENT_ALGORITHMS:
-        raise ValueError(f"rnn={rnn!r} needs a recurrent algorithm ({' or '.join(RECURRENT_ALGORITHMS)}); "
-                         f"{algo} has no recurrence")
+    entry = ALGORITHM_REGISTRY.get(algo) if algo is not None else None
+    if algo is not None and (entry is None or not entry.recurrent):
+        recurrent = [name for name, known in ALGORITHM_REGISTRY.items() if known.recurrent]
+        raise ValueError(f"rnn={rnn!r} needs a recurrent algorithm ({' or '.join(recurrent)}); {algo} has no "
+                         "recurrence")
+    if entry is not None and rnn not in entry.cells:
+        raise ValueError(f"rnn={rnn!r}: {algo} takes rnn {' or '.join(entry.cells)}")
     return RECURRENT_POLICIES[rnn]
+
 
 CLASS_KEY = "__class__"
 SCHEDULE_KEYS = ("learning_rate", "clip_range")
 _RESERVED = {"n_steps": "the budget's n_steps", "seed": "the spec's seed", "env": "the environment factory",
              "device": "training always runs on the CPU", "tensorboard_log": "train_smc's tensorboard_log"}
-
-
-def _check_algo(algo: str) -> None:
-    if algo not in ALGORITHMS:
-        raise ValueError(f"algo must be one of {ALGORITHMS}, got {algo!r}")
 
 
 def encode_value(value: Any, where: str) -> Any:
@@ -185,13 +235,13 @@ def decode_value(value: Any, where: str) -> Any:
 
 
 def resolve_hyperparameters(algo: str, overrides: Mapping[str, Any] | None = None) -> dict[str, Any]:
-    """``DEFAULT_HYPERPARAMETERS[algo]`` with ``overrides`` applied (``policy_kwargs`` key by key), as JSON data."""
-    _check_algo(algo)
+    """The defaults of ``algo`` with ``overrides`` applied (``policy_kwargs`` key by key), as JSON data."""
+    defaults = algorithm(algo).hyperparameters
     overrides = dict(overrides or {})
     for key, why in _RESERVED.items():
         if key in overrides:
             raise ValueError(f"hyperparameter {key!r} is not set through the hyperparameters ({why})")
-    resolved = copy.deepcopy(DEFAULT_HYPERPARAMETERS[algo])
+    resolved = copy.deepcopy(defaults)
     policy_kwargs = resolved.pop("policy_kwargs")
     policy_kwargs.update(overrides.pop("policy_kwargs", None) or {})
     resolved.update(overrides)

@@ -8,9 +8,9 @@ previous action), trains a paper-sized policy with the signal-bias initialisatio
 earliest) and returns it as an :class:`~sb3_smc.smc.SMC` whose policy is a numpy copy of the selected actor, with
 its ``spec`` and :class:`~sb3_smc.records.TrainingRecord`.
 
-Defaults (:data:`sb3_smc.hyperparameters.DEFAULT_HYPERPARAMETERS`, measured, see ``docs/training.md``): 16
-environments x 125 steps = 2,000 steps per update, 200 updates (400,000 steps), gamma 0.99, GAE lambda 1, episodes
-of at most 100 decisions.
+Defaults (:data:`sb3_smc.hyperparameters.ALGORITHM_REGISTRY`, measured, see ``docs/training.md``): 16
+environments x 125 steps = 2,000 steps per update, 200 updates (``DEFAULT_TIMESTEPS``), gamma 0.99, GAE lambda 1,
+episodes of at most 100 decisions.
 
 * ``RecurrentPPO`` (with :class:`~sb3_smc.common.recurrent.SequenceLstmPolicy` and
   :class:`~sb3_smc.common.recurrent.CompactRecurrentRolloutBuffer`: sb3-contrib's numbers, faster): one LSTM layer
@@ -35,8 +35,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 import torch
-from sb3_contrib import TRPO, RecurrentPPO
-from stable_baselines3 import PPO
+from sb3_contrib import RecurrentPPO
 from stable_baselines3.common.logger import Logger
 
 from sb3_smc.bias import apply_signal_bias
@@ -46,20 +45,19 @@ from sb3_smc.callbacks import SMCTrainingCallback
 # reference); importing it here keeps them loadable.
 from sb3_smc.common.recurrent import SequenceLstmPolicy, use_compact_buffer  # noqa: F401
 from sb3_smc.envs import make_smc_env
-from sb3_smc.hyperparameters import ALGORITHMS, DEFAULT_N_ENVS, constructor_arguments
+from sb3_smc.hyperparameters import (
+    ALGORITHM_REGISTRY,
+    DEFAULT_ALGORITHM,
+    DEFAULT_N_ENVS,
+    DEFAULT_TIMESTEPS,
+    constructor_arguments,
+)
 from sb3_smc.policies import FrameStackPolicy, policy_from_model
 from sb3_smc.records import TrainingRecord, TrainingSpec, package_versions
-from sb3_smc.recurrent_trpo import RecurrentTRPO
 from sb3_smc.smc import SMC, StepPolicy
 from sb3_smc.vec_env import SMCVecEnv
 
-__all__ = ["ALGORITHM_CLASSES", "check_model_settings", "make_vec_env", "resolve_children", "train_smc",
-           "untrained_smc"]
-
-ALGORITHM_CLASSES: dict[str, type] = {"RecurrentPPO": RecurrentPPO, "TRPO": TRPO, "PPO": PPO,
-                                      "RecurrentTRPO": RecurrentTRPO}
-"""The SB3 class of each algorithm name of :data:`~sb3_smc.hyperparameters.ALGORITHMS`."""
-assert tuple(ALGORITHM_CLASSES) == ALGORITHMS
+__all__ = ["check_model_settings", "make_vec_env", "resolve_children", "train_smc", "untrained_smc"]
 
 
 def resolve_children(children: Any, names: Sequence[str] | None = None) -> tuple[SMC, ...]:
@@ -104,7 +102,7 @@ def check_model_settings(spec: TrainingSpec) -> None:
     The caller's torch random state is left as it was."""
     from stable_baselines3.common.vec_env import DummyVecEnv
 
-    cls = ALGORITHM_CLASSES[spec.algo]
+    cls = ALGORITHM_REGISTRY[spec.algo].load_class()
     policy, settings = constructor_arguments(spec.hyperparameters)
     accepted = inspect.signature(cls).parameters
     for key in settings:
@@ -143,8 +141,8 @@ def train_smc(
     log_every: int | None = None,
     callback: Any = None,
     printer: Callable[[str], None] = print,
-    algo: str = "RecurrentPPO",
-    total_timesteps: int = 400_000,
+    algo: str = DEFAULT_ALGORITHM,
+    total_timesteps: int = DEFAULT_TIMESTEPS,
     seed: int = 0,
     include_primitives: bool = True,
     name: str | None = None,
@@ -164,12 +162,12 @@ def train_smc(
     arguments (:meth:`TrainingSpec.create <sb3_smc.records.TrainingSpec.create>`; passing a spec and any of them is
     an error). ``total_timesteps`` must be >= 1 (:func:`untrained_smc` gives the SMC before training):
 
-    * ``algo``: ``"RecurrentPPO"`` (LSTM 32), ``"TRPO"`` (MLP 32), ``"PPO"`` (MLP 32) or ``"RecurrentTRPO"``
-      (:mod:`sb3_smc.recurrent_trpo`: TRPO's trust region on the recurrent policy); ``rnn="gru"`` gives the
-      recurrent algorithms a GRU (:class:`~sb3_smc.common.recurrent.SequenceGruPolicy`, the paper's cell) instead
-      of the default LSTM (``rnn="lstm"``); ``hyperparams`` override
-      :data:`~sb3_smc.hyperparameters.DEFAULT_HYPERPARAMETERS` (``policy_kwargs`` key by key); ``n_steps``
-      defaults to ``2000 // n_envs``.
+    * ``algo``: a name of :data:`~sb3_smc.hyperparameters.ALGORITHM_REGISTRY`: ``"RecurrentPPO"`` (LSTM 32),
+      ``"TRPO"`` (MLP 32), ``"PPO"`` (MLP 32) or ``"RecurrentTRPO"`` (:mod:`sb3_smc.recurrent_trpo`: TRPO's trust
+      region on the recurrent policy); ``rnn="gru"`` gives the recurrent algorithms a GRU
+      (:class:`~sb3_smc.common.recurrent.SequenceGruPolicy`, the paper's cell) instead of the default LSTM
+      (``rnn="lstm"``); ``hyperparams`` override the algorithm's defaults (``policy_kwargs`` key by key);
+      ``n_steps`` defaults to ``2000 // n_envs``.
     * ``include_primitives=False`` drops the moves (the "noprim" ablation); ``count_primitive_steps`` /
       ``call_step_cap`` / ``max_steps`` go to the wrapper; ``env_kwargs`` to ``gym.make``.
     * ``signal_bias``: the initial action distribution of spec §5.2 (on by default; without it episodes end after
@@ -231,9 +229,10 @@ def _spec_and_children(task: str | TrainingSpec, children: Any, settings: dict[s
     raise TypeError(f"train_smc needs an env id or a TrainingSpec, got {type(task).__name__}")
 
 
-_KEYWORD_DEFAULTS = {"algo": "RecurrentPPO", "total_timesteps": 400_000, "seed": 0, "include_primitives": True,
-                     "name": None, "n_envs": DEFAULT_N_ENVS, "signal_bias": True, "frame_stack": 1, "max_steps": 100,
-                     "count_primitive_steps": False, "call_step_cap": 100, "env_kwargs": None, "rnn": None}
+_RUN_OPTIONS = ("children", "tensorboard_log", "log_every", "callback", "printer")
+_KEYWORD_DEFAULTS = {name: parameter.default for name, parameter in inspect.signature(train_smc).parameters.items()
+                     if parameter.kind is inspect.Parameter.KEYWORD_ONLY and name not in _RUN_OPTIONS}
+"""The spec settings of :func:`train_smc` and their defaults (its keyword arguments but the run options)."""
 
 
 def _train(spec: TrainingSpec, children: tuple[SMC, ...], *, tensorboard_log: str | None, log_every: int | None,
@@ -251,8 +250,9 @@ def _train(spec: TrainingSpec, children: tuple[SMC, ...], *, tensorboard_log: st
     action_names = tuple(first.action_names)
 
     policy_class, settings = constructor_arguments(spec.hyperparameters)
-    model = ALGORITHM_CLASSES[spec.algo](policy_class, venv, n_steps=spec.budget.n_steps, seed=spec.seed,
-                                         device="cpu", tensorboard_log=tensorboard_log, verbose=0, **settings)
+    algorithm_class = ALGORITHM_REGISTRY[spec.algo].load_class()
+    model = algorithm_class(policy_class, venv, n_steps=spec.budget.n_steps, seed=spec.seed, device="cpu",
+                            tensorboard_log=tensorboard_log, verbose=0, **settings)
     if tensorboard_log is None:  # SB3's default logger would create an empty /tmp/SB3-<date> folder per run
         model.set_logger(Logger(folder=None, output_formats=[]))
     if isinstance(model, RecurrentPPO):

@@ -46,19 +46,29 @@ from typing import Any
 
 from pixelworld_env.atomic import atomic_write, make_temporary_directory
 from sb3_smc.curricula.format import SEED_SEPARATOR, Curriculum, CurriculumError, Node, merge
-from sb3_smc.hyperparameters import STEPS_PER_UPDATE
+from sb3_smc.hyperparameters import (
+    DEFAULT_ALGORITHM,
+    DEFAULT_TIMESTEPS,
+    STEPS_PER_UPDATE,
+    algorithm,
+    recurrent_policy,
+)
 from sb3_smc.library import storage
 from sb3_smc.library.errors import CorruptModelError
 from sb3_smc.records import Budget, TaskSpec, TrainingRecord, TrainingSpec, WrapperSettings
 
-__all__ = ["REUSE", "Job", "JobResult", "RunFileError", "RunSettingsError", "TrainingRun", "check_curriculum",
-           "check_run_options", "describe", "file_stem", "finished_jobs", "job_name", "name_of_file", "node_spec",
-           "rank_seeds", "read_json", "read_settings", "run_job", "run_settings", "status", "train_curriculum"]
+__all__ = ["BACKENDS", "DEFAULT_REUSE", "DEFAULT_SEEDS", "REUSE", "Job", "JobResult", "RunFileError",
+           "RunSettingsError", "TrainingRun", "check_curriculum", "check_run_options", "describe", "file_stem",
+           "finished_jobs", "job_name", "name_of_file", "node_spec", "rank_seeds", "read_json", "read_settings",
+           "run_job", "run_settings", "status", "train_curriculum"]
 
 REUSE = {"one_best": 1, "two_best": 2}
 """SMC filters of the paper: how many seeds of each lower-level node a caller gets."""
+DEFAULT_REUSE = "two_best"
 DEFAULT_SEEDS = 5
-DEFAULT_TIMESTEPS = 400_000
+"""Seeds per node (the paper's)."""
+BACKENDS = ("local", "ray")
+"""Where jobs run: local processes or Ray tasks."""
 RUN_FORMAT = "sb3-smc-run"
 RUN_VERSION = 1
 
@@ -155,11 +165,9 @@ def node_spec(node: Node, seed: int, children: tuple[str, ...], *, timesteps: in
               algo: str | None = None, rnn: str | None = None) -> TrainingSpec:
     """The spec of job ``<node>@<seed>`` calling ``children``; ``timesteps`` / ``algo`` replace the node's own,
     ``rnn`` sets its recurrent cell (the run's settings)."""
-    algo = algo or node.algo or "RecurrentPPO"
+    algo = algo or node.algo or DEFAULT_ALGORITHM
     hyperparameters = dict(node.hyperparameters)
     if rnn is not None:
-        from sb3_smc.hyperparameters import recurrent_policy
-
         hyperparameters["policy"] = recurrent_policy(rnn, algo)
     return TrainingSpec(name=job_name(node.name, seed), task=TaskSpec(node.env_id).resolved(),
                         algo=algo, hyperparameters=hyperparameters, seed=seed, budget=Budget(_budget(node, timesteps)),
@@ -167,7 +175,7 @@ def node_spec(node: Node, seed: int, children: tuple[str, ...], *, timesteps: in
 
 
 def check_curriculum(curriculum: Curriculum, names: Sequence[str] | None = None, *, timesteps: int | None = None,
-                     algo: str | None = None, rnn: str | None = None, reuse: str = "two_best") -> None:
+                     algo: str | None = None, rnn: str | None = None, reuse: str = DEFAULT_REUSE) -> None:
     """Check every node of ``names`` (default: all) as a run with these settings would train it, before anything is
     trained: its settings make a valid spec, and the algorithm takes its hyperparameters (the model is built on an
     environment with the SMC's spaces, :func:`sb3_smc.training.check_model_settings`). ``CurriculumError`` naming
@@ -343,9 +351,9 @@ def train_curriculum(
     targets: Sequence[str] | None = None,
     seeds: int = DEFAULT_SEEDS,
     timesteps: int | None = None,
-    reuse: str = "two_best",
+    reuse: str = DEFAULT_REUSE,
     workers: int = 1,
-    backend: str = "local",
+    backend: str = BACKENDS[0],
     algo: str | None = None,
     rnn: str | None = None,
     ray_address: str | None = None,
@@ -397,8 +405,8 @@ def train_curriculum(
         lock.close()
 
 
-def check_run_options(*, seeds: int = DEFAULT_SEEDS, timesteps: int | None = None, reuse: str = "two_best",
-                      workers: int = 1, backend: str = "local", ray_address: str | None = None,
+def check_run_options(*, seeds: int = DEFAULT_SEEDS, timesteps: int | None = None, reuse: str = DEFAULT_REUSE,
+                      workers: int = 1, backend: str = BACKENDS[0], ray_address: str | None = None,
                       algo: str | None = None, rnn: str | None = None) -> None:
     """``ValueError`` naming the first option of a run that is out of range (before anything is done)."""
     for name, value, optional in (("seeds", seeds, False), ("workers", workers, False), ("timesteps", timesteps, True)):
@@ -406,18 +414,13 @@ def check_run_options(*, seeds: int = DEFAULT_SEEDS, timesteps: int | None = Non
             raise ValueError(f"{name} must be a positive integer, got {value!r}")
     if reuse not in REUSE:
         raise ValueError(f"reuse must be one of {list(REUSE)}, got {reuse!r}")
-    if backend not in ("local", "ray"):
-        raise ValueError(f"backend must be 'local' or 'ray', got {backend!r}")
+    if backend not in BACKENDS:
+        raise ValueError(f"backend must be {' or '.join(map(repr, BACKENDS))}, got {backend!r}")
     if ray_address is not None and backend != "ray":
         raise ValueError(f"a Ray address ({ray_address!r}) is for backend 'ray', not {backend!r}")
     if algo is not None:
-        from sb3_smc.hyperparameters import ALGORITHMS
-
-        if algo not in ALGORITHMS:
-            raise ValueError(f"algo must be one of {ALGORITHMS}, got {algo!r}")
+        algorithm(algo)  # a known algorithm
     if rnn is not None:
-        from sb3_smc.hyperparameters import recurrent_policy
-
         recurrent_policy(rnn)  # a known cell (each node's algorithm is checked with its spec)
 
 
@@ -428,7 +431,7 @@ def finished_jobs(
     targets: Sequence[str] | None = None,
     seeds: int = DEFAULT_SEEDS,
     timesteps: int | None = None,
-    reuse: str = "two_best",
+    reuse: str = DEFAULT_REUSE,
     algo: str | None = None,
     rnn: str | None = None,
 ) -> set[str]:

@@ -30,6 +30,7 @@ from pixelworld_env.atomic import (
     make_temporary_directory,
     replace_directory,
 )
+from sb3_smc.hyperparameters import ALGORITHM_REGISTRY
 from sb3_smc.hyperparameters import ALGORITHMS as TRAINED_ALGORITHMS
 from sb3_smc.library.errors import (
     CorruptModelError,
@@ -70,11 +71,14 @@ ALGORITHMS = TRAINED_ALGORITHMS
 """Algorithms whose models a library stores (those ``train_smc`` trains; loaded with their class, ``device="cpu"``)."""
 
 
-def algorithm_classes() -> dict[str, type]:
-    """Algorithm name (as in the manifest's ``algo``) -> SB3 class (:data:`sb3_smc.training.ALGORITHM_CLASSES`)."""
-    from sb3_smc.training import ALGORITHM_CLASSES
+_V1_ALGORITHMS = ("RecurrentPPO", "TRPO")
+"""The algorithms of sb3-smc 0.1, whose version-1 entries carry a training spec to convert."""
 
-    return ALGORITHM_CLASSES
+
+def algorithm_classes() -> dict[str, type]:
+    """Algorithm name (as in the manifest's ``algo``) -> SB3 class (from
+    :data:`~sb3_smc.hyperparameters.ALGORITHM_REGISTRY`)."""
+    return {name: algo.load_class() for name, algo in ALGORITHM_REGISTRY.items()}
 
 
 def sha256(path: Path) -> str:
@@ -518,7 +522,7 @@ def upgrade_v1(manifest: dict[str, Any], where: Path) -> dict[str, Any]:
 
 def _v1_records(name: str, entry: dict[str, Any], meta: Mapping[str, Any],
                 versions: dict[str, str]) -> tuple[dict | None, dict | None]:
-    if not meta.get("env_id") or "training_returns" not in meta or entry["algo"] not in ("RecurrentPPO", "TRPO"):
+    if not meta.get("env_id") or "training_returns" not in meta or entry["algo"] not in _V1_ALGORITHMS:
         return None, None
     hyper = dict(meta["hyperparameters"])
     n_steps = hyper.pop("n_steps")
@@ -595,7 +599,8 @@ def load_model(root: Path, name: str, entry: Mapping[str, Any]) -> Any:
     """The SB3 model of entry ``name``, after checking its file (:func:`check_model_file`)."""
     check_model_file(root, name, entry)
     file = root / entry["model"]
-    cls = algorithm_classes()[entry["algo"]]
+    algorithm = ALGORITHM_REGISTRY[entry["algo"]]
+    cls = algorithm.load_class()
     try:
         model = cls.load(file, device="cpu")
     except Exception as err:  # noqa: BLE001 - SB3 raises many kinds of errors for a bad archive
@@ -603,9 +608,7 @@ def load_model(root: Path, name: str, entry: Mapping[str, Any]) -> Any:
                                 f"{type(err).__name__}: {err}") from err
     from sb3_contrib.common.recurrent.policies import RecurrentActorCriticPolicy
 
-    from sb3_smc.hyperparameters import RECURRENT_ALGORITHMS
-
-    if isinstance(model.policy, RecurrentActorCriticPolicy) != (entry["algo"] in RECURRENT_ALGORITHMS):
+    if isinstance(model.policy, RecurrentActorCriticPolicy) != algorithm.recurrent:
         raise CorruptModelError(f"SMC {name!r}: the manifest says {entry['algo']}, but {file} holds a "
                                 f"{type(model.policy).__name__} (a model of another algorithm)")
     return model

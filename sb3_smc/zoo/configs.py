@@ -1,6 +1,6 @@
-"""The rl_zoo3 hyperparameters of PW-* environments, generated from
-:data:`~sb3_smc.hyperparameters.DEFAULT_HYPERPARAMETERS`: the files of ``zoo_configs/`` and the conf modules
-``sb3_smc.zoo.trpo`` / ``ppo`` / ``ppo_lstm``.
+"""The rl_zoo3 hyperparameters of PW-* environments, generated from the algorithm registry
+(:data:`~sb3_smc.hyperparameters.ALGORITHM_REGISTRY`): the files of ``zoo_configs/`` and the conf modules
+``sb3_smc.zoo.<zoo name>`` (``trpo``, ``ppo``, ``ppo_lstm``, ``recurrent_trpo``).
 
 Regenerate the files after changing the defaults: ``python -m sb3_smc.zoo zoo_configs`` (a test checks that the
 shipped files equal what this module writes).
@@ -14,29 +14,17 @@ from typing import Any
 
 import yaml
 
-from sb3_smc.hyperparameters import DEFAULT_HYPERPARAMETERS, DEFAULT_N_ENVS, STEPS_PER_UPDATE
+from sb3_smc.hyperparameters import ALGORITHM_REGISTRY, DEFAULT_N_ENVS, DEFAULT_TIMESTEPS, STEPS_PER_UPDATE
 
 __all__ = ["CALLBACK", "ENV_WRAPPER", "ZOO_ALGOS", "ZOO_POLICY_NAMES", "hyperparams_for", "render_config",
            "write_configs"]
 
-ZOO_ALGOS = {"ppo_lstm": "RecurrentPPO", "trpo": "TRPO", "ppo": "PPO", "recurrent_trpo": "RecurrentTRPO"}
-"""rl_zoo3's ``--algo`` name -> the algorithm of :data:`DEFAULT_HYPERPARAMETERS` (``recurrent_trpo`` is added to
-rl_zoo3's table by the start-up hook of installed wheels, ``_sb3_smc_gym_hook``)."""
+ZOO_ALGOS = {algo.zoo_name: name for name, algo in ALGORITHM_REGISTRY.items() if algo.zoo_name is not None}
+"""rl_zoo3's ``--algo`` name -> the algorithm (:attr:`~sb3_smc.hyperparameters.Algorithm.zoo_name`)."""
 ZOO_POLICY_NAMES = {"SequenceLstmPolicy": "MlpLstmPolicy"}
 """Policies rl_zoo3 cannot name (it passes the string to SB3) -> the stock policy computing the same numbers."""
 ENV_WRAPPER = "sb3_smc.zoo.smc_env"
 CALLBACK = "sb3_smc.zoo.SMCZooCallback"
-
-_NOTES = {
-    "ppo_lstm": "RecurrentPPO: one 32-unit LSTM (the paper's GRU-32 size) with the action layer directly on it and a "
-                "critic linear in the observation. train_smc uses SequenceLstmPolicy, a faster subclass of "
-                "MlpLstmPolicy with the same numbers; rl_zoo3 can only name SB3's own policies.",
-    "trpo": "TRPO: one hidden layer of 32 tanh units for actor and critic, KL step 0.01 (the paper's NPO step size).",
-    "ppo": "PPO: one hidden layer of 32 tanh units for actor and critic (memoryless).",
-    "recurrent_trpo": "RecurrentTRPO (sb3_smc.recurrent_trpo): TRPO's trust-region step (KL 0.01) on a 32-unit "
-                      "LSTM policy; policy: MlpGruPolicy gives the paper's GRU, baseline: linear_feature its "
-                      "linear feature baseline. sb3-smc's start-up hook adds --algo recurrent_trpo to rl_zoo3.",
-}
 
 
 def _python(value: Any) -> str:
@@ -50,6 +38,12 @@ def _python(value: Any) -> str:
     return repr(value)
 
 
+def _short_float(value: float) -> str:
+    """``value`` in the shortest scientific notation, as rl_zoo3's files write step counts (``4e5``)."""
+    mantissa, exponent = f"{value:e}".split("e")
+    return f"{float(mantissa):g}e{int(exponent)}"
+
+
 def _yaml_scalar(value: Any) -> str:
     if isinstance(value, float):
         return f"!!float {value!r}" if "e" in repr(value) else repr(value)
@@ -58,21 +52,21 @@ def _yaml_scalar(value: Any) -> str:
 
 def render_config(zoo_algo: str) -> str:
     """The text of ``zoo_configs/<zoo_algo>.yml``."""
-    algo = ZOO_ALGOS[zoo_algo]
-    hyper = dict(DEFAULT_HYPERPARAMETERS[algo])
+    algorithm = ALGORITHM_REGISTRY[ZOO_ALGOS[zoo_algo]]
+    hyper = dict(algorithm.hyperparameters)
     policy_kwargs = hyper.pop("policy_kwargs")
-    policy = ZOO_POLICY_NAMES.get(hyper.pop("policy"), DEFAULT_HYPERPARAMETERS[algo]["policy"])
+    policy = ZOO_POLICY_NAMES.get(hyper.pop("policy"), algorithm.hyperparameters["policy"])
     lines = [
-        f"# rl_zoo3 hyperparameters for {algo} on PixelWorld (PW-*) environments.",
+        f"# rl_zoo3 hyperparameters for {algorithm.name} on PixelWorld (PW-*) environments.",
         "# Generated from sb3_smc.hyperparameters.DEFAULT_HYPERPARAMETERS by `python -m sb3_smc.zoo zoo_configs`;",
         "# do not edit by hand (tests/test_zoo.py checks the file equals what the generator writes).",
         "#",
         f"#   rl_zoo3 train --algo {zoo_algo} --env PW-cl_self-in-left-corner_vs_on-hline-v0 \\",
         f"#       -conf sb3_smc.zoo.{zoo_algo}   (the same settings as this file; or -conf zoo_configs/{zoo_algo}.yml)",
         "#",
-        *textwrap.wrap(_NOTES[zoo_algo], 114, initial_indent="# ", subsequent_indent="# "),
+        *textwrap.wrap(algorithm.zoo_note, 114, initial_indent="# ", subsequent_indent="# "),
         f"# The paper's batch (spec §5.3): {DEFAULT_N_ENVS} envs x {STEPS_PER_UPDATE // DEFAULT_N_ENVS} steps = "
-        f"{STEPS_PER_UPDATE:,} steps per update, 400k steps.",
+        f"{STEPS_PER_UPDATE:,} steps per update, {DEFAULT_TIMESTEPS // 1000}k steps.",
         f"# {ENV_WRAPPER} puts the env in sb3_smc's HierarchicalSMCWrapper (without SMCs unless `library` and `names`",
         "# are given), so the policy sees what an SMC sees and the trained model goes into an SMCLibrary;",
         f"# {CALLBACK} writes the smc/ and smc_calls/ TensorBoard curves.",
@@ -82,7 +76,7 @@ def render_config(zoo_algo: str) -> str:
         f"  env_wrapper: {ENV_WRAPPER}",
         f"  callback: {CALLBACK}",
         f"  n_envs: {DEFAULT_N_ENVS}",
-        "  n_timesteps: !!float 4e5",
+        f"  n_timesteps: !!float {_short_float(DEFAULT_TIMESTEPS)}",
         f"  policy: {policy}",
         f"  n_steps: {STEPS_PER_UPDATE // DEFAULT_N_ENVS}",
     ]

@@ -8,6 +8,7 @@ from typing import Any
 
 import yaml
 
+from sb3_smc.hyperparameters import ALGORITHM_REGISTRY
 from sb3_smc.zoo.configs import ENV_WRAPPER, ZOO_ALGOS
 
 __all__ = ["ZooRunError", "import_zoo_model", "read_zoo_run"]
@@ -77,7 +78,6 @@ def import_zoo_model(run_dir: str | os.PathLike, library: str | os.PathLike, *, 
     from sb3_smc.policies import FrameStackPolicy, policy_from_model
     from sb3_smc.records import TaskSpec, smc_name_from_env_id
     from sb3_smc.smc import SMC
-    from sb3_smc.training import ALGORITHM_CLASSES
 
     run = Path(run_dir)
     args, config = read_zoo_run(run)
@@ -100,8 +100,7 @@ def import_zoo_model(run_dir: str | os.PathLike, library: str | os.PathLike, *, 
     if not path.is_file():
         raise ZooRunError(f"{path}: no {model_file} model in the zoo run (have: "
                           f"{sorted(p.name for p in run.glob('*.zip'))})")
-    algo = ZOO_ALGOS[zoo_algo]
-    model = ALGORITHM_CLASSES[algo].load(path, device="cpu")
+    model = ALGORITHM_REGISTRY[ZOO_ALGOS[zoo_algo]].load_class().load(path, device="cpu")
     task = TaskSpec(str(env_id)).resolved()
     if task.kind is None:
         raise ZooRunError(f"{run}: {env_id!r} is not a PixelWorld id (an SMC's task is a PW-* environment)")
