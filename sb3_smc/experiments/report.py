@@ -391,10 +391,11 @@ def _pushable_figure(folder: Path, table: _Table, targets: Sequence[str], level:
 def _learner(settings: dict[str, Any]) -> str:
     """The algorithm and cell of the run's SMCs (runs from before the ``--algo`` / ``--rnn`` options: the
     defaults, RecurrentPPO with an LSTM)."""
-    from sb3_smc.hyperparameters import RECURRENT_ALGORITHMS
+    from sb3_smc.hyperparameters import ALGORITHM_REGISTRY
 
     algo = settings.get("algo", "RecurrentPPO")
-    return f"{algo} ({settings.get('rnn', 'lstm').upper() if algo in RECURRENT_ALGORITHMS else 'MLP'})"
+    recurrent = algo in ALGORITHM_REGISTRY and ALGORITHM_REGISTRY[algo].recurrent
+    return f"{algo} ({settings.get('rnn', 'lstm').upper() if recurrent else 'MLP'})"
 
 
 def _command(directory: Path, settings: dict[str, Any]) -> str:
