@@ -31,7 +31,8 @@ DATASETS = {
     "PWBench-classification-v0": "cl_self-in-container_vs_noncontainer",
     "PWBench-bring-about-v0": "ba_self-in-container_from_on-floor",
 }
-PUSHABLE = ["PW-cl_pushable-floor-pixel_vs_unpushable-v0", "PW-ba_pixel-touches-reference_from_left-on-floor-pushable-v0"]
+PUSHABLE = ["PW-cl_pushable-floor-pixel_vs_unpushable-v0",
+            "PW-ba_pixel-touches-reference_from_left-on-floor-pushable-v0"]
 SIZES = (1, 16, 256, 1024)
 MINIGRID = "MiniGrid-Empty-8x8-v0"
 

@@ -5,6 +5,14 @@ observations of :class:`pixelworld_env.vector.PixelWorldVectorEnv`.
 array has it empty or owned by the self (``World.move``'s fast path; ``sb3_smc.common.kernels.leaf_call`` calls it
 too). The vector env reads it from each scene's *initial* owner array: the only cells a self-only move changes are
 the self's own, and the self never moves onto itself, so the initial array answers exactly as the live one.
+:func:`push_move` is ``World.move``'s general path (transitive pushing) on one environment's live arrays, for the
+worlds where objects besides the self move.
+
+The batched functions take those worlds' arrays as one tuple, ``pushing`` = ``(grid0, owner0, cells, n_cells, colors,
+moveable, n_objects, initial, disjoint0, grids, owners, positions, disjoint, plan, planned)``: per scene the initial
+padded colours and owners, the objects' cells / cell counts / colours / moveability, their count and initial
+positions, whether they start disjoint; per environment its live padded colours and owners, object positions and
+disjointness (empty arrays when no scene pushes); scratch arrays for :func:`push_move`.
 
 Imported only by the vector env and ``sb3_smc`` (numba's import costs about half a second; ``import pixelworld_env``
 does not pay it). The compiled code is cached next to this file; numba checks only the caller's file for changes, so
@@ -16,10 +24,10 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from pixelworld_env.world import EMPTY
+from pixelworld_env.world import EMPTY, OUTSIDE
 
-__all__ = ["NEED_DRAWS", "NEED_SCENES", "OK", "observe_states", "observe_windows", "reset_envs", "self_target_free",
-           "step_envs"]
+__all__ = ["NEED_DRAWS", "NEED_SCENES", "OK", "observe_states", "observe_windows", "push_move", "reset_envs",
+           "self_target_free", "step_envs"]
 
 OK, NEED_DRAWS, NEED_SCENES = 0, 1, 2
 """What :func:`step_envs` and :func:`reset_envs` return: done; an environment to reset has no scene draw left (refill
@@ -29,7 +37,7 @@ MOVE = 1
 """``kinds`` entry of a move action (0: a signal)."""
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def self_target_free(owner: np.ndarray, me: int, row: int, col: int) -> bool:  # pragma: no cover
     """Whether the one-pixel self (object ``me``) may move to cell ``(row, col)`` (unpadded coordinates) of a world
     where only it moves: that cell of the padded ``owner`` array is empty or the self's own."""
@@ -38,26 +46,107 @@ def self_target_free(owner: np.ndarray, me: int, row: int, col: int) -> bool:  #
 
 
 @njit(cache=True)
+def _draw(grid: np.ndarray, owner: np.ndarray, positions: np.ndarray, cells: np.ndarray, n_cells: np.ndarray,
+          colors: np.ndarray, n_objects: int) -> bool:  # pragma: no cover
+    """``World._draw``: redraw every object in index order; returns whether no two objects share a cell."""
+    grid[:, :] = 0
+    owner[:, :] = OUTSIDE
+    owner[1:-1, 1:-1] = EMPTY
+    n_pixels = 0
+    for i in range(n_objects):
+        n_pixels += n_cells[i]
+        for p in range(n_cells[i]):
+            r, c = positions[i, 0] + cells[i, p, 0] + 1, positions[i, 1] + cells[i, p, 1] + 1
+            grid[r, c] = colors[i]
+            owner[r, c] = i
+    drawn = 0
+    for r in range(owner.shape[0]):
+        for c in range(owner.shape[1]):
+            if owner[r, c] >= 0:
+                drawn += 1
+    return drawn == n_pixels
+
+
+@njit(cache=True)
+def push_move(grid: np.ndarray, owner: np.ndarray, positions: np.ndarray, cells: np.ndarray, n_cells: np.ndarray,
+              colors: np.ndarray, moveable: np.ndarray, n_objects: int, me: int, dr: int, dc: int,
+              disjoint: np.ndarray, k: int, plan: np.ndarray, planned: np.ndarray) -> bool:  # pragma: no cover
+    """``World.move``'s general path on one world's live padded ``grid`` / ``owner`` and object ``positions``
+    (``cells`` / ``n_cells`` / ``colors`` / ``moveable`` the scene's objects): move the self (object ``me``) by
+    ``(dr, dc)``, pushing moveable objects transitively; any immoveable object or the world's edge in the chain
+    blocks the whole move. Redraws only the moved objects while ``disjoint[k]`` (no two objects share a cell), else
+    everything. ``plan`` / ``planned`` are scratch arrays of ``n_objects`` entries. Returns whether it moved."""
+    planned[:n_objects] = False
+    plan[0] = me
+    planned[me] = True
+    size = 1
+    i = 0
+    while i < size:  # breadth-first closure of the pushed objects
+        index = plan[i]
+        i += 1
+        for p in range(n_cells[index]):
+            other = owner[positions[index, 0] + cells[index, p, 0] + dr + 1,
+                          positions[index, 1] + cells[index, p, 1] + dc + 1]
+            if other == OUTSIDE:
+                return False
+            if other == EMPTY or planned[other]:
+                continue
+            if not moveable[other]:
+                return False
+            planned[other] = True
+            plan[size] = other
+            size += 1
+    if not disjoint[k]:
+        for i in range(size):
+            positions[plan[i], 0] += dr
+            positions[plan[i], 1] += dc
+        disjoint[k] = _draw(grid, owner, positions, cells, n_cells, colors, n_objects)
+        return True
+    for i in range(size):  # the same arrays as a full redraw: erase the moved objects, then draw them moved
+        index = plan[i]
+        for p in range(n_cells[index]):
+            r, c = positions[index, 0] + cells[index, p, 0] + 1, positions[index, 1] + cells[index, p, 1] + 1
+            grid[r, c] = 0
+            owner[r, c] = EMPTY
+    for i in range(size):
+        index = plan[i]
+        positions[index, 0] += dr
+        positions[index, 1] += dc
+        for p in range(n_cells[index]):
+            r, c = positions[index, 0] + cells[index, p, 0] + 1, positions[index, 1] + cells[index, p, 1] + 1
+            grid[r, c] = colors[index]
+            owner[r, c] = index
+    return True
+
+
+@njit(cache=True, inline="always")
 def _ready(s: int, bring_about: bool, ready: np.ndarray) -> bool:  # pragma: no cover
     return not bring_about or ready[s] != 0
 
 
-@njit(cache=True)
-def _reset_one(k: int, s: int, bring_about: bool, start: np.ndarray, goal0: np.ndarray, scene: np.ndarray,
-               row: np.ndarray, col: np.ndarray, steps: np.ndarray, goal: np.ndarray,
-               autoreset: np.ndarray) -> None:  # pragma: no cover
+@njit(cache=True, inline="always")
+def _reset_one(k: int, s: int, bring_about: bool, start: np.ndarray, goal0: np.ndarray, push_scene: np.ndarray,
+               pushing: tuple, scene: np.ndarray, row: np.ndarray, col: np.ndarray, steps: np.ndarray,
+               goal: np.ndarray, autoreset: np.ndarray) -> None:  # pragma: no cover
     scene[k] = s
     row[k] = start[s, 0]
     col[k] = start[s, 1]
     steps[k] = 0
     goal[k] = goal0[s] if bring_about else 0
     autoreset[k] = False
+    if push_scene[s]:
+        grid0, owner0, _, _, _, _, n_objects, initial, disjoint0, grids, owners, positions, disjoint, _, _ = pushing
+        grids[k] = grid0[s]
+        owners[k] = owner0[s]
+        positions[k, : n_objects[s]] = initial[s, : n_objects[s]]
+        disjoint[k] = disjoint0[s]
 
 
 @njit(cache=True)
 def reset_envs(mask: np.ndarray, forced: np.ndarray, bring_about: bool, ready: np.ndarray, start: np.ndarray,
-               goal0: np.ndarray, draws: np.ndarray, used: np.ndarray, scene: np.ndarray, row: np.ndarray,
-               col: np.ndarray, steps: np.ndarray, goal: np.ndarray, autoreset: np.ndarray) -> int:  # pragma: no cover
+               goal0: np.ndarray, push_scene: np.ndarray, pushing: tuple, draws: np.ndarray, used: np.ndarray,
+               scene: np.ndarray, row: np.ndarray, col: np.ndarray, steps: np.ndarray, goal: np.ndarray,
+               autoreset: np.ndarray) -> int:  # pragma: no cover
     """Reset the environments where ``mask`` is set: into scene ``forced[k]`` where it is >= 0, else into the next of
     their scene draws (``draws[k, used[k]]``, then ``used[k]`` grows). Returns ``OK``, or ``NEED_DRAWS`` /
     ``NEED_SCENES`` before changing anything."""
@@ -79,25 +168,28 @@ def reset_envs(mask: np.ndarray, forced: np.ndarray, bring_about: bool, ready: n
             else:
                 s = draws[k, used[k]]
                 used[k] += 1
-            _reset_one(k, s, bring_about, start, goal0, scene, row, col, steps, goal, autoreset)
+            _reset_one(k, s, bring_about, start, goal0, push_scene, pushing, scene, row, col, steps, goal, autoreset)
     return OK
 
 
 @njit(cache=True)
 def step_envs(actions: np.ndarray, kinds: np.ndarray, values: np.ndarray, deltas: np.ndarray, bring_about: bool,
-              max_steps: int, signal_reward: float, potential: float, goal_reward: float, owner0: np.ndarray,
-              me: np.ndarray, start: np.ndarray, labels: np.ndarray, python_scene: np.ndarray,
-              goal_table: np.ndarray, goal0: np.ndarray, ready: np.ndarray, draws: np.ndarray, used: np.ndarray,
-              scene: np.ndarray, row: np.ndarray, col: np.ndarray, steps: np.ndarray, goal: np.ndarray,
-              autoreset: np.ndarray, rewards: np.ndarray, terminated: np.ndarray, truncated: np.ndarray,
-              success: np.ndarray, was_reset: np.ndarray, python_move: np.ndarray) -> int:  # pragma: no cover
+              max_steps: int, signal_reward: float, potential: float, goal_reward: float, me: np.ndarray,
+              start: np.ndarray, labels: np.ndarray, goal_table: np.ndarray, goal0: np.ndarray, ready: np.ndarray,
+              push_scene: np.ndarray, pushing: tuple, draws: np.ndarray, used: np.ndarray, scene: np.ndarray,
+              row: np.ndarray, col: np.ndarray, steps: np.ndarray, goal: np.ndarray, autoreset: np.ndarray,
+              rewards: np.ndarray, terminated: np.ndarray, truncated: np.ndarray, success: np.ndarray,
+              was_reset: np.ndarray, goal_pending: np.ndarray) -> int:  # pragma: no cover
     """One step of every environment (Gymnasium's next-step autoreset): those that ended last step are reset (reward
     0, ``was_reset``), the others take ``actions[k]`` (per action ``kinds``: 0 signal, 1 move; ``values`` a signal's
-    value; ``deltas`` a move's offsets) with :class:`~pixelworld_env.PixelWorldEnv`'s rewards. Scenes are read
-    from the per-scene arrays (``owner0`` the initial padded owners, ``start`` / ``me`` the self's cell and index,
-    ``labels``, ``goal_table`` the goal's truth per self cell, ``goal0`` at the start). A move in a scene where more
-    than the self moves (``python_scene``) is left to the caller (``python_move``, reward 0 so far). Returns ``OK``,
-    or ``NEED_DRAWS`` / ``NEED_SCENES`` before changing anything."""
+    value; ``deltas`` a move's offsets) with :class:`~pixelworld_env.PixelWorldEnv`'s rewards. Scenes are read from
+    the per-scene arrays (``me`` / ``start`` the self's index and cell, ``labels``, ``goal_table`` the goal's truth
+    per self cell, ``goal0`` at the start; ``pushing`` see above). In a scene where more than the self moves
+    (``push_scene``) a move is :func:`push_move`, and in bring-about its goal is left to the caller
+    (``goal_pending``; reward 0 so far). Returns ``OK``, or ``NEED_DRAWS`` / ``NEED_SCENES`` before changing
+    anything."""
+    grid0, owner0, cells, n_cells, colors, moveable, n_objects, _, _, grids, owners, positions, disjoint, plan, \
+        planned = pushing
     n = actions.shape[0]
     for k in range(n):
         if autoreset[k]:
@@ -106,11 +198,11 @@ def step_envs(actions: np.ndarray, kinds: np.ndarray, values: np.ndarray, deltas
             if not _ready(draws[k, used[k]], bring_about, ready):
                 return NEED_SCENES
     for k in range(n):
-        python_move[k] = False
+        goal_pending[k] = False
         if autoreset[k]:
             s = draws[k, used[k]]
             used[k] += 1
-            _reset_one(k, s, bring_about, start, goal0, scene, row, col, steps, goal, autoreset)
+            _reset_one(k, s, bring_about, start, goal0, push_scene, pushing, scene, row, col, steps, goal, autoreset)
             rewards[k] = 0.0
             terminated[k] = False
             truncated[k] = False
@@ -124,8 +216,12 @@ def step_envs(actions: np.ndarray, kinds: np.ndarray, values: np.ndarray, deltas
         reward = 0.0
         term = False
         if kinds[a] == MOVE:
-            if python_scene[s]:
-                python_move[k] = True
+            if push_scene[s]:
+                if push_move(grids[k], owners[k], positions[k], cells[s], n_cells[s], colors[s], moveable[s],
+                             n_objects[s], me[s], deltas[a, 0], deltas[a, 1], disjoint, k, plan, planned):
+                    row[k] = positions[k, me[s], 0]
+                    col[k] = positions[k, me[s], 1]
+                    goal_pending[k] = bring_about
             else:
                 r = row[k] + deltas[a, 0]
                 c = col[k] + deltas[a, 1]
@@ -153,32 +249,33 @@ def step_envs(actions: np.ndarray, kinds: np.ndarray, values: np.ndarray, deltas
 
 
 @njit(cache=True)
-def _cell(s: int, pr: int, pc: int, r0: int, c0: int, grid0: np.ndarray, start: np.ndarray,
-          self_color: np.ndarray) -> int:  # pragma: no cover
-    """The colour of padded cell ``(pr, pc)`` of scene ``s`` with the self at unpadded ``(r0, c0)``."""
-    if pr == r0 + 1 and pc == c0 + 1:
-        return self_color[s]
-    if pr == start[s, 0] + 1 and pc == start[s, 1] + 1:
-        return 0
-    return grid0[s, pr, pc]
-
-
-@njit(cache=True)
-def observe_windows(one_hot: bool, n_colors: int, grid0: np.ndarray, start: np.ndarray, self_color: np.ndarray,
-                    python_scene: np.ndarray, scene: np.ndarray, row: np.ndarray, col: np.ndarray,
+def observe_windows(one_hot: bool, n_colors: int, start: np.ndarray, self_color: np.ndarray, push_scene: np.ndarray,
+                    pushing: tuple, scene: np.ndarray, row: np.ndarray, col: np.ndarray,
                     out: np.ndarray) -> None:  # pragma: no cover
-    """Write the 3 x 3 window of every environment in a scene where only the self moves into its row of ``out``:
-    ``one_hot`` ``(n, 9 * n_colors)`` float32, else ``(n, 9)`` raw codes (rows of other environments are left)."""
+    """Write the 3 x 3 window of every environment into its row of ``out``: ``one_hot`` ``(n, 9 * n_colors)``
+    float32, else ``(n, 9)`` raw codes. Where only the self moves, the window is the scene's initial colours with
+    the self's start emptied and the self at the centre."""
+    grid0, grids = pushing[0], pushing[9]
+    width = out.shape[1]
     for k in range(scene.shape[0]):
         s = scene[k]
-        if python_scene[s]:
-            continue
         r0, c0 = row[k], col[k]
+        push = push_scene[s]
+        start_r, start_c = start[s, 0] + 1, start[s, 1] + 1
         if one_hot:
-            out[k, :] = 0.0
+            for x in range(width):
+                out[k, x] = 0.0
         for i in range(3):
             for j in range(3):
-                value = _cell(s, r0 + i, c0 + j, r0, c0, grid0, start, self_color)
+                pr, pc = r0 + i, c0 + j
+                if push:
+                    value = grids[k, pr, pc]
+                elif i == 1 and j == 1:
+                    value = self_color[s]
+                elif pr == start_r and pc == start_c:
+                    value = 0
+                else:
+                    value = grid0[s, pr, pc]
                 if one_hot:
                     out[k, (3 * i + j) * n_colors + value] = 1.0
                 else:
@@ -186,14 +283,17 @@ def observe_windows(one_hot: bool, n_colors: int, grid0: np.ndarray, start: np.n
 
 
 @njit(cache=True)
-def observe_states(grid0: np.ndarray, start: np.ndarray, self_color: np.ndarray, python_scene: np.ndarray,
+def observe_states(start: np.ndarray, self_color: np.ndarray, push_scene: np.ndarray, pushing: tuple,
                    scene: np.ndarray, row: np.ndarray, col: np.ndarray, out: np.ndarray) -> None:  # pragma: no cover
-    """Write the state array of every environment in a scene where only the self moves into ``out`` ``(n, height,
-    width)`` (rows of other environments are left)."""
+    """Write the state array of every environment into ``out`` ``(n, height, width)``."""
+    grid0, grids = pushing[0], pushing[9]
+    height, width = out.shape[1], out.shape[2]
     for k in range(scene.shape[0]):
         s = scene[k]
-        if python_scene[s]:
-            continue
-        for i in range(out.shape[1]):
-            for j in range(out.shape[2]):
-                out[k, i, j] = _cell(s, i + 1, j + 1, row[k], col[k], grid0, start, self_color)
+        source = grids[k] if push_scene[s] else grid0[s]
+        for i in range(height):
+            for j in range(width):
+                out[k, i, j] = source[i + 1, j + 1]
+        if not push_scene[s]:
+            out[k, start[s, 0], start[s, 1]] = 0
+            out[k, row[k], col[k]] = self_color[s]

@@ -8,10 +8,14 @@ How: the environments' state is a handful of arrays (scene index, self cell, ste
 the block of scene draws and the PCG64 state of each environment's generator); the scenes are arrays too (initial
 colours and owners, the self's start, labels, and the bring-about goal per self cell, computed per scene the first
 time an environment is reset into it with the single env's own test, ``Concept.self_evaluator``). A step of all
-environments is :func:`pixelworld_env.kernels.step_envs` and their observations :func:`~pixelworld_env.kernels.
-observe_envs`. In worlds where objects besides the self move (the pushable datasets, ``World.self_only`` false)
-each environment's moves go through its own :class:`~pixelworld_env.world.World` in Python and its goal through
-``Concept.holds_objects``, as in the single env; the compiled step still does their signals, truncation and resets.
+environments is :func:`pixelworld_env.kernels.step_envs` and their observations
+:func:`~pixelworld_env.kernels.observe_windows` / :func:`~pixelworld_env.kernels.observe_states`. Where only the self
+moves (all AAAI-18 data) an environment needs no world arrays of its own: a move is
+:func:`~pixelworld_env.kernels.self_target_free` on the scene's initial owners. In worlds where objects besides the
+self move (the pushable datasets, ``World.self_only`` false) each environment keeps its own padded colours, owners
+and object positions, moved by :func:`~pixelworld_env.kernels.push_move` (``World.move``'s pushing, compiled); a
+bring-about goal there is ``Concept.holds_objects`` in Python, as in the single env, memoised per scene and object
+positions.
 """
 
 from __future__ import annotations
@@ -102,17 +106,42 @@ class PixelWorldVectorEnv(VectorEnv):
         n_scenes = len(self.scenes)
         height, width = self.scenes[0].height, self.scenes[0].width
         worlds = [World(scene) for scene in self.scenes]
-        self._grid0 = np.stack([w.grid for w in worlds])
+        grid0 = np.stack([w.grid for w in worlds])
         self._owner0 = np.stack([w.owner for w in worlds])
         self._start = np.array([w.self_position for w in worlds], dtype=np.int64)
         self._me = np.array([w.self_index for w in worlds], dtype=np.int64)
         self._self_color = np.array([int(s.self_object.color) for s in self.scenes], dtype=np.int64)
-        self._python_scene = np.array([not w.self_only for w in worlds], dtype=np.bool_)
+        self._push_scene = np.array([not w.self_only for w in worlds], dtype=np.bool_)
         self._labels = np.array(self.labels if self.labels is not None else [0] * n_scenes, dtype=np.int64)
         table_shape = (n_scenes, height, width) if self._bring_about else (n_scenes, 1, 1)
         self._goal_table = np.full(table_shape, -1, dtype=np.int8)
         self._goal0 = np.zeros(n_scenes, dtype=np.int8)
         self._ready = np.zeros(n_scenes, dtype=np.uint8)
+        # the objects, for the worlds where more than the self moves (kernels.push_move)
+        n_objects = np.array([len(s.objects) for s in self.scenes], dtype=np.int64)
+        most_objects = int(n_objects.max())
+        most_cells = max(len(o.cells) for s in self.scenes for o in s.objects)
+        cells = np.zeros((n_scenes, most_objects, most_cells, 2), dtype=np.int64)
+        n_cells = np.zeros((n_scenes, most_objects), dtype=np.int64)
+        colors = np.zeros((n_scenes, most_objects), dtype=np.int8)
+        moveable = np.zeros((n_scenes, most_objects), dtype=np.bool_)
+        initial = np.zeros((n_scenes, most_objects, 2), dtype=np.int64)
+        for s, scene in enumerate(self.scenes):
+            for i, obj in enumerate(scene.objects):
+                cells[s, i, : len(obj.cells)] = obj.cells
+                n_cells[s, i] = len(obj.cells)
+                colors[s, i] = obj.color
+                moveable[s, i] = obj.moveable
+                initial[s, i] = obj.position
+        disjoint0 = (self._owner0 >= 0).sum(axis=(1, 2)) == n_cells.sum(axis=1)
+        pushers = num_envs if self._push_scene.any() else 0
+        self._positions = np.zeros((pushers, most_objects, 2), dtype=np.int64)
+        self._grids = np.zeros((pushers, height + 2, width + 2), dtype=np.int8)
+        self._pushing = (grid0, self._owner0, cells, n_cells, colors, moveable, n_objects, initial, disjoint0,
+                         self._grids, np.zeros((pushers, height + 2, width + 2), dtype=np.int16), self._positions,
+                         np.zeros(pushers, dtype=np.bool_), np.zeros(most_objects, dtype=np.int64),
+                         np.zeros(most_objects, dtype=np.bool_))
+        self._push_goals: dict[tuple[int, bytes], bool] = {}
 
         # per environment
         self._draws = np.zeros((num_envs, DRAW_BLOCK), dtype=np.int32)
@@ -126,13 +155,9 @@ class PixelWorldVectorEnv(VectorEnv):
         self._goal = np.zeros(num_envs, dtype=np.int8)
         self._rewards = np.zeros(num_envs, dtype=np.float64)
         (self._autoreset, self._terminated, self._truncated, self._success, self._was_reset,
-         self._python_move) = (np.zeros(num_envs, dtype=np.bool_) for _ in range(6))
+         self._goal_pending) = (np.zeros(num_envs, dtype=np.bool_) for _ in range(6))
         self._no_index = np.full(num_envs, -1, dtype=np.int64)
         self._everyone = np.ones(num_envs, dtype=np.bool_)
-        # worlds where more than the self moves: per environment its World per scene, and the live one
-        self._python = bool(self._python_scene.any())
-        self._worlds: list[dict[int, World]] = [{} for _ in range(num_envs)] if self._python else []
-        self._live: list[World | None] = [None] * num_envs if self._python else []
         self._started = False
 
     @staticmethod
@@ -157,8 +182,8 @@ class PixelWorldVectorEnv(VectorEnv):
     def _prepare_scene(self, s: int) -> None:
         """The goal's truth in scene ``s``: at the start, and per self cell where only the self moves."""
         scene = self.scenes[s]
-        if self._python_scene[s]:
-            self._goal0[s] = self.concept.holds_objects(World(scene).objects, scene.floor_row)
+        if self._push_scene[s]:
+            self._goal0[s] = self._push_goal(s, self._pushing[7][s])
         else:
             holds_for = self.concept.self_evaluator(scene.objects, scene.floor_row)
             owner = self._owner0[s, 1:-1, 1:-1]
@@ -203,57 +228,44 @@ class PixelWorldVectorEnv(VectorEnv):
                 if not self._ready[s]:
                     self._prepare_scene(int(s))
 
-    # ------------------------------------------------------------------------------------------ Python worlds
+    # ------------------------------------------------------------------------------------------ pushing worlds
 
-    def _reset_worlds(self, mask: np.ndarray) -> None:
-        for k in np.flatnonzero(mask & self._python_scene[self._scene]):
-            s = int(self._scene[k])
-            world = self._worlds[k].get(s)
-            if world is None:
-                world = self._worlds[k][s] = World(self.scenes[s])
-            world.reset()
-            self._live[k] = world
+    def _push_goal(self, s: int, positions: np.ndarray) -> bool:
+        """Whether the concept holds in scene ``s`` with its objects at ``positions`` (``Concept.holds_objects``, as
+        the single env tests it after every move there), memoised per scene and positions."""
+        scene = self.scenes[s]
+        key = (s, positions[: len(scene.objects)].tobytes())
+        holds = self._push_goals.get(key)
+        if holds is None:
+            objects = tuple(obj if obj.position == (r, c) else obj.moved_to((r, c))
+                            for obj, (r, c) in zip(scene.objects, positions.tolist(), strict=False))
+            holds = self._push_goals[key] = self.concept.holds_objects(objects, scene.floor_row)
+        return holds
 
-    def _python_moves(self, actions: np.ndarray) -> None:
-        for k in np.flatnonzero(self._python_move):
-            world = self._live[k]
-            assert world is not None
-            if world.move(self._moves[actions[k]]):  # type: ignore[arg-type]
-                self._row[k], self._col[k] = world.self_position
-                if self._bring_about:
-                    goal = self.concept.holds_objects(world.objects, world.scene.floor_row)
-                    if goal != bool(self._goal[k]):
-                        self._goal[k] = goal
-                        self._rewards[k] = GOAL_POTENTIAL if goal else -GOAL_POTENTIAL
-                        self._success[k] = self._truncated[k] and self._rewards[k] > 0
+    def _push_goals_after_moves(self) -> None:
+        """The goal's shaping after the moves the compiled step made in pushing worlds (``_goal_pending``)."""
+        for k in np.flatnonzero(self._goal_pending):
+            goal = self._push_goal(int(self._scene[k]), self._positions[k])
+            if goal != bool(self._goal[k]):
+                self._goal[k] = goal
+                self._rewards[k] = GOAL_POTENTIAL if goal else -GOAL_POTENTIAL
+                self._success[k] = self._truncated[k] and self._rewards[k] > 0
 
     # ------------------------------------------------------------------------------------------ observations, infos
 
     def _observe(self) -> np.ndarray:
         n, observation = self.num_envs, self.observation
-        state = observation in ("full", "image")
-        if state:
+        if observation in ("full", "image"):
             out = np.empty((n, self.scenes[0].height, self.scenes[0].width), dtype=np.uint8)
-            kernels.observe_states(self._grid0, self._start, self._self_color, self._python_scene, self._scene,
+            kernels.observe_states(self._start, self._self_color, self._push_scene, self._pushing, self._scene,
                                    self._row, self._col, out)
-        else:
-            one_hot = observation == "hand"
-            out = np.empty((n, 9 * NUM_COLORS), dtype=np.float32) if one_hot else np.empty((n, 9), dtype=np.int64)
-            kernels.observe_windows(one_hot, NUM_COLORS, self._grid0, self._start, self._self_color,
-                                    self._python_scene, self._scene, self._row, self._col, out)
-        if self._python:
-            for k in np.flatnonzero(self._python_scene[self._scene]):
-                world = self._live[k]
-                assert world is not None
-                if state:
-                    out[k] = world.state()
-                elif observation == "hand":
-                    out[k] = 0.0
-                    out[k, _ONE_HOT_OFFSETS + world.window().ravel()] = 1.0
-                else:
-                    out[k] = world.window().reshape(-1)
-        if observation == "image":
-            return (out[:, None] == _COLOR_CODES).astype(np.uint8) * np.uint8(255)
+            if observation == "image":
+                return (out[:, None] == _COLOR_CODES).astype(np.uint8) * np.uint8(255)
+            return out
+        one_hot = observation == "hand"
+        out = np.empty((n, 9 * NUM_COLORS), dtype=np.float32) if one_hot else np.empty((n, 9), dtype=np.int64)
+        kernels.observe_windows(one_hot, NUM_COLORS, self._start, self._self_color, self._push_scene, self._pushing,
+                                self._scene, self._row, self._col, out)
         return out
 
     def _infos(self, mask: np.ndarray, success: np.ndarray, signalled: np.ndarray,
@@ -303,11 +315,9 @@ class PixelWorldVectorEnv(VectorEnv):
             if seeds[k] is not None:
                 self._seed(int(k), seeds[k])
         while kernels.reset_envs(mask, index, self._bring_about, self._ready, self._start, self._goal0,
-                                 self._draws, self._used, self._scene, self._row, self._col, self._steps, self._goal,
-                                 self._autoreset) != kernels.OK:
+                                 self._push_scene, self._pushing, self._draws, self._used, self._scene, self._row,
+                                 self._col, self._steps, self._goal, self._autoreset) != kernels.OK:
             self._prepare(mask, index)
-        if self._python:
-            self._reset_worlds(mask)
         self._terminated[mask] = False
         self._truncated[mask] = False
         self._started = True
@@ -355,33 +365,31 @@ class PixelWorldVectorEnv(VectorEnv):
             raise ValueError(f"actions must be in [0, {len(self.action_names)}), got {actions}")
         actions = actions.astype(np.int64, copy=False)
         while kernels.step_envs(actions, self._kinds, self._values, self._deltas, self._bring_about, self.max_steps,
-                                CLASSIFICATION_REWARD, GOAL_POTENTIAL, GOAL_REWARD, self._owner0, self._me,
-                                self._start, self._labels, self._python_scene, self._goal_table, self._goal0,
-                                self._ready, self._draws, self._used, self._scene, self._row, self._col, self._steps,
-                                self._goal, self._autoreset, self._rewards, self._terminated, self._truncated,
-                                self._success, self._was_reset, self._python_move) != kernels.OK:
+                                CLASSIFICATION_REWARD, GOAL_POTENTIAL, GOAL_REWARD, self._me, self._start,
+                                self._labels, self._goal_table, self._goal0, self._ready, self._push_scene,
+                                self._pushing, self._draws, self._used, self._scene, self._row, self._col,
+                                self._steps, self._goal, self._autoreset, self._rewards, self._terminated,
+                                self._truncated, self._success, self._was_reset, self._goal_pending) != kernels.OK:
             self._prepare(self._autoreset, self._no_index)
-        if self._python:
-            self._reset_worlds(self._was_reset)
-            self._python_moves(actions)
+        if self._bring_about and self._goal_pending.any():
+            self._push_goals_after_moves()
         info = self._infos(self._everyone, self._success, self._terminated, self._was_reset)
         return (self._observe(), self._rewards.copy(), self._terminated.copy(), self._truncated.copy(), info)
 
     def _state(self, k: int) -> np.ndarray:
         """Environment ``k``'s state array (colour codes)."""
-        if self._python_scene[self._scene[k]]:
-            return self._live[k].state().copy()  # type: ignore[union-attr]
         s = self._scene[k]
-        state = self._grid0[s, 1:-1, 1:-1].copy()
+        if self._push_scene[s]:
+            return self._grids[k, 1:-1, 1:-1].copy()
+        state = self._pushing[0][s, 1:-1, 1:-1].copy()
         state[self._start[s, 0], self._start[s, 1]] = 0
         state[self._row[k], self._col[k]] = self._self_color[s]
         return state
 
     def _current_scene(self, k: int) -> Scene:
-        s = int(self._scene[k])
-        if self._python_scene[s]:
-            return self._live[k].current_scene()  # type: ignore[union-attr]
-        scene = self.scenes[s]
+        scene = self.scenes[self._scene[k]]
+        if self._push_scene[self._scene[k]]:
+            return scene.with_positions([(r, c) for r, c in self._positions[k, : len(scene.objects)].tolist()])
         positions = [obj.position for obj in scene.objects]
         positions[scene.self_index] = (int(self._row[k]), int(self._col[k]))
         return scene.with_positions(positions)

@@ -271,3 +271,40 @@ def test_ppo_first_rollout_equals_dummy_vec_env_and_trains() -> None:
         assert torch.equal(value, b.policy.state_dict()[key])
         if key.endswith("weight"):
             assert not torch.equal(value, fresh[key])  # it trained
+
+
+OVERLAPPING = """
+#########
+#.S.B...#
+#...C.a.#
+#.......#
+#..D....#
+#=======#
+#.......#
+#########
+"""
+
+
+def test_pushing_with_overlapping_objects_redraws_as_world_move() -> None:
+    """Objects that start on one cell (no generated scene has them) take ``World.move``'s full-redraw path."""
+    from pixelworld_env import PixelWorldEnv, Scene
+
+    scene = Scene.from_ascii(OVERLAPPING)
+    positions = [obj.position for obj in scene.objects]
+    pushable = [i for i, obj in enumerate(scene.objects) if obj.pushable]
+    positions[pushable[1]] = positions[pushable[0]]  # C on B
+    scenes = [scene.with_positions(positions), scene]
+
+    def make_env() -> PixelWorldEnv:
+        return PixelWorldEnv(scenes, kind="bring-about", concept="?x pushable(x) & touches(self,x)", max_steps=15)
+
+    a, b = PixelWorldVectorEnv(make_env(), 3), SyncVectorEnv([make_env for _ in range(3)])
+    rng = np.random.default_rng(5)
+    assert_same(a.reset(seed=1, options={"index": 0}), b.reset(seed=1, options={"index": 0}))
+    rewards = 0
+    for _ in range(300):
+        actions = np.where(rng.random(3) < 0.03, 0, rng.integers(1, 5, size=3))
+        result = a.step(actions)
+        assert_same(result, b.step(actions))
+        rewards += int(np.count_nonzero(result[1]))
+    assert rewards > 10 and not a._pushing[8][0] and a._pushing[8][1]
