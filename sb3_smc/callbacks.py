@@ -120,9 +120,10 @@ class SMCTrainingCallback(BaseCallback):
         self.history: list[dict[str, float]] = []
         self.total_primitive_steps = 0
         self._stats = RolloutStats()
-        self._episode_return: np.ndarray | None = None
-        self._episode_length: np.ndarray | None = None
-        self._episode_primitive: np.ndarray | None = None
+        # per environment; sized on the training's first start (and again if its number of environments differs)
+        self._episode_return = np.zeros(0)
+        self._episode_length = np.zeros(0, dtype=np.int64)
+        self._episode_primitive = np.zeros(0, dtype=np.int64)
         self._start_time = 0.0
         self._finished = False
 
@@ -130,7 +131,7 @@ class SMCTrainingCallback(BaseCallback):
 
     def _on_training_start(self) -> None:
         n = self.training_env.num_envs
-        if self._episode_return is None or len(self._episode_return) != n:
+        if len(self._episode_return) != n:
             self._episode_return = np.zeros(n)
             self._episode_length = np.zeros(n, dtype=np.int64)
             self._episode_primitive = np.zeros(n, dtype=np.int64)
@@ -163,18 +164,18 @@ class SMCTrainingCallback(BaseCallback):
                     calls[child] = calls.get(child, 0) + 1
                     call_steps[child] = call_steps.get(child, 0) + call["primitive_steps"]
                     call_sig1[child] = call_sig1.get(child, 0) + (call["outcome"] > 0)
-        for i in np.flatnonzero(dones):
-            info = infos[i]
+        for k in np.flatnonzero(dones):
+            info = infos[k]
             # VecMonitor's episode record when present (the same numbers), else the callback's own sums
             episode = info.get("episode")
-            stats.returns.append(float(episode["r"]) if episode else float(self._episode_return[i]))
-            stats.lengths.append(int(episode["l"]) if episode else int(self._episode_length[i]))
-            stats.primitive_lengths.append(int(primitive[i]))
+            stats.returns.append(float(episode["r"]) if episode else float(self._episode_return[k]))
+            stats.lengths.append(int(episode["l"]) if episode else int(self._episode_length[k]))
+            stats.primitive_lengths.append(int(primitive[k]))
             stats.successes.append(bool(info.get("is_success", False)))
-            self._episode_return[i] = 0.0
-            self._episode_length[i] = 0
-            self.total_primitive_steps += int(primitive[i])
-            primitive[i] = 0
+            self._episode_return[k] = 0.0
+            self._episode_length[k] = 0
+            self.total_primitive_steps += int(primitive[k])
+            primitive[k] = 0
         return True
 
     def _on_rollout_end(self) -> None:

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Mapping, Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import gymnasium as gym
 
@@ -17,10 +17,13 @@ from sb3_smc.records import TaskSpec, TrainingSpec, WrapperSettings
 from sb3_smc.smc import SMC
 from sb3_smc.wrapper import HierarchicalSMCWrapper
 
+if TYPE_CHECKING:
+    from pixelworld_env.env import PixelWorldEnv
+
 __all__ = ["make_smc_env", "pixelworld_base", "spec_for_smc", "wrap_with_smcs"]
 
 
-def pixelworld_base(env: gym.Env) -> Any:
+def pixelworld_base(env: gym.Env) -> PixelWorldEnv:
     """The :class:`~pixelworld_env.env.PixelWorldEnv` under ``env``; ``TypeError`` if there is none, ``ValueError``
     if ``env`` already has SMC actions (a :class:`HierarchicalSMCWrapper` layer)."""
     from pixelworld_env.env import PixelWorldEnv

@@ -18,9 +18,8 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Mapping
 from dataclasses import asdict, dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any, cast
 
-import gymnasium as gym
 import numpy as np
 
 from pixelworld_env.validation import check_int, check_seed
@@ -28,6 +27,10 @@ from sb3_smc.envs import make_smc_env, spec_for_smc
 from sb3_smc.policies import sample_action
 from sb3_smc.records import EvaluationRecord
 from sb3_smc.smc import SMC
+
+if TYPE_CHECKING:
+    from pixelworld_env.env import PixelWorldEnv
+    from sb3_smc.wrapper import HierarchicalSMCWrapper
 
 __all__ = ["EnvironmentResult", "EpisodeResult", "EvaluationResult", "REPEAT_SEED_OFFSET", "evaluate",
            "episode_seed", "make_evaluation_env", "run_episode"]
@@ -143,14 +146,14 @@ def episode_seed(seed: int, repeat: int, index: int) -> int:
     return int(np.random.SeedSequence((seed, REPEAT_SEED_OFFSET + repeat, index)).generate_state(1)[0])
 
 
-def run_episode(smc: SMC, env: gym.Env, *, index: int | None = None, seed: int,
+def run_episode(smc: SMC, env: HierarchicalSMCWrapper, *, index: int | None = None, seed: int,
                 record_cells: bool = True) -> EpisodeResult:
     """Run one episode of ``smc`` on ``env`` (a :class:`~sb3_smc.wrapper.HierarchicalSMCWrapper` built for it).
 
     ``index`` picks the scene (``None``: the env's own draw). Actions are sampled from the SMC's policy with
     ``numpy.random.default_rng((seed, 1))``; the env is reset with ``seed``.
     """
-    base = env.unwrapped
+    base = cast("PixelWorldEnv", env.unwrapped)
     observation, _ = env.reset(seed=seed, options=None if index is None else {"index": index})
     cells: list[Cell] = [base.world.self_position] if record_cells else []
     rng = np.random.default_rng((seed, 1))
@@ -191,7 +194,7 @@ def run_episode(smc: SMC, env: gym.Env, *, index: int | None = None, seed: int,
 
 
 def make_evaluation_env(smc: SMC, env_id: str | None = None, *, split: str = "test", max_steps: int | None = None,
-                        env_kwargs: Mapping[str, Any] | None = None) -> gym.Env:
+                        env_kwargs: Mapping[str, Any] | None = None) -> HierarchicalSMCWrapper:
     """The environment ``smc`` was trained in (:func:`sb3_smc.envs.make_smc_env` with its spec), on ``split``.
 
     ``env_id`` defaults to the SMC's own task; ``max_steps`` replaces the episode length it was trained with. The
@@ -230,7 +233,7 @@ def evaluate(smc: SMC, env_id: str | None = None, *, split: str = "test", repeat
     smc.check_layout()
     env = make_evaluation_env(smc, env_id, split=split, max_steps=max_steps, env_kwargs=env_kwargs)
     try:
-        base = env.unwrapped
+        base = cast("PixelWorldEnv", env.unwrapped)
         if base.kind != smc.kind:
             raise ValueError(f"SMC {smc.name!r} is a {smc.kind} SMC but {env_id} is a {base.kind} task")
         if tuple(env.action_names) != tuple(smc.action_names):

@@ -40,7 +40,8 @@ class PixelWorldCNN(BaseFeaturesExtractor):
 
     def __init__(self, observation_space: spaces.Space, features_dim: int = 8, filters: Sequence[int] = (8, 16)
                  ) -> None:
-        if not (is_image_space(observation_space) and is_image_space_channels_first(observation_space)):
+        if not (isinstance(observation_space, spaces.Box) and is_image_space(observation_space)
+                and is_image_space_channels_first(observation_space)):
             raise ValueError(f"PixelWorldCNN needs a channel-first uint8 image space in [0, 255] "
                              f"(PixelWorldEnv(observation='image')), got {observation_space}")
         features_dim = check_int(features_dim, "features_dim", 1)

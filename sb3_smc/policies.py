@@ -24,6 +24,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 if TYPE_CHECKING:
+    from stable_baselines3.common.base_class import BaseAlgorithm
+    from stable_baselines3.common.policies import BasePolicy
+
     from sb3_smc.smc import StepPolicy
 
 __all__ = [
@@ -420,7 +423,8 @@ def _n_outputs(layers: Sequence[Layer]) -> int:
 # From SB3 models
 # ---------------------------------------------------------------------------------------------------------------
 
-def policy_from_model(model: Any, dtype: Any = np.float64) -> NumpyMLPPolicy | NumpyLSTMPolicy | NumpyGRUPolicy:
+def policy_from_model(model: BaseAlgorithm | BasePolicy, dtype: Any = np.float64
+                      ) -> NumpyMLPPolicy | NumpyLSTMPolicy | NumpyGRUPolicy:
     """Numpy copy of the actor of a trained SB3 model (or of its ``policy``), as a :class:`StepPolicy`.
 
     Supports ``RecurrentPPO`` + ``MlpLstmPolicy`` (:class:`NumpyLSTMPolicy`) or ``SequenceGruPolicy``
@@ -466,7 +470,7 @@ def policy_from_model(model: Any, dtype: Any = np.float64) -> NumpyMLPPolicy | N
     try:
         from sb3_contrib.common.recurrent.policies import RecurrentActorCriticPolicy
     except ImportError:  # pragma: no cover - sb3-contrib is a dependency
-        RecurrentActorCriticPolicy = None  # noqa: N806
+        RecurrentActorCriticPolicy = None  # type: ignore[assignment,misc]  # noqa: N806  (a class or None)
 
     if RecurrentActorCriticPolicy is not None and isinstance(policy, RecurrentActorCriticPolicy):
         _check_overrides(policy, RecurrentActorCriticPolicy, ("get_distribution", "_process_sequence"), what)

@@ -14,7 +14,7 @@ unbatched ones (see ``docs/benchmarks.md``).
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from typing import Any
+from typing import Any, cast
 
 import gymnasium as gym
 import numpy as np
@@ -73,7 +73,7 @@ class SMCVecEnv(DummyVecEnv):
             if not self._coroutine_step[i]:
                 results[i] = env.step(self.actions[i])
                 continue
-            coroutine = env.step_coroutine(self.actions[i])
+            coroutine = cast(HierarchicalSMCWrapper, env).step_coroutine(self.actions[i])  # as _coroutine_step says
             try:
                 requests[i] = next(coroutine)
                 running[i] = coroutine

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Generator, Iterable, Sequence
-from typing import Any, TypeVar
+from typing import Any, Protocol, TypeVar, cast
 
 import gymnasium as gym
 import numpy as np
@@ -26,6 +26,14 @@ PolicyRequest = tuple[StepPolicy, np.ndarray, Any]
 _Result = TypeVar("_Result")
 
 
+class _CompiledPolicy(StepPolicy, Protocol):
+    """A step policy whose calls can be compiled (``compiled_weights`` not None): the recurrent numpy actors."""
+
+    observation_size: int
+    n_actions: int
+    hidden_size: int
+
+
 def _only_order_checks(env: gym.Env, base: gym.Env) -> bool:
     from gymnasium.wrappers import OrderEnforcing, PassiveEnvChecker
 
@@ -33,7 +41,7 @@ def _only_order_checks(env: gym.Env, base: gym.Env) -> bool:
     while layer is not base:
         if type(layer) not in (OrderEnforcing, PassiveEnvChecker):
             return False
-        layer = layer.env
+        layer = cast(gym.Wrapper, layer).env  # one of the two wrappers
     return True
 
 
@@ -151,7 +159,8 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         key = id(smc)
         cached = self._leaf_plans.get(key)
         if cached is None or cached[0] is not smc or cached[1] is not smc.policy:  # new, or its policy replaced
-            policy = smc.policy
+            # a policy with compiled weights (sb3_smc.policies' recurrent actors) has the sizes read below
+            policy = cast(_CompiledPolicy, smc.policy)
             weights = getattr(policy, "compiled_weights", None)
             n_actions = len(smc.action_names)
             plan = self._plan_of(smc)
@@ -332,7 +341,8 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
             if self._direct:  # the base env's step without the observation the wrapper would discard
                 reward, terminated, base_truncated, info = self.base.transition(value)
             else:
-                _, reward, terminated, base_truncated, info = self.env.step(value)
+                _, step_reward, terminated, base_truncated, info = self.env.step(value)
+                reward = cast(float, step_reward)  # PixelWorldEnv.step's float, behind Gymnasium's checking wrappers
             moves = int(kind == _MOVE)
             cost = 1
             if moves and self.record_cells:

@@ -19,11 +19,17 @@ from collections import Counter
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
 from pixelworld_env.atomic import atomic_write
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+    from pixelworld_env.env import PixelWorldEnv
+    from sb3_smc.smc import SMC
 
 __all__ = ["METHOD_COLORS", "METHOD_LABELS", "Panel", "bar_panels", "goal_cells", "pyplot", "save_figure",
            "trajectory_figure", "timeline_figure"]
@@ -48,7 +54,7 @@ def pyplot() -> Any:
     return plt
 
 
-def save_figure(fig: Any, path: Path) -> Path:
+def save_figure(fig: Figure, path: Path) -> Path:
     """Write ``fig`` as a PNG atomically and close it."""
     plt = pyplot()
     buffer = io.BytesIO()
@@ -57,7 +63,7 @@ def save_figure(fig: Any, path: Path) -> Path:
     return atomic_write(path, buffer.getvalue())
 
 
-def goal_cells(env: Any, index: int) -> list[tuple[int, int]]:
+def goal_cells(env: PixelWorldEnv, index: int) -> list[tuple[int, int]]:
     """Cells where the self (moved there, nothing else moved) satisfies a bring-about env's concept in scene
     ``index``."""
     scene = env.scenes[index]
@@ -85,7 +91,7 @@ def trajectory_figure(smcs: Mapping[str, Any], target: str, path: str | Path, *,
     from sb3_smc.evaluation import episode_seed, make_evaluation_env, run_episode
 
     plt = pyplot()
-    env = gym.make(f"PW-{target}-v0", split="test").unwrapped
+    env = cast("PixelWorldEnv", gym.make(f"PW-{target}-v0", split="test").unwrapped)
     count = min(environments, len(env.scenes))
     visits: dict[str, list[Counter]] = {}
     for method, smc in smcs.items():  # the episodes of evaluate(smc, split="test", seed=seed), first environments
@@ -134,7 +140,7 @@ def trajectory_figure(smcs: Mapping[str, Any], target: str, path: str | Path, *,
     return save_figure(fig, Path(path))
 
 
-def timeline_figure(smc: Any, target: str, path: str | Path, *, index: int = 0, seed: int = 0) -> Path:
+def timeline_figure(smc: SMC, target: str, path: str | Path, *, index: int = 0, seed: int = 0) -> Path:
     """Fig. 1: one test episode of ``smc`` on environment ``index`` of ``target``: a row per depth (0 = the SMC
     itself), a bar per primitive move coloured by the acting SMC, each call's outcome written at its end."""
     import pixelworld_env  # noqa: F401

@@ -186,8 +186,8 @@ def claims(score: Score, kind_of: Mapping[str, str], category_of: Mapping[str, s
             out.append(_mean_claim(kind, f"{method}-noprim", paper_without, without, len(targets), tolerance))
             out.append(_order_claim(f"{kind}: {method} without primitives against with (mean gap, points)",
                                     paper_without - paper_with, _gap(score, targets, f"{method}-noprim", method)))
-    for target, paper in PAPER_CONCEPTS.items():
-        for method, value in paper.items():
+    for target, paper_scores in PAPER_CONCEPTS.items():
+        for method, value in paper_scores.items():
             out.append(_value_claim(f"{target}: {method}", value, score.get((target, method)), tolerance))
     return out
 

@@ -16,7 +16,7 @@ import dataclasses
 import os
 from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from sb3_smc.envs import make_smc_env, pixelworld_base, wrap_with_smcs
 from sb3_smc.library import storage
@@ -28,7 +28,13 @@ from sb3_smc.library.errors import (
     suggest,
 )
 from sb3_smc.records import WrapperSettings
-from sb3_smc.smc import SIGNALS, SMC
+from sb3_smc.smc import SIGNALS, SMC, StepPolicy
+
+if TYPE_CHECKING:
+    import gymnasium as gym
+
+    from pixelworld_env.env import PixelWorldEnv
+    from sb3_smc.wrapper import HierarchicalSMCWrapper
 
 __all__ = ["SMCLibrary"]
 
@@ -247,7 +253,7 @@ class SMCLibrary(Mapping[str, SMC]):
             storage.check_model_layout(name, model, entry["action_names"], size,
                                        f"the {entry['algo']} model in {root / entry['model']}", stack)
             try:
-                policy = policy_from_model(model)
+                policy: StepPolicy = policy_from_model(model)
                 if stack > 1:
                     policy = FrameStackPolicy(policy, stack, size)
             except (TypeError, ValueError) as err:
@@ -269,7 +275,8 @@ class SMCLibrary(Mapping[str, SMC]):
 
     # ------------------------------------------------------------------------------------------ environments
 
-    def wrap(self, env: Any, names: Sequence[str] | str, *, include_primitives: bool = True, **kwargs: Any) -> Any:
+    def wrap(self, env: gym.Env, names: Sequence[str] | str, *, include_primitives: bool = True,
+             **kwargs: Any) -> HierarchicalSMCWrapper:
         """``env`` with the SMCs ``names`` as actions (:func:`sb3_smc.envs.wrap_with_smcs`), for training a new
         higher-level policy.
 
@@ -290,7 +297,7 @@ class SMCLibrary(Mapping[str, SMC]):
         settings = WrapperSettings(include_primitives=include_primitives, **kwargs)
         return wrap_with_smcs(env, smcs, settings, record_cells=record_cells)
 
-    def env_for(self, name: str, env: Any, **kwargs: Any) -> Any:
+    def env_for(self, name: str, env: gym.Env, **kwargs: Any) -> HierarchicalSMCWrapper:
         """``env`` as SMC ``name`` itself sees it (:func:`sb3_smc.envs.make_smc_env` with its spec and children).
 
         The result's action names and observation size are exactly the SMC's, so ``library[name].model`` or
@@ -336,13 +343,13 @@ def _descendants(entries: Mapping[str, Any], names: Sequence[str], where: Path) 
     return seen
 
 
-def _check_env(env: Any) -> Any:
+def _check_env(env: gym.Env) -> PixelWorldEnv:
     try:
         return pixelworld_base(env)
     except (TypeError, ValueError) as err:
         raise LayoutMismatchError(str(err)) from None
 
 
-def _env_label(env: Any) -> str:
+def _env_label(env: gym.Env) -> str:
     spec = getattr(env, "spec", None)
     return repr(spec.id) if spec is not None and getattr(spec, "id", None) else type(env.unwrapped).__name__

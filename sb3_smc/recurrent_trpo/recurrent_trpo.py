@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from functools import partial
-from typing import Any, ClassVar, TypeVar
+from typing import TYPE_CHECKING, Any, ClassVar, TypeVar, cast
 
 import numpy as np
 import torch
@@ -27,6 +27,9 @@ from torch.distributions import Categorical, kl_divergence
 from torch.nn import functional as F
 
 from sb3_smc.common.recurrent import SequenceGruPolicy, SequenceLstmPolicy, use_compact_buffer
+
+if TYPE_CHECKING:
+    from stable_baselines3.common.type_aliases import GymEnv, MaybeCallback
 
 __all__ = ["BASELINES", "LinearFeatureBaseline", "RecurrentTRPO"]
 
@@ -87,8 +90,10 @@ class RecurrentTRPO(RecurrentPPO):
     """
 
     policy_aliases: ClassVar[dict[str, type]] = {"MlpLstmPolicy": SequenceLstmPolicy, "MlpGruPolicy": SequenceGruPolicy}
+    target_kl: float  # never None here (checked > 0), unlike RecurrentPPO's
+    policy: SequenceLstmPolicy  # checked by _setup_model
 
-    def __init__(self, policy: str | type[SequenceLstmPolicy], env: Any, learning_rate: float = 1e-3,
+    def __init__(self, policy: str | type[SequenceLstmPolicy], env: GymEnv | str, learning_rate: float = 1e-3,
                  n_steps: int = 2048, batch_size: int | None = None, gamma: float = 0.99, gae_lambda: float = 0.95,
                  cg_max_steps: int = 15, cg_damping: float = 0.1, line_search_shrinking_factor: float = 0.8,
                  line_search_max_iter: int = 10, n_critic_updates: int = 10, normalize_advantage: bool = True,
@@ -140,12 +145,14 @@ class RecurrentTRPO(RecurrentPPO):
         previous = start_steps - 1
         for t in range(n_rollout_steps):
             steps[t] = previous = np.where(starts[t], 0, previous + 1)
+        assert self._last_episode_starts is not None  # set by learn's first reset
         last_starts = self._last_episode_starts.astype(bool)
         self._episode_steps = np.where(last_starts, 0, steps[-1] + 1)
         observations = rollout_buffer.observations.reshape(n_rollout_steps * env.num_envs, -1)
         values = self.linear_baseline.predict(observations, steps.reshape(-1)).reshape(n_rollout_steps, env.num_envs)
         rollout_buffer.values[:] = values
-        last = self.linear_baseline.predict(self._last_obs.reshape(env.num_envs, -1), self._episode_steps)
+        last_obs = cast(np.ndarray, self._last_obs)  # set by learn's first reset; a Box observation here
+        last = self.linear_baseline.predict(last_obs.reshape(env.num_envs, -1), self._episode_steps)
         rollout_buffer.compute_returns_and_advantage(last_values=torch.as_tensor(last, dtype=torch.float32),
                                                      dones=self._last_episode_starts)
         self.linear_baseline.fit(observations, steps.reshape(-1), rollout_buffer.returns.reshape(-1))
@@ -168,7 +175,7 @@ class RecurrentTRPO(RecurrentPPO):
         ``logits``: several times cheaper than the double backward through the recurrent net that sb3-contrib's
         feed-forward TRPO uses, and the line search checks the exact KL anyway.
         """
-        theta = torch.sqrt(sum((o ** 2).sum() for o in originals))
+        theta = torch.sqrt(cast(torch.Tensor, sum((o ** 2).sum() for o in originals)))  # originals is not empty
         step = 5e-3 * max(1.0, float(theta)) / max(float(vector.norm()), 1e-12)
         with torch.no_grad():
             shifted = []
@@ -201,7 +208,8 @@ class RecurrentTRPO(RecurrentPPO):
         policy = self.policy
         if policy.lstm_critic is None and not policy.shared_lstm:
             features = policy.extract_features(data.observations, policy.vf_features_extractor)
-            return policy.value_net(policy.mlp_extractor.forward_critic(policy.critic(features))).flatten()
+            critic = cast(torch.nn.Linear, policy.critic)  # sb3-contrib's: a Linear when the critic has no LSTM
+            return policy.value_net(policy.mlp_extractor.forward_critic(critic(features))).flatten()
         return policy.evaluate_sequences(data.observations, data.lstm_states, data.episode_starts)[1].flatten()
 
     def train(self) -> None:
@@ -273,7 +281,7 @@ class RecurrentTRPO(RecurrentPPO):
         self.logger.record("train/explained_variance", explained)
         self.logger.record("train/n_updates", self._n_updates, exclude="tensorboard")
 
-    def learn(self: SelfRecurrentTRPO, total_timesteps: int, callback: Any = None, log_interval: int = 1,
+    def learn(self: SelfRecurrentTRPO, total_timesteps: int, callback: MaybeCallback = None, log_interval: int = 1,
               tb_log_name: str = "RecurrentTRPO", reset_num_timesteps: bool = True,
               progress_bar: bool = False) -> SelfRecurrentTRPO:
         return super().learn(total_timesteps=total_timesteps, callback=callback, log_interval=log_interval,

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 import torch
@@ -11,6 +11,10 @@ from sb3_contrib.common.recurrent.buffers import RecurrentRolloutBuffer
 
 from sb3_smc.common.recurrent.policies import SequenceLstmPolicy
 from sb3_smc.common.recurrent.type_aliases import SequenceStates
+
+if TYPE_CHECKING:
+    from sb3_contrib.common.recurrent.type_aliases import RecurrentRolloutBufferSamples
+    from stable_baselines3.common.vec_env import VecNormalize
 
 __all__ = ["CompactRecurrentRolloutBuffer", "use_compact_buffer"]
 
@@ -25,7 +29,10 @@ class CompactRecurrentRolloutBuffer(RecurrentRolloutBuffer):
     reads it. The minibatch order and sequence cuts are the stock ones.
     """
 
-    def _get_samples(self, batch_inds: np.ndarray, env_change: np.ndarray, env: Any = None):
+    # sb3-contrib's signature (env_change added before env), which mypy finds incompatible with SB3's base buffers
+    def _get_samples(  # type: ignore[override]
+            self, batch_inds: np.ndarray, env_change: np.ndarray, env: VecNormalize | None = None
+    ) -> RecurrentRolloutBufferSamples:
         from sb3_contrib.common.recurrent.type_aliases import RecurrentRolloutBufferSamples
 
         episode_starts = self.episode_starts[batch_inds].reshape(-1)

@@ -69,9 +69,13 @@ class SequenceGruPolicy(SequenceLstmPolicy):
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)
         size, layers = self.lstm_output_dim, self.lstm_hidden_state_shape[0]
-        self.lstm_actor = GRUAsLSTM(self.features_dim, size, layers, **self.lstm_kwargs)
+        # sb3-contrib types these as nn.LSTM; a GRUAsLSTM is one by duck typing (same calls, same state layout)
+        self.lstm_actor = GRUAsLSTM(self.features_dim, size, layers, **self.lstm_kwargs)  # type: ignore[assignment]
         if self.lstm_critic is not None:
-            self.lstm_critic = GRUAsLSTM(self.features_dim, size, layers, **self.lstm_kwargs)
+            self.lstm_critic = GRUAsLSTM(  # type: ignore[assignment]
+                self.features_dim, size, layers, **self.lstm_kwargs)
         # the optimizer the parent built holds the LSTMs' parameters: rebuild it over the GRUs'
         learning_rate = self.optimizer.param_groups[0]["lr"]  # lr_schedule(1), as the parent used
-        self.optimizer = self.optimizer_class(self.parameters(), lr=learning_rate, **self.optimizer_kwargs)
+        # SB3 types optimizer_class as type[Optimizer], whose base __init__ takes no lr (every real one does)
+        self.optimizer = self.optimizer_class(  # type: ignore[call-arg]
+            self.parameters(), lr=learning_rate, **self.optimizer_kwargs)

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 import torch
@@ -15,6 +15,9 @@ from torch import nn
 from torch.distributions import Categorical
 
 from sb3_smc.common.recurrent.type_aliases import SequenceStates
+
+if TYPE_CHECKING:
+    from sb3_smc.common.recurrent.gru import GRUAsLSTM
 
 __all__ = ["SequenceLstmPolicy"]
 
@@ -54,13 +57,14 @@ def _steppable(lstm: torch.nn.LSTM) -> bool:
     return not lstm.batch_first and not lstm.proj_size and not (lstm.dropout and lstm.training)
 
 
-def _lstm_step(lstm: torch.nn.Module, x: torch.Tensor, states: tuple[torch.Tensor, torch.Tensor]
+def _lstm_step(lstm: nn.LSTM | GRUAsLSTM, x: torch.Tensor, states: tuple[torch.Tensor, torch.Tensor]
                ) -> tuple[torch.Tensor, tuple[torch.Tensor, torch.Tensor]]:
     """One time step of ``lstm`` for a batch ``x`` ``(batch, input)``: the last layer's output and the new
     ``(h, c)``, each ``(n_layers, batch, hidden)`` (a module with its own ``step``, such as a GRU behind the LSTM
     interface, does it itself)."""
-    if hasattr(lstm, "step"):
-        return lstm.step(x, states)
+    step = getattr(lstm, "step", None)
+    if step is not None:
+        return step(x, states)
     hs, cs = [], []
     for k in range(lstm.num_layers):
         bias = (getattr(lstm, f"bias_ih_l{k}"), getattr(lstm, f"bias_hh_l{k}")) if lstm.bias else (None, None)
@@ -125,7 +129,8 @@ class SequenceLstmPolicy(RecurrentActorCriticPolicy):
         """The tensors of the compiled collection step, or ``None`` where the architecture is not the default one:
         the recurrent layer's (``weight_ih, weight_hh, bias_ih, bias_hh``), then the critic's, value head's and
         action head's weights and biases."""
-        recurrent = getattr(self.lstm_actor, "gru", self.lstm_actor)
+        # an nn.LSTM or nn.GRU, whose weight_*_l0 / bias_*_l0 parameters torch registers by name
+        recurrent: Any = getattr(self.lstm_actor, "gru", self.lstm_actor)
         linear = (self.critic, self.value_net, self.action_net)
         if (recurrent.num_layers != 1 or not recurrent.bias or not all(isinstance(m, nn.Linear) and m.bias is not None
                                                                        for m in linear)
@@ -133,8 +138,9 @@ class SequenceLstmPolicy(RecurrentActorCriticPolicy):
                 or type(self.features_extractor) is not FlattenExtractor
                 or not isinstance(self.observation_space, spaces.Box) or len(self.observation_space.shape) != 1):
             return None
+        heads = cast(tuple[nn.Linear, ...], linear)  # all nn.Linear with a bias, as checked above
         tensors = (recurrent.weight_ih_l0, recurrent.weight_hh_l0, recurrent.bias_ih_l0, recurrent.bias_hh_l0,
-                   *(t for m in linear for t in (m.weight, m.bias)))
+                   *(t for m in heads for t in (m.weight, m.bias)))
         if any(t.dtype != torch.float32 or t.device.type != "cpu" for t in tensors):
             return None
         return tensors
