@@ -1,12 +1,14 @@
 """Registers the PixelWorld ``PW-*`` ids with Gymnasium as soon as Gymnasium is imported, in any program, and
-sb3-smc's ``RecurrentTRPO`` as rl_zoo3's ``--algo recurrent_trpo`` as soon as rl_zoo3 is imported.
+sb3-smc's algorithms that rl_zoo3 lacks (``RecurrentTRPO`` as ``--algo recurrent_trpo``) as soon as rl_zoo3 is
+imported.
 
 Every install of sb3-smc (a wheel, and ``pip install -e .``, as ``make`` does) puts ``sb3_smc_gym_hook.pth`` in
 site-packages; its one line imports this module at interpreter start. That costs a few microseconds: nothing is
 imported here except ``importlib`` and ``os``. When a program later imports ``gymnasium``, the ids are registered
 right after it (importing ``pixelworld_env``, no torch, no datasets), so ``rl_zoo3 train --env PW-...`` and
 ``gymnasium.make("PW-...")`` work without ``--gym-packages pixelworld_env`` or ``import pixelworld_env``. When
-rl_zoo3 loads its algorithm table (``rl_zoo3.utils.ALGOS``), ``recurrent_trpo`` is added to it (importing
+rl_zoo3 loads its algorithm table (``rl_zoo3.utils.ALGOS``), every rl_zoo3 name of sb3-smc's algorithm registry
+(``sb3_smc.hyperparameters.ALGORITHM_REGISTRY``) that the table lacks is added to it (``recurrent_trpo``: importing
 ``sb3_smc.recurrent_trpo``; rl_zoo3 has already loaded torch and SB3 by then).
 
 When Gymnasium is first imported by ``pixelworld_env`` itself (``import pixelworld_env``, the ``pixelworld`` and
@@ -24,7 +26,6 @@ import os
 import sys
 
 ENVIRONMENT_SWITCH = "SB3_SMC_GYM_HOOK"
-ZOO_ALGORITHM = "recurrent_trpo"
 
 
 def _register(module) -> None:
@@ -41,19 +42,21 @@ def _register(module) -> None:
                       f"use `import pixelworld_env` (or rl_zoo3's --gym-packages pixelworld_env)", stacklevel=2)
 
 
-def _add_zoo_algorithm(module) -> None:
+def _add_zoo_algorithms(module) -> None:
     try:
-        from sb3_smc.recurrent_trpo import RecurrentTRPO
+        from sb3_smc.hyperparameters import ALGORITHM_REGISTRY
 
-        module.ALGOS.setdefault(ZOO_ALGORITHM, RecurrentTRPO)
+        for algorithm in ALGORITHM_REGISTRY.values():
+            if algorithm.zoo_name is not None and algorithm.zoo_name not in module.ALGOS:
+                module.ALGOS[algorithm.zoo_name] = algorithm.load_class()
     except Exception as error:  # never break rl_zoo3
         import warnings
 
-        warnings.warn(f"sb3-smc could not add --algo {ZOO_ALGORITHM} to rl_zoo3 ({type(error).__name__}: {error})",
+        warnings.warn(f"sb3-smc could not add its algorithms to rl_zoo3 ({type(error).__name__}: {error})",
                       stacklevel=2)
 
 
-_TARGETS = {"gymnasium": _register, "rl_zoo3.utils": _add_zoo_algorithm}
+_TARGETS = {"gymnasium": _register, "rl_zoo3.utils": _add_zoo_algorithms}
 """Module -> what to run right after it is imported."""
 
 

@@ -139,16 +139,20 @@ def _positive(text: str) -> int:
 
 
 def _learner_arguments(parser: argparse.ArgumentParser) -> None:
-    from sb3_smc.hyperparameters import ALGORITHMS, RECURRENT_POLICIES
+    from sb3_smc.hyperparameters import ALGORITHMS, DEFAULT_ALGORITHM, RECURRENT_POLICIES
 
     parser.add_argument("--algo", default=None, choices=ALGORITHMS,
-                        help="algorithm of every SMC (default: each node's, else RecurrentPPO)")
+                        help=f"algorithm of every SMC (default: each node's, else {DEFAULT_ALGORITHM})")
     parser.add_argument("--rnn", default=None, choices=sorted(RECURRENT_POLICIES),
                         help="recurrent cell of every SMC (recurrent algorithms; default lstm); the paper's learner "
                              "is --algo RecurrentTRPO --rnn gru")
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    from sb3_smc.curricula.trainer import BACKENDS, DEFAULT_REUSE, DEFAULT_SEEDS, REUSE
+    from sb3_smc.experiments.design import CATEGORIES, DEFAULT_REPEATS, METHODS
+    from sb3_smc.hyperparameters import DEFAULT_TIMESTEPS
+
     parser = argparse.ArgumentParser(prog="sb3-smc", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = parser.add_subparsers(dest="command", required=True)
@@ -162,13 +166,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--out", required=True, help="the run directory")
     p.add_argument("--targets", action="append", help="node or dataset names (comma-separated; repeatable); "
                                                       "default: the curriculum's targets")
-    p.add_argument("--seeds", type=_positive, default=5, help="seeds 0..N-1 per node (default 5, the paper's)")
+    p.add_argument("--seeds", type=_positive, default=DEFAULT_SEEDS,
+                   help=f"seeds 0..N-1 per node (default {DEFAULT_SEEDS}, the paper's)")
     p.add_argument("--timesteps", type=_positive, default=None,
-                   help="steps per job, replacing the nodes' own (default: the node's, else 400,000)")
-    p.add_argument("--reuse", choices=["two_best", "one_best"], default="two_best",
+                   help=f"steps per job, replacing the nodes' own (default: the node's, else {DEFAULT_TIMESTEPS:,})")
+    p.add_argument("--reuse", choices=list(REUSE), default=DEFAULT_REUSE,
                    help="seeds of each lower-level node a caller gets (default two_best)")
     p.add_argument("--workers", type=_positive, default=1, help="jobs in parallel (local processes or Ray tasks)")
-    p.add_argument("--backend", choices=["local", "ray"], default="local")
+    p.add_argument("--backend", choices=BACKENDS, default=BACKENDS[0])
     p.add_argument("--ray-address", default=None, help="Ray cluster address (default: $RAY_ADDRESS)")
     _learner_arguments(p)
     p.add_argument("--no-tensorboard", action="store_true", help="write no TensorBoard logs")
@@ -179,18 +184,19 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     p = sub.add_parser("experiment", help="the paper's protocol: train, evaluate, results.csv / results.json")
     p.add_argument("--out", required=True, help="the experiment directory (re-run to resume)")
-    p.add_argument("--methods", default="cnn,base,curr,canon,curr-noprim,canon-noprim",
-                   help="comma-separated: cnn, base, curr, canon, curr-noprim, canon-noprim (default: all)")
+    p.add_argument("--methods", default=",".join(METHODS),
+                   help=f"comma-separated: {', '.join(METHODS)} (default: all)")
     group = p.add_mutually_exclusive_group()
     group.add_argument("--targets", action="append", help="level-2 target datasets (comma-separated; repeatable)")
-    group.add_argument("--category", choices=["containment", "objcon", "objects", "search", "pushable", "all"],
+    group.add_argument("--category", choices=[*CATEGORIES, "all"],
                        help="the higher-level targets of a category (default: all, the paper's 51; pushable: "
                             "the 8 of the designed pushable curriculum)")
-    p.add_argument("--seeds", type=_positive, default=5)
-    p.add_argument("--timesteps", type=_positive, default=None, help="steps per SMC (default 400,000)")
-    p.add_argument("--repeats", type=_positive, default=10, help="test repeats per environment (default 10)")
+    p.add_argument("--seeds", type=_positive, default=DEFAULT_SEEDS)
+    p.add_argument("--timesteps", type=_positive, default=None, help=f"steps per SMC (default {DEFAULT_TIMESTEPS:,})")
+    p.add_argument("--repeats", type=_positive, default=DEFAULT_REPEATS,
+                   help=f"test repeats per environment (default {DEFAULT_REPEATS})")
     p.add_argument("--workers", type=_positive, default=1)
-    p.add_argument("--backend", choices=["local", "ray"], default="local")
+    p.add_argument("--backend", choices=BACKENDS, default=BACKENDS[0])
     p.add_argument("--ray-address", default=None)
     p.add_argument("--no-train", action="store_true",
                    help="train nothing: evaluate and tabulate what the run has finished so far (partial results, "

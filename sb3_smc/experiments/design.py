@@ -1,10 +1,10 @@
 """The paper's experiment design (spec §5.4, §6): methods, level-2 targets by category, and the curriculum nodes
 that train each target with each method. Torch-free.
 
-Methods: ``cnn`` (the passive CNN baseline, classification targets only), ``base`` (a flat SMC on the target),
-``curr`` (the hand-designed smc-curr entries, 1-3 per target), ``canon`` (the canonical smc-canon entry) and their
-``-noprim`` variants. Every SMC method's jobs are nodes of shipped curricula; :func:`plan` merges them so that a
-lower-level node shared by several methods is trained once.
+Methods (:data:`METHOD_REGISTRY`): ``cnn`` (the passive CNN baseline, classification targets only), ``base`` (a
+flat SMC on the target), ``curr`` (the hand-designed smc-curr entries, 1-3 per target), ``canon`` (the canonical
+smc-canon entry) and their ``-noprim`` variants. Every SMC method's jobs are nodes of curricula (shipped ones, or
+base's flat one); :func:`plan` merges them so that a lower-level node shared by several methods is trained once.
 """
 
 from __future__ import annotations
@@ -14,15 +14,50 @@ from dataclasses import dataclass
 
 from sb3_smc.curricula.format import Curriculum, CurriculumError, Node, merge
 
-__all__ = ["CATEGORIES", "METHODS", "PAPER_CATEGORIES", "SMC_METHODS", "ExperimentPlan", "level2_targets", "plan"]
+__all__ = ["CATEGORIES", "DEFAULT_REPEATS", "METHODS", "METHOD_REGISTRY", "PAPER_CATEGORIES", "SMC_METHODS",
+           "ExperimentMethod", "ExperimentPlan", "level2_targets", "plan"]
 
-METHODS = ("cnn", "base", "curr", "canon", "curr-noprim", "canon-noprim")
-SMC_METHODS = METHODS[1:]
+
+@dataclass(frozen=True)
+class ExperimentMethod:
+    """One method of the experiment: what it trains, and how the report shows it."""
+
+    name: str
+    """Its name in ``--methods``, ``results.csv`` and the report's columns."""
+    label: str
+    """Its legend entry in the figures."""
+    colour: str
+    """Its bars' colour in the figures."""
+    curricula: str | None = None
+    """The ``method`` of the shipped curricula whose target nodes it trains (``smc-curr``); ``None``: a flat SMC on
+    each target (a curriculum ``smc-<name>`` of one node per target), or no SMC."""
+    smc: bool = True
+    """``False``: the passive CNN baseline (:mod:`sb3_smc.experiments.cnn`), no SMCs."""
+    classifies_only: bool = False
+    """It has results for classification targets only (none for bring-about targets)."""
+
+    @property
+    def flat(self) -> bool:
+        """Whether it trains a flat SMC on each target."""
+        return self.smc and self.curricula is None
+
+
+METHOD_REGISTRY: dict[str, ExperimentMethod] = {method.name: method for method in (
+    ExperimentMethod("cnn", "cnn (passive CNN)", "#888888", smc=False, classifies_only=True),
+    ExperimentMethod("base", "base (flat SMC)", "#4c72b0"),
+    ExperimentMethod("curr", "curr (hand-designed curricula)", "#dd8452", curricula="smc-curr"),
+    ExperimentMethod("canon", "canon (canonical curriculum)", "#55a868", curricula="smc-canon"),
+    ExperimentMethod("curr-noprim", "curr, no primitive moves", "#f2b48a", curricula="smc-curr-noprim"),
+    ExperimentMethod("canon-noprim", "canon, no primitive moves", "#a5d6a7", curricula="smc-canon-noprim"),
+)}
+"""Every method by name, in the order of the report's columns."""
+METHODS = tuple(METHOD_REGISTRY)
+SMC_METHODS = tuple(name for name, method in METHOD_REGISTRY.items() if method.smc)
 CATEGORIES = ("containment", "objcon", "objects", "search", "pushable")
 PAPER_CATEGORIES = CATEGORIES[:4]
 """The categories of the released benchmark (``all``); ``pushable`` is the curriculum sb3-smc designed."""
-_SHIPPED_METHOD = {"curr": "smc-curr", "canon": "smc-canon", "curr-noprim": "smc-curr-noprim",
-                   "canon-noprim": "smc-canon-noprim"}
+DEFAULT_REPEATS = 10
+"""Test episodes per environment and SMC (the paper's protocol)."""
 
 
 def level2_targets(category: str = "all") -> list[str]:
@@ -82,17 +117,16 @@ def plan(targets: Sequence[str], methods: Sequence[str]) -> ExperimentPlan:
     shipped = shipped_curricula()
     nodes: dict[tuple[str, str], tuple[str, ...]] = {}
     used: list[Curriculum] = []
-    if "base" in methods:
-        flat = Curriculum("smc-base", tuple(Node(t, t) for t in targets), tuple(targets), method="smc-base",
-                          description="flat SMCs on the experiment's targets")
+    chosen_methods = [METHOD_REGISTRY[m] for m in methods]
+    for method in (m for m in chosen_methods if m.flat):
+        flat = Curriculum(f"smc-{method.name}", tuple(Node(t, t) for t in targets), tuple(targets),
+                          method=f"smc-{method.name}", description="flat SMCs on the experiment's targets")
         used.append(flat)
-        nodes.update({(t, "base"): (t,) for t in targets})
-    for method in methods:
-        if method in ("cnn", "base"):
-            continue
+        nodes.update({(t, method.name): (t,) for t in targets})
+    for method in (m for m in chosen_methods if m.curricula is not None):
         found: dict[str, list[str]] = {t: [] for t in targets}
         for curriculum in shipped.values():
-            if curriculum.method != _SHIPPED_METHOD[method]:
+            if curriculum.method != method.curricula:
                 continue
             chosen = [n for n in curriculum.targets if curriculum.node(n).task in found]
             if chosen:
@@ -101,15 +135,15 @@ def plan(targets: Sequence[str], methods: Sequence[str]) -> ExperimentPlan:
                     found[curriculum.node(name).task].append(name)
         for target, names in found.items():
             if names:
-                nodes[(target, method)] = tuple(names)
-    if "cnn" in methods:
-        classification = [t for t in targets if catalog.dataset(t).kind == "classification"]
-        nodes.update({(t, "cnn"): () for t in classification})
+                nodes[(target, method.name)] = tuple(names)
+    for method in (m for m in chosen_methods if not m.smc):
+        wanted = [t for t in targets if not method.classifies_only or catalog.dataset(t).kind == "classification"]
+        nodes.update({(t, method.name): () for t in wanted})
     if not nodes:
         raise ValueError(f"nothing to run: the CNN (method cnn) classifies only, and {', '.join(targets)} "
                          f"{'is a bring-about target' if len(targets) == 1 else 'are bring-about targets'}; add an "
                          "SMC method (base, curr, ...) or a classification target")
-    missing = [(t, m) for t in targets for m in methods if m != "cnn" and (t, m) not in nodes]
+    missing = [(t, m) for t in targets for m in methods if METHOD_REGISTRY[m].smc and (t, m) not in nodes]
     if missing:
         raise CurriculumError(f"no shipped curriculum trains {missing[0][0]!r} with method {missing[0][1]!r} "
                               f"({len(missing)} target x method pair(s) missing); the level-2 targets are "

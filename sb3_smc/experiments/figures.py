@@ -24,6 +24,7 @@ from typing import TYPE_CHECKING, Any, cast
 import numpy as np
 
 from pixelworld_env.atomic import atomic_write
+from sb3_smc.experiments.design import METHOD_REGISTRY
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -34,11 +35,8 @@ if TYPE_CHECKING:
 __all__ = ["METHOD_COLORS", "METHOD_LABELS", "Panel", "bar_panels", "goal_cells", "pyplot", "save_figure",
            "trajectory_figure", "timeline_figure"]
 
-METHOD_COLORS = {"cnn": "#888888", "base": "#4c72b0", "curr": "#dd8452", "canon": "#55a868",
-                 "curr-noprim": "#f2b48a", "canon-noprim": "#a5d6a7"}
-METHOD_LABELS = {"cnn": "cnn (passive CNN)", "base": "base (flat SMC)", "curr": "curr (hand-designed curricula)",
-                 "canon": "canon (canonical curriculum)", "curr-noprim": "curr, no primitive moves",
-                 "canon-noprim": "canon, no primitive moves"}
+METHOD_COLORS = {name: method.colour for name, method in METHOD_REGISTRY.items()}
+METHOD_LABELS = {name: method.label for name, method in METHOD_REGISTRY.items()}
 TRAJECTORY_KEY = ("orange: cells the self visited (brighter = more episodes); frame: the environment's label "
                   "(green positive, red negative; classification); blue dots: cells where the self reaches the goal "
                   "(bring-about)")

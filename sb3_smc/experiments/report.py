@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from pixelworld_env.atomic import atomic_write
-from sb3_smc.experiments.design import CATEGORIES, METHODS, PAPER_CATEGORIES
+from sb3_smc.experiments.design import CATEGORIES, METHOD_REGISTRY, METHODS, PAPER_CATEGORIES, SMC_METHODS
 from sb3_smc.experiments.figures import Panel, bar_panels
 from sb3_smc.experiments.paper import PAPER_CONCEPTS, PAPER_MEANS, PAPER_NOPRIM, PAPER_TTESTS
 from sb3_smc.experiments.runner import experiment_command, read_results
@@ -90,7 +90,7 @@ def _behaviour(directory: Path, figures: Path, reported: Sequence[dict[str, Any]
     from sb3_smc.library import SMCLibrary, storage
 
     best = {r["method"]: job_name(r["curriculum"], r["seed"]) for r in reported
-            if r["target"] == target and r["method"] != "cnn"}
+            if r["target"] == target and r["method"] in SMC_METHODS}
     if not best:
         return [], None
     library_dir = directory / "library"
@@ -104,7 +104,7 @@ def _behaviour(directory: Path, figures: Path, reported: Sequence[dict[str, Any]
     library = SMCLibrary.load(directory / "library", names=sorted(set(best.values())))
     smcs = {method: library[name] for method, name in best.items()}
     paths = [trajectory_figure(smcs, target, figures / "trajectories.png")]
-    hierarchical = [m for m in ("curr", "canon", "curr-noprim", "canon-noprim") if m in smcs]
+    hierarchical = [m for m in METHODS if m in smcs and METHOD_REGISTRY[m].curricula is not None]
     if hierarchical:
         paths.append(timeline_figure(smcs[hierarchical[0]], target, figures / "timeline.png"))
     return paths, None

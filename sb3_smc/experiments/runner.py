@@ -33,6 +33,7 @@ from typing import Any
 
 from pixelworld_env.atomic import atomic_write
 from sb3_smc.curricula.trainer import (
+    BACKENDS,
     DEFAULT_SEEDS,
     RunFileError,
     RunSettingsError,
@@ -44,7 +45,8 @@ from sb3_smc.curricula.trainer import (
     read_json,
     train_curriculum,
 )
-from sb3_smc.experiments.design import METHODS, level2_targets, plan
+from sb3_smc.experiments.design import DEFAULT_REPEATS, METHOD_REGISTRY, METHODS, level2_targets, plan
+from sb3_smc.hyperparameters import DEFAULT_ALGORITHM, DEFAULT_TIMESTEPS
 from sb3_smc.records import package_versions
 
 __all__ = ["RESULT_FIELDS", "read_results", "run_experiment"]
@@ -61,9 +63,9 @@ def run_experiment(
     category: str | None = None,
     seeds: int = DEFAULT_SEEDS,
     timesteps: int | None = None,
-    repeats: int = 10,
+    repeats: int = DEFAULT_REPEATS,
     workers: int = 1,
-    backend: str = "local",
+    backend: str = BACKENDS[0],
     ray_address: str | None = None,
     algo: str | None = None,
     rnn: str | None = None,
@@ -115,7 +117,7 @@ def run_experiment(
     missing: list[str] = []
     for (target, method), nodes in sorted(design.nodes.items()):
         info = catalog.dataset(target)
-        if method == "cnn":
+        if not METHOD_REGISTRY[method].smc:
             for seed in range(seeds):
                 result = _cnn(directory, target, seed)
                 rows.append(_row(target, info, method, "cnn", seed, None, None, result["test_score"],
@@ -131,9 +133,9 @@ def run_experiment(
                                  evaluation["selected_update"], evaluation["test_score"], evaluation["wall_time_s"]))
         if progress:
             printer(f"evaluated {target} / {method}")
-    settings = {"methods": list(methods), "targets": chosen, "seeds": seeds, "timesteps": timesteps or 400_000,
-                "repeats": repeats, "workers": workers, "backend": backend,
-                "algo": algo or "RecurrentPPO", "rnn": rnn or "lstm"}
+    settings = {"methods": list(methods), "targets": chosen, "seeds": seeds,
+                "timesteps": timesteps or DEFAULT_TIMESTEPS, "repeats": repeats, "workers": workers, "backend": backend,
+                "algo": algo or DEFAULT_ALGORITHM, "rnn": rnn or "lstm"}
     wall = time.time() - start
     results = {
         "format": "sb3-smc-results", "version": 1,
@@ -160,9 +162,9 @@ def run_experiment(
 
 
 def experiment_command(out: str | Path, *, methods: Sequence[str], targets: Sequence[str] | None = None,
-                       category: str | None = None, seeds: int, timesteps: int | None = None, repeats: int = 10,
-                       workers: int = 1, backend: str = "local", algo: str | None = None, rnn: str | None = None,
-                       train: bool = True) -> str:
+                       category: str | None = None, seeds: int, timesteps: int | None = None,
+                       repeats: int = DEFAULT_REPEATS, workers: int = 1, backend: str = BACKENDS[0],
+                       algo: str | None = None, rnn: str | None = None, train: bool = True) -> str:
     """The ``sb3-smc experiment`` command line of a run with these options (as given: ``None`` options are left
     out, as ``run.json`` records them), which runs it again or resumes it."""
     chosen = f"--category {category}" if category else f"--targets {','.join(targets or ())}"
