@@ -71,7 +71,7 @@ class Algorithm:
     """The ``rnn`` options (:data:`RECURRENT_POLICIES`) it takes; none for a memoryless (MLP) policy."""
     zoo_name: str | None = None
     """rl_zoo3's ``--algo`` name: ``zoo_configs/<zoo_name>.yml`` and the conf module ``sb3_smc.zoo.<zoo_name>``
-    (rl_zoo3 lacks none but ``recurrent_trpo``, which the start-up hook ``_sb3_smc_gym_hook`` adds to it)."""
+    (the start-up hook ``_sb3_smc_gym_hook`` adds the names rl_zoo3 lacks to its table)."""
     zoo_note: str = ""
     """What ``zoo_configs/<zoo_name>.yml`` says of the settings."""
 
@@ -84,8 +84,6 @@ class Algorithm:
         """The Stable-Baselines3 class (imports torch)."""
         module, _, name = self.class_path.rpartition(".")
         return getattr(importlib.import_module(module), name)
-
-
 
 
 def _lstm_32() -> dict[str, Any]:
