@@ -25,7 +25,10 @@ import importlib
 import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from stable_baselines3.common.on_policy_algorithm import OnPolicyAlgorithm
 
 __all__ = [
     "ALGORITHMS",
@@ -80,8 +83,8 @@ class Algorithm:
         """Whether its policy has memory of its own (a recurrent cell)."""
         return bool(self.cells)
 
-    def load_class(self) -> type:
-        """The Stable-Baselines3 class (imports torch)."""
+    def load_class(self) -> type[OnPolicyAlgorithm]:
+        """The Stable-Baselines3 class (imports torch); on-policy: ``n_steps`` comes from the budget."""
         module, _, name = self.class_path.rpartition(".")
         return getattr(importlib.import_module(module), name)
 

@@ -20,7 +20,7 @@ import shutil
 import zipfile
 from collections.abc import Callable, Collection, Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from pixelworld_env.atomic import (
     OLD_MARKER,
@@ -54,6 +54,9 @@ from sb3_smc.records import (
 )
 from sb3_smc.smc import HAND_SIZE, SIGNALS, SMC, observation_size, smc_action_names
 
+if TYPE_CHECKING:
+    from stable_baselines3.common.on_policy_algorithm import OnPolicyAlgorithm
+
 __all__ = ["ALGORITHMS", "FORMAT", "FORMAT_VERSION", "MANIFEST", "MODELS", "add_to_library", "check_manifest",
            "check_model_file", "entry_for", "interrupted_hint", "link_copy", "load_model", "model_files",
            "read_manifest", "remove_from_library", "sha256", "topological_order", "upgrade_v1", "write_library"]
@@ -75,7 +78,7 @@ _V1_ALGORITHMS = ("RecurrentPPO", "TRPO")
 """The algorithms of sb3-smc 0.1, whose version-1 entries carry a training spec to convert."""
 
 
-def algorithm_classes() -> dict[str, type]:
+def algorithm_classes() -> dict[str, type[OnPolicyAlgorithm]]:
     """Algorithm name (as in the manifest's ``algo``) -> SB3 class (from
     :data:`~sb3_smc.hyperparameters.ALGORITHM_REGISTRY`)."""
     return {name: algo.load_class() for name, algo in ALGORITHM_REGISTRY.items()}
