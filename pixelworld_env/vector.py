@@ -48,7 +48,6 @@ DRAW_BLOCK = 256
 """Scene indices drawn at a time from an environment's generator, as :meth:`PixelWorldEnv.reset` draws them."""
 RENDER_ENVS = ("all", "first")
 
-_ONE_HOT_OFFSETS = np.arange(9) * NUM_COLORS
 _COLOR_CODES = np.arange(NUM_COLORS, dtype=np.uint8)[:, None, None]
 _MASK64 = (1 << 64) - 1
 
