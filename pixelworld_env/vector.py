@@ -310,9 +310,9 @@ class PixelWorldVectorEnv(VectorEnv):
                              "options={'index': i or [i, ...], 'reset_mask': mask}")
         if not self._started and not mask.all():
             raise RuntimeError("the first reset must reset every environment (no reset_mask)")
-        for k in np.flatnonzero(mask):
+        for k in np.flatnonzero(mask).tolist():
             if seeds[k] is not None:
-                self._seed(int(k), seeds[k])
+                self._seed(k, seeds[k])
         while kernels.reset_envs(mask, index, self._bring_about, self._ready, self._start, self._goal0,
                                  self._push_scene, self._pushing, self._draws, self._used, self._scene, self._row,
                                  self._col, self._steps, self._goal, self._autoreset) != kernels.OK:

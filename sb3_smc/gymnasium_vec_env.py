@@ -13,7 +13,7 @@ PPO's first rollout).
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any
+from typing import Any, cast
 
 import gymnasium as gym
 import numpy as np
@@ -65,7 +65,8 @@ class GymnasiumVecEnv(VecEnv):
             if unknown:
                 raise ValueError(f"GymnasiumVecEnv passes only the reset option 'index', got {sorted(unknown)}")
             options = {"index": [option.get("index") for option in self._options]}
-        obs, info = self.env.reset(seed=seeds, options=options)
+        # a list of seeds: the vector envs this adapter takes accept one (VectorEnv.reset is typed for an int)
+        obs, info = self.env.reset(seed=cast("int | None", seeds), options=options)
         self.reset_infos = info_list(info, self.num_envs)
         self._reset_seeds()
         self._reset_options()
@@ -82,8 +83,8 @@ class GymnasiumVecEnv(VecEnv):
         infos = info_list(info, self.num_envs)
         for k, (term, trunc) in enumerate(zip(terminated.tolist(), truncated.tolist(), strict=True)):
             infos[k]["TimeLimit.truncated"] = trunc and not term
-        ended = np.flatnonzero(dones)
-        if ended.size:
+        ended = np.flatnonzero(dones).tolist()
+        if ended:
             for k in ended:
                 infos[k]["terminal_observation"] = obs[k].copy()
             obs, reset_info = self.env.reset(options={"reset_mask": dones.copy()})
@@ -97,10 +98,10 @@ class GymnasiumVecEnv(VecEnv):
 
     def get_images(self) -> Sequence[np.ndarray | None]:
         frames = self.env.render()
-        return list(frames) if frames is not None else [None] * self.num_envs
+        return list(cast("Sequence[np.ndarray | None]", frames)) if frames is not None else [None] * self.num_envs
 
     def get_attr(self, attr_name: str, indices: VecEnvIndices = None) -> list[Any]:
-        return [getattr(self.env, attr_name)] * len(self._get_indices(indices))
+        return [getattr(self.env, attr_name)] * len(list(self._get_indices(indices)))
 
     def set_attr(self, attr_name: str, value: Any, indices: VecEnvIndices = None) -> None:
         setattr(self.env, attr_name, value)
@@ -111,4 +112,4 @@ class GymnasiumVecEnv(VecEnv):
         return [method(*method_args, **method_kwargs) for _ in self._get_indices(indices)]
 
     def env_is_wrapped(self, wrapper_class: type[gym.Wrapper], indices: VecEnvIndices = None) -> list[bool]:
-        return [False] * len(self._get_indices(indices))
+        return [False] * len(list(self._get_indices(indices)))
