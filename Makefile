@@ -18,6 +18,7 @@ demo: $(STAMP)
 
 test: $(STAMP)
 	$(PY) -m pytest -q
+	$(VENV)/bin/mypy
 	$(MAKE) --no-print-directory docs
 
 # the documentation site (docs/ + the API reference from the docstrings) in strict mode: a warning fails it

@@ -24,7 +24,8 @@ from pixelworld_env.world import MOVES, World
 CLASSIFICATION = "classification"
 BRING_ABOUT = "bring-about"
 KINDS = (CLASSIFICATION, BRING_ABOUT)
-OBSERVATIONS = ("hand", "hand_raw", "full", "image")
+Observation = Literal["hand", "hand_raw", "full", "image"]
+OBSERVATIONS: tuple[Observation, ...] = ("hand", "hand_raw", "full", "image")
 RENDER_MODES = ("human", "rgb_array", "ansi")
 
 CLASSIFICATION_ACTIONS = ("SIG0", "SIG1", "DOWN", "RIGHT", "UP", "LEFT")
@@ -97,7 +98,7 @@ class PixelWorldEnv(gym.Env):
         labels: Sequence[int] | None = None,
         macros: Mapping[str, str] | None = None,
         max_steps: int = 100,
-        observation: Literal["hand", "hand_raw", "full"] = "hand",
+        observation: Observation = "hand",
         render_mode: str | None = None,
         aaai18_reset_bug: bool = False,
     ) -> None:

@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Literal
 import gymnasium as gym
 
 from pixelworld_env import catalog
-from pixelworld_env.env import PixelWorldEnv, check_settings
+from pixelworld_env.env import Observation, PixelWorldEnv, check_settings
 from pixelworld_env.loading import Split, load_dataset
 from pixelworld_env.validation import check_bool, check_int
 
@@ -35,7 +35,7 @@ def env_id(name: str) -> str:
 
 
 def make_env(datasets: Sequence[str], *, split: Split = "train", seed: int = 0, max_steps: int = 100,
-             observation: str = "hand", render_mode: str | None = None,
+             observation: Observation = "hand", render_mode: str | None = None,
              aaai18_reset_bug: bool = False) -> PixelWorldEnv:
     """A :class:`PixelWorldEnv` over the scenes of one or more catalog datasets sharing kind and concept.
 
@@ -61,7 +61,7 @@ def make_env(datasets: Sequence[str], *, split: Split = "train", seed: int = 0, 
 
 
 def make_vector_env(num_envs: int = 1, *, datasets: Sequence[str], split: Split = "train", seed: int = 0,
-                    max_steps: int = 100, observation: str = "hand", render_mode: str | None = None,
+                    max_steps: int = 100, observation: Observation = "hand", render_mode: str | None = None,
                     aaai18_reset_bug: bool = False,
                     render_envs: Literal["all", "first"] = "all") -> PixelWorldVectorEnv:
     """``num_envs`` environments of :func:`make_env` as one :class:`~pixelworld_env.vector.PixelWorldVectorEnv`
@@ -79,7 +79,7 @@ def make_vector_env(num_envs: int = 1, *, datasets: Sequence[str], split: Split 
 
 def registered_ids() -> dict[str, tuple[str, ...]]:
     """Every PixelWorld id -> the datasets it samples from."""
-    ids = {env_id(name): (name,) for name in catalog.dataset_names()}
+    ids: dict[str, tuple[str, ...]] = {env_id(name): (name,) for name in catalog.dataset_names()}
     ids.update({env_id(pool): members for pool, members in catalog.concept_pools().items()})
     return ids
 

@@ -36,6 +36,7 @@ class World:
         self.grid = np.zeros(shape, dtype=np.int8)
         self.owner = np.full(shape, OUTSIDE, dtype=np.int16)
         self._n_pixels = sum(len(o.cells) for o in scene.objects)
+        self._disjoint: bool = True  # set by _draw: no two objects share a cell
         self._draw()
         self._grid0, self._owner0 = self.grid.copy(), self.owner.copy()
         self._disjoint0 = self._disjoint

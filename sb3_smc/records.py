@@ -315,8 +315,14 @@ class Budget(_Record):
         _set(self, "n_steps", _int(n_steps, "budget.n_steps", 1))
 
     @property
+    def env_steps(self) -> int:
+        """Steps per environment and update: ``n_steps`` as resolved (never ``None`` once built)."""
+        assert self.n_steps is not None  # resolved in __post_init__
+        return self.n_steps
+
+    @property
     def steps_per_update(self) -> int:
-        return self.n_envs * int(self.n_steps)  # type: ignore[arg-type]
+        return self.n_envs * self.env_steps
 
     @property
     def updates(self) -> int:

@@ -37,6 +37,7 @@ import numpy as np
 import torch
 from sb3_contrib import RecurrentPPO
 from stable_baselines3.common.logger import Logger
+from stable_baselines3.common.vec_env import VecEnv
 
 from sb3_smc.bias import apply_signal_bias
 from sb3_smc.callbacks import SMCTrainingCallback
@@ -114,19 +115,24 @@ def check_model_settings(spec: TrainingSpec) -> None:
     venv = DummyVecEnv([lambda: _SpacesOnly(size, n_actions)] * spec.budget.n_envs)
     with torch.random.fork_rng(devices=[]):
         try:
-            cls(policy, venv, n_steps=spec.budget.n_steps, device="cpu", verbose=0, **settings)
+            cls(policy, venv, n_steps=spec.budget.env_steps, device="cpu", verbose=0, **settings)
         except Exception as err:  # noqa: BLE001 - whatever the constructor refuses is the message
             raise ValueError(f"{spec.algo} refuses its hyperparameters: {type(err).__name__}: {err}") from None
 
 
-def make_vec_env(spec: TrainingSpec, children: Sequence[SMC] = ()) -> Any:
+def _returning(env: gym.Env) -> Callable[[], gym.Env]:
+    """A thunk for SB3's vector envs, returning the env already built."""
+    return lambda: env
+
+
+def make_vec_env(spec: TrainingSpec, children: Sequence[SMC] = ()) -> VecEnv:
     """``n_envs`` copies of the SMC's environment (:func:`~sb3_smc.envs.make_smc_env`) in a seeded, monitored
     :class:`~sb3_smc.vec_env.SMCVecEnv` (SMC calls in lockstep; ``VecFrameStack`` on top when
     ``spec.frame_stack > 1``)."""
     from stable_baselines3.common.vec_env import VecFrameStack, VecMonitor
 
     envs = [make_smc_env(spec, children) for _ in range(spec.budget.n_envs)]
-    venv = VecMonitor(SMCVecEnv([(lambda e=e: e) for e in envs]))
+    venv: VecEnv = VecMonitor(SMCVecEnv([_returning(e) for e in envs]))
     if spec.frame_stack > 1:
         venv = VecFrameStack(venv, spec.frame_stack)
     venv.seed(spec.seed)
@@ -240,7 +246,7 @@ def _train(spec: TrainingSpec, children: tuple[SMC, ...], *, tensorboard_log: st
     from stable_baselines3.common.callbacks import CallbackList
 
     venv = make_vec_env(spec, children)
-    first = venv.unwrapped.envs[0]
+    first = venv.unwrapped.envs[0]  # type: ignore[attr-defined]  # the SMCVecEnv under the monitor
     kind = first.unwrapped.kind
     if spec.task.kind is None:  # a user's own env id: the kind is known once the env exists
         spec = dataclasses.replace(spec, task=dataclasses.replace(spec.task, kind=kind))
@@ -251,7 +257,7 @@ def _train(spec: TrainingSpec, children: tuple[SMC, ...], *, tensorboard_log: st
 
     policy_class, settings = constructor_arguments(spec.hyperparameters)
     algorithm_class = ALGORITHM_REGISTRY[spec.algo].load_class()
-    model = algorithm_class(policy_class, venv, n_steps=spec.budget.n_steps, seed=spec.seed, device="cpu",
+    model = algorithm_class(policy_class, venv, n_steps=spec.budget.env_steps, seed=spec.seed, device="cpu",
                             tensorboard_log=tensorboard_log, verbose=0, **settings)
     if tensorboard_log is None:  # SB3's default logger would create an empty /tmp/SB3-<date> folder per run
         model.set_logger(Logger(folder=None, output_formats=[]))

@@ -138,6 +138,7 @@ def run_job(job: Job) -> JobResult:
     children = SMCLibrary.load(job.library, names=spec.children) if spec.children else {}
     with torch_threads(1):
         smc = train_smc(spec, children=children, tensorboard_log=job.tensorboard_log, log_every=0)
+    assert smc.spec is not None and smc.record is not None  # train_smc records both
     buffer = io.BytesIO()
     smc.model.save(buffer)
     return JobResult(spec=smc.spec, record=smc.record, algo=spec.algo, model=buffer.getvalue())
@@ -278,7 +279,7 @@ class _Scheduler:
         return _budget(node, self.timesteps)
 
     def children(self, node: Node) -> tuple[str, ...]:
-        names = []
+        names: list[str] = []
         for used in node.uses:
             best = rank_seeds(self.records[used])[: min(self.k, self.seeds)]
             names.extend(job_name(used, seed) for seed in best)
@@ -338,7 +339,7 @@ def _glob_escape(text: str) -> str:
     return "".join(f"[{c}]" if c in "*?[" else c for c in text)
 
 
-def _write_state(directory: Path, running: Sequence[str], started: float, skipped: Collection[str]) -> None:
+def _write_state(directory: Path, running: Collection[str], started: float, skipped: Collection[str]) -> None:
     atomic_write(directory / "state.json", json.dumps({"pid": os.getpid(), "running": sorted(running),
                                                       "skipped": sorted(skipped), "started": started,
                                                       "updated": time.time()}) + "\n")
@@ -698,6 +699,7 @@ def _library_jobs(library: Path) -> dict[str, tuple[dict[str, Any], str | None]]
 def _store(scheduler: _Scheduler, result: JobResult) -> TrainingRecord | None:
     """Add a finished job to the library (replacing the entry of a damaged one); returns the damaged one's record."""
     spec = result.spec
+    assert spec.task.kind is not None  # a trained SMC's spec names its task's kind
     entry = storage.make_entry(spec.task.kind, result.algo, spec.children, spec.wrapper.include_primitives,
                                spec.frame_stack, spec, result.record)
     earlier = scheduler.damaged.pop(spec.name, None)
