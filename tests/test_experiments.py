@@ -416,6 +416,13 @@ def test_the_whole_table_report_over_two_directories(tmp_path):
     for name in ("categories", "concepts-classification", "concepts-bring-about"):
         image = np.asarray(Image.open(tmp_path / "paper" / "figures" / f"{name}.png").convert("L"))
         assert image.std() > 5 and f"figures/{name}.png" in text
+    # a report of one category: the paper's whole-table claims and tests are not judged on a subset
+    [subset] = write_report(tmp_path / "containment", behaviour=False)
+    part = subset.read_text()
+    assert "| classification: the claims over all 34 concepts (means, t-tests, wins, noprim) | 34 concepts | 9 " \
+           "concepts here | not comparable: a subset |" in part and "mean of base" not in part
+    row = next(line for line in part.splitlines() if line.startswith("| classification | curr vs base |"))
+    assert [c.strip() for c in row.strip("|").split("|")][6:] == ["", ""]  # no paper test, no p at its df
     assert "### ../containment" in text and "Wall time of all runs of the 2 directories: 4.00 h" in text
     # a target x method in two directories is refused, before anything is written
     _synthetic_table(tmp_path / "again", containment[:1], ["base"], score)

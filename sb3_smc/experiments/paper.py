@@ -6,7 +6,10 @@ training return; means over the level-2 concepts of each kind.
 
 from __future__ import annotations
 
-__all__ = ["PAPER_CONCEPTS", "PAPER_MEANS", "PAPER_NOPRIM", "PAPER_TTESTS"]
+__all__ = ["PAPER_CONCEPTS", "PAPER_COUNTS", "PAPER_MEANS", "PAPER_NOPRIM", "PAPER_TTESTS"]
+
+PAPER_COUNTS: dict[str, int] = {"classification": 34, "bring-about": 17}
+"""How many level-2 concepts the paper's means and t-tests are over (§6.1, §6.2)."""
 
 PAPER_MEANS: dict[str, dict[str, float]] = {
     "classification": {"cnn": 79.9, "base": 74.5, "curr": 84.9, "canon": 80.2},
