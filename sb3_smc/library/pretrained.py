@@ -2,7 +2,7 @@
 of each node, as a caller of the curriculum gets them), loaded by curriculum name and put on an environment as
 actions without training anything::
 
-    library = SMCLibrary.pretrained("search2-canon")       # its 3 canonical SMCs x their 2 best seeds
+    library = SMCLibrary.pretrained("search2-canon")       # its 13 canonical SMCs x their 2 best seeds
     env = library.wrap(gym.make("PW-ba_self-in-target-container_from_nontarget-container-v0"), library.names)
 
 Each SMC keeps its training spec, training record and test evaluation (the paper's protocol: every test environment
@@ -114,29 +114,38 @@ def build_pretrained(runs: Sequence[str | Path], curricula: Sequence[str | Curri
     what ``out`` already holds (default: the package's pretrained library), as a compact library to ``out``.
 
     A node is ranked over all its seeds (the trainer's rule: best selected training return, ties to the lower
-    seed), so every seed of it must be in one run's library.
+    seed), so every seed of the run (``run.json``'s ``seeds``) must be in one run's library. A node already in
+    ``out`` is replaced by its new best seeds. ``out`` must be missing, empty or a library.
     """
     from sb3_smc.curricula.trainer import rank_seeds
     from sb3_smc.evaluation import evaluate
 
     target = Path(out) if out is not None else _root()
-    entries = {Path(run) / "library": storage.check_manifest(*storage.read_manifest(Path(run) / "library"))
-               for run in runs}
-    wanted: dict[Path, list[str]] = {}
+    if target.exists() and (not target.is_dir() or (any(target.iterdir())
+                                                    and not (target / storage.MANIFEST).is_file())):
+        raise LibraryError(f"refusing to write the pretrained library to {target}: it is a file or a non-empty "
+                           f"directory without {storage.MANIFEST} (not an SMC library)")
+    runs_ = [Path(run) for run in runs]
+    entries = {run: storage.check_manifest(*storage.read_manifest(run / "library")) for run in runs_}
+    chosen: list[tuple[str, Path, list[str]]] = []
     for node in dict.fromkeys(n for c in curricula for n in _lower_level(c)):
-        found = [(lib, {int(name.rpartition("@")[2]): entry["record"] for name, entry in held.items()
-                        if name.rpartition("@")[0] == node}) for lib, held in entries.items()]
-        lib, records = max(found, key=lambda item: len(item[1]))
-        if not records:
-            raise LibraryError(f"node {node!r} is in none of the runs' libraries ({', '.join(map(str, entries))})")
-        wanted.setdefault(lib, []).extend(f"{node}@{seed}" for seed in rank_seeds(records)[:PRETRAINED_SEEDS])
+        found = [(run, {int(name.rpartition("@")[2]): entry["record"] for name, entry in held.items()
+                        if name.rpartition("@")[0] == node}) for run, held in entries.items()]
+        run, records = max(found, key=lambda item: len(item[1]))
+        seeds = _run_seeds(run)
+        if len(records) != seeds or any(record is None for record in records.values()):
+            raise LibraryError(f"node {node!r}: {run / 'library'} holds {len(records)} of the run's {seeds} seeds "
+                               "with training records; the two best can only be chosen among all of them")
+        chosen.append((node, run, [f"{node}@{seed}" for seed in rank_seeds(records)[:PRETRAINED_SEEDS]]))
     library = SMCLibrary.load(target) if (target / storage.MANIFEST).is_file() else SMCLibrary()
-    for lib, names in wanted.items():
-        loaded = SMCLibrary.load(lib, names=names)
+    for node, run, names in chosen:
+        for stale in [name for name in library.names if name.rpartition("@")[0] == node]:
+            library.remove(stale)
+        loaded = SMCLibrary.load(run / "library", names=names)
         for name in names:
             smc = loaded[name]
             evaluate(smc, repeats=repeats, seed=0, record_cells=False)
-            library.add(smc, replace=True)
+            library.add(smc)
     target.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(dir=target.parent) as tmp:
         staged = library.save(Path(tmp) / "library")
@@ -148,3 +157,16 @@ def build_pretrained(runs: Sequence[str | Path], curricula: Sequence[str | Curri
         SMCLibrary.load(staged)  # the compact copy loads and checks out before it replaces anything
         replace_directory(staged, target)
     return target
+
+
+def _run_seeds(run: Path) -> int:
+    """The seeds of the run in directory ``run`` (its ``run.json``)."""
+    path = run / "run.json"
+    try:
+        seeds = json.loads(path.read_text(encoding="utf-8"))["seeds"]
+    except (OSError, ValueError, KeyError, TypeError) as err:
+        raise LibraryError(f"{path}: cannot read the run's seeds ({type(err).__name__}: {err}); build_pretrained "
+                           "takes run directories of sb3-smc train or experiment") from None
+    if not isinstance(seeds, int) or seeds < 1:
+        raise LibraryError(f"{path}: 'seeds' must be a positive integer, got {seeds!r}")
+    return seeds
