@@ -547,6 +547,14 @@ def test_changed_nodes_are_trained_again_with_accept_changes_the_others_kept(tmp
     assert len(list((kept / "tensorboard").glob("*@0_1"))) == 2
     assert status(out)["done"] == ["left@0", "above@0", "container@0"]
     assert train_curriculum(str(path), out, seeds=1, timesteps=2000, progress=False).rows  # the run is the new one
+    # fewer targets: the nodes left out keep their jobs; another curriculum name is another run, refused
+    train_curriculum(str(path), out, seeds=1, timesteps=2000, targets=["left"], progress=False, accept_changes=True)
+    assert {"above@0", "container@0"} <= set(SMCLibrary.load(out / "library").names)
+    renamed = tmp_path / "renamed.yml"
+    renamed.write_text(path.read_text().replace("curriculum: tiny", "curriculum: other"))
+    with pytest.raises(RunSettingsError, match="--accept-changes takes changed nodes only; curriculum decide"):
+        train_curriculum(str(renamed), out, seeds=1, timesteps=2000, targets=["left"], progress=False,
+                         accept_changes=True)
 
 
 def test_a_damaged_model_file_is_reported_and_trained_again(tmp_path, monkeypatch):

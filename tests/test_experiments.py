@@ -152,9 +152,13 @@ def test_a_tiny_experiment_end_to_end(tmp_path):
     assert dropped not in SMCLibrary.load(out / "library")  # nothing trained
     [report] = write_report(out, behaviour=False)
     assert "**Partial results**: 1 SMC(s)" in report.read_text() and f"`{dropped}`" in report.read_text()
-    with pytest.raises(RunSettingsError, match="other settings"):
+    with pytest.raises(RunSettingsError, match="other settings") as refused:
         run_experiment(out, methods=["cnn", "base", "curr"], targets=[LEFT_OF], seeds=2, timesteps=2000,
                        repeats=1, progress=False, train=False)
+    with pytest.raises(RunSettingsError, match="other settings") as refused:  # other methods: another run
+        run_experiment(out, methods=["cnn", "base"], targets=[LEFT_OF], seeds=1, timesteps=2000, repeats=1,
+                       progress=False, train=False)
+    assert "--accept-changes" not in str(refused.value)  # an experiment's merged curriculum has no command line
     with pytest.raises(RunSettingsError, match="no run.json"):
         run_experiment(tmp_path / "none", methods=["base"], targets=[LEFT_OF], seeds=1, progress=False, train=False)
     completed = run_experiment(out, methods=["cnn", "base", "curr"], targets=[LEFT_OF], seeds=1, timesteps=2000,

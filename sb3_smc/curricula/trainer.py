@@ -588,8 +588,9 @@ def read_settings(directory: Path) -> dict[str, Any] | None:
     return settings
 
 
-_NODE_KEYS = ("curriculum", "targets", "nodes")
-"""Settings that ``accept_changes`` takes; the others (seeds, timesteps, reuse, algo, rnn) decide every job."""
+_NODE_KEYS = ("targets", "nodes")
+"""Settings that ``accept_changes`` takes; the others (the curriculum's name, seeds, timesteps, reuse, algo, rnn)
+decide every job, or which run the directory holds."""
 
 
 @dataclass(frozen=True)
@@ -622,7 +623,8 @@ class _Changes:
                                    f"changed nodes only; {', '.join(self.every_job)} decide every job: use another "
                                    "--out directory, or the settings of that run")
         offer = ""
-        if not self.every_job:
+        experiment = (directory / "results.json").is_file() or (directory / "evaluations").is_dir()
+        if not self.every_job and not experiment:  # an experiment's merged curriculum is not named on a command line
             trained = f"the jobs of {', '.join(self.retrained)} are trained again" if self.retrained else \
                 "no trained job changes"
             offer = (f", or accept the changes (sb3-smc train --accept-changes; train_curriculum(..., "
@@ -631,15 +633,16 @@ class _Changes:
                                f"directory, or the settings of that run{offer}")
 
     def apply(self, directory: Path, printer: Callable[[str], None] | None) -> None:
-        """Take the jobs of the retrained and removed nodes out of the library (under the run's lock, before the new
+        """Take the jobs of the retrained nodes out of the library (under the run's lock, before the new
         ``run.json`` is written): :func:`_replace`."""
         library = directory / "library"
-        going = set(self.retrained) | set(self.removed)
-        names = [n for n in _library_jobs(library) if n.rpartition(SEED_SEPARATOR)[0] in going]
+        names = [n for n in _library_jobs(library) if n.rpartition(SEED_SEPARATOR)[0] in set(self.retrained)]
         lines = [f"accepting the changes in {directory}:", *(f"  {d}" for d in self.differences)]
         for name in self.retrained:
             why = "changed" if name in self.changed else "uses a changed node"
             lines.append(f"  node {name!r} is trained again ({why})")
+        if self.removed:
+            lines.append(f"  not in this run, kept in the library as they are: {', '.join(self.removed)}")
         if names:
             lines.append(_replace(directory, names))
         if printer is not None:
