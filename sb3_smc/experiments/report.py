@@ -318,8 +318,8 @@ def _noprim_section(table: _Table) -> list[str]:
     lines = ["", "## The role of hierarchy: without primitive moves (spec §6.3)", "",
              "| kind | method | with primitives | without | paper with | paper without |",
              "|---|---|---:|---:|---:|---:|"]
-    for kind in KINDS:
-        in_kind = table.of_kind(kind)
+    for kind in KINDS:  # over the paper's concepts (the pushable curriculum has no noprim variant)
+        in_kind = [t for t in table.of_kind(kind) if table.category_of[t] in PAPER_CATEGORIES]
         for method in ("curr", "canon"):
             if f"{method}-noprim" not in table.methods or not in_kind:
                 continue
