@@ -65,20 +65,29 @@ def pretrained_curricula(root: str | Path | None = None) -> list[str]:
     from sb3_smc.curricula import shipped_curricula
 
     nodes = {name.rpartition("@")[0] for name in _shipped_entries(_root() if root is None else Path(root))}
-    return [name for name, curriculum in shipped_curricula().items()
-            if curriculum.targets and _lower_level(name) and set(_lower_level(name)) <= nodes]
+    out = []
+    for name, curriculum in shipped_curricula().items():
+        lower = _lower_level(curriculum)
+        if curriculum.targets and lower and set(lower) <= nodes:
+            out.append(name)
+    return out
 
 
 def pretrained_names(curriculum: str, root: str | Path | None = None) -> list[str]:
     """The SMC names (``<node>@<seed>``) the pretrained library holds for ``curriculum``'s lower-level nodes."""
+    from sb3_smc.curricula import shipped_curricula
+
     root = _root() if root is None else Path(root)
-    available = pretrained_curricula(root)
-    if curriculum not in available:
+    entries = _shipped_entries(root)
+    shipped = shipped_curricula()
+    lower = set(_lower_level(shipped[curriculum])) if curriculum in shipped else set()
+    held = [name for name in entries if name.rpartition("@")[0] in lower]
+    if not lower or {name.rpartition("@")[0] for name in held} != lower:
+        available = pretrained_curricula(root)
         raise LibraryError(f"no pretrained SMCs for curriculum {curriculum!r}"
                            f"{suggest(curriculum, available, ' (none is shipped yet)')}; pretrained: "
                            f"{', '.join(available) or 'none'}")
-    nodes = set(_lower_level(curriculum))
-    return [name for name in _shipped_entries(root) if name.rpartition("@")[0] in nodes]
+    return held
 
 
 def load_pretrained(curriculum: str, root: str | Path | None = None) -> SMCLibrary:

@@ -1,0 +1,91 @@
+"""The pretrained library: built from a run's library (two best seeds of each lower-level node, evaluated, compact
+models with the trained weights), loaded by curriculum name and put on an environment as actions."""
+
+from __future__ import annotations
+
+import io
+import shutil
+import zipfile
+
+import gymnasium as gym
+import pytest
+import torch
+
+import pixelworld_env  # noqa: F401
+from sb3_smc.curricula import Curriculum, Node
+from sb3_smc.curricula.trainer import rank_seeds, train_curriculum
+from sb3_smc.library import LibraryError, SMCLibrary
+from sb3_smc.library.pretrained import build_pretrained, load_pretrained, pretrained_curricula, pretrained_names
+
+LEFT, RIGHT = "cl_self-in-left-corner_vs_on-hline", "cl_self-in-right-corner_vs_on-hline"
+TARGET = "ba_self-in-target-container_from_nontarget-container"
+
+
+def _optimizer_state(path) -> dict:
+    with zipfile.ZipFile(path) as archive:
+        return torch.load(io.BytesIO(archive.read("policy.optimizer.pth")), weights_only=True)
+
+
+def test_build_and_load_a_pretrained_library(tmp_path):
+    tiny = Curriculum("tiny", (Node(LEFT, LEFT), Node(RIGHT, RIGHT), Node("top", TARGET, (LEFT, RIGHT))), ("top",))
+    run = tmp_path / "run"
+    train_curriculum(tiny, run, targets=[LEFT, RIGHT], seeds=3, timesteps=256, progress=False)
+    trained = SMCLibrary.load(run / "library")
+    out = build_pretrained([run], [tiny], tmp_path / "pretrained", repeats=1)
+    library = SMCLibrary.load(out)
+    for node in (LEFT, RIGHT):  # the two best seeds by the trainer's ranking, evaluated on the test split
+        best = rank_seeds({s: trained[f"{node}@{s}"].record for s in range(3)})[:2]
+        assert sorted(n for n in library.names if n.startswith(node)) == sorted(f"{node}@{s}" for s in best)
+    for name in library.names:
+        smc, original = library[name], trained[name]
+        assert smc.test_score is not None and smc.spec == original.spec and smc.record == original.record
+        ours, theirs = smc.model.policy.state_dict(), original.model.policy.state_dict()
+        assert all(torch.equal(ours[k], theirs[k]) for k in theirs)  # the trained weights, exactly
+        model_file = out / "models" / f"{name}.zip"
+        assert _optimizer_state(model_file)["state"] == {}  # no optimiser running state
+        assert model_file.stat().st_size < 0.6 * (run / "library" / "models" / f"{name}.zip").stat().st_size
+    # a rebuild replaces a node's entries by its best seeds (an extra seed in the library does not survive)
+    best_names = sorted(library.names)
+    worst = next(f"{LEFT}@{s}" for s in range(3) if f"{LEFT}@{s}" not in library)
+    library.add(trained[worst])
+    library.save()
+    assert len(SMCLibrary.load(out)) == 5
+    build_pretrained([run], [tiny], out, repeats=1)
+    assert sorted(SMCLibrary.load(out).names) == best_names
+    # refused: a run that lacks seeds of a node (the ranking needs all), an out that is not a library
+    partial = tmp_path / "partial"
+    shutil.copytree(run, partial)
+    held = SMCLibrary.load(partial / "library")
+    held.remove(f"{RIGHT}@0")
+    held.save()
+    with pytest.raises(LibraryError, match=f"node '{RIGHT}': .* holds 2 of the run's 3 seeds"):
+        build_pretrained([partial], [tiny], tmp_path / "elsewhere", repeats=1)
+    (tmp_path / "notes").mkdir()
+    (tmp_path / "notes" / "keep.txt").write_text("mine")
+    with pytest.raises(LibraryError, match="refusing to write the pretrained library"):
+        build_pretrained([run], [tiny], tmp_path / "notes", repeats=1)
+    assert (tmp_path / "notes" / "keep.txt").read_text() == "mine"
+    library = SMCLibrary.load(out)
+    # loaded by curriculum name from a library root (the package's by default) and used as actions
+    with pytest.raises(LibraryError, match="no pretrained SMCs for curriculum 'tiny'"):
+        load_pretrained("tiny", out)  # only shipped curricula have names
+    env = library.wrap(gym.make(f"PW-{TARGET}-v0"), library.names)
+    assert list(env.action_names)[-4:] == [f"SMC:{name}" for name in library.names]
+    env.reset(seed=0)
+    *_, info = env.step(env.action_names.index(f"SMC:{library.names[0]}"))
+    assert info["smc_calls"]  # the pretrained SMC ran as an action
+
+
+def test_the_shipped_pretrained_library():
+    """What the package ships: every listed curriculum loads by name, with a test score per SMC."""
+    shipped = pretrained_curricula()
+    assert "search2-canon" in shipped and "con2-cl-canon" in shipped
+    for curriculum in shipped:  # two seeds of each lower-level node (names from the manifest: no model loaded)
+        nodes = {name.rpartition("@")[0] for name in pretrained_names(curriculum)}
+        assert len(pretrained_names(curriculum)) == 2 * len(nodes)
+    library = SMCLibrary.pretrained("search2-canon")  # loaded and checked (checksums, layouts) like any library
+    assert list(library.names) == pretrained_names("search2-canon") and len(library) == 26
+    assert all(smc.test_score is not None and smc.spec is not None and smc.record is not None
+               for smc in library.values())
+    with pytest.raises(LibraryError, match="did you mean 'search2-canon'"):
+        SMCLibrary.pretrained("search2-canonn")
