@@ -308,3 +308,23 @@ def test_pushing_with_overlapping_objects_redraws_as_world_move() -> None:
         assert_same(result, b.step(actions))
         rewards += int(np.count_nonzero(result[1]))
     assert rewards > 10 and not a._pushing[8][0] and a._pushing[8][1]
+
+
+@pytest.mark.parametrize("algo", ["TRPO", "RecurrentPPO"])
+def test_trpo_and_recurrent_ppo_train_on_the_adapter_as_on_dummy_vec_env(algo: str) -> None:
+    """The other learners of the package take the adapter too: the same rollout and update as over DummyVecEnv."""
+    import torch
+    from sb3_contrib import TRPO, RecurrentPPO
+
+    cls, policy = {"TRPO": (TRPO, "MlpPolicy"), "RecurrentPPO": (RecurrentPPO, "MlpLstmPolicy")}[algo]
+    models = []
+    for venv in sb3_pair(BRING_ABOUT, 4, max_steps=12):
+        model = cls(policy, venv, n_steps=32, batch_size=64, seed=0, device="cpu")
+        model.learn(128)
+        models.append(model)
+    a, b = models
+    np.testing.assert_array_equal(a.rollout_buffer.rewards, b.rollout_buffer.rewards)
+    np.testing.assert_array_equal(a.rollout_buffer.actions, b.rollout_buffer.actions)
+    assert a.num_timesteps == b.num_timesteps == 128
+    for key, value in a.policy.state_dict().items():
+        assert torch.equal(value, b.policy.state_dict()[key])
