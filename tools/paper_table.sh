@@ -1,0 +1,28 @@
+#!/bin/bash
+# The paper's whole table (docs/results/paper/README.md), one run directory per category, from a worktree at a fixed
+# commit with its own environment. Rerun to resume (finished jobs and evaluations are kept).
+#   tools/paper_table.sh run [categories...]     train + evaluate (default: search objects containment objcon)
+#   tools/paper_table.sh keep <category> [repo]   copy a run's records (no models) into docs/results/paper/<category>
+# Environment: RUNS (default /work/runs), RUN_ENV (default /work/run-env: a venv with the worktree installed).
+set -eu
+RUNS=${RUNS:-/work/runs}; RUN_ENV=${RUN_ENV:-/work/run-env}
+case ${1:-} in
+  run)
+    shift
+    export OMP_NUM_THREADS=1 MKL_NUM_THREADS=1
+    for cat in ${@:-search objects containment objcon}; do
+      echo "=== $cat start $(date -Is)"
+      rc=0
+      "$RUN_ENV/bin/sb3-smc" experiment --out "$RUNS/paper-$cat" --category "$cat" --seeds 5 --workers 2 || rc=$?
+      echo "=== $cat end $(date -Is) rc=$rc"
+    done ;;
+  keep)
+    cat=$2; repo=${3:-$(cd "$(dirname "$0")/.." && pwd)}
+    src=$RUNS/paper-$cat; dst=$repo/docs/results/paper/$cat
+    mkdir -p "$dst"
+    cp "$src/run.json" "$dst/"
+    for f in results.csv results.json; do if [ -f "$src/$f" ]; then cp "$src/$f" "$dst/"; fi; done
+    for d in evaluations cnn; do if [ -d "$src/$d" ]; then rm -rf "${dst:?}/$d"; cp -r "$src/$d" "$dst/$d"; fi; done
+    du -sh "$dst" ;;
+  *) echo "usage: $0 run [categories...] | keep <category> [repo]" >&2; exit 2 ;;
+esac
