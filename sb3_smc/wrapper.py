@@ -225,9 +225,9 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         decreased by every move; the call ends timed out (outcome 0) when it is used up.
 
         It yields ``(policy, observation, state)`` whenever a policy must decide (``smc``'s or, inside a child's
-        call, the child's) and expects ``policy.probabilities(observation, state)`` back: :meth:`run_call` answers
-        at once; :class:`sb3_smc.vec_env.SMCVecEnv` answers the requests of many environments with one batched
-        evaluation per policy. A policy that is never batched (``batch_from = None``: the compiled numpy actors,
+        call, the child's) and expects ``policy.probabilities(observation, state)`` back: :func:`run_coroutine`
+        (what :meth:`step` uses) answers at once; :class:`sb3_smc.vec_env.SMCVecEnv` answers the requests of many
+        environments with one batched evaluation per policy. A policy that is never batched (``batch_from = None``: the compiled numpy actors,
         whose single steps cost less than stacking a group) is asked here directly instead, without the round
         trip. The draws from this env's generator are the same either way. A call of a leaf SMC (no children, a
         compiled actor) in a world where only the self moves is made whole by one compiled loop
@@ -294,10 +294,6 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         if previous >= 0:
             obs[HAND_SIZE + len(outcomes) + previous] = 1.0
         return obs
-
-    def run_call(self, smc: SMC, depth: int, calls: list[dict[str, Any]], cap: int) -> tuple[float, int, float]:
-        """Run one call of ``smc`` on the live world: ``(reward, primitive steps, outcome)``."""
-        return run_coroutine(self.call_coroutine(smc, depth, calls, cap))
 
     # ------------------------------------------------------------------------------------------ gym API
 
