@@ -224,12 +224,12 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         calls included: ``budget`` is the one-element move budget shared by the calls of one top-level call,
         decreased by every move; the call ends timed out (outcome 0) when it is used up.
 
-        It yields ``(policy, observation, state)`` whenever a policy must decide (``smc``'s or, inside a child's
-        call, the child's) and expects ``policy.probabilities(observation, state)`` back: :func:`run_coroutine`
-        (what :meth:`step` uses) answers at once; :class:`sb3_smc.vec_env.SMCVecEnv` answers the requests of many
-        environments with one batched evaluation per policy. A policy that is never batched (``batch_from = None``: the compiled numpy actors,
-        whose single steps cost less than stacking a group) is asked here directly instead, without the round
-        trip. The draws from this env's generator are the same either way. A call of a leaf SMC (no children, a
+        It yields ``(policy, observation, state)`` whenever a policy must decide (``smc``'s or, inside a child's call,
+        the child's) and expects ``policy.probabilities(observation, state)`` back: :func:`run_coroutine` (what
+        :meth:`step` uses) answers at once; :class:`sb3_smc.vec_env.SMCVecEnv` answers the requests of many environments
+        with one batched evaluation per policy. A policy that is never batched (``batch_from = None``: the compiled
+        numpy actors, whose single steps cost less than stacking a group) is asked here directly instead, without the
+        round trip. The draws from this env's generator are the same either way. A call of a leaf SMC (no children, a
         compiled actor) in a world where only the self moves is made whole by one compiled loop
         (:func:`sb3_smc.common.kernels.leaf_call`), with the same moves, draws and result, and yields nothing.
         """
