@@ -59,8 +59,8 @@ from sb3_smc.records import Budget, TaskSpec, TrainingRecord, TrainingSpec, Wrap
 
 __all__ = ["BACKENDS", "DEFAULT_REUSE", "DEFAULT_SEEDS", "REUSE", "Job", "JobResult", "RunFileError",
            "RunSettingsError", "TrainingRun", "check_curriculum", "check_run_options", "describe", "file_stem",
-           "finished_jobs", "job_name", "name_of_file", "node_spec", "rank_seeds", "read_json", "read_settings",
-           "run_job", "run_settings", "status", "train_curriculum"]
+           "finished_jobs", "job_name", "name_of_file", "node_of", "node_spec", "rank_seeds", "read_json",
+           "read_settings", "run_job", "run_settings", "status", "train_curriculum"]
 
 REUSE = {"one_best": 1, "two_best": 2}
 """SMC filters of the paper: how many seeds of each lower-level node a caller gets."""
@@ -96,6 +96,11 @@ def read_json(path: Path, holds: str) -> Any:
 def job_name(node: str, seed: int) -> str:
     """The library name of node ``node`` trained with ``seed``."""
     return f"{node}{SEED_SEPARATOR}{seed}"
+
+
+def node_of(name: str) -> str:
+    """The node of the library name ``name`` (:func:`job_name`'s inverse, for the node)."""
+    return name.rpartition(SEED_SEPARATOR)[0]
 
 
 def file_stem(name: str) -> str:
@@ -290,7 +295,7 @@ class _Scheduler:
         ``order``): a deep curriculum's critical path starts at once, and top-level nodes (a flat baseline, say)
         fill idle workers. Which job runs when does not change what is trained. Nothing above a damaged job being
         trained again starts before it is done (it may be trained again itself: :func:`_store`)."""
-        repairing = {name.rpartition(SEED_SEPARATOR)[0] for name in self.damaged}
+        repairing = {node_of(name) for name in self.damaged}
         out = []
         for node_name, seed in sorted(self.jobs(), key=lambda job: -self.height[job[0]]):
             name = job_name(node_name, seed)
@@ -303,7 +308,7 @@ class _Scheduler:
 
     def blocked(self) -> list[str]:
         """Jobs that cannot run because a node they need has a failed job."""
-        bad = {name.rpartition(SEED_SEPARATOR)[0] for name in self.failed}
+        bad = {node_of(name) for name in self.failed}
         out = []
         for node_name, seed in self.jobs():
             name = job_name(node_name, seed)
@@ -466,7 +471,7 @@ def _plan_skip(curriculum: Curriculum, order: list[str], targets: Sequence[str],
     required: set[str] = set()
     for name in wanted:
         required |= curriculum.closure([name]) - {name}
-    skipped = frozenset(j for j in names if j.rpartition(SEED_SEPARATOR)[0] not in required)
+    skipped = frozenset(j for j in names if node_of(j) not in required)
     every_seed_skipped = {n for n in order if all(job_name(n, s) in skipped for s in range(seeds))}
     return [n for n in order if n in required or n in wanted or n in every_seed_skipped], skipped
 
@@ -636,7 +641,7 @@ class _Changes:
         """Take the jobs of the retrained nodes out of the library (under the run's lock, before the new
         ``run.json`` is written): :func:`_replace`."""
         library = directory / "library"
-        names = [n for n in _library_jobs(library) if n.rpartition(SEED_SEPARATOR)[0] in set(self.retrained)]
+        names = [n for n in _library_jobs(library) if node_of(n) in set(self.retrained)]
         lines = [f"accepting the changes in {directory}:", *(f"  {d}" for d in self.differences)]
         for name in self.retrained:
             why = "changed" if name in self.changed else "uses a changed node"

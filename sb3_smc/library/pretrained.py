@@ -24,6 +24,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from pixelworld_env.atomic import atomic_write, replace_directory
+from sb3_smc.curricula.format import SEED_SEPARATOR
+from sb3_smc.curricula.trainer import job_name, node_of, rank_seeds, read_settings
 from sb3_smc.library import storage
 from sb3_smc.library.errors import LibraryError, suggest
 from sb3_smc.library.library import SMCLibrary
@@ -64,7 +66,7 @@ def pretrained_curricula(root: str | Path | None = None) -> list[str]:
     pretrained library directory than the package's)."""
     from sb3_smc.curricula import shipped_curricula
 
-    nodes = {name.rpartition("@")[0] for name in _shipped_entries(_root() if root is None else Path(root))}
+    nodes = {node_of(name) for name in _shipped_entries(_root() if root is None else Path(root))}
     out = []
     for name, curriculum in shipped_curricula().items():
         lower = _lower_level(curriculum)
@@ -81,8 +83,8 @@ def pretrained_names(curriculum: str, root: str | Path | None = None) -> list[st
     entries = _shipped_entries(root)
     shipped = shipped_curricula()
     lower = set(_lower_level(shipped[curriculum])) if curriculum in shipped else set()
-    held = [name for name in entries if name.rpartition("@")[0] in lower]
-    if not lower or {name.rpartition("@")[0] for name in held} != lower:
+    held = [name for name in entries if node_of(name) in lower]
+    if not lower or {node_of(name) for name in held} != lower:
         available = pretrained_curricula(root)
         raise LibraryError(f"no pretrained SMCs for curriculum {curriculum!r}"
                            f"{suggest(curriculum, available, ' (none is shipped yet)')}; pretrained: "
@@ -126,7 +128,6 @@ def build_pretrained(runs: Sequence[str | Path], curricula: Sequence[str | Curri
     seed), so every seed of the run (``run.json``'s ``seeds``) must be in one run's library. A node already in
     ``out`` is replaced by its new best seeds. ``out`` must be missing, empty or a library.
     """
-    from sb3_smc.curricula.trainer import rank_seeds
     from sb3_smc.evaluation import evaluate
 
     target = Path(out) if out is not None else _root()
@@ -138,17 +139,21 @@ def build_pretrained(runs: Sequence[str | Path], curricula: Sequence[str | Curri
     entries = {run: storage.check_manifest(*storage.read_manifest(run / "library")) for run in runs_}
     chosen: list[tuple[str, Path, list[str]]] = []
     for node in dict.fromkeys(n for c in curricula for n in _lower_level(c)):
-        found = [(run, {int(name.rpartition("@")[2]): entry["record"] for name, entry in held.items()
-                        if name.rpartition("@")[0] == node}) for run, held in entries.items()]
+        found = [(run, {int(name.rpartition(SEED_SEPARATOR)[2]): entry["record"] for name, entry in held.items()
+                        if node_of(name) == node}) for run, held in entries.items()]
         run, records = max(found, key=lambda item: len(item[1]))
-        seeds = _run_seeds(run)
+        settings = read_settings(run)
+        if settings is None:
+            raise LibraryError(f"{run} holds no run (no run.json); build_pretrained takes run directories of "
+                               "sb3-smc train or experiment")
+        seeds = settings["seeds"]
         if len(records) != seeds or any(record is None for record in records.values()):
             raise LibraryError(f"node {node!r}: {run / 'library'} holds {len(records)} of the run's {seeds} seeds "
                                "with training records; the two best can only be chosen among all of them")
-        chosen.append((node, run, [f"{node}@{seed}" for seed in rank_seeds(records)[:PRETRAINED_SEEDS]]))
+        chosen.append((node, run, [job_name(node, seed) for seed in rank_seeds(records)[:PRETRAINED_SEEDS]]))
     library = SMCLibrary.load(target) if (target / storage.MANIFEST).is_file() else SMCLibrary()
     for node, run, names in chosen:
-        for stale in [name for name in library.names if name.rpartition("@")[0] == node]:
+        for stale in [name for name in library.names if node_of(name) == node]:
             library.remove(stale)
         loaded = SMCLibrary.load(run / "library", names=names)
         for name in names:
@@ -166,16 +171,3 @@ def build_pretrained(runs: Sequence[str | Path], curricula: Sequence[str | Curri
         SMCLibrary.load(staged)  # the compact copy loads and checks out before it replaces anything
         replace_directory(staged, target)
     return target
-
-
-def _run_seeds(run: Path) -> int:
-    """The seeds of the run in directory ``run`` (its ``run.json``)."""
-    path = run / "run.json"
-    try:
-        seeds = json.loads(path.read_text(encoding="utf-8"))["seeds"]
-    except (OSError, ValueError, KeyError, TypeError) as err:
-        raise LibraryError(f"{path}: cannot read the run's seeds ({type(err).__name__}: {err}); build_pretrained "
-                           "takes run directories of sb3-smc train or experiment") from None
-    if not isinstance(seeds, int) or seeds < 1:
-        raise LibraryError(f"{path}: 'seeds' must be a positive integer, got {seeds!r}")
-    return seeds
