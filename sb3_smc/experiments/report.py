@@ -27,7 +27,16 @@ from sb3_smc.experiments.design import CATEGORIES, METHOD_REGISTRY, METHODS, PAP
 from sb3_smc.experiments.figures import Panel, bar_panels
 from sb3_smc.experiments.paper import PAPER_CONCEPTS, PAPER_COUNTS, PAPER_MEANS, PAPER_NOPRIM, PAPER_TTESTS
 from sb3_smc.experiments.runner import experiment_command, read_results
-from sb3_smc.experiments.statistics import claims, mean_se, p_at_df, paired_ttest, seed_summary, wins
+from sb3_smc.experiments.statistics import (
+    claims,
+    mean_of_all,
+    mean_se,
+    method_mean,
+    method_test,
+    p_at_df,
+    seed_summary,
+    wins,
+)
 
 __all__ = ["pushable_levels", "write_report"]
 
@@ -136,12 +145,17 @@ class _Table:
         scores = self.seeds.get((target, method)) or [self.score[(target, method)]]
         return seed_summary(scores).text()
 
+    def mean_se(self, members: Sequence[str], method: str) -> tuple[float, float | None] | None:
+        """Mean and s.e. of ``method`` across ``members`` (:func:`mean_se`); ``None`` unless all of them ran."""
+        values = [self.score[(t, method)] for t in members if (t, method) in self.score]
+        return mean_se(values) if values and len(values) == len(members) else None
+
     def mean_cell(self, members: Sequence[str], method: str) -> str:
         """Mean ± s.e. across ``members`` (all of them must have run)."""
-        values = [self.score[(t, method)] for t in members if (t, method) in self.score]
-        if not values or len(values) < len(members):
+        found = self.mean_se(members, method)
+        if found is None:
             return "-"
-        mean, se = mean_se(values)
+        mean, se = found
         return f"{100 * mean:.1f}" + (f" ± {100 * se:.1f}" if se is not None else "")
 
 
@@ -265,11 +279,11 @@ def _means_section(table: _Table) -> list[str]:
                      + " | ".join(f"{paper[m]:.1f}" if m in paper else "" for m in methods) + " |")
         if len(in_paper) == PAPER_COUNTS[kind]:  # the paper's whole set: its means
             lines.append(f"| {kind} | ours - paper ({len(in_paper)} concepts) | | " + " | ".join(
-                _diff(_mean([table.score.get((t, m)) for t in in_paper]), paper.get(m)) for m in methods) + " |")
+                _diff(method_mean(table.score, in_paper, m), paper.get(m)) for m in methods) + " |")
         else:  # a subset: only against the paper's own numbers for the same concepts, where it gives them
             lines.append(f"| {kind} | ours - paper (the same {len(in_paper)} concept(s), where the paper gives them) "
-                         "| | " + " | ".join(_diff(_mean([table.score.get((t, m)) for t in in_paper]),
-                                                   _mean([PAPER_CONCEPTS.get(t, {}).get(m) for t in in_paper]))
+                         "| | " + " | ".join(_diff(method_mean(table.score, in_paper, m),
+                                                   mean_of_all([PAPER_CONCEPTS.get(t, {}).get(m) for t in in_paper]))
                                              for m in methods) + " |")
     return lines
 
@@ -324,8 +338,8 @@ def _noprim_section(table: _Table) -> list[str]:
             if f"{method}-noprim" not in table.methods or not in_kind:
                 continue
             paper = PAPER_NOPRIM[kind]
-            lines.append(f"| {kind} | {method} | {_pct(_mean([table.score.get((t, method)) for t in in_kind]))} | "
-                         f"{_pct(_mean([table.score.get((t, method + '-noprim')) for t in in_kind]))} | "
+            lines.append(f"| {kind} | {method} | {_pct(method_mean(table.score, in_kind, method))} | "
+                         f"{_pct(method_mean(table.score, in_kind, method + '-noprim'))} | "
                          f"{paper[method]:.1f} | {paper[method + '-noprim']:.1f} |")
     return lines
 
@@ -417,21 +431,15 @@ def _machine_line(machine: dict[str, Any]) -> str:
     return f"{machine.get('platform', '?')}{cpu}{cores}, Python {machine.get('python', '?')}"
 
 
-def _mean(values: Sequence[float | None]) -> float | None:
-    present = [v for v in values if v is not None]
-    return float(np.mean(present)) if present and len(present) == len(values) else None
-
-
 def _ttest_row(label: str, comparison: str, members: Sequence[str], a: str, b: str,
                score: dict[tuple[str, str], float], paper: tuple[int, float, float] | None) -> str:
-    pairs = [(score[(t, a)], score[(t, b)]) for t in members if (t, a) in score and (t, b) in score]
-    test = paired_ttest([p[0] for p in pairs], [p[1] for p in pairs]) if pairs else None
+    compared, test = method_test(score, members, a, b)
     paper_text = f"t({paper[0]}) = {paper[1]}, p = {paper[2]}" if paper else ""
     if test is None:
-        return f"| {label} | {comparison} | {len(pairs)} | - | - | - | {paper_text} | |"
+        return f"| {label} | {comparison} | {compared} | - | - | - | {paper_text} | |"
     df, t, p = test
     at_paper = f"{p_at_df(t, paper[0]):.2g}" if paper else ""
-    return f"| {label} | {comparison} | {len(pairs)} | {t:.2f} | {df} | {p:.2g} | {paper_text} | {at_paper} |"
+    return f"| {label} | {comparison} | {compared} | {t:.2f} | {df} | {p:.2g} | {paper_text} | {at_paper} |"
 
 
 def _figures(folder: Path, table: _Table) -> list[Path]:
@@ -450,8 +458,7 @@ def _figures(folder: Path, table: _Table) -> list[Path]:
         errors: dict[str, list[float | None]] = {m: [] for m in methods}
         for targets in members.values():
             for m in methods:
-                scores = [table.score[(t, m)] for t in targets if (t, m) in table.score]
-                mean, se = mean_se(scores) if len(scores) == len(targets) else (math.nan, None)
+                mean, se = table.mean_se(targets, m) or (math.nan, None)
                 values[m].append(100 * mean)
                 errors[m].append(None if se is None else 100 * se)
         panels.append(Panel(kind, list(members), values, errors))

@@ -16,7 +16,8 @@ import numpy as np
 
 from sb3_smc.experiments.paper import PAPER_CONCEPTS, PAPER_COUNTS, PAPER_MEANS, PAPER_NOPRIM, PAPER_TTESTS
 
-__all__ = ["ALPHA", "Claim", "SeedSummary", "claims", "mean_se", "paired_ttest", "p_at_df", "seed_summary", "wins"]
+__all__ = ["ALPHA", "Claim", "SeedSummary", "claims", "mean_of_all", "mean_se", "method_mean", "method_test",
+           "paired_ttest", "p_at_df", "seed_summary", "wins"]
 
 ALPHA = 0.05
 """Significance level of the claims table."""
@@ -96,14 +97,27 @@ class Claim:
     reproduced: str
 
 
-def _mean_of(score: Score, targets: Sequence[str], method: str) -> float | None:
-    values = [score[(t, method)] for t in targets if (t, method) in score]
-    return float(np.mean(values)) if values and len(values) == len(targets) else None
+def mean_of_all(values: Sequence[float | None]) -> float | None:
+    """The mean of ``values``; ``None`` when there are none or any is missing (``None``)."""
+    present = [v for v in values if v is not None]
+    return float(np.mean(present)) if present and len(present) == len(values) else None
+
+
+def method_mean(score: Score, targets: Sequence[str], method: str) -> float | None:
+    """The mean score of ``method`` over ``targets`` (``None`` unless it ran on all of them)."""
+    return mean_of_all([score.get((t, method)) for t in targets])
+
+
+def method_test(score: Score, targets: Sequence[str], a: str, b: str) -> tuple[int, tuple[int, float, float] | None]:
+    """The paired t-test of method ``a`` against ``b`` over the ``targets`` where both ran: (how many such
+    targets, :func:`paired_ttest`'s result)."""
+    pairs = [(score[(t, a)], score[(t, b)]) for t in targets if (t, a) in score and (t, b) in score]
+    return len(pairs), paired_ttest([x for x, _ in pairs], [y for _, y in pairs]) if pairs else None
 
 
 def _gap(score: Score, targets: Sequence[str], a: str, b: str) -> float | None:
     """Mean of ``a`` minus mean of ``b`` over ``targets`` (``None`` unless both ran on all of them)."""
-    mean_a, mean_b = _mean_of(score, targets, a), _mean_of(score, targets, b)
+    mean_a, mean_b = method_mean(score, targets, a), method_mean(score, targets, b)
     return None if mean_a is None or mean_b is None else mean_a - mean_b
 
 
@@ -125,8 +139,7 @@ def _value_claim(text: str, paper: float, ours: float | None, tolerance: float) 
 def _test_claim(kind: str, a: str, b: str, score: Score, targets: Sequence[str],
                 paper: tuple[int, float, float]) -> Claim:
     df_paper, t_paper, p_paper = paper
-    pairs = [(score[(t, a)], score[(t, b)]) for t in targets if (t, a) in score and (t, b) in score]
-    test = paired_ttest([x for x, _ in pairs], [y for _, y in pairs]) if pairs else None
+    _, test = method_test(score, targets, a, b)
     text = f"{kind}: {a} > {b}, paired t-test across concepts"
     if test is None:
         return Claim(text, f"t({df_paper}) = {t_paper}, p = {p_paper}", "-", "not run")
@@ -170,7 +183,7 @@ def claims(score: Score, kind_of: Mapping[str, str], category_of: Mapping[str, s
                              "not comparable: a subset"))
             continue
         for method, paper in PAPER_MEANS[kind].items():
-            out.append(_mean_claim(kind, method, paper, _mean_of(score, targets, method), len(targets), tolerance))
+            out.append(_mean_claim(kind, method, paper, method_mean(score, targets, method), len(targets), tolerance))
         for comparison, paper_test in PAPER_TTESTS[kind].items():
             a, _, b = comparison.split()
             out.append(_test_claim(kind, a, b, score, targets, paper_test))
@@ -188,7 +201,7 @@ def claims(score: Score, kind_of: Mapping[str, str], category_of: Mapping[str, s
             out.extend(_cnn_claims(score, targets, category_of))
         for method in ("curr", "canon"):
             paper_with, paper_without = PAPER_NOPRIM[kind][method], PAPER_NOPRIM[kind][f"{method}-noprim"]
-            without = _mean_of(score, targets, f"{method}-noprim")
+            without = method_mean(score, targets, f"{method}-noprim")
             out.append(_mean_claim(kind, f"{method}-noprim", paper_without, without, len(targets), tolerance))
             out.append(_order_claim(f"{kind}: {method} without primitives against with (mean gap, points)",
                                     paper_without - paper_with, _gap(score, targets, f"{method}-noprim", method)))
