@@ -13,6 +13,7 @@ from pixelworld_env.concepts import (
 )
 from pixelworld_env.constants import HEIGHT, WIDTH, Color, ObjectClass
 from pixelworld_env.env import PixelWorldEnv
+from pixelworld_env.errors import PixelWorldError
 from pixelworld_env.loading import Dataset, load_dataset
 from pixelworld_env.objects import WorldObject
 from pixelworld_env.registration import make_env, register_envs
@@ -32,6 +33,7 @@ __all__ = [
     "NegatedMacroError",
     "ObjectClass",
     "PixelWorldEnv",
+    "PixelWorldError",
     "Scene",
     "UndeclaredVariableError",
     "UnknownPredicateError",

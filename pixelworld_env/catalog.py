@@ -31,17 +31,18 @@ from importlib import resources
 from typing import Any, NamedTuple
 
 from pixelworld_env.constants import Kind
+from pixelworld_env.errors import PixelWorldError, PixelWorldKeyError
 
 FORMAT = "pixelworld-catalog"
 VERSION = 1
 DATA_FILE = "catalog.json"
 
 
-class CatalogError(ValueError):
+class CatalogError(PixelWorldError):
     """The catalog file is missing, of another format/version, or inconsistent."""
 
 
-class _UnknownName(KeyError, ValueError):
+class _UnknownName(PixelWorldKeyError):
     """An unknown name; catchable as ``KeyError`` and as ``ValueError``; ``suggestions`` are close names."""
 
     what = "name"

@@ -13,6 +13,7 @@ import numpy as np
 
 from pixelworld_env import catalog
 from pixelworld_env.env import PixelWorldEnv
+from pixelworld_env.errors import PixelWorldError
 from pixelworld_env.registration import make_env, registered_ids
 
 KEYS = {"w": "UP", "a": "LEFT", "s": "DOWN", "d": "RIGHT", "0": "SIG0", "1": "SIG1"}
@@ -223,12 +224,17 @@ def main(argv: Sequence[str] | None = None, out: TextIO | None = None, keys: Tex
             cmd_generate(args, out)
         else:
             cmd_play(args, out, keys or sys.stdin)
+    except PixelWorldError as err:  # bad input, said in one line; anything else is a bug: its traceback
+        raise SystemExit(f"pixelworld {args.command}: error: {err}") from None
     except KeyboardInterrupt:
         out.write("\ninterrupted\n")
         sys.exit(130)
     except BrokenPipeError:  # e.g. `pixelworld list | head`: stop quietly
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         sys.exit(1)
+    except OSError as err:  # a file of the user's (show --png): not allowed, the disk full
+        where = f" ({err.filename})" if err.filename else ""
+        raise SystemExit(f"pixelworld {args.command}: error: {err.strerror or err}{where}") from None
 
 
 if __name__ == "__main__":

@@ -37,6 +37,8 @@ from typing import TYPE_CHECKING, Any, cast
 
 import yaml
 
+from pixelworld_env.errors import PixelWorldError, PixelWorldKeyError
+
 if TYPE_CHECKING:
     from pixelworld_env.constants import Kind
     from pixelworld_env.env import PixelWorldEnv
@@ -60,7 +62,7 @@ RELEASE_UNRESOLVED: dict[str, tuple[str, ...]] = {
 _Loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 
 
-class DefinitionError(ValueError):
+class DefinitionError(PixelWorldError):
     """A definition file is malformed; the message names the file, the line and the entry."""
 
 
@@ -166,7 +168,7 @@ class DefinitionSet:
         if name not in self.datasets:
             close = difflib.get_close_matches(name, list(self.datasets), n=3)
             hint = f"; did you mean {', '.join(repr(c) for c in close)}?" if close else ""
-            raise KeyError(f"no dataset {name!r} in these definitions{hint}")
+            raise PixelWorldKeyError(f"no dataset {name!r} in these definitions{hint}")
         dataset = self.datasets[name]
         macros = self.macros
         return DatasetSpec(name=name, kind=dataset.kind, concept=macros[dataset.concept],
@@ -183,7 +185,7 @@ class DefinitionSet:
         from pixelworld_env.generation import split as stratified_split
 
         if split not in ("train", "test", "all"):
-            raise ValueError(f"split must be 'train', 'test' or 'all', got {split!r}")
+            raise PixelWorldError(f"split must be 'train', 'test' or 'all', got {split!r}")
         spec = self.dataset_spec(name, num_samples)
         generated = generate(spec, seed)
         indices = range(len(generated.scenes)) if split == "all" else \

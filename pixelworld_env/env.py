@@ -15,6 +15,7 @@ from pixelworld_env.concepts import Concept
 from pixelworld_env.concepts.evaluate import SelfEvaluator
 from pixelworld_env.concepts.parser import Expression
 from pixelworld_env.constants import NUM_COLORS
+from pixelworld_env.errors import PixelWorldError
 from pixelworld_env.objects import Cell
 from pixelworld_env.render import HUMAN_CELL_SIZE, Window, check_display, rgb_image
 from pixelworld_env.scene import Scene
@@ -50,9 +51,9 @@ def check_settings(*, max_steps: Any = 100, observation: Any = "hand", render_mo
     and a display (:func:`pixelworld_env.render.check_display`).
     """
     if observation not in OBSERVATIONS:
-        raise ValueError(f"observation must be one of {OBSERVATIONS}, got {observation!r}")
+        raise PixelWorldError(f"observation must be one of {OBSERVATIONS}, got {observation!r}")
     if render_mode is not None and render_mode not in RENDER_MODES:
-        raise ValueError(f"render_mode must be None or one of {list(RENDER_MODES)}, got {render_mode!r}")
+        raise PixelWorldError(f"render_mode must be None or one of {list(RENDER_MODES)}, got {render_mode!r}")
     check_bool(aaai18_reset_bug, "aaai18_reset_bug")
     max_steps = check_int(max_steps, "max_steps", 1)
     if render_mode == "human":
@@ -103,30 +104,30 @@ class PixelWorldEnv(gym.Env):
         aaai18_reset_bug: bool = False,
     ) -> None:
         if kind not in KINDS:
-            raise ValueError(f"kind must be one of {KINDS}, got {kind!r}")
+            raise PixelWorldError(f"kind must be one of {KINDS}, got {kind!r}")
         max_steps = check_settings(max_steps=max_steps, observation=observation, render_mode=render_mode,
                                    aaai18_reset_bug=aaai18_reset_bug)
         self.scenes: tuple[Scene, ...] = tuple(scenes)
         if not self.scenes:
-            raise ValueError("PixelWorldEnv needs at least one scene")
+            raise PixelWorldError("PixelWorldEnv needs at least one scene")
         height, width = self.scenes[0].height, self.scenes[0].width
         if any((s.height, s.width) != (height, width) for s in self.scenes):
-            raise ValueError("all scenes of an environment must have the same size")
+            raise PixelWorldError("all scenes of an environment must have the same size")
         if observation == "image" and min(height, width) < NUM_COLORS:
-            raise ValueError(f"observation='image' needs scenes of at least {NUM_COLORS} x {NUM_COLORS} cells, got "
-                             f"{height} x {width}: SB3 takes an image's smallest dimension for its {NUM_COLORS} "
-                             "channels")
+            raise PixelWorldError(f"observation='image' needs scenes of at least {NUM_COLORS} x {NUM_COLORS} cells, "
+                                  f"got {height} x {width}: SB3 takes an image's smallest dimension for its "
+                                  f"{NUM_COLORS} channels")
         self.kind = kind
         self.concept = concept if isinstance(concept, Concept) else Concept(concept, macros)
         if kind == BRING_ABOUT and labels is not None:
-            raise ValueError("labels are for classification tasks; a bring-about task's goal is its concept")
+            raise PixelWorldError("labels are for classification tasks; a bring-about task's goal is its concept")
         if kind == CLASSIFICATION:
             if labels is None:
                 labels = [int(self.concept.holds(s)) for s in self.scenes]
             if len(labels) != len(self.scenes):
-                raise ValueError(f"got {len(labels)} labels for {len(self.scenes)} scenes")
+                raise PixelWorldError(f"got {len(labels)} labels for {len(self.scenes)} scenes")
             if any(label not in (0, 1) for label in labels):
-                raise ValueError("classification labels must be 0 or 1")
+                raise PixelWorldError("classification labels must be 0 or 1")
         self.labels: tuple[int, ...] | None = tuple(int(x) for x in labels) if labels is not None else None
         self.max_steps = int(max_steps)
         self.split: str | None = None
@@ -271,7 +272,8 @@ class PixelWorldEnv(gym.Env):
             self._draws = []
         unknown = sorted(set(options or {}) - {"index"})
         if unknown:
-            raise ValueError(f"unknown reset option(s) {unknown}; PixelWorldEnv.reset takes options={{'index': i}}")
+            raise PixelWorldError(f"unknown reset option(s) {unknown}; PixelWorldEnv.reset takes "
+                                  "options={'index': i}")
         if options and "index" in options:
             index = check_int(options["index"], "options['index']")
             if not 0 <= index < len(self.scenes):
@@ -351,7 +353,7 @@ class PixelWorldEnv(gym.Env):
             raise RuntimeError("the episode has ended: call reset() before apply_move()")
         effect = self._effects[action]
         if effect.__class__ is not tuple:
-            raise ValueError(f"action {action} ({self.action_names[action]}) is not a move")
+            raise PixelWorldError(f"action {action} ({self.action_names[action]}) is not a move")
         return self._move(effect)  # type: ignore[arg-type]
 
     def step_info(self) -> dict[str, Any]:

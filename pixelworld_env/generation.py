@@ -89,6 +89,7 @@ from pixelworld_env.concepts import Concept, ConceptError, expand, parse
 from pixelworld_env.concepts.parser import SELF, Clause, Expression
 from pixelworld_env.concepts.predicates import PREDICATES, EvalContext
 from pixelworld_env.constants import FLOOR_HEIGHT, HEIGHT, PADDING, WIDTH, Color
+from pixelworld_env.errors import PixelWorldError, PixelWorldKeyError
 from pixelworld_env.objects import WorldObject, frame_object, object_class
 from pixelworld_env.oracle import goal_reachable
 from pixelworld_env.regions import inside_masks
@@ -139,7 +140,7 @@ DRAWS_PER_SAMPLE = 200
 _SHAPE_IDX_PREDICATES = frozenset({"same_shape"})
 
 
-class GenerationError(ValueError):
+class GenerationError(PixelWorldError):
     """A generator is unsatisfiable, or a dataset cannot reach its quota within the budget."""
 
 
@@ -172,23 +173,23 @@ class DatasetSpec:
     def __post_init__(self) -> None:
         kind = {"bringabout": "bring-about", "bring_about": "bring-about"}.get(self.kind, self.kind)
         if kind not in KINDS:
-            raise ValueError(f"dataset {self.name!r}: kind must be one of {KINDS}, got {self.kind!r}")
+            raise PixelWorldError(f"dataset {self.name!r}: kind must be one of {KINDS}, got {self.kind!r}")
         object.__setattr__(self, "kind", kind)
         generators = tuple((str(name), str(logic)) for name, logic in self.generators)
         if not generators:
-            raise ValueError(f"dataset {self.name!r} has no generators")
+            raise PixelWorldError(f"dataset {self.name!r} has no generators")
         object.__setattr__(self, "generators", generators)
         object.__setattr__(self, "macros", dict(self.macros))
         object.__setattr__(self, "settings", dict(self.settings or {}))
         unknown = sorted(set(self.settings) - SUPPORTED_SETTINGS)
         if unknown:
-            raise ValueError(f"dataset {self.name!r}: unsupported settings {unknown}; supported: "
-                             f"{sorted(SUPPORTED_SETTINGS)}")
+            raise PixelWorldError(f"dataset {self.name!r}: unsupported settings {unknown}; supported: "
+                                  f"{sorted(SUPPORTED_SETTINGS)}")
         if self.num_samples < 1:
-            raise ValueError(f"dataset {self.name!r}: num_samples must be >= 1, got {self.num_samples}")
+            raise PixelWorldError(f"dataset {self.name!r}: num_samples must be >= 1, got {self.num_samples}")
         if self.height < 3 or self.width < 3 or self.padding < 0 or not 0 < self.floor_height < self.height:
-            raise ValueError(f"dataset {self.name!r}: bad world size {self.height} x {self.width} "
-                             f"(floor_height {self.floor_height}, padding {self.padding})")
+            raise PixelWorldError(f"dataset {self.name!r}: bad world size {self.height} x {self.width} "
+                                  f"(floor_height {self.floor_height}, padding {self.padding})")
 
     def __hash__(self) -> int:  # equal specs hash equally (the mappings are left out)
         return hash((self.name, self.kind, self.concept, self.generators, self.num_samples, self.height, self.width,
@@ -202,7 +203,7 @@ class DatasetSpec:
         except KeyError:
             close = difflib.get_close_matches(name, list(definitions.datasets), n=3)
             hint = f"; did you mean {', '.join(close)}?" if close else ""
-            raise KeyError(f"unknown dataset {name!r}{hint}") from None
+            raise PixelWorldKeyError(f"unknown dataset {name!r}{hint}") from None
         macros = definitions.macros
         values: dict[str, Any] = {
             "name": name, "kind": dataset.kind, "concept": definitions.concepts[dataset.concept].logic,
@@ -929,11 +930,11 @@ def split(labels: Sequence[int], test_fraction: float = 0.5,
     to the test set. Classification 50+50 -> 50/50 with 25+25 each; bring-about 50 -> 25/25.
     """
     if not 0.0 < test_fraction < 1.0:
-        raise ValueError(f"test_fraction must lie strictly between 0 and 1, got {test_fraction}")
+        raise PixelWorldError(f"test_fraction must lie strictly between 0 and 1, got {test_fraction}")
     labels = [int(v) for v in labels]
     n = len(labels)
     if n < 2:
-        raise ValueError(f"need at least 2 samples to split, got {n}")
+        raise PixelWorldError(f"need at least 2 samples to split, got {n}")
     classes = sorted(set(labels))
     members = {c: [i for i, v in enumerate(labels) if v == c] for c in classes}
     n_test = min(n - 1, max(1, math.ceil(test_fraction * n)))

@@ -8,6 +8,7 @@ from typing import Literal
 from pixelworld_env import catalog, generation
 from pixelworld_env.constants import Kind
 from pixelworld_env.datasets import load_or_generate
+from pixelworld_env.errors import PixelWorldError
 from pixelworld_env.generation import DatasetSpec
 from pixelworld_env.scene import Scene
 from pixelworld_env.validation import check_seed
@@ -51,7 +52,7 @@ def load_dataset(name: str, split: Split = "all", seed: int = 0) -> Dataset:
     of spec §3.7 (fixed split seed 521).
     """
     if split not in SPLITS:
-        raise ValueError(f"split must be one of {SPLITS}, got {split!r}")
+        raise PixelWorldError(f"split must be one of {SPLITS}, got {split!r}")
     seed = check_seed(seed, "dataset seed")
     info = catalog.dataset(name)
     generated = load_or_generate(dataset_spec(name), seed)

@@ -8,6 +8,7 @@ from functools import cached_property
 import numpy as np
 
 from pixelworld_env.constants import MOVEABLE_CLASSES, Color, ObjectClass
+from pixelworld_env.errors import PixelWorldError
 
 Cell = tuple[int, int]
 
@@ -35,11 +36,11 @@ class WorldObject:
 
     def __post_init__(self) -> None:
         if not self.cells:
-            raise ValueError(f"object of class {self.cls!s} has no cells")
+            raise PixelWorldError(f"object of class {self.cls!s} has no cells")
         height, width = self.size
         for dr, dc in self.cells:
             if not (0 <= dr < height and 0 <= dc < width):
-                raise ValueError(f"cell offset {(dr, dc)} lies outside the template size {self.size}")
+                raise PixelWorldError(f"cell offset {(dr, dc)} lies outside the template size {self.size}")
 
     @property
     def is_self(self) -> bool:

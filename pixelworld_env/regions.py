@@ -26,6 +26,8 @@ from functools import lru_cache
 
 import numpy as np
 
+from pixelworld_env.errors import PixelWorldError
+
 SPACE, SOLID, INTERIOR, INSIDE_SUPPORTED = 2, 3, 4, 5
 
 Flow = tuple[int, int]
@@ -157,14 +159,14 @@ def _open_bottom_rules(labels: np.ndarray, t: np.ndarray) -> None:
 def _as_bool(template: np.ndarray) -> np.ndarray:
     t = np.asarray(template) != 0
     if t.ndim != 2:
-        raise ValueError(f"template must be a 2-D array, got shape {t.shape}")
+        raise PixelWorldError(f"template must be a 2-D array, got shape {t.shape}")
     return t
 
 
 def annotate(template: np.ndarray, family: str) -> np.ndarray:
     """Annotation of ``template`` (labels SPACE..INSIDE_SUPPORTED) by the water rule of ``family``."""
     if family not in _FLOWS:
-        raise ValueError(f"shape family {family!r} has no inside-region annotation rule")
+        raise PixelWorldError(f"shape family {family!r} has no inside-region annotation rule")
     t = _as_bool(template)
     plug = _PLUGS.get(family)
     if plug is None:

@@ -19,6 +19,7 @@ import gymnasium as gym
 
 from pixelworld_env import catalog
 from pixelworld_env.env import Observation, PixelWorldEnv, check_settings
+from pixelworld_env.errors import PixelWorldError
 from pixelworld_env.loading import Split, load_dataset
 from pixelworld_env.validation import check_bool, check_int
 
@@ -49,7 +50,7 @@ def make_env(datasets: Sequence[str], *, split: Split = "train", seed: int = 0, 
     kinds = {d.kind for d in loaded}
     concepts = {d.concept for d in loaded}
     if len(kinds) != 1 or len(concepts) != 1:
-        raise ValueError(f"datasets {list(datasets)} do not share one kind and concept")
+        raise PixelWorldError(f"datasets {list(datasets)} do not share one kind and concept")
     env = PixelWorldEnv(
         [s for d in loaded for s in d.scenes], kind=loaded[0].kind, concept=loaded[0].concept,
         labels=[label for d in loaded for label in d.labels] if loaded[0].kind == "classification" else None,

@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 
 from pixelworld_env.constants import FLOOR_HEIGHT, Color, ObjectClass
+from pixelworld_env.errors import PixelWorldError, PixelWorldTypeError
 from pixelworld_env.objects import Cell, WorldObject, cell_extent, frame_object, object_class
 
 _PIXEL_CLASSES = frozenset({ObjectClass.SELF, ObjectClass.BASIC, ObjectClass.IMMOVEABLE})
@@ -32,7 +33,7 @@ def _known_family(family: str, what: str) -> str:
     try:
         return check_family(family)
     except ValueError as exc:
-        raise ValueError(f"{what}: {exc}") from None
+        raise PixelWorldError(f"{what}: {exc}") from None
 
 
 def _template_size(family: str | None, shape_idx: int, cells: tuple[Cell, ...]) -> Cell:
@@ -67,13 +68,13 @@ class Scene:
     def __post_init__(self) -> None:
         selves = [i for i, obj in enumerate(self.objects) if obj.is_self]
         if len(selves) != 1:
-            raise ValueError(f"a scene needs exactly one self object, found {len(selves)}")
+            raise PixelWorldError(f"a scene needs exactly one self object, found {len(selves)}")
         if sum(obj.is_frame for obj in self.objects) > 1:
-            raise ValueError("a scene has at most one frame object")
+            raise PixelWorldError("a scene has at most one frame object")
         for i, obj in enumerate(self.objects):
             for r, c in obj.pixels:
                 if not (0 <= r < self.height and 0 <= c < self.width):
-                    raise ValueError(
+                    raise PixelWorldError(
                         f"object {i} ({obj.family or obj.cls}) has a pixel at row {r}, column {c}, outside the "
                         f"{self.height} x {self.width} world"
                     )
@@ -122,7 +123,7 @@ class Scene:
             height, width = int(data["height"]), int(data["width"])
             raw_objects = data["objects"]
         except KeyError as exc:
-            raise ValueError(f"scene dict lacks the field {exc.args[0]!r}") from None
+            raise PixelWorldError(f"scene dict lacks the field {exc.args[0]!r}") from None
         objects = [_object_from_dict(raw, height, width, i) for i, raw in enumerate(raw_objects)]
         return cls(height=height, width=width, objects=tuple(objects))
 
@@ -140,7 +141,7 @@ class Scene:
         and surrounding whitespace of each row are ignored.
         """
         if not isinstance(text, str):
-            raise TypeError(f"Scene.from_ascii needs the scene drawn as a string, got {type(text).__name__}")
+            raise PixelWorldTypeError(f"Scene.from_ascii needs the scene drawn as a string, got {type(text).__name__}")
         kinds = dict(kinds or {})
         rows = [line.strip() for line in text.strip("\n").splitlines()]
         while rows and not rows[0]:
@@ -148,15 +149,15 @@ class Scene:
         while rows and not rows[-1]:
             rows.pop()
         if not rows:
-            raise ValueError("empty scene text")
+            raise PixelWorldError("empty scene text")
         width = len(rows[0])
         for r, row in enumerate(rows):
             if len(row) != width:
-                raise ValueError(f"ragged scene text: row {r} has {len(row)} characters, row 0 has {width}")
+                raise PixelWorldError(f"ragged scene text: row {r} has {len(row)} characters, row 0 has {width}")
         height = len(rows)
         for letter, family in kinds.items():
             if len(letter) != 1 or letter not in string.ascii_letters or letter == "S":
-                raise ValueError(f"kinds: {letter!r} is not an object letter (a-z or A-Z except S)")
+                raise PixelWorldError(f"kinds: {letter!r} is not an object letter (a-z or A-Z except S)")
             _known_family(family, f"kinds[{letter!r}]")
         cells_of: dict[str, list[Cell]] = {}
         frame_cells: list[Cell] = []
@@ -169,15 +170,15 @@ class Scene:
                 elif ch == "=" or ch in string.ascii_letters:
                     cells_of.setdefault(ch, []).append((r, c))
                 else:
-                    raise ValueError(f"unknown character {ch!r} at row {r}, column {c}; legend: {ASCII_LEGEND}")
+                    raise PixelWorldError(f"unknown character {ch!r} at row {r}, column {c}; legend: {ASCII_LEGEND}")
         unused = sorted(set(kinds) - set(cells_of))
         if unused:
-            raise ValueError(f"kinds names letters that do not appear in the scene: {', '.join(unused)}")
+            raise PixelWorldError(f"kinds names letters that do not appear in the scene: {', '.join(unused)}")
         selves = cells_of.get("S", [])
         if len(selves) != 1:
             where = ", ".join(f"row {r} column {c}" for r, c in selves)
-            raise ValueError("the scene needs exactly one self 'S'" + (f", found {len(selves)} at {where}"
-                                                                      if selves else ", found none"))
+            raise PixelWorldError("the scene needs exactly one self 'S'" + (f", found {len(selves)} at {where}"
+                                                                           if selves else ", found none"))
         objects: list[WorldObject] = []
         for ch in sorted(cells_of, key=lambda k: (k != "=", k)):
             objects.append(_object_from_letter(ch, cells_of[ch], kinds))
@@ -185,7 +186,7 @@ class Scene:
             frame = frame_object(height, width)
             if set(frame_cells) != set(frame.cells):
                 bad = sorted(set(frame_cells) - set(frame.cells)) or sorted(set(frame.cells) - set(frame_cells))
-                raise ValueError(
+                raise PixelWorldError(
                     f"'#' is the frame and must fill exactly the border ring; row {bad[0][0]}, column "
                     f"{bad[0][1]} breaks that"
                 )
@@ -207,7 +208,7 @@ class Scene:
             else:
                 letter = next(upper if obj.moveable else lower, None)
                 if letter is None:
-                    raise ValueError("too many objects for the text format (26 per kind)")
+                    raise PixelWorldError("too many objects for the text format (26 per kind)")
                 letters[i] = letter
         return letters
 
@@ -255,21 +256,21 @@ def _object_from_dict(raw: Mapping[str, Any], height: int, width: int, index: in
     try:
         klass = ObjectClass(raw["class"])
     except KeyError:
-        raise ValueError(f"{where} lacks the field 'class'") from None
+        raise PixelWorldError(f"{where} lacks the field 'class'") from None
     except ValueError:
         known = ", ".join(k.value for k in ObjectClass)
-        raise ValueError(f"{where}: unknown class {raw['class']!r}; expected one of {known}") from None
+        raise PixelWorldError(f"{where}: unknown class {raw['class']!r}; expected one of {known}") from None
     meta = raw.get("meta", {})
     if klass is ObjectClass.FRAME:
         frame = frame_object(height, width)
         return replace(frame, color=int(raw.get("color", Color.PURPLE)), name=raw.get("name", "frame"))
     if "position" not in raw:
-        raise ValueError(f"{where} ({klass}) lacks the field 'position'")
+        raise PixelWorldError(f"{where} ({klass}) lacks the field 'position'")
     family = meta.get("shape", "pixel")
     shape_idx = int(meta.get("shape_idx", 0))
     cells = tuple((int(r), int(c)) for r, c in raw.get("shape", [[0, 0]]))
     if any(r < 0 or c < 0 for r, c in cells):
-        raise ValueError(f"{where}: shape offsets must be >= 0 (position is the template's top-left)")
+        raise PixelWorldError(f"{where}: shape offsets must be >= 0 (position is the template's top-left)")
     size = tuple(raw["size"]) if "size" in raw else _template_size(family, shape_idx, cells)
     return WorldObject(
         cls=klass, color=int(raw["color"]), position=(int(raw["position"][0]), int(raw["position"][1])),

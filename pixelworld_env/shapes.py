@@ -29,6 +29,8 @@ from functools import cache, partial
 
 import numpy as np
 
+from pixelworld_env.errors import PixelWorldError
+
 __all__ = ["FAMILIES", "LibraryParams", "build_library", "check_family", "shape_library", "template"]
 
 FAMILIES: tuple[str, ...] = (
@@ -585,7 +587,7 @@ def check_family(family: str) -> str:
     if family not in FAMILIES:
         close = difflib.get_close_matches(family, FAMILIES, n=3)
         hint = f"; did you mean {', '.join(close)}?" if close else f"; known families: {', '.join(FAMILIES)}"
-        raise ValueError(f"unknown shape family {family!r}{hint}")
+        raise PixelWorldError(f"unknown shape family {family!r}{hint}")
     return family
 
 

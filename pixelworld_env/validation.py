@@ -8,6 +8,8 @@ from typing import Any
 
 import numpy as np
 
+from pixelworld_env.errors import PixelWorldError, PixelWorldTypeError
+
 __all__ = ["MAX_SEED", "as_integer", "check_action", "check_bool", "check_int", "check_seed"]
 
 MAX_SEED = 2**63 - 1
@@ -30,9 +32,9 @@ def check_int(value: Any, name: str, minimum: int | None = None) -> int:
     ``minimum``."""
     number = as_integer(value)
     if number is None:
-        raise TypeError(f"{name} must be an integer, got {value!r} ({type(value).__name__})")
+        raise PixelWorldTypeError(f"{name} must be an integer, got {value!r} ({type(value).__name__})")
     if minimum is not None and number < minimum:
-        raise ValueError(f"{name} must be >= {minimum}, got {number}")
+        raise PixelWorldError(f"{name} must be >= {minimum}, got {number}")
     return number
 
 
@@ -40,7 +42,7 @@ def check_bool(value: Any, name: str) -> bool:
     """``value`` when it is ``True`` or ``False`` (numpy bools too); anything else (``1``, ``"yes"``, ``None``) is a
     ``TypeError`` naming ``name``."""
     if not isinstance(value, bool | np.bool_):
-        raise TypeError(f"{name} must be a bool (True or False), got {value!r} ({type(value).__name__})")
+        raise PixelWorldTypeError(f"{name} must be a bool (True or False), got {value!r} ({type(value).__name__})")
     return bool(value)
 
 
@@ -48,7 +50,7 @@ def check_seed(seed: Any, name: str = "seed") -> int:
     """A seed: an integer (numpy integers too) in ``[0, 2**63 - 1]``; anything else raises, nothing is converted."""
     number = check_int(seed, name)
     if not 0 <= number <= MAX_SEED:
-        raise ValueError(f"{name} must be in [0, 2**63 - 1], got {number}")
+        raise PixelWorldError(f"{name} must be in [0, 2**63 - 1], got {number}")
     return number
 
 
@@ -59,6 +61,6 @@ def check_action(action: Any, action_names: Sequence[str]) -> int:
     """
     index = as_integer(action)
     if index is None or not 0 <= index < len(action_names):
-        raise ValueError(f"invalid action {action!r}: expected an integer in [0, {len(action_names)}); the actions "
-                         f"are {list(enumerate(action_names))}")
+        raise PixelWorldError(f"invalid action {action!r}: expected an integer in [0, {len(action_names)}); the "
+                              f"actions are {list(enumerate(action_names))}")
     return index

@@ -10,6 +10,7 @@ import importlib
 from typing import TYPE_CHECKING, Any
 
 _EXPORTS = {
+    "SMCError": "sb3_smc.errors",
     "SMC": "sb3_smc.smc",
     "StepPolicy": "sb3_smc.smc",
     "observation_size": "sb3_smc.smc",
@@ -61,6 +62,7 @@ __all__ = [
     "RecordError",
     "RecurrentTRPO",
     "SMC",
+    "SMCError",
     "SMCLibrary",
     "ScriptedPolicy",
     "SequencePolicy",
@@ -101,6 +103,7 @@ def __dir__() -> list[str]:
 if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs
     from sb3_smc.bias import apply_signal_bias, initial_action_probabilities
     from sb3_smc.envs import make_smc_env
+    from sb3_smc.errors import SMCError
     from sb3_smc.evaluation import EvaluationResult, evaluate
     from sb3_smc.hyperparameters import DEFAULT_HYPERPARAMETERS
     from sb3_smc.library import (

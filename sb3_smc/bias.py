@@ -7,6 +7,7 @@ from typing import Any
 
 import numpy as np
 
+from sb3_smc.errors import SMCError
 from sb3_smc.smc import CALL_PREFIX, MOVES
 
 __all__ = ["NONSIGNAL_WEIGHT", "SIGNAL_WEIGHT", "SMC_WEIGHT", "apply_signal_bias", "initial_action_probabilities"]
@@ -22,8 +23,8 @@ def _group(name: str) -> str:
         return "smc"
     if name in MOVES:
         return "move"
-    raise ValueError(f"unknown action name {name!r}: expected a signal (SIG*), a move {MOVES} or "
-                     f"{CALL_PREFIX}<child>")
+    raise SMCError(f"unknown action name {name!r}: expected a signal (SIG*), a move {MOVES} or "
+                   f"{CALL_PREFIX}<child>")
 
 
 def initial_action_probabilities(action_names: Sequence[str], *, signal_weight: float = SIGNAL_WEIGHT,
@@ -38,7 +39,7 @@ def initial_action_probabilities(action_names: Sequence[str], *, signal_weight: 
     """
     groups = [_group(name) for name in action_names]
     if not groups:
-        raise ValueError("no actions")
+        raise SMCError("no actions")
     counts = {g: groups.count(g) for g in ("signal", "move", "smc")}
     weights = {"signal": signal_weight, "move": nonsignal_weight, "smc": smc_weight}
     if counts["smc"] == 0:
@@ -59,7 +60,7 @@ def apply_signal_bias(model: Any, action_names: Sequence[str], **weights: float)
     probabilities = initial_action_probabilities(action_names, **weights)
     action_net = model.policy.action_net
     if action_net.out_features != len(probabilities):
-        raise ValueError(f"the action layer has {action_net.out_features} outputs for {len(probabilities)} actions")
+        raise SMCError(f"the action layer has {action_net.out_features} outputs for {len(probabilities)} actions")
     with torch.no_grad():
         action_net.bias.copy_(torch.as_tensor(np.log(probabilities), dtype=action_net.bias.dtype))
     return probabilities

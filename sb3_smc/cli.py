@@ -226,17 +226,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.set_defaults(run=_status)
 
     args = parser.parse_args(argv)
-    from sb3_smc.curricula.format import CurriculumError
-    from sb3_smc.curricula.trainer import RunSettingsError
-    from sb3_smc.library import LibraryError
+    from pixelworld_env.errors import PixelWorldError
+    from sb3_smc.errors import SMCError
 
     try:
         return args.run(args)
-    except (CurriculumError, RunSettingsError, LibraryError, ValueError, RuntimeError, FileNotFoundError,
-            KeyError) as err:
+    except (SMCError, PixelWorldError) as err:  # bad input, said in one line; anything else is a bug: its traceback
         print(f"sb3-smc {args.command}: error: {err}", file=sys.stderr)
         return 2
-    except OSError as err:
+    except OSError as err:  # a file of the user's: missing, not allowed, the disk full
         print(f"sb3-smc {args.command}: error: {_os_error(err)}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:

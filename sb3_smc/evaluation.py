@@ -24,6 +24,7 @@ import numpy as np
 
 from pixelworld_env.validation import check_int, check_seed
 from sb3_smc.envs import make_smc_env, spec_for_smc
+from sb3_smc.errors import SMCError
 from sb3_smc.policies import sample_action
 from sb3_smc.records import EvaluationRecord
 from sb3_smc.smc import SMC
@@ -211,7 +212,7 @@ def _env_id(smc: SMC, env_id: str | None) -> str:
     if env_id is not None:
         return env_id
     if smc.spec is None:
-        raise ValueError(f"SMC {smc.name!r} has no training spec: name the env id to evaluate it on")
+        raise SMCError(f"SMC {smc.name!r} has no training spec: name the env id to evaluate it on")
     return smc.spec.task.env_id
 
 
@@ -235,9 +236,9 @@ def evaluate(smc: SMC, env_id: str | None = None, *, split: str = "test", repeat
     try:
         base = cast("PixelWorldEnv", env.unwrapped)
         if base.kind != smc.kind:
-            raise ValueError(f"SMC {smc.name!r} is a {smc.kind} SMC but {env_id} is a {base.kind} task")
+            raise SMCError(f"SMC {smc.name!r} is a {smc.kind} SMC but {env_id} is a {base.kind} task")
         if tuple(env.action_names) != tuple(smc.action_names):
-            raise ValueError(f"SMC {smc.name!r} has actions {smc.action_names}, the env {env.action_names}")
+            raise SMCError(f"SMC {smc.name!r} has actions {smc.action_names}, the env {env.action_names}")
         environments = []
         for index in range(len(base.scenes)):
             episodes = []

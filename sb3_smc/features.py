@@ -25,6 +25,7 @@ from stable_baselines3.common.torch_layers import BaseFeaturesExtractor
 from torch import nn
 
 from pixelworld_env.validation import check_int
+from sb3_smc.errors import SMCError, SMCTypeError
 
 __all__ = ["PixelWorldCNN"]
 
@@ -42,11 +43,11 @@ class PixelWorldCNN(BaseFeaturesExtractor):
                  ) -> None:
         if not (isinstance(observation_space, spaces.Box) and is_image_space(observation_space)
                 and is_image_space_channels_first(observation_space)):
-            raise ValueError(f"PixelWorldCNN needs a channel-first uint8 image space in [0, 255] "
-                             f"(PixelWorldEnv(observation='image')), got {observation_space}")
+            raise SMCError(f"PixelWorldCNN needs a channel-first uint8 image space in [0, 255] "
+                           f"(PixelWorldEnv(observation='image')), got {observation_space}")
         features_dim = check_int(features_dim, "features_dim", 1)
         if isinstance(filters, str | bytes) or not isinstance(filters, Sequence) or not filters:
-            raise TypeError(f"filters must be a non-empty sequence of channel counts, got {filters!r}")
+            raise SMCTypeError(f"filters must be a non-empty sequence of channel counts, got {filters!r}")
         filters = [check_int(count, "each of filters", 1) for count in filters]
         super().__init__(observation_space, features_dim)
         channels, height, width = observation_space.shape

@@ -27,6 +27,8 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+from sb3_smc.errors import SMCError
+
 if TYPE_CHECKING:
     from stable_baselines3.common.on_policy_algorithm import OnPolicyAlgorithm
 
@@ -150,7 +152,7 @@ DEFAULT_HYPERPARAMETERS: dict[str, dict[str, Any]] = {name: algo.hyperparameters
 def algorithm(name: str) -> Algorithm:
     """The registry's entry of ``name``; ``ValueError`` naming the algorithms for an unknown one."""
     if name not in ALGORITHM_REGISTRY:
-        raise ValueError(f"algo must be one of {ALGORITHMS}, got {name!r}")
+        raise SMCError(f"algo must be one of {ALGORITHMS}, got {name!r}")
     return ALGORITHM_REGISTRY[name]
 
 
@@ -158,14 +160,14 @@ def recurrent_policy(rnn: str, algo: str | None = None) -> str:
     """The policy (by name) of the ``rnn`` option; ``ValueError`` for an unknown cell, or for ``algo`` when given and
     not taking it."""
     if rnn not in RECURRENT_POLICIES:
-        raise ValueError(f"rnn must be one of {sorted(RECURRENT_POLICIES)}, got {rnn!r}")
+        raise SMCError(f"rnn must be one of {sorted(RECURRENT_POLICIES)}, got {rnn!r}")
     entry = ALGORITHM_REGISTRY.get(algo) if algo is not None else None
     if algo is not None and (entry is None or not entry.recurrent):
         recurrent = [name for name, known in ALGORITHM_REGISTRY.items() if known.recurrent]
-        raise ValueError(f"rnn={rnn!r} needs a recurrent algorithm ({' or '.join(recurrent)}); {algo} has no "
-                         "recurrence")
+        raise SMCError(f"rnn={rnn!r} needs a recurrent algorithm ({' or '.join(recurrent)}); {algo} has no "
+                       "recurrence")
     if entry is not None and rnn not in entry.cells:
-        raise ValueError(f"rnn={rnn!r}: {algo} takes rnn {' or '.join(entry.cells)}")
+        raise SMCError(f"rnn={rnn!r}: {algo} takes rnn {' or '.join(entry.cells)}")
     return RECURRENT_POLICIES[rnn]
 
 
@@ -181,15 +183,15 @@ def encode_value(value: Any, where: str) -> Any:
         return value
     if isinstance(value, int | float):
         if isinstance(value, float) and not math.isfinite(value):
-            raise ValueError(f"hyperparameter {where}: {value} is not a finite number")
+            raise SMCError(f"hyperparameter {where}: {value} is not a finite number")
         return value
     if type(value).__module__ == "numpy" and hasattr(value, "item"):
         return encode_value(value.item(), where)
     if isinstance(value, type):
         path = f"{value.__module__}.{value.__qualname__}"
         if "<locals>" in path:
-            raise ValueError(f"hyperparameter {where}: class {path} is defined inside a function and cannot be "
-                             "imported again; define it at module level")
+            raise SMCError(f"hyperparameter {where}: class {path} is defined inside a function and cannot be "
+                           "imported again; define it at module level")
         return {CLASS_KEY: path}
     if isinstance(value, Mapping):
         if CLASS_KEY in value and len(value) == 1:
@@ -197,8 +199,8 @@ def encode_value(value: Any, where: str) -> Any:
         return {str(k): encode_value(v, f"{where}.{k}") for k, v in value.items()}
     if isinstance(value, list | tuple):
         return [encode_value(v, f"{where}[{i}]") for i, v in enumerate(value)]
-    raise ValueError(f"hyperparameter {where}: a {type(value).__name__} ({value!r}) cannot be stored in a training "
-                     "spec; use JSON values, classes, or 'lin_<initial value>' for a linear schedule")
+    raise SMCError(f"hyperparameter {where}: a {type(value).__name__} ({value!r}) cannot be stored in a training "
+                   "spec; use JSON values, classes, or 'lin_<initial value>' for a linear schedule")
 
 
 def _import_class(path: str, where: str) -> type:
@@ -208,7 +210,7 @@ def _import_class(path: str, where: str) -> type:
         for part in name.split("."):
             obj = getattr(obj, part)
     except (ImportError, AttributeError, ValueError) as err:
-        raise ValueError(f"hyperparameter {where}: cannot import class {path!r} ({err})") from None
+        raise SMCError(f"hyperparameter {where}: cannot import class {path!r} ({err})") from None
     return obj
 
 
@@ -231,7 +233,7 @@ def decode_value(value: Any, where: str) -> Any:
         try:
             return _linear(float(value[4:]))
         except ValueError:
-            raise ValueError(f"hyperparameter {where}: {value!r} is not 'lin_<number>'") from None
+            raise SMCError(f"hyperparameter {where}: {value!r} is not 'lin_<number>'") from None
     return value
 
 
@@ -241,7 +243,7 @@ def resolve_hyperparameters(algo: str, overrides: Mapping[str, Any] | None = Non
     overrides = dict(overrides or {})
     for key, why in _RESERVED.items():
         if key in overrides:
-            raise ValueError(f"hyperparameter {key!r} is not set through the hyperparameters ({why})")
+            raise SMCError(f"hyperparameter {key!r} is not set through the hyperparameters ({why})")
     resolved = copy.deepcopy(defaults)
     policy_kwargs = resolved.pop("policy_kwargs")
     policy_kwargs.update(overrides.pop("policy_kwargs", None) or {})
@@ -249,7 +251,7 @@ def resolve_hyperparameters(algo: str, overrides: Mapping[str, Any] | None = Non
     resolved["policy_kwargs"] = policy_kwargs
     policy = resolved.get("policy")
     if not isinstance(policy, str | type):
-        raise ValueError(f"hyperparameter 'policy' must be a policy name or class, got {policy!r}")
+        raise SMCError(f"hyperparameter 'policy' must be a policy name or class, got {policy!r}")
     return {key: encode_value(value, key) for key, value in resolved.items()}
 
 

@@ -23,6 +23,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from sb3_smc.errors import SMCError, SMCTypeError
+
 if TYPE_CHECKING:
     from stable_baselines3.common.base_class import BaseAlgorithm
     from stable_baselines3.common.policies import BasePolicy
@@ -77,7 +79,7 @@ def _activate(name: str, param: float, x: np.ndarray) -> np.ndarray:
         return np.where(x > 20.0, x, np.logaddexp(0.0, x))
     if name == "identity":
         return x
-    raise ValueError(f"unknown activation {name!r}")
+    raise SMCError(f"unknown activation {name!r}")
 
 
 ACTIVATIONS: dict[str, str] = {"Tanh": "tanh", "ReLU": "relu", "LeakyReLU": "leaky_relu", "ELU": "elu",
@@ -95,14 +97,14 @@ def _activation_spec(module: Any) -> tuple[str, float]:
     kind = type(module)
     name = ACTIVATIONS.get(kind.__name__)
     if name is None or getattr(nn, kind.__name__, None) is not kind:
-        raise TypeError(f"unsupported activation {kind.__name__} in the policy network "
-                        f"(supported: {sorted(ACTIVATIONS)})")
+        raise SMCTypeError(f"unsupported activation {kind.__name__} in the policy network "
+                           f"(supported: {sorted(ACTIVATIONS)})")
     if name == "leaky_relu":
         return name, float(module.negative_slope)
     if name == "elu":
         return name, float(module.alpha)
     if name == "softplus" and (module.beta != 1 or module.threshold != 20):
-        raise TypeError(f"unsupported Softplus parameters (beta={module.beta}, threshold={module.threshold})")
+        raise SMCTypeError(f"unsupported Softplus parameters (beta={module.beta}, threshold={module.threshold})")
     return name, 0.0
 
 
@@ -206,7 +208,7 @@ class NumpyLSTMPolicy(_RecurrentActor):
                  observation_size: int, dtype: Any = np.float64) -> None:
         self.dtype = np.dtype(dtype)
         if not lstm:
-            raise ValueError("NumpyLSTMPolicy needs at least one LSTM layer")
+            raise SMCError("NumpyLSTMPolicy needs at least one LSTM layer")
         self.hidden_size = int(np.shape(lstm[0][1])[0])
         self.n_layers = len(lstm)
         self.observation_size = int(observation_size)
@@ -221,8 +223,8 @@ class NumpyLSTMPolicy(_RecurrentActor):
             expected_in = self.observation_size if k == 0 else self.hidden_size
             gates = 4 * self.hidden_size
             if w_ih.shape != (expected_in, gates) or w_hh.shape != (self.hidden_size, gates) or bias.shape != (gates,):
-                raise ValueError(f"LSTM layer {k}: inconsistent weight shapes {w_ih.shape}, {w_hh.shape}, "
-                                 f"{bias.shape}")
+                raise SMCError(f"LSTM layer {k}: inconsistent weight shapes {w_ih.shape}, {w_hh.shape}, "
+                               f"{bias.shape}")
         self.head = [_cast_layer(layer, self.dtype) for layer in head]
         self.n_actions = _n_outputs(self.head)
         self._compiled = (*self.lstm[0], *self.head[0][1:]) if _compilable(self) else None
@@ -262,7 +264,7 @@ class NumpyLSTMPolicy(_RecurrentActor):
         arithmetic as :meth:`probabilities`, batched)."""
         x = np.asarray(observations, dtype=self.dtype).reshape(len(observations), -1)
         if len(states) != len(x):
-            raise ValueError(f"{len(x)} observations but {len(states)} states")
+            raise SMCError(f"{len(x)} observations but {len(states)} states")
         if self._compiled is not None:
             return _one_by_one(self, x, states)
         h_prev = np.array([s[0] for s in states])  # (B, layers, n)
@@ -302,7 +304,7 @@ class NumpyGRUPolicy(_RecurrentActor):
                  observation_size: int, dtype: Any = np.float64) -> None:
         self.dtype = np.dtype(dtype)
         if not gru:
-            raise ValueError("NumpyGRUPolicy needs at least one GRU layer")
+            raise SMCError("NumpyGRUPolicy needs at least one GRU layer")
         self.hidden_size = int(np.shape(gru[0][1])[0])
         self.n_layers = len(gru)
         self.observation_size = int(observation_size)
@@ -312,8 +314,8 @@ class NumpyGRUPolicy(_RecurrentActor):
             gates = 3 * self.hidden_size
             if (w_ih.shape != (expected_in, gates) or w_hh.shape != (self.hidden_size, gates)
                     or b_ih.shape != (gates,) or b_hh.shape != (gates,)):
-                raise ValueError(f"GRU layer {k}: inconsistent weight shapes {w_ih.shape}, {w_hh.shape}, "
-                                 f"{b_ih.shape}, {b_hh.shape}")
+                raise SMCError(f"GRU layer {k}: inconsistent weight shapes {w_ih.shape}, {w_hh.shape}, "
+                               f"{b_ih.shape}, {b_hh.shape}")
         self.head = [_cast_layer(layer, self.dtype) for layer in head]
         self.n_actions = _n_outputs(self.head)
         self._compiled = (*self.gru[0], *self.head[0][1:]) if _compilable(self) else None
@@ -347,7 +349,7 @@ class NumpyGRUPolicy(_RecurrentActor):
         """Probabilities ``(B, n_actions)`` and next states of ``B`` observations, one state per row."""
         x = np.asarray(observations, dtype=self.dtype).reshape(len(observations), -1)
         if len(states) != len(x):
-            raise ValueError(f"{len(x)} observations but {len(states)} states")
+            raise SMCError(f"{len(x)} observations but {len(states)} states")
         if self._compiled is not None:
             return _one_by_one(self, x, states)
         h_prev = np.array(states).transpose(1, 0, 2)  # (layers, B, n)
@@ -390,7 +392,7 @@ def _flat(observation: np.ndarray, size: int) -> np.ndarray:
     if x.dtype != np.float32 and x.dtype != np.float64:  # one compiled variant per input type: keep to these two
         x = x.astype(np.float64)
     if x.shape[0] != size:
-        raise ValueError(f"observation of {x.shape[0]} values, but the policy takes {size}")
+        raise SMCError(f"observation of {x.shape[0]} values, but the policy takes {size}")
     return x
 
 
@@ -415,7 +417,7 @@ def _cast_layer(layer: Layer, dtype: np.dtype) -> Layer:
 def _n_outputs(layers: Sequence[Layer]) -> int:
     linear = [a for name, a, _ in layers if name == "linear"]
     if not linear:
-        raise ValueError("the policy head needs at least the action layer")
+        raise SMCError("the policy head needs at least the action layer")
     return int(linear[-1].shape[1])
 
 
@@ -444,26 +446,26 @@ def policy_from_model(model: BaseAlgorithm | BasePolicy, dtype: Any = np.float64
     policy = getattr(model, "policy", model)
     what = type(model).__name__ + ("" if policy is model else f" ({type(policy).__name__})")
     if not isinstance(policy, ActorCriticPolicy):
-        raise TypeError(f"policy_from_model supports actor-critic policies (PPO, TRPO, RecurrentPPO), not {what}")
+        raise SMCTypeError(f"policy_from_model supports actor-critic policies (PPO, TRPO, RecurrentPPO), not {what}")
     if not isinstance(policy.action_space, spaces.Discrete):
-        raise TypeError(f"policy_from_model supports Discrete action spaces only, {what} has "
-                        f"{type(policy.action_space).__name__}")
+        raise SMCTypeError(f"policy_from_model supports Discrete action spaces only, {what} has "
+                           f"{type(policy.action_space).__name__}")
     if not isinstance(policy.action_dist, CategoricalDistribution):
-        raise TypeError(f"unsupported action distribution {type(policy.action_dist).__name__} in {what}")
+        raise SMCTypeError(f"unsupported action distribution {type(policy.action_dist).__name__} in {what}")
     space = policy.observation_space
     if not isinstance(space, spaces.Box):
-        raise TypeError(f"policy_from_model supports Box observations only, {what} has {type(space).__name__}")
+        raise SMCTypeError(f"policy_from_model supports Box observations only, {what} has {type(space).__name__}")
     from stable_baselines3.common.preprocessing import is_image_space
 
     if policy.normalize_images and is_image_space(space, check_channels=False):
-        raise TypeError(f"image observations (normalised by SB3) are not supported: {space}")
+        raise SMCTypeError(f"image observations (normalised by SB3) are not supported: {space}")
     extractor = policy.pi_features_extractor
     if type(extractor) is not FlattenExtractor:
-        raise TypeError(f"policy_from_model supports FlattenExtractor only, {what} uses {type(extractor).__name__} "
-                        "(use MlpPolicy / MlpLstmPolicy)")
+        raise SMCTypeError(f"policy_from_model supports FlattenExtractor only, {what} uses {type(extractor).__name__} "
+                           "(use MlpPolicy / MlpLstmPolicy)")
     mlp = policy.mlp_extractor
     if not isinstance(mlp, MlpExtractor) or type(mlp).forward_actor is not MlpExtractor.forward_actor:
-        raise TypeError(f"unsupported mlp_extractor {type(mlp).__name__} in {what}")
+        raise SMCTypeError(f"unsupported mlp_extractor {type(mlp).__name__} in {what}")
     observation_size = int(np.prod(space.shape))
     head = _sequential_layers(mlp.policy_net) + [_linear_layer(policy.action_net)]
 
@@ -480,7 +482,7 @@ def policy_from_model(model: BaseAlgorithm | BasePolicy, dtype: Any = np.float64
             return NumpyGRUPolicy(_gru_layers(policy.lstm_actor.gru), head, observation_size, dtype)
         return NumpyLSTMPolicy(_lstm_layers(policy.lstm_actor), head, observation_size, dtype)
     if hasattr(policy, "lstm_actor"):
-        raise TypeError(f"unsupported recurrent policy {what}")
+        raise SMCTypeError(f"unsupported recurrent policy {what}")
     _check_overrides(policy, ActorCriticPolicy, ("get_distribution", "_get_action_dist_from_latent"), what)
     return NumpyMLPPolicy(head, observation_size, dtype)
 
@@ -488,7 +490,7 @@ def policy_from_model(model: BaseAlgorithm | BasePolicy, dtype: Any = np.float64
 def _check_overrides(policy: Any, base: type, methods: Sequence[str], what: str) -> None:
     for method in methods:
         if getattr(type(policy), method) is not getattr(base, method):
-            raise TypeError(f"{what} overrides {method}; policy_from_model cannot reproduce it")
+            raise SMCTypeError(f"{what} overrides {method}; policy_from_model cannot reproduce it")
 
 
 def _numpy(tensor: Any) -> np.ndarray:
@@ -499,7 +501,7 @@ def _linear_layer(module: Any) -> Layer:
     from torch import nn
 
     if type(module) is not nn.Linear:
-        raise TypeError(f"expected a Linear layer, got {type(module).__name__}")
+        raise SMCTypeError(f"expected a Linear layer, got {type(module).__name__}")
     bias = _numpy(module.bias) if module.bias is not None else np.zeros(module.out_features)
     return "linear", _numpy(module.weight).T, bias
 
@@ -525,9 +527,9 @@ def _lstm_layers(lstm: Any) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
     from torch import nn
 
     if type(lstm) is not nn.LSTM:
-        raise TypeError(f"expected torch.nn.LSTM as lstm_actor, got {type(lstm).__name__}")
+        raise SMCTypeError(f"expected torch.nn.LSTM as lstm_actor, got {type(lstm).__name__}")
     if lstm.bidirectional or lstm.proj_size or lstm.batch_first:
-        raise ValueError("unsupported LSTM options (bidirectional, proj_size or batch_first) in lstm_actor")
+        raise SMCError("unsupported LSTM options (bidirectional, proj_size or batch_first) in lstm_actor")
     layers = []
     for k in range(lstm.num_layers):
         w_ih = _numpy(getattr(lstm, f"weight_ih_l{k}"))
@@ -564,7 +566,7 @@ class ScriptedPolicy:
 
     def __init__(self, n_actions: int, choose: Callable[[np.ndarray, int], int]) -> None:
         if n_actions < 1:
-            raise ValueError(f"n_actions must be positive, got {n_actions}")
+            raise SMCError(f"n_actions must be positive, got {n_actions}")
         self.n_actions = int(n_actions)
         self.choose = choose
 
@@ -587,16 +589,16 @@ class SequencePolicy:
 
     def __init__(self, n_actions: int, actions: Sequence[int], when_exhausted: str = "repeat") -> None:
         if n_actions < 1:
-            raise ValueError(f"n_actions must be positive, got {n_actions}")
+            raise SMCError(f"n_actions must be positive, got {n_actions}")
         if when_exhausted not in ("repeat", "raise"):
-            raise ValueError(f"when_exhausted must be 'repeat' or 'raise', got {when_exhausted!r}")
+            raise SMCError(f"when_exhausted must be 'repeat' or 'raise', got {when_exhausted!r}")
         self.n_actions = int(n_actions)
         self.actions = tuple(int(a) for a in actions)
         if not self.actions:
-            raise ValueError("SequencePolicy needs at least one action")
+            raise SMCError("SequencePolicy needs at least one action")
         bad = [a for a in self.actions if not 0 <= a < self.n_actions]
         if bad:
-            raise ValueError(f"actions {bad} out of range for {self.n_actions} actions")
+            raise SMCError(f"actions {bad} out of range for {self.n_actions} actions")
         self.when_exhausted = when_exhausted
 
     def initial_state(self) -> int:
@@ -615,7 +617,7 @@ class SequencePolicy:
 
 def _one_hot(action: int, n: int) -> np.ndarray:
     if not 0 <= action < n:
-        raise ValueError(f"action {action} out of range for {n} actions")
+        raise SMCError(f"action {action} out of range for {n} actions")
     probs = np.zeros(n)
     probs[action] = 1.0
     return probs
@@ -634,7 +636,7 @@ class FrameStackPolicy:
 
     def __init__(self, inner: StepPolicy, n_stack: int, observation_size: int) -> None:
         if n_stack < 1:
-            raise ValueError(f"n_stack must be >= 1, got {n_stack}")
+            raise SMCError(f"n_stack must be >= 1, got {n_stack}")
         self.inner = inner
         self.n_stack = int(n_stack)
         self.observation_size = int(observation_size)
@@ -666,12 +668,12 @@ def sample_action(probabilities: np.ndarray, rng: np.random.Generator) -> int:
     if type(probabilities) is np.ndarray and probabilities.dtype == np.float64 and probabilities.ndim == 1:
         index = _kernels().sample_index(probabilities, rng.random())
         if index < 0:
-            raise ValueError(f"probabilities must have a positive finite sum, got {probabilities.sum()}")
+            raise SMCError(f"probabilities must have a positive finite sum, got {probabilities.sum()}")
         return index
     cdf = np.asarray(probabilities).cumsum()  # array methods: no numpy dispatch wrappers on this hot path
     total = cdf[-1]
     if not 0.0 < total < np.inf:
-        raise ValueError(f"probabilities must have a positive finite sum, got {total}")
+        raise SMCError(f"probabilities must have a positive finite sum, got {total}")
     index = int(cdf.searchsorted(rng.random() * total, side="right"))
     if index >= len(cdf):  # rounding at the top end: the last action of positive probability
         index = int(np.flatnonzero(np.asarray(probabilities) > 0)[-1])
@@ -684,7 +686,7 @@ def sample_actions(probabilities: np.ndarray, rng: np.random.Generator) -> np.nd
     cdf = np.cumsum(p, axis=1)
     total = cdf[:, -1:]
     if not np.all(total > 0.0):
-        raise ValueError("every row of probabilities must have a positive finite sum")
+        raise SMCError("every row of probabilities must have a positive finite sum")
     u = rng.random((len(p), 1)) * total
     index = (cdf <= u).sum(axis=1)
     top = index >= p.shape[1]

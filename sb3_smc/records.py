@@ -26,6 +26,7 @@ from importlib import metadata as importlib_metadata
 from typing import Any, ClassVar, TypeVar
 
 from pixelworld_env.validation import as_integer
+from sb3_smc.errors import SMCError
 from sb3_smc.hyperparameters import (
     ALGORITHMS,
     DEFAULT_N_ENVS,
@@ -53,7 +54,7 @@ SPLITS = ("train", "test", "all")
 R = TypeVar("R", bound="_Record")
 
 
-class RecordError(ValueError):
+class RecordError(SMCError):
     """A record's field is missing, unknown, or of the wrong type or value (the message names it)."""
 
 
@@ -446,7 +447,7 @@ class TrainingSpec(_Record):
     def action_names(self) -> tuple[str, ...]:
         """The SMC's actions (``ValueError`` while the task's kind is unknown)."""
         if self.task.kind is None:
-            raise ValueError(f"SMC {self.name!r}: the kind of task {self.task.env_id!r} is not known yet")
+            raise SMCError(f"SMC {self.name!r}: the kind of task {self.task.env_id!r} is not known yet")
         return smc_action_names(self.task.kind, self.children, self.wrapper.include_primitives)
 
     @property

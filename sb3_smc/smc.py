@@ -15,6 +15,8 @@ from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 import numpy as np
 
+from sb3_smc.errors import SMCError
+
 if TYPE_CHECKING:
     from sb3_smc.records import EvaluationRecord, TrainingRecord, TrainingSpec
 
@@ -46,7 +48,7 @@ class StepPolicy(Protocol):
 def smc_action_names(kind: str, children: Sequence[str] = (), include_primitives: bool = True) -> tuple[str, ...]:
     """The action list of an SMC of task ``kind`` with child SMCs named ``children``."""
     if kind not in SIGNALS:
-        raise ValueError(f"kind must be one of {tuple(SIGNALS)}, got {kind!r}")
+        raise SMCError(f"kind must be one of {tuple(SIGNALS)}, got {kind!r}")
     moves = MOVES if include_primitives else ()
     return (*SIGNALS[kind], *moves, *(CALL_PREFIX + name for name in children))
 
@@ -79,13 +81,13 @@ class SMC:
 
     def __post_init__(self) -> None:
         if self.kind not in SIGNALS:
-            raise ValueError(f"SMC {self.name!r}: kind must be one of {tuple(SIGNALS)}, got {self.kind!r}")
+            raise SMCError(f"SMC {self.name!r}: kind must be one of {tuple(SIGNALS)}, got {self.kind!r}")
         self.children = tuple(self.children)
         names = [child.name for child in self.children]
         if len(set(names)) != len(names):
-            raise ValueError(f"SMC {self.name!r}: child names must be unique, got {names}")
+            raise SMCError(f"SMC {self.name!r}: child names must be unique, got {names}")
         if _calls(self, self.name):
-            raise ValueError(f"SMC {self.name!r} calls itself (directly or through its children)")
+            raise SMCError(f"SMC {self.name!r} calls itself (directly or through its children)")
         self.evaluations = tuple(self.evaluations)
         if self.spec is not None:
             spec = self.spec
@@ -94,7 +96,7 @@ class SMC:
             wrong = {k: v for k, v in found.items() if v[0] != v[1]}
             if wrong:
                 detail = "; ".join(f"{k}: spec {a!r}, SMC {b!r}" for k, (a, b) in wrong.items())
-                raise ValueError(f"SMC {self.name!r}: its training spec does not match it ({detail})")
+                raise SMCError(f"SMC {self.name!r}: its training spec does not match it ({detail})")
 
     def __deepcopy__(self, memo: dict) -> SMC:
         # An SMC is frozen once built: copies of env specs, wrappers and configs share it (its model may hold
@@ -119,7 +121,7 @@ class SMC:
     def add_evaluation(self, evaluation: EvaluationRecord) -> None:
         """Keep ``evaluation``, replacing an earlier one of the same env id and split."""
         if evaluation.smc != self.name:
-            raise ValueError(f"evaluation of SMC {evaluation.smc!r} given to SMC {self.name!r}")
+            raise SMCError(f"evaluation of SMC {evaluation.smc!r} given to SMC {self.name!r}")
         self.evaluations = (*(e for e in self.evaluations if e.key != evaluation.key), evaluation)
 
     def check_layout(self, caller: str | None = None) -> None:
@@ -135,15 +137,15 @@ class SMC:
         stack = getattr(policy, "n_stack", None)
         inner = getattr(getattr(policy, "inner", None), "observation_size", None)
         if stack is not None and inner is not None and inner != stack * size:
-            raise ValueError(f"{where}: its policy stacks {stack} frames of {declared} values into {inner} inputs, but "
-                             f"as an SMC it gets frames of {size} ({layout})")
+            raise SMCError(f"{where}: its policy stacks {stack} frames of {declared} values into {inner} inputs, but "
+                           f"as an SMC it gets frames of {size} ({layout})")
         if declared is not None and declared != size:
-            raise ValueError(f"{where}: its policy expects observations of {declared} values, but as an SMC it gets "
-                             f"{size} ({layout}); was it trained with other children or actions?")
+            raise SMCError(f"{where}: its policy expects observations of {declared} values, but as an SMC it gets "
+                           f"{size} ({layout}); was it trained with other children or actions?")
         declared_actions = getattr(policy, "n_actions", None)
         if declared_actions is not None and declared_actions != n_actions:
-            raise ValueError(f"{where}: its policy gives {declared_actions} action probabilities, but its actions are "
-                             f"{n_actions}: {list(self.action_names)}")
+            raise SMCError(f"{where}: its policy gives {declared_actions} action probabilities, but its actions are "
+                           f"{n_actions}: {list(self.action_names)}")
         for child in self.children:
             child.check_layout(self.name)
 

@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+from pixelworld_env.errors import PixelWorldError
 
-class ConceptError(ValueError):
+
+class ConceptError(PixelWorldError):
     """Base class of every concept-language error."""
 
 

@@ -9,6 +9,7 @@ from dataclasses import dataclass
 from pixelworld_env.concepts.errors import ArityError, MacroNameError, UnknownPredicateError
 from pixelworld_env.concepts.parser import SELF, Clause, Expression, expand, parse
 from pixelworld_env.concepts.predicates import PREDICATES, EvalContext, Predicate
+from pixelworld_env.errors import PixelWorldTypeError
 from pixelworld_env.objects import WorldObject
 from pixelworld_env.scene import Scene
 
@@ -36,8 +37,8 @@ class Concept:
     def __init__(self, text: str | Expression, macros: Macros | None = None, *,
                  dir_above_quirk: bool = False) -> None:
         if not isinstance(text, str | Expression):
-            raise TypeError(f"a concept is an expression string (or a parsed Expression), got {text!r} "
-                            f"({type(text).__name__})")
+            raise PixelWorldTypeError(f"a concept is an expression string (or a parsed Expression), got {text!r} "
+                                      f"({type(text).__name__})")
         self._source = text
         expression = parse(text) if isinstance(text, str) else text
         self.text = str(text)
@@ -46,10 +47,11 @@ class Concept:
 
             macros = catalog_macros()
         if not isinstance(macros, Mapping):
-            raise TypeError(f"macros must map names to expression strings, got {type(macros).__name__}")
+            raise PixelWorldTypeError(f"macros must map names to expression strings, got {type(macros).__name__}")
         for name, body in macros.items():
             if not isinstance(body, str | Expression):
-                raise TypeError(f"macro {name!r} must be an expression string, got {body!r} ({type(body).__name__})")
+                raise PixelWorldTypeError(f"macro {name!r} must be an expression string, got {body!r} "
+                                          f"({type(body).__name__})")
             if name in PREDICATES:
                 raise MacroNameError(name)
         self.macros = dict(macros)
@@ -232,6 +234,6 @@ def holds(expression: str | Concept, scene: Scene, macros: Macros | None = None)
     catalog's table (every AAAI-18 concept and generator, :func:`pixelworld_env.catalog.macros`).
     """
     if not isinstance(scene, Scene):
-        raise TypeError(f"holds needs a Scene, got {scene!r} ({type(scene).__name__})")
+        raise PixelWorldTypeError(f"holds needs a Scene, got {scene!r} ({type(scene).__name__})")
     concept = expression if isinstance(expression, Concept) else Concept(expression, macros)
     return concept.holds(scene)

@@ -24,6 +24,7 @@ from pixelworld_env.concepts.errors import (
     NegatedMacroError,
     UndeclaredVariableError,
 )
+from pixelworld_env.errors import PixelWorldTypeError
 
 SELF = "self"
 MAX_MACRO_DEPTH = 100
@@ -168,7 +169,7 @@ def _check_declared(expression: Expression) -> None:
 def parse(text: str) -> Expression:
     """Parse concept text into an :class:`Expression` (macros not yet expanded)."""
     if not isinstance(text, str):
-        raise TypeError(f"a concept expression must be a string, got {type(text).__name__}")
+        raise PixelWorldTypeError(f"a concept expression must be a string, got {type(text).__name__}")
     return _parse_cached(text)
 
 

@@ -34,6 +34,7 @@ from typing import Any
 
 import yaml
 
+from sb3_smc.errors import SMCError
 from sb3_smc.hyperparameters import ALGORITHMS
 
 __all__ = ["FORMAT_KEYS", "NODE_KEYS", "SEED_SEPARATOR", "Curriculum", "CurriculumError", "Node", "load_curriculum",
@@ -47,7 +48,7 @@ SEED_SEPARATOR = "@"
 """SMC names in a curriculum's library are ``<node>@<seed>``; node names may not contain it."""
 
 
-class CurriculumError(ValueError):
+class CurriculumError(SMCError):
     """A curriculum file or object is malformed; the message names the file, the line where known, and the node."""
 
 

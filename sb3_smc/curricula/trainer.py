@@ -46,6 +46,7 @@ from typing import Any
 
 from pixelworld_env.atomic import atomic_write, make_temporary_directory
 from sb3_smc.curricula.format import SEED_SEPARATOR, Curriculum, CurriculumError, Node, merge
+from sb3_smc.errors import SMCError, SMCRuntimeError, SMCTypeError
 from sb3_smc.hyperparameters import (
     DEFAULT_ALGORITHM,
     DEFAULT_TIMESTEPS,
@@ -73,12 +74,12 @@ RUN_FORMAT = "sb3-smc-run"
 RUN_VERSION = 1
 
 
-class RunSettingsError(ValueError):
+class RunSettingsError(SMCError):
     """The run directory was started with other settings (the message lists the differences), or is not a run
     directory."""
 
 
-class RunFileError(ValueError):
+class RunFileError(SMCError):
     """A file of a run or experiment directory is not what it should be (the message names it and what it should
     hold)."""
 
@@ -417,13 +418,13 @@ def check_run_options(*, seeds: int = DEFAULT_SEEDS, timesteps: int | None = Non
     """``ValueError`` naming the first option of a run that is out of range (before anything is done)."""
     for name, value, optional in (("seeds", seeds, False), ("workers", workers, False), ("timesteps", timesteps, True)):
         if not (optional and value is None) and (isinstance(value, bool) or not isinstance(value, int) or value < 1):
-            raise ValueError(f"{name} must be a positive integer, got {value!r}")
+            raise SMCError(f"{name} must be a positive integer, got {value!r}")
     if reuse not in REUSE:
-        raise ValueError(f"reuse must be one of {list(REUSE)}, got {reuse!r}")
+        raise SMCError(f"reuse must be one of {list(REUSE)}, got {reuse!r}")
     if backend not in BACKENDS:
-        raise ValueError(f"backend must be {' or '.join(map(repr, BACKENDS))}, got {backend!r}")
+        raise SMCError(f"backend must be {' or '.join(map(repr, BACKENDS))}, got {backend!r}")
     if ray_address is not None and backend != "ray":
-        raise ValueError(f"a Ray address ({ray_address!r}) is for backend 'ray', not {backend!r}")
+        raise SMCError(f"a Ray address ({ray_address!r}) is for backend 'ray', not {backend!r}")
     if algo is not None:
         algorithm(algo)  # a known algorithm
     if rnn is not None:
@@ -459,14 +460,14 @@ def _plan_skip(curriculum: Curriculum, order: list[str], targets: Sequence[str],
     job's node uses (at any depth) is trained with every seed, skipped or not; the other skipped jobs are skipped,
     and nodes that no wanted job needs are left out."""
     if isinstance(skip, str):
-        raise TypeError(f"skip must be a collection of job names, got the string {skip!r}")
+        raise SMCTypeError(f"skip must be a collection of job names, got the string {skip!r}")
     names = frozenset(skip)
     known = set(order)
     for name in names:
         node, sep, seed = name.rpartition(SEED_SEPARATOR)
         if not sep or node not in known or not seed.isdigit() or str(int(seed)) != seed or int(seed) >= seeds:
-            raise ValueError(f"skip: {name!r} is not a job of this run (<node>{SEED_SEPARATOR}<seed> with one of its "
-                             f"{len(order)} nodes and a seed below {seeds})")
+            raise SMCError(f"skip: {name!r} is not a job of this run (<node>{SEED_SEPARATOR}<seed> with one of its "
+                           f"{len(order)} nodes and a seed below {seeds})")
     wanted = [n for n in targets if any(job_name(n, s) not in names for s in range(seeds))]
     required: set[str] = set()
     for name in wanted:
@@ -826,13 +827,13 @@ class _Ray:
         try:
             import ray
         except ImportError:
-            raise RuntimeError("backend='ray' needs Ray: pip install 'sb3-smc[ray]'") from None
+            raise SMCRuntimeError("backend='ray' needs Ray: pip install 'sb3-smc[ray]'") from None
         self._ray = ray
         if not ray.is_initialized():
             address = address or os.environ.get("RAY_ADDRESS")
             if address is None:
-                raise RuntimeError("backend='ray' runs on an existing Ray cluster: pass ray_address (--ray-address) "
-                                   "or set RAY_ADDRESS (e.g. 'auto' on a node of the cluster, or ray://host:10001)")
+                raise SMCRuntimeError("backend='ray' runs on an existing Ray cluster: pass ray_address (--ray-address) "
+                                      "or set RAY_ADDRESS (e.g. 'auto' on a node of the cluster, or ray://host:10001)")
             ray.init(address=address, log_to_driver=False)
         self._remote = ray.remote(num_cpus=1, max_retries=0)(run_job)
         self._pending: set[Any] = set()

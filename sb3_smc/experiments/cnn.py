@@ -23,6 +23,8 @@ from typing import Any
 
 import numpy as np
 
+from sb3_smc.errors import SMCError
+
 __all__ = ["CHANNELS", "CNNResult", "encode", "train_cnn"]
 
 CHANNELS = (0, 1, 2, 3, 7)
@@ -68,7 +70,7 @@ def train_cnn(target: str, seed: int, *, dataset_seed: int = 0) -> CNNResult:
     from sb3_smc.common.threads import torch_threads
 
     if catalog.dataset(target).kind != "classification":
-        raise ValueError(f"the CNN baseline classifies: {target!r} is a bring-about dataset")
+        raise SMCError(f"the CNN baseline classifies: {target!r} is a bring-about dataset")
     with torch_threads(1):
         return _train(target, seed, dataset_seed)
 

@@ -13,6 +13,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 from sb3_smc.curricula.format import Curriculum, CurriculumError, Node, merge
+from sb3_smc.errors import SMCError
 
 __all__ = ["CATEGORIES", "DEFAULT_REPEATS", "METHODS", "METHOD_REGISTRY", "PAPER_CATEGORIES", "SMC_METHODS",
            "ExperimentMethod", "ExperimentPlan", "level2_targets", "plan"]
@@ -68,7 +69,7 @@ def level2_targets(category: str = "all") -> list[str]:
     from sb3_smc.curricula import shipped_curricula
 
     if category != "all" and category not in CATEGORIES:
-        raise ValueError(f"category must be one of {(*CATEGORIES, 'all')}, got {category!r}")
+        raise SMCError(f"category must be one of {(*CATEGORIES, 'all')}, got {category!r}")
     targets = {c.node(t).task for c in shipped_curricula().values() if c.method in ("smc-curr", "smc-canon")
                for t in c.targets}
     wanted = PAPER_CATEGORIES if category == "all" else (category,)
@@ -103,15 +104,15 @@ def plan(targets: Sequence[str], methods: Sequence[str]) -> ExperimentPlan:
 
     unknown = [m for m in methods if m not in METHODS]
     if unknown:
-        raise ValueError(f"unknown method(s) {unknown}; methods are {list(METHODS)}")
+        raise SMCError(f"unknown method(s) {unknown}; methods are {list(METHODS)}")
     if not methods:
-        raise ValueError(f"no methods: nothing to run; methods are {list(METHODS)}")
+        raise SMCError(f"no methods: nothing to run; methods are {list(METHODS)}")
     if not targets:
-        raise ValueError("no targets: nothing to run")
+        raise SMCError("no targets: nothing to run")
     for given, what in ((methods, "method"), (targets, "target")):
         twice = sorted({x for x in given if list(given).count(x) > 1})
         if twice:
-            raise ValueError(f"{what} {twice[0]!r} is given twice")
+            raise SMCError(f"{what} {twice[0]!r} is given twice")
     for target in targets:
         catalog.dataset(target)  # UnknownDatasetError with close names
     shipped = shipped_curricula()
@@ -140,9 +141,9 @@ def plan(targets: Sequence[str], methods: Sequence[str]) -> ExperimentPlan:
         wanted = [t for t in targets if not method.classifies_only or catalog.dataset(t).kind == "classification"]
         nodes.update({(t, method.name): () for t in wanted})
     if not nodes:
-        raise ValueError(f"nothing to run: the CNN (method cnn) classifies only, and {', '.join(targets)} "
-                         f"{'is a bring-about target' if len(targets) == 1 else 'are bring-about targets'}; add an "
-                         "SMC method (base, curr, ...) or a classification target")
+        raise SMCError(f"nothing to run: the CNN (method cnn) classifies only, and {', '.join(targets)} "
+                       f"{'is a bring-about target' if len(targets) == 1 else 'are bring-about targets'}; add an "
+                       "SMC method (base, curr, ...) or a classification target")
     missing = [(t, m) for t in targets for m in methods if METHOD_REGISTRY[m].smc and (t, m) not in nodes]
     if missing:
         raise CurriculumError(f"no shipped curriculum trains {missing[0][0]!r} with method {missing[0][1]!r} "

@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from pixelworld_env.atomic import atomic_write
+from sb3_smc.errors import SMCError
 from sb3_smc.experiments.design import CATEGORIES, METHOD_REGISTRY, METHODS, PAPER_CATEGORIES, SMC_METHODS
 from sb3_smc.experiments.figures import Panel, bar_panels
 from sb3_smc.experiments.paper import PAPER_CONCEPTS, PAPER_COUNTS, PAPER_MEANS, PAPER_NOPRIM, PAPER_TTESTS
@@ -63,7 +64,7 @@ def write_report(directories: str | Path | Sequence[str | Path], *, out: str | P
     """
     items = [Path(directories)] if isinstance(directories, str | Path) else [Path(d) for d in directories]
     if not items:
-        raise ValueError("no experiment directories to report on")
+        raise SMCError("no experiment directories to report on")
     sources = [(d, read_results(d)) for d in items]  # every directory read before anything is written
     if out is None:
         return [_write([source], source[0], trajectories, behaviour) for source in sources]
@@ -79,8 +80,8 @@ def _merge(sources: Sequence[tuple[Path, dict[str, Any]]]) -> tuple[list[dict[st
         for entry in results["reported"]:
             key = (entry["target"], entry["method"])
             if key in seen:
-                raise ValueError(f"{key[0]} with {key[1]} is in both {seen[key]} and {directory}: report them "
-                                 "separately, or keep one")
+                raise SMCError(f"{key[0]} with {key[1]} is in both {seen[key]} and {directory}: report them "
+                               "separately, or keep one")
             seen[key] = directory
         rows += results["rows"]
         reported += results["reported"]
@@ -122,7 +123,7 @@ class _Table:
 
     def __init__(self, rows: Sequence[dict[str, Any]], reported: Sequence[dict[str, Any]]) -> None:
         if not reported:
-            raise ValueError("no results to report")
+            raise SMCError("no results to report")
         self.methods = [m for m in METHODS if any(r["method"] == m for r in reported)]
         self.score = {(r["target"], r["method"]): r["test_score"] for r in reported}
         self.targets = sorted({r["target"] for r in reported})
@@ -171,7 +172,7 @@ def _write(sources: Sequence[tuple[Path, dict[str, Any]]], out: Path, trajectori
     if behaviour:
         chosen = trajectories or targets[0]
         if chosen not in targets:
-            raise ValueError(f"--trajectories {chosen!r} is not a target of the report ({', '.join(targets)})")
+            raise SMCError(f"--trajectories {chosen!r} is not a target of the report ({', '.join(targets)})")
         home = next(d for d, results in sources if any(r["target"] == chosen for r in results["reported"]))
         pictures, behaviour_note = _behaviour(home, figures_dir, reported, chosen)
         figures += pictures

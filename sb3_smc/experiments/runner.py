@@ -45,6 +45,7 @@ from sb3_smc.curricula.trainer import (
     read_json,
     train_curriculum,
 )
+from sb3_smc.errors import SMCError, SMCRuntimeError
 from sb3_smc.experiments.design import DEFAULT_REPEATS, METHOD_REGISTRY, METHODS, level2_targets, plan
 from sb3_smc.hyperparameters import DEFAULT_ALGORITHM, DEFAULT_TIMESTEPS
 from sb3_smc.records import package_versions
@@ -84,9 +85,9 @@ def run_experiment(
     from pixelworld_env import catalog
 
     if targets is not None and category is not None:
-        raise ValueError("give targets or a category, not both")
+        raise SMCError("give targets or a category, not both")
     if isinstance(repeats, bool) or not isinstance(repeats, int) or repeats < 1:
-        raise ValueError(f"repeats must be a positive integer, got {repeats!r}")
+        raise SMCError(f"repeats must be a positive integer, got {repeats!r}")
     check_run_options(seeds=seeds, timesteps=timesteps, workers=workers, backend=backend, ray_address=ray_address,
                       algo=algo, rnn=rnn)
     chosen = list(targets) if targets is not None else level2_targets(category or "all")
@@ -110,9 +111,9 @@ def run_experiment(
                                timesteps=timesteps, workers=workers, backend=backend, ray_address=ray_address,
                                algo=algo, rnn=rnn, progress=progress, printer=printer, skip=set(kept))
         if run.failed:
-            raise RuntimeError(f"{len(run.failed)} training job(s) failed ({', '.join(sorted(run.failed)[:5])}; "
-                               f"tracebacks in {directory / 'failed'}): nothing evaluated; run the same command "
-                               "again to retry them")
+            raise SMCRuntimeError(f"{len(run.failed)} training job(s) failed ({', '.join(sorted(run.failed)[:5])}; "
+                                  f"tracebacks in {directory / 'failed'}): nothing evaluated; run the same command "
+                                  "again to retry them")
     rows: list[dict[str, Any]] = []
     missing: list[str] = []
     for (target, method), nodes in sorted(design.nodes.items()):
@@ -250,9 +251,9 @@ def _saved_evaluation(path: Path, repeats: int) -> dict[str, Any] | None:
     try:
         saved = json.loads(path.read_text(encoding="utf-8"))
     except json.JSONDecodeError as err:
-        raise ValueError(f"{path} is not valid JSON ({err}); delete it to evaluate that SMC again") from None
+        raise SMCError(f"{path} is not valid JSON ({err}); delete it to evaluate that SMC again") from None
     if not isinstance(saved, dict) or not isinstance(saved.get("test_score"), int | float):
-        raise ValueError(f"{path} is not an sb3-smc evaluation (no test_score); delete it to evaluate that SMC again")
+        raise SMCError(f"{path} is not an sb3-smc evaluation (no test_score); delete it to evaluate that SMC again")
     return saved if saved.get("repeats") == repeats else None
 
 

@@ -5,11 +5,13 @@ from __future__ import annotations
 import difflib
 from collections.abc import Sequence
 
+from sb3_smc.errors import SMCError, SMCKeyError
+
 __all__ = ["CorruptModelError", "LayoutMismatchError", "LibraryError", "ManifestError", "MissingChildError",
            "UnknownSMCError", "suggest"]
 
 
-class LibraryError(ValueError):
+class LibraryError(SMCError):
     """Any problem with an SMC library (base class of the errors below)."""
 
 
@@ -17,11 +19,8 @@ class ManifestError(LibraryError):
     """The manifest is missing, unreadable, of another format or version, or has wrong or missing fields."""
 
 
-class UnknownSMCError(LibraryError, KeyError):
+class UnknownSMCError(LibraryError, SMCKeyError):
     """No SMC of that name in the library (the message suggests close names)."""
-
-    def __str__(self) -> str:  # KeyError would quote the message
-        return str(self.args[0]) if self.args else ""
 
 
 class MissingChildError(LibraryError):

@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from sb3_smc.envs import make_smc_env, pixelworld_base, wrap_with_smcs
+from sb3_smc.errors import SMCTypeError
 from sb3_smc.library import storage
 from sb3_smc.library.errors import (
     CorruptModelError,
@@ -117,7 +118,7 @@ class SMCLibrary(Mapping[str, SMC]):
         or a copy calling the library's own child objects when ``smc``'s children are equal but other objects.
         """
         if not isinstance(smc, SMC):
-            raise TypeError(f"SMCLibrary.add expects an SMC, got {type(smc).__name__}")
+            raise SMCTypeError(f"SMCLibrary.add expects an SMC, got {type(smc).__name__}")
         before = dict(self._smcs)
         try:
             return self._add(smc, replace)

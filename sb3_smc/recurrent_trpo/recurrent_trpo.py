@@ -27,6 +27,7 @@ from torch.distributions import Categorical, kl_divergence
 from torch.nn import functional as F
 
 from sb3_smc.common.recurrent import SequenceGruPolicy, SequenceLstmPolicy, use_compact_buffer
+from sb3_smc.errors import SMCError, SMCTypeError
 
 if TYPE_CHECKING:
     from stable_baselines3.common.type_aliases import GymEnv, MaybeCallback
@@ -102,9 +103,9 @@ class RecurrentTRPO(RecurrentPPO):
                  seed: int | None = None, device: torch.device | str = "auto", _init_setup_model: bool = True
                  ) -> None:
         if baseline not in BASELINES:
-            raise ValueError(f"baseline must be one of {BASELINES}, got {baseline!r}")
+            raise SMCError(f"baseline must be one of {BASELINES}, got {baseline!r}")
         if not target_kl > 0:
-            raise ValueError(f"target_kl must be > 0, got {target_kl}")
+            raise SMCError(f"target_kl must be > 0, got {target_kl}")
         self.cg_max_steps = cg_max_steps
         self.cg_damping = cg_damping
         self.line_search_shrinking_factor = line_search_shrinking_factor
@@ -125,8 +126,8 @@ class RecurrentTRPO(RecurrentPPO):
     def _setup_model(self) -> None:
         super()._setup_model()
         if not isinstance(self.policy, SequenceLstmPolicy):
-            raise TypeError(f"RecurrentTRPO needs a SequenceLstmPolicy or SequenceGruPolicy (\"MlpLstmPolicy\" / "
-                            f"\"MlpGruPolicy\"), got {type(self.policy).__name__}")
+            raise SMCTypeError(f"RecurrentTRPO needs a SequenceLstmPolicy or SequenceGruPolicy (\"MlpLstmPolicy\" / "
+                               f"\"MlpGruPolicy\"), got {type(self.policy).__name__}")
         use_compact_buffer(self)
 
     # ------------------------------------------------------------------------------------ the linear baseline

@@ -14,6 +14,7 @@ from typing import Any
 
 import yaml
 
+from sb3_smc.errors import SMCError
 from sb3_smc.hyperparameters import ALGORITHM_REGISTRY, DEFAULT_N_ENVS, DEFAULT_TIMESTEPS, STEPS_PER_UPDATE
 
 __all__ = ["CALLBACK", "ENV_WRAPPER", "ZOO_ALGOS", "ZOO_POLICY_NAMES", "hyperparams_for", "render_config",
@@ -96,5 +97,5 @@ def hyperparams_for(zoo_algo: str) -> dict[str, Any]:
     """What ``-conf sb3_smc.zoo.<zoo_algo>`` gives rl_zoo3: ``{"default": <the shipped file's settings>}`` (rl_zoo3
     uses ``default`` for every env id that has no entry of its own, so every PW-* id gets them)."""
     if zoo_algo not in ZOO_ALGOS:
-        raise ValueError(f"no shipped rl_zoo3 configuration for --algo {zoo_algo!r} (have: {sorted(ZOO_ALGOS)})")
+        raise SMCError(f"no shipped rl_zoo3 configuration for --algo {zoo_algo!r} (have: {sorted(ZOO_ALGOS)})")
     return yaml.safe_load(render_config(zoo_algo))

@@ -9,6 +9,7 @@ from collections.abc import Sequence
 from typing import Any
 
 from sb3_smc.callbacks import SMCTrainingCallback
+from sb3_smc.errors import SMCError, SMCTypeError
 from sb3_smc.records import WrapperSettings
 
 __all__ = ["SMCZooCallback", "smc_env"]
@@ -35,7 +36,7 @@ def smc_env(env: Any, library: str | None = None, names: Sequence[str] = (), inc
     from sb3_smc.envs import pixelworld_base, wrap_with_smcs
 
     if names and library is None:
-        raise ValueError(f"smc_env: names {list(names)} given without the library they come from")
+        raise SMCError(f"smc_env: names {list(names)} given without the library they come from")
     smcs = [_library(str(library))[name] for name in names] if library is not None else []
     settings = WrapperSettings(include_primitives=include_primitives, count_primitive_steps=count_primitive_steps,
                                call_step_cap=call_step_cap)
@@ -68,6 +69,6 @@ class SMCZooCallback(SMCTrainingCallback):
             self.kind = env.get_attr("kind")[0]
             self.children = tuple(smc.name for smc in env.get_attr("smcs")[0])
         except AttributeError as error:
-            raise TypeError("SMCZooCallback needs PixelWorld training environments inside sb3_smc.zoo.smc_env "
-                            "(env_wrapper: sb3_smc.zoo.smc_env in the hyperparameters)") from error
+            raise SMCTypeError("SMCZooCallback needs PixelWorld training environments inside sb3_smc.zoo.smc_env "
+                               "(env_wrapper: sb3_smc.zoo.smc_env in the hyperparameters)") from error
         super()._on_training_start()

@@ -8,13 +8,14 @@ from typing import Any
 
 import yaml
 
+from sb3_smc.errors import SMCError
 from sb3_smc.hyperparameters import ALGORITHM_REGISTRY
 from sb3_smc.zoo.configs import ENV_WRAPPER, ZOO_ALGOS
 
 __all__ = ["ZooRunError", "import_zoo_model", "read_zoo_run"]
 
 
-class ZooRunError(ValueError):
+class ZooRunError(SMCError):
     """A zoo run directory that cannot become an SMC (what is wrong, in which file, and what to do)."""
 
 
@@ -95,7 +96,7 @@ def import_zoo_model(run_dir: str | os.PathLike, library: str | os.PathLike, *, 
         raise ZooRunError(f"{where}: smc_env names {names} without the library they come from")
     files = {"final": run / f"{env_id}.zip", "best": run / "best_model.zip"}
     if model_file not in files:
-        raise ValueError(f"model_file must be 'final' or 'best', got {model_file!r}")
+        raise SMCError(f"model_file must be 'final' or 'best', got {model_file!r}")
     path = files[model_file]
     if not path.is_file():
         raise ZooRunError(f"{path}: no {model_file} model in the zoo run (have: "

@@ -15,6 +15,7 @@ import torch
 from torch import nn
 
 from sb3_smc.common.recurrent.policies import SequenceLstmPolicy
+from sb3_smc.errors import SMCError
 
 __all__ = ["GRUAsLSTM", "SequenceGruPolicy"]
 
@@ -26,7 +27,7 @@ class GRUAsLSTM(nn.Module):
         super().__init__()
         unsupported = sorted(set(gru_kwargs) - {"bias", "dropout"})
         if unsupported:
-            raise ValueError(f"GRU options {unsupported} are not supported (bias and dropout are)")
+            raise SMCError(f"GRU options {unsupported} are not supported (bias and dropout are)")
         self.gru = nn.GRU(input_size, hidden_size, num_layers=num_layers, **gru_kwargs)
 
     # the attributes sb3-contrib and sb3-smc read from an nn.LSTM
