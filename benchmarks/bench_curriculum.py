@@ -32,7 +32,7 @@ from pixelworld_env import catalog
 from sb3_smc.curricula import shipped_curricula
 from sb3_smc.curricula.designed import designed_curricula
 from sb3_smc.curricula.format import Curriculum
-from sb3_smc.curricula.trainer import Job, job_name, run_job
+from sb3_smc.curricula.jobs import Job, job_name, run_job
 from sb3_smc.library import SMCLibrary
 from sb3_smc.records import Budget, TaskSpec, TrainingSpec
 from sb3_smc.training import untrained_smc

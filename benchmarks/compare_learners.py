@@ -36,7 +36,7 @@ REPEATS = 10
 
 def result_path(out: str | Path, learner: str, node: str, seed: int) -> Path:
     """Where one job's result goes (``/`` of a node name encoded as the curriculum trainer encodes it)."""
-    from sb3_smc.curricula.trainer import file_stem
+    from sb3_smc.curricula.jobs import file_stem
 
     return Path(out) / f"{learner}__{file_stem(node)}__{seed}.json"
 
@@ -58,7 +58,7 @@ def run_one(headlines: list[str], out: str, learner: str, node: str, seed: int, 
     import torch
 
     from pixelworld_env.atomic import atomic_write
-    from sb3_smc.curricula.trainer import job_name
+    from sb3_smc.curricula.jobs import job_name
     from sb3_smc.evaluation import evaluate
     from sb3_smc.library import SMCLibrary
     from sb3_smc.training import train_smc

@@ -24,7 +24,8 @@ __all__ = ["main"]
 
 def _curricula(args: argparse.Namespace) -> int:
     from sb3_smc.curricula import resolve_curriculum, shipped_curricula
-    from sb3_smc.curricula.trainer import check_curriculum, describe
+    from sb3_smc.curricula.format import describe
+    from sb3_smc.curricula.jobs import check_curriculum
 
     if args.name:
         curriculum = resolve_curriculum(args.name)
@@ -55,7 +56,7 @@ def _train(args: argparse.Namespace) -> int:
 
 
 def _status(args: argparse.Namespace) -> int:
-    from sb3_smc.curricula.trainer import status
+    from sb3_smc.curricula.run_directory import status
 
     state = status(args.directory)
     settings = state["settings"]
@@ -149,7 +150,8 @@ def _learner_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    from sb3_smc.curricula.trainer import BACKENDS, DEFAULT_REUSE, DEFAULT_SEEDS, REUSE
+    from sb3_smc.curricula.executors import BACKENDS
+    from sb3_smc.curricula.jobs import DEFAULT_REUSE, DEFAULT_SEEDS, REUSE
     from sb3_smc.experiments.design import CATEGORIES, DEFAULT_REPEATS, METHODS
     from sb3_smc.hyperparameters import DEFAULT_TIMESTEPS
 

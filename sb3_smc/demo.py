@@ -30,7 +30,7 @@ def experiment(out: str | Path = "demo-output", seed_count: int = 2, timesteps: 
     """Run the small experiment into ``out`` and write its report; returns the report's path."""
     import torch
 
-    from sb3_smc.curricula.trainer import RunSettingsError
+    from sb3_smc.curricula.run_directory import RunSettingsError
     from sb3_smc.experiments.report import write_report
     from sb3_smc.experiments.runner import run_experiment
 

@@ -37,8 +37,8 @@ import yaml
 from sb3_smc.errors import SMCError
 from sb3_smc.hyperparameters import ALGORITHMS
 
-__all__ = ["FORMAT_KEYS", "NODE_KEYS", "SEED_SEPARATOR", "Curriculum", "CurriculumError", "Node", "load_curriculum",
-           "merge", "parse_curriculum"]
+__all__ = ["FORMAT_KEYS", "NODE_KEYS", "SEED_SEPARATOR", "Curriculum", "CurriculumError", "Node", "describe",
+           "load_curriculum", "merge", "parse_curriculum"]
 
 FORMAT_KEYS = ("curriculum", "method", "description", "defaults", "nodes", "targets")
 """Top-level keys of a curriculum file."""
@@ -400,3 +400,29 @@ def merge(curricula: Sequence[Curriculum]) -> Curriculum:
     return Curriculum(name="+".join(c.name for c in curricula), nodes=tuple(nodes.values()),
                       targets=tuple(dict.fromkeys(targets)), method=None,
                       description="; ".join(c.description for c in curricula if c.description))
+
+
+def describe(curriculum: Curriculum) -> str:
+    """A curriculum's DAG by level (what ``sb3-smc curricula NAME`` prints)."""
+    lines = [curriculum.name + (f" ({curriculum.method})" if curriculum.method else "")]
+    if curriculum.description:
+        lines.append(curriculum.description)
+    targets = set(curriculum.targets)
+    for level, names in enumerate(curriculum.levels(), start=1):
+        lines.append(f"level {level}: {len(names)} node{'s' * (len(names) != 1)}")
+        for name in names:
+            node = curriculum.node(name)
+            mark = "*" if name in targets else " "
+            extra = []
+            if node.task != name:
+                extra.append(f"task {node.task}")
+            if not node.include_primitives:
+                extra.append("noprim")
+            if node.algo:
+                extra.append(node.algo)
+            if node.timesteps:
+                extra.append(f"{node.timesteps:,} steps")
+            head = f"  {mark} {name}" + (f" ({', '.join(extra)})" if extra else "")
+            lines.append(head + (f" uses {', '.join(node.uses)}" if node.uses else ""))
+    lines.append("(* = target)")
+    return "\n".join(lines)

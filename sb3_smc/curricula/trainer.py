@@ -1,22 +1,10 @@
 """``train_curriculum``: every node x seed of a curriculum trained level by level into one SMC library.
 
-A **job** is one node with one seed: a :class:`~sb3_smc.records.TrainingSpec` named ``<node>@<seed>`` whose children
-are, for every node it uses, the ``k`` best seeds of that node (``reuse="two_best"``: k = 2; ranked by the
-selected training return, ties to the lower seed; spec §5.5), as distinct SMC actions. A job becomes ready once
-every seed of every node it uses is trained. Jobs carry picklable specs and the path of the run's library, where
-the worker loads the children by name (never torch objects), and return the trained model as bytes: the same
-function runs in this process, in local worker processes or as a Ray task, and gives the same SMC.
-
-Run directory::
-
-    DIR/run.json        the settings; re-running with other settings is refused (the differences are listed)
-                        unless node changes are accepted (``accept_changes``)
-    DIR/library/        an SMCLibrary: one SMC per finished job, with its spec and training record
-    DIR/tensorboard/    SB3 and SMC curves, one run per job (``<node>@<seed>_1``)
-    DIR/failed/         ``<job>.txt``: the traceback of a job that raised (retried by the next run; ``/`` as ``%2F``)
-    DIR/state.json      the jobs running now and the coordinator's pid (for ``sb3-smc status``)
-    DIR/replaced/       ``<time>-<random>/``: the library (and run.json) as it was before SMCs were replaced
-    DIR/.lock           held by the coordinator while it runs (a second one on the same directory is refused)
+The run schedules jobs (:mod:`sb3_smc.curricula.jobs`: one node with one seed, calling the ``k`` best seeds of every
+node it uses) on an executor (:mod:`sb3_smc.curricula.executors`: this process, local processes or Ray) and keeps
+its state in the run directory (:mod:`sb3_smc.curricula.run_directory`: ``run.json``, the library, ``failed/``,
+``state.json``, ``replaced/``, ``.lock``). A job becomes ready once every seed of every node it uses is trained;
+jobs with the longest chain of nodes above them start first.
 
 Jobs whose results are kept elsewhere can be skipped (``skip``: e.g. the evaluated SMCs of an experiment whose run
 directory lost its library); a skipped job is trained all the same when a job still to train needs its node as a
@@ -26,16 +14,17 @@ Crash safety: a finished job is one whose SMC is in the library manifest; the mo
 written atomically by the coordinator (the only writer), so killing the process at any moment loses at most the
 jobs that were running, which the next run starts again from scratch. Finished jobs are never trained again and
 their files never rewritten, except that a job whose model file is missing or damaged (checked against the
-manifest's SHA-256 by every run and by :func:`status`) is trained again, replacing its entry, and so are the jobs
-above it when that training differs from the recorded one; accepted node changes replace the jobs of the changed
-nodes and of the nodes above them. The working SMCs so replaced stay in ``DIR/replaced/``.
+manifest's SHA-256 by every run and by :func:`~sb3_smc.curricula.run_directory.status`) is trained again, replacing
+its entry, and so are the jobs above it when that training differs from the recorded one; accepted node changes
+replace the jobs of the changed nodes and of the nodes above them. The working SMCs so replaced stay in
+``DIR/replaced/``.
+
+The names of the modules above that this one offered before it was split are imported from here as before.
 """
 
 from __future__ import annotations
 
-import io
 import json
-import os
 import shutil
 import time
 import traceback
@@ -44,197 +33,47 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from pixelworld_env.atomic import atomic_write, make_temporary_directory
-from sb3_smc.curricula.format import SEED_SEPARATOR, Curriculum, CurriculumError, Node, merge
-from sb3_smc.errors import SMCError, SMCRuntimeError, SMCTypeError
-from sb3_smc.hyperparameters import (
-    DEFAULT_ALGORITHM,
-    DEFAULT_TIMESTEPS,
-    STEPS_PER_UPDATE,
-    algorithm,
-    recurrent_policy,
+from pixelworld_env.atomic import atomic_write
+from sb3_smc.curricula.executors import BACKENDS, make_executor
+from sb3_smc.curricula.format import SEED_SEPARATOR, Curriculum, Node, describe, merge
+from sb3_smc.curricula.jobs import (
+    DEFAULT_REUSE,
+    DEFAULT_SEEDS,
+    REUSE,
+    Job,
+    JobResult,
+    check_curriculum,
+    file_stem,
+    job_name,
+    name_of_file,
+    node_budget,
+    node_of,
+    node_spec,
+    rank_seeds,
+    run_job,
 )
+from sb3_smc.curricula.run_directory import (
+    RunFileError,
+    RunSettingsError,
+    SettingsChanges,
+    glob_escape,
+    library_jobs,
+    read_json,
+    read_settings,
+    replace_jobs,
+    run_settings,
+    status,
+    write_state,
+)
+from sb3_smc.errors import SMCError, SMCTypeError
+from sb3_smc.hyperparameters import STEPS_PER_UPDATE, algorithm, recurrent_policy
 from sb3_smc.library import storage
-from sb3_smc.library.errors import CorruptModelError
-from sb3_smc.records import Budget, TaskSpec, TrainingRecord, TrainingSpec, WrapperSettings
+from sb3_smc.records import TrainingRecord
 
 __all__ = ["BACKENDS", "DEFAULT_REUSE", "DEFAULT_SEEDS", "REUSE", "Job", "JobResult", "RunFileError",
            "RunSettingsError", "TrainingRun", "check_curriculum", "check_run_options", "describe", "file_stem",
            "finished_jobs", "job_name", "name_of_file", "node_of", "node_spec", "rank_seeds", "read_json",
            "read_settings", "run_job", "run_settings", "status", "train_curriculum"]
-
-REUSE = {"one_best": 1, "two_best": 2}
-"""SMC filters of the paper: how many seeds of each lower-level node a caller gets."""
-DEFAULT_REUSE = "two_best"
-DEFAULT_SEEDS = 5
-"""Seeds per node (the paper's)."""
-BACKENDS = ("local", "ray")
-"""Where jobs run: local processes or Ray tasks."""
-RUN_FORMAT = "sb3-smc-run"
-RUN_VERSION = 1
-
-
-class RunSettingsError(SMCError):
-    """The run directory was started with other settings (the message lists the differences), or is not a run
-    directory."""
-
-
-class RunFileError(SMCError):
-    """A file of a run or experiment directory is not what it should be (the message names it and what it should
-    hold)."""
-
-
-def read_json(path: Path, holds: str) -> Any:
-    """The JSON content of ``path``; :class:`RunFileError` naming the file and what it ``holds`` when it is not
-    JSON text."""
-    try:
-        return json.loads(path.read_text(encoding="utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError) as err:
-        raise RunFileError(f"{path} is not valid JSON (corrupt or truncated?): {err}; it should hold {holds}") \
-            from None
-
-
-def job_name(node: str, seed: int) -> str:
-    """The library name of node ``node`` trained with ``seed``."""
-    return f"{node}{SEED_SEPARATOR}{seed}"
-
-
-def node_of(name: str) -> str:
-    """The node of the library name ``name`` (:func:`job_name`'s inverse, for the node)."""
-    return name.rpartition(SEED_SEPARATOR)[0]
-
-
-def file_stem(name: str) -> str:
-    """A job name as a file name (``/`` and ``%`` percent-encoded: reversible, no collisions)."""
-    return name.replace("%", "%25").replace("/", "%2F")
-
-
-def name_of_file(stem: str) -> str:
-    """The inverse of :func:`file_stem`."""
-    return stem.replace("%2F", "/").replace("%25", "%")
-
-
-@dataclass(frozen=True)
-class Job:
-    """One node x seed to train: picklable, torch-free (the worker loads the children from ``library`` by name)."""
-
-    spec: TrainingSpec
-    library: str
-    tensorboard_log: str | None = None
-
-
-@dataclass(frozen=True)
-class JobResult:
-    """What a worker returns: the spec, the training record and the SB3 model archive."""
-
-    spec: TrainingSpec
-    record: TrainingRecord
-    algo: str
-    model: bytes
-
-
-def run_job(job: Job) -> JobResult:
-    """Train ``job`` (one torch thread; the caller's count is restored) and return its result; the same in any
-    process or Ray worker."""
-    from sb3_smc.common.threads import torch_threads
-    from sb3_smc.library import SMCLibrary
-    from sb3_smc.training import train_smc
-
-    spec = job.spec
-    children = SMCLibrary.load(job.library, names=spec.children) if spec.children else {}
-    with torch_threads(1):
-        smc = train_smc(spec, children=children, tensorboard_log=job.tensorboard_log, log_every=0)
-    assert smc.spec is not None and smc.record is not None  # train_smc records both
-    buffer = io.BytesIO()
-    smc.model.save(buffer)
-    return JobResult(spec=smc.spec, record=smc.record, algo=spec.algo, model=buffer.getvalue())
-
-
-def rank_seeds(records: dict[int, TrainingRecord]) -> list[int]:
-    """Seeds best first: by selected training return (a seed that never selected an update last), ties to the
-    lower seed (spec §5.5)."""
-    def key(seed: int) -> tuple[int, float, int]:
-        value = records[seed].selected_return
-        return (1, 0.0, seed) if value is None else (0, -value, seed)
-
-    return sorted(records, key=key)
-
-
-# ---------------------------------------------------------------------------------------------------------------
-# Settings
-# ---------------------------------------------------------------------------------------------------------------
-
-def _budget(node: Node, timesteps: int | None) -> int:
-    return timesteps or node.timesteps or DEFAULT_TIMESTEPS
-
-
-def node_spec(node: Node, seed: int, children: tuple[str, ...], *, timesteps: int | None = None,
-              algo: str | None = None, rnn: str | None = None) -> TrainingSpec:
-    """The spec of job ``<node>@<seed>`` calling ``children``; ``timesteps`` / ``algo`` replace the node's own,
-    ``rnn`` sets its recurrent cell (the run's settings)."""
-    algo = algo or node.algo or DEFAULT_ALGORITHM
-    hyperparameters = dict(node.hyperparameters)
-    if rnn is not None:
-        hyperparameters["policy"] = recurrent_policy(rnn, algo)
-    return TrainingSpec(name=job_name(node.name, seed), task=TaskSpec(node.env_id).resolved(),
-                        algo=algo, hyperparameters=hyperparameters, seed=seed, budget=Budget(_budget(node, timesteps)),
-                        wrapper=WrapperSettings(include_primitives=node.include_primitives), children=children)
-
-
-def check_curriculum(curriculum: Curriculum, names: Sequence[str] | None = None, *, timesteps: int | None = None,
-                     algo: str | None = None, rnn: str | None = None, reuse: str = DEFAULT_REUSE) -> None:
-    """Check every node of ``names`` (default: all) as a run with these settings would train it, before anything is
-    trained: its settings make a valid spec, and the algorithm takes its hyperparameters (the model is built on an
-    environment with the SMC's spaces, :func:`sb3_smc.training.check_model_settings`). ``CurriculumError`` naming
-    the file, the line and the node. ``sb3-smc curricula FILE`` and :func:`train_curriculum` both check so."""
-    from sb3_smc.training import check_model_settings
-
-    checked: set[str] = set()  # nodes alike in what builds their model are built once
-    for name in curriculum.order() if names is None else names:
-        node = curriculum.node(name)
-        children = tuple(job_name(u, seed) for u in node.uses for seed in range(REUSE[reuse]))
-        try:
-            spec = node_spec(node, 0, children, timesteps=timesteps, algo=algo, rnn=rnn)
-            key = json.dumps([spec.algo, spec.hyperparameters, spec.budget.to_dict(), spec.frame_stack,
-                              spec.observation_size, len(spec.action_names)], sort_keys=True)
-            if key not in checked:
-                check_model_settings(spec)
-                checked.add(key)
-        except ValueError as err:
-            where = f"{curriculum.source}:{node.line}: " if node.line is not None and curriculum.source else ""
-            raise CurriculumError(f"{where}node {name!r}: {err}") from None
-
-def run_settings(curriculum: Curriculum, nodes: Sequence[str], targets: Sequence[str], seeds: int,
-                 timesteps: int | None, reuse: str, algo: str | None, rnn: str | None = None) -> dict[str, Any]:
-    """What decides a run's SMCs (``DIR/run.json``): backend and worker count do not (``rnn`` is written only when
-    given, so run directories from before the option resume)."""
-    settings = {"format": RUN_FORMAT, "version": RUN_VERSION, "curriculum": curriculum.name,
-                "targets": list(targets), "seeds": seeds, "timesteps": timesteps, "reuse": reuse, "algo": algo,
-                "nodes": {name: curriculum.node(name).settings() for name in nodes}}
-    if rnn is not None:
-        settings["rnn"] = rnn
-    return settings
-
-
-def _differences(old: dict[str, Any], new: dict[str, Any]) -> list[str]:
-    out = []
-    for key in sorted(set(old) | set(new)):
-        if key == "nodes":
-            continue
-        if old.get(key) != new.get(key):
-            out.append(f"{key}: {old.get(key)!r} in the directory, {new.get(key)!r} now")
-    old_nodes, new_nodes = old.get("nodes", {}), new.get("nodes", {})
-    for name in sorted(set(old_nodes) | set(new_nodes)):
-        if name not in new_nodes:
-            out.append(f"node {name!r}: in the directory, not in this run")
-        elif name not in old_nodes:
-            out.append(f"node {name!r}: new in this run")
-        elif old_nodes[name] != new_nodes[name]:
-            was, now = old_nodes[name], new_nodes[name]
-            keys = [k for k in sorted(set(was) | set(now)) if was.get(k) != now.get(k)]
-            out.append(f"node {name!r}: " + "; ".join(f"{k} {was.get(k)!r} in the directory, {now.get(k)!r} now"
-                                                      for k in keys))
-    return out
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -282,7 +121,7 @@ class _Scheduler:
         return seed in self.records[node] or job_name(node, seed) in self.skip
 
     def budget(self, node: Node) -> int:
-        return _budget(node, self.timesteps)
+        return node_budget(node, self.timesteps)
 
     def children(self, node: Node) -> tuple[str, ...]:
         names: list[str] = []
@@ -324,7 +163,7 @@ class _Scheduler:
         log = None
         if tensorboard:
             folder = self.directory / "tensorboard"
-            for stale in folder.glob(f"{_glob_escape(name)}_*"):  # a half-finished earlier attempt
+            for stale in folder.glob(f"{glob_escape(name)}_*"):  # a half-finished earlier attempt
                 shutil.rmtree(stale, ignore_errors=True)
             log = str(folder)
         return Job(spec=spec, library=str(self.library.absolute()), tensorboard_log=log)
@@ -339,16 +178,6 @@ def _heights(curriculum: Curriculum, order: list[str]) -> dict[str, int]:
             if used in height:
                 height[used] = max(height[used], height[name] + 1)
     return height
-
-
-def _glob_escape(text: str) -> str:
-    return "".join(f"[{c}]" if c in "*?[" else c for c in text)
-
-
-def _write_state(directory: Path, running: Collection[str], started: float, skipped: Collection[str]) -> None:
-    atomic_write(directory / "state.json", json.dumps({"pid": os.getpid(), "running": sorted(running),
-                                                      "skipped": sorted(skipped), "started": started,
-                                                      "updated": time.time()}) + "\n")
 
 
 def train_curriculum(
@@ -396,7 +225,7 @@ def train_curriculum(
     scheduler = _Scheduler(merged, order, seeds, timesteps, REUSE[reuse], algo, directory, rnn, skipped)
     check_curriculum(merged, order, timesteps=timesteps, algo=algo, rnn=rnn, reuse=reuse)
     old = read_settings(directory)
-    changes = _Changes.between(old, settings, merged) if old is not None else None
+    changes = SettingsChanges.between(old, settings, merged) if old is not None else None
     if changes is not None and changes.differences:
         changes.check(directory, accept_changes)
     directory.mkdir(parents=True, exist_ok=True)
@@ -450,7 +279,7 @@ def finished_jobs(
     old = read_settings(directory)
     if old is None:
         raise RunSettingsError(f"{directory} holds no run yet (no run.json): nothing is trained")
-    _Changes.between(old, settings, merged).check(directory, accept=False)
+    SettingsChanges.between(old, settings, merged).check(directory, accept=False)
     return set(status(directory)["done"])
 
 
@@ -522,7 +351,7 @@ def _run(merged: Curriculum, scheduler: _Scheduler, order: list[str], directory:
         for why in damaged.values():
             printer(f"{why}: it is trained again")
     started = time.time()
-    executor = _executor(backend, workers, ray_address)
+    executor = make_executor(backend, workers, ray_address, run_job)  # run_job: this module's, at each run
     bar = _Progress(total, done_before, steps_total, steps_done, printer if progress else None)
     try:
         pending: dict[Any, str] = {}
@@ -535,7 +364,7 @@ def _run(merged: Curriculum, scheduler: _Scheduler, order: list[str], directory:
                 (failed_dir / f"{file_stem(name)}.txt").unlink(missing_ok=True)
                 scheduler.running.add(name)
                 pending[executor.submit(job)] = name
-            _write_state(directory, scheduler.running, started, scheduler.skip)
+            write_state(directory, scheduler.running, started, scheduler.skip)
             bar.show(len(scheduler.running))
             if not pending:
                 break
@@ -558,7 +387,7 @@ def _run(merged: Curriculum, scheduler: _Scheduler, order: list[str], directory:
                         bar.undone(_rounded(scheduler.budget(merged.node(above))))
     finally:
         executor.shutdown()
-        _write_state(directory, [], started, scheduler.skip)
+        write_state(directory, [], started, scheduler.skip)
         bar.close()
     run = TrainingRun(directory=directory, library=scheduler.library, rows=_rows(scheduler),
                       failed=dict(scheduler.failed))
@@ -575,110 +404,12 @@ def _rounded(timesteps: int) -> int:
     return -(-timesteps // STEPS_PER_UPDATE) * STEPS_PER_UPDATE
 
 
-def read_settings(directory: Path) -> dict[str, Any] | None:
-    """The settings in ``directory/run.json``; ``None`` where ``directory`` holds no run yet (missing or empty).
-    :class:`RunSettingsError` for a file, or a directory that holds other things; :class:`RunFileError` for a
-    ``run.json`` that is not one."""
-    if directory.exists() and not directory.is_dir():
-        raise RunSettingsError(f"{directory} is a file, not a run directory: give a new directory or one of this run")
-    path = directory / "run.json"
-    if not path.is_file():
-        if directory.is_dir() and any(p.name != ".lock" for p in directory.iterdir()):
-            raise RunSettingsError(f"{directory} is not empty and holds no run.json: not a curriculum run directory")
-        return None
-    settings = read_json(path, "the settings of a curriculum run (sb3-smc train writes it)")
-    if not isinstance(settings, dict) or settings.get("format") != RUN_FORMAT \
-            or not isinstance(settings.get("nodes"), dict) or not isinstance(settings.get("seeds"), int):
-        raise RunFileError(f"{path} is not the settings of an sb3-smc run (a JSON object of format {RUN_FORMAT!r} "
-                           "with its nodes and seeds)")
-    return settings
-
-
-_NODE_KEYS = ("targets", "nodes")
-"""Settings that ``accept_changes`` takes; the others (the curriculum's name, seeds, timesteps, reuse, algo, rnn)
-decide every job, or which run the directory holds."""
-
-
-@dataclass(frozen=True)
-class _Changes:
-    """How a run's settings differ from those its directory holds."""
-
-    differences: list[str]
-    every_job: list[str]  # differing settings that decide every job
-    changed: list[str]  # nodes of both, with other settings
-    removed: list[str]  # nodes of the directory, not of this run
-    retrained: list[str]  # nodes of both whose jobs are trained again: the changed ones and every node using one
-
-    @classmethod
-    def between(cls, old: dict[str, Any], new: dict[str, Any], curriculum: Curriculum) -> _Changes:
-        old_nodes, new_nodes = old["nodes"], new["nodes"]
-        changed = [n for n in new_nodes if n in old_nodes and old_nodes[n] != new_nodes[n]]
-        keys = sorted(set(old) | set(new))
-        return cls(differences=_differences(old, new),
-                   every_job=[k for k in keys if k not in _NODE_KEYS and old.get(k) != new.get(k)],
-                   changed=changed, removed=[n for n in old_nodes if n not in new_nodes],
-                   retrained=[n for n in new_nodes if n in old_nodes and curriculum.closure([n]) & set(changed)])
-
-    def check(self, directory: Path, accept: bool) -> None:
-        """:class:`RunSettingsError` listing the differences, unless there are none or they are accepted."""
-        if not self.differences or accept and not self.every_job:
-            return
-        listed = "\n  ".join(self.differences)
-        if accept:
-            raise RunSettingsError(f"{directory} holds a run with other settings:\n  {listed}\n--accept-changes takes "
-                                   f"changed nodes only; {', '.join(self.every_job)} decide every job: use another "
-                                   "--out directory, or the settings of that run")
-        offer = ""
-        experiment = (directory / "results.json").is_file() or (directory / "evaluations").is_dir()
-        if not self.every_job and not experiment:  # an experiment's merged curriculum is not named on a command line
-            trained = f"the jobs of {', '.join(self.retrained)} are trained again" if self.retrained else \
-                "no trained job changes"
-            offer = (f", or accept the changes (sb3-smc train --accept-changes; train_curriculum(..., "
-                     f"accept_changes=True)): {trained}, the other nodes keep theirs")
-        raise RunSettingsError(f"{directory} holds a run with other settings:\n  {listed}\nuse another --out "
-                               f"directory, or the settings of that run{offer}")
-
-    def apply(self, directory: Path, printer: Callable[[str], None] | None) -> None:
-        """Take the jobs of the retrained nodes out of the library (under the run's lock, before the new
-        ``run.json`` is written): :func:`_replace`."""
-        library = directory / "library"
-        names = [n for n in _library_jobs(library) if node_of(n) in set(self.retrained)]
-        lines = [f"accepting the changes in {directory}:", *(f"  {d}" for d in self.differences)]
-        for name in self.retrained:
-            why = "changed" if name in self.changed else "uses a changed node"
-            lines.append(f"  node {name!r} is trained again ({why})")
-        if self.removed:
-            lines.append(f"  not in this run, kept in the library as they are: {', '.join(self.removed)}")
-        if names:
-            lines.append(_replace(directory, names))
-        if printer is not None:
-            printer("\n".join(lines))
-
-
-def _replace(directory: Path, names: Sequence[str]) -> str:
-    """Take the SMCs ``names`` out of the run's library, to be trained again; the library as it was, ``run.json``
-    and their TensorBoard folders are kept in ``DIR/replaced/<time>-<random>/`` (nothing trained is lost). Returns
-    a line saying so."""
-    library = directory / "library"
-    (directory / "replaced").mkdir(exist_ok=True)
-    kept = make_temporary_directory(directory / "replaced", time.strftime("%Y%m%d-%H%M%S-"))
-    shutil.copy2(directory / "run.json", kept / "run.json")
-    storage.link_copy(library, kept / "library")
-    for name in names:
-        for folder in (directory / "tensorboard").glob(f"{_glob_escape(name)}_*"):
-            (kept / "tensorboard").mkdir(exist_ok=True)
-            folder.rename(kept / "tensorboard" / folder.name)
-    storage.remove_from_library(library, names)
-    shown = ", ".join(names[:6]) + (", ..." if len(names) > 6 else "")
-    return f"  {len(names)} trained SMC(s) to train again ({shown}); the library as it was: {kept / 'library'}"
-
-
 def _load_done(scheduler: _Scheduler) -> dict[str, str]:
     """Read the finished jobs from the library manifest (the only record of what is done), each checked against its
     model file: a job whose file is missing or damaged is not done (it is trained again and replaces its entry).
     Returns those jobs, with what is wrong with each."""
     damaged: dict[str, str] = {}
-    for name, (entry, problem) in _library_jobs(scheduler.library).items():
+    for name, (entry, problem) in library_jobs(scheduler.library).items():
         node_name, sep, seed_text = name.rpartition(SEED_SEPARATOR)
         if sep and node_name in scheduler.records and seed_text.isdigit() and entry["record"] is not None:
             if problem is None:
@@ -687,22 +418,6 @@ def _load_done(scheduler: _Scheduler) -> dict[str, str]:
                 scheduler.damaged[name] = entry["record"]
                 damaged[name] = problem
     return damaged
-
-
-def _library_jobs(library: Path) -> dict[str, tuple[dict[str, Any], str | None]]:
-    """Every SMC of a run's library: its manifest entry, and what is wrong with its model file (``None``: nothing;
-    :func:`sb3_smc.library.storage.check_model_file`)."""
-    if not (library / storage.MANIFEST).is_file():
-        return {}
-    manifest, where = storage.read_manifest(library)
-    out: dict[str, tuple[dict[str, Any], str | None]] = {}
-    for name, entry in storage.check_manifest(manifest, where).items():
-        try:
-            storage.check_model_file(library, name, entry)
-            out[name] = (entry, None)
-        except CorruptModelError as err:
-            out[name] = (entry, str(err))
-    return out
 
 
 def _store(scheduler: _Scheduler, result: JobResult) -> TrainingRecord | None:
@@ -727,13 +442,13 @@ def _trained_alike(a: TrainingRecord, b: TrainingRecord) -> bool:
 def _retrain_above(scheduler: _Scheduler, node_name: str, name: str, note: Callable[[str], None]) -> list[str]:
     """A damaged job ``name`` trained again differs from its earlier record (another CPU or code): the finished jobs
     of every node above its node were trained with the earlier one and are taken out of the library to be trained
-    again (:func:`_replace`). Returns the node of each such job that counted as done."""
+    again (:func:`replace_jobs`). Returns the node of each such job that counted as done."""
     above = [n for n in scheduler.order if node_name in scheduler.below[n]]
     jobs = [(n, seed) for n in above for seed in range(scheduler.seeds)
             if seed in scheduler.records[n] or job_name(n, seed) in scheduler.damaged]
     if not jobs:
         return []
-    line = _replace(scheduler.directory, [job_name(n, seed) for n, seed in jobs])
+    line = replace_jobs(scheduler.directory, [job_name(n, seed) for n, seed in jobs])
     finished = [n for n, seed in jobs if scheduler.records[n].pop(seed, None) is not None]
     for n, seed in jobs:  # a damaged one is trained afresh too: its entry is gone
         scheduler.damaged.pop(job_name(n, seed), None)
@@ -750,120 +465,6 @@ def _rows(scheduler: _Scheduler) -> list[dict[str, Any]]:
             rows.append({"node": node_name, "seed": seed, "selected_update": record.selected_update,
                          "training_return": record.selected_return, "wall_time_s": record.wall_time_s})
     return rows
-
-
-# ---------------------------------------------------------------------------------------------------------------
-# Executors: in process, local processes, Ray
-# ---------------------------------------------------------------------------------------------------------------
-
-class _InProcess:
-    """Trains a job in this process when it is waited for (as a worker would meanwhile), so the state file and the
-    progress line count it as running while it trains."""
-
-    def __init__(self) -> None:
-        self._jobs: dict[int, Job] = {}
-        self._next = 0
-
-    def submit(self, job: Job) -> int:
-        handle = self._next
-        self._next += 1
-        self._jobs[handle] = job
-        return handle
-
-    def wait(self, handles: list[int]) -> list[tuple[int, Any]]:
-        handle = handles[0]
-        try:
-            return [(handle, run_job(self._jobs.pop(handle)))]
-        except Exception as err:  # noqa: BLE001 - reported as the job's failure
-            return [(handle, err)]
-
-    def shutdown(self) -> None:
-        self._jobs.clear()
-
-
-class _Processes:
-    def __init__(self, workers: int) -> None:
-        import multiprocessing
-        from concurrent.futures import ProcessPoolExecutor
-
-        def make() -> ProcessPoolExecutor:
-            return ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"))
-
-        self._make = make
-        self._pool = make()
-
-    def submit(self, job: Job) -> Any:
-        return self._pool.submit(run_job, job)
-
-    def wait(self, handles: list[Any]) -> list[tuple[Any, Any]]:
-        from concurrent.futures import FIRST_COMPLETED, wait
-        from concurrent.futures.process import BrokenProcessPool
-
-        done, _ = wait(handles, return_when=FIRST_COMPLETED)
-        out = []
-        broken = False
-        for future in done:
-            error = future.exception()
-            if isinstance(error, BrokenProcessPool):
-                broken = True
-                hint = RuntimeError(
-                    "a worker process died abruptly: killed (e.g. for memory), crashed, or, when a script trains with "
-                    "workers > 1, the script starts the run at its top level: workers are spawned and import the "
-                    "script again, so put the call under `if __name__ == \"__main__\":`")
-                hint.__cause__ = error
-                error = hint
-            out.append((future, error if error is not None else future.result()))
-        if broken:  # a worker died (e.g. killed for memory): its jobs count as failed, the run goes on
-            self._pool.shutdown(wait=False, cancel_futures=True)
-            self._pool = self._make()
-        return out
-
-    def shutdown(self) -> None:
-        self._pool.shutdown(wait=True, cancel_futures=True)
-
-
-class _Ray:
-    def __init__(self, address: str | None) -> None:
-        try:
-            import ray
-        except ImportError:
-            raise SMCRuntimeError("backend='ray' needs Ray: pip install 'sb3-smc[ray]'") from None
-        self._ray = ray
-        if not ray.is_initialized():
-            address = address or os.environ.get("RAY_ADDRESS")
-            if address is None:
-                raise SMCRuntimeError("backend='ray' runs on an existing Ray cluster: pass ray_address (--ray-address) "
-                                      "or set RAY_ADDRESS (e.g. 'auto' on a node of the cluster, or ray://host:10001)")
-            ray.init(address=address, log_to_driver=False)
-        self._remote = ray.remote(num_cpus=1, max_retries=0)(run_job)
-        self._pending: set[Any] = set()
-
-    def submit(self, job: Job) -> Any:
-        ref = self._remote.remote(job)
-        self._pending.add(ref)
-        return ref
-
-    def wait(self, handles: list[Any]) -> list[tuple[Any, Any]]:
-        ready, _ = self._ray.wait(handles, num_returns=1)
-        out = []
-        for ref in ready:
-            self._pending.discard(ref)
-            try:
-                out.append((ref, self._ray.get(ref)))
-            except Exception as err:  # noqa: BLE001 - a task's error, reported as the job's failure
-                out.append((ref, err))
-        return out
-
-    def shutdown(self) -> None:
-        for ref in self._pending:  # after an interrupt or an error: free the cluster
-            self._ray.cancel(ref)
-        self._pending.clear()
-
-
-def _executor(backend: str, workers: int, address: str | None) -> Any:
-    if backend == "ray":
-        return _Ray(address)
-    return _Processes(workers) if workers > 1 else _InProcess()
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -923,75 +524,4 @@ class _Progress:
         if self.printer is not None and self.tty:
             print()
 
-
-def status(directory: str | Path) -> dict[str, Any]:
-    """What a run directory holds: ``done``, ``running``, ``failed``, ``skipped`` (by the last run's ``skip``: kept
-    elsewhere, such as an experiment's evaluation records), ``damaged`` (finished, but the model file is missing or
-    damaged: job name -> what is wrong; the next run trains them again) and ``left`` job names (and the
-    settings)."""
-    directory = Path(directory)
-    settings = read_settings(directory) if directory.is_dir() else None
-    if settings is None:
-        raise RunSettingsError(f"{directory} is not a curriculum run directory (no run.json)")
-    jobs = [job_name(node, seed) for node in settings["nodes"] for seed in range(settings["seeds"])]
-    library = {name: problem for name, (_, problem) in _library_jobs(directory / "library").items()}
-    done = {name for name, problem in library.items() if problem is None}
-    running: list[str] = []
-    skipped: set[str] = set()
-    state_path = directory / "state.json"
-    if state_path.is_file():
-        holds = "the coordinator's pid and running jobs; delete it, the next sb3-smc train writes it again"
-        state = read_json(state_path, holds)
-        if not isinstance(state, dict) or not isinstance(state.get("pid", -1), int) \
-                or not isinstance(state.get("running", []), list) or not isinstance(state.get("skipped", []), list):
-            raise RunFileError(f"{state_path} is not the state of an sb3-smc run: it should hold {holds}")
-        if state.get("running") and _alive(state.get("pid", -1)):
-            running = [n for n in state["running"] if n not in done]
-        skipped = set(state.get("skipped", ())) - done
-    failed = sorted(name_of_file(p.stem) for p in (directory / "failed").glob("*.txt")) \
-        if (directory / "failed").is_dir() else []
-    failed = [n for n in failed if n in jobs and n not in done and n not in running]
-    damaged = {n: library[n] for n in jobs if library.get(n) is not None and n not in running}
-    left = [n for n in jobs if n not in done and n not in running and n not in failed and n not in skipped
-            and n not in damaged]
-    return {"settings": settings, "jobs": jobs, "done": [n for n in jobs if n in done], "running": running,
-            "failed": failed, "skipped": [n for n in jobs if n in skipped], "damaged": damaged, "left": left}
-
-
-def _alive(pid: int) -> bool:
-    if pid <= 0:
-        return False
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    return True
-
-
-def describe(curriculum: Curriculum) -> str:
-    """A curriculum's DAG by level (what ``sb3-smc curricula NAME`` prints)."""
-    lines = [curriculum.name + (f" ({curriculum.method})" if curriculum.method else "")]
-    if curriculum.description:
-        lines.append(curriculum.description)
-    targets = set(curriculum.targets)
-    for level, names in enumerate(curriculum.levels(), start=1):
-        lines.append(f"level {level}: {len(names)} node{'s' * (len(names) != 1)}")
-        for name in names:
-            node = curriculum.node(name)
-            mark = "*" if name in targets else " "
-            extra = []
-            if node.task != name:
-                extra.append(f"task {node.task}")
-            if not node.include_primitives:
-                extra.append("noprim")
-            if node.algo:
-                extra.append(node.algo)
-            if node.timesteps:
-                extra.append(f"{node.timesteps:,} steps")
-            head = f"  {mark} {name}" + (f" ({', '.join(extra)})" if extra else "")
-            lines.append(head + (f" uses {', '.join(node.uses)}" if node.uses else ""))
-    lines.append("(* = target)")
-    return "\n".join(lines)
 

@@ -93,7 +93,7 @@ def _behaviour(directory: Path, figures: Path, reported: Sequence[dict[str, Any]
     """The Fig. 4 / Fig. 1 pictures of the best SMCs of ``target`` (trained in ``directory``) into ``figures``; or
     none and the reason, when the run directory does not hold their models (a run kept as records:
     ``docs/experiments.md``)."""
-    from sb3_smc.curricula.trainer import job_name
+    from sb3_smc.curricula.jobs import job_name
     from sb3_smc.experiments.figures import timeline_figure, trajectory_figure
     from sb3_smc.library import SMCLibrary, storage
 

@@ -32,19 +32,10 @@ from pathlib import Path
 from typing import Any
 
 from pixelworld_env.atomic import atomic_write
-from sb3_smc.curricula.trainer import (
-    BACKENDS,
-    DEFAULT_SEEDS,
-    RunFileError,
-    RunSettingsError,
-    check_run_options,
-    file_stem,
-    finished_jobs,
-    job_name,
-    name_of_file,
-    read_json,
-    train_curriculum,
-)
+from sb3_smc.curricula.executors import BACKENDS
+from sb3_smc.curricula.jobs import DEFAULT_SEEDS, file_stem, job_name, name_of_file
+from sb3_smc.curricula.run_directory import RunFileError, RunSettingsError, read_json
+from sb3_smc.curricula.trainer import check_run_options, finished_jobs, train_curriculum
 from sb3_smc.errors import SMCError, SMCRuntimeError
 from sb3_smc.experiments.design import DEFAULT_REPEATS, METHOD_REGISTRY, METHODS, level2_targets, plan
 from sb3_smc.hyperparameters import DEFAULT_ALGORITHM, DEFAULT_TIMESTEPS

@@ -25,7 +25,8 @@ from typing import TYPE_CHECKING
 
 from pixelworld_env.atomic import atomic_write, replace_directory
 from sb3_smc.curricula.format import SEED_SEPARATOR
-from sb3_smc.curricula.trainer import job_name, node_of, rank_seeds, read_settings
+from sb3_smc.curricula.jobs import job_name, node_of, rank_seeds
+from sb3_smc.curricula.run_directory import read_settings
 from sb3_smc.library import storage
 from sb3_smc.library.errors import LibraryError, suggest
 from sb3_smc.library.library import SMCLibrary

@@ -1,0 +1,139 @@
+"""Where a curriculum run's jobs train: in this process, in local worker processes, or as Ray tasks.
+
+Each executor takes the function that trains a job (:func:`~sb3_smc.curricula.jobs.run_job`) and offers
+``submit(job) -> handle``, ``wait(handles) -> [(handle, result or exception)]`` (at least one) and ``shutdown()``;
+:func:`make_executor` picks one. A job's exception is its outcome, reported as the job's failure by the trainer.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable
+from typing import Any
+
+from sb3_smc.curricula.jobs import Job, JobResult
+from sb3_smc.errors import SMCRuntimeError
+
+__all__ = ["BACKENDS", "make_executor"]
+
+BACKENDS = ("local", "ray")
+"""Where jobs run: local processes or Ray tasks."""
+
+
+class _InProcess:
+    """Trains a job in this process when it is waited for (as a worker would meanwhile), so the state file and the
+    progress line count it as running while it trains."""
+
+    def __init__(self, run: Callable[[Job], JobResult]) -> None:
+        self._run = run
+        self._jobs: dict[int, Job] = {}
+        self._next = 0
+
+    def submit(self, job: Job) -> int:
+        handle = self._next
+        self._next += 1
+        self._jobs[handle] = job
+        return handle
+
+    def wait(self, handles: list[int]) -> list[tuple[int, Any]]:
+        handle = handles[0]
+        try:
+            return [(handle, self._run(self._jobs.pop(handle)))]
+        except Exception as err:  # noqa: BLE001 - reported as the job's failure
+            return [(handle, err)]
+
+    def shutdown(self) -> None:
+        self._jobs.clear()
+
+
+class _Processes:
+    """Trains jobs in ``workers`` spawned processes; a worker that dies fails its jobs, and the pool is made
+    again."""
+
+    def __init__(self, run: Callable[[Job], JobResult], workers: int) -> None:
+        import multiprocessing
+        from concurrent.futures import ProcessPoolExecutor
+
+        def make() -> ProcessPoolExecutor:
+            return ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"))
+
+        self._run = run
+        self._make = make
+        self._pool = make()
+
+    def submit(self, job: Job) -> Any:
+        return self._pool.submit(self._run, job)
+
+    def wait(self, handles: list[Any]) -> list[tuple[Any, Any]]:
+        from concurrent.futures import FIRST_COMPLETED, wait
+        from concurrent.futures.process import BrokenProcessPool
+
+        done, _ = wait(handles, return_when=FIRST_COMPLETED)
+        out = []
+        broken = False
+        for future in done:
+            error = future.exception()
+            if isinstance(error, BrokenProcessPool):
+                broken = True
+                hint = RuntimeError(
+                    "a worker process died abruptly: killed (e.g. for memory), crashed, or, when a script trains with "
+                    "workers > 1, the script starts the run at its top level: workers are spawned and import the "
+                    "script again, so put the call under `if __name__ == \"__main__\":`")
+                hint.__cause__ = error
+                error = hint
+            out.append((future, error if error is not None else future.result()))
+        if broken:  # a worker died (e.g. killed for memory): its jobs count as failed, the run goes on
+            self._pool.shutdown(wait=False, cancel_futures=True)
+            self._pool = self._make()
+        return out
+
+    def shutdown(self) -> None:
+        self._pool.shutdown(wait=True, cancel_futures=True)
+
+
+class _Ray:
+    """Trains jobs as tasks of an existing Ray cluster (one CPU each, no retries)."""
+
+    def __init__(self, run: Callable[[Job], JobResult], address: str | None) -> None:
+        try:
+            import ray
+        except ImportError:
+            raise SMCRuntimeError("backend='ray' needs Ray: pip install 'sb3-smc[ray]'") from None
+        self._ray = ray
+        if not ray.is_initialized():
+            address = address or os.environ.get("RAY_ADDRESS")
+            if address is None:
+                raise SMCRuntimeError("backend='ray' runs on an existing Ray cluster: pass ray_address (--ray-address) "
+                                      "or set RAY_ADDRESS (e.g. 'auto' on a node of the cluster, or ray://host:10001)")
+            ray.init(address=address, log_to_driver=False)
+        self._remote = ray.remote(num_cpus=1, max_retries=0)(run)
+        self._pending: set[Any] = set()
+
+    def submit(self, job: Job) -> Any:
+        ref = self._remote.remote(job)
+        self._pending.add(ref)
+        return ref
+
+    def wait(self, handles: list[Any]) -> list[tuple[Any, Any]]:
+        ready, _ = self._ray.wait(handles, num_returns=1)
+        out = []
+        for ref in ready:
+            self._pending.discard(ref)
+            try:
+                out.append((ref, self._ray.get(ref)))
+            except Exception as err:  # noqa: BLE001 - a task's error, reported as the job's failure
+                out.append((ref, err))
+        return out
+
+    def shutdown(self) -> None:
+        for ref in self._pending:  # after an interrupt or an error: free the cluster
+            self._ray.cancel(ref)
+        self._pending.clear()
+
+
+def make_executor(backend: str, workers: int, address: str | None, run: Callable[[Job], JobResult]) -> Any:
+    """The executor of a run's ``backend`` (``workers`` local processes, or this process for one worker; Ray tasks
+    on the cluster at ``address``), training each job with ``run``."""
+    if backend == "ray":
+        return _Ray(run, address)
+    return _Processes(run, workers) if workers > 1 else _InProcess(run)

@@ -1,0 +1,136 @@
+"""The jobs of a curriculum run: one node with one seed, named ``<node>@<seed>``.
+
+A job's :class:`~sb3_smc.records.TrainingSpec` calls, for every node its node uses, the ``k`` best seeds of that
+node (``reuse="two_best"``: k = 2; :func:`rank_seeds`, spec §5.5) as distinct SMC actions. A :class:`Job` carries
+the picklable spec and the path of the run's library, where the worker loads the children by name (never torch
+objects); :func:`run_job` trains it and returns the model as bytes, the same in this process, a local worker process
+or a Ray task. :func:`check_curriculum` checks every node's spec before a run trains anything.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from sb3_smc.curricula.format import SEED_SEPARATOR, Curriculum, CurriculumError, Node
+from sb3_smc.hyperparameters import DEFAULT_ALGORITHM, DEFAULT_TIMESTEPS, recurrent_policy
+from sb3_smc.records import Budget, TaskSpec, TrainingRecord, TrainingSpec, WrapperSettings
+
+__all__ = ["DEFAULT_REUSE", "DEFAULT_SEEDS", "REUSE", "Job", "JobResult", "check_curriculum", "file_stem", "job_name",
+           "name_of_file", "node_budget", "node_of", "node_spec", "rank_seeds", "run_job"]
+
+REUSE = {"one_best": 1, "two_best": 2}
+"""SMC filters of the paper: how many seeds of each lower-level node a caller gets."""
+DEFAULT_REUSE = "two_best"
+DEFAULT_SEEDS = 5
+"""Seeds per node (the paper's)."""
+
+
+def job_name(node: str, seed: int) -> str:
+    """The library name of node ``node`` trained with ``seed``."""
+    return f"{node}{SEED_SEPARATOR}{seed}"
+
+
+def node_of(name: str) -> str:
+    """The node of the library name ``name`` (:func:`job_name`'s inverse, for the node)."""
+    return name.rpartition(SEED_SEPARATOR)[0]
+
+
+def file_stem(name: str) -> str:
+    """A job name as a file name (``/`` and ``%`` percent-encoded: reversible, no collisions)."""
+    return name.replace("%", "%25").replace("/", "%2F")
+
+
+def name_of_file(stem: str) -> str:
+    """The inverse of :func:`file_stem`."""
+    return stem.replace("%2F", "/").replace("%25", "%")
+
+
+@dataclass(frozen=True)
+class Job:
+    """One node x seed to train: picklable, torch-free (the worker loads the children from ``library`` by name)."""
+
+    spec: TrainingSpec
+    library: str
+    tensorboard_log: str | None = None
+
+
+@dataclass(frozen=True)
+class JobResult:
+    """What a worker returns: the spec, the training record and the SB3 model archive."""
+
+    spec: TrainingSpec
+    record: TrainingRecord
+    algo: str
+    model: bytes
+
+
+def run_job(job: Job) -> JobResult:
+    """Train ``job`` (one torch thread; the caller's count is restored) and return its result; the same in any
+    process or Ray worker."""
+    from sb3_smc.common.threads import torch_threads
+    from sb3_smc.library import SMCLibrary
+    from sb3_smc.training import train_smc
+
+    spec = job.spec
+    children = SMCLibrary.load(job.library, names=spec.children) if spec.children else {}
+    with torch_threads(1):
+        smc = train_smc(spec, children=children, tensorboard_log=job.tensorboard_log, log_every=0)
+    assert smc.spec is not None and smc.record is not None  # train_smc records both
+    buffer = io.BytesIO()
+    smc.model.save(buffer)
+    return JobResult(spec=smc.spec, record=smc.record, algo=spec.algo, model=buffer.getvalue())
+
+
+def rank_seeds(records: dict[int, TrainingRecord]) -> list[int]:
+    """Seeds best first: by selected training return (a seed that never selected an update last), ties to the
+    lower seed (spec §5.5)."""
+    def key(seed: int) -> tuple[int, float, int]:
+        value = records[seed].selected_return
+        return (1, 0.0, seed) if value is None else (0, -value, seed)
+
+    return sorted(records, key=key)
+
+
+def node_budget(node: Node, timesteps: int | None) -> int:
+    """The steps a job of ``node`` trains: the run's ``timesteps``, else the node's own, else the default."""
+    return timesteps or node.timesteps or DEFAULT_TIMESTEPS
+
+
+def node_spec(node: Node, seed: int, children: tuple[str, ...], *, timesteps: int | None = None,
+              algo: str | None = None, rnn: str | None = None) -> TrainingSpec:
+    """The spec of job ``<node>@<seed>`` calling ``children``; ``timesteps`` / ``algo`` replace the node's own,
+    ``rnn`` sets its recurrent cell (the run's settings)."""
+    algo = algo or node.algo or DEFAULT_ALGORITHM
+    hyperparameters = dict(node.hyperparameters)
+    if rnn is not None:
+        hyperparameters["policy"] = recurrent_policy(rnn, algo)
+    return TrainingSpec(name=job_name(node.name, seed), task=TaskSpec(node.env_id).resolved(), algo=algo,
+                        hyperparameters=hyperparameters, seed=seed, budget=Budget(node_budget(node, timesteps)),
+                        wrapper=WrapperSettings(include_primitives=node.include_primitives), children=children)
+
+
+def check_curriculum(curriculum: Curriculum, names: Sequence[str] | None = None, *, timesteps: int | None = None,
+                     algo: str | None = None, rnn: str | None = None, reuse: str = DEFAULT_REUSE) -> None:
+    """Check every node of ``names`` (default: all) as a run with these settings would train it, before anything is
+    trained: its settings make a valid spec, and the algorithm takes its hyperparameters (the model is built on an
+    environment with the SMC's spaces, :func:`sb3_smc.training.check_model_settings`). ``CurriculumError`` naming
+    the file, the line and the node. ``sb3-smc curricula FILE`` and :func:`train_curriculum` both check so."""
+    from sb3_smc.training import check_model_settings
+
+    checked: set[str] = set()  # nodes alike in what builds their model are built once
+    for name in curriculum.order() if names is None else names:
+        node = curriculum.node(name)
+        children = tuple(job_name(u, seed) for u in node.uses for seed in range(REUSE[reuse]))
+        try:
+            spec = node_spec(node, 0, children, timesteps=timesteps, algo=algo, rnn=rnn)
+            key = json.dumps([spec.algo, spec.hyperparameters, spec.budget.to_dict(), spec.frame_stack,
+                              spec.observation_size, len(spec.action_names)], sort_keys=True)
+            if key not in checked:
+                check_model_settings(spec)
+                checked.add(key)
+        except ValueError as err:
+            where = f"{curriculum.source}:{node.line}: " if node.line is not None and curriculum.source else ""
+            raise CurriculumError(f"{where}node {name!r}: {err}") from None
