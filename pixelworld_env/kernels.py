@@ -184,10 +184,10 @@ def step_envs(actions: np.ndarray, kinds: np.ndarray, values: np.ndarray, deltas
     0, ``was_reset``), the others take ``actions[k]`` (per action ``kinds``: 0 signal, 1 move; ``values`` a signal's
     value; ``deltas`` a move's offsets) with :class:`~pixelworld_env.PixelWorldEnv`'s rewards. Scenes are read from
     the per-scene arrays (``me`` / ``start`` the self's index and cell, ``labels``, ``goal_table`` the goal's truth
-    per self cell, ``goal0`` at the start; ``pushing`` see above). In a scene where more than the self moves
-    (``push_scene``) a move is :func:`push_move`, and in bring-about its goal is left to the caller
-    (``goal_pending``; reward 0 so far). Returns ``OK``, or ``NEED_DRAWS`` / ``NEED_SCENES`` before changing
-    anything."""
+    per self cell, -1 where not yet known, ``goal0`` at the start; ``pushing`` see above). In a scene where more
+    than the self moves (``push_scene``) a move is :func:`push_move`. In bring-about, the goal after a move in such a
+    scene, or to a cell whose truth is not yet known, is left to the caller (``goal_pending``; reward 0 so far).
+    Returns ``OK``, or ``NEED_DRAWS`` / ``NEED_SCENES`` before changing anything."""
     grid0, owner0, cells, n_cells, colors, moveable, n_objects, _, _, grids, owners, positions, disjoint, plan, \
         planned = pushing
     n = actions.shape[0]
@@ -230,7 +230,9 @@ def step_envs(actions: np.ndarray, kinds: np.ndarray, values: np.ndarray, deltas
                     col[k] = c
                     if bring_about:
                         g = goal_table[s, r, c]
-                        if g != goal[k]:
+                        if g < 0:  # a cell not reached before in this scene: its goal is tested by the caller
+                            goal_pending[k] = True
+                        elif g != goal[k]:
                             goal[k] = g
                             reward = potential if g == 1 else -potential
         else:

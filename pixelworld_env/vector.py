@@ -30,6 +30,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from pixelworld_env import kernels
+from pixelworld_env.concepts.evaluate import SelfEvaluator
 from pixelworld_env.constants import NUM_COLORS
 from pixelworld_env.env import (
     BRING_ABOUT,
@@ -42,7 +43,7 @@ from pixelworld_env.objects import Cell
 from pixelworld_env.render import rgb_image
 from pixelworld_env.scene import Scene
 from pixelworld_env.validation import check_int
-from pixelworld_env.world import EMPTY, World
+from pixelworld_env.world import World
 
 DRAW_BLOCK = 256
 """Scene indices drawn at a time from an environment's generator, as :meth:`PixelWorldEnv.reset` draws them."""
@@ -141,6 +142,7 @@ class PixelWorldVectorEnv(VectorEnv):
                          np.zeros(pushers, dtype=np.bool_), np.zeros(most_objects, dtype=np.int64),
                          np.zeros(most_objects, dtype=np.bool_))
         self._push_goals: dict[tuple[int, bytes], bool] = {}
+        self._evaluators: dict[int, SelfEvaluator] = {}
 
         # per environment
         self._draws = np.zeros((num_envs, DRAW_BLOCK), dtype=np.int32)
@@ -179,17 +181,26 @@ class PixelWorldVectorEnv(VectorEnv):
     # ------------------------------------------------------------------------------------------ scenes and draws
 
     def _prepare_scene(self, s: int) -> None:
-        """The goal's truth in scene ``s``: at the start, and per self cell where only the self moves."""
-        scene = self.scenes[s]
+        """The goal's truth in scene ``s`` at the start (the other self cells are tested when first reached)."""
         if self._push_scene[s]:
             self._goal0[s] = self._push_goal(s, self._pushing[7][s])
         else:
-            holds_for = self.concept.self_evaluator(scene.objects, scene.floor_row)
-            owner = self._owner0[s, 1:-1, 1:-1]
-            for r, c in np.argwhere((owner == EMPTY) | (owner == self._me[s])):
-                self._goal_table[s, r, c] = holds_for(scene.self_object.moved_to((int(r), int(c))))
-            self._goal0[s] = self._goal_table[s, self._start[s, 0], self._start[s, 1]]
+            self._goal0[s] = self._self_goal(s, int(self._start[s, 0]), int(self._start[s, 1]))
         self._ready[s] = 1
+
+    def _self_goal(self, s: int, r: int, c: int) -> bool:
+        """Whether the concept holds with the self at ``(r, c)`` in scene ``s`` where only the self moves, tested
+        once per scene and cell (``Concept.self_evaluator``, as the single env tests it) into ``_goal_table``."""
+        known = self._goal_table[s, r, c]
+        if known >= 0:
+            return bool(known)
+        holds_for = self._evaluators.get(s)
+        if holds_for is None:
+            scene = self.scenes[s]
+            holds_for = self._evaluators[s] = self.concept.self_evaluator(scene.objects, scene.floor_row)
+        holds = holds_for(self.scenes[s].self_object.moved_to((r, c)))
+        self._goal_table[s, r, c] = holds
+        return holds
 
     def _seed(self, k: int, seed: int | None) -> None:
         generator, _ = seeding.np_random(seed)
@@ -241,10 +252,15 @@ class PixelWorldVectorEnv(VectorEnv):
             holds = self._push_goals[key] = self.concept.holds_objects(objects, scene.floor_row)
         return holds
 
-    def _push_goals_after_moves(self) -> None:
-        """The goal's shaping after the moves the compiled step made in pushing worlds (``_goal_pending``)."""
-        for k in np.flatnonzero(self._goal_pending):
-            goal = self._push_goal(int(self._scene[k]), self._positions[k])
+    def _goals_after_moves(self) -> None:
+        """The goal's shaping after the moves whose goal the compiled step left to Python (``_goal_pending``): in
+        pushing worlds, and where the self reached a cell of its scene for the first time."""
+        for k in np.flatnonzero(self._goal_pending).tolist():
+            s = int(self._scene[k])
+            if self._push_scene[s]:
+                goal = self._push_goal(s, self._positions[k])
+            else:
+                goal = self._self_goal(s, int(self._row[k]), int(self._col[k]))
             if goal != bool(self._goal[k]):
                 self._goal[k] = goal
                 self._rewards[k] = GOAL_POTENTIAL if goal else -GOAL_POTENTIAL
@@ -371,7 +387,7 @@ class PixelWorldVectorEnv(VectorEnv):
                                 self._truncated, self._success, self._was_reset, self._goal_pending) != kernels.OK:
             self._prepare(self._autoreset, self._no_index)
         if self._bring_about and self._goal_pending.any():
-            self._push_goals_after_moves()
+            self._goals_after_moves()
         info = self._infos(self._everyone, self._success, self._terminated, self._was_reset)
         return (self._observe(), self._rewards.copy(), self._terminated.copy(), self._truncated.copy(), info)
 

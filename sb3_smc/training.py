@@ -1,12 +1,12 @@
 """Train one SMC on a ``PW-*`` environment with sb3-contrib RecurrentPPO (default) or TRPO (spec §5).
 
-:func:`train_smc` takes a :class:`~sb3_smc.records.TrainingSpec` (or builds one from its keyword arguments),
-builds ``n_envs`` copies of the SMC's environment with :func:`sb3_smc.envs.make_smc_env` (also for a flat SMC, so
-every SMC sees the same observation layout: the one-hot window, the outcome vector of its children and its
-previous action), trains a paper-sized policy with the signal-bias initialisation of spec §5.2
-(:mod:`sb3_smc.bias`), keeps the snapshot of the update with the highest mean training return (spec §5.4, ties ->
-earliest) and returns it as an :class:`~sb3_smc.smc.SMC` whose policy is a numpy copy of the selected actor, with
-its ``spec`` and :class:`~sb3_smc.records.TrainingRecord`.
+:func:`train_smc` takes a :class:`~sb3_smc.records.TrainingSpec` (or builds one from its keyword arguments), builds
+``n_envs`` copies of the SMC's environment (:func:`make_vec_env`: every SMC sees the same observation layout, the
+one-hot window, the outcome vector of its children and its previous action; a flat SMC on a ``PW-*`` id steps them
+in PixelWorld's native vector env, the same transitions), trains a paper-sized policy with the signal-bias
+initialisation of spec §5.2 (:mod:`sb3_smc.bias`), keeps the snapshot of the update with the highest mean training
+return (spec §5.4, ties -> earliest) and returns it as an :class:`~sb3_smc.smc.SMC` whose policy is a numpy copy of
+the selected actor, with its ``spec`` and :class:`~sb3_smc.records.TrainingRecord`.
 
 Defaults (:data:`sb3_smc.hyperparameters.ALGORITHM_REGISTRY`, measured, see ``docs/training.md``): 16
 environments x 125 steps = 2,000 steps per update, 200 updates (``DEFAULT_TIMESTEPS``), gamma 0.99, GAE lambda 1,
@@ -30,7 +30,7 @@ import difflib
 import inspect
 import time
 from collections.abc import Callable, Mapping, Sequence
-from typing import Any
+from typing import Any, cast
 
 import gymnasium as gym
 import numpy as np
@@ -39,6 +39,7 @@ from sb3_contrib import RecurrentPPO
 from stable_baselines3.common.logger import Logger
 from stable_baselines3.common.vec_env import VecEnv
 
+from pixelworld_env.vector import PixelWorldVectorEnv
 from sb3_smc.bias import apply_signal_bias
 from sb3_smc.callbacks import SMCTrainingCallback
 
@@ -56,7 +57,8 @@ from sb3_smc.hyperparameters import (
 from sb3_smc.policies import FrameStackPolicy, policy_from_model
 from sb3_smc.records import TrainingRecord, TrainingSpec, package_versions
 from sb3_smc.smc import SMC, StepPolicy
-from sb3_smc.vec_env import SMCVecEnv
+from sb3_smc.vec_env import FlatSMCVecEnv, SMCVecEnv
+from sb3_smc.wrapper import HierarchicalSMCWrapper
 
 __all__ = ["check_model_settings", "make_vec_env", "resolve_children", "train_smc", "untrained_smc"]
 
@@ -125,18 +127,43 @@ def _returning(env: gym.Env) -> Callable[[], gym.Env]:
     return lambda: env
 
 
-def make_vec_env(spec: TrainingSpec, children: Sequence[SMC] = ()) -> VecEnv:
-    """``n_envs`` copies of the SMC's environment (:func:`~sb3_smc.envs.make_smc_env`) in a seeded, monitored
-    :class:`~sb3_smc.vec_env.SMCVecEnv` (SMC calls in lockstep; ``VecFrameStack`` on top when
-    ``spec.frame_stack > 1``)."""
+def make_vec_env(spec: TrainingSpec, children: Sequence[SMC] = (), *, native: bool | None = None) -> VecEnv:
+    """``n_envs`` copies of the SMC's environment in a seeded, monitored SB3 ``VecEnv`` (``VecFrameStack`` on top
+    when ``spec.frame_stack > 1``).
+
+    A flat SMC (no children) on an id with PixelWorld's native vector env trains in :class:`FlatSMCVecEnv` over it
+    (one compiled call steps every environment); any other SMC in :class:`~sb3_smc.vec_env.SMCVecEnv` over
+    :func:`~sb3_smc.envs.make_smc_env` (SMC calls in lockstep). Both give the same transitions with the same seeds
+    (tested). ``native``: ``None`` chooses as above, ``False`` forces ``SMCVecEnv``, ``True`` refuses an SMC the
+    native env cannot host."""
     from stable_baselines3.common.vec_env import VecFrameStack, VecMonitor
 
-    envs = [make_smc_env(spec, children) for _ in range(spec.budget.n_envs)]
-    venv: VecEnv = VecMonitor(SMCVecEnv([_returning(e) for e in envs]))
+    vector = _native_vector_env(spec, children) if native is not False else None
+    if native and vector is None:
+        raise ValueError(f"SMC {spec.name!r}: the native vector env hosts flat SMCs on PixelWorld ids only")
+    base: VecEnv
+    if vector is not None:
+        base = FlatSMCVecEnv(vector)
+    else:
+        envs = [make_smc_env(spec, children) for _ in range(spec.budget.n_envs)]
+        base = SMCVecEnv([_returning(e) for e in envs])
+    venv: VecEnv = VecMonitor(base)
     if spec.frame_stack > 1:
         venv = VecFrameStack(venv, spec.frame_stack)
     venv.seed(spec.seed)
     return venv
+
+
+def _native_vector_env(spec: TrainingSpec, children: Sequence[SMC]) -> PixelWorldVectorEnv | None:
+    """PixelWorld's vector env of ``spec``'s task when the SMC is flat and the id has one, else None."""
+    settings = spec.task.env_kwargs
+    if (children or spec.children or not spec.task.env_id.startswith("PW-") or settings.get("aaai18_reset_bug")
+            or settings.get("render_mode") == "human" or gym.spec(spec.task.env_id).vector_entry_point is None):
+        return None
+    kwargs = {"split": spec.task.split, "max_steps": spec.wrapper.max_steps, **spec.task.env_kwargs}
+    vector = gym.make_vec(spec.task.env_id, num_envs=spec.budget.n_envs, vectorization_mode="vector_entry_point",
+                          **kwargs)
+    return vector if isinstance(vector, PixelWorldVectorEnv) else None
 
 
 def train_smc(
@@ -246,14 +273,17 @@ def _train(spec: TrainingSpec, children: tuple[SMC, ...], *, tensorboard_log: st
     from stable_baselines3.common.callbacks import CallbackList
 
     venv = make_vec_env(spec, children)
-    first = venv.unwrapped.envs[0]  # type: ignore[attr-defined]  # the SMCVecEnv under the monitor
-    kind = first.unwrapped.kind
+    under = venv.unwrapped  # the FlatSMCVecEnv or SMCVecEnv under the monitor
+    if isinstance(under, FlatSMCVecEnv):
+        kind, action_names = under.kind, under.action_names
+    else:
+        wrapper = cast(HierarchicalSMCWrapper, cast(SMCVecEnv, under).envs[0])
+        kind, action_names = wrapper.base.kind, wrapper.action_names
     if spec.task.kind is None:  # a user's own env id: the kind is known once the env exists
         spec = dataclasses.replace(spec, task=dataclasses.replace(spec.task, kind=kind))
     elif spec.task.kind != kind:
         raise ValueError(f"SMC {spec.name!r}: the spec says a {spec.task.kind} task, but {spec.task.env_id} is a "
                          f"{kind} task")
-    action_names = tuple(first.action_names)
 
     policy_class, settings = constructor_arguments(spec.hyperparameters)
     algorithm_class = ALGORITHM_REGISTRY[spec.algo].load_class()

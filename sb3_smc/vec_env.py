@@ -18,12 +18,16 @@ from typing import Any, cast
 
 import gymnasium as gym
 import numpy as np
+from gymnasium import spaces
 from stable_baselines3.common.vec_env import DummyVecEnv
-from stable_baselines3.common.vec_env.base_vec_env import VecEnvStepReturn
+from stable_baselines3.common.vec_env.base_vec_env import VecEnvObs, VecEnvStepReturn
 
+from pixelworld_env.vector import PixelWorldVectorEnv
+from sb3_smc.gymnasium_vec_env import GymnasiumVecEnv
+from sb3_smc.smc import HAND_SIZE, MOVES, observation_size, smc_action_names
 from sb3_smc.wrapper import HierarchicalSMCWrapper
 
-__all__ = ["SMCVecEnv", "answer_in_batches"]
+__all__ = ["FlatSMCVecEnv", "SMCVecEnv", "answer_in_batches"]
 
 
 def answer_in_batches(requests: dict[int, tuple[Any, np.ndarray, Any]]) -> dict[int, tuple[np.ndarray, Any]]:
@@ -98,3 +102,75 @@ class SMCVecEnv(DummyVecEnv):
             self.buf_infos[i] = info
             self._save_obs(i, obs)
         return self._obs_from_buf(), np.copy(self.buf_rews), np.copy(self.buf_dones), [dict(i) for i in self.buf_infos]
+
+
+class FlatSMCVecEnv(GymnasiumVecEnv):
+    """SB3's ``VecEnv`` of a flat SMC (one without children) over PixelWorld's native vector env
+    (:class:`pixelworld_env.vector.PixelWorldVectorEnv`, ``observation="hand"``): all environments stepped in one
+    compiled call.
+
+    It gives what :class:`SMCVecEnv` over ``HierarchicalSMCWrapper`` environments without children gives, step for
+    step with the same seeds: the SMC's actions (:func:`~sb3_smc.smc.smc_action_names`), its observation (the
+    one-hot window and the one-hot previous action, zeros after a reset), rewards, SB3's same-step reset with
+    ``terminal_observation`` and ``TimeLimit.truncated``, and the info keys of the wrapper that training reads
+    (``is_success``: the episode ended with a positive reward; ``primitive_steps``: 1 for a move, 0 for a signal).
+    ``train_smc`` trains flat SMCs in it (:func:`sb3_smc.training.make_vec_env`). ``get_attr`` and the other
+    per-environment calls are :class:`~sb3_smc.gymnasium_vec_env.GymnasiumVecEnv`'s.
+    """
+
+    def __init__(self, env: PixelWorldVectorEnv) -> None:
+        if env.observation != "hand":
+            raise ValueError(f"FlatSMCVecEnv builds SMC observations from the one-hot 3 x 3 window: the vector env "
+                             f"needs observation='hand', got {env.observation!r}")
+        super().__init__(env)
+        self.kind: str = env.kind
+        self.action_names = smc_action_names(env.kind)
+        n_actions = len(self.action_names)
+        self.observation_space = spaces.Box(-1.0, 1.0, shape=(observation_size(0, n_actions),), dtype=np.float32)
+        self.action_space = spaces.Discrete(n_actions)
+        self._to_base = np.array([env.action_names.index(name) for name in self.action_names], dtype=np.int64)
+        self._is_move = np.array([name in MOVES for name in self.action_names], dtype=np.bool_)
+        self._previous = np.full(env.num_envs, -1, dtype=np.int64)
+        self._rows = np.arange(env.num_envs)
+
+    def _observation(self, hand: np.ndarray) -> np.ndarray:
+        obs = np.zeros((self.num_envs, HAND_SIZE + len(self.action_names)), dtype=np.float32)
+        obs[:, :HAND_SIZE] = hand
+        acted = self._previous >= 0
+        obs[self._rows[acted], HAND_SIZE + self._previous[acted]] = 1.0
+        return obs
+
+    def reset(self) -> VecEnvObs:
+        seeds = None if all(s is None for s in self._seeds) else list(self._seeds)
+        if any(self._options):
+            raise ValueError(f"FlatSMCVecEnv takes no reset options, got {self._options}")
+        hand, _ = self.env.reset(seed=cast("int | None", seeds))  # a list of seeds: one per environment
+        self.reset_infos = [{} for _ in range(self.num_envs)]
+        self._reset_seeds()
+        self._previous[:] = -1
+        return self._observation(hand)
+
+    def step_async(self, actions: np.ndarray) -> None:
+        self._actions = np.asarray(actions, dtype=np.int64).reshape(self.num_envs)
+
+    def step_wait(self) -> VecEnvStepReturn:
+        assert self._actions is not None, "step_async first"
+        actions, self._actions = self._actions, None
+        hand, rewards, terminated, truncated, _ = self.env.step(self._to_base[actions])
+        self._previous[:] = actions
+        obs = self._observation(hand)
+        dones = terminated | truncated
+        success = (dones & (rewards > 0)).tolist()
+        moves = self._is_move[actions].astype(np.int64).tolist()
+        limit = (truncated & ~terminated).tolist()
+        infos: list[dict[str, Any]] = [
+            {"is_success": s, "primitive_steps": m, "TimeLimit.truncated": t}
+            for s, m, t in zip(success, moves, limit, strict=True)]
+        ended = np.flatnonzero(dones)
+        if ended.size:
+            for k in ended.tolist():
+                infos[k]["terminal_observation"] = obs[k].copy()
+            hand, _ = self.env.reset(options={"reset_mask": dones})
+            self._previous[ended] = -1
+            obs[ended] = self._observation(hand)[ended]
+        return obs, rewards.astype(np.float32), dones, infos

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import functools
+
+import gymnasium as gym
 import numpy as np
 import pytest
 import torch
@@ -11,8 +14,10 @@ from stable_baselines3.common.vec_env import DummyVecEnv
 from sb3_smc import SMC
 from sb3_smc.common.recurrent import SequenceLstmPolicy
 from sb3_smc.policies import NumpyLSTMPolicy, ScriptedPolicy
+from sb3_smc.records import TrainingSpec
 from sb3_smc.smc import observation_size, smc_action_names
-from sb3_smc.vec_env import SMCVecEnv, answer_in_batches
+from sb3_smc.training import make_vec_env, train_smc, untrained_smc
+from sb3_smc.vec_env import FlatSMCVecEnv, SMCVecEnv, answer_in_batches
 from sb3_smc.wrapper import HierarchicalSMCWrapper
 from tests.helpers import classification_env
 
@@ -145,3 +150,78 @@ def test_the_lean_collection_step_matches_the_stock_forward(starts: list[float])
         torch.testing.assert_close(a, b, rtol=1e-5, atol=1e-6)
     for a, b in zip((*lean[3].pi, *lean[3].vf), (*stock[3].pi, *stock[3].vf), strict=True):
         torch.testing.assert_close(a, b, rtol=1e-5, atol=1e-6)
+
+
+# ------------------------------------------------------------------------------------------------ FlatSMCVecEnv
+
+FLAT_IDS = ["PW-cl_self-in-container_vs_noncontainer-v0", "PW-ba_self-in-container-v0",
+            "PW-ba_pixel-touches-reference_from_left-on-floor-pushable-v0"]
+
+
+@pytest.mark.parametrize("env_id", FLAT_IDS)
+def test_flat_smc_vec_env_steps_as_the_wrapper(env_id: str) -> None:
+    """The native flat SMC env gives SMCVecEnv's observations, rewards, dones and the info keys training reads, with
+    the same seeds, across many same-step resets (classification, bring-about, pushing)."""
+    spec = TrainingSpec.create(env_id, seed=3, n_envs=6, max_steps=20)
+    reference, native = make_vec_env(spec, native=False), make_vec_env(spec, native=True)
+    assert isinstance(reference.unwrapped, SMCVecEnv) and isinstance(native.unwrapped, FlatSMCVecEnv)
+    assert native.observation_space == reference.observation_space
+    assert native.action_space == reference.action_space
+    assert native.unwrapped.action_names == reference.unwrapped.envs[0].action_names
+    np.testing.assert_array_equal(native.reset(), reference.reset())
+    rng = np.random.default_rng(0)
+    ended = 0
+    for _ in range(400):
+        actions = rng.integers(native.action_space.n, size=6)
+        obs, rewards, dones, infos = native.step(actions)
+        obs_ref, rewards_ref, dones_ref, infos_ref = reference.step(actions)
+        np.testing.assert_array_equal(obs, obs_ref)
+        np.testing.assert_array_equal(rewards, rewards_ref)
+        np.testing.assert_array_equal(dones, dones_ref)
+        assert rewards.dtype == rewards_ref.dtype and obs.dtype == obs_ref.dtype
+        for info, info_ref in zip(infos, infos_ref, strict=True):
+            for key in ("is_success", "primitive_steps", "TimeLimit.truncated"):
+                assert info[key] == info_ref[key], key
+            assert ("terminal_observation" in info) == ("terminal_observation" in info_ref)
+            if "terminal_observation" in info:
+                np.testing.assert_array_equal(info["terminal_observation"], info_ref["terminal_observation"])
+                assert info["episode"]["r"] == info_ref["episode"]["r"]
+                assert info["episode"]["l"] == info_ref["episode"]["l"]
+        ended += int(dones.sum())
+    assert ended > 50
+
+
+@pytest.mark.parametrize("algo,frame_stack", [("RecurrentPPO", 1), ("TRPO", 1), ("TRPO", 3), ("PPO", 1)])
+def test_train_smc_on_the_native_env_is_bit_identical(algo: str, frame_stack: int,
+                                                      monkeypatch: pytest.MonkeyPatch) -> None:
+    """A flat SMC trained in FlatSMCVecEnv (train_smc's choice) is the one trained in SMCVecEnv: the same returns,
+    selected update and weights."""
+    import sb3_smc.training as training
+
+    settings = dict(algo=algo, total_timesteps=768, n_envs=4, n_steps=64, seed=5, frame_stack=frame_stack)
+    native = train_smc("PW-ba_self-in-container-v0", **settings)
+    assert isinstance(native.model.get_env().unwrapped, FlatSMCVecEnv)
+    monkeypatch.setattr(training, "make_vec_env", functools.partial(training.make_vec_env, native=False))
+    reference = train_smc("PW-ba_self-in-container-v0", **settings)
+    assert isinstance(reference.model.get_env().unwrapped, SMCVecEnv)
+    assert native.record.training_returns == reference.record.training_returns
+    assert native.record.selected_update == reference.record.selected_update
+    assert native.record.success_rates == reference.record.success_rates
+    assert native.record.primitive_steps == reference.record.primitive_steps
+    state, state_ref = native.model.policy.state_dict(), reference.model.policy.state_dict()
+    assert all(torch.equal(state[k], state_ref[k]) for k in state)
+
+
+def test_smcs_with_children_and_other_ids_keep_smc_vec_env() -> None:
+    child = untrained_smc("PW-ba_self-in-container-v0", algo="TRPO", n_envs=2, seed=1)
+    spec = TrainingSpec.create("PW-cl_self-in-container_vs_noncontainer-v0", children=[child.name], n_envs=2)
+    assert isinstance(make_vec_env(spec, (child,)).unwrapped, SMCVecEnv)
+    with pytest.raises(ValueError, match="flat SMCs on PixelWorld ids only"):
+        make_vec_env(spec, (child,), native=True)
+    buggy = TrainingSpec.create("PW-ba_self-in-container-v0", n_envs=2, env_kwargs={"aaai18_reset_bug": True})
+    assert isinstance(make_vec_env(buggy).unwrapped, SMCVecEnv)
+
+
+def test_flat_smc_vec_env_refuses_another_observation() -> None:
+    with pytest.raises(ValueError, match="needs observation='hand', got 'full'"):
+        FlatSMCVecEnv(gym.make_vec("PW-ba_self-in-container-v0", num_envs=2, observation="full"))
