@@ -22,8 +22,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from pixelworld_env.dataset_spec import DatasetSpec
 from pixelworld_env.definitions import load_definitions
-from pixelworld_env.generation import DatasetSpec
 
 REFERENCE = Path(os.environ.get("PIXELWORLD_REFERENCE", Path(__file__).resolve().parents[2] / "shared" / "reference"))
 

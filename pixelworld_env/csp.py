@@ -1,6 +1,6 @@
 """The generator CSP of spec §3.8 written for python-constraint (``python-constraint2``).
 
-:mod:`pixelworld_env.generation` samples generators with its own randomized backtracking search because
+:mod:`pixelworld_env.sampling` samples generators with its own randomized backtracking search because
 python-constraint's solvers are 100-10,000x slower on the positional constraints (measurements in that
 module's docstring). This module states the same problem independently, variable by variable, so that the
 fast sampler can be checked against it (:func:`satisfies_generator`) and small generators can be sampled
@@ -27,8 +27,9 @@ from pixelworld_env.concepts import Concept, expand, parse
 from pixelworld_env.concepts.parser import SELF
 from pixelworld_env.concepts.predicates import PREDICATES, EvalContext
 from pixelworld_env.constants import FLOOR_HEIGHT, HEIGHT, PADDING, WIDTH, Color
-from pixelworld_env.generation import COLORS, NUM_SHAPE_IDX, library_object
 from pixelworld_env.objects import WorldObject, frame_object
+from pixelworld_env.placement import library_object
+from pixelworld_env.sampling import COLORS, NUM_SHAPE_IDX
 from pixelworld_env.scene import Scene
 from pixelworld_env.shapes import FAMILIES, shape_library
 

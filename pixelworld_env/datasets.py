@@ -41,15 +41,10 @@ from pathlib import Path
 from typing import Any
 
 from pixelworld_env.atomic import atomic_write
-from pixelworld_env.generation import (
-    GENERATOR_VERSION,
-    DatasetSpec,
-    GeneratedDataset,
-    GeneratorStats,
-    generate,
-    library_object,
-)
+from pixelworld_env.dataset_spec import DatasetSpec
+from pixelworld_env.generation import GENERATOR_VERSION, GeneratedDataset, GeneratorStats, generate
 from pixelworld_env.objects import WorldObject, frame_object
+from pixelworld_env.placement import library_object
 from pixelworld_env.scene import Scene
 from pixelworld_env.shapes import LibraryParams
 from pixelworld_env.validation import check_seed

@@ -41,8 +41,8 @@ from pixelworld_env.errors import PixelWorldError, PixelWorldKeyError
 
 if TYPE_CHECKING:
     from pixelworld_env.constants import Kind
+    from pixelworld_env.dataset_spec import DatasetSpec
     from pixelworld_env.env import PixelWorldEnv
-    from pixelworld_env.generation import DatasetSpec
 
 #: Top-level keys with a meaning of their own (everything else that is a list of strings is a named list).
 SECTIONS = ("concepts", "generators", "datasets", "curriculum")
@@ -163,7 +163,7 @@ class DefinitionSet:
 
     def dataset_spec(self, name: str, num_samples: int = 50) -> DatasetSpec:
         """The generation spec of dataset ``name`` (for :func:`pixelworld_env.generation.generate`)."""
-        from pixelworld_env.generation import DatasetSpec
+        from pixelworld_env.dataset_spec import DatasetSpec
 
         if name not in self.datasets:
             close = difflib.get_close_matches(name, list(self.datasets), n=3)

@@ -7,9 +7,9 @@ from typing import Literal
 
 from pixelworld_env import catalog, generation
 from pixelworld_env.constants import Kind
+from pixelworld_env.dataset_spec import DatasetSpec
 from pixelworld_env.datasets import load_or_generate
 from pixelworld_env.errors import PixelWorldError
-from pixelworld_env.generation import DatasetSpec
 from pixelworld_env.scene import Scene
 from pixelworld_env.validation import check_seed
 
