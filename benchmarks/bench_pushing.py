@@ -1,55 +1,64 @@
-"""Moves in worlds with a pushable object: ``World.move`` (redraws only the objects a move shifts) next to the
-full redraw it replaced, side by side in one run.
+"""``World.move`` in this tree beside a baseline checkout, in one run: worlds with a pushable object and worlds where
+only the self moves.
 
-In a world with any moveable object besides the one-pixel self, every successful move used to redraw the whole
-state array (``World._draw``); the pushable curriculum's worlds all have one. The baseline here is the same
-``World`` forced onto that full-redraw path. Both give the same arrays (``tests/test_pushable.py``). Walks of 20
-moves right then 20 left from every start of the first 20 scenes of each dataset, best of 5 repeats.
-Run: ``python benchmarks/bench_pushing.py``.
+Walks of 20 moves right then 20 left from every start of the first 20 scenes of each dataset, best of 5 repeats,
+each tree in its own subprocess (``PYTHONPATH`` = the tree), alternating. Both trees must give the same arrays
+(``tests/test_pushable.py`` checks every move against a full redraw). Run: ``python benchmarks/bench_pushing.py
+[--baseline PATH]``; make a baseline checkout with ``git worktree add /tmp/baseline <commit>``. Without
+``--baseline`` only this tree is measured.
 """
 
 from __future__ import annotations
 
-import timeit
+import argparse
+import os
+import subprocess
+import sys
+from pathlib import Path
 
+HERE = Path(__file__).resolve().parents[1]
+DATASETS = ("ba_pixel-touches-reference_from_left-on-floor-pushable", "cl_pushable-floor-pixel_vs_unpushable",
+            "ba_self-in-container_from_on-floor")
+
+_JOB = """
+import sys, timeit
 from pixelworld_env.datasets import load_or_generate
 from pixelworld_env.loading import dataset_spec
 from pixelworld_env.world import MOVES, World
+worlds = [World(scene) for scene in load_or_generate(dataset_spec(sys.argv[1]), 0).scenes[:20]]
+right, left = MOVES["RIGHT"], MOVES["LEFT"]
+def walk():
+    for world in worlds:
+        world.reset()
+        for _ in range(20):
+            world.move(right)
+        for _ in range(20):
+            world.move(left)
+walk()
+print(1e6 * min(timeit.repeat(walk, number=10, repeat=5)) / (10 * len(worlds) * 40))
+"""
 
-DATASETS = ("ba_pixel-touches-reference_from_left-on-floor-pushable", "cl_pushable-floor-pixel_vs_unpushable")
 
-
-class FullRedrawWorld(World):
-    """The baseline: every successful move redraws the whole world."""
-
-    def _draw(self) -> None:
-        super()._draw()
-        self._disjoint = False
-
-
-def microseconds_per_move(world_class: type[World], name: str, repeats: int = 5) -> float:
-    worlds = [world_class(scene) for scene in load_or_generate(dataset_spec(name), 0).scenes[:20]]
-    right, left = MOVES["RIGHT"], MOVES["LEFT"]
-
-    def walk() -> None:
-        for world in worlds:
-            world.reset()
-            for _ in range(20):
-                world.move(right)
-            for _ in range(20):
-                world.move(left)
-
-    best = min(timeit.repeat(walk, number=10, repeat=repeats))
-    return 1e6 * best / (10 * len(worlds) * 40)
+def microseconds_per_move(tree: Path, name: str) -> float:
+    env = {**os.environ, "PYTHONPATH": str(tree)}
+    out = subprocess.run([sys.executable, "-c", _JOB, name], env=env, capture_output=True, text=True, check=True)
+    return float(out.stdout.strip().splitlines()[-1])
 
 
 def main() -> None:
-    print("| dataset | full redraw (µs/move) | moved objects only (µs/move) | speed-up |")
-    print("|---|---:|---:|---:|")
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--baseline", type=Path, help="a checkout of the code to compare with")
+    args = parser.parse_args()
+    if args.baseline is None:
+        print("| dataset | µs/move |\n|---|---:|")
+        for name in DATASETS:
+            print(f"| `{name}` | {microseconds_per_move(HERE, name):.2f} |")
+        return
+    print("| dataset | baseline (µs/move) | this tree (µs/move) | speed-up |\n|---|---:|---:|---:|")
     for name in DATASETS:
-        before = microseconds_per_move(FullRedrawWorld, name)
-        after = microseconds_per_move(World, name)
-        print(f"| `{name}` | {before:.1f} | {after:.1f} | {before / after:.1f}x |")
+        before = microseconds_per_move(args.baseline, name)
+        after = microseconds_per_move(HERE, name)
+        print(f"| `{name}` | {before:.2f} | {after:.2f} | {before / after:.2f}x |", flush=True)
 
 
 if __name__ == "__main__":

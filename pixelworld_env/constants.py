@@ -47,3 +47,8 @@ class ObjectClass(StrEnum):
 
 
 MOVEABLE_CLASSES = frozenset({ObjectClass.SELF, ObjectClass.BASIC, ObjectClass.COMPLEX})
+
+EMPTY = -1
+"""Owner-array entry of an empty cell (the world's arrays are padded by one ring of ``OUTSIDE`` cells)."""
+OUTSIDE = -2
+"""Owner-array entry of a cell outside the world."""

@@ -1,12 +1,13 @@
-"""Compiled (numba) PixelWorld physics for worlds where only the one-pixel self moves, and the batched steps and
-observations of :class:`pixelworld_env.vector.PixelWorldVectorEnv`.
+"""PixelWorld's physics, compiled (numba), in one place: the moves of :class:`pixelworld_env.world.World`, of the
+native vector env (:class:`pixelworld_env.vector.PixelWorldVectorEnv`, whose batched steps and observations are here
+too) and of ``sb3_smc``'s compiled SMC calls.
 
-:func:`self_target_free` is the self-only move's rule in one place: the self may enter a cell iff the padded owner
-array has it empty or owned by the self (``World.move``'s fast path; ``sb3_smc.common.kernels.leaf_call`` calls it
+:func:`self_target_free` is the self-only move's rule: the self may enter a cell iff the padded owner array has it
+empty or owned by the self (``World.move`` where only the self moves; ``sb3_smc.common.kernels.leaf_call`` calls it
 too). The vector env reads it from each scene's *initial* owner array: the only cells a self-only move changes are
 the self's own, and the self never moves onto itself, so the initial array answers exactly as the live one.
-:func:`push_move` is ``World.move``'s general path (transitive pushing) on one environment's live arrays, for the
-worlds where objects besides the self move.
+:func:`push_move` is the general move (transitive pushing) on one world's live arrays, for the worlds where objects
+besides the self move; :func:`draw_objects` draws a world's arrays from its objects' positions.
 
 The batched functions take those worlds' arrays as one tuple, ``pushing`` = ``(grid0, owner0, cells, n_cells, colors,
 moveable, n_objects, initial, disjoint0, grids, owners, positions, disjoint, plan, planned)``: per scene the initial
@@ -14,9 +15,9 @@ padded colours and owners, the objects' cells / cell counts / colours / moveabil
 positions, whether they start disjoint; per environment its live padded colours and owners, object positions and
 disjointness (empty arrays when no scene pushes); scratch arrays for :func:`push_move`.
 
-Imported only by the vector env and ``sb3_smc`` (numba's import costs about half a second; ``import pixelworld_env``
-does not pay it). The compiled code is cached next to this file; numba checks only the caller's file for changes, so
-after editing :func:`self_target_free` delete ``sb3_smc/common/__pycache__/kernels*.nbi`` / ``*.nbc``.
+The compiled code is cached next to this file (numba's import and the first call of a cached function cost about
+half a second per process); numba checks only the caller's file for changes, so after editing
+:func:`self_target_free` delete ``sb3_smc/common/__pycache__/kernels*.nbi`` / ``*.nbc``.
 """
 
 from __future__ import annotations
@@ -24,10 +25,10 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from pixelworld_env.world import EMPTY, OUTSIDE
+from pixelworld_env.constants import EMPTY, OUTSIDE
 
-__all__ = ["NEED_DRAWS", "NEED_SCENES", "OK", "observe_states", "observe_windows", "push_move", "reset_envs",
-           "self_target_free", "step_envs"]
+__all__ = ["NEED_DRAWS", "NEED_SCENES", "OK", "draw_objects", "observe_states", "observe_windows", "push_move",
+           "reset_envs", "self_target_free", "step_envs"]
 
 OK, NEED_DRAWS, NEED_SCENES = 0, 1, 2
 """What :func:`step_envs` and :func:`reset_envs` return: done; an environment to reset has no scene draw left (refill
@@ -46,9 +47,10 @@ def self_target_free(owner: np.ndarray, me: int, row: int, col: int) -> bool:  #
 
 
 @njit(cache=True)
-def _draw(grid: np.ndarray, owner: np.ndarray, positions: np.ndarray, cells: np.ndarray, n_cells: np.ndarray,
-          colors: np.ndarray, n_objects: int) -> bool:  # pragma: no cover
-    """``World._draw``: redraw every object in index order; returns whether no two objects share a cell."""
+def draw_objects(grid: np.ndarray, owner: np.ndarray, positions: np.ndarray, cells: np.ndarray, n_cells: np.ndarray,
+                 colors: np.ndarray, n_objects: int) -> bool:  # pragma: no cover
+    """Redraw the padded ``grid`` / ``owner`` arrays with every object at ``positions``, in index order (a later
+    object over an earlier one); returns whether no two objects share a cell."""
     grid[:, :] = 0
     owner[:, :] = OUTSIDE
     owner[1:-1, 1:-1] = EMPTY
@@ -100,7 +102,7 @@ def push_move(grid: np.ndarray, owner: np.ndarray, positions: np.ndarray, cells:
         for i in range(size):
             positions[plan[i], 0] += dr
             positions[plan[i], 1] += dc
-        disjoint[k] = _draw(grid, owner, positions, cells, n_cells, colors, n_objects)
+        disjoint[k] = draw_objects(grid, owner, positions, cells, n_cells, colors, n_objects)
         return True
     for i in range(size):  # the same arrays as a full redraw: erase the moved objects, then draw them moved
         index = plan[i]

@@ -177,3 +177,29 @@ def test_the_papers_protocol_estimate_leaves_the_designed_curriculum_out() -> No
     module = import_benchmark("bench_curriculum")
     assert "pushable" not in module.paper_curricula()
     assert module.protocol_jobs() == {"flat": 505, "curr": 830, "canon": 510}
+
+
+def test_the_reset_bugs_stale_pixel_in_a_pushing_world() -> None:
+    """A stale self pixel (the AAAI-18 reset bug) in a world with a pushable object: a blocked move keeps it, the
+    first move that succeeds redraws the world without it (as in a world where only the self moves)."""
+    scene = Scene.from_ascii("""
+#########
+#.......#
+#..SA...#
+#=======#
+#.......#
+#########
+""")
+    world = World(scene)
+    world.move(RIGHT)  # pushes A
+    start = world.self_position
+    world.reset(stale_cell=(1, 1))
+    assert world.stale and world.grid[2, 2] != 0 and world.owner[2, 2] == world.self_index
+    assert not world.move(MOVES["DOWN"])  # the floor: blocked, the stale pixel stays
+    assert world.stale and world.owner[2, 2] == world.self_index
+    assert world.move(RIGHT) and not world.stale  # pushes A again, redraws everything
+    assert world.self_position == (start[0], start[1]) and world.owner[2, 2] < 0
+    grid, owner = world.grid.copy(), world.owner.copy()
+    world.set_positions(list(world.positions))
+    np.testing.assert_array_equal(world.grid, grid)
+    np.testing.assert_array_equal(world.owner, owner)
