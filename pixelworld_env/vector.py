@@ -39,6 +39,7 @@ from pixelworld_env.env import (
     GOAL_REWARD,
     PixelWorldEnv,
 )
+from pixelworld_env.errors import PixelWorldError, PixelWorldTypeError
 from pixelworld_env.objects import Cell
 from pixelworld_env.render import rgb_image
 from pixelworld_env.scene import Scene
@@ -166,13 +167,13 @@ class PixelWorldVectorEnv(VectorEnv):
         """``ValueError`` for the settings only single envs have (the reset bug, the pygame window) and an unknown
         ``render_envs``."""
         if aaai18_reset_bug:
-            raise ValueError("aaai18_reset_bug=True is not supported by the vector env; use "
-                             "gym.make_vec(id, n, vectorization_mode='sync', aaai18_reset_bug=True)")
+            raise PixelWorldError("aaai18_reset_bug=True is not supported by the vector env; use "
+                                  "gym.make_vec(id, n, vectorization_mode='sync', aaai18_reset_bug=True)")
         if render_mode == "human":
-            raise ValueError("render_mode='human' draws one env in a window; use gym.make(id, render_mode='human') "
-                             "or render_mode='rgb_array' here")
+            raise PixelWorldError("render_mode='human' draws one env in a window; use gym.make(id, "
+                                  "render_mode='human') or render_mode='rgb_array' here")
         if render_envs not in RENDER_ENVS:
-            raise ValueError(f"render_envs must be one of {RENDER_ENVS}, got {render_envs!r}")
+            raise PixelWorldError(f"render_envs must be one of {RENDER_ENVS}, got {render_envs!r}")
 
     def __repr__(self) -> str:
         name = self.spec.id if self.spec is not None else f"{self.kind}, {len(self.scenes)} scenes"
@@ -316,14 +317,14 @@ class PixelWorldVectorEnv(VectorEnv):
         else:
             seeds = list(seed)
             if len(seeds) != n:
-                raise ValueError(f"If seeds are passed as a list the length must match num_envs={n} but got "
-                                 f"length={len(seeds)}.")
+                raise PixelWorldError(f"If seeds are passed as a list the length must match num_envs={n} but got "
+                                      f"length={len(seeds)}.")
         options = dict(options or {})
         mask = self._reset_mask(options.pop("reset_mask", None))
         index = self._indices(options.pop("index", None))
         if options:
-            raise ValueError(f"unknown reset option(s) {sorted(options)}; PixelWorldVectorEnv.reset takes "
-                             "options={'index': i or [i, ...], 'reset_mask': mask}")
+            raise PixelWorldError(f"unknown reset option(s) {sorted(options)}; PixelWorldVectorEnv.reset takes "
+                                  "options={'index': i or [i, ...], 'reset_mask': mask}")
         if not self._started and not mask.all():
             raise RuntimeError("the first reset must reset every environment (no reset_mask)")
         for k in np.flatnonzero(mask).tolist():
@@ -343,14 +344,14 @@ class PixelWorldVectorEnv(VectorEnv):
         if mask is None:
             return self._everyone.copy()
         if not isinstance(mask, np.ndarray):
-            raise TypeError(f"`options['reset_mask']` must be a numpy array, got {type(mask)}")
+            raise PixelWorldTypeError(f"`options['reset_mask']` must be a numpy array, got {type(mask)}")
         if mask.shape != (self.num_envs,):
-            raise ValueError(f"`options['reset_mask']` must have shape `({self.num_envs},)`, got {mask.shape}")
+            raise PixelWorldError(f"`options['reset_mask']` must have shape `({self.num_envs},)`, got {mask.shape}")
         if mask.dtype != np.bool_:
-            raise TypeError(f"`options['reset_mask']` must have `dtype=np.bool_`, got {mask.dtype}")
+            raise PixelWorldTypeError(f"`options['reset_mask']` must have `dtype=np.bool_`, got {mask.dtype}")
         if not mask.any():
-            raise ValueError("`options['reset_mask']` must contain a boolean array with at least one True value, "
-                             f"got reset_mask={mask}")
+            raise PixelWorldError("`options['reset_mask']` must contain a boolean array with at least one True value, "
+                                  f"got reset_mask={mask}")
         return mask.copy()
 
     def _indices(self, index: Any) -> np.ndarray:
@@ -359,8 +360,8 @@ class PixelWorldVectorEnv(VectorEnv):
             return self._no_index
         if isinstance(index, (list, tuple, np.ndarray)):
             if len(index) != self.num_envs:
-                raise ValueError(f"options['index'] as a list needs one entry per environment ({self.num_envs}), "
-                                 f"got {len(index)}")
+                raise PixelWorldError(f"options['index'] as a list needs one entry per environment ({self.num_envs}), "
+                                      f"got {len(index)}")
             values = [-1 if i is None else check_int(i, "options['index']") for i in index]
         else:
             values = [check_int(index, "options['index']")] * self.num_envs
@@ -374,10 +375,10 @@ class PixelWorldVectorEnv(VectorEnv):
             raise RuntimeError("call reset() first")
         actions = np.asarray(actions)
         if actions.shape != (self.num_envs,) or actions.dtype.kind not in "iu":
-            raise ValueError(f"actions must be an integer array of shape ({self.num_envs},), got {actions.dtype} "
-                             f"{actions.shape}")
+            raise PixelWorldError(f"actions must be an integer array of shape ({self.num_envs},), got {actions.dtype} "
+                                  f"{actions.shape}")
         if actions.size and (actions.min() < 0 or actions.max() >= len(self.action_names)):
-            raise ValueError(f"actions must be in [0, {len(self.action_names)}), got {actions}")
+            raise PixelWorldError(f"actions must be in [0, {len(self.action_names)}), got {actions}")
         actions = actions.astype(np.int64, copy=False)
         while kernels.step_envs(actions, self._kinds, self._values, self._deltas, self._bring_about, self.max_steps,
                                 CLASSIFICATION_REWARD, GOAL_POTENTIAL, GOAL_REWARD, self._me, self._start,

@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING, Any
 
 import gymnasium as gym
 
+from sb3_smc.errors import SMCError, SMCTypeError
 from sb3_smc.records import TaskSpec, TrainingSpec, WrapperSettings
 from sb3_smc.smc import SMC
 from sb3_smc.wrapper import HierarchicalSMCWrapper
@@ -20,7 +21,7 @@ from sb3_smc.wrapper import HierarchicalSMCWrapper
 if TYPE_CHECKING:
     from pixelworld_env.env import PixelWorldEnv
 
-__all__ = ["make_smc_env", "pixelworld_base", "spec_for_smc", "wrap_with_smcs"]
+__all__ = ["check_env_kwargs", "make_smc_env", "pixelworld_base", "spec_for_smc", "wrap_with_smcs"]
 
 
 def pixelworld_base(env: gym.Env) -> PixelWorldEnv:
@@ -30,12 +31,12 @@ def pixelworld_base(env: gym.Env) -> PixelWorldEnv:
 
     base = getattr(env, "unwrapped", env)
     if not isinstance(base, PixelWorldEnv):
-        raise TypeError(f"SMCs act on PixelWorld environments; got {type(base).__name__}")
+        raise SMCTypeError(f"SMCs act on PixelWorld environments; got {type(base).__name__}")
     layer = env
     while layer is not base:
         if isinstance(layer, HierarchicalSMCWrapper):
-            raise ValueError("the environment is already wrapped with SMC actions (HierarchicalSMCWrapper); "
-                             "wrap the PixelWorld environment itself")
+            raise SMCError("the environment is already wrapped with SMC actions (HierarchicalSMCWrapper); "
+                           "wrap the PixelWorld environment itself")
         layer = getattr(layer, "env", base)
     return base
 
@@ -54,18 +55,18 @@ def make_smc_env(spec: TrainingSpec, children: Sequence[SMC] = (), *, env: gym.E
     children = tuple(children)
     names = tuple(child.name for child in children)
     if names != spec.children:
-        raise ValueError(f"SMC {spec.name!r} calls the children {list(spec.children)} (in that order), but was given "
-                         f"{list(names)}")
+        raise SMCError(f"SMC {spec.name!r} calls the children {list(spec.children)} (in that order), but was given "
+                       f"{list(names)}")
     settings = wrapper or spec.wrapper
     if env is None:
         import pixelworld_env  # noqa: F401  (registers the PW-* ids)
 
         env_id = env_id or spec.task.env_id
-        kwargs = {"disable_env_checker": True, **_check_env_kwargs(env_id, {**spec.task.env_kwargs,
+        kwargs = {"disable_env_checker": True, **check_env_kwargs(env_id, {**spec.task.env_kwargs,
                                                                            **_mapping(env_kwargs)})}
         env = gym.make(env_id, split=split or spec.task.split, max_steps=settings.max_steps, **kwargs)
     elif env_id is not None or split is not None or env_kwargs:
-        raise ValueError("make_smc_env: give either env, or env_id / split / env_kwargs to build one, not both")
+        raise SMCError("make_smc_env: give either env, or env_id / split / env_kwargs to build one, not both")
     else:
         pixelworld_base(env)
     return wrap_with_smcs(env, children, settings, record_cells=record_cells)
@@ -75,12 +76,12 @@ def _mapping(env_kwargs: Any) -> dict[str, Any]:
     if env_kwargs is None:
         return {}
     if not isinstance(env_kwargs, Mapping) or not all(isinstance(key, str) for key in env_kwargs):
-        raise TypeError(f"env_kwargs must be a mapping of argument names to values, got {env_kwargs!r}")
+        raise SMCTypeError(f"env_kwargs must be a mapping of argument names to values, got {env_kwargs!r}")
     return dict(env_kwargs)
 
 
-def _check_env_kwargs(env_id: str, kwargs: dict[str, Any]) -> dict[str, Any]:
-    """``kwargs`` for ``gym.make(env_id, split=..., max_steps=..., **kwargs)``: ``ValueError`` for ``split`` or
+def check_env_kwargs(env_id: str, kwargs: dict[str, Any]) -> dict[str, Any]:
+    """``kwargs`` for ``gym.make(env_id, split=..., max_steps=..., **kwargs)``: :class:`SMCError` for ``split`` or
     ``max_steps`` (set by the spec or make_smc_env's arguments) and, for a PixelWorld id, for a name its
     environment does not take (the values are checked by the environment)."""
     import difflib
@@ -90,8 +91,8 @@ def _check_env_kwargs(env_id: str, kwargs: dict[str, Any]) -> dict[str, Any]:
 
     clash = sorted({"split", "max_steps"} & set(kwargs))
     if clash:
-        raise ValueError(f"env_kwargs {clash}: the split is make_smc_env's split= (else the spec's task.split), "
-                         "max_steps the wrapper settings' (wrapper=WrapperSettings(max_steps=...)); give them there")
+        raise SMCError(f"env_kwargs {clash}: the split is make_smc_env's split= (else the spec's task.split), "
+                       "max_steps the wrapper settings' (wrapper=WrapperSettings(max_steps=...)); give them there")
     try:
         entry = gym.spec(env_id).entry_point
     except gym.error.Error:
@@ -103,8 +104,8 @@ def _check_env_kwargs(env_id: str, kwargs: dict[str, Any]) -> dict[str, Any]:
     for key in kwargs:
         if key not in taken:
             close = difflib.get_close_matches(key, taken, n=1)
-            raise ValueError(f"env_kwargs: {env_id} takes no argument {key!r} (it takes {taken})"
-                             + (f"; did you mean {close[0]!r}?" if close else ""))
+            raise SMCError(f"env_kwargs: {env_id} takes no argument {key!r} (it takes {taken})"
+                           + (f"; did you mean {close[0]!r}?" if close else ""))
     return kwargs
 
 

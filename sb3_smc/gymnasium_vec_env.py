@@ -20,6 +20,8 @@ import numpy as np
 from gymnasium.vector import AutoresetMode
 from stable_baselines3.common.vec_env.base_vec_env import VecEnv, VecEnvIndices, VecEnvObs, VecEnvStepReturn
 
+from sb3_smc.errors import SMCError
+
 __all__ = ["GymnasiumVecEnv", "info_list"]
 
 
@@ -51,8 +53,8 @@ class GymnasiumVecEnv(VecEnv):
 
     def __init__(self, env: gym.vector.VectorEnv) -> None:
         if env.metadata.get("autoreset_mode") != AutoresetMode.NEXT_STEP:
-            raise ValueError(f"GymnasiumVecEnv needs a vector env with next-step autoreset, got "
-                             f"{env.metadata.get('autoreset_mode')!r}")
+            raise SMCError(f"GymnasiumVecEnv needs a vector env with next-step autoreset, got "
+                           f"{env.metadata.get('autoreset_mode')!r}")
         self.env = env
         super().__init__(env.num_envs, env.single_observation_space, env.single_action_space)
         self._actions: np.ndarray | None = None
@@ -63,7 +65,7 @@ class GymnasiumVecEnv(VecEnv):
         if any(self._options):
             unknown = {key for option in self._options for key in option} - {"index"}
             if unknown:
-                raise ValueError(f"GymnasiumVecEnv passes only the reset option 'index', got {sorted(unknown)}")
+                raise SMCError(f"GymnasiumVecEnv passes only the reset option 'index', got {sorted(unknown)}")
             options = {"index": [option.get("index") for option in self._options]}
         # a list of seeds: the vector envs this adapter takes accept one (VectorEnv.reset is typed for an int)
         obs, info = self.env.reset(seed=cast("int | None", seeds), options=options)

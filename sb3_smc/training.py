@@ -46,7 +46,8 @@ from sb3_smc.callbacks import SMCTrainingCallback
 # SequenceLstmPolicy: models saved by sb3-smc 0.1 name sb3_smc.training.SequenceLstmPolicy (SB3 pickles the class by
 # reference); importing it here keeps them loadable.
 from sb3_smc.common.recurrent import SequenceLstmPolicy, use_compact_buffer  # noqa: F401
-from sb3_smc.envs import make_smc_env
+from sb3_smc.envs import check_env_kwargs, make_smc_env
+from sb3_smc.errors import SMCError, SMCKeyError, SMCTypeError
 from sb3_smc.hyperparameters import (
     ALGORITHM_REGISTRY,
     DEFAULT_ALGORITHM,
@@ -68,10 +69,10 @@ def resolve_children(children: Any, names: Sequence[str] | None = None) -> tuple
     (an :class:`~sb3_smc.library.SMCLibrary`) looked up with ``names`` (a spec's children)."""
     if isinstance(children, Mapping):
         if names is None:
-            raise TypeError("children given as a mapping (a library) need the names to take from it")
+            raise SMCTypeError("children given as a mapping (a library) need the names to take from it")
         missing = [n for n in names if n not in children]
         if missing:
-            raise KeyError(f"children {missing} are not in the given library (it has {sorted(children)[:10]})")
+            raise SMCKeyError(f"children {missing} are not in the given library (it has {sorted(children)[:10]})")
         return tuple(children[n] for n in names)
     if children is None:
         resolved: tuple[SMC, ...] = ()
@@ -83,10 +84,10 @@ def resolve_children(children: Any, names: Sequence[str] | None = None) -> tuple
         resolved = tuple(children)
     bad = [type(c).__name__ for c in resolved if not isinstance(c, SMC)]
     if bad:
-        raise TypeError(f"children must be SMCs, (library, [names]) or a library, got {bad}")
+        raise SMCTypeError(f"children must be SMCs, (library, [names]) or a library, got {bad}")
     if names is not None and tuple(c.name for c in resolved) != tuple(names):
-        raise ValueError(f"the spec's children are {list(names)}, but the SMCs given are "
-                         f"{[c.name for c in resolved]}")
+        raise SMCError(f"the spec's children are {list(names)}, but the SMCs given are "
+                       f"{[c.name for c in resolved]}")
     return resolved
 
 
@@ -111,15 +112,15 @@ def check_model_settings(spec: TrainingSpec) -> None:
     for key in settings:
         if key not in accepted:
             close = difflib.get_close_matches(key, list(accepted), n=1)
-            raise ValueError(f"hyperparameter {key!r} is not an argument of {spec.algo}"
-                             + (f"; did you mean {close[0]!r}?" if close else ""))
+            raise SMCError(f"hyperparameter {key!r} is not an argument of {spec.algo}"
+                           + (f"; did you mean {close[0]!r}?" if close else ""))
     size, n_actions = spec.frame_stack * spec.observation_size, len(spec.action_names)
     venv = DummyVecEnv([lambda: _SpacesOnly(size, n_actions)] * spec.budget.n_envs)
     with torch.random.fork_rng(devices=[]):
         try:
             cls(policy, venv, n_steps=spec.budget.env_steps, device="cpu", verbose=0, **settings)
         except Exception as err:  # noqa: BLE001 - whatever the constructor refuses is the message
-            raise ValueError(f"{spec.algo} refuses its hyperparameters: {type(err).__name__}: {err}") from None
+            raise SMCError(f"{spec.algo} refuses its hyperparameters: {type(err).__name__}: {err}") from None
 
 
 def _returning(env: gym.Env) -> Callable[[], gym.Env]:
@@ -140,7 +141,7 @@ def make_vec_env(spec: TrainingSpec, children: Sequence[SMC] = (), *, native: bo
 
     vector = _native_vector_env(spec, children) if native is not False else None
     if native and vector is None:
-        raise ValueError(f"SMC {spec.name!r}: the native vector env hosts flat SMCs on PixelWorld ids only")
+        raise SMCError(f"SMC {spec.name!r}: the native vector env hosts flat SMCs on PixelWorld ids only")
     base: VecEnv
     if vector is not None:
         base = FlatSMCVecEnv(vector)
@@ -160,7 +161,8 @@ def _native_vector_env(spec: TrainingSpec, children: Sequence[SMC]) -> PixelWorl
     if (children or spec.children or not spec.task.env_id.startswith("PW-") or settings.get("aaai18_reset_bug")
             or settings.get("render_mode") == "human" or gym.spec(spec.task.env_id).vector_entry_point is None):
         return None
-    kwargs = {"split": spec.task.split, "max_steps": spec.wrapper.max_steps, **spec.task.env_kwargs}
+    kwargs = {"split": spec.task.split, "max_steps": spec.wrapper.max_steps,
+              **check_env_kwargs(spec.task.env_id, dict(settings))}
     vector = gym.make_vec(spec.task.env_id, num_envs=spec.budget.n_envs, vectorization_mode="vector_entry_point",
                           **kwargs)
     return vector if isinstance(vector, PixelWorldVectorEnv) else None
@@ -223,9 +225,9 @@ def train_smc(
                     rnn=rnn)
     spec, kids = _spec_and_children(task, children, settings, hyperparams)
     if spec.budget.total_timesteps < 1:
-        raise ValueError(f"SMC {spec.name!r}: total_timesteps must be >= 1, got {spec.budget.total_timesteps} "
-                         "(nothing would be trained); untrained_smc(...) builds an SMC with its initial policy on "
-                         "purpose")
+        raise SMCError(f"SMC {spec.name!r}: total_timesteps must be >= 1, got {spec.budget.total_timesteps} "
+                       "(nothing would be trained); untrained_smc(...) builds an SMC with its initial policy on "
+                       "purpose")
     return _train(spec, kids, tensorboard_log=tensorboard_log, log_every=log_every, callback=callback,
                   printer=printer)
 
@@ -236,7 +238,7 @@ def untrained_smc(task: str | TrainingSpec, *, children: Any = None, **settings:
     returned spec's budget is 0 steps); for tests, benchmarks and baselines that need a model, not a trained
     one."""
     if "total_timesteps" in settings:
-        raise TypeError("untrained_smc trains nothing: it takes no total_timesteps")
+        raise SMCTypeError("untrained_smc trains nothing: it takes no total_timesteps")
     known = {key: settings.pop(key) for key in list(settings) if key in _KEYWORD_DEFAULTS}
     if isinstance(task, TrainingSpec):
         task = dataclasses.replace(task, budget=dataclasses.replace(task.budget, total_timesteps=0))
@@ -252,14 +254,14 @@ def _spec_and_children(task: str | TrainingSpec, children: Any, settings: dict[s
     if isinstance(task, TrainingSpec):
         given = {k: v for k, v in settings.items() if v != _KEYWORD_DEFAULTS[k]}
         if given or hyperparams:
-            raise TypeError(f"train_smc got a TrainingSpec and the settings {sorted({*given, *hyperparams})}; "
-                            "put them in the spec (dataclasses.replace) instead")
+            raise SMCTypeError(f"train_smc got a TrainingSpec and the settings {sorted({*given, *hyperparams})}; "
+                               "put them in the spec (dataclasses.replace) instead")
         return task, resolve_children(children, task.children)
     if isinstance(task, str):
         kids = resolve_children(children)
         spec = TrainingSpec.create(task, children=[c.name for c in kids], **settings, **hyperparams)
         return spec, kids
-    raise TypeError(f"train_smc needs an env id or a TrainingSpec, got {type(task).__name__}")
+    raise SMCTypeError(f"train_smc needs an env id or a TrainingSpec, got {type(task).__name__}")
 
 
 _RUN_OPTIONS = ("children", "tensorboard_log", "log_every", "callback", "printer")
@@ -272,6 +274,7 @@ def _train(spec: TrainingSpec, children: tuple[SMC, ...], *, tensorboard_log: st
            callback: Any, printer: Callable[[str], None]) -> SMC:
     from stable_baselines3.common.callbacks import CallbackList
 
+    check_model_settings(spec)  # a typo in a hyperparameter: a message before any environment is built
     venv = make_vec_env(spec, children)
     under = venv.unwrapped  # the FlatSMCVecEnv or SMCVecEnv under the monitor
     if isinstance(under, FlatSMCVecEnv):
@@ -282,8 +285,8 @@ def _train(spec: TrainingSpec, children: tuple[SMC, ...], *, tensorboard_log: st
     if spec.task.kind is None:  # a user's own env id: the kind is known once the env exists
         spec = dataclasses.replace(spec, task=dataclasses.replace(spec.task, kind=kind))
     elif spec.task.kind != kind:
-        raise ValueError(f"SMC {spec.name!r}: the spec says a {spec.task.kind} task, but {spec.task.env_id} is a "
-                         f"{kind} task")
+        raise SMCError(f"SMC {spec.name!r}: the spec says a {spec.task.kind} task, but {spec.task.env_id} is a "
+                       f"{kind} task")
 
     policy_class, settings = constructor_arguments(spec.hyperparameters)
     algorithm_class = ALGORITHM_REGISTRY[spec.algo].load_class()

@@ -23,6 +23,7 @@ from stable_baselines3.common.vec_env import DummyVecEnv
 from stable_baselines3.common.vec_env.base_vec_env import VecEnvObs, VecEnvStepReturn
 
 from pixelworld_env.vector import PixelWorldVectorEnv
+from sb3_smc.errors import SMCError
 from sb3_smc.gymnasium_vec_env import GymnasiumVecEnv
 from sb3_smc.smc import HAND_SIZE, MOVES, observation_size, smc_action_names
 from sb3_smc.wrapper import HierarchicalSMCWrapper
@@ -120,8 +121,8 @@ class FlatSMCVecEnv(GymnasiumVecEnv):
 
     def __init__(self, env: PixelWorldVectorEnv) -> None:
         if env.observation != "hand":
-            raise ValueError(f"FlatSMCVecEnv builds SMC observations from the one-hot 3 x 3 window: the vector env "
-                             f"needs observation='hand', got {env.observation!r}")
+            raise SMCError(f"FlatSMCVecEnv builds SMC observations from the one-hot 3 x 3 window: the vector env "
+                           f"needs observation='hand', got {env.observation!r}")
         super().__init__(env)
         self.kind: str = env.kind
         self.action_names = smc_action_names(env.kind)
@@ -143,7 +144,7 @@ class FlatSMCVecEnv(GymnasiumVecEnv):
     def reset(self) -> VecEnvObs:
         seeds = None if all(s is None for s in self._seeds) else list(self._seeds)
         if any(self._options):
-            raise ValueError(f"FlatSMCVecEnv takes no reset options, got {self._options}")
+            raise SMCError(f"FlatSMCVecEnv takes no reset options, got {self._options}")
         hand, _ = self.env.reset(seed=cast("int | None", seeds))  # a list of seeds: one per environment
         self.reset_infos = [{} for _ in range(self.num_envs)]
         self._reset_seeds()

@@ -13,6 +13,7 @@ from pixelworld_env.constants import NUM_COLORS
 from pixelworld_env.env import BRING_ABOUT, GOAL_POTENTIAL, PixelWorldEnv
 from pixelworld_env.validation import check_action
 from pixelworld_env.world import MOVES as MOVE_OFFSETS
+from sb3_smc.errors import SMCError, SMCTypeError
 from sb3_smc.policies import NumpyGRUPolicy, _kernels, sample_action
 from sb3_smc.smc import CALL_PREFIX, HAND_SIZE, MOVES, SMC, StepPolicy, observation_size, smc_action_names
 
@@ -48,13 +49,13 @@ def _only_order_checks(env: gym.Env, base: gym.Env) -> bool:
 def _smc_actions(smcs: Any) -> tuple[SMC, ...]:
     """``smcs`` as a tuple of SMC objects; ``TypeError`` naming what else was given."""
     if isinstance(smcs, str | SMC) or not isinstance(smcs, Iterable):
-        raise TypeError(f"smcs must be a sequence of SMCs, got {type(smcs).__name__} {smcs!r}")
+        raise SMCTypeError(f"smcs must be a sequence of SMCs, got {type(smcs).__name__} {smcs!r}")
     out = tuple(smcs)
     for i, smc in enumerate(out):
         if not isinstance(smc, SMC):
             hint = (": SMCs are objects, not names; take them from their library (library.wrap(env, names), or "
                     "[library[name] for name in names])") if isinstance(smc, str) else ""
-            raise TypeError(f"smcs[{i}] must be an SMC, got {type(smc).__name__} {smc!r}{hint}")
+            raise SMCTypeError(f"smcs[{i}] must be an SMC, got {type(smc).__name__} {smc!r}{hint}")
     return out
 
 
@@ -95,17 +96,17 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         super().__init__(env)
         base = env.unwrapped
         if not isinstance(base, PixelWorldEnv):
-            raise TypeError(f"HierarchicalSMCWrapper needs a PixelWorldEnv underneath, got {type(base).__name__}")
+            raise SMCTypeError(f"HierarchicalSMCWrapper needs a PixelWorldEnv underneath, got {type(base).__name__}")
         if call_step_cap < 1:
-            raise ValueError(f"call_step_cap must be >= 1, got {call_step_cap}")
+            raise SMCError(f"call_step_cap must be >= 1, got {call_step_cap}")
         self.base = base
         self.smcs = smcs
         names = [smc.name for smc in self.smcs]
         if len(set(names)) != len(names):
-            raise ValueError(f"SMC names must be unique, got {names}")
+            raise SMCError(f"SMC names must be unique, got {names}")
         if base.observation != "hand":
-            raise ValueError(f"HierarchicalSMCWrapper builds SMC observations from the one-hot 3 x 3 window: the "
-                             f"environment needs observation='hand', got {base.observation!r}")
+            raise SMCError(f"HierarchicalSMCWrapper builds SMC observations from the one-hot 3 x 3 window: the "
+                           f"environment needs observation='hand', got {base.observation!r}")
         for smc in self.smcs:
             smc.check_layout()
         self.include_primitives = include_primitives
@@ -204,7 +205,7 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
             base.self_moved(bool(counters[kernels.GOAL]))
             budget[0] = int(counters[kernels.BUDGET])
         if status == kernels.LEAF_BAD_PROBABILITIES:
-            raise ValueError(f"SMC {smc.name!r}: its policy gave action probabilities without a positive finite sum")
+            raise SMCError(f"SMC {smc.name!r}: its policy gave action probabilities without a positive finite sum")
         return float(totals[0]), int(counters[kernels.MOVES_MADE]), float(totals[1])
 
     @property
@@ -262,8 +263,8 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
             else:
                 probabilities, state = yield policy, obs, state
             if len(probabilities) != n_actions:
-                raise ValueError(f"SMC {smc.name!r}: its policy gives {len(probabilities)} action probabilities, "
-                                 f"but its actions are {smc.action_names}")
+                raise SMCError(f"SMC {smc.name!r}: its policy gives {len(probabilities)} action probabilities, "
+                               f"but its actions are {smc.action_names}")
             action = sample_action(probabilities, self._rng)
             kind, value = plan[action]
             if kind == _SIGNAL:

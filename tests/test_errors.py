@@ -106,3 +106,21 @@ def test_sb3_smc_cli_lets_a_bug_surface(monkeypatch: pytest.MonkeyPatch) -> None
     monkeypatch.setattr("sb3_smc.curricula.shipped_curricula", broken)
     with pytest.raises(RuntimeError, match="^bug$"):
         sb3_smc_cli("curricula")
+
+
+def test_training_and_vector_env_input_errors_are_package_errors() -> None:
+    """Bad input to train_smc, the SMC envs and the native vector env: the package's errors, so the CLIs print
+    them as messages."""
+    import gymnasium as gym
+
+    from sb3_smc import train_smc
+    from sb3_smc.wrapper import HierarchicalSMCWrapper
+
+    with pytest.raises(SMCError, match="takes no argument 'spilt'"):
+        train_smc(ID, total_timesteps=64, n_envs=2, n_steps=32, env_kwargs={"spilt": "test"})
+    with pytest.raises(SMCError, match="learnin_rate"):
+        train_smc(ID, total_timesteps=64, n_envs=2, n_steps=32, learnin_rate=0.1)
+    with pytest.raises(SMCError, match="call_step_cap must be >= 1"):
+        HierarchicalSMCWrapper(gym.make(ID), [], call_step_cap=0)
+    with pytest.raises(PixelWorldError, match="render_mode='human' draws one env"):
+        gym.make_vec(ID, num_envs=2, render_mode="human")
