@@ -141,6 +141,7 @@ class PixelWorldEnv(gym.Env):
         self._spec: EnvSpec | None = None
 
         self.action_names: tuple[str, ...] = CLASSIFICATION_ACTIONS if kind == CLASSIFICATION else BRING_ABOUT_ACTIONS
+        self.primitive_names: tuple[str, ...] = tuple(name for name in self.action_names if name in MOVES)
         self.action_space = spaces.Discrete(len(self.action_names))
         # What each action does: a move offset, or the signal's value (SIG1 -> 1, SIG0 -> 0).
         self._effects: tuple[Cell | int, ...] = tuple(
@@ -355,6 +356,19 @@ class PixelWorldEnv(gym.Env):
         if effect.__class__ is not tuple:
             raise PixelWorldError(f"action {action} ({self.action_names[action]}) is not a move")
         return self._move(effect)  # type: ignore[arg-type]
+
+    # the task protocol that sb3_smc's HierarchicalSMCWrapper drives (sb3_smc.tasks.TaskEnv), implemented natively
+    sensor_size = 9 * NUM_COLORS
+    """Length of :meth:`sense`'s sensor: the one-hot 3 x 3 window."""
+
+    def sense(self, out: np.ndarray) -> np.ndarray:
+        """Write the one-hot window into the first :attr:`sensor_size` entries of ``out`` (zeros there)."""
+        return self.hand_observation(out=out)
+
+    def apply_primitive(self, action: int) -> tuple[float, bool, bool]:
+        """:meth:`apply_move` in the protocol's form ``(reward, terminated, truncated)``: a move never ends the
+        episode."""
+        return self.apply_move(action), False, False
 
     def step_info(self) -> dict[str, Any]:
         """The ``info`` of the current state (``is_success`` and ``signalled`` false)."""

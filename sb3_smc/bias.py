@@ -16,28 +16,29 @@ SIGNAL_WEIGHT, NONSIGNAL_WEIGHT, SMC_WEIGHT = 1.0, 20.0, 20.0
 """Weights of the bias rule of spec §5.2 (their sum with both groups present is 41)."""
 
 
-def _group(name: str) -> str:
+def _group(name: str, primitives: Sequence[str]) -> str:
     if name.startswith("SIG"):
         return "signal"
     if name.startswith(CALL_PREFIX):
         return "smc"
-    if name in MOVES:
+    if name in primitives:
         return "move"
-    raise SMCError(f"unknown action name {name!r}: expected a signal (SIG*), a move {MOVES} or "
+    raise SMCError(f"unknown action name {name!r}: expected a signal (SIG*), a primitive {tuple(primitives)} or "
                    f"{CALL_PREFIX}<child>")
 
 
 def initial_action_probabilities(action_names: Sequence[str], *, signal_weight: float = SIGNAL_WEIGHT,
-                                 nonsignal_weight: float = NONSIGNAL_WEIGHT,
-                                 smc_weight: float = SMC_WEIGHT) -> np.ndarray:
+                                 nonsignal_weight: float = NONSIGNAL_WEIGHT, smc_weight: float = SMC_WEIGHT,
+                                 primitives: Sequence[str] = MOVES) -> np.ndarray:
     """The initial action distribution of spec §5.2 ("init" policies).
 
-    Signals share ``signal_weight`` equally, moves share ``nonsignal_weight`` and SMC actions ``smc_weight``;
+    Signals share ``signal_weight`` equally, moves (the environment's ``primitives``: PixelWorld's by default) share
+    ``nonsignal_weight`` and SMC actions ``smc_weight``;
     without SMC actions the moves take both shares (``nonsignal_weight + smc_weight``). Absent groups are
     dropped and the rest renormalised: classification flat SIG0 = SIG1 = 1/82 and each move 10/41;
     with SMCs the moves share 20/41 and the SMCs 20/41; without moves (noprim) signals 1/21 and SMCs 20/21.
     """
-    groups = [_group(name) for name in action_names]
+    groups = [_group(name, primitives) for name in action_names]
     if not groups:
         raise SMCError("no actions")
     counts = {g: groups.count(g) for g in ("signal", "move", "smc")}
@@ -49,7 +50,8 @@ def initial_action_probabilities(action_names: Sequence[str], *, signal_weight: 
     return probabilities
 
 
-def apply_signal_bias(model: Any, action_names: Sequence[str], **weights: float) -> np.ndarray:
+def apply_signal_bias(model: Any, action_names: Sequence[str], primitives: Sequence[str] = MOVES,
+                      **weights: float) -> np.ndarray:
     """Set the bias of the policy's action layer to ``log p`` (:func:`initial_action_probabilities`).
 
     SB3 initialises the action layer orthogonally with gain 0.01, so the initial logits are the bias up to
@@ -57,7 +59,7 @@ def apply_signal_bias(model: Any, action_names: Sequence[str], **weights: float)
     """
     import torch
 
-    probabilities = initial_action_probabilities(action_names, **weights)
+    probabilities = initial_action_probabilities(action_names, primitives=primitives, **weights)
     action_net = model.policy.action_net
     if action_net.out_features != len(probabilities):
         raise SMCError(f"the action layer has {action_net.out_features} outputs for {len(probabilities)} actions")

@@ -16,28 +16,37 @@ import gymnasium as gym
 from sb3_smc.errors import SMCError, SMCTypeError
 from sb3_smc.records import TaskSpec, TrainingSpec, WrapperSettings
 from sb3_smc.smc import SMC
+from sb3_smc.tasks import TaskEnv, task_layer
 from sb3_smc.wrapper import HierarchicalSMCWrapper
 
 if TYPE_CHECKING:
     from pixelworld_env.env import PixelWorldEnv
 
-__all__ = ["check_env_kwargs", "make_smc_env", "pixelworld_base", "spec_for_smc", "wrap_with_smcs"]
+__all__ = ["check_env_kwargs", "is_pixelworld_id", "make_smc_env", "pixelworld_base", "spec_for_smc", "task_base",
+           "wrap_with_smcs"]
 
 
-def pixelworld_base(env: gym.Env) -> PixelWorldEnv:
-    """The :class:`~pixelworld_env.env.PixelWorldEnv` under ``env``; ``TypeError`` if there is none, ``ValueError``
+def task_base(env: gym.Env) -> TaskEnv:
+    """The task under ``env`` that SMCs act on (a :class:`~pixelworld_env.env.PixelWorldEnv` or an
+    :class:`~sb3_smc.tasks.SMCTask`, :func:`~sb3_smc.tasks.task_layer`); ``TypeError`` if there is none, ``ValueError``
     if ``env`` already has SMC actions (a :class:`HierarchicalSMCWrapper` layer)."""
-    from pixelworld_env.env import PixelWorldEnv
-
-    base = getattr(env, "unwrapped", env)
-    if not isinstance(base, PixelWorldEnv):
-        raise SMCTypeError(f"SMCs act on PixelWorld environments; got {type(base).__name__}")
-    layer = env
+    base = task_layer(env)
+    layer: Any = env
     while layer is not base:
         if isinstance(layer, HierarchicalSMCWrapper):
             raise SMCError("the environment is already wrapped with SMC actions (HierarchicalSMCWrapper); "
-                           "wrap the PixelWorld environment itself")
-        layer = getattr(layer, "env", base)
+                           "wrap the task itself")
+        layer = layer.env
+    return base
+
+
+def pixelworld_base(env: gym.Env) -> PixelWorldEnv:
+    """:func:`task_base`, which must be a :class:`~pixelworld_env.env.PixelWorldEnv` (``TypeError`` otherwise)."""
+    from pixelworld_env.env import PixelWorldEnv
+
+    base = task_base(env)
+    if not isinstance(base, PixelWorldEnv):
+        raise SMCTypeError(f"SMCs act on PixelWorld environments here; got {type(env.unwrapped).__name__}")
     return base
 
 
@@ -47,8 +56,10 @@ def make_smc_env(spec: TrainingSpec, children: Sequence[SMC] = (), *, env: gym.E
     """The environment SMC ``spec`` sees: its task inside :class:`HierarchicalSMCWrapper` with ``children``.
 
     ``children`` must be the SMCs named by ``spec.children``, in that order. The task is
-    ``gym.make(env_id or spec.task.env_id, split=split or spec.task.split, max_steps=wrapper.max_steps,
-    **spec.task.env_kwargs, **env_kwargs)``, or ``env`` itself when given (a PixelWorld env without SMC actions).
+    ``gym.make(env_id or spec.task.env_id, max_steps=wrapper.max_steps, **spec.task.env_kwargs, **env_kwargs)``,
+    with ``split=split or spec.task.split`` for a PixelWorld id (the id of any other task, an
+    :class:`~sb3_smc.tasks.SMCTask`, must take ``max_steps``), or ``env`` itself when given (a task without SMC
+    actions).
     ``wrapper`` replaces ``spec.wrapper`` (e.g. another ``call_step_cap``); ``record_cells`` makes the wrapper
     report the self's cells after every move (for trajectory pictures).
     """
@@ -64,11 +75,13 @@ def make_smc_env(spec: TrainingSpec, children: Sequence[SMC] = (), *, env: gym.E
         env_id = env_id or spec.task.env_id
         kwargs = {"disable_env_checker": True, **check_env_kwargs(env_id, {**spec.task.env_kwargs,
                                                                            **_mapping(env_kwargs)})}
-        env = gym.make(env_id, split=split or spec.task.split, max_steps=settings.max_steps, **kwargs)
+        if is_pixelworld_id(env_id):
+            kwargs["split"] = split or spec.task.split
+        env = gym.make(env_id, max_steps=settings.max_steps, **kwargs)
     elif env_id is not None or split is not None or env_kwargs:
         raise SMCError("make_smc_env: give either env, or env_id / split / env_kwargs to build one, not both")
     else:
-        pixelworld_base(env)
+        task_base(env)
     return wrap_with_smcs(env, children, settings, record_cells=record_cells)
 
 
@@ -78,6 +91,17 @@ def _mapping(env_kwargs: Any) -> dict[str, Any]:
     if not isinstance(env_kwargs, Mapping) or not all(isinstance(key, str) for key in env_kwargs):
         raise SMCTypeError(f"env_kwargs must be a mapping of argument names to values, got {env_kwargs!r}")
     return dict(env_kwargs)
+
+
+def is_pixelworld_id(env_id: str) -> bool:
+    """Whether ``env_id`` is registered with PixelWorld's entry point (a ``PW-*`` id or one made like them)."""
+    from pixelworld_env.registration import make_env
+
+    try:
+        entry = gym.spec(env_id).entry_point
+    except gym.error.Error:
+        return False
+    return entry == f"{make_env.__module__}:{make_env.__name__}"
 
 
 def check_env_kwargs(env_id: str, kwargs: dict[str, Any]) -> dict[str, Any]:
@@ -93,12 +117,8 @@ def check_env_kwargs(env_id: str, kwargs: dict[str, Any]) -> dict[str, Any]:
     if clash:
         raise SMCError(f"env_kwargs {clash}: the split is make_smc_env's split= (else the spec's task.split), "
                        "max_steps the wrapper settings' (wrapper=WrapperSettings(max_steps=...)); give them there")
-    try:
-        entry = gym.spec(env_id).entry_point
-    except gym.error.Error:
-        return kwargs  # not registered: gym.make says so
-    if entry != f"{make_env.__module__}:{make_env.__name__}":
-        return kwargs  # a user's own environment: its arguments are not known here
+    if not is_pixelworld_id(env_id):
+        return kwargs  # not registered (gym.make says so), or a user's own environment: its arguments are not known
     names = {*inspect.signature(gym.make).parameters, *inspect.signature(make_env).parameters}
     taken = sorted(names - {"id", "datasets", "kwargs", "split", "max_steps"})
     for key in kwargs:

@@ -34,7 +34,7 @@ from sb3_smc.hyperparameters import (
     encode_value,
     resolve_hyperparameters,
 )
-from sb3_smc.smc import SIGNALS, observation_size, smc_action_names
+from sb3_smc.smc import PIXELWORLD_LAYOUT, SIGNALS, Layout, observation_size, smc_action_names
 
 __all__ = [
     "Budget",
@@ -231,7 +231,10 @@ class TaskSpec(_Record):
     """The environment an SMC is trained on: ``gym.make(env_id, split=split, **env_kwargs)``.
 
     ``kind`` and ``datasets`` are filled from the PixelWorld catalog for ``PW-*`` ids (:meth:`resolved`);
-    ``None`` / empty means "not known yet" (e.g. a user's own registered id before its env is built).
+    ``None`` / empty means "not known yet" (e.g. a user's own registered id before its env is built). ``layout``
+    is the environment's sensor size and primitive actions (:class:`~sb3_smc.smc.Layout`): ``None`` for
+    PixelWorld's, set from the environment for any other (an :class:`~sb3_smc.tasks.SMCTask`); in JSON only when
+    set.
     """
 
     env_id: str
@@ -239,8 +242,38 @@ class TaskSpec(_Record):
     kind: str | None = None
     datasets: tuple[str, ...] = ()
     env_kwargs: dict[str, Any] = field(default_factory=dict)
+    layout: Layout | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        out = super().to_dict()
+        if self.layout is None:
+            del out["layout"]
+        else:
+            out["layout"] = {"sensor_size": self.layout.sensor_size, "primitives": list(self.layout.primitives)}
+        return out
+
+    @classmethod
+    def from_dict(cls, data: Any, where: str | None = None) -> TaskSpec:
+        layout = data.get("layout") if isinstance(data, Mapping) else None
+        if isinstance(layout, Mapping):
+            where = where or cls.__name__
+            if set(layout) != {"sensor_size", "primitives"}:
+                raise RecordError(f"{where}.layout: expected the fields ['primitives', 'sensor_size'], got "
+                                  f"{sorted(layout)}")
+            try:
+                data = {**data, "layout": Layout(layout["sensor_size"], tuple(layout["primitives"]))}
+            except (SMCError, TypeError) as err:
+                raise RecordError(f"{where}.layout: {err}") from None
+        return super().from_dict(data, where)
+
+    @property
+    def smc_layout(self) -> Layout:
+        """The layout of the SMCs trained on this task (PixelWorld's unless :attr:`layout` says otherwise)."""
+        return self.layout if self.layout is not None else PIXELWORLD_LAYOUT
 
     def __post_init__(self) -> None:
+        if self.layout is not None and not isinstance(self.layout, Layout):
+            raise RecordError(f"layout must be a Layout or None, got {type(self.layout).__name__}")
         _str(self.env_id, "env_id")
         _str(self.split, "split", SPLITS)
         if self.kind is not None:
@@ -448,12 +481,13 @@ class TrainingSpec(_Record):
         """The SMC's actions (``ValueError`` while the task's kind is unknown)."""
         if self.task.kind is None:
             raise SMCError(f"SMC {self.name!r}: the kind of task {self.task.env_id!r} is not known yet")
-        return smc_action_names(self.task.kind, self.children, self.wrapper.include_primitives)
+        return smc_action_names(self.task.kind, self.children, self.wrapper.include_primitives,
+                                self.task.smc_layout.primitives)
 
     @property
     def observation_size(self) -> int:
         """Length of one observation (before frame stacking)."""
-        return observation_size(len(self.children), len(self.action_names))
+        return observation_size(len(self.children), len(self.action_names), self.task.smc_layout.sensor_size)
 
 
 # ---------------------------------------------------------------------------------------------------------------

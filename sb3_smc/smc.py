@@ -1,10 +1,12 @@
 """Sensorimotor contingencies (SMCs): frozen policies with their action names and child SMCs.
 
-An SMC acts on a PixelWorld environment through the action list of :func:`smc_action_names`: the task's
-signals, then (unless ``include_primitives`` is off) the four moves, then one action per child SMC. Its
-observation (:func:`observation_size`) is the one-hot 3 x 3 window (81 values), then one outcome entry per
-child (+1 SIG1, -1 SIG0, 0 not called yet or timed out), then the one-hot of its previous action (all zeros at
-the first step), as the paper's policy input.
+An SMC acts on an environment through the action list of :func:`smc_action_names`: the task's signals, then
+(unless ``include_primitives`` is off) the environment's primitive actions, then one action per child SMC. Its
+observation (:func:`observation_size`) is the environment's sensor values, then one outcome entry per child (+1
+SIG1, -1 SIG0, 0 not called yet or timed out), then the one-hot of its previous action (all zeros at the first
+step), as the paper's policy input. On PixelWorld (:data:`PIXELWORLD_LAYOUT`) the sensor is the one-hot 3 x 3 window
+(81 values) and the primitives are the four moves; on another environment they are what its task gives
+(:mod:`sb3_smc.tasks`), recorded as the SMC's :class:`Layout`.
 """
 
 from __future__ import annotations
@@ -15,7 +17,7 @@ from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 import numpy as np
 
-from sb3_smc.errors import SMCError
+from sb3_smc.errors import SMCError, SMCTypeError
 
 if TYPE_CHECKING:
     from sb3_smc.records import EvaluationRecord, TrainingRecord, TrainingSpec
@@ -28,6 +30,35 @@ HAND_SIZE = 81
 """Length of the one-hot 3 x 3 window."""
 CALL_PREFIX = "SMC:"
 """Action names of child SMCs are ``CALL_PREFIX + child.name``."""
+
+
+@dataclass(frozen=True)
+class Layout:
+    """What an SMC senses and does on its environment: ``sensor_size`` sensor values at the start of its
+    observation, and the names of the environment's ``primitives`` (its actions besides the signals)."""
+
+    sensor_size: int = HAND_SIZE
+    primitives: tuple[str, ...] = MOVES
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "primitives", tuple(self.primitives))
+        if not isinstance(self.sensor_size, int) or self.sensor_size < 1:
+            raise SMCError(f"a layout needs sensor_size >= 1, got {self.sensor_size!r}")
+        clash = [name for name in self.primitives
+                 if name.startswith(CALL_PREFIX) or name in SIGNALS["classification"] or not name]
+        if clash or len(set(self.primitives)) != len(self.primitives):
+            raise SMCError(f"primitive action names must be unique, non-empty, and neither signals nor "
+                           f"'{CALL_PREFIX}...', got {list(self.primitives)}")
+
+    def describe(self, n_children: int, n_actions: int) -> str:
+        """The observation in words: ``"81 window + 2 outcomes + 8 previous action"`` (``sensor`` off PixelWorld)."""
+        sensor = "window" if self == Layout() else "sensor"
+        return (f"{self.sensor_size} {sensor} + {n_children} outcome{'s' * (n_children != 1)} + {n_actions} previous "
+                f"action")
+
+
+PIXELWORLD_LAYOUT = Layout()
+"""PixelWorld's layout: the one-hot 3 x 3 window and the four moves."""
 
 
 @runtime_checkable
@@ -45,17 +76,19 @@ class StepPolicy(Protocol):
     def probabilities(self, observation: np.ndarray, state: Any) -> tuple[np.ndarray, Any]: ...
 
 
-def smc_action_names(kind: str, children: Sequence[str] = (), include_primitives: bool = True) -> tuple[str, ...]:
-    """The action list of an SMC of task ``kind`` with child SMCs named ``children``."""
+def smc_action_names(kind: str, children: Sequence[str] = (), include_primitives: bool = True,
+                     primitives: Sequence[str] = MOVES) -> tuple[str, ...]:
+    """The action list of an SMC of task ``kind`` with child SMCs named ``children`` on an environment with these
+    ``primitives`` (PixelWorld's moves by default)."""
     if kind not in SIGNALS:
         raise SMCError(f"kind must be one of {tuple(SIGNALS)}, got {kind!r}")
-    moves = MOVES if include_primitives else ()
+    moves = tuple(primitives) if include_primitives else ()
     return (*SIGNALS[kind], *moves, *(CALL_PREFIX + name for name in children))
 
 
-def observation_size(n_children: int, n_actions: int) -> int:
-    """Length of an SMC's observation: window, outcome vector, previous action."""
-    return HAND_SIZE + n_children + n_actions
+def observation_size(n_children: int, n_actions: int, sensor_size: int = HAND_SIZE) -> int:
+    """Length of an SMC's observation: sensor (PixelWorld's window by default), outcome vector, previous action."""
+    return sensor_size + n_children + n_actions
 
 
 @dataclass
@@ -66,7 +99,8 @@ class SMC:
     their provenance as typed records (:mod:`sb3_smc.records`): ``spec`` (how it was trained), ``record`` (what
     training produced) and ``evaluations`` (the latest :class:`~sb3_smc.records.EvaluationRecord` per env id and
     split, added by :func:`sb3_smc.evaluate`). A spec must agree with the SMC's kind, children and primitive
-    setting.
+    setting. ``layout`` is the environment's sensor size and primitive actions (PixelWorld's by default); an SMC's
+    children share it.
     """
 
     name: str
@@ -78,8 +112,11 @@ class SMC:
     spec: TrainingSpec | None = None
     record: TrainingRecord | None = None
     evaluations: tuple[EvaluationRecord, ...] = ()
+    layout: Layout = PIXELWORLD_LAYOUT
 
     def __post_init__(self) -> None:
+        if not isinstance(self.layout, Layout):
+            raise SMCTypeError(f"SMC {self.name!r}: layout must be a Layout, got {type(self.layout).__name__}")
         if self.kind not in SIGNALS:
             raise SMCError(f"SMC {self.name!r}: kind must be one of {tuple(SIGNALS)}, got {self.kind!r}")
         self.children = tuple(self.children)
@@ -88,11 +125,16 @@ class SMC:
             raise SMCError(f"SMC {self.name!r}: child names must be unique, got {names}")
         if _calls(self, self.name):
             raise SMCError(f"SMC {self.name!r} calls itself (directly or through its children)")
+        other = [child.name for child in self.children if child.layout != self.layout]
+        if other:
+            raise SMCError(f"SMC {self.name!r}: the children {other} act on another environment layout than its own "
+                           f"({self.layout})")
         self.evaluations = tuple(self.evaluations)
         if self.spec is not None:
             spec = self.spec
             found = {"kind": (spec.task.kind, self.kind), "children": (spec.children, tuple(names)),
-                     "include_primitives": (spec.wrapper.include_primitives, self.include_primitives)}
+                     "include_primitives": (spec.wrapper.include_primitives, self.include_primitives),
+                     "layout": (spec.task.smc_layout, self.layout)}
             wrong = {k: v for k, v in found.items() if v[0] != v[1]}
             if wrong:
                 detail = "; ".join(f"{k}: spec {a!r}, SMC {b!r}" for k, (a, b) in wrong.items())
@@ -105,11 +147,12 @@ class SMC:
 
     @property
     def action_names(self) -> tuple[str, ...]:
-        return smc_action_names(self.kind, [c.name for c in self.children], self.include_primitives)
+        return smc_action_names(self.kind, [c.name for c in self.children], self.include_primitives,
+                                self.layout.primitives)
 
     @property
     def observation_size(self) -> int:
-        return observation_size(len(self.children), len(self.action_names))
+        return observation_size(len(self.children), len(self.action_names), self.layout.sensor_size)
 
     @property
     def test_score(self) -> float | None:
@@ -131,8 +174,7 @@ class SMC:
         where = f"SMC {self.name!r}" + (f" (called by {caller!r})" if caller else "")
         size, n_actions = self.observation_size, len(self.action_names)
         policy = self.policy
-        layout = (f"{HAND_SIZE} window + {len(self.children)} outcome{'s' * (len(self.children) != 1)} + "
-                  f"{n_actions} previous action")
+        layout = self.layout.describe(len(self.children), n_actions)
         declared = getattr(policy, "observation_size", None)
         stack = getattr(policy, "n_stack", None)
         inner = getattr(getattr(policy, "inner", None), "observation_size", None)

@@ -57,7 +57,7 @@ from sb3_smc.hyperparameters import (
 )
 from sb3_smc.policies import FrameStackPolicy, policy_from_model
 from sb3_smc.records import TrainingRecord, TrainingSpec, package_versions
-from sb3_smc.smc import SMC, StepPolicy
+from sb3_smc.smc import PIXELWORLD_LAYOUT, SMC, StepPolicy
 from sb3_smc.vec_env import FlatSMCVecEnv, SMCVecEnv
 from sb3_smc.wrapper import HierarchicalSMCWrapper
 
@@ -274,16 +274,22 @@ def _train(spec: TrainingSpec, children: tuple[SMC, ...], *, tensorboard_log: st
            callback: Any, printer: Callable[[str], None]) -> SMC:
     from stable_baselines3.common.callbacks import CallbackList
 
-    check_model_settings(spec)  # a typo in a hyperparameter: a message before any environment is built
+    if spec.task.kind is not None:
+        check_model_settings(spec)  # a typo in a hyperparameter: a message before any environment is built
     venv = make_vec_env(spec, children)
     under = venv.unwrapped  # the FlatSMCVecEnv or SMCVecEnv under the monitor
     if isinstance(under, FlatSMCVecEnv):
-        kind, action_names = under.kind, under.action_names
+        kind, action_names, layout = under.kind, under.action_names, PIXELWORLD_LAYOUT
     else:
         wrapper = cast(HierarchicalSMCWrapper, cast(SMCVecEnv, under).envs[0])
-        kind, action_names = wrapper.base.kind, wrapper.action_names
-    if spec.task.kind is None:  # a user's own env id: the kind is known once the env exists
-        spec = dataclasses.replace(spec, task=dataclasses.replace(spec.task, kind=kind))
+        kind, action_names, layout = wrapper.base.kind, wrapper.action_names, wrapper.layout
+    if spec.task.kind is None or spec.task.smc_layout != layout:  # a user's own task: known once the env exists
+        if spec.task.kind not in (None, kind) or spec.task.layout not in (None, layout):
+            raise SMCError(f"SMC {spec.name!r}: the spec says a {spec.task.kind} task on {spec.task.smc_layout}, but "
+                           f"{spec.task.env_id} is a {kind} task on {layout}")
+        spec = dataclasses.replace(spec, task=dataclasses.replace(
+            spec.task, kind=kind, layout=None if layout == PIXELWORLD_LAYOUT else layout))
+        check_model_settings(spec)
     elif spec.task.kind != kind:
         raise SMCError(f"SMC {spec.name!r}: the spec says a {spec.task.kind} task, but {spec.task.env_id} is a "
                        f"{kind} task")
@@ -296,7 +302,8 @@ def _train(spec: TrainingSpec, children: tuple[SMC, ...], *, tensorboard_log: st
         model.set_logger(Logger(folder=None, output_formats=[]))
     if isinstance(model, RecurrentPPO):
         use_compact_buffer(model)
-    initial = apply_signal_bias(model, action_names, **spec.signal_bias.weights) if spec.signal_bias.enabled else None
+    initial = (apply_signal_bias(model, action_names, layout.primitives, **spec.signal_bias.weights)
+               if spec.signal_bias.enabled else None)
 
     total_updates = spec.budget.updates
     if log_every is None:
@@ -331,4 +338,4 @@ def _train(spec: TrainingSpec, children: tuple[SMC, ...], *, tensorboard_log: st
         versions=package_versions(),
     )
     return SMC(spec.name, kind, policy, children=children, include_primitives=spec.wrapper.include_primitives,
-               model=model, spec=spec, record=record)
+               model=model, spec=spec, record=record, layout=layout)

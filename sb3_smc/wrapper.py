@@ -15,7 +15,8 @@ from pixelworld_env.validation import check_action
 from pixelworld_env.world import MOVES as MOVE_OFFSETS
 from sb3_smc.errors import SMCError, SMCTypeError
 from sb3_smc.policies import NumpyGRUPolicy, _kernels, sample_action
-from sb3_smc.smc import CALL_PREFIX, HAND_SIZE, MOVES, SMC, StepPolicy, observation_size, smc_action_names
+from sb3_smc.smc import CALL_PREFIX, SMC, StepPolicy, observation_size, smc_action_names
+from sb3_smc.tasks import layout_of, task_layer
 
 SIGNAL_OUTCOMES = {"SIG1": 1.0, "SIG0": -1.0}
 """The outcome an SMC call records for each signal (0 = not called in this episode, or timed out)."""
@@ -94,28 +95,36 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
                                                  count_primitive_steps=count_primitive_steps,
                                                  call_step_cap=call_step_cap, record_cells=record_cells)
         super().__init__(env)
-        base = env.unwrapped
-        if not isinstance(base, PixelWorldEnv):
-            raise SMCTypeError(f"HierarchicalSMCWrapper needs a PixelWorldEnv underneath, got {type(base).__name__}")
+        base = task_layer(env)
         if call_step_cap < 1:
             raise SMCError(f"call_step_cap must be >= 1, got {call_step_cap}")
         self.base = base
+        self.pixelworld = isinstance(base, PixelWorldEnv)
         self.smcs = smcs
         names = [smc.name for smc in self.smcs]
         if len(set(names)) != len(names):
             raise SMCError(f"SMC names must be unique, got {names}")
-        if base.observation != "hand":
+        if self.pixelworld and cast(PixelWorldEnv, base).observation != "hand":
             raise SMCError(f"HierarchicalSMCWrapper builds SMC observations from the one-hot 3 x 3 window: the "
-                           f"environment needs observation='hand', got {base.observation!r}")
+                           f"environment needs observation='hand', got {cast(PixelWorldEnv, base).observation!r}")
+        if record_cells and not self.pixelworld:
+            raise SMCError("record_cells=True records the self's cells of a PixelWorld; this environment has none")
+        self.layout = layout_of(base)
         for smc in self.smcs:
+            if smc.layout != self.layout:
+                raise SMCError(f"SMC {smc.name!r} acts on another environment layout ({smc.layout}) than this "
+                               f"environment's ({self.layout}): it was trained on another environment or "
+                               "observation")
             smc.check_layout()
         self.include_primitives = include_primitives
         self.count_primitive_steps = count_primitive_steps
         self.call_step_cap = int(call_step_cap)
-        self.action_names = smc_action_names(base.kind, names, include_primitives)
+        self.action_names = smc_action_names(base.kind, names, include_primitives, self.layout.primitives)
         self.action_space = spaces.Discrete(len(self.action_names))
-        size = observation_size(len(self.smcs), len(self.action_names))
-        self.observation_space = spaces.Box(-1.0, 1.0, shape=(size,), dtype=np.float32)
+        self._sensor_size = self.layout.sensor_size
+        size = observation_size(len(self.smcs), len(self.action_names), self._sensor_size)
+        low = -1.0 if self.pixelworld else -np.inf
+        self.observation_space = spaces.Box(low, -low, shape=(size,), dtype=np.float32)
         self._plan = self._action_plan(self.action_names, self.action_names.index)
         self._child_plans: dict[int, list[tuple[int, Any]]] = {}
         self._leaf_plans: dict[int, tuple[SMC, Any, tuple[Any, ...] | None]] = {}
@@ -123,7 +132,8 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         self._previous_action = -1
         # Moves and signals may skip the layers between this wrapper and the base env when those only check the
         # call order (gym.make's OrderEnforcing / PassiveEnvChecker), which the wrapper checks itself.
-        self._direct = _only_order_checks(env, base)
+        self._direct = _only_order_checks(env, cast(gym.Env, base))
+        self._ended = (False, False)  # (terminated, truncated) when the environment ended the episode in a call
         self._rng: np.random.Generator | None = None
         self._elapsed = 0
         self._done = True
@@ -141,7 +151,7 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         for name in names:
             if name in SIGNAL_OUTCOMES:
                 plan.append((_SIGNAL, SIGNAL_OUTCOMES[name] if parent_index is None else parent_index(name)))
-            elif name in MOVES:
+            elif name in self.layout.primitives:
                 plan.append((_MOVE, self.base.action_names.index(name)))
             else:
                 plan.append((_CALL, children.index(name)))
@@ -177,13 +187,18 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
             cached = self._leaf_plans[key] = (smc, policy, leaf)  # the SMC kept: its id is not reused meanwhile
         return cached[2]
 
+    def _compilable(self) -> bool:
+        """Whether a leaf's call can be compiled now: a PixelWorld where only the self moves, no stale pixel."""
+        world = cast(PixelWorldEnv, self.base).world
+        return world.self_only and not world.stale
+
     def _compiled_call(self, smc: SMC, leaf: tuple[Any, ...], cap: int, budget: list[int]
                        ) -> tuple[float, int, float]:
         """One call of the leaf ``smc`` made by the compiled loop: the same moves, draws and result as the loop of
         :meth:`call_coroutine`."""
         kernels = _kernels()
         kinds, values, deltas, gru, hidden, weights = leaf
-        base = self.base
+        base = cast(PixelWorldEnv, self.base)
         world = base.world
         row, col = world.positions[world.self_index]
         counters = np.array([row, col, cap, budget[0], 0, -1, int(base.goal), 0], dtype=np.int64)
@@ -237,8 +252,7 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         assert self._rng is not None
         if budget is None:
             budget = [cap]
-        world = self.base.world
-        if not self.record_cells and world.self_only and not world.stale:
+        if self.pixelworld and not self.record_cells and self._compilable():
             leaf = self._leaf_plan(smc)
             if leaf is not None:  # the whole call compiled: no decision to yield
                 reward, moves, outcome = self._compiled_call(smc, leaf, cap, budget)
@@ -271,17 +285,23 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
                 outcome = value
                 break
             if kind == _MOVE:
-                reward += self.base.apply_move(value)
+                r, terminated, truncated = self.base.apply_primitive(value)
+                reward += r
                 moves += 1
                 budget[0] -= 1
                 if self.record_cells:
-                    self._cells.append(self.base.world.self_position)
+                    self._cells.append(cast(PixelWorldEnv, self.base).world.self_position)
                     self._moves.append((tuple(self._stack), smc.action_names[action]))
+                if terminated or truncated:  # the environment ended the episode: the call ends with it
+                    self._ended = (terminated, truncated)
+                    break
             else:
                 r, m, o = yield from self.call_coroutine(smc.children[value], depth + 1, calls, cap, budget)
                 outcomes[value] = o
                 reward += r
                 moves += m
+                if self._ended != (False, False):
+                    break
             previous = action
         self._stack.pop()
         calls.append({"smc": smc.name, "depth": depth, "primitive_steps": moves, "outcome": int(outcome),
@@ -289,11 +309,12 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         return reward, moves, outcome
 
     def _call_observation(self, outcomes: np.ndarray, previous: int, n_actions: int) -> np.ndarray:
-        obs = np.zeros(HAND_SIZE + len(outcomes) + n_actions, dtype=np.float32)
-        self.base.hand_observation(out=obs)
-        obs[HAND_SIZE:HAND_SIZE + len(outcomes)] = outcomes
+        size = self._sensor_size
+        obs = np.zeros(size + len(outcomes) + n_actions, dtype=np.float32)
+        self.base.sense(obs)
+        obs[size:size + len(outcomes)] = outcomes
         if previous >= 0:
-            obs[HAND_SIZE + len(outcomes) + previous] = 1.0
+            obs[size + len(outcomes) + previous] = 1.0
         return obs
 
     # ------------------------------------------------------------------------------------------ gym API
@@ -308,6 +329,7 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         self._previous_action = -1
         self._elapsed = 0
         self._done = False
+        self._ended = (False, False)
         info = dict(info, primitive_steps=0, elapsed_steps=0, smc_calls=[])
         return self._observation(), info
 
@@ -331,7 +353,7 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
                 cap = max(1, min(cap, self.base.max_steps - self._elapsed))
             reward, moves, outcome = yield from self.call_coroutine(self.smcs[value], 1, calls, cap)
             self._outcomes[value] = outcome
-            terminated, base_truncated = False, False
+            terminated, base_truncated = self._ended
             info = self.base.step_info()
             cost = max(1, moves) if self.count_primitive_steps else 1
         else:
@@ -343,7 +365,7 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
             moves = int(kind == _MOVE)
             cost = 1
             if moves and self.record_cells:
-                self._cells.append(self.base.world.self_position)
+                self._cells.append(cast(PixelWorldEnv, self.base).world.self_position)
                 self._moves.append(((), self.action_names[action]))
         self._elapsed += cost
         truncated = not terminated and (base_truncated or self._elapsed >= self.base.max_steps)

@@ -97,7 +97,7 @@ def test_children_must_match_the_spec():
     wrapped = make_smc_env(_spec(), children)
     with pytest.raises(ValueError, match="already wrapped with SMC actions"):
         make_smc_env(_spec(), children, env=wrapped)
-    with pytest.raises(TypeError, match="SMCs act on PixelWorld environments; got CartPoleEnv"):
+    with pytest.raises(TypeError, match="SMCs act on a PixelWorld environment or an SMCTask .* got CartPoleEnv"):
         pixelworld_base(gym.make("CartPole-v1"))
 
 

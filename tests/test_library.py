@@ -263,7 +263,7 @@ def test_env_of_the_other_kind_is_a_layout_mismatch(saved):
         library.env_for("corner", gym.make(BA_ID))
     with pytest.raises(LayoutMismatchError, match="'container' acts on bring-about tasks.*classification task"):
         library.env_for("container", gym.make(CL_ID))
-    with pytest.raises(LayoutMismatchError, match="PixelWorld environments; got CartPoleEnv"):
+    with pytest.raises(LayoutMismatchError, match="a PixelWorld environment or an SMCTask .* got CartPoleEnv"):
         library.wrap(gym.make("CartPole-v1"), ["corner"])
     with pytest.raises(LayoutMismatchError, match="already wrapped"):
         library.wrap(library.wrap(gym.make(CL_ID), ["corner"]), ["container"])

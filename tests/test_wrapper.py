@@ -54,7 +54,7 @@ def test_action_names_and_spaces() -> None:
     noprim = HierarchicalSMCWrapper(base_env("classification"), [down], include_primitives=False)
     assert noprim.action_names == ("SIG0", "SIG1", "SMC:down")
     assert noprim.action_space == gym.spaces.Discrete(3)
-    with pytest.raises(TypeError, match="PixelWorldEnv"):
+    with pytest.raises(TypeError, match="a PixelWorld environment or an SMCTask .* got CartPoleEnv without one"):
         HierarchicalSMCWrapper(gym.make("CartPole-v1"))
 
 

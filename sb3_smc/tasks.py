@@ -1,0 +1,292 @@
+"""SMC tasks on any Gymnasium environment with discrete actions: :class:`SMCTask`, and the protocol :class:`TaskEnv`
+that :class:`~sb3_smc.wrapper.HierarchicalSMCWrapper` drives.
+
+An SMC task is what the paper trains an SMC on (its rules, in the package's words in ``docs/smcs.md``):
+
+* **bring-about** (``goal(env) -> bool`` on the environment's state): actions SIG1 then the environment's own
+  (primitive) actions. A primitive step that makes the goal true earns +0.5, one that makes it false -0.5 (the
+  shaping); SIG1 ends the episode and earns 0.5 more if the goal holds (1 in all with the shaping), else 0.
+* **classification** (``label(env) -> 0 or 1``, read from the episode's initial state at reset): actions SIG0,
+  SIG1, then the primitives. The signal equal to the label earns +1, the other -1; either ends the episode.
+  Primitive steps earn 0.
+
+The environment's own rewards are not the task's and are dropped. An episode is cut (truncated) after
+``max_steps`` actions. When the environment ends its episode itself (Minigrid reaching its goal square, a time
+limit of its own), the task's episode ends there, as if the SMC had stopped without a signal: terminated if the
+environment terminated, truncated if it truncated; a bring-about task then pays what SIG1 would (0.5 if the goal
+holds), a classification task nothing more.
+
+The observation is the environment's, flattened to float32 (:attr:`SMCTask.sensor_size` values): a ``Box``,
+``Discrete`` (one-hot), ``MultiBinary`` / ``MultiDiscrete`` or a ``Dict`` / ``Tuple`` of them, as
+``gymnasium.spaces.flatten`` flattens them; ``observation=("image", "direction")`` takes only those keys of a
+``Dict`` (Minigrid's ``mission`` is text, which has no flat form), and a function ``observation(obs) -> array``
+builds it any other way. Anything else is refused at construction, naming what cannot be flattened.
+"""
+
+from __future__ import annotations
+
+import enum
+from collections.abc import Callable, Sequence
+from typing import Any, Protocol, runtime_checkable
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from pixelworld_env.env import BRING_ABOUT, CLASSIFICATION, CLASSIFICATION_REWARD, GOAL_POTENTIAL, GOAL_REWARD
+from sb3_smc.errors import SMCError, SMCTypeError
+from sb3_smc.smc import SIGNALS, Layout
+
+__all__ = ["SMCTask", "TaskEnv", "layout_of", "task_layer"]
+
+Goal = Callable[[gym.Env], bool]
+Label = Callable[[gym.Env], int]
+Observation = Callable[[Any], np.ndarray]
+
+
+@runtime_checkable
+class TaskEnv(Protocol):
+    """What :class:`~sb3_smc.wrapper.HierarchicalSMCWrapper` needs of the environment under it (beside Gymnasium's
+    ``reset``): :class:`pixelworld_env.PixelWorldEnv` implements it natively, :class:`SMCTask` for any environment.
+
+    ``action_names`` are the task's signals then its ``primitive_names``; :meth:`sense` writes the current sensor
+    values (``sensor_size`` of them) into the start of an observation; :meth:`transition` takes one action of the
+    episode (a signal or a primitive) and returns ``(reward, terminated, truncated, info)``;
+    :meth:`apply_primitive` takes a primitive inside an SMC call (not counted against ``max_steps``) and returns
+    ``(reward, terminated, truncated)``, the last two true when the environment itself ended the episode.
+    """
+
+    @property
+    def kind(self) -> str: ...
+
+    @property
+    def action_names(self) -> tuple[str, ...]: ...
+
+    @property
+    def primitive_names(self) -> tuple[str, ...]: ...
+
+    @property
+    def sensor_size(self) -> int: ...
+
+    @property
+    def max_steps(self) -> int: ...
+
+    def sense(self, out: np.ndarray) -> np.ndarray: ...
+
+    def transition(self, action: int) -> tuple[float, bool, bool, dict[str, Any]]: ...
+
+    def apply_primitive(self, action: int) -> tuple[float, bool, bool]: ...
+
+    def step_info(self) -> dict[str, Any]: ...
+
+
+def layout_of(task: TaskEnv) -> Layout:
+    """The :class:`~sb3_smc.smc.Layout` of the SMCs that act on ``task``."""
+    return Layout(task.sensor_size, task.primitive_names)
+
+
+def _flattener(space: spaces.Space, observation: Observation | Sequence[str] | None
+               ) -> tuple[Callable[[Any], np.ndarray], int]:
+    """A function from the environment's observations to flat float32 sensor values, and their count."""
+    if callable(observation):
+        sample = np.asarray(observation(space.sample()), dtype=np.float32)
+        if sample.ndim != 1 or sample.size == 0:
+            raise SMCError(f"observation= must return a non-empty 1-D array, got shape {sample.shape} for a sample "
+                           "of the environment's observation space")
+        user = observation
+        return (lambda obs: np.asarray(user(obs), dtype=np.float32)), int(sample.size)
+    if observation is not None:
+        keys = [observation] if isinstance(observation, str) else list(observation)
+        if not isinstance(space, spaces.Dict):
+            raise SMCError(f"observation={keys!r} takes keys of a Dict observation, but the environment's is "
+                           f"{space}")
+        missing = [key for key in keys if key not in space.spaces]
+        if missing:
+            raise SMCError(f"observation keys {missing} are not in the environment's observation "
+                           f"(it has {list(space.spaces)})")
+        parts = [(key, space.spaces[key]) for key in keys]
+        for key, part in parts:
+            _check_flat(part, f"observation key {key!r}")
+        size = sum(spaces.flatdim(part) for _, part in parts)
+        return (lambda obs: np.concatenate([spaces.flatten(part, obs[key]) for key, part in parts]
+                                           ).astype(np.float32, copy=False)), size
+    _check_flat(space, "the environment's observation")
+    return (lambda obs: np.asarray(spaces.flatten(space, obs), dtype=np.float32)), spaces.flatdim(space)
+
+
+def _check_flat(space: spaces.Space, what: str) -> None:
+    """:class:`SMCError` naming the part of ``space`` that has no flat numeric form."""
+    if isinstance(space, spaces.Dict):
+        for key, part in space.spaces.items():
+            _check_flat(part, f"{what}[{key!r}]")
+    elif isinstance(space, spaces.Tuple):
+        for i, part in enumerate(space.spaces):
+            _check_flat(part, f"{what}[{i}]")
+    elif not isinstance(space, spaces.Box | spaces.Discrete | spaces.MultiBinary | spaces.MultiDiscrete):
+        hint = (": give observation=[keys] to take only some keys of the Dict, or observation=function"
+                if "[" in what else ": give observation=function to build the sensor values")
+        raise SMCError(f"{what} is {space}, which has no flat numeric form{hint}")
+
+
+def _primitive_names(env: gym.Env, n: int, names: Sequence[str] | None) -> tuple[str, ...]:
+    """The names of the environment's ``n`` actions: ``names``, else an enum the environment keeps as ``actions``
+    (Minigrid's), else ``A0``, ``A1``, ..."""
+    if names is not None:
+        names = tuple(names)
+        if len(names) != n:
+            raise SMCError(f"primitive_names has {len(names)} names, but the environment has {n} actions")
+        return names
+    actions = getattr(env.unwrapped, "actions", None)
+    if isinstance(actions, type) and issubclass(actions, enum.Enum) and len(actions) == n:
+        ordered = sorted(actions, key=lambda a: a.value)
+        if [a.value for a in ordered] == list(range(n)):
+            return tuple(a.name for a in ordered)
+    return tuple(f"A{i}" for i in range(n))
+
+
+class SMCTask(gym.Wrapper, gym.utils.RecordConstructorArgs):
+    """``env`` (any Gymnasium environment with a ``Discrete`` action space) as an SMC task of ``kind``
+    ``"bring-about"`` (with ``goal``) or ``"classification"`` (with ``label``): the paper's signals, rewards and
+    episode limit (see the module docstring), the environment's observation flattened to its sensor values.
+
+    ``goal(env)`` and ``label(env)`` receive the unwrapped environment (Minigrid's ``MiniGridEnv``, with its
+    ``agent_pos``, ``carrying``, ``grid``). ``primitive_names`` names the environment's actions (default: its
+    ``actions`` enum, as Minigrid has, else ``A0``...). It is a Gymnasium environment of its own (``reset`` /
+    ``step``, observation the sensor values) and the :class:`TaskEnv` a
+    :class:`~sb3_smc.wrapper.HierarchicalSMCWrapper` builds SMC calls on.
+    """
+
+    def __init__(self, env: gym.Env, kind: str, *, goal: Goal | None = None, label: Label | None = None,
+                 observation: Observation | Sequence[str] | None = None, max_steps: int = 100,
+                 primitive_names: Sequence[str] | None = None) -> None:
+        gym.utils.RecordConstructorArgs.__init__(self, kind=kind, goal=goal, label=label, observation=observation,
+                                                 max_steps=max_steps, primitive_names=primitive_names)
+        super().__init__(env)
+        if not isinstance(env.action_space, spaces.Discrete) or int(env.action_space.start) != 0:
+            raise SMCError(f"an SMC task needs a Discrete action space starting at 0 (actions become SMC actions), "
+                           f"got {env.action_space}")
+        if kind not in SIGNALS:
+            raise SMCError(f"kind must be one of {tuple(SIGNALS)}, got {kind!r}")
+        needed, other = ("goal", "label") if kind == BRING_ABOUT else ("label", "goal")
+        given = {"goal": goal, "label": label}
+        if not callable(given[needed]):
+            raise SMCTypeError(f"a {kind} task needs {needed}=function(env), got {given[needed]!r}")
+        if given[other] is not None:
+            raise SMCError(f"a {kind} task takes {needed}=, not {other}=")
+        if not isinstance(max_steps, int) or isinstance(max_steps, bool) or max_steps < 1:
+            raise SMCError(f"max_steps must be an integer >= 1, got {max_steps!r}")
+        self.kind = kind
+        self.max_steps = max_steps
+        self._goal_of, self._label_of = goal, label
+        self._flatten, self.sensor_size = _flattener(env.observation_space, observation)
+        self.primitive_names = _primitive_names(env, int(env.action_space.n), primitive_names)
+        self.action_names = (*SIGNALS[kind], *self.primitive_names)
+        Layout(self.sensor_size, self.primitive_names)  # the names' checks
+        self._n_signals = len(SIGNALS[kind])
+        self.action_space = spaces.Discrete(len(self.action_names))
+        self.observation_space = spaces.Box(-np.inf, np.inf, shape=(self.sensor_size,), dtype=np.float32)
+        self._sensor = np.zeros(self.sensor_size, dtype=np.float32)
+        self._goal = False
+        self._label = 0
+        self._steps = 0
+        self._done = True
+
+    # ------------------------------------------------------------------------------------------ the task
+
+    def _read_goal(self) -> bool:
+        assert self._goal_of is not None
+        return bool(self._goal_of(self.env.unwrapped))
+
+    def _info(self, success: bool = False, signalled: bool = False) -> dict[str, Any]:
+        info: dict[str, Any] = {"is_success": success, "signalled": signalled}
+        if self.kind == BRING_ABOUT:
+            info["goal"] = self._goal
+        else:
+            info["label"] = self._label
+        return info
+
+    def sense(self, out: np.ndarray) -> np.ndarray:
+        out[: self.sensor_size] = self._sensor
+        return out
+
+    def step_info(self) -> dict[str, Any]:
+        return self._info()
+
+    def apply_primitive(self, action: int) -> tuple[float, bool, bool]:
+        """Primitive ``action`` (an index into :attr:`action_names`) on the environment, not counted against
+        ``max_steps``: ``(reward, terminated, truncated)`` (the last two: the environment ended its episode)."""
+        if self._done:
+            raise RuntimeError("the episode has ended: call reset() first")
+        if not self._n_signals <= action < len(self.action_names):
+            raise SMCError(f"action {action} is not a primitive action of this task ({self.action_names})")
+        obs, _, terminated, truncated, _ = self.env.step(action - self._n_signals)
+        self._sensor = self._flatten(obs)
+        reward = 0.0
+        if self.kind == BRING_ABOUT:
+            goal = self._read_goal()
+            if goal != self._goal:
+                self._goal = goal
+                reward = GOAL_POTENTIAL if goal else -GOAL_POTENTIAL
+        ended = bool(terminated or truncated)
+        if ended:
+            self._done = True
+            if self.kind == BRING_ABOUT and self._goal:
+                reward += GOAL_REWARD - GOAL_POTENTIAL
+        return reward, bool(terminated), bool(truncated and not terminated)
+
+    def transition(self, action: int) -> tuple[float, bool, bool, dict[str, Any]]:
+        """One action of the episode: ``(reward, terminated, truncated, info)``."""
+        if self._done:
+            raise RuntimeError("the episode has ended: call reset() before step()")
+        self._steps += 1
+        if action < self._n_signals:
+            value = 1 if self.action_names[action] == "SIG1" else 0
+            if self.kind == CLASSIFICATION:
+                reward = CLASSIFICATION_REWARD if value == self._label else -CLASSIFICATION_REWARD
+            else:
+                reward = GOAL_REWARD - GOAL_POTENTIAL if self._goal else 0.0
+            self._done = True
+            return reward, True, False, self._info(success=reward > 0, signalled=True)
+        reward, terminated, truncated = self.apply_primitive(action)
+        truncated = truncated or (not terminated and self._steps >= self.max_steps)
+        self._done = terminated or truncated
+        return reward, terminated, truncated, self._info(success=self._done and reward > 0)
+
+    # ------------------------------------------------------------------------------------------ gym API
+
+    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None
+              ) -> tuple[np.ndarray, dict[str, Any]]:
+        obs, info = self.env.reset(seed=seed, options=options)
+        self._sensor = self._flatten(obs)
+        self._steps = 0
+        self._done = False
+        if self.kind == BRING_ABOUT:
+            self._goal = self._read_goal()
+        else:
+            assert self._label_of is not None
+            label = self._label_of(self.env.unwrapped)
+            if label not in (0, 1) or isinstance(label, float):
+                raise SMCError(f"label(env) must give 0 or 1, got {label!r}")
+            self._label = int(label)
+        return self._sensor.copy(), {**info, **self._info()}
+
+    def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        if not self.action_space.contains(action):
+            raise SMCError(f"action must be an integer in [0, {len(self.action_names)}), got {action!r}")
+        reward, terminated, truncated, info = self.transition(int(action))
+        return self._sensor.copy(), reward, terminated, truncated, info
+
+
+def task_layer(env: gym.Env) -> TaskEnv:
+    """The task under ``env``'s wrappers that SMC calls act on: a :class:`pixelworld_env.PixelWorldEnv` or an
+    :class:`SMCTask` (the outermost one); :class:`SMCTypeError` if there is none."""
+    from pixelworld_env.env import PixelWorldEnv
+
+    layer: Any = env
+    while True:
+        if isinstance(layer, PixelWorldEnv | SMCTask):
+            return layer
+        if not isinstance(layer, gym.Wrapper):
+            raise SMCTypeError(f"SMCs act on a PixelWorld environment or an SMCTask (sb3_smc.tasks: any Gymnasium "
+                               f"environment with a goal or a label); got {type(env.unwrapped).__name__} without one")
+        layer = layer.env
