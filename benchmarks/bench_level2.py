@@ -73,13 +73,16 @@ def train_children(cache: Path, trained: bool, tasks: tuple[str, ...] = CHILDREN
     torch.set_num_threads(1)
     import pixelworld_env  # noqa: F401
     from sb3_smc import SMCLibrary, train_smc
+    from sb3_smc.training import untrained_smc
 
     smcs = []
     for task in tasks:
         for seed in range(seeds):
             print(f"{'training' if trained else 'initialising'} child {task} seed {seed} ...", flush=True)
-            smcs.append(train_smc(f"PW-{task}-v0", seed=seed, log_every=0, name=f"{task}@{seed}",
-                                  **({} if trained else {"total_timesteps": 0})))
+            if trained:
+                smcs.append(train_smc(f"PW-{task}-v0", seed=seed, log_every=0, name=f"{task}@{seed}"))
+            else:
+                smcs.append(untrained_smc(f"PW-{task}-v0", seed=seed, name=f"{task}@{seed}"))
     SMCLibrary(smcs).save(library)
     return library
 

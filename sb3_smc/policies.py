@@ -239,23 +239,7 @@ class NumpyLSTMPolicy(_RecurrentActor):
             probabilities, h, c = _kernels().lstm_linear_step(_flat(observation, self.observation_size), h_prev[0],
                                                               c_prev[0], *self._compiled)
             return probabilities, (h, c)
-        x = np.asarray(observation, dtype=self.dtype).reshape(-1)
-        h_prev, c_prev = state
-        n = self.hidden_size
-        h_next = np.empty_like(h_prev)
-        c_next = np.empty_like(c_prev)
-        for k, (w_ih, w_hh, bias) in enumerate(self.lstm):
-            t = x @ w_ih
-            t += h_prev[k] @ w_hh
-            t += bias
-            np.tanh(t, out=t)
-            s = t * 0.5
-            s += 0.5
-            c = s[n:2 * n] * c_prev[k]
-            c += s[:n] * t[2 * n:3 * n]
-            x = s[3 * n:] * np.tanh(c)
-            h_next[k] = x
-            c_next[k] = c
+        x, h_next, c_next = self._layers(np.asarray(observation, dtype=self.dtype).reshape(-1), *state)
         return _softmax(_forward(self.head, x)), (h_next, c_next)
 
     def probabilities_batch(self, observations: np.ndarray, states: Sequence[LSTMState]
@@ -267,24 +251,37 @@ class NumpyLSTMPolicy(_RecurrentActor):
             raise SMCError(f"{len(x)} observations but {len(states)} states")
         if self._compiled is not None:
             return _one_by_one(self, x, states)
-        h_prev = np.array([s[0] for s in states])  # (B, layers, n)
-        c_prev = np.array([s[1] for s in states])
+        h_prev = np.array([s[0] for s in states]).transpose(1, 0, 2)  # (layers, B, n)
+        c_prev = np.array([s[1] for s in states]).transpose(1, 0, 2)
+        x, h_next, c_next = self._layers(x, h_prev, c_prev)
+        return _softmax(_forward(self.head, x)), list(zip(h_next.transpose(1, 0, 2), c_next.transpose(1, 0, 2),
+                                                          strict=True))
+
+    def _layers(self, x: np.ndarray, h_prev: np.ndarray, c_prev: np.ndarray
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The stacked LSTM on ``x`` (``(..., input)``) from ``h_prev`` / ``c_prev`` (``(layers, ..., n)``):
+        ``(last layer's h', h', c')``.
+
+        :func:`sb3_smc.common.kernels.lstm_cell`'s arithmetic vectorised over rows (the i, f, o columns of the
+        weights are halved, so one tanh serves all gates). Kept beside the compiled cell for the architectures it
+        does not serve: numpy's vectorised ``tanh`` makes a batch of 16 rows about twice as fast as the compiled
+        cell row by row, and a single row no slower (``docs/benchmarks.md``, "One recurrent cell")."""
         n = self.hidden_size
         h_next = np.empty_like(h_prev)
         c_next = np.empty_like(c_prev)
         for k, (w_ih, w_hh, bias) in enumerate(self.lstm):
             t = x @ w_ih
-            t += h_prev[:, k] @ w_hh
+            t += h_prev[k] @ w_hh
             t += bias
             np.tanh(t, out=t)
             s = t * 0.5
             s += 0.5
-            c = s[:, n:2 * n] * c_prev[:, k]
-            c += s[:, :n] * t[:, 2 * n:3 * n]
-            x = s[:, 3 * n:] * np.tanh(c)
-            h_next[:, k] = x
-            c_next[:, k] = c
-        return _softmax(_forward(self.head, x)), list(zip(h_next, c_next, strict=True))
+            c = s[..., n:2 * n] * c_prev[k]
+            c += s[..., :n] * t[..., 2 * n:3 * n]
+            x = s[..., 3 * n:] * np.tanh(c)
+            h_next[k] = x
+            c_next[k] = c
+        return x, h_next, c_next
 
     def __repr__(self) -> str:
         return (f"{type(self).__name__}(observation_size={self.observation_size}, hidden_size={self.hidden_size}, "
@@ -324,7 +321,9 @@ class NumpyGRUPolicy(_RecurrentActor):
         return np.zeros((self.n_layers, self.hidden_size), dtype=self.dtype)
 
     def _layers(self, x: np.ndarray, h_prev: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The stacked GRU on ``x`` (``(..., input)``) from ``h_prev`` (``(layers, ..., n)``)."""
+        """The stacked GRU on ``x`` (``(..., input)``) from ``h_prev`` (``(layers, ..., n)``): ``(last layer's h',
+        h')``; :func:`sb3_smc.common.kernels.gru_cell`'s arithmetic vectorised over rows, kept for the reason
+        :meth:`NumpyLSTMPolicy._layers` gives."""
         n = self.hidden_size
         h_next = np.empty_like(h_prev)
         for k, (w_ih, w_hh, b_ih, b_hh) in enumerate(self.gru):

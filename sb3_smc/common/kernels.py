@@ -14,6 +14,11 @@ second; the compiled code is cached next to this file).
 The ``*_collection_step`` functions are the training side's counterpart: one data-collection step of
 :class:`~sb3_smc.common.recurrent.policies.SequenceLstmPolicy` (or its GRU variant) for all environments at once,
 in place of a dozen small torch calls (see its ``forward``).
+
+Every compiled path (the single steps, :func:`leaf_call`, the collection steps) runs the one :func:`lstm_cell` /
+:func:`gru_cell`; the numpy actors' other architectures run the same arithmetic vectorised over rows in numpy
+(``NumpyLSTMPolicy._layers`` / ``NumpyGRUPolicy._layers``), kept because numpy's vectorised ``tanh`` beats the
+cell's scalar one on batches (``docs/benchmarks.md``, "One recurrent cell").
 """
 
 from __future__ import annotations
@@ -23,8 +28,8 @@ from numba import njit
 
 from pixelworld_env.kernels import self_target_free
 
-__all__ = ["gru_collection_step", "gru_linear_step", "leaf_call", "lstm_collection_step", "lstm_linear_step",
-           "sample_index"]
+__all__ = ["gru_cell", "gru_collection_step", "gru_linear_step", "leaf_call", "lstm_cell", "lstm_collection_step",
+           "lstm_linear_step", "sample_index"]
 
 
 @njit(cache=True)
@@ -56,22 +61,27 @@ def _add_rows(t: np.ndarray, x: np.ndarray, w: np.ndarray) -> None:  # pragma: n
                 t[j] += xi * w[i, j]
 
 
-@njit(cache=True)
-def _lstm_row(x: np.ndarray, h: np.ndarray, c: np.ndarray, w_ih: np.ndarray, w_hh: np.ndarray, bias: np.ndarray,
-              w_out: np.ndarray, b_out: np.ndarray, probabilities: np.ndarray, h_next: np.ndarray,
-              c_next: np.ndarray) -> None:  # pragma: no cover
+@njit(cache=True, inline="always")
+def lstm_cell(x: np.ndarray, h: np.ndarray, c: np.ndarray, w_ih: np.ndarray, w_hh: np.ndarray, bias: np.ndarray,
+              gate_scale: float, h_next: np.ndarray, c_next: np.ndarray) -> None:  # pragma: no cover
+    """The LSTM cell, the one place its arithmetic is written: one step of one layer for one row, in float64.
+
+    ``x`` the layer's input, ``h`` / ``c`` the previous state; the weights transposed (``(inputs, 4 n)``), gates i,
+    f, g, o in torch's order, ``bias`` the sum of torch's two biases. ``sigmoid(z) = 0.5 * tanh(z / 2) + 0.5`` with
+    ``z / 2 = gate_scale * (preactivation)``: 0.5 for torch's weights, 1.0 for weights whose i, f, o columns are
+    halved already (:class:`~sb3_smc.policies.NumpyLSTMPolicy`'s). Writes ``h'`` / ``c'`` into ``h_next`` /
+    ``c_next``. The zero entries of ``x`` and ``h`` are skipped (mostly one-hot observations)."""
     n = h.shape[0]
-    t = bias.copy()
+    t = bias.astype(np.float64)
     _add_rows(t, x, w_ih)
     _add_rows(t, h, w_hh)
     for j in range(n):
-        gate_i = 0.5 * np.tanh(t[j]) + 0.5
-        gate_f = 0.5 * np.tanh(t[n + j]) + 0.5
-        gate_o = 0.5 * np.tanh(t[3 * n + j]) + 0.5
+        gate_i = 0.5 * np.tanh(gate_scale * t[j]) + 0.5
+        gate_f = 0.5 * np.tanh(gate_scale * t[n + j]) + 0.5
+        gate_o = 0.5 * np.tanh(gate_scale * t[3 * n + j]) + 0.5
         cell = gate_f * c[j] + gate_i * np.tanh(t[2 * n + j])
         c_next[j] = cell
         h_next[j] = gate_o * np.tanh(cell)
-    _linear_softmax(h_next, w_out, b_out, probabilities)
 
 
 @njit(cache=True)
@@ -88,25 +98,28 @@ def lstm_linear_step(x: np.ndarray, h: np.ndarray, c: np.ndarray, w_ih: np.ndarr
     probabilities = np.empty(b_out.shape[0])
     h_next = np.empty((1, h.shape[0]))
     c_next = np.empty((1, h.shape[0]))
-    _lstm_row(x, h, c, w_ih, w_hh, bias, w_out, b_out, probabilities, h_next[0], c_next[0])
+    lstm_cell(x, h, c, w_ih, w_hh, bias, 1.0, h_next[0], c_next[0])
+    _linear_softmax(h_next[0], w_out, b_out, probabilities)
     return probabilities, h_next, c_next
 
 
-@njit(cache=True)
-def _gru_row(x: np.ndarray, h: np.ndarray, w_ih: np.ndarray, w_hh: np.ndarray, b_ih: np.ndarray, b_hh: np.ndarray,
-             w_out: np.ndarray, b_out: np.ndarray, probabilities: np.ndarray, h_next: np.ndarray
-             ) -> None:  # pragma: no cover
+@njit(cache=True, inline="always")
+def gru_cell(x: np.ndarray, h: np.ndarray, w_ih: np.ndarray, w_hh: np.ndarray, b_ih: np.ndarray, b_hh: np.ndarray,
+             h_next: np.ndarray) -> None:  # pragma: no cover
+    """The GRU cell, the one place its arithmetic is written: one step of one layer for one row, in float64, with
+    torch's equations (gates r, z, n; ``n = tanh(W_in x + b_in + r * (W_hn h + b_hn))``, ``h' = (1 - z) * n + z * h``
+    written ``n + z * (h - n)``). The weights transposed (``(inputs, 3 n)``); writes ``h'`` into ``h_next``; the
+    zero entries of ``x`` and ``h`` are skipped."""
     n = h.shape[0]
-    gi = b_ih.copy()
+    gi = b_ih.astype(np.float64)
     _add_rows(gi, x, w_ih)
-    gh = b_hh.copy()
+    gh = b_hh.astype(np.float64)
     _add_rows(gh, h, w_hh)
     for j in range(n):
         r = 0.5 * np.tanh(0.5 * (gi[j] + gh[j])) + 0.5
         z = 0.5 * np.tanh(0.5 * (gi[n + j] + gh[n + j])) + 0.5
         candidate = np.tanh(gi[2 * n + j] + r * gh[2 * n + j])
         h_next[j] = candidate + z * (h[j] - candidate)
-    _linear_softmax(h_next, w_out, b_out, probabilities)
 
 
 @njit(cache=True)
@@ -119,7 +132,8 @@ def gru_linear_step(x: np.ndarray, h: np.ndarray, w_ih: np.ndarray, w_hh: np.nda
         raise ValueError("GRU state or observation of the wrong size for this policy")
     probabilities = np.empty(b_out.shape[0])
     h_next = np.empty((1, h.shape[0]))
-    _gru_row(x, h, w_ih, w_hh, b_ih, b_hh, w_out, b_out, probabilities, h_next[0])
+    gru_cell(x, h, w_ih, w_hh, b_ih, b_hh, h_next[0])
+    _linear_softmax(h_next[0], w_out, b_out, probabilities)
     return probabilities, h_next
 
 
@@ -207,23 +221,17 @@ def lstm_collection_step(x: np.ndarray, h: np.ndarray, c: np.ndarray, starts: np
     h_next = np.empty((n, hidden), dtype=np.float32)
     c_next = np.empty((n, hidden), dtype=np.float32)
     latent = np.empty(hidden)
+    cell = np.empty(hidden)
+    previous_h = np.empty(hidden)
+    previous_c = np.empty(hidden)
     for k in range(n):
         keep = 1.0 - starts[k]
-        t = bias.astype(np.float64)
-        _add_rows(t, x[k], w_ih)
-        if keep != 0.0:
-            for i in range(hidden):
-                hi = keep * h[k, i]
-                if hi != 0.0:
-                    for j in range(4 * hidden):
-                        t[j] += hi * w_hh[i, j]
+        for i in range(hidden):
+            previous_h[i] = keep * h[k, i]
+            previous_c[i] = keep * c[k, i]
+        lstm_cell(x[k], previous_h, previous_c, w_ih, w_hh, bias, 0.5, latent, cell)
         for j in range(hidden):
-            gate_i = 0.5 * np.tanh(0.5 * t[j]) + 0.5
-            gate_f = 0.5 * np.tanh(0.5 * t[hidden + j]) + 0.5
-            gate_o = 0.5 * np.tanh(0.5 * t[3 * hidden + j]) + 0.5
-            cell = gate_f * (keep * c[k, j]) + gate_i * np.tanh(t[2 * hidden + j])
-            latent[j] = gate_o * np.tanh(cell)
-            c_next[k, j] = cell
+            c_next[k, j] = cell[j]
             h_next[k, j] = latent[j]
         actions[k], value, log_probs[k] = _heads(x[k], latent, uniforms[k], deterministic, w_critic, b_critic,
                                                  w_value, b_value, w_action, b_action)
@@ -252,15 +260,8 @@ def gru_collection_step(x: np.ndarray, h: np.ndarray, starts: np.ndarray, unifor
         keep = 1.0 - starts[k]
         for i in range(hidden):
             previous[i] = keep * h[k, i]
-        gi = b_ih.astype(np.float64)
-        _add_rows(gi, x[k], w_ih)
-        gh = b_hh.astype(np.float64)
-        _add_rows(gh, previous, w_hh)
+        gru_cell(x[k], previous, w_ih, w_hh, b_ih, b_hh, latent)
         for j in range(hidden):
-            r = 0.5 * np.tanh(0.5 * (gi[j] + gh[j])) + 0.5
-            z = 0.5 * np.tanh(0.5 * (gi[hidden + j] + gh[hidden + j])) + 0.5
-            candidate = np.tanh(gi[2 * hidden + j] + r * gh[2 * hidden + j])
-            latent[j] = candidate + z * (previous[j] - candidate)
             h_next[k, j] = latent[j]
         actions[k], value, log_probs[k] = _heads(x[k], latent, uniforms[k], deterministic, w_critic, b_critic,
                                                  w_value, b_value, w_action, b_action)
@@ -327,11 +328,12 @@ def leaf_call(grid: np.ndarray, owner: np.ndarray, me: int, self_color: int, goa
         if counters[PREVIOUS] >= 0:
             x[first_previous + counters[PREVIOUS]] = 1.0
         if gru:
-            _gru_row(x, h, w_ih, w_hh, b_first, b_second, w_out, b_out, probabilities, h_next)
+            gru_cell(x, h, w_ih, w_hh, b_first, b_second, h_next)
         else:
-            _lstm_row(x, h, c, w_ih, w_hh, b_first, w_out, b_out, probabilities, h_next, c_next)
+            lstm_cell(x, h, c, w_ih, w_hh, b_first, 1.0, h_next, c_next)
             c[:] = c_next
         h[:] = h_next
+        _linear_softmax(h_next, w_out, b_out, probabilities)
         action = sample_index(probabilities, rng.random())
         if action < 0:
             return LEAF_BAD_PROBABILITIES
