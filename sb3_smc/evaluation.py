@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING, Any, cast
 import numpy as np
 
 from pixelworld_env.validation import check_int, check_seed
-from sb3_smc.envs import make_smc_env, spec_for_smc
+from sb3_smc.envs import is_pixelworld_id, make_smc_env, spec_for_smc
 from sb3_smc.errors import SMCError
 from sb3_smc.policies import sample_action
 from sb3_smc.records import EvaluationRecord
@@ -33,11 +33,15 @@ if TYPE_CHECKING:
     from pixelworld_env.env import PixelWorldEnv
     from sb3_smc.wrapper import HierarchicalSMCWrapper
 
-__all__ = ["EnvironmentResult", "EpisodeResult", "EvaluationResult", "REPEAT_SEED_OFFSET", "evaluate",
-           "episode_seed", "make_evaluation_env", "run_episode"]
+__all__ = ["FOREIGN_TEST_SEED", "EnvironmentResult", "EpisodeResult", "EvaluationResult", "REPEAT_SEED_OFFSET",
+           "evaluate", "episode_seed", "make_evaluation_env", "run_episode", "start_seed"]
 
 REPEAT_SEED_OFFSET = 512
 """Repeat ``r`` of the paper's test is seeded with ``512 + r``."""
+FOREIGN_TEST_SEED = 1_000_000_000
+"""The first start seed of the test split of a task without datasets (:func:`start_seed`)."""
+FOREIGN_SPLITS = {"train": 0, "test": FOREIGN_TEST_SEED}
+"""The first start seed of each split of a task without datasets."""
 
 Cell = tuple[int, int]
 
@@ -70,6 +74,8 @@ class EpisodeResult:
     """For each move of ``moves``, the decision (0-based step of the episode) it belongs to."""
     call_log: list[dict[str, Any]] = field(default_factory=list)
     """Every SMC call of the episode, nested ones included, in the order they finished (``info["smc_calls"]``)."""
+    label: int | None = None
+    """The classification label of a task without datasets, read at reset (PixelWorld's are its scenes')."""
 
 
 @dataclass
@@ -148,15 +154,22 @@ def episode_seed(seed: int, repeat: int, index: int) -> int:
 
 
 def run_episode(smc: SMC, env: HierarchicalSMCWrapper, *, index: int | None = None, seed: int,
-                record_cells: bool = True) -> EpisodeResult:
+                record_cells: bool = True, start_seed: int | None = None) -> EpisodeResult:
     """Run one episode of ``smc`` on ``env`` (a :class:`~sb3_smc.wrapper.HierarchicalSMCWrapper` built for it).
 
-    ``index`` picks the scene (``None``: the env's own draw). Actions are sampled from the SMC's policy with
-    ``numpy.random.default_rng((seed, 1))``; the env is reset with ``seed``.
+    On PixelWorld ``index`` picks the scene (``None``: the env's own draw) and the env is reset with ``seed``. On
+    another task (:class:`~sb3_smc.tasks.SMCTask`) the task is reset with ``start_seed`` (its start state) and the
+    SMC calls' sampling with ``seed``. Actions are sampled from the SMC's policy with
+    ``numpy.random.default_rng((seed, 1))``. Cells are recorded on PixelWorld only.
     """
-    base = cast("PixelWorldEnv", env.unwrapped)
-    observation, _ = env.reset(seed=seed, options=None if index is None else {"index": index})
-    cells: list[Cell] = [base.world.self_position] if record_cells else []
+    label = None
+    if env.pixelworld:
+        observation, _ = env.reset(seed=seed, options=None if index is None else {"index": index})
+    else:
+        observation, reset_info = env.reset(seed=start_seed, options={"call_seed": seed})
+        label = reset_info.get("label")
+        record_cells = False
+    cells: list[Cell] = ([cast("PixelWorldEnv", env.base).world.self_position] if record_cells else [])
     rng = np.random.default_rng((seed, 1))
     policy = smc.policy
     state = policy.initial_state()
@@ -191,7 +204,7 @@ def run_episode(smc: SMC, env: HierarchicalSMCWrapper, *, index: int | None = No
     return EpisodeResult(environment=-1 if index is None else index, repeat=-1, seed=seed, success=bool(reward > 0),
                          final_reward=float(reward), total_reward=float(total), length=length,
                          primitive_steps=primitive, signalled=bool(terminated), actions=actions, cells=cells,
-                         calls=calls, moves=moves, move_decisions=move_decisions, call_log=call_log)
+                         calls=calls, moves=moves, move_decisions=move_decisions, call_log=call_log, label=label)
 
 
 def make_evaluation_env(smc: SMC, env_id: str | None = None, *, split: str = "test", max_steps: int | None = None,
@@ -205,7 +218,7 @@ def make_evaluation_env(smc: SMC, env_id: str | None = None, *, split: str = "te
     spec = spec_for_smc(smc, env_id)
     wrapper = spec.wrapper if max_steps is None else dataclasses.replace(spec.wrapper, max_steps=max_steps)
     return make_smc_env(spec, smc.children, env_id=env_id, split=split, wrapper=wrapper, env_kwargs=env_kwargs,
-                        record_cells=True)
+                        record_cells=is_pixelworld_id(env_id))
 
 
 def _env_id(smc: SMC, env_id: str | None) -> str:
@@ -216,10 +229,23 @@ def _env_id(smc: SMC, env_id: str | None) -> str:
     return smc.spec.task.env_id
 
 
+def start_seed(split: str, index: int) -> int:
+    """The reset seed of start state ``index`` of ``split`` on a task without datasets (an
+    :class:`~sb3_smc.tasks.SMCTask`): ``index`` for ``"train"``, ``FOREIGN_TEST_SEED + index`` for ``"test"``."""
+    if split not in FOREIGN_SPLITS:
+        raise SMCError(f"a task without datasets has the splits {tuple(FOREIGN_SPLITS)} (start seeds), got {split!r}")
+    return FOREIGN_SPLITS[split] + index
+
+
 def evaluate(smc: SMC, env_id: str | None = None, *, split: str = "test", repeats: int = 10, seed: int = 0,
              max_steps: int | None = None, record_cells: bool = True, env_kwargs: Mapping[str, Any] | None = None,
-             keep: bool = True) -> EvaluationResult:
+             keep: bool = True, starts: int | None = None) -> EvaluationResult:
     """The paper's test (spec §5.4): every environment of ``split`` run ``repeats`` times, stochastic policy.
+
+    On a task without datasets (an :class:`~sb3_smc.tasks.SMCTask` on any Gymnasium environment) the environments
+    are ``starts`` start states (default 100): the task reset with :func:`start_seed` (``split`` ``"test"``: seeds
+    from ``FOREIGN_TEST_SEED``, far from the ``seed + i`` training resets with; ``"train"``: from 0); each repeat
+    samples the policy and the SMC calls anew from the same start.
 
     ``env_id`` defaults to the task the SMC was trained on. Returns an :class:`EvaluationResult` with the overall
     ``score`` (mean of final-step reward > 0 over environments x repeats), one :class:`EnvironmentResult` per
@@ -234,20 +260,29 @@ def evaluate(smc: SMC, env_id: str | None = None, *, split: str = "test", repeat
     smc.check_layout()
     env = make_evaluation_env(smc, env_id, split=split, max_steps=max_steps, env_kwargs=env_kwargs)
     try:
-        base = cast("PixelWorldEnv", env.unwrapped)
+        base = env.base
         if base.kind != smc.kind:
             raise SMCError(f"SMC {smc.name!r} is a {smc.kind} SMC but {env_id} is a {base.kind} task")
         if tuple(env.action_names) != tuple(smc.action_names):
             raise SMCError(f"SMC {smc.name!r} has actions {smc.action_names}, the env {env.action_names}")
+        pixelworld = cast("PixelWorldEnv", base) if env.pixelworld else None
+        if pixelworld is not None and starts is not None:
+            raise SMCError(f"starts= is for tasks without datasets; {env_id} runs every scene of its {split} split")
+        n = len(pixelworld.scenes) if pixelworld is not None else check_int(100 if starts is None else starts,
+                                                                             "starts", 1)
         environments = []
-        for index in range(len(base.scenes)):
+        for index in range(n):
             episodes = []
             for repeat in range(repeats):
                 episode = run_episode(smc, env, index=index, seed=episode_seed(seed, repeat, index),
-                                      record_cells=record_cells)
+                                      record_cells=record_cells,
+                                      start_seed=None if pixelworld is not None else start_seed(split, index))
                 episode.repeat = repeat
                 episodes.append(episode)
-            label = base.labels[index] if base.labels is not None else None
+            if pixelworld is not None:
+                label = pixelworld.labels[index] if pixelworld.labels is not None else None
+            else:
+                label = episodes[0].label
             score = float(np.mean([e.success for e in episodes]))
             environments.append(EnvironmentResult(index=index, score=score, label=label, episodes=episodes))
     finally:

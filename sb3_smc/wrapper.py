@@ -320,8 +320,15 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
     # ------------------------------------------------------------------------------------------ gym API
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
-        _, info = self.env.reset(seed=seed, options=options)
-        if seed is not None:
+        """Reset the task with ``seed`` and ``options``; the SMC calls' sampling is seeded with ``seed`` too, or with
+        ``options["call_seed"]`` (taken out before the task sees the options), so that one start state can be
+        replayed with different calls."""
+        options = dict(options) if options else None
+        call_seed = options.pop("call_seed", None) if options else None
+        _, info = self.env.reset(seed=seed, options=options or None)
+        if call_seed is not None:
+            self._rng = np.random.default_rng((call_seed, 0x5EED))
+        elif seed is not None:
             self._rng = np.random.default_rng((seed, 0x5EED))
         elif self._rng is None:
             self._rng = np.random.default_rng()

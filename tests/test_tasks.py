@@ -212,3 +212,24 @@ def test_minigrid_doorkey_as_an_smc_task() -> None:
     env.reset(seed=3)
     _, _, _, _, info = env.step(len(env.action_names) - 1)
     assert info["smc_calls"][0]["primitive_steps"] == 20  # never signals: cut at the cap
+
+
+def test_evaluate_on_a_task_without_datasets_uses_start_seeds() -> None:
+    from sb3_smc import evaluate
+    from sb3_smc.evaluation import FOREIGN_TEST_SEED, start_seed
+    from sb3_smc.records import TaskSpec, TrainingSpec
+
+    env_id = _register_corridor()
+    layout = Layout(5, ("L", "R", "S"))
+    spec = TrainingSpec(name="walker", task=TaskSpec(env_id, kind="bring-about", layout=layout))
+    walker = SMC("walker", "bring-about", ScriptedPolicy(4, lambda obs, step: 2 if obs[4] == 0 else 0),
+                 layout=layout, spec=spec)
+    result = evaluate(walker, starts=7, repeats=2, seed=3)
+    assert result.score == 1.0 and len(result.environments) == 7 and result.n_episodes == 14
+    starts = [Corridor(start=None).reset(seed=start_seed("test", i))[0] for i in range(7)]
+    assert [e.length for e in result.episodes] == [5 - s for s in starts for _ in range(2)]  # moves + SIG1
+    assert start_seed("test", 2) == FOREIGN_TEST_SEED + 2 and start_seed("train", 2) == 2
+    assert walker.evaluations[-1].score == 1.0 and walker.evaluations[-1].split == "test"
+    assert evaluate(walker, starts=7, repeats=2, seed=3).episodes == result.episodes  # deterministic
+    with pytest.raises(SMCError, match="splits .*'train', 'test'.* got 'all'"):
+        evaluate(walker, split="all", starts=2)
