@@ -513,16 +513,16 @@ converted specs (the original archives are large); that 0.1's own archives load 
 
 
 def test_version_1_libraries_load_through_the_conversion(tmp_path):
-    from sb3_smc.library import storage
+    from sb3_smc.library import manifest, storage
     from sb3_smc.training import train_smc
 
     v1 = json.loads(V1_MANIFEST.read_text())
     assert v1["version"] == 1
-    converted = storage.check_manifest(json.loads(V1_MANIFEST.read_text()), V1_MANIFEST)
+    converted = manifest.check_manifest(json.loads(V1_MANIFEST.read_text()), V1_MANIFEST)
     root = tmp_path / "library"
     (root / "models").mkdir(parents=True)
     trained: dict[str, SMC] = {}
-    for name in storage.topological_order(converted, V1_MANIFEST):
+    for name in manifest.topological_order(converted, V1_MANIFEST):
         spec = converted[name]["spec"]
         smc = train_smc(spec, children=trained)
         trained[name] = smc
@@ -551,13 +551,13 @@ def test_version_1_libraries_load_through_the_conversion(tmp_path):
 
 
 def test_version_1_entry_that_cannot_be_converted(tmp_path):
-    from sb3_smc.library import storage
+    from sb3_smc.library import manifest
 
     v1 = json.loads(V1_MANIFEST.read_text())
     del v1["smcs"]["cl_self-in-left-corner_vs_on-hline"]["metadata"]["wrapper"]
     with pytest.raises(ManifestError, match="version-1 entry 'cl_self-in-left-corner_vs_on-hline' cannot be "
                                             "converted .*wrapper"):
-        storage.check_manifest(v1, V1_MANIFEST)
+        manifest.check_manifest(v1, V1_MANIFEST)
 
 
 def test_version_0_1_models_name_a_policy_class_that_still_imports():
@@ -609,12 +609,12 @@ def test_summary_fields_must_agree_with_the_records(copy, field, value, message)
     (lambda e: e.update(test_score="high"), "version-1 entry .*'test_score' must be int or float or null, got 'high'"),
 ])
 def test_bad_version_1_entries_name_the_entry_and_field(change, message):
-    from sb3_smc.library import storage
+    from sb3_smc.library import manifest
 
     v1 = json.loads(V1_MANIFEST.read_text())
     change(v1["smcs"]["cl_self-in-left-corner_vs_on-hline"])
     with pytest.raises(ManifestError, match=message):
-        storage.check_manifest(v1, V1_MANIFEST)
+        manifest.check_manifest(v1, V1_MANIFEST)
 
 
 def test_bare_observation_models_are_explained(tmp_path):

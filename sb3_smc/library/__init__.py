@@ -1,8 +1,10 @@
 """SMC libraries: trained SMCs in a directory with a versioned manifest.
 
 * :mod:`sb3_smc.library.library` — :class:`SMCLibrary`, the API (a mapping name -> SMC; add, save, load, wrap);
-* :mod:`sb3_smc.library.storage` — the disk format: manifest schema and validation, checksums, model files, the
-  version-1 conversion, the atomic save;
+* :mod:`sb3_smc.library.manifest` — the manifest: its schema, validation of any version (the version-1
+  conversion), the load order;
+* :mod:`sb3_smc.library.storage` — the files: reading and writing the manifest, model files and checksums, adding
+  and removing SMCs in place, the atomic save;
 * :mod:`sb3_smc.library.errors` — the :class:`LibraryError` family.
 """
 
@@ -15,7 +17,7 @@ from sb3_smc.library.errors import (
     UnknownSMCError,
 )
 from sb3_smc.library.library import SMCLibrary
-from sb3_smc.library.storage import FORMAT, FORMAT_VERSION
+from sb3_smc.library.manifest import FORMAT, FORMAT_VERSION
 
 __all__ = [
     "FORMAT",

@@ -1,5 +1,7 @@
-"""How an SMC library lies on disk: the manifest schema and its validation, model files and checksums, the
-conversion of version-1 manifests, and the atomic save (:mod:`pixelworld_env.atomic`).
+"""How an SMC library lies on disk: reading and writing the manifest file, model files and checksums, adding and
+removing SMCs in place, and the atomic save (:mod:`pixelworld_env.atomic`). The manifest's schema and validation
+(and the conversion of version-1 manifests) are :mod:`sb3_smc.library.manifest`'s; its names that callers use
+through this module (``check_manifest``, ``topological_order``, ``FORMAT`` ...) are re-exported here.
 
 Layout::
 
@@ -18,7 +20,7 @@ import os
 import re
 import shutil
 import zipfile
-from collections.abc import Callable, Collection, Mapping, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -31,51 +33,31 @@ from pixelworld_env.atomic import (
     replace_directory,
 )
 from sb3_smc.hyperparameters import ALGORITHM_REGISTRY
-from sb3_smc.hyperparameters import ALGORITHMS as TRAINED_ALGORITHMS
-from sb3_smc.library.errors import (
-    CorruptModelError,
-    LayoutMismatchError,
-    LibraryError,
-    ManifestError,
-    MissingChildError,
-    suggest,
+from sb3_smc.library.errors import CorruptModelError, LayoutMismatchError, LibraryError, ManifestError, suggest
+from sb3_smc.library.manifest import (
+    ALGORITHMS,
+    FORMAT,
+    FORMAT_VERSION,
+    MANIFEST,
+    check_manifest,
+    check_version,
+    make_entry,
+    new_manifest,
+    topological_order,
+    upgrade_v1,
 )
-from sb3_smc.records import (
-    Budget,
-    EvaluationRecord,
-    RecordError,
-    SignalBias,
-    TaskSpec,
-    TrainingRecord,
-    TrainingSpec,
-    WrapperSettings,
-    package_versions,
-    test_score_of,
-)
-from sb3_smc.smc import HAND_SIZE, SIGNALS, SMC, observation_size, smc_action_names
+from sb3_smc.smc import HAND_SIZE, SMC
 
 if TYPE_CHECKING:
     from stable_baselines3.common.on_policy_algorithm import OnPolicyAlgorithm
 
 __all__ = ["ALGORITHMS", "FORMAT", "FORMAT_VERSION", "MANIFEST", "MODELS", "add_to_library", "check_manifest",
-           "check_model_file", "entry_for", "interrupted_hint", "link_copy", "load_model", "model_files",
-           "read_manifest", "remove_from_library", "sha256", "topological_order", "upgrade_v1", "write_library"]
+           "check_model_file", "entry_for", "interrupted_hint", "link_copy", "load_model", "make_entry", "model_files",
+           "new_manifest", "read_manifest", "remove_from_library", "sha256", "topological_order", "upgrade_v1",
+           "write_library"]
 
-FORMAT = "sb3-smc-library"
-"""Value of the manifest's ``format`` field."""
-FORMAT_VERSION = 2
-"""Manifest version written. Version 1 (sb3-smc 0.1, a free-form ``metadata`` dict per SMC) is read through
-:func:`upgrade_v1`."""
-MANIFEST = "manifest.json"
 MODELS = "models"
 SAVING_MARKER = ".saving-"
-
-ALGORITHMS = TRAINED_ALGORITHMS
-"""Algorithms whose models a library stores (those ``train_smc`` trains; loaded with their class, ``device="cpu"``)."""
-
-
-_V1_ALGORITHMS = ("RecurrentPPO", "TRPO")
-"""The algorithms of sb3-smc 0.1, whose version-1 entries carry a training spec to convert."""
 
 
 def algorithm_classes() -> dict[str, type[OnPolicyAlgorithm]]:
@@ -112,12 +94,6 @@ def model_file_for(name: str, taken: Sequence[str]) -> str:
         cleaned = re.sub(r"[^A-Za-z0-9_.+=@-]", "_", name)[:80].lstrip("._") or "smc"
         stem = f"{cleaned}-{hashlib.sha256(name.encode()).hexdigest()[:10]}"
     return f"{MODELS}/{stem}.zip"
-
-
-def observation_layout(n_children: int, n_actions: int) -> dict[str, int]:
-    """The manifest's ``observation``: total ``size``, then the parts in order (window, outcomes, previous action)."""
-    return {"size": observation_size(n_children, n_actions), "window": HAND_SIZE, "outcomes": n_children,
-            "previous_action": n_actions}
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -173,36 +149,6 @@ def entry_for(smc: SMC) -> dict[str, Any]:
                       frame_stack_of(smc), smc.spec, smc.record, smc.evaluations, smc.test_score)
 
 
-def make_entry(kind: str, algo: str, children: Sequence[str], include_primitives: bool, frame_stack: int,
-               spec: TrainingSpec | None, record: TrainingRecord | None,
-               evaluations: Sequence[EvaluationRecord] = (), test_score: float | None = None) -> dict[str, Any]:
-    """A manifest entry (without ``model`` and ``sha256``).
-
-    ``spec``, ``record`` and ``evaluations`` are the typed records; ``env_id`` ... ``total_timesteps`` repeat the
-    most-used of their values for people and tools reading the manifest (they are derived, never read back).
-    """
-    action_names = smc_action_names(kind, children, include_primitives)
-    return {
-        "kind": kind,
-        "algo": algo,
-        "children": list(children),
-        "include_primitives": include_primitives,
-        "action_names": list(action_names),
-        "observation": observation_layout(len(children), len(action_names)),
-        "frame_stack": frame_stack,
-        "spec": spec.to_dict() if spec is not None else None,
-        "record": record.to_dict() if record is not None else None,
-        "evaluations": [e.to_dict() for e in evaluations],
-        "env_id": spec.task.env_id if spec is not None else None,
-        "datasets": list(spec.task.datasets) if spec is not None else [],
-        "seed": spec.seed if spec is not None else None,
-        "selected_update": record.selected_update if record is not None else None,
-        "training_return": record.selected_return if record is not None else None,
-        "test_score": test_score,
-        "total_timesteps": record.total_timesteps if record is not None else None,
-    }
-
-
 def write_library(target: Path, smcs: Mapping[str, SMC], manifest: dict[str, Any]) -> None:
     """Write ``manifest`` and the models of ``smcs`` to directory ``target``, atomically.
 
@@ -229,10 +175,6 @@ def write_library(target: Path, smcs: Mapping[str, SMC], manifest: dict[str, Any
         raise
 
 
-def new_manifest(smcs: dict[str, dict[str, Any]]) -> dict[str, Any]:
-    return {"format": FORMAT, "version": FORMAT_VERSION, "created_with": package_versions(), "smcs": smcs}
-
-
 def _current_manifest(root: Path) -> tuple[dict[str, Any], Path]:
     """The manifest of the library in ``root`` (a new, empty one where there is none), which must be of the current
     version to be written."""
@@ -240,7 +182,7 @@ def _current_manifest(root: Path) -> tuple[dict[str, Any], Path]:
     if not manifest_path.is_file():
         return new_manifest({}), manifest_path
     manifest, _ = read_manifest(root)
-    if _check_version(manifest, manifest_path) != FORMAT_VERSION:
+    if check_version(manifest, manifest_path) != FORMAT_VERSION:
         raise ManifestError(f"{manifest_path}: version {manifest['version']} library; convert it first "
                             "(SMCLibrary.load(path).save())")
     return manifest, manifest_path
@@ -327,252 +269,6 @@ def read_manifest(root: Path) -> tuple[dict[str, Any], Path]:
         return json.loads(manifest_path.read_text(encoding="utf-8")), manifest_path
     except (UnicodeDecodeError, json.JSONDecodeError) as err:
         raise ManifestError(f"{manifest_path} is not valid JSON (corrupt or truncated?): {err}") from None
-
-
-_ENTRY_FIELDS: dict[str, tuple[type, ...]] = {
-    "model": (str,),
-    "kind": (str,),
-    "algo": (str,),
-    "children": (list,),
-    "include_primitives": (bool,),
-    "action_names": (list,),
-    "observation": (dict,),
-}
-
-
-def _check_version(manifest: Any, where: Path) -> int:
-    if not isinstance(manifest, dict):
-        raise ManifestError(f"{where}: expected a JSON object, got {type(manifest).__name__}")
-    if manifest.get("format") != FORMAT:
-        raise ManifestError(f"{where}: not an SMC library manifest (format {manifest.get('format')!r}, expected "
-                            f"{FORMAT!r})")
-    version = manifest.get("version")
-    if not isinstance(version, int) or isinstance(version, bool):
-        raise ManifestError(f"{where}: manifest version must be an integer, got {version!r}")
-    if version > FORMAT_VERSION:
-        made = (manifest.get("created_with") or {}).get("sb3_smc", "a newer sb3_smc")
-        raise ManifestError(f"{where}: manifest version {version} is newer than this sb3_smc reads "
-                            f"(version {FORMAT_VERSION}); it was written by sb3_smc {made}: upgrade sb3_smc")
-    if version not in (1, FORMAT_VERSION):
-        raise ManifestError(f"{where}: incompatible manifest version {version} (this sb3_smc reads versions 1 and "
-                            f"{FORMAT_VERSION})")
-    return version
-
-
-def check_manifest(manifest: Any, where: Path) -> dict[str, dict[str, Any]]:
-    """Validate a manifest (a version-1 one is upgraded first, :func:`upgrade_v1`); returns its entries with
-    ``spec``, ``record`` and ``evaluations`` parsed into records."""
-    if _check_version(manifest, where) == 1:
-        manifest = upgrade_v1(manifest, where)
-    smcs = manifest.get("smcs")
-    if not isinstance(smcs, dict):
-        raise ManifestError(f"{where}: 'smcs' must be an object name -> entry, got {type(smcs).__name__}")
-    for name, entry in smcs.items():
-        _check_entry(name, entry, where)
-    for name, entry in smcs.items():
-        for child in entry["children"]:
-            if child not in smcs:
-                raise MissingChildError(
-                    f"{where}: SMC {name!r} calls child {child!r}, which is not in the library"
-                    f"{suggest(child, [n for n in smcs if n != name], ' (it has no other SMC)')}")
-        expected = list(smc_action_names(entry["kind"], entry["children"], entry["include_primitives"]))
-        if entry["action_names"] != expected:
-            raise LayoutMismatchError(
-                f"{where}: SMC {name!r}: action names {entry['action_names']} do not match its kind "
-                f"{entry['kind']!r}, children {entry['children']} and include_primitives="
-                f"{entry['include_primitives']} (expected {expected})")
-        layout = observation_layout(len(entry["children"]), len(expected))
-        if entry["observation"] != layout:
-            raise LayoutMismatchError(
-                f"{where}: SMC {name!r}: observation {entry['observation']} does not match its children and actions "
-                f"(expected {layout}: {HAND_SIZE} window + {len(entry['children'])} outcomes + {len(expected)} "
-                "previous action)")
-    return smcs
-
-
-def _check_entry(name: str, entry: Any, where: Path) -> None:
-    if not isinstance(entry, dict):
-        raise ManifestError(f"{where}: entry {name!r} must be an object, got {type(entry).__name__}")
-    missing = [f for f in (*_ENTRY_FIELDS, "sha256", "spec", "record", "evaluations") if f not in entry]
-    if missing:
-        raise ManifestError(f"{where}: entry {name!r} lacks the field(s) {missing}")
-    for field, types in _ENTRY_FIELDS.items():
-        if not isinstance(entry[field], types):
-            raise ManifestError(f"{where}: entry {name!r}: {field!r} must be {types[0].__name__}, got "
-                                f"{entry[field]!r}")
-    if entry["kind"] not in SIGNALS:
-        raise ManifestError(f"{where}: entry {name!r}: unknown kind {entry['kind']!r} (expected one of "
-                            f"{list(SIGNALS)})")
-    if entry["algo"] not in ALGORITHMS:
-        raise ManifestError(f"{where}: entry {name!r}: unknown algorithm {entry['algo']!r} (supported: "
-                            f"{list(ALGORITHMS)})")
-    if not isinstance(entry["sha256"], str) or not re.fullmatch(r"[0-9a-f]{64}", entry["sha256"]):
-        raise ManifestError(f"{where}: entry {name!r}: 'sha256' must be the 64 hex digits of the model file's "
-                            f"SHA-256, got {entry['sha256']!r}")
-    model = entry["model"]
-    if Path(model).is_absolute() or ".." in Path(model).parts:
-        raise ManifestError(f"{where}: entry {name!r}: model path {model!r} must be relative, inside the library")
-    if not all(isinstance(c, str) for c in entry["children"]):
-        raise ManifestError(f"{where}: entry {name!r}: children must be names, got {entry['children']!r}")
-    for field, value in (("observation.size", entry["observation"].get("size")),
-                         ("frame_stack", entry.get("frame_stack", 1))):
-        if not isinstance(value, int) or isinstance(value, bool) or value < 1:
-            raise ManifestError(f"{where}: entry {name!r}: {field} must be a positive integer, got {value!r}")
-    _parse_records(name, entry, where)
-
-
-def _parse_records(name: str, entry: dict[str, Any], where: Path) -> None:
-    """Replace ``entry``'s spec / record / evaluations JSON by records (``ManifestError`` naming the field)."""
-    def parse(field: str, parser: Callable[[Any], Any]) -> Any:
-        value = entry[field]
-        if value is None or isinstance(value, TrainingSpec | TrainingRecord):
-            return value
-        try:
-            return parser(value)
-        except RecordError as err:
-            raise ManifestError(f"{where}: entry {name!r}: {err}") from None
-
-    entry["spec"] = parse("spec", lambda v: TrainingSpec.from_dict(v, "spec"))
-    entry["record"] = parse("record", lambda v: TrainingRecord.from_dict(v, "record"))
-    evaluations = entry["evaluations"]
-    if not isinstance(evaluations, list):
-        raise ManifestError(f"{where}: entry {name!r}: 'evaluations' must be a list, got {evaluations!r}")
-    parsed = []
-    for i, value in enumerate(evaluations):
-        if isinstance(value, EvaluationRecord):
-            parsed.append(value)
-            continue
-        try:
-            parsed.append(EvaluationRecord.from_dict(value, f"evaluations[{i}]"))
-        except RecordError as err:
-            raise ManifestError(f"{where}: entry {name!r}: {err}") from None
-    entry["evaluations"] = parsed
-    _check_summary(name, entry, where)
-    spec = entry["spec"]
-    if spec is not None:
-        found = {"kind": (spec.task.kind, entry["kind"]), "children": (list(spec.children), entry["children"]),
-                 "algo": (spec.algo, entry["algo"]), "frame_stack": (spec.frame_stack, entry.get("frame_stack", 1)),
-                 "include_primitives": (spec.wrapper.include_primitives, entry["include_primitives"])}
-        wrong = [f"{k}: spec {a!r}, entry {b!r}" for k, (a, b) in found.items() if a != b]
-        if wrong:
-            raise ManifestError(f"{where}: entry {name!r}: its training spec disagrees with the entry "
-                                f"({'; '.join(wrong)})")
-
-
-SUMMARY_FIELDS = ("env_id", "datasets", "seed", "selected_update", "training_return", "test_score", "total_timesteps")
-"""Fields of an entry that repeat values of its records (for people and tools reading the manifest)."""
-
-
-def _check_summary(name: str, entry: dict[str, Any], where: Path) -> None:
-    """The summary fields must say what the records say (they are never read back, so a wrong one is an error)."""
-    spec, record, evaluations = entry["spec"], entry["record"], entry["evaluations"]
-    derived = make_entry(entry["kind"], entry["algo"], entry["children"], entry["include_primitives"],
-                         entry.get("frame_stack", 1), spec, record, evaluations, test_score_of(spec, evaluations))
-    for field in SUMMARY_FIELDS:
-        if field in entry and entry[field] != derived[field]:
-            raise ManifestError(f"{where}: entry {name!r}: {field!r} is {entry[field]!r}, but its records say "
-                                f"{derived[field]!r}")
-
-
-_V1_SUMMARY_TYPES = {"env_id": (str,), "datasets": (list,), "seed": (int,), "selected_update": (int,),
-                     "training_return": (int, float), "test_score": (int, float), "total_timesteps": (int,)}
-
-
-def _check_v1_summary(name: str, entry: dict[str, Any], where: Path) -> None:
-    for field, types in _V1_SUMMARY_TYPES.items():
-        value = entry.get(field)
-        if value is not None and (isinstance(value, bool) or not isinstance(value, types)):
-            raise ManifestError(f"{where}: version-1 entry {name!r}: {field!r} must be "
-                                f"{' or '.join(t.__name__ for t in types)} or null, got {value!r}")
-
-
-def upgrade_v1(manifest: dict[str, Any], where: Path) -> dict[str, Any]:
-    """A version-1 manifest (sb3-smc 0.1) as version 2: each entry's ``metadata`` becomes typed records.
-
-    The ``metadata`` that ``train_smc`` 0.1 wrote converts completely into a :class:`TrainingSpec` and a
-    :class:`TrainingRecord` (the budget's ``total_timesteps`` is the number of steps actually run, which 0.1
-    recorded instead of the requested one); a ``test_score`` becomes an :class:`EvaluationRecord` of the test split
-    whose ``repeats`` and ``seed`` are unknown (``None``). An entry without training metadata (a model trained
-    elsewhere) gets no spec and no record; other metadata keys are dropped.
-    """
-    smcs = manifest.get("smcs")
-    if not isinstance(smcs, dict):
-        raise ManifestError(f"{where}: 'smcs' must be an object name -> entry, got {type(smcs).__name__}")
-    versions = {str(k): str(v) for k, v in (manifest.get("created_with") or {}).items()}
-    upgraded = {}
-    for name, entry in smcs.items():
-        if not isinstance(entry, dict):
-            raise ManifestError(f"{where}: entry {name!r} must be an object, got {type(entry).__name__}")
-        new = {k: v for k, v in entry.items() if k != "metadata" and k not in SUMMARY_FIELDS}
-        meta = entry.get("metadata") or {}
-        if not isinstance(meta, dict):
-            raise ManifestError(f"{where}: version-1 entry {name!r}: 'metadata' must be an object, got {meta!r}")
-        _check_v1_summary(name, entry, where)
-        try:
-            spec, record = _v1_records(name, entry, meta, versions)
-            evaluations = []
-            if entry.get("test_score") is not None:
-                evaluations.append(EvaluationRecord(
-                    smc=name, env_id=entry.get("env_id") or meta.get("env_id") or "unknown", split="test",
-                    kind=entry["kind"], repeats=None, seed=None, score=entry["test_score"]).to_dict())
-        except (RecordError, KeyError, TypeError) as err:
-            raise ManifestError(f"{where}: version-1 entry {name!r} cannot be converted to version "
-                                f"{FORMAT_VERSION} ({type(err).__name__}: {err})") from None
-        new.update(spec=spec, record=record, evaluations=evaluations)
-        upgraded[name] = new
-    return {**manifest, "version": FORMAT_VERSION, "smcs": upgraded}
-
-
-def _v1_records(name: str, entry: dict[str, Any], meta: Mapping[str, Any],
-                versions: dict[str, str]) -> tuple[dict | None, dict | None]:
-    if not meta.get("env_id") or "training_returns" not in meta or entry["algo"] not in _V1_ALGORITHMS:
-        return None, None
-    hyper = dict(meta["hyperparameters"])
-    n_steps = hyper.pop("n_steps")
-    hyper["policy"] = meta["policy"]
-    wrapper = dict(meta["wrapper"])
-    spec = TrainingSpec(
-        name=name,
-        task=TaskSpec(meta["env_id"], kind=entry["kind"], datasets=tuple(meta.get("datasets") or ()),
-                      env_kwargs=dict(meta.get("env_kwargs") or {})),
-        algo=entry["algo"], hyperparameters=hyper, seed=meta["seed"],
-        budget=Budget(meta["total_timesteps"], meta["n_envs"], n_steps),
-        wrapper=WrapperSettings(entry["include_primitives"], wrapper["count_primitive_steps"],
-                                wrapper["call_step_cap"], wrapper["max_steps"]),
-        signal_bias=SignalBias(enabled=bool(meta["signal_bias"])), frame_stack=meta.get("frame_stack", 1),
-        children=tuple(entry["children"]))
-    probabilities = meta.get("initial_action_probabilities")
-    record = TrainingRecord(
-        training_returns=tuple(meta["training_returns"]),
-        success_rates=tuple(meta["training_success_rates"]),
-        selected_update=meta["selected_update"], selected_return=meta["training_return"],
-        total_timesteps=meta["total_timesteps"], primitive_steps=meta["primitive_steps"],
-        wall_time_s=meta["wall_time_s"], action_names=tuple(meta.get("action_names") or entry["action_names"]),
-        initial_action_probabilities=None if probabilities is None else tuple(probabilities),
-        torch_threads=meta.get("torch_threads", 1), versions=versions)
-    return spec.to_dict(), record.to_dict()
-
-
-def topological_order(entries: Mapping[str, Mapping[str, Any]], where: Path) -> list[str]:
-    """Entry names, children before parents; :class:`LibraryError` naming the cycle if SMCs call each other."""
-    order: list[str] = []
-    state: dict[str, int] = {}  # 1 visiting, 2 done
-
-    def visit(name: str, stack: list[str]) -> None:
-        if state.get(name) == 2:
-            return
-        if state.get(name) == 1:
-            cycle = stack[stack.index(name):] + [name]
-            raise LibraryError(f"{where}: SMCs call each other in a cycle: {' -> '.join(cycle)}")
-        state[name] = 1
-        for child in entries[name]["children"]:
-            visit(child, [*stack, name])
-        state[name] = 2
-        order.append(name)
-
-    for name in entries:
-        visit(name, [])
-    return order
 
 
 def check_model_file(root: Path, name: str, entry: Mapping[str, Any]) -> None:
