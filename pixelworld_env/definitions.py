@@ -19,9 +19,7 @@ the macro table (spec §3.2). A ``+@name`` reference must name a list defined in
 a file it includes (directly or not). Curriculum entries are grouped by the stem of the file that defines them
 (:attr:`DefinitionSet.curricula`).
 
-Experiment files (:func:`load_experiments`) are the 33 top-level files of ``experiments/aaai18``: their
-``__include__`` chain (common settings, goal, ``level2``/``level2-noprim``, one ``DATA/*.curriculum``) is
-deep-merged in include order and the settings that matter for the benchmark are read from the result.
+The experiment files that use these definitions are read by :mod:`pixelworld_env.experiment_files`.
 
 Every error is a :class:`DefinitionError` whose message names the file and, where there is one, the line.
 """
@@ -29,7 +27,6 @@ Every error is a :class:`DefinitionError` whose message names the file and, wher
 from __future__ import annotations
 
 import difflib
-import itertools
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 from pathlib import Path, PurePosixPath
@@ -46,8 +43,6 @@ if TYPE_CHECKING:
 
 #: Top-level keys with a meaning of their own (everything else that is a list of strings is a named list).
 SECTIONS = ("concepts", "generators", "datasets", "curriculum")
-#: Goal codes of the experiment files (``vals_goal``) -> the benchmark's words.
-GOALS = {"c": "classification", "sig": "bring-about-signal", "dir": "bring-about-direct"}
 #: The one defect of the AAAI-18 release that loads: three generators of ``bfaw-search.generators`` name
 #: ``potential-container``, a relation defined nowhere (the predicate is ``potential_container``), and no dataset
 #: uses them. Exactly these (key and unknown names) are recorded in :attr:`DefinitionSet.unresolved`; any other
@@ -216,7 +211,8 @@ def _line(node: yaml.Node | None) -> int:
     return node.start_mark.line + 1 if node is not None else 0
 
 
-def _load_yaml(path: Path) -> tuple[Any, yaml.Node | None]:
+def load_yaml(path: Path) -> tuple[Any, yaml.Node | None]:
+    """The file's data and its node tree (for line numbers); :class:`DefinitionError` naming the file if unreadable."""
     try:
         text = path.read_text(encoding="utf-8")
     except OSError as exc:
@@ -338,7 +334,7 @@ def _check_expressions(result: DefinitionSet) -> None:
 def _read_file(path: Path, result: DefinitionSet, stack: tuple[Path, ...], pending: list[_PendingEntry]) -> None:
     if str(path) in result.files:
         return
-    data, node = _load_yaml(path)
+    data, node = load_yaml(path)
     result.files.append(str(path))
     result.includes[str(path)] = []
     if data is None:
@@ -539,125 +535,3 @@ def _read_curricula(path: Path, node: yaml.Node | None, pending: list[_PendingEn
             else:
                 raise DefinitionError(shape)
             pending.append(_PendingEntry(entry, dataset_node.value.strip(), paths, path, key_node))
-
-
-# -- experiment files ------------------------------------------------------------------------------------------
-
-
-@dataclass(frozen=True)
-class ExperimentDefinition:
-    """One top-level experiment file (an experiment group such as ``con2-canon-class``).
-
-    ``goal`` is the ``vals_goal`` code (``c``, ``sig`` or ``dir``); ``smc_filters`` the ``(name, k)`` of every
-    SMC filter variant; ``variants`` the output variant strings
-    ``{dataset_size}+{goal}+{embodiment}+{currname}+{filter}+{policy}+{algorithm}``; ``num_seeds`` the
-    number of training seeds (seeds ``0 .. num_seeds-1``); ``include_base_nonsignals`` is false in the
-    ``-noprim`` files (primitive moves removed from the higher-level action set); ``test_schedule`` lists
-    (trained-on, tested-on) entry pairs (``*.testing`` files).
-    """
-
-    name: str
-    curriculum: str
-    goal: str
-    smc_filters: tuple[tuple[str, int], ...]
-    variants: tuple[str, ...]
-    num_seeds: int
-    include_base_nonsignals: bool
-    num_samples: int
-    test_size: float
-    test_schedule: tuple[tuple[str, str], ...] = ()
-    source: str = ""
-
-    @property
-    def goal_name(self) -> str:
-        """``classification``, ``bring-about-signal`` or ``bring-about-direct``."""
-        return GOALS[self.goal]
-
-    @property
-    def noprim(self) -> bool:
-        """True when the primitive moves are removed from the higher-level action set (``level2-noprim``)."""
-        return not self.include_base_nonsignals
-
-
-def _merge(base: dict[str, Any], override: dict[str, Any]) -> dict[str, Any]:
-    merged = dict(base)
-    for key, value in override.items():
-        if isinstance(value, dict) and isinstance(merged.get(key), dict):
-            merged[key] = _merge(merged[key], value)
-        else:
-            merged[key] = value
-    return merged
-
-
-def _merged_config(path: Path, cache: dict[Path, Any], stack: tuple[Path, ...] = ()) -> dict[str, Any]:
-    """The file's mapping deep-merged over its includes (in include order, later ones winning)."""
-    if path in stack:
-        chain = " -> ".join(str(p) for p in (*stack, path))
-        raise DefinitionError(f"{path}: circular __include__ ({chain})")
-    if path not in cache:
-        cache[path] = _load_yaml(path)[0]
-    data = cache[path]
-    if data is None:
-        return {}
-    if not isinstance(data, dict):
-        raise DefinitionError(f"{path}: expected a mapping at the top level")
-    includes = data.get("__include__") or []
-    merged: dict[str, Any] = {}
-    for include in [includes] if isinstance(includes, str) else includes:
-        target = (path.parent / include).resolve()
-        if not target.is_file():
-            raise DefinitionError(f"{path}: included file {include!r} not found ({target})")
-        merged = _merge(merged, _merged_config(target, cache, (*stack, path)))
-    return _merge(merged, {k: v for k, v in data.items() if k != "__include__"})
-
-
-def _get(config: dict[str, Any], path: str, where: str) -> Any:
-    value: Any = config
-    for part in path.split("."):
-        if not isinstance(value, dict) or part not in value:
-            raise DefinitionError(f"{where}: setting {path!r} not found in the file or its includes")
-        value = value[part]
-    return value
-
-
-def load_experiments(paths: str | Path | Iterable[str | Path]) -> dict[str, ExperimentDefinition]:
-    """Read experiment files (name -> :class:`ExperimentDefinition`, keyed by file name).
-
-    Each file must include exactly one ``*.curriculum`` file directly; ``curriculum`` is its resolved path.
-    """
-    todo = [Path(paths)] if isinstance(paths, str | Path) else [Path(p) for p in paths]
-    cache: dict[Path, Any] = {}
-    result: dict[str, ExperimentDefinition] = {}
-    for raw in todo:
-        path = raw.resolve()
-        where = str(path)
-        config = _merged_config(path, cache)
-        direct = (cache[path] if isinstance(cache[path], dict) else {}).get("__include__") or []
-        curricula = [i for i in ([direct] if isinstance(direct, str) else direct) if str(i).endswith(".curriculum")]
-        if len(curricula) != 1:
-            raise DefinitionError(f"{where}: an experiment file must include exactly one *.curriculum file, "
-                                  f"found {len(curricula)}")
-        vals = _get(config, "overrideable_variant_vals", where)
-        goals = _get(vals, "vals_goal", where)
-        if not (isinstance(goals, list) and len(goals) == 1 and goals[0] in GOALS):
-            raise DefinitionError(f"{where}: vals_goal must be one of {sorted(GOALS)} (got {goals!r})")
-        filters = []
-        for item in _get(vals, "vals_filter", where):
-            if not (isinstance(item, list) and len(item) == 3 and isinstance(item[2], dict) and "k" in item[2]):
-                raise DefinitionError(f"{where}: vals_filter entries must be [name, rule, {{k: n}}] (got {item!r})")
-            filters.append((str(item[0]), int(item[2]["k"])))
-        axes = [_get(vals, key, where) for key in ("vals_dataset_size", "vals_goal", "vals_embodiment",
-                                                   "vals_currname")]
-        axes += [[name for name, _ in filters], _get(vals, "vals_policy", where), _get(vals, "vals_algorithm", where)]
-        variants = tuple("+".join(str(v) for v in combo) for combo in itertools.product(*axes))
-        env_kwargs = config.get("base_env", {}).get("env", {}).get("kwargs", {}) or {}
-        dataset_kwargs = _get(config, "overrideable_dataset_kwargs", where)
-        schedule = tuple((str(a), str(b)) for a, b in config.get("test_schedule") or ())
-        result[path.name] = ExperimentDefinition(
-            name=path.name, curriculum=str((path.parent / curricula[0]).resolve()), goal=goals[0],
-            smc_filters=tuple(filters), variants=variants, num_seeds=int(_get(vals, "num_smcs", where)),
-            include_base_nonsignals=bool(env_kwargs.get("include_base_nonsignals", True)),
-            num_samples=int(_get(dataset_kwargs, "num_samples", where)),
-            test_size=float(_get(config, "common.test_size", where)), test_schedule=schedule, source=where,
-        )
-    return result

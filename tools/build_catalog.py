@@ -36,7 +36,8 @@ if str(ROOT) not in sys.path:
 
 from pixelworld_env.concepts import ConceptError, parse  # noqa: E402
 from pixelworld_env.concepts.predicates import PREDICATES  # noqa: E402
-from pixelworld_env.definitions import GOALS, load_definitions, load_experiments  # noqa: E402
+from pixelworld_env.definitions import load_definitions  # noqa: E402
+from pixelworld_env.experiment_files import GOALS, load_experiments  # noqa: E402
 
 CATALOG_PATH = ROOT / "pixelworld_env" / "data" / "catalog.json"
 DESIGNED_PATH = ROOT / "pixelworld_env" / "data" / "definitions"
