@@ -10,7 +10,7 @@ from sb3_contrib import RecurrentPPO
 
 from sb3_smc import SMCLibrary, evaluate, train_smc, untrained_smc
 from sb3_smc.common.recurrent import GRUAsLSTM, SequenceGruPolicy, SequenceLstmPolicy
-from sb3_smc.policies import NumpyGRUPolicy
+from sb3_smc.numpy_actors import NumpyGRUPolicy
 from sb3_smc.records import RecordError, TrainingSpec
 from sb3_smc.vec_env import answer_in_batches
 

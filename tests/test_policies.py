@@ -17,16 +17,18 @@ from stable_baselines3 import DQN, PPO
 from stable_baselines3.common.vec_env import DummyVecEnv
 from torch import nn
 
-from sb3_smc.policies import (
+from sb3_smc.numpy_actors import (
     COMPILED_BATCH_FROM,
     NumpyGRUPolicy,
     NumpyLSTMPolicy,
     NumpyMLPPolicy,
+    _activate,
+    _compilable,
+)
+from sb3_smc.policies import (
     ScriptedPolicy,
     SequencePolicy,
-    _activate,
     _activation_spec,
-    _compilable,
     policy_from_model,
     sample_action,
     sample_actions,

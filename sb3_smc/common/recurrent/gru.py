@@ -64,7 +64,7 @@ class SequenceGruPolicy(SequenceLstmPolicy):
 
     Select it with ``train_smc(..., rnn="gru")``; it saves and loads through ``RecurrentPPO.load`` like any SB3
     policy, and :func:`sb3_smc.policies.policy_from_model` turns it into a
-    :class:`~sb3_smc.policies.NumpyGRUPolicy`.
+    :class:`~sb3_smc.numpy_actors.NumpyGRUPolicy`.
     """
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
