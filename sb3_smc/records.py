@@ -51,6 +51,9 @@ __all__ = [
 ]
 
 SPLITS = ("train", "test", "all")
+DISCOUNTS = ("decision", "semi-mdp")
+"""How a decision is discounted (``WrapperSettings.discount``): ``decision``, by gamma, whatever it did (the paper);
+``semi-mdp``, by gamma ** its primitive steps."""
 R = TypeVar("R", bound="_Record")
 
 
@@ -323,8 +326,19 @@ class WrapperSettings(_Record):
     """Decisions a called SMC may take before it is cut off."""
     max_steps: int = 100
     """Episode length in decisions (``gym.make(..., max_steps=...)``)."""
+    discount: str = "decision"
+    """How the learner discounts a decision: ``"decision"`` by gamma, whatever it did (the paper), or
+    ``"semi-mdp"`` by gamma ** its primitive steps (:mod:`sb3_smc.common.discounting`); in JSON only when not the
+    paper's."""
+
+    def to_dict(self) -> dict[str, Any]:
+        out = super().to_dict()
+        if self.discount == "decision":
+            del out["discount"]
+        return out
 
     def __post_init__(self) -> None:
+        _str(self.discount, "wrapper.discount", DISCOUNTS)
         _bool(self.include_primitives, "wrapper.include_primitives")
         _bool(self.count_primitive_steps, "wrapper.count_primitive_steps")
         _set(self, "call_step_cap", _int(self.call_step_cap, "wrapper.call_step_cap", 1))
@@ -448,7 +462,7 @@ class TrainingSpec(_Record):
                include_primitives: bool = True, count_primitive_steps: bool = False, call_step_cap: int = 100,
                max_steps: int = 100, signal_bias: bool | SignalBias = True, frame_stack: int = 1,
                split: str = "train", env_kwargs: Mapping[str, Any] | None = None, rnn: str | None = None,
-               **hyperparameters: Any) -> TrainingSpec:
+               discount: str = "decision", **hyperparameters: Any) -> TrainingSpec:
         """The spec of ``train_smc``'s keyword interface (``n_steps`` in ``hyperparameters`` goes to the budget;
         ``rnn="lstm"`` or ``"gru"`` picks the recurrent policy of a recurrent algorithm)."""
         n_steps = hyperparameters.pop("n_steps", None)
@@ -469,7 +483,7 @@ class TrainingSpec(_Record):
             task=TaskSpec(env_id, split=split, env_kwargs=dict(env_kwargs or {})).resolved(),
             algo=algo, hyperparameters=hyperparameters, seed=seed,
             budget=Budget(total_timesteps, n_envs, n_steps),
-            wrapper=WrapperSettings(include_primitives, count_primitive_steps, call_step_cap, max_steps),
+            wrapper=WrapperSettings(include_primitives, count_primitive_steps, call_step_cap, max_steps, discount),
             signal_bias=bias, frame_stack=frame_stack, children=tuple(children))
 
     @property

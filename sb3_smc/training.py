@@ -42,6 +42,7 @@ from stable_baselines3.common.vec_env import VecEnv
 from pixelworld_env.vector import PixelWorldVectorEnv
 from sb3_smc.bias import apply_signal_bias
 from sb3_smc.callbacks import SMCTrainingCallback
+from sb3_smc.common.discounting import SemiMDPDiscount
 
 # SequenceLstmPolicy: models saved by sb3-smc 0.1 name sb3_smc.training.SequenceLstmPolicy (SB3 pickles the class by
 # reference); importing it here keeps them loadable.
@@ -189,6 +190,7 @@ def train_smc(
     call_step_cap: int = 100,
     env_kwargs: Mapping[str, Any] | None = None,
     rnn: str | None = None,
+    discount: str = "decision",
     **hyperparams: Any,
 ) -> SMC:
     """Train an SMC and return the snapshot with the best mean training return.
@@ -208,6 +210,8 @@ def train_smc(
     * ``signal_bias``: the initial action distribution of spec §5.2 (on by default; without it episodes end after
       a few random signals and little is learned).
     * ``frame_stack``: stack the last k observations (meant for TRPO's memoryless MLP).
+    * ``discount="semi-mdp"`` discounts a decision by ``gamma ** k`` for its k primitive steps (an SMC call of 40
+      moves by ``gamma ** 40``) instead of the paper's ``gamma`` per decision (:mod:`sb3_smc.common.discounting`).
 
     Run options (not part of the spec): ``children`` — the SMCs to use as actions: a sequence of SMCs,
     ``(library, [names])``, or, with a spec, a library (any mapping name -> SMC) to look the spec's children up
@@ -219,10 +223,8 @@ def train_smc(
     The returned SMC's ``policy`` is a numpy copy of the selected snapshot's actor, ``model`` the SB3 model with the
     selected weights loaded, ``spec`` the (resolved) spec and ``record`` the :class:`TrainingRecord`.
     """
-    settings = dict(algo=algo, total_timesteps=total_timesteps, seed=seed, include_primitives=include_primitives,
-                    name=name, n_envs=n_envs, signal_bias=signal_bias, frame_stack=frame_stack, max_steps=max_steps,
-                    count_primitive_steps=count_primitive_steps, call_step_cap=call_step_cap, env_kwargs=env_kwargs,
-                    rnn=rnn)
+    given = locals()
+    settings = {key: given[key] for key in _KEYWORD_DEFAULTS}  # the spec settings among the keyword arguments
     spec, kids = _spec_and_children(task, children, settings, hyperparams)
     if spec.budget.total_timesteps < 1:
         raise SMCError(f"SMC {spec.name!r}: total_timesteps must be >= 1, got {spec.budget.total_timesteps} "
@@ -272,7 +274,7 @@ _KEYWORD_DEFAULTS = {name: parameter.default for name, parameter in inspect.sign
 
 def _train(spec: TrainingSpec, children: tuple[SMC, ...], *, tensorboard_log: str | None, log_every: int | None,
            callback: Any, printer: Callable[[str], None]) -> SMC:
-    from stable_baselines3.common.callbacks import CallbackList
+    from stable_baselines3.common.callbacks import BaseCallback, CallbackList
 
     if spec.task.kind is not None:
         check_model_settings(spec)  # a typo in a hyperparameter: a message before any environment is built
@@ -310,7 +312,12 @@ def _train(spec: TrainingSpec, children: tuple[SMC, ...], *, tensorboard_log: st
         log_every = 10 if total_updates >= 50 else 0
     stats = SMCTrainingCallback(kind=kind, children=spec.children, total_updates=total_updates,
                                 log_every=log_every, name=spec.name, printer=printer)
-    callbacks = CallbackList([stats, callback]) if callback is not None else stats
+    parts: list[BaseCallback] = [stats]
+    if spec.wrapper.discount == "semi-mdp":
+        parts.append(SemiMDPDiscount())
+    if callback is not None:
+        parts.append(callback)
+    callbacks = CallbackList(parts) if len(parts) > 1 else stats
     start = time.perf_counter()
     model.learn(total_timesteps=spec.budget.total_timesteps, callback=callbacks, tb_log_name=spec.name,
                 progress_bar=False)
