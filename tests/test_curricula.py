@@ -641,3 +641,35 @@ def test_run_directory_files_and_a_full_disk_are_explained(tmp_path, monkeypatch
     code, _, err = sb3_smc_cli("train", path, "--out", str(tmp_path / "new"), "--ray-address", "auto")
     assert code == 2 and "a Ray address ('auto') is for backend 'ray', not 'local'" in err
     assert not (tmp_path / "new").exists()
+
+
+def test_a_kill_after_storing_a_differing_repair_still_retrains_what_is_above(tmp_path, monkeypatch):
+    """The run dies after storing the repaired job (trained differently) and before taking out the jobs trained with
+    its damaged copy: the next run takes them out first and trains them again."""
+    from sb3_smc.curricula import trainer
+
+    path = _tiny(tmp_path)
+    out = tmp_path / "run"
+    train_curriculum(str(path), out, seeds=1, timesteps=2000, targets=["left", "container"], progress=False)
+    before = json.loads((out / "library" / "manifest.json").read_text())["smcs"]
+    (out / "library" / before["left@0"]["model"]).write_bytes(b"")
+    monkeypatch.setattr(trainer, "_trained_alike", lambda a, b: False)
+
+    def killed(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(trainer, "_retrain_above", killed)
+    with pytest.raises(KeyboardInterrupt):
+        train_curriculum(str(path), out, seeds=1, timesteps=2000, targets=["left", "container"], progress=False)
+    pending = json.loads((out / "retrain.json").read_text())
+    assert pending == {"repaired": "left@0", "jobs": ["container@0"]}
+    assert "container@0" in json.loads((out / "library" / "manifest.json").read_text())["smcs"]  # still there
+    monkeypatch.undo()
+    lines: list[str] = []
+    train_curriculum(str(path), out, seeds=1, timesteps=2000, targets=["left", "container"], printer=lines.append)
+    assert any("left@0 was trained again differently before the last run stopped" in line and "container@0" in line
+               for line in lines)
+    assert [line.split(",")[0] for line in lines if line.startswith("jobs ")] == ["jobs 3/3"]  # container again
+    assert not (out / "retrain.json").exists() and status(out)["done"] == ["left@0", "above@0", "container@0"]
+    [kept] = (out / "replaced").iterdir()
+    assert "container@0" in SMCLibrary.load(kept / "library", names=["container@0"])

@@ -32,9 +32,13 @@ from sb3_smc.errors import SMCError
 from sb3_smc.library import storage
 from sb3_smc.library.errors import CorruptModelError
 
-__all__ = ["RUN_FORMAT", "RUN_VERSION", "RunFileError", "RunSettingsError", "SettingsChanges", "glob_escape",
-           "library_jobs", "read_json", "read_settings", "replace_jobs", "run_settings", "status", "write_state"]
+__all__ = ["PENDING_RETRAIN", "RUN_FORMAT", "RUN_VERSION", "RunFileError", "RunSettingsError", "SettingsChanges",
+           "glob_escape", "library_jobs", "read_json", "read_settings", "replace_jobs", "run_settings", "status",
+           "write_state"]
 
+PENDING_RETRAIN = "retrain.json"
+"""A run directory's note of the jobs to take out of the library after a repaired job trained differently, written
+before the repaired job is stored and removed once they are out (a run that dies in between finishes it first)."""
 RUN_FORMAT = "sb3-smc-run"
 RUN_VERSION = 1
 

@@ -15,9 +15,10 @@ written atomically by the coordinator (the only writer), so killing the process 
 jobs that were running, which the next run starts again from scratch. Finished jobs are never trained again and
 their files never rewritten, except that a job whose model file is missing or damaged (checked against the
 manifest's SHA-256 by every run and by :func:`~sb3_smc.curricula.run_directory.status`) is trained again, replacing
-its entry, and so are the jobs above it when that training differs from the recorded one; accepted node changes
-replace the jobs of the changed nodes and of the nodes above them. The working SMCs so replaced stay in
-``DIR/replaced/``.
+its entry, and so are the jobs above it when that training differs from the recorded one (``DIR/retrain.json``
+names them from before the repaired job is stored until they are out, so a kill in between loses nothing); accepted
+node changes replace the jobs of the changed nodes and of the nodes above them. The working SMCs so replaced stay
+in ``DIR/replaced/``.
 
 The names of the modules above that this one offered before it was split are imported from here as before.
 """
@@ -53,6 +54,7 @@ from sb3_smc.curricula.jobs import (
     run_job,
 )
 from sb3_smc.curricula.run_directory import (
+    PENDING_RETRAIN,
     RunFileError,
     RunSettingsError,
     SettingsChanges,
@@ -337,6 +339,7 @@ def _lock(directory: Path) -> Any:
 def _run(merged: Curriculum, scheduler: _Scheduler, order: list[str], directory: Path, seeds: int, backend: str,
          workers: int, ray_address: str | None, tensorboard: bool, progress: bool,
          printer: Callable[[str], None]) -> TrainingRun:
+    _finish_pending_retrain(directory, printer)
     damaged = _load_done(scheduler)
     failed_dir = directory / "failed"
     total = len(scheduler.jobs())
@@ -378,13 +381,19 @@ def _run(merged: Curriculum, scheduler: _Scheduler, order: list[str], directory:
                     atomic_write(failed_dir / f"{file_stem(name)}.txt", text)
                     bar.note(f"job {name} failed: {scheduler.failed[name]}")
                     continue
-                earlier = _store(scheduler, outcome)
+                earlier = scheduler.damaged.get(name)
+                differs = earlier is not None and not _trained_alike(earlier, outcome.record)
+                if differs:  # what was trained with the damaged copy goes, even if the run dies after storing
+                    atomic_write(directory / PENDING_RETRAIN, json.dumps(
+                        {"repaired": name, "jobs": _jobs_above(scheduler, node_name)}, indent=1))
+                _store(scheduler, outcome)
                 scheduler.records[node_name][int(seed_text)] = outcome.record
                 bar.running = len(scheduler.running)
                 bar.finished(_rounded(scheduler.budget(merged.node(node_name))))
-                if earlier is not None and not _trained_alike(earlier, outcome.record):
+                if differs:
                     for above in _retrain_above(scheduler, node_name, name, bar.note):
                         bar.undone(_rounded(scheduler.budget(merged.node(above))))
+                    (directory / PENDING_RETRAIN).unlink()
     finally:
         executor.shutdown()
         write_state(directory, [], started, scheduler.skip)
@@ -420,15 +429,35 @@ def _load_done(scheduler: _Scheduler) -> dict[str, str]:
     return damaged
 
 
-def _store(scheduler: _Scheduler, result: JobResult) -> TrainingRecord | None:
-    """Add a finished job to the library (replacing the entry of a damaged one); returns the damaged one's record."""
+def _store(scheduler: _Scheduler, result: JobResult) -> None:
+    """Add a finished job to the library (replacing the entry of a damaged one)."""
     spec = result.spec
     assert spec.task.kind is not None  # a trained SMC's spec names its task's kind
     entry = storage.make_entry(spec.task.kind, result.algo, spec.children, spec.wrapper.include_primitives,
                                spec.frame_stack, spec, result.record)
     earlier = scheduler.damaged.pop(spec.name, None)
     storage.add_to_library(scheduler.library, spec.name, entry, result.model, replace=earlier is not None)
-    return earlier
+
+
+def _finish_pending_retrain(directory: Path, note: Callable[[str], None]) -> None:
+    """A run that died between storing a repaired job that trained differently and taking out the jobs trained with
+    its damaged copy (``PENDING_RETRAIN`` says which) takes them out now, before anything counts as done."""
+    marker = directory / PENDING_RETRAIN
+    if not marker.is_file():
+        return
+    try:
+        pending = json.loads(marker.read_text(encoding="utf-8"))
+        repaired, jobs = pending["repaired"], list(pending["jobs"])
+    except (ValueError, KeyError, TypeError) as err:
+        raise RunFileError(f"{marker} is damaged ({type(err).__name__}: {err}); it names the jobs to train again "
+                           f"after a repaired one: delete them from the library by hand (or the whole run), then "
+                           "the file") from None
+    present = [name for name in jobs if name in library_jobs(directory / "library")]
+    if present:
+        line = replace_jobs(directory, present)
+        note(f"{repaired} was trained again differently before the last run stopped; the SMCs trained with its "
+             f"damaged copy are trained again:\n{line}")
+    marker.unlink()
 
 
 def _trained_alike(a: TrainingRecord, b: TrainingRecord) -> bool:
@@ -439,13 +468,22 @@ def _trained_alike(a: TrainingRecord, b: TrainingRecord) -> bool:
     return trained(a) == trained(b)
 
 
+def _above(scheduler: _Scheduler, node_name: str) -> list[tuple[str, int]]:
+    """The finished (or damaged) jobs of every node above ``node_name``."""
+    above = [n for n in scheduler.order if node_name in scheduler.below[n]]
+    return [(n, seed) for n in above for seed in range(scheduler.seeds)
+            if seed in scheduler.records[n] or job_name(n, seed) in scheduler.damaged]
+
+
+def _jobs_above(scheduler: _Scheduler, node_name: str) -> list[str]:
+    return [job_name(n, seed) for n, seed in _above(scheduler, node_name)]
+
+
 def _retrain_above(scheduler: _Scheduler, node_name: str, name: str, note: Callable[[str], None]) -> list[str]:
     """A damaged job ``name`` trained again differs from its earlier record (another CPU or code): the finished jobs
     of every node above its node were trained with the earlier one and are taken out of the library to be trained
     again (:func:`replace_jobs`). Returns the node of each such job that counted as done."""
-    above = [n for n in scheduler.order if node_name in scheduler.below[n]]
-    jobs = [(n, seed) for n in above for seed in range(scheduler.seeds)
-            if seed in scheduler.records[n] or job_name(n, seed) in scheduler.damaged]
+    jobs = _above(scheduler, node_name)
     if not jobs:
         return []
     line = replace_jobs(scheduler.directory, [job_name(n, seed) for n, seed in jobs])
