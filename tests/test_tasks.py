@@ -233,3 +233,19 @@ def test_evaluate_on_a_task_without_datasets_uses_start_seeds() -> None:
     assert evaluate(walker, starts=7, repeats=2, seed=3).episodes == result.episodes  # deterministic
     with pytest.raises(SMCError, match="splits .*'train', 'test'.* got 'all'"):
         evaluate(walker, split="all", starts=2)
+
+
+def test_the_doorkey_example_tasks_start_where_they_say() -> None:
+    from sb3_smc.examples.minigrid_doorkey import door_open, register, task_id
+
+    ids = register(5)
+    assert ids == [task_id(5, t) for t in ("get-key", "open-door", "reach-goal", "doorkey")]
+    starts = {}
+    for env_id in ids:
+        task = gym.make(env_id, max_steps=30)
+        task.reset(seed=4)
+        base = task.unwrapped
+        starts[env_id] = (has_key(base), door_open(base))
+        assert task_layer(task).max_steps == 30 and layout_of(task_layer(task)) == Layout(151, (
+            "left", "right", "forward", "pickup", "drop", "toggle", "done"))
+    assert list(starts.values()) == [(False, False), (True, False), (True, True), (False, False)]

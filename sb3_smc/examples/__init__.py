@@ -1,0 +1,1 @@
+"""Examples of SMCs on environments other than PixelWorld."""
