@@ -17,8 +17,6 @@ TRPO, RecurrentPPO and RecurrentTRPO alike.
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 import torch
 from stable_baselines3.common.buffers import RolloutBuffer
@@ -57,12 +55,14 @@ class SemiMDPDiscount(BaseCallback):
     def __init__(self) -> None:
         super().__init__()
         self._steps: np.ndarray | None = None
+        self._buffer: RolloutBuffer | None = None
 
     def _on_training_start(self) -> None:
         buffer = getattr(self.model, "rollout_buffer", None)
-        if not isinstance(buffer, RolloutBuffer):
+        if not isinstance(buffer, RolloutBuffer):  # an on-policy algorithm has one
             raise TypeError(f"semi-MDP discounting needs an on-policy algorithm's RolloutBuffer, got "
                             f"{type(buffer).__name__}")
+        self._buffer = buffer
         self._steps = np.ones((buffer.buffer_size, buffer.n_envs), dtype=np.float64)
         steps = self._steps
 
@@ -76,8 +76,7 @@ class SemiMDPDiscount(BaseCallback):
         buffer.compute_returns_and_advantage = compute_returns_and_advantage  # type: ignore[method-assign]
 
     def _on_step(self) -> bool:
-        assert self._steps is not None
-        buffer: Any = self.model.rollout_buffer
+        assert self._steps is not None and self._buffer is not None
         infos = self.locals["infos"]
-        self._steps[buffer.pos] = [max(1, int(info.get("primitive_steps", 1))) for info in infos]
+        self._steps[self._buffer.pos] = [max(1, int(info.get("primitive_steps", 1))) for info in infos]
         return True

@@ -97,6 +97,6 @@ def register(size: int = 8) -> list[str]:
     for task in TASKS:
         env_id = task_id(size, task)
         if env_id not in gym.registry:
-            gym.register(env_id, entry_point=make_task, kwargs={"size": size, "task": task})
+            gym.register(env_id, entry_point=f"{__name__}:make_task", kwargs={"size": size, "task": task})
         ids.append(env_id)
     return ids
