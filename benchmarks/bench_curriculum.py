@@ -11,7 +11,7 @@ same ``run_job`` the curriculum trainer ships to workers:
 Children are untrained (signal-biased) SMCs, whose calls last ~41 decisions as early in training: trained children
 answer in a few steps, so level-2 rates later in training are higher and the estimate is an upper bound.
 
-Then it counts the jobs of the protocol of spec §5 from the shipped curricula (every level-2 target; the flat
+Then it counts the jobs of the paper's protocol from the shipped curricula (every level-2 target; the flat
 lower-level nodes and the flat baseline of every target (smc-base), smc-curr, smc-canon and both noprim variants;
 5 seeds; 400,000 steps per job) and prints the estimated wall time with 1 and 2 workers (jobs packed perfectly, a
 second worker on the second core).

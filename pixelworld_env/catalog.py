@@ -232,7 +232,7 @@ def generators() -> dict[str, str]:
 
 
 def macros() -> dict[str, str]:
-    """The merged concept + generator macro table (spec §3.2); a name defined as both is an error."""
+    """The merged concept + generator macro table; a name defined as both is an error."""
     return dict(_macro_table())
 
 

@@ -1,4 +1,4 @@
-"""Colour codes, object classes and world dimensions of the AAAI-18 PixelWorld (spec §1)."""
+"""Colour codes, object classes and world dimensions of the AAAI-18 PixelWorld (docs/design.md, "The world")."""
 
 from __future__ import annotations
 
@@ -6,20 +6,21 @@ from enum import IntEnum, StrEnum
 from typing import Literal
 
 HEIGHT = 18
-"""World height in cells, frame included (spec §1.1: the paper's 20 counts an extra frame)."""
+"""World height in cells, frame included (the paper's 20 counts one more ring around the frame)."""
 WIDTH = 35
 """World width in cells, frame included."""
 FLOOR_HEIGHT = 3
 """The floor's top row is ``height - FLOOR_HEIGHT`` (row 15 in an 18-row world)."""
 PADDING = 2
-"""Generated objects keep this distance from the world border (spec §3.8)."""
+"""Generated objects keep this distance from the world border (docs/design.md, "The constraint problem and the
+sampler")."""
 
 Kind = Literal["classification", "bring-about"]
 """The two kinds of task (and of dataset): a label to tell, or a goal to bring about."""
 
 
 class Color(IntEnum):
-    """Colour codes of the state array (spec §1.3)."""
+    """Colour codes of the state array."""
 
     EMPTY = 0
     WHITE = 1
@@ -36,7 +37,7 @@ NUM_COLORS = len(Color)
 
 
 class ObjectClass(StrEnum):
-    """Engine classes of the minimal PixelWorld (spec §1.2)."""
+    """Engine classes of the minimal PixelWorld (docs/design.md, "The world")."""
 
     SELF = "self"
     BASIC = "basic"

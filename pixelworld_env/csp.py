@@ -1,4 +1,5 @@
-"""The generator CSP of spec §3.8 written for python-constraint (``python-constraint2``).
+"""The generator CSP (docs/design.md, "The constraint problem and the sampler") written for python-constraint
+(``python-constraint2``).
 
 :mod:`pixelworld_env.sampling` samples generators with its own randomized backtracking search because
 python-constraint's solvers are 100-10,000x slower on the positional constraints (measurements in that

@@ -29,7 +29,7 @@ class DatasetSpec:
     used to expand both the concept and the generators. ``num_samples`` is the quota per label for
     classification (50 + 50) and the total for bring-about (50). The world is ``height`` x ``width``
     cells with the frame, the floor's top row is ``height - floor_height``, and generated objects keep
-    ``padding`` cells from the border (spec §1.1).
+    ``padding`` cells from the border (docs/design.md, "The constraint problem and the sampler").
     """
 
     name: str

@@ -1,4 +1,7 @@
-"""``PixelWorldEnv``: classification and bring-about tasks over a set of scenes (spec §1.4-§2.2)."""
+"""``PixelWorldEnv``: classification and bring-about tasks over a set of scenes.
+
+The rules: docs/design.md, "Observations and actions", "Episodes and the reset" and "Rewards".
+"""
 
 from __future__ import annotations
 
@@ -34,7 +37,7 @@ BRING_ABOUT_ACTIONS = ("SIG1", "DOWN", "RIGHT", "UP", "LEFT")
 
 CLASSIFICATION_REWARD = 1.0
 GOAL_POTENTIAL = 0.5
-"""Shaping potential while the goal holds (spec §2.2)."""
+"""Shaping potential while the goal holds (docs/design.md, "Rewards")."""
 GOAL_REWARD = 1.0
 """Base reward of SIG1 while the goal holds; SIG1 outside the goal earns 0 (``reward_mistake`` of AAAI-18)."""
 
@@ -62,7 +65,8 @@ def check_settings(*, max_steps: Any = 100, observation: Any = "hand", render_mo
 
 
 class PixelWorldEnv(gym.Env):
-    """A PixelWorld task: explore a scene with a 3 x 3 window, then signal (spec §1.5, §2).
+    """A PixelWorld task: explore a scene with a 3 x 3 window, then signal (docs/design.md, "Observations and
+    actions", "Rewards").
 
     * ``kind="classification"``: actions SIG0, SIG1, DOWN, RIGHT, UP, LEFT. The signal that matches the
       scene's label earns +1, the other -1; either ends the episode.

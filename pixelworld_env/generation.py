@@ -1,4 +1,5 @@
-"""Dataset generation: generators sampled as constraint problems, filtered by a concept (spec §3.7, §3.8).
+"""Dataset generation: generators sampled as constraint problems, filtered by a concept (docs/design.md,
+"Dataset generation").
 
 A generator is a concept expression whose variables (plus ``self``) each become one object. Its objects
 are sampled from a constraint problem: per term a shape family, a ``shape_idx`` (0..49, template =
@@ -127,7 +128,7 @@ def _stream_seed(seed: int, generator: str) -> int:
 
 def generate(spec: DatasetSpec, seed: int = 0, *, max_draws: int | None = None,
              progress: Callable[[int, int, int], None] | None = None) -> GeneratedDataset:
-    """Generate dataset ``spec`` with ``seed`` (spec §3.7).
+    """Generate dataset ``spec`` with ``seed`` (docs/design.md, "Generation algorithm").
 
     Each draw picks a generator uniformly with ``random.Random(seed)`` and takes its next sample (each
     generator has its own seeded stream); a scene identical to an earlier one (same objects, including

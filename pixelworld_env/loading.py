@@ -48,8 +48,8 @@ def load_dataset(name: str, split: Split = "all", seed: int = 0) -> Dataset:
     """The scenes and labels of dataset ``name`` (``split`` "all", "train" or "test").
 
     Generated with ``seed`` (an integer in ``[0, 2**63 - 1]``; nothing else is converted) on first use and cached
-    on disk (``$PIXELWORLD_CACHE`` or the user cache directory). The train/test split is the stratified 50/50 split
-    of spec §3.7 (fixed split seed 521).
+    on disk (``$PIXELWORLD_CACHE`` or the user cache directory). The train/test split is stratified by label, 50/50,
+    with the fixed split seed 521 (docs/design.md, "Sizes and the split").
     """
     if split not in SPLITS:
         raise PixelWorldError(f"split must be one of {SPLITS}, got {split!r}")

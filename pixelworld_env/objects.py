@@ -1,4 +1,5 @@
-"""World objects: an engine class, a colour, a position and a rigid template of cells (spec §1.2)."""
+"""World objects: an engine class, a colour, a position and a rigid template of cells (docs/design.md, "The
+world")."""
 
 from __future__ import annotations
 
@@ -20,7 +21,7 @@ class WorldObject:
     ``position`` is the ``(row, col)`` of the top-left corner of the object's template, ``cells`` the
     ``(drow, dcol)`` offsets of its pixels and ``size`` the ``(height, width)`` of the template array. The
     template may contain empty rows or columns (clipped containers), so ``size`` is stored, not derived:
-    every bounding-box relation of the concept language uses it (spec §3.4).
+    every bounding-box relation of the concept language uses it.
     """
 
     cls: ObjectClass
@@ -81,8 +82,8 @@ def cell_extent(cells: tuple[Cell, ...]) -> Cell:
 
 
 def object_class(family: str, *, is_self: bool = False, pushable: bool = False) -> ObjectClass:
-    """The engine class of an object (spec §1.2): ``self``, else ``basic``/``complex`` when pushable, else
-    ``immoveable``/``immoveable_big`` (one-pixel ``pixel`` family vs any other family)."""
+    """The engine class of an object (docs/design.md, "The world"): ``self``, else ``basic``/``complex`` when
+    pushable, else ``immoveable``/``immoveable_big`` (one-pixel ``pixel`` family vs any other family)."""
     if is_self:
         return ObjectClass.SELF
     if pushable:

@@ -59,7 +59,7 @@ def library_object(family: str, shape_idx: int, color: int, position: tuple[int,
                    is_target: bool = False, pushable: bool = False) -> WorldObject:
     """A generated object: library template ``shape_idx mod family size`` at ``position`` (row, col).
 
-    The class follows spec §1.2: ``self`` for the self, ``basic``/``complex`` for pushable objects,
+    The class: ``self`` for the self, ``basic``/``complex`` for pushable objects,
     else ``immoveable`` (pixels) or ``immoveable_big``.
     """
     check_family(family)

@@ -1,4 +1,4 @@
-"""Inside regions of container-like shape templates (spec §3.4, §3.5).
+"""Inside regions of container-like shape templates (docs/design.md, "Inside regions").
 
 The annotation of a template is computed by the "water" rule on the template array alone:
 
@@ -103,8 +103,9 @@ def _blank_beyond_water(labels: np.ndarray, solid: np.ndarray, water: np.ndarray
 def _plug_open_bottom(t: np.ndarray) -> np.ndarray:
     """Close the bottom row and both side walls (from their top pixel, at least from row H-2).
 
-    Equivalent to §3.5's steps: an empty side column gets a pixel at row H-2, so the plugged bottom
-    row always spans the whole width.
+    Equivalent to the original annotator's plugging, which closes the bottom row only between the outermost
+    occupied columns: an empty side column gets a pixel at row H-2 first, so the plugged bottom row always spans
+    the whole width.
     """
     h, w = t.shape
     plugged = t.copy()

@@ -1,4 +1,5 @@
-"""Rendering of PixelWorld states as RGB images (spec §1.9), and the window of ``render_mode="human"``."""
+"""Rendering of PixelWorld states as RGB images, and the window of ``render_mode="human"`` (docs/design.md,
+"Rendering")."""
 
 from __future__ import annotations
 

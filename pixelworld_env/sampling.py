@@ -1,10 +1,11 @@
 """The search that samples one generator's objects: a seeded randomized depth-first search over the constraint
-problem of spec §3.8 (:class:`GeneratorSampler`; :func:`pixelworld_env.generation.generate` draws from it).
+problem of docs/design.md, "The constraint problem and the sampler" (:class:`GeneratorSampler`;
+:func:`pixelworld_env.generation.generate` draws from it).
 
 Search method
 -------------
 The sampler is a **custom seeded randomized depth-first backtracking search** over exactly the domains
-and constraints of spec §3.8 (the AAAI-18 sampler was itself a randomized DFS with restarts). It was
+and constraints of that problem (the AAAI-18 sampler was itself a randomized DFS with restarts). It was
 chosen over ``python-constraint2`` after prototyping both on this machine (2 slow cores, Python 3.11).
 The ``python-constraint2`` 2.9 prototype used separate integer ``x``/``y`` variables, ``shape``,
 ``shape_idx`` and ``color`` variables, ``FunctionConstraint`` s calling the real predicates (and a
@@ -80,7 +81,7 @@ __all__ = ["COLORS", "FRAME_EXEMPT", "MAX_REJECTIONS", "MAX_SEARCH_STEPS", "NUM_
            "GenerationError", "GeneratorSampler"]
 
 COLORS: tuple[int, ...] = (1, 2, 3, 4, 5, 8)
-"""Colour domain of generated objects (spec §3.8)."""
+"""Colour domain of generated objects."""
 NUM_SHAPE_IDX = 50
 """``shape_idx`` domain is 0..49 (the largest family size); template = ``shape_idx mod family size``."""
 FRAME_EXEMPT = frozenset({"floor_shape", "wall"})

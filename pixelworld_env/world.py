@@ -1,4 +1,7 @@
-"""The mutable world: object positions, the state array, movement and transitive pushing (spec §1.6)."""
+"""The mutable world: object positions, the state array, movement and transitive pushing.
+
+The rules: docs/design.md, "Movement and pushing" and "Episodes and the reset".
+"""
 
 from __future__ import annotations
 
@@ -73,8 +76,8 @@ class World:
     def reset(self, stale_cell: Cell | None = None) -> None:
         """Restore the scene's initial state.
 
-        ``stale_cell`` reproduces the AAAI-18 reset bug (spec §1.8): a red pixel owned by the self is left in
-        that cell (if it is empty) until the first successful move redraws the world.
+        ``stale_cell`` reproduces the AAAI-18 reset bug (docs/design.md, "Episodes and the reset"): a red pixel
+        owned by the self is left in that cell (if it is empty) until the first successful move redraws the world.
         """
         self.positions[:] = self._initial
         if not self.self_only:  # the array the compiled pushing reads (a self-only move needs only the list)

@@ -1,4 +1,5 @@
-"""The initial action distribution of spec §5.2 ("init" policies) and its installation in a model's action layer."""
+"""The initial action distribution ("init" policies, the signal bias) and its installation in a model's action
+layer (docs/design.md, "Initial action distribution (signal bias)")."""
 
 from __future__ import annotations
 
@@ -13,7 +14,7 @@ from sb3_smc.smc import CALL_PREFIX, MOVES
 __all__ = ["NONSIGNAL_WEIGHT", "SIGNAL_WEIGHT", "SMC_WEIGHT", "apply_signal_bias", "initial_action_probabilities"]
 
 SIGNAL_WEIGHT, NONSIGNAL_WEIGHT, SMC_WEIGHT = 1.0, 20.0, 20.0
-"""Weights of the bias rule of spec §5.2 (their sum with both groups present is 41)."""
+"""Weights of the signal-bias rule (their sum with both groups present is 41)."""
 
 
 def _group(name: str, primitives: Sequence[str]) -> str:
@@ -30,7 +31,7 @@ def _group(name: str, primitives: Sequence[str]) -> str:
 def initial_action_probabilities(action_names: Sequence[str], *, signal_weight: float = SIGNAL_WEIGHT,
                                  nonsignal_weight: float = NONSIGNAL_WEIGHT, smc_weight: float = SMC_WEIGHT,
                                  primitives: Sequence[str] = MOVES) -> np.ndarray:
-    """The initial action distribution of spec §5.2 ("init" policies).
+    """The initial action distribution of the paper's "init" policies (the signal bias).
 
     Signals share ``signal_weight`` equally, moves (the environment's ``primitives``: PixelWorld's by default) share
     ``nonsignal_weight`` and SMC actions ``smc_weight``;

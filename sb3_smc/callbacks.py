@@ -4,8 +4,9 @@
 default) and
 
 * computes the **mean training return** of the episodes that ended during the rollout and keeps a copy of the
-  policy that collected the rollout whenever that mean beats every earlier one (spec §5.4: the paper reports
-  the iteration with the maximum training ``AverageReturn``; ties go to the earliest update), see
+  policy that collected the rollout whenever that mean beats every earlier one (the paper reports the iteration
+  with the maximum training ``AverageReturn``; ties go to the earliest update; docs/design.md, "Selection and
+  test"), see
   :class:`BestSnapshot`;
 * records the task's own curves next to SB3's (``rollout/``, ``train/``) in the logger, so they reach
   TensorBoard when the model has a ``tensorboard_log``:
@@ -50,7 +51,7 @@ __all__ = ["BestSnapshot", "RolloutStats", "SMCTrainingCallback"]
 
 @dataclass
 class BestSnapshot:
-    """The selection rule of spec §5.4: keep the snapshot of the update with the highest mean training return.
+    """The paper's selection rule: keep the snapshot of the update with the highest mean training return.
 
     Call :meth:`update` once per update with that update's mean return; ``snapshot`` (a callable) is only
     evaluated when the return is a new maximum. Ties keep the earliest update; ``NaN`` returns (no episode ended

@@ -1,4 +1,4 @@
-"""The paper's test protocol (spec §5.4) as a function: :func:`evaluate`.
+"""The paper's test protocol (docs/design.md, "Selection and test") as a function: :func:`evaluate`.
 
 Every environment of the split (each scene, in order) is run ``repeats`` times (10 in the paper) with the SMC's
 **stochastic** policy; an episode succeeds when its final step's reward is > 0 (classification: the right signal;
@@ -240,7 +240,7 @@ def start_seed(split: str, index: int) -> int:
 def evaluate(smc: SMC, env_id: str | None = None, *, split: str = "test", repeats: int = 10, seed: int = 0,
              max_steps: int | None = None, record_cells: bool = True, env_kwargs: Mapping[str, Any] | None = None,
              keep: bool = True, starts: int | None = None) -> EvaluationResult:
-    """The paper's test (spec §5.4): every environment of ``split`` run ``repeats`` times, stochastic policy.
+    """The paper's test: every environment of ``split`` run ``repeats`` times, stochastic policy.
 
     On a task without datasets (an :class:`~sb3_smc.tasks.SMCTask` on any Gymnasium environment) the environments
     are ``starts`` start states (default 100): the task reset with :func:`start_seed` (``split`` ``"test"``: seeds

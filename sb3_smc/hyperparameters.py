@@ -2,7 +2,7 @@
 as plain JSON.
 
 :data:`ALGORITHM_REGISTRY` is the single source of what sb3-smc knows of each algorithm (like rl_zoo3's ``ALGOS``,
-but torch-free: classes are imported on first use): its SB3 class, the paper's settings (spec §5.2-§5.3), the
+but torch-free: classes are imported on first use): its SB3 class, the paper's settings (docs/design.md), the
 recurrent cells it takes, its rl_zoo3 name. ``train_smc`` builds the class and merges a user's overrides into the
 defaults (:func:`resolve_hyperparameters`), a :class:`~sb3_smc.records.TrainingSpec` stores the merged result, a
 library loads its models with the class, curricula and the ``sb3-smc`` command take its names, and the rl_zoo3
@@ -138,7 +138,7 @@ ALGORITHM_REGISTRY: dict[str, Algorithm] = {algo.name: algo for algo in (
 (memoryless; minibatches of 250, 10 epochs, learning rate 3e-4, the settings of the earlier hand-written rl_zoo3
 file) is offered for comparison, untuned. RecurrentTRPO (:mod:`sb3_smc.recurrent_trpo`, the paper's learner with
 ``rnn="gru"``) has TRPO's trust region (KL 0.01) and critic learning rate on RecurrentPPO's recurrent policy;
-``baseline="linear_feature"`` gives spec §5.3's linear feature baseline instead of the critic."""
+``baseline="linear_feature"`` gives the paper's linear feature baseline instead of the critic."""
 
 ALGORITHMS = tuple(ALGORITHM_REGISTRY)
 """Algorithms :func:`~sb3_smc.training.train_smc` trains."""

@@ -316,7 +316,8 @@ def _registered_datasets(env_id: str) -> tuple[str, ...]:
 
 @dataclass(frozen=True, eq=False)
 class WrapperSettings(_Record):
-    """How :class:`~sb3_smc.wrapper.HierarchicalSMCWrapper` presents the task (spec §5.5)."""
+    """How :class:`~sb3_smc.wrapper.HierarchicalSMCWrapper` presents the task (docs/design.md, "Hierarchy: SMC
+    calls")."""
 
     include_primitives: bool = True
     """The four moves are actions (False: the paper's "noprim" ablation)."""
@@ -380,7 +381,7 @@ class Budget(_Record):
 
 @dataclass(frozen=True, eq=False)
 class SignalBias(_Record):
-    """The initial action distribution of spec §5.2 (:func:`sb3_smc.bias.initial_action_probabilities`)."""
+    """The initial action distribution, the signal bias (:func:`sb3_smc.bias.initial_action_probabilities`)."""
 
     enabled: bool = True
     signal_weight: float = 1.0
@@ -510,7 +511,7 @@ class TrainingSpec(_Record):
 
 @dataclass(frozen=True, eq=False)
 class TrainingRecord(_Record):
-    """What a training run produced (spec §5.4's selection included).
+    """What a training run produced (the selection of docs/design.md, "Selection and test", included).
 
     ``training_returns[k]`` is the mean undiscounted return of the episodes that ended in rollout ``k`` (NaN when
     none did; ``null`` in JSON), ``success_rates[k]`` the fraction of them with a final reward > 0. The selected
@@ -573,7 +574,7 @@ class TrainingRecord(_Record):
 
 @dataclass(frozen=True, eq=False)
 class EvaluationRecord(_Record):
-    """One run of the paper's test (spec §5.4) of SMC ``smc`` on ``env_id``'s ``split``.
+    """One run of the paper's test of SMC ``smc`` on ``env_id``'s ``split`` (docs/design.md, "Selection and test").
 
     ``environment_scores[i]``: the success fraction over the repeats of environment ``i``; ``score``: the mean over
     environments x repeats. ``repeats`` and ``seed`` are ``None`` only for a score converted from a version-1

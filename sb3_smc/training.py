@@ -1,12 +1,13 @@
-"""Train one SMC on a ``PW-*`` environment with sb3-contrib RecurrentPPO (default) or TRPO (spec §5).
+"""Train one SMC on a ``PW-*`` environment with sb3-contrib RecurrentPPO (default) or TRPO (docs/design.md, "The
+learner").
 
 :func:`train_smc` takes a :class:`~sb3_smc.records.TrainingSpec` (or builds one from its keyword arguments), builds
 ``n_envs`` copies of the SMC's environment (:func:`make_vec_env`: every SMC sees the same observation layout, the
 one-hot window, the outcome vector of its children and its previous action; a flat SMC on a ``PW-*`` id steps them
 in PixelWorld's native vector env, the same transitions), trains a paper-sized policy with the signal-bias
-initialisation of spec §5.2 (:mod:`sb3_smc.bias`), keeps the snapshot of the update with the highest mean training
-return (spec §5.4, ties -> earliest) and returns it as an :class:`~sb3_smc.smc.SMC` whose policy is a numpy copy of
-the selected actor, with its ``spec`` and :class:`~sb3_smc.records.TrainingRecord`.
+initialisation (:mod:`sb3_smc.bias`), keeps the snapshot of the update with the highest mean training return (ties
+-> earliest; docs/design.md, "Selection and test") and returns it as an :class:`~sb3_smc.smc.SMC` whose policy is a
+numpy copy of the selected actor, with its ``spec`` and :class:`~sb3_smc.records.TrainingRecord`.
 
 Defaults (:data:`sb3_smc.hyperparameters.ALGORITHM_REGISTRY`, measured, see ``docs/training.md``): 16
 environments x 125 steps = 2,000 steps per update, 200 updates (``DEFAULT_TIMESTEPS``), gamma 0.99, GAE lambda 1,
@@ -207,7 +208,7 @@ def train_smc(
       ``n_steps`` defaults to ``2000 // n_envs``.
     * ``include_primitives=False`` drops the moves (the "noprim" ablation); ``count_primitive_steps`` /
       ``call_step_cap`` / ``max_steps`` go to the wrapper; ``env_kwargs`` to ``gym.make``.
-    * ``signal_bias``: the initial action distribution of spec §5.2 (on by default; without it episodes end after
+    * ``signal_bias``: the paper's initial action distribution (on by default; without it episodes end after
       a few random signals and little is learned).
     * ``frame_stack``: stack the last k observations (meant for TRPO's memoryless MLP).
     * ``discount="semi-mdp"`` discounts a decision by ``gamma ** k`` for its k primitive steps (an SMC call of 40

@@ -1,4 +1,5 @@
-"""``HierarchicalSMCWrapper``: SMCs as extra actions of a PixelWorld environment (spec §5.5, §7 item 8)."""
+"""``HierarchicalSMCWrapper``: SMCs as extra actions of a PixelWorld environment (docs/design.md, "Hierarchy: SMC
+calls")."""
 
 from __future__ import annotations
 
@@ -65,8 +66,8 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
 
     Choosing an SMC runs its frozen policy on the same world, from a fresh recurrent state and stochastically
     (seeded by ``reset(seed=...)``), until it emits one of its signals or ``call_step_cap`` primitive moves have
-    been made under it, the moves of the calls it makes included (spec §7 item 8: "until it chooses a signal or
-    100 primitive steps pass"); each call also takes at most ``call_step_cap`` decisions of its own. Its signal
+    been made under it, the moves of the calls it makes included (docs/design.md, "Hierarchy: SMC calls"); each
+    call also takes at most ``call_step_cap`` decisions of its own. Its signal
     never ends the episode: it becomes the SMC's **outcome** (+1 SIG1, -1 SIG0, 0 timed out). An SMC that has
     children calls them the same way, each with its own outcome vector, at any depth; a nested call shares the
     move budget of the top-level call it runs in, so a call of any depth makes at most ``call_step_cap`` moves.

@@ -14,7 +14,7 @@ from pixelworld_env.concepts import Concept, ConceptError, expand, parse
 from tests.helpers import REFERENCE, require_reference
 
 ROOT = Path(__file__).resolve().parents[1]
-#: The three generators of bfaw-search.generators that name the undefined `potential-container` (spec §7 item 22).
+#: The three generators of bfaw-search.generators that name the undefined `potential-container`.
 BROKEN_GENERATORS = {
     "bfaw-self-and-two-potential-containers-in-nontarget",
     "bfaw-self-and-two-potential-containers-in-left-nontarget",
@@ -192,7 +192,7 @@ def test_canonical_smc_lists(ref) -> None:
 
 def test_curriculum_entry_lookup() -> None:
     entry = catalog.curriculum_entry("con2-canon-class-noprim/cl_self-touches-container_vs_corner_canon")
-    assert entry.dataset == "cl_self-touches-container_vs_noncontainer"  # spec §7 item 11: kept as written
+    assert entry.dataset == "cl_self-touches-container_vs_noncontainer"  # the original file's typo, kept as written
     assert entry.smc_list == "canonical_containment_curriculum" and len(entry.lower_level) == 13
     assert catalog.curriculum_entry("cl_self-touches-container_vs_corner_canon") == entry
     assert str(entry.lower_level[0]) == "con1-class/cl_self-in-left-corner_vs_on-hline"

@@ -1,4 +1,4 @@
-"""The test protocol of spec §5.4 (``sb3_smc.evaluation.evaluate``) with scripted SMCs on a real PixelWorld env."""
+"""The paper's test protocol (``sb3_smc.evaluation.evaluate``) with scripted SMCs on a real PixelWorld env."""
 
 from __future__ import annotations
 

@@ -262,7 +262,7 @@ def test_cli_experiment_and_report_succeed(tmp_path):
 
 
 def test_the_report_has_the_noprim_table_and_the_cnn_tests_per_category(tmp_path):
-    """Synthetic results: the §6.3 table (means with and without primitives beside the paper's) and one paired
+    """Synthetic results: the noprim table (means with and without primitives beside the paper's) and one paired
     t-test of the best SMC method against the CNN per classification category, with scipy's numbers."""
     from scipy import stats
 

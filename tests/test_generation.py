@@ -1,4 +1,5 @@
-"""Dataset generation (spec §3.7, §3.8): validity, quotas, determinism, split, errors, fidelity to AAAI-18."""
+"""Dataset generation (docs/design.md, "Dataset generation"): validity, quotas, determinism, split, errors,
+fidelity to AAAI-18."""
 
 from __future__ import annotations
 
@@ -101,7 +102,7 @@ def test_representative_datasets_are_valid(name: str) -> None:
 def test_search_dataset_uses_targets() -> None:
     ds = generated("ba_self-touches-target_from_left-on-floor")
     assert ds.spec.allow_targets
-    # x is the target; the floor's flag is free (spec §3.8: every non-self term may be a target).
+    # x is the target; the floor's flag is free (every non-self term may be a target).
     objects = [[o for o in scene.objects if o.family not in (None, "floor_shape", "pixel")] for scene in ds.scenes]
     assert all(len(objs) == 1 and objs[0].is_target for objs in objects)
     floors = [o.is_target for scene in ds.scenes for o in scene.objects if o.family == "floor_shape"]

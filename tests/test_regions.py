@@ -1,4 +1,4 @@
-"""Tests of the inside-region annotations (spec §3.5) against the AAAI-18 shape library."""
+"""Tests of the inside-region annotations (docs/design.md, "Inside regions") against the AAAI-18 shape library."""
 
 from __future__ import annotations
 

@@ -44,7 +44,7 @@ def make_training_env(env_id: str, children=()):
     return make_smc_env(TrainingSpec.create(env_id, children=[c.name for c in children]), children)
 
 
-# ------------------------------------------------------------------------------------------------ bias rule (§5.2)
+# ---------------------------------------------------------------------------------------------- signal bias
 
 def test_bias_classification_flat() -> None:
     p = initial_action_probabilities(smc_action_names("classification"))
@@ -98,7 +98,7 @@ def test_untrained_smc_follows_the_bias(algo: str) -> None:
     np.testing.assert_allclose(probabilities, np.full(6, 1 / 6), rtol=0.1)
 
 
-# ------------------------------------------------------------------------------------------------ selection (§5.4)
+# ------------------------------------------------------------------------------------------------ selection
 
 def test_best_snapshot_ties_go_to_the_earliest() -> None:
     best = BestSnapshot()

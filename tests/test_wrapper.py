@@ -127,8 +127,9 @@ def test_time_accounting_modes_and_the_per_call_cap() -> None:
 
 
 def test_the_move_cap_is_shared_by_nested_calls() -> None:
-    """Spec §7 item 8: a call runs until a signal or ``call_step_cap`` primitive steps, its nested calls' included
-    (not ``call_step_cap`` moves per nested call: that would let a level-k call make ``cap ** k`` moves)."""
+    """A call runs until a signal or ``call_step_cap`` primitive steps, its nested calls' included (not
+    ``call_step_cap`` moves per nested call: that would let a level-k call make ``cap ** k`` moves; docs/design.md,
+    "Hierarchy: SMC calls")."""
     wander = scripted("wander", "bring-about", ["RIGHT", "LEFT"])  # never signals
     checker = scripted("checker", "classification", ["RIGHT", "SMC:wander"], children=(wander,))
     env = HierarchicalSMCWrapper(base_env(), [checker, wander], call_step_cap=5)

@@ -80,7 +80,7 @@ def _category(source: str) -> str:
 
 
 def _split_sizes(kind: str, num_samples: int, test_fraction: float) -> tuple[int, int]:
-    """(train, test): classification has num_samples per label, bring-about num_samples in all (spec §3.7).
+    """(train, test): classification has num_samples per label, bring-about num_samples in all.
 
     The test part is ``ceil(test_fraction * n)`` as in sklearn's ``train_test_split``.
     """
@@ -303,7 +303,7 @@ def _pushable_section(catalog: dict[str, Any]) -> list[str]:
     if missing:
         raise BuildError(f"the pushable curriculum and the pushable datasets disagree on {missing}")
     out = ["## The pushable curriculum (designed by sb3-smc)", "",
-           "The paper's 11-concept, 6-level pushable curriculum (Fig. 3, Fig. 5c) was never released (spec §5.7). "
+           "The paper's 11-concept, 6-level pushable curriculum (Fig. 3, Fig. 5c) was never released. "
            "sb3-smc's design: a white pixel P lies on the floor; it may be pushable (engine class `basic`) or "
            "immoveable, and both look the same. An immoveable reference object R (a white small blob on the "
            "floor) lies to its right; the top level adds a floating distractor. With a 3 x 3 view that moves "
@@ -354,7 +354,8 @@ def render_docs(catalog: dict[str, Any]) -> str:
         f"* **Sizes**: `num_samples` = {split['num_samples']}: classification datasets have "
         f"{split['num_samples']} positive + {split['num_samples']} negative environments, bring-about datasets "
         f"{split['num_samples']} (all with the goal initially false); each is split "
-        f"{1 - split['test_fraction']:.0%} / {split['test_fraction']:.0%} stratified by label (spec §3.7, §7 item 3).",
+        f"{1 - split['test_fraction']:.0%} / {split['test_fraction']:.0%} stratified by label "
+        "([design choices](design.md#sizes-and-the-split)).",
         "* **Python**: `pixelworld_env.catalog` -- `dataset_names()`, `dataset(name)` (a `DatasetInfo`), "
         "`concepts()`, `generators()`, `macros()`, `concept_pools()`, `curricula()` (experiment groups with "
         "their entries), `curriculum_files()`, `curriculum_entry(\"<group>/<entry>\")`, "
@@ -421,8 +422,7 @@ def render_docs(catalog: dict[str, Any]) -> str:
             for section, table in catalog["unresolved_macros"].items() for key, names in table.items()]
     out += _table(["kind", "name", "undefined"], rows) if rows else ["None."]
     out += ["", "## Other quirks of the original files", "",
-            "Curriculum entries whose name does not start with their target dataset's name (kept as written; "
-            "spec §7 items 11 and 22):", ""]
+            "Curriculum entries whose name does not start with their target dataset's name (kept as written):", ""]
     rows = [[f"`{stem}`", f"`{e['name']}`", f"`{e['dataset']}`"] for stem, info in catalog["curricula"].items()
             for e in info["entries"] if not e["name"].startswith(e["dataset"])]
     out += _table(["curriculum", "entry", "target dataset"], rows) if rows else ["None."]

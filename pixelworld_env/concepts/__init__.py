@@ -1,4 +1,4 @@
-"""The concept language: parser, macros, predicates and semantics (spec §3)."""
+"""The concept language: parser, macros, predicates and semantics (docs/design.md, "The concept language")."""
 
 from pixelworld_env.concepts.errors import (
     ArityError,

@@ -1,4 +1,4 @@
-"""Compiled concepts and their semantics (spec §3.3)."""
+"""Compiled concepts and their semantics (docs/design.md, "Semantics")."""
 
 from __future__ import annotations
 
@@ -31,7 +31,7 @@ class Concept:
     ``Concept(text, macros).holds(scene)`` is true if the variables (``self`` included) can be bound to
     pairwise distinct non-frame objects so that every positive clause holds and no negated group has all
     its clauses holding under the same binding. ``dir_above_quirk`` reproduces the AAAI-18 ``dir_above``
-    transposition (spec §3.4); it only matters for generators.
+    transposition (docs/design.md, "Vocabulary"); it only matters for generators.
     """
 
     def __init__(self, text: str | Expression, macros: Macros | None = None, *,

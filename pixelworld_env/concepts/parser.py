@@ -1,4 +1,4 @@
-"""Parser of the concept language (spec §3.1) and macro expansion (spec §3.2).
+"""Parser of the concept language and macro expansion (docs/design.md, "Syntax" and "Macros").
 
 Grammar (whitespace and line breaks are ignored)::
 
@@ -181,7 +181,7 @@ def _parse_cached(text: str) -> Expression:
 def expand(
     expression: Expression, macros: Mapping[str, str | Expression], _chain: tuple[str, ...] = ()
 ) -> Expression:
-    """Replace every macro call by the macro's clauses (spec §3.2), recursively."""
+    """Replace every macro call by the macro's clauses, recursively."""
     positives: list[Clause] = []
     negations: list[tuple[Clause, ...]] = []
     for clause in expression.positives:

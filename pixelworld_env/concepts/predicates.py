@@ -1,4 +1,4 @@
-"""The predicate vocabulary of the concept language (spec §3.4).
+"""The predicate vocabulary of the concept language (docs/design.md, "Vocabulary").
 
 Every predicate is a function of world objects (and an :class:`EvalContext`). Geometry uses each object's
 template bounding box (``position`` + ``size``, which may include empty rows or columns) and its pixels.
@@ -157,7 +157,7 @@ def _columns(o: WorldObject) -> dict[int, tuple[int, int]]:
 
 
 def _columns_aaai18(o: WorldObject) -> dict[int, tuple[int, int]]:
-    """The original's columns: template cell (i, j) counted as column i + x, row j + y (spec §3.4)."""
+    """The original's columns: template cell (i, j) counted as column i + x, row j + y (the ``dir_above`` quirk)."""
     top, left = o.position
     return _lines([(i + left, j + top) for i, j in o.cells])
 

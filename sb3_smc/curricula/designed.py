@@ -1,7 +1,7 @@
 """Curricula designed by sb3-smc (not in the AAAI-18 release): the pushable curriculum of the paper's Fig. 3 / 5c.
 
 The paper names an 11-concept, 6-level *pushable* curriculum leading to ``cl_pushable-floor-pixel_vs_unpushable``
-but never released it (spec §5.7). Its datasets are defined in
+but never released it. Its datasets are defined in
 ``pixelworld_env/data/definitions/pushable.datasets`` (category ``pushable`` of the catalog); the hierarchy is
 :data:`PUSHABLE`. A node's level is one more than the highest level it uses (level 1: flat;
 ``Curriculum.levels()``). Torch-free.

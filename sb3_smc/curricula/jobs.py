@@ -1,7 +1,7 @@
 """The jobs of a curriculum run: one node with one seed, named ``<node>@<seed>``.
 
 A job's :class:`~sb3_smc.records.TrainingSpec` calls, for every node its node uses, the ``k`` best seeds of that
-node (``reuse="two_best"``: k = 2; :func:`rank_seeds`, spec §5.5) as distinct SMC actions. A :class:`Job` carries
+node (``reuse="two_best"``: k = 2; :func:`rank_seeds`) as distinct SMC actions. A :class:`Job` carries
 the picklable spec and the path of the run's library, where the worker loads the children by name (never torch
 objects); :func:`run_job` trains it and returns the model as bytes, the same in this process, a local worker process
 or a Ray task. :func:`check_curriculum` checks every node's spec before a run trains anything.
@@ -86,7 +86,7 @@ def run_job(job: Job) -> JobResult:
 
 def rank_seeds(records: dict[int, TrainingRecord]) -> list[int]:
     """Seeds best first: by selected training return (a seed that never selected an update last), ties to the
-    lower seed (spec §5.5)."""
+    lower seed (docs/design.md, "Curricula: reuse of the best seeds")."""
     def key(seed: int) -> tuple[int, float, int]:
         value = records[seed].selected_return
         return (1, 0.0, seed) if value is None else (0, -value, seed)

@@ -1,4 +1,5 @@
-"""The paper's experiments (spec §5.4, §5.8, §6): one command from curricula to results and a report.
+"""The paper's experiments: one command from curricula to results and a report (docs/design.md, "Selection and
+test").
 
 * :mod:`sb3_smc.experiments.design` — methods, the level-2 targets by category, the nodes of each method;
 * :mod:`sb3_smc.experiments.cnn` — the passive CNN baseline;

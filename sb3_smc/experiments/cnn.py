@@ -1,6 +1,6 @@
-"""The paper's passive CNN baseline (spec §5.8): a classifier that sees the whole initial grid and never acts.
+"""The paper's passive CNN baseline: a classifier that sees the whole initial grid and never acts.
 
-Every choice the paper leaves open follows the spec's recommendation:
+sb3-smc's choices where the paper leaves them open (docs/design.md, "The CNN baseline"):
 
 * input: the initial 18 x 35 state array as one-hot channels of the colour codes 0, 1, 2, 3 and 7 (empty, white,
   red self, blue floor, purple frame: the codes of the classification datasets);

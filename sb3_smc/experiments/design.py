@@ -1,4 +1,4 @@
-"""The paper's experiment design (spec §5.4, §6): methods, level-2 targets by category, and the curriculum nodes
+"""The paper's experiment design: methods, level-2 targets by category, and the curriculum nodes
 that train each target with each method. Torch-free.
 
 Methods (:data:`METHOD_REGISTRY`): ``cnn`` (the passive CNN baseline, classification targets only), ``base`` (a

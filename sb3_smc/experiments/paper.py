@@ -1,4 +1,4 @@
-"""The paper's reported numbers (spec §6: Hay et al., AAAI-18, Fig. 5 and text), for the report to put beside ours.
+"""The paper's reported numbers (Hay et al., AAAI-18, Fig. 5 and text), for the report to put beside ours.
 
 Percentages of test accuracy (classification) or success rate (bring-about): best seed, the update with the best
 training return; means over the level-2 concepts of each kind.
@@ -9,19 +9,20 @@ from __future__ import annotations
 __all__ = ["PAPER_CONCEPTS", "PAPER_COUNTS", "PAPER_MEANS", "PAPER_NOPRIM", "PAPER_TTESTS"]
 
 PAPER_COUNTS: dict[str, int] = {"classification": 34, "bring-about": 17}
-"""How many level-2 concepts the paper's means and t-tests are over (§6.1, §6.2)."""
+"""How many level-2 concepts the paper's means and t-tests are over."""
 
 PAPER_MEANS: dict[str, dict[str, float]] = {
     "classification": {"cnn": 79.9, "base": 74.5, "curr": 84.9, "canon": 80.2},
     "bring-about": {"base": 52.7, "curr": 74.5, "canon": 75.0},
 }
-"""Mean score per method over the level-2 concepts (§6.1: 34 classification; §6.2: 17 bring-about)."""
+"""Mean score per method over the level-2 concepts (34 classification, 17 bring-about)."""
 
 PAPER_NOPRIM: dict[str, dict[str, float]] = {
     "classification": {"curr": 84.9, "curr-noprim": 82.7, "canon": 80.3, "canon-noprim": 81.1},
     "bring-about": {"curr": 74.5, "curr-noprim": 71.6, "canon": 75.1, "canon-noprim": 75.1},
 }
-"""§6.3, the role of hierarchy (the with-primitives numbers as printed in that paragraph)."""
+"""The role of hierarchy, with and without primitive moves (the with-primitives numbers as printed in that
+paragraph of the paper)."""
 
 PAPER_TTESTS: dict[str, dict[str, tuple[int, float, float]]] = {
     "classification": {"curr vs base": (34, 4.9, 0.00002), "canon vs base": (34, 2.3, 0.025)},

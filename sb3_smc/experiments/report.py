@@ -1,11 +1,11 @@
 """``write_report``: ``report.md`` and ``figures/*.png`` from the ``results.json`` of one experiment directory, or of
 several at once (the paper's whole table, run as one directory per category).
 
-The report puts the paper's numbers (spec §6, :mod:`sb3_smc.experiments.paper`) beside ours: per concept (best seed,
+The report puts the paper's numbers (:mod:`sb3_smc.experiments.paper`) beside ours: per concept (best seed,
 and mean ± s.d. over seeds) where the paper gives them, per kind and category (mean ± standard error across
 concepts) for every method that ran, the paired t-tests across concepts (also read at the paper's degrees of
 freedom), how often a hierarchical SMC beats the flat one, a claims table of every quantitative claim of the paper,
-the noprim table of §6.3 when those methods ran, and the settings, machine, wall time and command of every
+the noprim table when those methods ran, and the settings, machine, wall time and command of every
 directory. Figures (matplotlib, headless): Fig. 5a/5d category means and Fig. 5b/5e every concept in panels by kind
 and category. The numbers: :mod:`sb3_smc.experiments.statistics`.
 """
@@ -185,7 +185,7 @@ def _write(sources: Sequence[tuple[Path, dict[str, Any]]], out: Path, trajectori
              + (f"{seeds} seed(s); {timesteps:,} steps per SMC; test: {repeats} repeats per test environment"
                 if seeds is not None else "seeds, budgets and repeats per directory below")
              + ", stochastic policy, the update with the best training return. Scores in %; the paper's numbers "
-               "(Hay et al., AAAI-18, spec §6) beside ours where it gives them.", ""]
+               "(Hay et al., AAAI-18) beside ours where it gives them.", ""]
     for directory, results in sources:
         if results.get("complete") is False:
             missing = results.get("missing", [])
@@ -330,7 +330,7 @@ def _ttest_section(table: _Table) -> list[str]:
 def _noprim_section(table: _Table) -> list[str]:
     if not any(m in table.methods for m in ("curr-noprim", "canon-noprim")):
         return []
-    lines = ["", "## The role of hierarchy: without primitive moves (spec §6.3)", "",
+    lines = ["", "## The role of hierarchy: without primitive moves", "",
              "| kind | method | with primitives | without | paper with | paper without |",
              "|---|---|---:|---:|---:|---:|"]
     for kind in KINDS:  # over the paper's concepts (the pushable curriculum has no noprim variant)

@@ -167,7 +167,7 @@ def _order_claim(text: str, paper_gap: float, ours_gap: float | None, tolerance:
 
 def claims(score: Score, kind_of: Mapping[str, str], category_of: Mapping[str, str], *,
            tolerance: float = 5.0) -> list[Claim]:
-    """Every quantitative claim of the paper's results (its §6: means per kind, t-tests, wins, the headline
+    """Every quantitative claim of the paper's results (means per kind, t-tests, wins, the headline
     concepts, the CNN by category, the noprim ablation) with ours. A mean is reproduced within ``tolerance``
     points; a comparison when its direction is the paper's and it is significant at :data:`ALPHA`. The claims
     over all concepts of a kind are judged only when ``score`` holds all of them (the paper's 34 / 17); a report of

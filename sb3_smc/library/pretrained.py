@@ -38,7 +38,8 @@ __all__ = ["PRETRAINED_SEEDS", "build_pretrained", "compact_model", "load_pretra
            "pretrained_names"]
 
 PRETRAINED_SEEDS = 2
-"""Seeds shipped per node: the two best, as the paper's SMC filter gives a caller (spec §5.5)."""
+"""Seeds shipped per node: the two best, as the paper's SMC filter gives a caller (docs/design.md, "Curricula:
+reuse of the best seeds")."""
 _OPTIMIZER = "policy.optimizer.pth"
 
 

@@ -1,6 +1,6 @@
 """Recurrent TRPO: sb3-contrib's TRPO update on recurrent (LSTM or GRU) policies, over whole-episode sequences.
 
-The paper trained GRU-32 policies with rllab's NPO/TRPO (spec §5.2-5.3). sb3-contrib's ``TRPO`` is feed-forward
+The paper trained GRU-32 policies with rllab's NPO (docs/design.md). sb3-contrib's ``TRPO`` is feed-forward
 and its ``RecurrentPPO`` has no trust region. :class:`RecurrentTRPO` collects rollouts like ``RecurrentPPO``
 (recurrent states, episode starts, ``predict`` with state) and updates like ``TRPO``: the surrogate objective and
 the mean KL between the old and the new policy are computed over the whole batch with the recurrent policy run
@@ -9,7 +9,7 @@ natural-gradient direction comes from conjugate gradient on Fisher-vector produc
 KL's Hessian: a central difference of the logits and one backward pass, :meth:`RecurrentTRPO.fisher_vector_product`);
 a backtracking line search accepts the largest step with KL below ``target_kl`` (0.01, the paper's step size) that
 improves the surrogate, and reverts otherwise. The critic is fitted afterwards, or replaced by the linear feature
-baseline of spec §5.3 (``baseline="linear_feature"``, rllab's ``LinearFeatureBaseline``).
+baseline of the paper (``baseline="linear_feature"``, rllab's ``LinearFeatureBaseline``).
 """
 
 from __future__ import annotations

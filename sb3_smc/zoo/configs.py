@@ -66,13 +66,13 @@ def render_config(zoo_algo: str) -> str:
         f"#       -conf sb3_smc.zoo.{zoo_algo}   (the same settings as this file; or -conf zoo_configs/{zoo_algo}.yml)",
         "#",
         *textwrap.wrap(algorithm.zoo_note, 114, initial_indent="# ", subsequent_indent="# "),
-        f"# The paper's batch (spec §5.3): {DEFAULT_N_ENVS} envs x {STEPS_PER_UPDATE // DEFAULT_N_ENVS} steps = "
+        f"# The paper's batch: {DEFAULT_N_ENVS} envs x {STEPS_PER_UPDATE // DEFAULT_N_ENVS} steps = "
         f"{STEPS_PER_UPDATE:,} steps per update, {DEFAULT_TIMESTEPS // 1000}k steps.",
         f"# {ENV_WRAPPER} puts the env in sb3_smc's HierarchicalSMCWrapper (without SMCs unless `library` and `names`",
         "# are given), so the policy sees what an SMC sees and the trained model goes into an SMCLibrary;",
         f"# {CALLBACK} writes the smc/ and smc_calls/ TensorBoard curves.",
-        "# Not reproduced by rl_zoo3: the initial action distribution of spec §5.2 and the best-update selection of",
-        "# spec §5.4 (sb3_smc.train_smc does both). rl_zoo3 looks up the exact env id first, then `default`.",
+        "# Not reproduced by rl_zoo3: the initial action distribution (signal bias) and the best-update selection",
+        "# (sb3_smc.train_smc does both; docs/design.md). rl_zoo3 looks up the exact env id first, then `default`.",
         "default:",
         f"  env_wrapper: {ENV_WRAPPER}",
         f"  callback: {CALLBACK}",
