@@ -14,10 +14,10 @@ Definition files (:func:`load_definitions`) may hold the sections
   resolved through ``kwargs.bindings`` (``local: +@global``) or directly against the named lists;
 
 and include other files with ``__include__: [paths relative to the file]`` (each file is read once). Names are
-the dictionary keys (the ``name:`` fields are ignored, spec §7 item 22). Concepts and generators together form
-the macro table (spec §3.2). A ``+@name`` reference must name a list defined in the curriculum file itself or in
-a file it includes (directly or not). Curriculum entries are grouped by the stem of the file that defines them
-(:attr:`DefinitionSet.curricula`).
+the dictionary keys (the ``name:`` fields are ignored: docs/design.md, choices). Concepts and generators together
+form the macro table (docs/design.md, "Macros"). A ``+@name`` reference must name a list defined in the curriculum
+file itself or in a file it includes (directly or not). Curriculum entries are grouped by the stem of the file that
+defines them (:attr:`DefinitionSet.curricula`).
 
 The experiment files that use these definitions are read by :mod:`pixelworld_env.experiment_files`.
 
