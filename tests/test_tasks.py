@@ -249,3 +249,36 @@ def test_the_doorkey_example_tasks_start_where_they_say() -> None:
         assert task_layer(task).max_steps == 30 and layout_of(task_layer(task)) == Layout(151, (
             "left", "right", "forward", "pickup", "drop", "toggle", "done"))
     assert list(starts.values()) == [(False, False), (True, False), (True, True), (False, False)]
+
+
+def test_foreign_smcs_round_trip_through_a_library(tmp_path) -> None:
+    import json
+
+    from sb3_smc import SMCLibrary
+    from sb3_smc.library.errors import LayoutMismatchError
+
+    env_id = _register_corridor()
+    settings = dict(algo="PPO", total_timesteps=256, n_envs=2, n_steps=128, batch_size=128, max_steps=20,
+                    log_every=0)
+    child = train_smc(env_id, seed=0, name="walk", **settings)
+    parent = train_smc(env_id, seed=1, name="walk-twice", children=[child], **settings)
+    library = SMCLibrary([parent])
+    library.save(tmp_path / "lib")
+    manifest = json.loads((tmp_path / "lib" / "manifest.json").read_text())
+    entry = manifest["smcs"]["walk-twice"]
+    assert entry["layout"] == {"sensor_size": 5, "primitives": ["L", "R", "S"]}
+    assert entry["observation"] == {"size": 5 + 1 + 5, "sensor": 5, "outcomes": 1, "previous_action": 5}
+    loaded = SMCLibrary.load(tmp_path / "lib")
+    assert loaded["walk-twice"].layout == parent.layout and loaded["walk"].layout == child.layout
+    assert loaded["walk-twice"].spec == parent.spec and loaded["walk-twice"].action_names == parent.action_names
+    env = HierarchicalSMCWrapper(gym.make(env_id, max_steps=20), [loaded["walk"]])
+    obs, _ = env.reset(seed=0)
+    probabilities, _ = loaded["walk-twice"].policy.probabilities(obs, loaded["walk-twice"].policy.initial_state())
+    ours, _ = parent.policy.probabilities(obs, parent.policy.initial_state())
+    np.testing.assert_allclose(probabilities, ours)
+    manifest["smcs"]["walk"].pop("layout")  # the child now claims PixelWorld's layout
+    manifest["smcs"]["walk"]["action_names"] = ["SIG1", "DOWN", "RIGHT", "UP", "LEFT"]
+    manifest["smcs"]["walk"]["observation"] = {"size": 86, "window": 81, "outcomes": 0, "previous_action": 5}
+    (tmp_path / "lib" / "manifest.json").write_text(json.dumps(manifest))
+    with pytest.raises(LayoutMismatchError, match=r"SMC 'walk-twice' .* calls \['walk'\], which act on another"):
+        SMCLibrary.load(tmp_path / "lib")

@@ -434,7 +434,7 @@ def _store(scheduler: _Scheduler, result: JobResult) -> None:
     spec = result.spec
     assert spec.task.kind is not None  # a trained SMC's spec names its task's kind
     entry = storage.make_entry(spec.task.kind, result.algo, spec.children, spec.wrapper.include_primitives,
-                               spec.frame_stack, spec, result.record)
+                               spec.frame_stack, spec, result.record, layout=spec.task.smc_layout)
     earlier = scheduler.damaged.pop(spec.name, None)
     storage.add_to_library(scheduler.library, spec.name, entry, result.model, replace=earlier is not None)
 

@@ -179,7 +179,7 @@ class SMCLibrary(Mapping[str, SMC]):
             raise LibraryError(f"SMC {smc.name!r}: cannot store a {algo} model (supported: "
                                f"{', '.join(storage.ALGORITHMS)})")
         storage.check_model_layout(smc.name, smc.model, smc.action_names, smc.observation_size, f"its {algo} model",
-                                   storage.frame_stack_of(smc))
+                                   storage.frame_stack_of(smc), smc.layout)
 
     # ------------------------------------------------------------------------------------------ manifest
 
@@ -251,8 +251,9 @@ class SMCLibrary(Mapping[str, SMC]):
             model = storage.load_model(root, name, entry)
             size = entry["observation"]["size"]
             stack = entry.get("frame_stack", 1)
+            layout = storage.entry_layout(entry)
             storage.check_model_layout(name, model, entry["action_names"], size,
-                                       f"the {entry['algo']} model in {root / entry['model']}", stack)
+                                       f"the {entry['algo']} model in {root / entry['model']}", stack, layout)
             try:
                 policy: StepPolicy = policy_from_model(model)
                 if stack > 1:
@@ -263,7 +264,7 @@ class SMCLibrary(Mapping[str, SMC]):
             children = tuple(library._smcs[c] for c in entry["children"])
             library._smcs[name] = SMC(name, entry["kind"], policy, children, entry["include_primitives"], model=model,
                                       spec=entry["spec"], record=entry["record"],
-                                      evaluations=tuple(entry["evaluations"]))
+                                      evaluations=tuple(entry["evaluations"]), layout=layout)
         return library
 
     @classmethod

@@ -11,6 +11,7 @@ from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from sb3_smc.errors import SMCError
 from sb3_smc.hyperparameters import ALGORITHMS as TRAINED_ALGORITHMS
 from sb3_smc.library.errors import LayoutMismatchError, LibraryError, ManifestError, MissingChildError, suggest
 from sb3_smc.records import (
@@ -25,10 +26,10 @@ from sb3_smc.records import (
     package_versions,
     test_score_of,
 )
-from sb3_smc.smc import HAND_SIZE, SIGNALS, observation_size, smc_action_names
+from sb3_smc.smc import PIXELWORLD_LAYOUT, SIGNALS, Layout, observation_size, smc_action_names
 
 __all__ = ["ALGORITHMS", "FORMAT", "FORMAT_VERSION", "MANIFEST", "SUMMARY_FIELDS", "check_manifest", "check_version",
-           "make_entry", "new_manifest", "observation_layout", "topological_order", "upgrade_v1"]
+           "entry_layout", "make_entry", "new_manifest", "observation_layout", "topological_order", "upgrade_v1"]
 
 FORMAT = "sb3-smc-library"
 """Value of the manifest's ``format`` field."""
@@ -44,28 +45,41 @@ _V1_ALGORITHMS = ("RecurrentPPO", "TRPO")
 """The algorithms of sb3-smc 0.1, whose version-1 entries carry a training spec to convert."""
 
 
-def observation_layout(n_children: int, n_actions: int) -> dict[str, int]:
-    """The manifest's ``observation``: total ``size``, then the parts in order (window, outcomes, previous action)."""
-    return {"size": observation_size(n_children, n_actions), "window": HAND_SIZE, "outcomes": n_children,
-            "previous_action": n_actions}
+def observation_layout(n_children: int, n_actions: int, layout: Layout = PIXELWORLD_LAYOUT) -> dict[str, int]:
+    """The manifest's ``observation``: total ``size``, then the parts in order (PixelWorld's ``window`` or another
+    environment's ``sensor``, outcomes, previous action)."""
+    sensor = "window" if layout == PIXELWORLD_LAYOUT else "sensor"
+    return {"size": observation_size(n_children, n_actions, layout.sensor_size), sensor: layout.sensor_size,
+            "outcomes": n_children, "previous_action": n_actions}
+
+
+def entry_layout(entry: dict[str, Any]) -> Layout:
+    """The environment layout of a (checked) entry: its ``layout`` field, PixelWorld's when it has none."""
+    layout = entry.get("layout")
+    return PIXELWORLD_LAYOUT if layout is None else Layout(layout["sensor_size"], tuple(layout["primitives"]))
 
 
 def make_entry(kind: str, algo: str, children: Sequence[str], include_primitives: bool, frame_stack: int,
                spec: TrainingSpec | None, record: TrainingRecord | None,
-               evaluations: Sequence[EvaluationRecord] = (), test_score: float | None = None) -> dict[str, Any]:
+               evaluations: Sequence[EvaluationRecord] = (), test_score: float | None = None,
+               layout: Layout = PIXELWORLD_LAYOUT) -> dict[str, Any]:
     """A manifest entry (without ``model`` and ``sha256``).
 
     ``spec``, ``record`` and ``evaluations`` are the typed records; ``env_id`` ... ``total_timesteps`` repeat the
     most-used of their values for people and tools reading the manifest (they are derived, never read back).
+    ``layout``: the environment's sensor and primitives, written as the entry's ``layout`` unless PixelWorld's.
     """
-    action_names = smc_action_names(kind, children, include_primitives)
+    action_names = smc_action_names(kind, children, include_primitives, layout.primitives)
+    environment = ({} if layout == PIXELWORLD_LAYOUT else
+                   {"layout": {"sensor_size": layout.sensor_size, "primitives": list(layout.primitives)}})
     return {
         "kind": kind,
         "algo": algo,
         "children": list(children),
         "include_primitives": include_primitives,
         "action_names": list(action_names),
-        "observation": observation_layout(len(children), len(action_names)),
+        **environment,
+        "observation": observation_layout(len(children), len(action_names), layout),
         "frame_stack": frame_stack,
         "spec": spec.to_dict() if spec is not None else None,
         "record": record.to_dict() if record is not None else None,
@@ -131,18 +145,23 @@ def check_manifest(manifest: Any, where: Path) -> dict[str, dict[str, Any]]:
                 raise MissingChildError(
                     f"{where}: SMC {name!r} calls child {child!r}, which is not in the library"
                     f"{suggest(child, [n for n in smcs if n != name], ' (it has no other SMC)')}")
-        expected = list(smc_action_names(entry["kind"], entry["children"], entry["include_primitives"]))
+        environment = entry_layout(entry)
+        other = [child for child in entry["children"] if entry_layout(smcs[child]) != environment]
+        if other:
+            raise LayoutMismatchError(f"{where}: SMC {name!r} ({environment}) calls {other}, which act on another "
+                                      "environment layout")
+        expected = list(smc_action_names(entry["kind"], entry["children"], entry["include_primitives"],
+                                         environment.primitives))
         if entry["action_names"] != expected:
             raise LayoutMismatchError(
                 f"{where}: SMC {name!r}: action names {entry['action_names']} do not match its kind "
                 f"{entry['kind']!r}, children {entry['children']} and include_primitives="
                 f"{entry['include_primitives']} (expected {expected})")
-        layout = observation_layout(len(entry["children"]), len(expected))
+        layout = observation_layout(len(entry["children"]), len(expected), environment)
         if entry["observation"] != layout:
             raise LayoutMismatchError(
                 f"{where}: SMC {name!r}: observation {entry['observation']} does not match its children and actions "
-                f"(expected {layout}: {HAND_SIZE} window + {len(entry['children'])} outcomes + {len(expected)} "
-                "previous action)")
+                f"(expected {layout}: {environment.describe(len(entry['children']), len(expected))})")
     return smcs
 
 
@@ -170,6 +189,16 @@ def _check_entry(name: str, entry: Any, where: Path) -> None:
         raise ManifestError(f"{where}: entry {name!r}: model path {model!r} must be relative, inside the library")
     if not all(isinstance(c, str) for c in entry["children"]):
         raise ManifestError(f"{where}: entry {name!r}: children must be names, got {entry['children']!r}")
+    layout = entry.get("layout")
+    if layout is not None:
+        if not isinstance(layout, dict) or set(layout) != {"sensor_size", "primitives"} or not isinstance(
+                layout["primitives"], list):
+            raise ManifestError(f"{where}: entry {name!r}: 'layout' must be {{'sensor_size': int, 'primitives': "
+                                f"[names]}}, got {layout!r}")
+        try:
+            Layout(layout["sensor_size"], tuple(layout["primitives"]))
+        except SMCError as err:
+            raise ManifestError(f"{where}: entry {name!r}: layout: {err}") from None
     for field, value in (("observation.size", entry["observation"].get("size")),
                          ("frame_stack", entry.get("frame_stack", 1))):
         if not isinstance(value, int) or isinstance(value, bool) or value < 1:
@@ -223,7 +252,8 @@ def _check_summary(name: str, entry: dict[str, Any], where: Path) -> None:
     """The summary fields must say what the records say (they are never read back, so a wrong one is an error)."""
     spec, record, evaluations = entry["spec"], entry["record"], entry["evaluations"]
     derived = make_entry(entry["kind"], entry["algo"], entry["children"], entry["include_primitives"],
-                         entry.get("frame_stack", 1), spec, record, evaluations, test_score_of(spec, evaluations))
+                         entry.get("frame_stack", 1), spec, record, evaluations, test_score_of(spec, evaluations),
+                         entry_layout(entry))
     for field in SUMMARY_FIELDS:
         if field in entry and entry[field] != derived[field]:
             raise ManifestError(f"{where}: entry {name!r}: {field!r} is {entry[field]!r}, but its records say "

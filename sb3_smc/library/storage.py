@@ -41,20 +41,21 @@ from sb3_smc.library.manifest import (
     MANIFEST,
     check_manifest,
     check_version,
+    entry_layout,
     make_entry,
     new_manifest,
     topological_order,
     upgrade_v1,
 )
-from sb3_smc.smc import HAND_SIZE, SMC
+from sb3_smc.smc import HAND_SIZE, PIXELWORLD_LAYOUT, SMC, Layout
 
 if TYPE_CHECKING:
     from stable_baselines3.common.on_policy_algorithm import OnPolicyAlgorithm
 
 __all__ = ["ALGORITHMS", "FORMAT", "FORMAT_VERSION", "MANIFEST", "MODELS", "add_to_library", "check_manifest",
-           "check_model_file", "entry_for", "interrupted_hint", "link_copy", "load_model", "make_entry", "model_files",
-           "new_manifest", "read_manifest", "remove_from_library", "sha256", "topological_order", "upgrade_v1",
-           "write_library"]
+           "check_model_file", "entry_for", "entry_layout", "interrupted_hint", "link_copy", "load_model", "make_entry",
+           "model_files", "new_manifest", "read_manifest", "remove_from_library", "sha256", "topological_order",
+           "upgrade_v1", "write_library"]
 
 MODELS = "models"
 SAVING_MARKER = ".saving-"
@@ -119,7 +120,7 @@ def frame_stack_of(smc: SMC) -> int:
 
 
 def check_model_layout(name: str, model: Any, action_names: Sequence[str], size: int, where: str,
-                       frame_stack: int = 1) -> None:
+                       frame_stack: int = 1, layout: Layout = PIXELWORLD_LAYOUT) -> None:
     """:class:`LayoutMismatchError` unless the model's spaces fit the action names and observation size."""
     n, shape = model_layout(model)
     if n != len(action_names):
@@ -132,11 +133,12 @@ def check_model_layout(name: str, model: Any, action_names: Sequence[str], size:
         stacked = f", {frame_stack} stacked" if frame_stack > 1 else ""
         bare = (" — the bare PixelWorld observation: the model was trained without HierarchicalSMCWrapper (e.g. by "
                 "rl_zoo3 without -conf sb3_smc.zoo.<algo>); train it inside sb3_smc.zoo.smc_env so that it sees "
-                "the window, the outcomes and its previous action") if shape in ((HAND_SIZE,), (9,)) else ""
+                "the window, the outcomes and its previous action") if layout == PIXELWORLD_LAYOUT and shape in (
+                    (HAND_SIZE,), (9,)) else ""
+        n_outcomes = size - layout.sensor_size - len(action_names)
         raise LayoutMismatchError(
             f"SMC {name!r}: {where} has {have}, but its observation layout is ({frame_stack * size},) "
-            f"({HAND_SIZE} window + {size - HAND_SIZE - len(action_names)} outcomes + "
-            f"{len(action_names)} previous action{stacked}){bare}")
+            f"({layout.describe(n_outcomes, len(action_names))}{stacked}){bare}")
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -146,7 +148,7 @@ def check_model_layout(name: str, model: Any, action_names: Sequence[str], size:
 def entry_for(smc: SMC) -> dict[str, Any]:
     """The manifest entry of ``smc`` (without the ``model`` file and ``sha256`` fields the save adds)."""
     return make_entry(smc.kind, type(smc.model).__name__, [c.name for c in smc.children], smc.include_primitives,
-                      frame_stack_of(smc), smc.spec, smc.record, smc.evaluations, smc.test_score)
+                      frame_stack_of(smc), smc.spec, smc.record, smc.evaluations, smc.test_score, smc.layout)
 
 
 def write_library(target: Path, smcs: Mapping[str, SMC], manifest: dict[str, Any]) -> None:
