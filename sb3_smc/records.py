@@ -289,17 +289,26 @@ class TaskSpec(_Record):
         _set(self, "env_kwargs", kwargs)
 
     def resolved(self) -> TaskSpec:
-        """This task with ``kind`` and ``datasets`` read from the Gymnasium registry and the catalog, where known."""
-        if self.kind is not None and self.datasets:
+        """This task with ``kind`` and ``datasets`` read from the Gymnasium registry and the catalog, where known;
+        for another environment's SMC task (:class:`~sb3_smc.tasks.SMCTask`) its ``kind`` and ``layout``, read from
+        one instance of it."""
+        if self.kind is not None and (self.datasets or self.layout is not None):
             return self
         datasets = self.datasets or _registered_datasets(self.env_id)
-        kind = self.kind
+        kind, layout = self.kind, self.layout
         if kind is None and datasets:
             from pixelworld_env import catalog
 
             kinds = {catalog.dataset(name).kind for name in datasets}
             kind = kinds.pop() if len(kinds) == 1 else None
-        return dataclasses.replace(self, kind=kind, datasets=datasets)
+        elif not datasets and (kind is None or layout is None):
+            from sb3_smc.tasks import describe_task
+
+            found = describe_task(self.env_id, self.env_kwargs)
+            if found is not None:
+                kind, task_layout = found
+                layout = None if task_layout == PIXELWORLD_LAYOUT else task_layout
+        return dataclasses.replace(self, kind=kind, datasets=datasets, layout=layout)
 
 
 def _registered_datasets(env_id: str) -> tuple[str, ...]:

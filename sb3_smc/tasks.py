@@ -37,7 +37,7 @@ from pixelworld_env.env import BRING_ABOUT, CLASSIFICATION, CLASSIFICATION_REWAR
 from sb3_smc.errors import SMCError, SMCTypeError
 from sb3_smc.smc import SIGNALS, Layout
 
-__all__ = ["SMCTask", "TaskEnv", "layout_of", "task_layer"]
+__all__ = ["SMCTask", "TaskEnv", "describe_task", "layout_of", "task_layer"]
 
 Goal = Callable[[gym.Env], bool]
 Label = Callable[[gym.Env], int]
@@ -290,3 +290,20 @@ def task_layer(env: gym.Env) -> TaskEnv:
             raise SMCTypeError(f"SMCs act on a PixelWorld environment or an SMCTask (sb3_smc.tasks: any Gymnasium "
                                f"environment with a goal or a label); got {type(env.unwrapped).__name__} without one")
         layer = layer.env
+
+
+def describe_task(env_id: str, env_kwargs: dict[str, Any] | None = None) -> tuple[str, Layout] | None:
+    """The kind and layout of the SMC task registered as ``env_id`` (``"module:Id-v0"`` imports the module first, as
+    ``gym.make`` does), read from one instance of it; ``None`` if the id is not registered or is not a task (a bare
+    environment)."""
+    try:
+        env = gym.make(env_id, **(env_kwargs or {}))
+    except gym.error.Error:
+        return None
+    try:
+        task = task_layer(env)
+    except SMCTypeError:
+        return None
+    finally:
+        env.close()
+    return task.kind, layout_of(task)

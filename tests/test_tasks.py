@@ -282,3 +282,31 @@ def test_foreign_smcs_round_trip_through_a_library(tmp_path) -> None:
     (tmp_path / "lib" / "manifest.json").write_text(json.dumps(manifest))
     with pytest.raises(LayoutMismatchError, match=r"SMC 'walk-twice' .* calls \['walk'\], which act on another"):
         SMCLibrary.load(tmp_path / "lib")
+
+
+def test_a_curriculum_of_minigrid_tasks_trains_level_by_level(tmp_path) -> None:
+    from sb3_smc import SMCLibrary
+    from sb3_smc.curricula import load_curriculum, train_curriculum
+    from sb3_smc.curricula.format import CurriculumError
+
+    module = "sb3_smc.examples.minigrid_doorkey"
+    path = tmp_path / "doorkey.yml"
+    path.write_text(f"""curriculum: doorkey-tiny
+defaults: {{timesteps: 1000, algo: PPO, hyperparameters: {{batch_size: 125}}}}
+nodes:
+  - name: get-key
+    task: {module}:DoorKey5-get-key-v0
+  - name: doorkey
+    task: {module}:DoorKey5-doorkey-v0
+    uses: [get-key]
+""")
+    run = train_curriculum(str(path), tmp_path / "run", seeds=1, reuse="one_best", progress=False)
+    assert not run.failed
+    library = SMCLibrary.load(tmp_path / "run" / "library")
+    top = library["doorkey@0"]
+    assert top.children == (library["get-key@0"],) and top.layout.sensor_size == 151
+    assert top.action_names[-1] == "SMC:get-key@0" and top.spec.task.env_id == f"{module}:DoorKey5-doorkey-v0"
+    bad = tmp_path / "bad.yml"
+    bad.write_text("curriculum: bad\nnodes:\n  - name: x\n    task: NoSuchTask-v0\n")
+    with pytest.raises(CurriculumError, match=r"bad.yml:3: node 'x': 'NoSuchTask-v0' is not a registered Gymnasium"):
+        load_curriculum(str(bad))

@@ -1,7 +1,8 @@
 """Curricula as data: a DAG of SMCs to train, read from the project's YAML format (``docs/curricula.md``).
 
 A curriculum names **nodes**; each node is an SMC to train on a PixelWorld task (a catalog dataset or concept pool)
-and may **use** lower-level nodes as actions. Example::
+or on another environment's SMC task (a Gymnasium id, ``module:Name-v0``: :mod:`sb3_smc.tasks`), and may **use**
+lower-level nodes as actions. Example::
 
     curriculum: my-containment
     method: smc-curr                 # optional: smc-base | smc-curr | smc-canon | anything (reports group by it)
@@ -27,6 +28,7 @@ from __future__ import annotations
 import dataclasses
 import difflib
 import os
+import re
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -38,7 +40,7 @@ from sb3_smc.errors import SMCError
 from sb3_smc.hyperparameters import ALGORITHMS
 
 __all__ = ["FORMAT_KEYS", "NODE_KEYS", "SEED_SEPARATOR", "Curriculum", "CurriculumError", "Node", "describe",
-           "load_curriculum", "merge", "parse_curriculum"]
+           "is_env_id", "load_curriculum", "merge", "parse_curriculum"]
 
 FORMAT_KEYS = ("curriculum", "method", "description", "defaults", "nodes", "targets")
 """Top-level keys of a curriculum file."""
@@ -71,7 +73,9 @@ class Node:
 
     @property
     def env_id(self) -> str:
-        return f"PW-{self.task}-v0"
+        """``PW-<task>-v0`` for a PixelWorld dataset or pool; a Gymnasium id (``Name-vN``, ``module:Name-vN``) as
+        it is."""
+        return self.task if is_env_id(self.task) else f"PW-{self.task}-v0"
 
     def settings(self) -> dict[str, Any]:
         """What decides the trained SMCs (two nodes of the same name must agree on it)."""
@@ -313,6 +317,28 @@ def _node(item: Any, line: int, defaults: Mapping[str, Any], source: str) -> Nod
 # Validation (also of curricula built in Python)
 # ---------------------------------------------------------------------------------------------------------------
 
+def is_env_id(task: str) -> bool:
+    """Whether a node's ``task`` is a Gymnasium id (of an :class:`~sb3_smc.tasks.SMCTask` on any environment) rather
+    than a PixelWorld dataset or concept pool, whose names never end in a version."""
+    return re.search(r"-v\d+$", task) is not None
+
+
+def _registered(env_id: str) -> bool:
+    """Whether ``env_id`` is registered (``module:`` imported first, as ``gym.make`` does)."""
+    import importlib
+
+    import gymnasium as gym
+
+    module, _, name = env_id.rpartition(":")
+    try:
+        if module:
+            importlib.import_module(module)
+        gym.spec(name)
+    except (ImportError, gym.error.Error):
+        return False
+    return True
+
+
 def _tasks() -> set[str]:
     from pixelworld_env import catalog
 
@@ -336,7 +362,11 @@ def _validate(curriculum: Curriculum) -> None:
         if SEED_SEPARATOR in node.name:
             raise CurriculumError(f"{at(node)}: node {node.name!r}: names may not contain {SEED_SEPARATOR!r} "
                                   f"(library SMCs are named <node>{SEED_SEPARATOR}<seed>)")
-        if node.task not in tasks:
+        if is_env_id(node.task):
+            if not _registered(node.task):
+                raise CurriculumError(f"{at(node)}: node {node.name!r}: {node.task!r} is not a registered Gymnasium "
+                                      "id (name the module that registers it: 'module:Name-v0')")
+        elif node.task not in tasks:
             raise CurriculumError(f"{at(node)}: node {node.name!r}: unknown dataset or concept pool "
                                   f"{node.task!r}{_suggest(node.task, tasks)}")
         if node.algo is not None and node.algo not in ALGORITHMS:

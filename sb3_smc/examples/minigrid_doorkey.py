@@ -10,8 +10,9 @@ actions as primitives):
 * ``doorkey``: the agent stands on the goal square (from DoorKey's own start states): the target, trained flat or
   with the three others as SMC actions.
 
-Each is registered as a Gymnasium id ``DoorKey<n>-<task>-v0`` (taking ``max_steps``, as ``train_smc`` needs), so
-``train_smc("DoorKey8-get-key-v0")`` trains it and ``evaluate`` tests it on held-out start states. Needs
+Each is registered on import as a Gymnasium id ``DoorKey<n>-<task>-v0`` for n in 5, 6, 8 (taking ``max_steps``,
+as ``train_smc`` needs), so ``train_smc("sb3_smc.examples.minigrid_doorkey:DoorKey8-get-key-v0")`` trains it (a
+curriculum names it so too) and ``evaluate`` tests it on held-out start states. Needs
 ``pip install "sb3-smc[minigrid]"``.
 """
 
@@ -23,7 +24,7 @@ import gymnasium as gym
 
 from sb3_smc.tasks import SMCTask
 
-__all__ = ["OBSERVATION", "TASKS", "at_goal", "door_open", "has_key", "register", "task_id"]
+__all__ = ["OBSERVATION", "SIZES", "TASKS", "at_goal", "door_open", "has_key", "register", "task_id"]
 
 OBSERVATION = ("image", "direction")
 """The keys of Minigrid's observation an SMC senses (``mission`` is text, the same in every episode)."""
@@ -100,3 +101,8 @@ def register(size: int = 8) -> list[str]:
             gym.register(env_id, entry_point=f"{__name__}:make_task", kwargs={"size": size, "task": task})
         ids.append(env_id)
     return ids
+
+
+SIZES = (5, 6, 8)
+for _size in SIZES:  # registered on import, so that "sb3_smc.examples.minigrid_doorkey:DoorKey8-doorkey-v0" works
+    register(_size)
