@@ -229,3 +229,32 @@ def test_import_zoo_refuses_a_run_without_the_smc_wrapper(installed: Installed) 
     assert out.returncode == 2
     assert "did not use sb3-smc's wrapper" in out.stderr and "-conf sb3_smc.zoo.trpo" in out.stderr
     assert not (installed.work / "lib2").exists()
+
+
+def test_a_zoo_run_on_a_minigrid_smc_task_imports_with_its_layout(installed: Installed) -> None:
+    """rl_zoo3 on an SMC task of another environment (--gym-packages registers it), then imported into a library
+    with the task's layout, and a level-2 zoo run calling it."""
+    pytest.importorskip("minigrid")
+    package, child_id, parent_id = ("sb3_smc.examples.minigrid_doorkey", "DoorKey5-get-key-v0",
+                                    "DoorKey5-doorkey-v0")
+    installed.zoo("train", "--algo", "ppo", "--env", child_id, "--gym-packages", package, "-conf", "sb3_smc.zoo.ppo",
+                  "-n", "2000", "--num-threads", "1", "-f", "mg")
+    out = installed.run("import sys; from sb3_smc.cli import main; sys.exit(main(sys.argv[1:]))", "import-zoo",
+                        f"mg/ppo/{child_id}_1", "--library", "mglib", "--name", "get-key")
+    assert "added SMC 'get-key' (bring-about, PPO)" in out.stdout
+    settings = yaml.safe_load((ROOT / "zoo_configs" / "ppo.yml").read_text())["default"]
+    settings["env_wrapper"] = [{"sb3_smc.zoo.smc_env": {"library": str(installed.work / "mglib"),
+                                                        "names": ["get-key"]}}]
+    (installed.work / "mg2.yml").write_text(yaml.safe_dump({parent_id: settings}))
+    run = installed.zoo("train", "--algo", "ppo", "--env", parent_id, "--gym-packages", package, "-conf", "mg2.yml",
+                        "-n", "2000", "--num-threads", "1", "-f", "mgparent")
+    assert "serves its environment's own start states (an SMC task), SMC actions ['get-key']" in run.stderr
+    check = ("import sys\n"
+             "from sb3_smc import SMCLibrary\n"
+             "from sb3_smc.zoo import import_zoo_model\n"
+             "smc = import_zoo_model(sys.argv[1], 'mglib', name='doorkey')\n"
+             "library = SMCLibrary.load('mglib')\n"
+             "print(library['doorkey'].layout.sensor_size, library['doorkey'].action_names[-1],\n"
+             "      library['get-key'].layout == library['doorkey'].layout)\n")
+    out = installed.run(check, f"mgparent/ppo/{parent_id}_1").stdout
+    assert out.split() == ["151", "SMC:get-key", "True"]

@@ -28,26 +28,34 @@ def smc_env(env: Any, library: str | None = None, names: Sequence[str] = (), inc
             count_primitive_steps: bool = False, call_step_cap: int = 100) -> Any:
     """rl_zoo3 ``env_wrapper`` entry: ``env`` with the SMCs ``names`` of the library at ``library`` as actions.
 
-    Without ``library`` the env gets no SMC actions: a flat SMC's layout (window, previous action). The library is
+    ``env`` is a PixelWorld environment or an SMC task on any environment (:class:`~sb3_smc.tasks.SMCTask`, its
+    module given to rl_zoo3 as ``--gym-packages``). Without ``library`` the env gets no SMC actions: a flat SMC's
+    layout (sensor, previous action). The library is
     loaded once per process and path. The first env of each id and split in a process prints one line naming the
     split it serves (``rl_zoo3 enjoy`` evaluates on what it says: pass ``--env-kwargs split:"'test'"`` for the test
     environments).
     """
-    from sb3_smc.envs import pixelworld_base, wrap_with_smcs
+    from pixelworld_env.env import PixelWorldEnv
+    from sb3_smc.envs import task_base, wrap_with_smcs
 
     if names and library is None:
         raise SMCError(f"smc_env: names {list(names)} given without the library they come from")
     smcs = [_library(str(library))[name] for name in names] if library is not None else []
     settings = WrapperSettings(include_primitives=include_primitives, count_primitive_steps=count_primitive_steps,
                                call_step_cap=call_step_cap)
-    base = pixelworld_base(env)
+    base = task_base(env)
     env_id = getattr(getattr(env, "spec", None), "id", None) or type(base).__name__
-    key = (env_id, base.split)
+    split = base.split if isinstance(base, PixelWorldEnv) else None
+    key = (env_id, split)
     if key not in _ANNOUNCED:
         _ANNOUNCED.add(key)
-        split = f"the {base.split!r} split" if base.split is not None else "its own scenes (no split)"
         calls = f", SMC actions {list(names)} from {library}" if names else ""
-        print(f"sb3-smc: {env_id} serves {split}: {len(base.scenes)} environments{calls}", file=sys.stderr)
+        if isinstance(base, PixelWorldEnv):
+            serves = f"the {split!r} split" if split is not None else "its own scenes (no split)"
+            print(f"sb3-smc: {env_id} serves {serves}: {len(base.scenes)} environments{calls}", file=sys.stderr)
+        else:
+            print(f"sb3-smc: {env_id} serves its environment's own start states (an SMC task){calls}",
+                  file=sys.stderr)
     return wrap_with_smcs(env, smcs, settings)
 
 

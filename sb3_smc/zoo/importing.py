@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import importlib
 import os
 from pathlib import Path
 from typing import Any
@@ -102,15 +103,18 @@ def import_zoo_model(run_dir: str | os.PathLike, library: str | os.PathLike, *, 
         raise ZooRunError(f"{path}: no {model_file} model in the zoo run (have: "
                           f"{sorted(p.name for p in run.glob('*.zip'))})")
     model = ALGORITHM_REGISTRY[ZOO_ALGOS[zoo_algo]].load_class().load(path, device="cpu")
+    for package in args.get("gym_packages") or ():  # what registered the run's env id (--gym-packages)
+        importlib.import_module(package)
     task = TaskSpec(str(env_id)).resolved()
     if task.kind is None:
-        raise ZooRunError(f"{run}: {env_id!r} is not a PixelWorld id (an SMC's task is a PW-* environment)")
+        raise ZooRunError(f"{run}: {env_id!r} is not an SMC task (a PW-* environment, or an sb3_smc.tasks.SMCTask "
+                          "registered by one of the run's --gym-packages)")
     children = tuple(SMCLibrary.load(kwargs["library"], names=names)[n] for n in names) if names else ()
     policy = policy_from_model(model)
     stack = int(config.get("frame_stack") or 1)
     include_primitives = bool(kwargs.get("include_primitives", True))
     smc = SMC(name or smc_name_from_env_id(str(env_id)), task.kind, policy, children=children,
-              include_primitives=include_primitives, model=model)
+              include_primitives=include_primitives, model=model, layout=task.smc_layout)
     if stack > 1:
         smc.policy = FrameStackPolicy(policy, stack, smc.observation_size)
     target = Path(library)
