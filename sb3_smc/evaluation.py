@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING, Any, cast
 import numpy as np
 
 from pixelworld_env.validation import check_int, check_seed
-from sb3_smc.envs import is_pixelworld_id, make_smc_env, spec_for_smc
+from sb3_smc.envs import make_smc_env, spec_for_smc
 from sb3_smc.errors import SMCError
 from sb3_smc.policies import sample_action
 from sb3_smc.records import EvaluationRecord
@@ -160,7 +160,8 @@ def run_episode(smc: SMC, env: HierarchicalSMCWrapper, *, index: int | None = No
     On PixelWorld ``index`` picks the scene (``None``: the env's own draw) and the env is reset with ``seed``. On
     another task (:class:`~sb3_smc.tasks.SMCTask`) the task is reset with ``start_seed`` (its start state) and the
     SMC calls' sampling with ``seed``. Actions are sampled from the SMC's policy with
-    ``numpy.random.default_rng((seed, 1))``. Cells are recorded on PixelWorld only.
+    ``numpy.random.default_rng((seed, 1))``. Moves and calls are recorded with ``record_cells``, cells on PixelWorld
+    only.
     """
     label = None
     if env.pixelworld:
@@ -168,8 +169,8 @@ def run_episode(smc: SMC, env: HierarchicalSMCWrapper, *, index: int | None = No
     else:
         observation, reset_info = env.reset(seed=start_seed, options={"call_seed": seed})
         label = reset_info.get("label")
-        record_cells = False
-    cells: list[Cell] = ([cast("PixelWorldEnv", env.base).world.self_position] if record_cells else [])
+    cells: list[Cell] = ([cast("PixelWorldEnv", env.base).world.self_position] if record_cells and env.pixelworld
+                         else [])
     rng = np.random.default_rng((seed, 1))
     policy = smc.policy
     state = policy.initial_state()
@@ -218,7 +219,7 @@ def make_evaluation_env(smc: SMC, env_id: str | None = None, *, split: str = "te
     spec = spec_for_smc(smc, env_id)
     wrapper = spec.wrapper if max_steps is None else dataclasses.replace(spec.wrapper, max_steps=max_steps)
     return make_smc_env(spec, smc.children, env_id=env_id, split=split, wrapper=wrapper, env_kwargs=env_kwargs,
-                        record_cells=is_pixelworld_id(env_id))
+                        record_cells=True)
 
 
 def _env_id(smc: SMC, env_id: str | None) -> str:

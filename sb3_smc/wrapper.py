@@ -82,9 +82,9 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
     * ``info`` on every step adds ``primitive_steps`` (moves executed during the step), ``elapsed_steps``
       and ``smc_calls``: one dict per call made during the step, nested calls included, in the order the
       calls finished: ``{"smc", "depth", "primitive_steps", "outcome", "reward"}``. With ``record_cells=True``
-      it also has ``cells``: the self's cell after each move of the step (moves inside calls included), and
-      ``moves``: for each of those moves, the chain of SMCs that made it (outermost first; empty for a move of
-      the policy itself) and the move's name.
+      it also has ``moves``: for each primitive step of the step (those inside calls included), the chain of SMCs
+      that made it (outermost first; empty for a move of the policy itself) and the action's name; and ``cells``:
+      on PixelWorld the self's cell after each of those moves (empty elsewhere).
 
     Any policy following :class:`sb3_smc.smc.StepPolicy` can stand behind an SMC (scripted ones included).
     """
@@ -108,8 +108,6 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         if self.pixelworld and cast(PixelWorldEnv, base).observation != "hand":
             raise SMCError(f"HierarchicalSMCWrapper builds SMC observations from the one-hot 3 x 3 window: the "
                            f"environment needs observation='hand', got {cast(PixelWorldEnv, base).observation!r}")
-        if record_cells and not self.pixelworld:
-            raise SMCError("record_cells=True records the self's cells of a PixelWorld; this environment has none")
         self.layout = layout_of(base)
         for smc in self.smcs:
             if smc.layout != self.layout:
@@ -291,7 +289,8 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
                 moves += 1
                 budget[0] -= 1
                 if self.record_cells:
-                    self._cells.append(cast(PixelWorldEnv, self.base).world.self_position)
+                    if self.pixelworld:
+                        self._cells.append(cast(PixelWorldEnv, self.base).world.self_position)
                     self._moves.append((tuple(self._stack), smc.action_names[action]))
                 if terminated or truncated:  # the environment ended the episode: the call ends with it
                     self._ended = (terminated, truncated)
@@ -373,7 +372,8 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
             moves = int(kind == _MOVE)
             cost = 1
             if moves and self.record_cells:
-                self._cells.append(cast(PixelWorldEnv, self.base).world.self_position)
+                if self.pixelworld:
+                    self._cells.append(cast(PixelWorldEnv, self.base).world.self_position)
                 self._moves.append(((), self.action_names[action]))
         self._elapsed += cost
         truncated = not terminated and (base_truncated or self._elapsed >= self.base.max_steps)

@@ -164,8 +164,6 @@ def test_children_of_another_layout_are_refused() -> None:
     other = SMC("other", "bring-about", ScriptedPolicy(4, lambda obs, step: 0), layout=Layout(7, ("L", "R", "S")))
     with pytest.raises(SMCError, match="another environment layout"):
         HierarchicalSMCWrapper(bring_about(), [other])
-    with pytest.raises(SMCError, match="record_cells=True records the self's cells of a PixelWorld"):
-        HierarchicalSMCWrapper(bring_about(), [], record_cells=True)
 
 
 def _register_corridor() -> str:

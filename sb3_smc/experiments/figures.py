@@ -138,15 +138,18 @@ def trajectory_figure(smcs: Mapping[str, Any], target: str, path: str | Path, *,
     return save_figure(fig, Path(path))
 
 
-def timeline_figure(smc: SMC, target: str, path: str | Path, *, index: int = 0, seed: int = 0) -> Path:
+def timeline_figure(smc: SMC, target: str, path: str | Path, *, index: int = 0, seed: int = 0,
+                    env_id: str | None = None) -> Path:
     """Fig. 1: one test episode of ``smc`` on environment ``index`` of ``target``: a row per depth (0 = the SMC
-    itself), a bar per primitive move coloured by the acting SMC, each call's outcome written at its end."""
+    itself), a bar per primitive move coloured by the acting SMC, each call's outcome written at its end.
+    ``env_id`` (default ``PW-<target>-v0``) may be another environment's SMC task: its test start state ``index``."""
     import pixelworld_env  # noqa: F401
-    from sb3_smc.evaluation import make_evaluation_env, run_episode
+    from sb3_smc.evaluation import make_evaluation_env, run_episode, start_seed
 
     plt = pyplot()
-    env = make_evaluation_env(smc, f"PW-{target}-v0")  # the SMC's own settings (max_steps included), test split
-    episode = run_episode(smc, env, index=index, seed=seed)
+    env = make_evaluation_env(smc, env_id or f"PW-{target}-v0")  # the SMC's own settings, test split
+    start = None if env.pixelworld else start_seed("test", index)
+    episode = run_episode(smc, env, index=index, seed=seed, start_seed=start)
     names = sorted({name for chain, _ in episode.moves for name in chain})
     colors = {name: plt.cm.tab20(k % 20) for k, name in enumerate(names)}
     depth = max((len(chain) for chain, _ in episode.moves), default=0)
