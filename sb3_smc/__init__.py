@@ -106,6 +106,7 @@ if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs
     from sb3_smc.errors import SMCError
     from sb3_smc.evaluation import EvaluationResult, evaluate
     from sb3_smc.hyperparameters import DEFAULT_HYPERPARAMETERS
+    from sb3_smc.layout import observation_size, smc_action_names
     from sb3_smc.library import (
         CorruptModelError,
         LayoutMismatchError,
@@ -127,6 +128,6 @@ if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs
         WrapperSettings,
     )
     from sb3_smc.recurrent_trpo import RecurrentTRPO
-    from sb3_smc.smc import SMC, StepPolicy, observation_size, smc_action_names
+    from sb3_smc.smc import SMC, StepPolicy
     from sb3_smc.training import train_smc, untrained_smc
     from sb3_smc.wrapper import HierarchicalSMCWrapper

@@ -28,13 +28,16 @@ from typing import Any, ClassVar, TypeVar
 from pixelworld_env.validation import as_integer
 from sb3_smc.errors import SMCError
 from sb3_smc.hyperparameters import (
+    ALGORITHM_REGISTRY,
     ALGORITHMS,
+    DEFAULT_ALGORITHM,
     DEFAULT_N_ENVS,
+    DEFAULT_TIMESTEPS,
     STEPS_PER_UPDATE,
     encode_value,
     resolve_hyperparameters,
 )
-from sb3_smc.smc import PIXELWORLD_LAYOUT, SIGNALS, Layout, observation_size, smc_action_names
+from sb3_smc.layout import PIXELWORLD_LAYOUT, SIGNALS, Layout, observation_size, smc_action_names
 
 __all__ = [
     "Budget",
@@ -362,7 +365,7 @@ class Budget(_Record):
     ``n_steps=None`` means ``max(1, STEPS_PER_UPDATE // n_envs)`` (125 with 16 environments).
     """
 
-    total_timesteps: int = 400_000
+    total_timesteps: int = DEFAULT_TIMESTEPS
     n_envs: int = DEFAULT_N_ENVS
     n_steps: int | None = None
 
@@ -423,7 +426,7 @@ class TrainingSpec(_Record):
 
     name: str
     task: TaskSpec
-    algo: str = "RecurrentPPO"
+    algo: str = DEFAULT_ALGORITHM
     hyperparameters: dict[str, Any] = field(default_factory=dict)
     seed: int = 0
     budget: Budget = field(default_factory=Budget)
@@ -443,8 +446,9 @@ class TrainingSpec(_Record):
         _str(self.algo, "algo", ALGORITHMS)
         _set(self, "seed", _int(self.seed, "seed", 0))
         _set(self, "frame_stack", _int(self.frame_stack, "frame_stack", 1))
-        if self.algo == "RecurrentPPO" and self.frame_stack != 1:
-            raise RecordError("frame_stack is meant for memoryless policies (TRPO); RecurrentPPO has an LSTM")
+        if ALGORITHM_REGISTRY[self.algo].recurrent and self.frame_stack != 1:
+            raise RecordError(f"frame_stack is meant for memoryless policies (TRPO, PPO); {self.algo} has a "
+                              "recurrent cell")
         children = _names(self.children, "children")
         duplicates = sorted({c for c in children if children.count(c) > 1})
         if duplicates:
@@ -467,8 +471,8 @@ class TrainingSpec(_Record):
         _set(self, "hyperparameters", hyperparameters)
 
     @classmethod
-    def create(cls, env_id: str, *, name: str | None = None, algo: str = "RecurrentPPO", seed: int = 0,
-               total_timesteps: int = 400_000, n_envs: int = DEFAULT_N_ENVS, children: Sequence[str] = (),
+    def create(cls, env_id: str, *, name: str | None = None, algo: str = DEFAULT_ALGORITHM, seed: int = 0,
+               total_timesteps: int = DEFAULT_TIMESTEPS, n_envs: int = DEFAULT_N_ENVS, children: Sequence[str] = (),
                include_primitives: bool = True, count_primitive_steps: bool = False, call_step_cap: int = 100,
                max_steps: int = 100, signal_bias: bool | SignalBias = True, frame_stack: int = 1,
                split: str = "train", env_kwargs: Mapping[str, Any] | None = None, rnn: str | None = None,

@@ -1,64 +1,26 @@
 """Sensorimotor contingencies (SMCs): frozen policies with their action names and child SMCs.
 
-An SMC acts on an environment through the action list of :func:`smc_action_names`: the task's signals, then
-(unless ``include_primitives`` is off) the environment's primitive actions, then one action per child SMC. Its
-observation (:func:`observation_size`) is the environment's sensor values, then one outcome entry per child (+1
-SIG1, -1 SIG0, 0 not called yet or timed out), then the one-hot of its previous action (all zeros at the first
-step), as the paper's policy input. On PixelWorld (:data:`PIXELWORLD_LAYOUT`) the sensor is the one-hot 3 x 3 window
-(81 values) and the primitives are the four moves; on another environment they are what its task gives
-(:mod:`sb3_smc.tasks`), recorded as the SMC's :class:`Layout`.
+An SMC acts on an environment through the action list of :func:`~sb3_smc.layout.smc_action_names`: the task's
+signals, then (unless ``include_primitives`` is off) the environment's primitive actions, then one action per child
+SMC. Its observation (:func:`~sb3_smc.layout.observation_size`) is the environment's sensor values, then one outcome
+entry per child (+1 SIG1, -1 SIG0, 0 not called yet or timed out), then the one-hot of its previous action (all
+zeros at the first step), as the paper's policy input. On PixelWorld (:data:`~sb3_smc.layout.PIXELWORLD_LAYOUT`) the
+sensor is the one-hot 3 x 3 window (81 values) and the primitives are the four moves; on another environment they
+are what its task gives (:mod:`sb3_smc.tasks`), recorded as the SMC's :class:`~sb3_smc.layout.Layout`.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 import numpy as np
 
 from sb3_smc.errors import SMCError, SMCTypeError
+from sb3_smc.layout import PIXELWORLD_LAYOUT, SIGNALS, Layout, observation_size, smc_action_names
 
 if TYPE_CHECKING:
     from sb3_smc.records import EvaluationRecord, TrainingRecord, TrainingSpec
-
-SIGNALS = {"classification": ("SIG0", "SIG1"), "bring-about": ("SIG1",)}
-"""The signal actions of each task kind, in environment order."""
-MOVES = ("DOWN", "RIGHT", "UP", "LEFT")
-"""The primitive moves, in environment order."""
-HAND_SIZE = 81
-"""Length of the one-hot 3 x 3 window."""
-CALL_PREFIX = "SMC:"
-"""Action names of child SMCs are ``CALL_PREFIX + child.name``."""
-
-
-@dataclass(frozen=True)
-class Layout:
-    """What an SMC senses and does on its environment: ``sensor_size`` sensor values at the start of its
-    observation, and the names of the environment's ``primitives`` (its actions besides the signals)."""
-
-    sensor_size: int = HAND_SIZE
-    primitives: tuple[str, ...] = MOVES
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "primitives", tuple(self.primitives))
-        if not isinstance(self.sensor_size, int) or self.sensor_size < 1:
-            raise SMCError(f"a layout needs sensor_size >= 1, got {self.sensor_size!r}")
-        clash = [name for name in self.primitives
-                 if name.startswith(CALL_PREFIX) or name in SIGNALS["classification"] or not name]
-        if clash or len(set(self.primitives)) != len(self.primitives):
-            raise SMCError(f"primitive action names must be unique, non-empty, and neither signals nor "
-                           f"'{CALL_PREFIX}...', got {list(self.primitives)}")
-
-    def describe(self, n_children: int, n_actions: int) -> str:
-        """The observation in words: ``"81 window + 2 outcomes + 8 previous action"`` (``sensor`` off PixelWorld)."""
-        sensor = "window" if self == Layout() else "sensor"
-        return (f"{self.sensor_size} {sensor} + {n_children} outcome{'s' * (n_children != 1)} + {n_actions} previous "
-                f"action")
-
-
-PIXELWORLD_LAYOUT = Layout()
-"""PixelWorld's layout: the one-hot 3 x 3 window and the four moves."""
 
 
 @runtime_checkable
@@ -74,21 +36,6 @@ class StepPolicy(Protocol):
     def initial_state(self) -> Any: ...
 
     def probabilities(self, observation: np.ndarray, state: Any) -> tuple[np.ndarray, Any]: ...
-
-
-def smc_action_names(kind: str, children: Sequence[str] = (), include_primitives: bool = True,
-                     primitives: Sequence[str] = MOVES) -> tuple[str, ...]:
-    """The action list of an SMC of task ``kind`` with child SMCs named ``children`` on an environment with these
-    ``primitives`` (PixelWorld's moves by default)."""
-    if kind not in SIGNALS:
-        raise SMCError(f"kind must be one of {tuple(SIGNALS)}, got {kind!r}")
-    moves = tuple(primitives) if include_primitives else ()
-    return (*SIGNALS[kind], *moves, *(CALL_PREFIX + name for name in children))
-
-
-def observation_size(n_children: int, n_actions: int, sensor_size: int = HAND_SIZE) -> int:
-    """Length of an SMC's observation: sensor (PixelWorld's window by default), outcome vector, previous action."""
-    return sensor_size + n_children + n_actions
 
 
 @dataclass

@@ -35,7 +35,7 @@ from gymnasium import spaces
 
 from pixelworld_env.env import BRING_ABOUT, CLASSIFICATION, CLASSIFICATION_REWARD, GOAL_POTENTIAL, GOAL_REWARD
 from sb3_smc.errors import SMCError, SMCTypeError
-from sb3_smc.smc import SIGNALS, Layout
+from sb3_smc.layout import SIGNALS, Layout
 
 __all__ = ["SMCTask", "TaskEnv", "describe_task", "layout_of", "task_layer"]
 

@@ -57,9 +57,10 @@ from sb3_smc.hyperparameters import (
     DEFAULT_TIMESTEPS,
     constructor_arguments,
 )
+from sb3_smc.layout import PIXELWORLD_LAYOUT
 from sb3_smc.policies import FrameStackPolicy, policy_from_model
 from sb3_smc.records import TrainingRecord, TrainingSpec, package_versions
-from sb3_smc.smc import PIXELWORLD_LAYOUT, SMC, StepPolicy
+from sb3_smc.smc import SMC, StepPolicy
 from sb3_smc.vec_env import FlatSMCVecEnv, SMCVecEnv
 from sb3_smc.wrapper import HierarchicalSMCWrapper
 

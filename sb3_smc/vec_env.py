@@ -25,7 +25,7 @@ from stable_baselines3.common.vec_env.base_vec_env import VecEnvObs, VecEnvStepR
 from pixelworld_env.vector import PixelWorldVectorEnv
 from sb3_smc.errors import SMCError
 from sb3_smc.gymnasium_vec_env import GymnasiumVecEnv
-from sb3_smc.smc import HAND_SIZE, MOVES, observation_size, smc_action_names
+from sb3_smc.layout import HAND_SIZE, MOVES, observation_size, smc_action_names
 from sb3_smc.wrapper import HierarchicalSMCWrapper
 
 __all__ = ["FlatSMCVecEnv", "SMCVecEnv", "answer_in_batches"]

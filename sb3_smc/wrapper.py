@@ -15,8 +15,9 @@ from pixelworld_env.env import BRING_ABOUT, GOAL_POTENTIAL, PixelWorldEnv
 from pixelworld_env.validation import check_action
 from pixelworld_env.world import MOVES as MOVE_OFFSETS
 from sb3_smc.errors import SMCError, SMCTypeError
+from sb3_smc.layout import CALL_PREFIX, observation_size, smc_action_names
 from sb3_smc.policies import NumpyGRUPolicy, _kernels, sample_action
-from sb3_smc.smc import CALL_PREFIX, SMC, StepPolicy, observation_size, smc_action_names
+from sb3_smc.smc import SMC, StepPolicy
 from sb3_smc.tasks import layout_of, task_layer
 
 SIGNAL_OUTCOMES = {"SIG1": 1.0, "SIG0": -1.0}

@@ -8,8 +8,9 @@ import pytest
 import pixelworld_env  # noqa: F401  (registers the PW-* ids)
 from pixelworld_env.loading import load_dataset
 from sb3_smc.evaluation import evaluate
+from sb3_smc.layout import smc_action_names
 from sb3_smc.policies import ScriptedPolicy
-from sb3_smc.smc import SMC, smc_action_names
+from sb3_smc.smc import SMC
 from tests.helpers import UniformPolicy
 
 CORNER = "cl_self-in-left-corner_vs_on-hline"

@@ -12,8 +12,8 @@ from gymnasium import spaces
 
 from sb3_smc import SMC, HierarchicalSMCWrapper, train_smc
 from sb3_smc.errors import SMCError, SMCTypeError
+from sb3_smc.layout import Layout
 from sb3_smc.policies import ScriptedPolicy
-from sb3_smc.smc import Layout
 from sb3_smc.tasks import SMCTask, TaskEnv, layout_of, task_layer
 
 LEFT, RIGHT, STAY = 0, 1, 2

@@ -28,9 +28,10 @@ from sb3_smc.common.recurrent import CompactRecurrentRolloutBuffer, SequenceLstm
 from sb3_smc.envs import make_smc_env
 from sb3_smc.evaluation import evaluate
 from sb3_smc.experiments.runner import cpu_model
+from sb3_smc.layout import smc_action_names
 from sb3_smc.policies import FrameStackPolicy, ScriptedPolicy, policy_from_model
 from sb3_smc.records import TrainingSpec, smc_name_from_env_id
-from sb3_smc.smc import SMC, smc_action_names
+from sb3_smc.smc import SMC
 from sb3_smc.training import resolve_children, train_smc, untrained_smc
 
 CORNER_ID = "PW-cl_self-in-left-corner_vs_on-hline-v0"

@@ -13,10 +13,10 @@ from stable_baselines3.common.vec_env import DummyVecEnv
 
 from sb3_smc import SMC
 from sb3_smc.common.recurrent import SequenceLstmPolicy
+from sb3_smc.layout import observation_size, smc_action_names
 from sb3_smc.numpy_actors import NumpyLSTMPolicy
 from sb3_smc.policies import ScriptedPolicy
 from sb3_smc.records import TrainingSpec
-from sb3_smc.smc import observation_size, smc_action_names
 from sb3_smc.training import make_vec_env, train_smc, untrained_smc
 from sb3_smc.vec_env import FlatSMCVecEnv, SMCVecEnv, answer_in_batches
 from sb3_smc.wrapper import HierarchicalSMCWrapper

@@ -10,8 +10,8 @@ import pytest
 
 from pixelworld_env import PixelWorldEnv, Scene
 from sb3_smc import SMC
+from sb3_smc.layout import smc_action_names
 from sb3_smc.policies import ScriptedPolicy, SequencePolicy
-from sb3_smc.smc import smc_action_names
 from sb3_smc.wrapper import HierarchicalSMCWrapper
 from tests.helpers import UniformPolicy
 

@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Any
 
 from sb3_smc.envs import make_smc_env, pixelworld_base, wrap_with_smcs
 from sb3_smc.errors import SMCTypeError
+from sb3_smc.layout import SIGNALS
 from sb3_smc.library import storage
 from sb3_smc.library.errors import (
     CorruptModelError,
@@ -29,7 +30,7 @@ from sb3_smc.library.errors import (
     suggest,
 )
 from sb3_smc.records import WrapperSettings
-from sb3_smc.smc import SIGNALS, SMC, StepPolicy
+from sb3_smc.smc import SMC, StepPolicy
 
 if TYPE_CHECKING:
     import gymnasium as gym

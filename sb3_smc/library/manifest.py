@@ -13,6 +13,7 @@ from typing import Any
 
 from sb3_smc.errors import SMCError
 from sb3_smc.hyperparameters import ALGORITHMS as TRAINED_ALGORITHMS
+from sb3_smc.layout import PIXELWORLD_LAYOUT, SIGNALS, Layout, observation_size, smc_action_names
 from sb3_smc.library.errors import LayoutMismatchError, LibraryError, ManifestError, MissingChildError, suggest
 from sb3_smc.records import (
     Budget,
@@ -26,7 +27,6 @@ from sb3_smc.records import (
     package_versions,
     test_score_of,
 )
-from sb3_smc.smc import PIXELWORLD_LAYOUT, SIGNALS, Layout, observation_size, smc_action_names
 
 __all__ = ["ALGORITHMS", "FORMAT", "FORMAT_VERSION", "MANIFEST", "SUMMARY_FIELDS", "check_manifest", "check_version",
            "entry_layout", "make_entry", "new_manifest", "observation_layout", "topological_order", "upgrade_v1"]

@@ -33,6 +33,7 @@ from pixelworld_env.atomic import (
     replace_directory,
 )
 from sb3_smc.hyperparameters import ALGORITHM_REGISTRY
+from sb3_smc.layout import HAND_SIZE, PIXELWORLD_LAYOUT, Layout
 from sb3_smc.library.errors import CorruptModelError, LayoutMismatchError, LibraryError, ManifestError, suggest
 from sb3_smc.library.manifest import (
     ALGORITHMS,
@@ -47,7 +48,7 @@ from sb3_smc.library.manifest import (
     topological_order,
     upgrade_v1,
 )
-from sb3_smc.smc import HAND_SIZE, PIXELWORLD_LAYOUT, SMC, Layout
+from sb3_smc.smc import SMC
 
 if TYPE_CHECKING:
     from stable_baselines3.common.on_policy_algorithm import OnPolicyAlgorithm
