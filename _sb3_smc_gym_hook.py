@@ -32,7 +32,7 @@ def _register(module) -> None:
     if "pixelworld_env" in sys.modules:  # Gymnasium was imported by pixelworld_env, which registers the ids itself
         return  # at the end of its own import (registering now would import it half-initialised)
     try:
-        from pixelworld_env.registration import register_envs
+        from pixelworld_env.envs.registration import register_envs
 
         register_envs()
     except Exception as error:  # never break the program that imported gymnasium

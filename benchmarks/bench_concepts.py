@@ -14,7 +14,7 @@ import random
 import time
 
 from pixelworld_env.concepts import Concept
-from pixelworld_env.scene import Scene
+from pixelworld_env.core.scene import Scene
 
 CASES = {
     "5 variables, a chain false at its last clause":

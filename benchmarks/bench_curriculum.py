@@ -28,7 +28,7 @@ from pathlib import Path
 
 import torch
 
-from pixelworld_env import catalog
+from pixelworld_env.datasets import catalog
 from sb3_smc.curricula import shipped_curricula
 from sb3_smc.curricula.designed import designed_curricula
 from sb3_smc.curricula.format import Curriculum

@@ -23,8 +23,8 @@ import numpy as np
 
 import pixelworld_env  # noqa: F401  (the PW-* ids)
 from pixelworld_env import PixelWorldEnv, Scene
-from pixelworld_env.definitions import load_definitions
-from pixelworld_env.vector import PixelWorldVectorEnv
+from pixelworld_env.envs.vector import PixelWorldVectorEnv
+from pixelworld_env.generation.definitions import load_definitions
 
 REFERENCE = Path(__file__).resolve().parents[2] / "shared" / "reference"
 DATASETS = {

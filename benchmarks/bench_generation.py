@@ -22,8 +22,8 @@ import tempfile
 import time
 from pathlib import Path
 
-from pixelworld_env.dataset_spec import DatasetSpec
-from pixelworld_env.definitions import load_definitions
+from pixelworld_env.generation.dataset_spec import DatasetSpec
+from pixelworld_env.generation.definitions import load_definitions
 
 REFERENCE = Path(os.environ.get("PIXELWORLD_REFERENCE", Path(__file__).resolve().parents[2] / "shared" / "reference"))
 
@@ -38,16 +38,16 @@ def specs_from_reference(reference: Path = REFERENCE) -> list[DatasetSpec]:
 
 
 def specs_from_catalog() -> list[DatasetSpec]:
-    """One spec per dataset of the project catalog (``pixelworld_env.catalog``), sorted by name."""
-    from pixelworld_env import catalog
-    from pixelworld_env.loading import dataset_spec
+    """One spec per dataset of the project catalog (``pixelworld_env.datasets.catalog``), sorted by name."""
+    from pixelworld_env.datasets import catalog
+    from pixelworld_env.datasets.loading import dataset_spec
 
     return [dataset_spec(name) for name in sorted(catalog.dataset_names())]
 
 
 def run(specs: list[DatasetSpec], seed: int, out=sys.stdout) -> dict[str, float]:
     # Imported here so that PIXELWORLD_CACHE (set by main) is in force; cache_dir() reads it on every call.
-    from pixelworld_env import datasets as cache
+    from pixelworld_env.datasets import cache
 
     times: list[tuple[float, str]] = []
     samples = draws = 0

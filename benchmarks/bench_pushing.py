@@ -22,9 +22,9 @@ DATASETS = ("ba_pixel-touches-reference_from_left-on-floor-pushable", "cl_pushab
 
 _JOB = """
 import sys, timeit
-from pixelworld_env.datasets import load_or_generate
-from pixelworld_env.loading import dataset_spec
-from pixelworld_env.world import MOVES, World
+from pixelworld_env.datasets.cache import load_or_generate
+from pixelworld_env.datasets.loading import dataset_spec
+from pixelworld_env.core.world import MOVES, World
 worlds = [World(scene) for scene in load_or_generate(dataset_spec(sys.argv[1]), 0).scenes[:20]]
 right, left = MOVES["RIGHT"], MOVES["LEFT"]
 def walk():

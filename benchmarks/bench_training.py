@@ -25,7 +25,7 @@ import argparse
 import torch
 
 import pixelworld_env  # noqa: F401  (registers the PW-* ids)
-from pixelworld_env import catalog
+from pixelworld_env.datasets import catalog
 from sb3_smc.training import train_smc, untrained_smc
 
 FLAT = "PW-cl_self-in-left-corner_vs_on-hline-v0"

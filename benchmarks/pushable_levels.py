@@ -21,8 +21,8 @@ from statistics import mean
 
 def first_view_accuracy(name: str) -> float:
     """Test accuracy of the majority-label lookup table of the first 3 x 3 view, fitted on the training split."""
-    from pixelworld_env.loading import load_dataset
-    from pixelworld_env.world import World
+    from pixelworld_env.core.world import World
+    from pixelworld_env.datasets.loading import load_dataset
 
     train, test = load_dataset(name, split="train"), load_dataset(name, split="test")
     votes: dict[bytes, Counter] = defaultdict(Counter)
@@ -42,7 +42,7 @@ def main() -> int:
     args = parser.parse_args()
     import torch
 
-    from pixelworld_env import catalog
+    from pixelworld_env.datasets import catalog
     from sb3_smc.curricula import shipped_curriculum
     from sb3_smc.experiments.cnn import train_cnn
 

@@ -11,13 +11,13 @@ from pixelworld_env.concepts import (
     holds,
     parse,
 )
-from pixelworld_env.constants import HEIGHT, WIDTH, Color, ObjectClass
-from pixelworld_env.env import PixelWorldEnv
+from pixelworld_env.core.constants import HEIGHT, WIDTH, Color, ObjectClass
+from pixelworld_env.core.objects import WorldObject
+from pixelworld_env.core.scene import Scene
+from pixelworld_env.datasets.loading import Dataset, load_dataset
+from pixelworld_env.envs.env import PixelWorldEnv
+from pixelworld_env.envs.registration import make_env, register_envs
 from pixelworld_env.errors import PixelWorldError
-from pixelworld_env.loading import Dataset, load_dataset
-from pixelworld_env.objects import WorldObject
-from pixelworld_env.registration import make_env, register_envs
-from pixelworld_env.scene import Scene
 
 register_envs()
 

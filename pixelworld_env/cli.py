@@ -11,10 +11,10 @@ from typing import TextIO
 
 import numpy as np
 
-from pixelworld_env import catalog
-from pixelworld_env.env import PixelWorldEnv
+from pixelworld_env.datasets import catalog
+from pixelworld_env.envs.env import PixelWorldEnv
+from pixelworld_env.envs.registration import make_env, registered_ids
 from pixelworld_env.errors import PixelWorldError
-from pixelworld_env.registration import make_env, registered_ids
 
 KEYS = {"w": "UP", "a": "LEFT", "s": "DOWN", "d": "RIGHT", "0": "SIG0", "1": "SIG1"}
 
@@ -59,7 +59,7 @@ def _sheet(env: PixelWorldEnv, count: int) -> np.ndarray:
     green, negatives red)."""
     from PIL import Image, ImageDraw
 
-    from pixelworld_env.render import rgb_image
+    from pixelworld_env.core.render import rgb_image
 
     tiles = [rgb_image(s.grid(), cell_size=4) for s in env.scenes[:count]]
     cols = min(4, count)
@@ -109,15 +109,15 @@ def cmd_show(args: argparse.Namespace, out: TextIO) -> None:
 def cmd_generate(args: argparse.Namespace, out: TextIO) -> None:
     from tqdm import tqdm
 
-    from pixelworld_env.datasets import load_or_generate
-    from pixelworld_env.loading import dataset_spec
+    from pixelworld_env.datasets.cache import load_or_generate
+    from pixelworld_env.datasets.loading import dataset_spec
 
     names = catalog.dataset_names() if args.all else [n for name in args.names for n in _resolve(name)[1]]
     if not names:
         raise SystemExit("pixelworld generate: name datasets or ids, or pass --all")
     import warnings
 
-    from pixelworld_env.datasets import CacheWarning, cache_dir
+    from pixelworld_env.datasets.cache import CacheWarning, cache_dir
 
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", CacheWarning)
@@ -135,7 +135,7 @@ def cmd_generate(args: argparse.Namespace, out: TextIO) -> None:
 
 
 def cmd_play(args: argparse.Namespace, out: TextIO, keys: TextIO) -> None:
-    from pixelworld_env.constants import Color
+    from pixelworld_env.core.constants import Color
 
     env = _env(args, "ansi")
     _, info = env.reset(seed=args.episode_seed, options=None if args.index is None else {"index": args.index})

@@ -9,9 +9,9 @@ import argparse
 
 import numpy as np
 
-from pixelworld_env.env import PixelWorldEnv
-from pixelworld_env.oracle import plan_to_goal
-from pixelworld_env.scene import Scene
+from pixelworld_env.core.scene import Scene
+from pixelworld_env.envs.env import PixelWorldEnv
+from pixelworld_env.generation.oracle import plan_to_goal
 
 DEMO_SCENE = """
 ###################################

@@ -20,14 +20,14 @@ from sb3_smc.tasks import TaskEnv, task_layer
 from sb3_smc.wrapper import HierarchicalSMCWrapper
 
 if TYPE_CHECKING:
-    from pixelworld_env.env import PixelWorldEnv
+    from pixelworld_env.envs.env import PixelWorldEnv
 
 __all__ = ["check_env_kwargs", "is_pixelworld_id", "make_smc_env", "pixelworld_base", "spec_for_smc", "task_base",
            "wrap_with_smcs"]
 
 
 def task_base(env: gym.Env) -> TaskEnv:
-    """The task under ``env`` that SMCs act on (a :class:`~pixelworld_env.env.PixelWorldEnv` or an
+    """The task under ``env`` that SMCs act on (a :class:`~pixelworld_env.envs.env.PixelWorldEnv` or an
     :class:`~sb3_smc.tasks.SMCTask`, :func:`~sb3_smc.tasks.task_layer`); ``TypeError`` if there is none, ``ValueError``
     if ``env`` already has SMC actions (a :class:`HierarchicalSMCWrapper` layer)."""
     base = task_layer(env)
@@ -41,8 +41,8 @@ def task_base(env: gym.Env) -> TaskEnv:
 
 
 def pixelworld_base(env: gym.Env) -> PixelWorldEnv:
-    """:func:`task_base`, which must be a :class:`~pixelworld_env.env.PixelWorldEnv` (``TypeError`` otherwise)."""
-    from pixelworld_env.env import PixelWorldEnv
+    """:func:`task_base`, which must be a :class:`~pixelworld_env.envs.env.PixelWorldEnv` (``TypeError`` otherwise)."""
+    from pixelworld_env.envs.env import PixelWorldEnv
 
     base = task_base(env)
     if not isinstance(base, PixelWorldEnv):
@@ -95,7 +95,7 @@ def _mapping(env_kwargs: Any) -> dict[str, Any]:
 
 def is_pixelworld_id(env_id: str) -> bool:
     """Whether ``env_id`` is registered with PixelWorld's entry point (a ``PW-*`` id or one made like them)."""
-    from pixelworld_env.registration import make_env
+    from pixelworld_env.envs.registration import make_env
 
     try:
         entry = gym.spec(env_id).entry_point
@@ -111,7 +111,7 @@ def check_env_kwargs(env_id: str, kwargs: dict[str, Any]) -> dict[str, Any]:
     import difflib
     import inspect
 
-    from pixelworld_env.registration import make_env
+    from pixelworld_env.envs.registration import make_env
 
     clash = sorted({"split", "max_steps"} & set(kwargs))
     if clash:

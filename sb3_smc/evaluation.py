@@ -30,7 +30,7 @@ from sb3_smc.records import EvaluationRecord
 from sb3_smc.smc import SMC
 
 if TYPE_CHECKING:
-    from pixelworld_env.env import PixelWorldEnv
+    from pixelworld_env.envs.env import PixelWorldEnv
     from sb3_smc.wrapper import HierarchicalSMCWrapper
 
 __all__ = ["FOREIGN_TEST_SEED", "EnvironmentResult", "EpisodeResult", "EvaluationResult", "REPEAT_SEED_OFFSET",

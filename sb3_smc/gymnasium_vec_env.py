@@ -5,7 +5,7 @@ step returns the reset observation, and ``infos[i]`` holds the last one as ``"te
 ``"TimeLimit.truncated"`` on every step). This adapter steps the vector env, then resets the environments that ended
 with ``options={"reset_mask": done}`` (Gymnasium's partial reset, which also clears their pending next-step reset),
 and turns the vector ``info`` (arrays with ``_key`` masks) into SB3's list of dicts, with the values of the single
-env's ``info`` (Python scalars). Over :class:`pixelworld_env.vector.PixelWorldVectorEnv` (or ``SyncVectorEnv``) a
+env's ``info`` (Python scalars). Over :class:`pixelworld_env.envs.vector.PixelWorldVectorEnv` (or ``SyncVectorEnv``) a
 model sees what it sees through ``DummyVecEnv`` over ``gym.make`` of the same id with the same seeds (tested on
 PPO's first rollout).
 """

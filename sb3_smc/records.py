@@ -300,7 +300,7 @@ class TaskSpec(_Record):
         datasets = self.datasets or _registered_datasets(self.env_id)
         kind, layout = self.kind, self.layout
         if kind is None and datasets:
-            from pixelworld_env import catalog
+            from pixelworld_env.datasets import catalog
 
             kinds = {catalog.dataset(name).kind for name in datasets}
             kind = kinds.pop() if len(kinds) == 1 else None

@@ -40,7 +40,7 @@ from sb3_contrib import RecurrentPPO
 from stable_baselines3.common.logger import Logger
 from stable_baselines3.common.vec_env import VecEnv
 
-from pixelworld_env.vector import PixelWorldVectorEnv
+from pixelworld_env.envs.vector import PixelWorldVectorEnv
 from sb3_smc.bias import apply_signal_bias
 from sb3_smc.callbacks import SMCTrainingCallback
 from sb3_smc.common.discounting import SemiMDPDiscount

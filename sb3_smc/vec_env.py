@@ -22,7 +22,7 @@ from gymnasium import spaces
 from stable_baselines3.common.vec_env import DummyVecEnv
 from stable_baselines3.common.vec_env.base_vec_env import VecEnvObs, VecEnvStepReturn
 
-from pixelworld_env.vector import PixelWorldVectorEnv
+from pixelworld_env.envs.vector import PixelWorldVectorEnv
 from sb3_smc.errors import SMCError
 from sb3_smc.gymnasium_vec_env import GymnasiumVecEnv
 from sb3_smc.layout import HAND_SIZE, MOVES, observation_size, smc_action_names
@@ -107,7 +107,7 @@ class SMCVecEnv(DummyVecEnv):
 
 class FlatSMCVecEnv(GymnasiumVecEnv):
     """SB3's ``VecEnv`` of a flat SMC (one without children) over PixelWorld's native vector env
-    (:class:`pixelworld_env.vector.PixelWorldVectorEnv`, ``observation="hand"``): all environments stepped in one
+    (:class:`pixelworld_env.envs.vector.PixelWorldVectorEnv`, ``observation="hand"``): all environments stepped in one
     compiled call.
 
     It gives what :class:`SMCVecEnv` over ``HierarchicalSMCWrapper`` environments without children gives, step for

@@ -10,10 +10,10 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from pixelworld_env.constants import NUM_COLORS
-from pixelworld_env.env import BRING_ABOUT, GOAL_POTENTIAL, PixelWorldEnv
+from pixelworld_env.core.constants import NUM_COLORS
+from pixelworld_env.core.world import MOVES as MOVE_OFFSETS
+from pixelworld_env.envs.env import BRING_ABOUT, GOAL_POTENTIAL, PixelWorldEnv
 from pixelworld_env.validation import check_action
-from pixelworld_env.world import MOVES as MOVE_OFFSETS
 from sb3_smc.errors import SMCError, SMCTypeError
 from sb3_smc.layout import CALL_PREFIX, observation_size, smc_action_names
 from sb3_smc.policies import NumpyGRUPolicy, _kernels, sample_action

@@ -11,7 +11,7 @@ import pytest
 
 import pixelworld_env  # noqa: F401  (registers the PW-* ids)
 from pixelworld_env import PixelWorldEnv, Scene
-from pixelworld_env.loading import load_dataset
+from pixelworld_env.datasets.loading import load_dataset
 from pixelworld_env.validation import MAX_SEED, check_action, check_seed
 from sb3_smc.policies import SequencePolicy
 from sb3_smc.smc import SMC

@@ -9,8 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from pixelworld_env import catalog
 from pixelworld_env.concepts import Concept, ConceptError, expand, parse
+from pixelworld_env.datasets import catalog
 from tests.helpers import REFERENCE, require_reference
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -66,7 +66,7 @@ def test_show_refuses_bad_counts_and_names(tmp_path: Path) -> None:
 def test_png_sheets_caption_each_scene_with_its_label(tmp_path: Path) -> None:
     png = tmp_path / "cl.png"
     run("show", "PW-cl_self-in-left-corner_vs_on-hline-v0", "--png", str(png), "--count", "8")
-    from pixelworld_env.registration import make_env
+    from pixelworld_env.envs.registration import make_env
 
     labels = make_env(["cl_self-in-left-corner_vs_on-hline"]).labels[:8]
     pixels = np.asarray(Image.open(png).convert("RGB"))
@@ -86,7 +86,7 @@ def test_generate_fails_when_nothing_can_be_cached(tmp_path: Path, monkeypatch: 
     monkeypatch.setenv("PIXELWORLD_CACHE", str(locked))
     try:
         if os.access(locked, os.W_OK):  # root ignores permissions: make writing fail another way
-            monkeypatch.setattr("pixelworld_env.datasets.atomic_write",
+            monkeypatch.setattr("pixelworld_env.datasets.cache.atomic_write",
                                 lambda *a, **k: (_ for _ in ()).throw(PermissionError(13, "Permission denied")))
         with pytest.raises(SystemExit, match=r"1 dataset\(s\) generated but 1 could not be cached in .*locked"):
             run("generate", "cl_self-in-right-corner_vs_on-hline")

@@ -13,7 +13,7 @@ import pytest
 
 import pixelworld_env  # noqa: F401  (the PW-* ids)
 from pixelworld_env import PixelWorldEnv, Scene
-from pixelworld_env.world import World
+from pixelworld_env.core.world import World
 from sb3_smc import SMC
 from sb3_smc.layout import observation_size, smc_action_names
 from sb3_smc.numpy_actors import NumpyGRUPolicy, NumpyLSTMPolicy

@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import pytest
 
-from pixelworld_env import catalog
-from pixelworld_env.csp import sample_generator, satisfies_generator
-from pixelworld_env.datasets import load_or_generate
-from pixelworld_env.loading import dataset_spec
-from pixelworld_env.scene import Scene
+from pixelworld_env.core.scene import Scene
+from pixelworld_env.datasets import catalog
+from pixelworld_env.datasets.cache import load_or_generate
+from pixelworld_env.datasets.loading import dataset_spec
+from pixelworld_env.generation.csp import sample_generator, satisfies_generator
 from tests.helpers import SAMPLES, read_samples, require_reference
 
 DATASETS = [

@@ -82,7 +82,7 @@ def test_shipped_curricula_match_the_paper():
 
 
 def test_the_pushable_curriculum_has_11_concepts_over_6_levels():
-    from pixelworld_env import catalog
+    from pixelworld_env.datasets import catalog
     from sb3_smc.curricula.designed import PUSHABLE, PUSHABLE_TOP
 
     pushable = shipped_curricula()["pushable"]

@@ -11,9 +11,10 @@ from pathlib import Path
 
 import pytest
 
-import pixelworld_env.datasets as datasets
-from pixelworld_env.datasets import CacheWarning, DatasetCache, cache_dir, cache_key, load_or_generate
-from pixelworld_env.generation import DatasetSpec, GeneratedDataset, generate
+import pixelworld_env.datasets.cache as datasets
+from pixelworld_env.datasets.cache import CacheWarning, DatasetCache, cache_dir, cache_key, load_or_generate
+from pixelworld_env.generation.dataset import GeneratedDataset, generate
+from pixelworld_env.generation.dataset_spec import DatasetSpec
 
 SELF_ON_FLOOR = "?f ?x floor(f) & blue(f) & white(x) & small_blob(x) & on_top(x,f) & on_top(self,f)"
 SPEC = DatasetSpec(

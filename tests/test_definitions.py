@@ -8,8 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from pixelworld_env.definitions import DefinitionError, load_definitions
-from pixelworld_env.experiment_files import load_experiments
+from pixelworld_env.generation.definitions import DefinitionError, load_definitions
+from pixelworld_env.generation.experiment_files import load_experiments
 from tests.helpers import REFERENCE, require_reference
 
 AAAI18 = REFERENCE / "aaai18"

@@ -13,8 +13,8 @@ from gymnasium.utils.env_checker import check_env as gym_check_env
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
 from pixelworld_env import Color, PixelWorldEnv, Scene
-from pixelworld_env.constants import NUM_COLORS
-from pixelworld_env.render import HUMAN_CELL_SIZE, rgb_image
+from pixelworld_env.core.constants import NUM_COLORS
+from pixelworld_env.core.render import HUMAN_CELL_SIZE, rgb_image
 from tests.helpers import CONTAINER, IN_CONTAINER, classification_env, make
 
 DOWN, RIGHT, UP, LEFT = "DOWN", "RIGHT", "UP", "LEFT"
@@ -329,7 +329,7 @@ def test_goal_memo_matches_direct_evaluation() -> None:
 
 
 def test_oracle_plans_with_and_without_pushing() -> None:
-    from pixelworld_env.oracle import plan_to_goal
+    from pixelworld_env.generation.oracle import plan_to_goal
 
     env = make()
     env.reset(seed=0)

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import pixelworld_env  # noqa: F401  (registers the PW-* ids)
-from pixelworld_env.loading import load_dataset
+from pixelworld_env.datasets.loading import load_dataset
 from sb3_smc.evaluation import evaluate
 from sb3_smc.layout import smc_action_names
 from sb3_smc.policies import ScriptedPolicy

@@ -266,7 +266,7 @@ def test_the_report_has_the_noprim_table_and_the_cnn_tests_per_category(tmp_path
     t-test of the best SMC method against the CNN per classification category, with scipy's numbers."""
     from scipy import stats
 
-    from pixelworld_env import catalog
+    from pixelworld_env.datasets import catalog
 
     targets = [t for t in level2_targets("objcon") if catalog.dataset(t).kind == "classification"][:4]
     methods = ["cnn", "base", "curr", "curr-noprim"]
@@ -289,7 +289,7 @@ def test_the_report_has_the_noprim_table_and_the_cnn_tests_per_category(tmp_path
 
 
 def test_the_report_orders_the_pushable_curriculum_by_level(tmp_path):
-    from pixelworld_env import catalog
+    from pixelworld_env.datasets import catalog
     from sb3_smc.experiments.report import pushable_levels
 
     targets = level2_targets("pushable")
@@ -343,7 +343,7 @@ def test_the_demo_plays_trains_evaluates_and_reports(tmp_path):
 
 def _synthetic_table(directory: Path, targets: list[str], methods: list[str], score) -> None:
     """A results.json of two seeds per target x method: seed 0 scores ``score(t, m)``, seed 1 ten points less."""
-    from pixelworld_env import catalog
+    from pixelworld_env.datasets import catalog
 
     rows = []
     for t in targets:
@@ -364,7 +364,7 @@ def _synthetic_table(directory: Path, targets: list[str], methods: list[str], sc
 def test_the_whole_table_report_over_two_directories(tmp_path):
     """One report over the paper's 51 targets run as two directories: category means ± s.e. across concepts, the
     t-tests with the paper's degrees of freedom, the win count, the claims table and the Fig. 5 panels."""
-    from pixelworld_env import catalog
+    from pixelworld_env.datasets import catalog
     from sb3_smc.experiments.statistics import p_at_df
 
     methods = ["cnn", "base", "curr", "canon", "curr-noprim", "canon-noprim"]

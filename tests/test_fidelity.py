@@ -6,7 +6,8 @@ from pathlib import Path
 
 import pytest
 
-from pixelworld_env import Concept, Scene, catalog
+from pixelworld_env import Concept, Scene
+from pixelworld_env.datasets import catalog
 from tests.helpers import REFERENCE, read_samples, require_reference, sample_files
 
 FILES = sample_files()

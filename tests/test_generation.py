@@ -12,21 +12,18 @@ from pathlib import Path
 
 import pytest
 
-from pixelworld_env import Concept, Scene, catalog
+from pixelworld_env import Concept, Scene
 from pixelworld_env.concepts.predicates import PREDICATES, EvalContext
-from pixelworld_env.datasets import load_or_generate
-from pixelworld_env.definitions import DefinitionSet, load_definitions
-from pixelworld_env.generation import (
-    _BOUNDS,
-    DatasetSpec,
-    GeneratedDataset,
-    GenerationError,
-    generate,
-    library_object,
-    split,
-)
-from pixelworld_env.loading import dataset_spec
-from pixelworld_env.shapes import shape_library
+from pixelworld_env.core.shapes import shape_library
+from pixelworld_env.datasets import catalog
+from pixelworld_env.datasets.cache import load_or_generate
+from pixelworld_env.datasets.loading import dataset_spec
+from pixelworld_env.generation.dataset import GeneratedDataset, generate, split
+from pixelworld_env.generation.dataset_spec import DatasetSpec
+from pixelworld_env.generation.definitions import DefinitionSet, load_definitions
+from pixelworld_env.generation.placement import BOUNDS as _BOUNDS
+from pixelworld_env.generation.placement import library_object
+from pixelworld_env.generation.sampling import GenerationError
 from tests.helpers import read_samples, require_reference, sample_files
 
 REPRESENTATIVE = (

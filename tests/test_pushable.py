@@ -12,11 +12,12 @@ import dataclasses
 import numpy as np
 import pytest
 
-from pixelworld_env import Scene, catalog
-from pixelworld_env.constants import MOVEABLE_CLASSES, ObjectClass
-from pixelworld_env.datasets import load_or_generate
-from pixelworld_env.loading import dataset_spec
-from pixelworld_env.world import MOVES, World
+from pixelworld_env import Scene
+from pixelworld_env.core.constants import MOVEABLE_CLASSES, ObjectClass
+from pixelworld_env.core.world import MOVES, World
+from pixelworld_env.datasets import catalog
+from pixelworld_env.datasets.cache import load_or_generate
+from pixelworld_env.datasets.loading import dataset_spec
 from tests.helpers import import_benchmark
 from tests.test_generation import check_dataset
 

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pixelworld_env.regions import (
+from pixelworld_env.core.regions import (
     ANNOTATED_FAMILIES,
     INSIDE_SUPPORTED,
     INTERIOR,

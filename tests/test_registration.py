@@ -14,9 +14,10 @@ from gymnasium.utils.env_checker import check_env
 from gymnasium.wrappers import TimeLimit
 
 import pixelworld_env
-from pixelworld_env import catalog, registration
-from pixelworld_env.oracle import plan_to_goal
-from pixelworld_env.registration import make_env, registered_ids
+from pixelworld_env.datasets import catalog
+from pixelworld_env.envs import registration
+from pixelworld_env.envs.registration import make_env, registered_ids
+from pixelworld_env.generation.oracle import plan_to_goal
 
 IDS = sorted(registered_ids())
 BRING_ABOUT = [i for i in IDS if registered_ids()[i][0].startswith("ba_") and len(registered_ids()[i]) == 1]

@@ -78,7 +78,7 @@ def test_sample_dicts_round_trip_unchanged() -> None:
 
 def test_sample_objects_use_their_library_template_size() -> None:
     require_reference()
-    from pixelworld_env.shapes import shape_library
+    from pixelworld_env.core.shapes import shape_library
 
     for path in sample_files():
         for sample in read_samples(path)[1]:

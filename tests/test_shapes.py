@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pixelworld_env.shapes import FAMILIES, LibraryParams, build_library, shape_library, template
+from pixelworld_env.core.shapes import FAMILIES, LibraryParams, build_library, shape_library, template
 
 LIBRARY_FILE = (
     Path(__file__).resolve().parents[2] / "shared" / "reference" / "aaai18_samples" / "shape_library.json.gz"

@@ -9,9 +9,9 @@ import pytest
 from gymnasium.vector import AutoresetMode, SyncVectorEnv
 
 import pixelworld_env  # noqa: F401  (registers the PW-* ids)
-from pixelworld_env.oracle import plan_to_goal
-from pixelworld_env.registration import registered_ids
-from pixelworld_env.vector import PixelWorldVectorEnv
+from pixelworld_env.envs.registration import registered_ids
+from pixelworld_env.envs.vector import PixelWorldVectorEnv
+from pixelworld_env.generation.oracle import plan_to_goal
 
 CLASSIFICATION = "PW-cl_self-in-container_vs_noncontainer-v0"
 BRING_ABOUT = "PW-ba_self-in-container_from_on-floor-v0"
@@ -159,7 +159,7 @@ def test_reset_mask_and_one_index_per_env() -> None:
 
 def test_every_id_registers_the_vector_entry_point() -> None:
     for env_id in registered_ids():
-        assert gym.spec(env_id).vector_entry_point == "pixelworld_env.registration:make_vector_env"
+        assert gym.spec(env_id).vector_entry_point == "pixelworld_env.envs.registration:make_vector_env"
     env = gym.make_vec(CLASSIFICATION, num_envs=2)  # the default mode is the vector entry point
     assert isinstance(env, PixelWorldVectorEnv) and env.spec.id == CLASSIFICATION
     assert repr(env) == f"PixelWorldVectorEnv({CLASSIFICATION}, num_envs=2)"

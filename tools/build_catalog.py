@@ -2,9 +2,9 @@
 """Build the project's benchmark catalog from the original AAAI-18 definition and experiment files.
 
 Reads ``<reference>/aaai18/DATA/*.datasets`` and ``*.curriculum`` (with everything they include) through
-:mod:`pixelworld_env.definitions`, the 33 experiment files ``<reference>/aaai18/*``, and the definitions sb3-smc
-designed in the same format (``pixelworld_env/data/definitions/*.datasets``: the pushable curriculum, category
-``pushable``), and writes
+:mod:`pixelworld_env.generation.definitions`, the 33 experiment files ``<reference>/aaai18/*``, and the definitions
+sb3-smc designed in the same format (``pixelworld_env/data/definitions/*.datasets``: the pushable curriculum,
+category ``pushable``), and writes
 
 * ``pixelworld_env/data/catalog.json`` -- the catalog (format ``pixelworld-catalog``, version 1), and
 * ``docs/catalog.md`` -- tables generated from it.
@@ -36,8 +36,8 @@ if str(ROOT) not in sys.path:
 
 from pixelworld_env.concepts import ConceptError, parse  # noqa: E402
 from pixelworld_env.concepts.predicates import PREDICATES  # noqa: E402
-from pixelworld_env.definitions import load_definitions  # noqa: E402
-from pixelworld_env.experiment_files import GOALS, load_experiments  # noqa: E402
+from pixelworld_env.generation.definitions import load_definitions  # noqa: E402
+from pixelworld_env.generation.experiment_files import GOALS, load_experiments  # noqa: E402
 
 CATALOG_PATH = ROOT / "pixelworld_env" / "data" / "catalog.json"
 DESIGNED_PATH = ROOT / "pixelworld_env" / "data" / "definitions"
@@ -345,7 +345,7 @@ def render_docs(catalog: dict[str, Any]) -> str:
         f"{', '.join(f'{k} {n}' for k, n in sorted(by_category.items()))}), "
         f"{len(catalog['concepts'])} concepts, {len(catalog['generators'])} generators, "
         f"{len(catalog['experiments'])} experiment groups and their curricula. It is read by "
-        "`pixelworld_env.catalog` and built from the original definition files by `tools/build_catalog.py`.",
+        "`pixelworld_env.datasets.catalog` and built from the original definition files by `tools/build_catalog.py`.",
         "",
         "* **Kind**: `cl_` classification, `ba_` bring-about. **Category**: by the defining `*.datasets` file "
         "(`bfaw-containment-*` containment, `bfaw-obj-containment-cl` objcon, `bfaw-objects-*` objects, "
@@ -356,11 +356,11 @@ def render_docs(catalog: dict[str, Any]) -> str:
         f"{split['num_samples']} (all with the goal initially false); each is split "
         f"{1 - split['test_fraction']:.0%} / {split['test_fraction']:.0%} stratified by label "
         "([design choices](design.md#sizes-and-the-split)).",
-        "* **Python**: `pixelworld_env.catalog` -- `dataset_names()`, `dataset(name)` (a `DatasetInfo`), "
+        "* **Python**: `pixelworld_env.datasets.catalog` -- `dataset_names()`, `dataset(name)` (a `DatasetInfo`), "
         "`concepts()`, `generators()`, `macros()`, `concept_pools()`, `curricula()` (experiment groups with "
         "their entries), `curriculum_files()`, `curriculum_entry(\"<group>/<entry>\")`, "
         "`canonical_smc_lists()`.",
-        "* **File format**: see the docstring of `pixelworld_env/catalog.py`. Lower-level SMCs are written "
+        "* **File format**: see the docstring of `pixelworld_env/datasets/catalog.py`. Lower-level SMCs are written "
         "`group/dataset`: the flat experiment group that trains the SMC and its dataset.",
         "* **Environment ids**: `PW-<dataset>-v0` for every dataset and `PW-<cl|ba>_<concept>-v0` for every "
         "concept pool (all datasets of one kind sharing a concept). No pool name equals a dataset name (the "

@@ -9,9 +9,9 @@ from dataclasses import dataclass
 from pixelworld_env.concepts.errors import ArityError, MacroNameError, UnknownPredicateError
 from pixelworld_env.concepts.parser import SELF, Clause, Expression, expand, parse
 from pixelworld_env.concepts.predicates import PREDICATES, EvalContext, Predicate
+from pixelworld_env.core.objects import WorldObject
+from pixelworld_env.core.scene import Scene
 from pixelworld_env.errors import PixelWorldTypeError
-from pixelworld_env.objects import WorldObject
-from pixelworld_env.scene import Scene
 
 Macros = Mapping[str, "str | Expression"]
 FORWARD_CHECKING_FROM = 4
@@ -43,7 +43,7 @@ class Concept:
         expression = parse(text) if isinstance(text, str) else text
         self.text = str(text)
         if macros is None:
-            from pixelworld_env.catalog import macros as catalog_macros
+            from pixelworld_env.datasets.catalog import macros as catalog_macros
 
             macros = catalog_macros()
         if not isinstance(macros, Mapping):
@@ -231,7 +231,7 @@ def holds(expression: str | Concept, scene: Scene, macros: Macros | None = None)
     """Whether a concept expression holds in a scene.
 
     ``macros`` maps macro names (concept or generator keys) to expressions; by default the benchmark
-    catalog's table (every AAAI-18 concept and generator, :func:`pixelworld_env.catalog.macros`).
+    catalog's table (every AAAI-18 concept and generator, :func:`pixelworld_env.datasets.catalog.macros`).
     """
     if not isinstance(scene, Scene):
         raise PixelWorldTypeError(f"holds needs a Scene, got {scene!r} ({type(scene).__name__})")

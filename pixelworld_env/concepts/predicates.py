@@ -10,10 +10,10 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cache
 
-from pixelworld_env.constants import Color
-from pixelworld_env.objects import WorldObject
-from pixelworld_env.regions import inside_masks
-from pixelworld_env.shapes import FAMILIES
+from pixelworld_env.core.constants import Color
+from pixelworld_env.core.objects import WorldObject
+from pixelworld_env.core.regions import inside_masks
+from pixelworld_env.core.shapes import FAMILIES
 
 
 @dataclass(frozen=True)

@@ -26,7 +26,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from pixelworld_env.kernels import self_target_free
+from pixelworld_env.core.kernels import self_target_free
 
 __all__ = ["gru_cell", "gru_collection_step", "gru_linear_step", "leaf_call", "lstm_cell", "lstm_collection_step",
            "lstm_linear_step", "sample_index"]
@@ -295,7 +295,7 @@ def leaf_call(grid: np.ndarray, owner: np.ndarray, me: int, self_color: int, goa
     """One call of a leaf SMC (no children; its actions are signals and moves) with a compiled actor, made entirely
     here, in a world where only the one-pixel self moves: the loop of
     :meth:`sb3_smc.HierarchicalSMCWrapper.call_coroutine` with :meth:`pixelworld_env.World.move`'s self-only move
-    (its rule :func:`pixelworld_env.kernels.self_target_free`, shared with the vector env) and
+    (its rule :func:`pixelworld_env.core.kernels.self_target_free`, shared with the vector env) and
     :class:`pixelworld_env.PixelWorldEnv`'s goal shaping, decision by decision the same arithmetic and the same draws
     from ``rng`` as that loop, so the same call.
 

@@ -340,7 +340,7 @@ def _registered(env_id: str) -> bool:
 
 
 def _tasks() -> set[str]:
-    from pixelworld_env import catalog
+    from pixelworld_env.datasets import catalog
 
     return {*catalog.dataset_names(), *catalog.concept_pools()}
 

@@ -37,7 +37,7 @@ HEADER = ("# sb3-smc curriculum (format: docs/curricula.md). Generated from the 
 
 def _methods() -> dict[str, tuple[str, str]]:
     """Curriculum file stem -> (method, goal) of the experiment groups that use it (noprim groups aside)."""
-    from pixelworld_env import catalog
+    from pixelworld_env.datasets import catalog
 
     out: dict[str, tuple[str, str]] = {}
     for group in catalog.curricula().values():
@@ -49,7 +49,7 @@ def _methods() -> dict[str, tuple[str, str]]:
 def _intended_dataset(entry: str, dataset: str) -> str | None:
     """The dataset a canonical entry ``<dataset>_canon`` is named after when it trains another one (the original
     file's ``cl_self-touches-container_vs_corner_canon`` trains ``..._vs_noncontainer``), else ``None``."""
-    from pixelworld_env import catalog
+    from pixelworld_env.datasets import catalog
 
     named = entry.removesuffix(CANON_SUFFIX)
     if named in (entry, dataset) or named not in catalog.dataset_names():
@@ -59,7 +59,7 @@ def _intended_dataset(entry: str, dataset: str) -> str | None:
 
 def build_shipped() -> dict[str, Curriculum]:
     """Every shipped curriculum, built from the catalog (name -> curriculum)."""
-    from pixelworld_env import catalog
+    from pixelworld_env.datasets import catalog
 
     methods = _methods()
     out: dict[str, Curriculum] = {}

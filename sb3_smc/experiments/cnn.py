@@ -66,7 +66,7 @@ def _network(height: int, width: int) -> Any:
 def train_cnn(target: str, seed: int, *, dataset_seed: int = 0) -> CNNResult:
     """Train the CNN on ``target``'s training split with ``seed`` and test it on the test split (one torch thread;
     the caller's count is restored)."""
-    from pixelworld_env import catalog
+    from pixelworld_env.datasets import catalog
     from sb3_smc.common.threads import torch_threads
 
     if catalog.dataset(target).kind != "classification":
@@ -78,7 +78,7 @@ def train_cnn(target: str, seed: int, *, dataset_seed: int = 0) -> CNNResult:
 def _train(target: str, seed: int, dataset_seed: int) -> CNNResult:
     import torch
 
-    from pixelworld_env.loading import load_dataset
+    from pixelworld_env.datasets.loading import load_dataset
 
     torch.manual_seed(seed)
     train = load_dataset(target, split="train", seed=dataset_seed)

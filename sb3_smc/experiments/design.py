@@ -65,7 +65,7 @@ def level2_targets(category: str = "all") -> list[str]:
     """The higher-level target datasets of one category, or ``all`` the paper's 51 of the released benchmark (34
     classification, 17 bring-about; ``pushable``: the 8 nodes above level 1 of the designed pushable
     curriculum)."""
-    from pixelworld_env import catalog
+    from pixelworld_env.datasets import catalog
     from sb3_smc.curricula import shipped_curricula
 
     if category != "all" and category not in CATEGORIES:
@@ -99,7 +99,7 @@ class ExperimentPlan:
 
 def plan(targets: Sequence[str], methods: Sequence[str]) -> ExperimentPlan:
     """The curricula and nodes of ``methods`` for ``targets`` (dataset names)."""
-    from pixelworld_env import catalog
+    from pixelworld_env.datasets import catalog
     from sb3_smc.curricula import shipped_curricula
 
     unknown = [m for m in methods if m not in METHODS]

@@ -29,7 +29,7 @@ from sb3_smc.experiments.design import METHOD_REGISTRY
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-    from pixelworld_env.env import PixelWorldEnv
+    from pixelworld_env.envs.env import PixelWorldEnv
     from sb3_smc.smc import SMC
 
 __all__ = ["METHOD_COLORS", "METHOD_LABELS", "Panel", "bar_panels", "goal_cells", "pyplot", "save_figure",
@@ -85,7 +85,7 @@ def trajectory_figure(smcs: Mapping[str, Any], target: str, path: str | Path, *,
     import gymnasium as gym
 
     import pixelworld_env  # noqa: F401  (registers the PW-* ids)
-    from pixelworld_env.render import rgb_image
+    from pixelworld_env.core.render import rgb_image
     from sb3_smc.evaluation import episode_seed, make_evaluation_env, run_episode
 
     plt = pyplot()

@@ -73,7 +73,7 @@ def run_experiment(
     ``train=False`` trains nothing: it tabulates what the directory's run has finished so far (while it may still be
     training): the finished SMCs are evaluated (and the CNN trained), the rest are listed in ``missing`` and the
     results are marked ``"complete": false`` (the report says so). Running with ``train=True`` completes them."""
-    from pixelworld_env import catalog
+    from pixelworld_env.datasets import catalog
 
     if targets is not None and category is not None:
         raise SMCError("give targets or a category, not both")

@@ -35,7 +35,7 @@ from sb3_smc.smc import SMC, StepPolicy
 if TYPE_CHECKING:
     import gymnasium as gym
 
-    from pixelworld_env.env import PixelWorldEnv
+    from pixelworld_env.envs.env import PixelWorldEnv
     from sb3_smc.wrapper import HierarchicalSMCWrapper
 
 __all__ = ["SMCLibrary"]

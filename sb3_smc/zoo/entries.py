@@ -35,7 +35,7 @@ def smc_env(env: Any, library: str | None = None, names: Sequence[str] = (), inc
     split it serves (``rl_zoo3 enjoy`` evaluates on what it says: pass ``--env-kwargs split:"'test'"`` for the test
     environments).
     """
-    from pixelworld_env.env import PixelWorldEnv
+    from pixelworld_env.envs.env import PixelWorldEnv
     from sb3_smc.envs import task_base, wrap_with_smcs
 
     if names and library is None:

@@ -1,6 +1,6 @@
 """Where a generated object may go: library templates as objects and bit masks, and the bounding boxes that a
 clause and the objects already placed leave for the top-left of the object being placed (:data:`BOUNDS`, used by
-the search of :mod:`pixelworld_env.sampling`)."""
+the search of :mod:`pixelworld_env.generation.sampling`)."""
 
 from __future__ import annotations
 
@@ -9,9 +9,9 @@ from functools import cache
 
 import numpy as np
 
-from pixelworld_env.objects import WorldObject, object_class
-from pixelworld_env.regions import inside_masks
-from pixelworld_env.shapes import check_family, shape_library
+from pixelworld_env.core.objects import WorldObject, object_class
+from pixelworld_env.core.regions import inside_masks
+from pixelworld_env.core.shapes import check_family, shape_library
 
 __all__ = ["BOUNDS", "CONJUNCTS", "Box", "BoundFn", "library_object", "make_object", "template_data", "template_mask"]
 

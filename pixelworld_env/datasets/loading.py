@@ -5,12 +5,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal
 
-from pixelworld_env import catalog, generation
-from pixelworld_env.constants import Kind
-from pixelworld_env.dataset_spec import DatasetSpec
-from pixelworld_env.datasets import load_or_generate
+from pixelworld_env.core.constants import Kind
+from pixelworld_env.core.scene import Scene
+from pixelworld_env.datasets import catalog
+from pixelworld_env.datasets.cache import load_or_generate
 from pixelworld_env.errors import PixelWorldError
-from pixelworld_env.scene import Scene
+from pixelworld_env.generation.dataset import split as stratified_split
+from pixelworld_env.generation.dataset_spec import DatasetSpec
 from pixelworld_env.validation import check_seed
 
 Split = Literal["all", "train", "test"]
@@ -59,7 +60,7 @@ def load_dataset(name: str, split: Split = "all", seed: int = 0) -> Dataset:
     if split == "all":
         indices: tuple[int, ...] = tuple(range(len(generated.scenes)))
     else:
-        train, test = generation.split(generated.labels)
+        train, test = stratified_split(generated.labels)
         indices = train if split == "train" else test
     return Dataset(
         name=name, kind=info.kind, concept=info.concept_logic, split=split, seed=seed,

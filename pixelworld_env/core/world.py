@@ -7,10 +7,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from pixelworld_env import kernels
-from pixelworld_env.constants import EMPTY, OUTSIDE, Color
-from pixelworld_env.objects import Cell, WorldObject
-from pixelworld_env.scene import Scene
+from pixelworld_env.core import kernels
+from pixelworld_env.core.constants import EMPTY, OUTSIDE, Color
+from pixelworld_env.core.objects import Cell, WorldObject
+from pixelworld_env.core.scene import Scene
 
 __all__ = ["EMPTY", "MOVES", "OUTSIDE", "World"]
 
@@ -43,7 +43,7 @@ class World:
         shape = (scene.height + 2, scene.width + 2)
         self.grid = np.zeros(shape, dtype=np.int8)
         self.owner = np.full(shape, OUTSIDE, dtype=np.int16)
-        # the objects as the compiled physics (pixelworld_env.kernels) takes them
+        # the objects as the compiled physics (pixelworld_env.core.kernels) takes them
         n, most = len(objects), max(len(o.cells) for o in objects)
         self._n_objects = n
         self._cells = np.zeros((n, most, 2), dtype=np.int64)
@@ -99,7 +99,7 @@ class World:
         self._draw()
 
     def _draw(self) -> None:
-        """Redraw every object at ``positions`` (:func:`pixelworld_env.kernels.draw_objects`)."""
+        """Redraw every object at ``positions`` (:func:`pixelworld_env.core.kernels.draw_objects`)."""
         self._array_positions[:] = self.positions
         self._disjoint[0] = kernels.draw_objects(self.grid, self.owner, self._array_positions, self._cells,
                                                  self._n_cells, self._colors, self._n_objects)
@@ -108,12 +108,12 @@ class World:
     def move(self, delta: Cell) -> bool:
         """Try to move the self by ``delta``, pushing moveable objects; return whether anything moved.
 
-        The physics is written once, in :mod:`pixelworld_env.kernels`, for every path (this world, the native vector
-        env, the compiled SMC calls): where only the self moves, :func:`~pixelworld_env.kernels.self_target_free`
-        decides (its Python form here: one check costs less than a call into compiled code); elsewhere
-        :func:`pixelworld_env.kernels.push_move` plans the move (the self plus, transitively, every object whose
-        pixels the planned objects would overlap after the shift; any immoveable object or the world's edge in the
-        chain blocks it all) and redraws what moved.
+        The physics is written once, in :mod:`pixelworld_env.core.kernels`, for every path (this world, the native
+        vector env, the compiled SMC calls): where only the self moves,
+        :func:`~pixelworld_env.core.kernels.self_target_free` decides (its Python form here: one check costs less than
+        a call into compiled code); elsewhere :func:`pixelworld_env.core.kernels.push_move` plans the move (the self
+        plus, transitively, every object whose pixels the planned objects would overlap after the shift; any
+        immoveable object or the world's edge in the chain blocks it all) and redraws what moved.
         """
         dr, dc = delta
         me = self.self_index

@@ -17,13 +17,13 @@ from gymnasium.envs.registration import EnvSpec
 from pixelworld_env.concepts import Concept
 from pixelworld_env.concepts.evaluate import SelfEvaluator
 from pixelworld_env.concepts.parser import Expression
-from pixelworld_env.constants import NUM_COLORS
+from pixelworld_env.core.constants import NUM_COLORS
+from pixelworld_env.core.objects import Cell
+from pixelworld_env.core.render import HUMAN_CELL_SIZE, Window, check_display, rgb_image
+from pixelworld_env.core.scene import Scene
+from pixelworld_env.core.world import MOVES, World
 from pixelworld_env.errors import PixelWorldError
-from pixelworld_env.objects import Cell
-from pixelworld_env.render import HUMAN_CELL_SIZE, Window, check_display, rgb_image
-from pixelworld_env.scene import Scene
 from pixelworld_env.validation import check_action, check_bool, check_int
-from pixelworld_env.world import MOVES, World
 
 CLASSIFICATION = "classification"
 BRING_ABOUT = "bring-about"
@@ -51,7 +51,7 @@ def check_settings(*, max_steps: Any = 100, observation: Any = "hand", render_mo
 
     ``ValueError`` for an unknown observation or render mode or ``max_steps < 1``, ``TypeError`` for a ``max_steps``
     that is not an integer or an ``aaai18_reset_bug`` that is not a bool; ``render_mode="human"`` also needs pygame
-    and a display (:func:`pixelworld_env.render.check_display`).
+    and a display (:func:`pixelworld_env.core.render.check_display`).
     """
     if observation not in OBSERVATIONS:
         raise PixelWorldError(f"observation must be one of {OBSERVATIONS}, got {observation!r}")

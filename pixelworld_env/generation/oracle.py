@@ -11,12 +11,12 @@ from collections import deque
 from typing import TYPE_CHECKING
 
 from pixelworld_env.concepts import Concept
-from pixelworld_env.objects import Cell
-from pixelworld_env.scene import Scene
-from pixelworld_env.world import EMPTY, MOVES, World
+from pixelworld_env.core.objects import Cell
+from pixelworld_env.core.scene import Scene
+from pixelworld_env.core.world import EMPTY, MOVES, World
 
 if TYPE_CHECKING:
-    from pixelworld_env.env import PixelWorldEnv
+    from pixelworld_env.envs.env import PixelWorldEnv
 
 MAX_STATES = 100_000
 

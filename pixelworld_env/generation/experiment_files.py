@@ -3,8 +3,8 @@
 Experiment files (:func:`load_experiments`) are the 33 top-level files of ``experiments/aaai18``: their
 ``__include__`` chain (common settings, goal, ``level2``/``level2-noprim``, one ``DATA/*.curriculum``) is
 deep-merged in include order and the settings that matter for the benchmark are read from the result. The
-definition files they include are read by :mod:`pixelworld_env.definitions`; every error is a
-:class:`~pixelworld_env.definitions.DefinitionError` naming the file.
+definition files they include are read by :mod:`pixelworld_env.generation.definitions`; every error is a
+:class:`~pixelworld_env.generation.definitions.DefinitionError` naming the file.
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from pixelworld_env.definitions import DefinitionError, load_yaml
+from pixelworld_env.generation.definitions import DefinitionError, load_yaml
 
 __all__ = ["GOALS", "ExperimentDefinition", "load_experiments"]
 

@@ -5,7 +5,7 @@
   e.g. ``PW-ba_self-in-container-v0``.
 
 Every id also has a native vector environment: ``gymnasium.make_vec(id, num_envs=N)`` gives a
-:class:`pixelworld_env.vector.PixelWorldVectorEnv` (``vectorization_mode="sync"`` still gives ``SyncVectorEnv``).
+:class:`pixelworld_env.envs.vector.PixelWorldVectorEnv` (``vectorization_mode="sync"`` still gives ``SyncVectorEnv``).
 
 Making an env loads (or generates, once) only the datasets it uses.
 """
@@ -17,17 +17,17 @@ from typing import TYPE_CHECKING, Literal
 
 import gymnasium as gym
 
-from pixelworld_env import catalog
-from pixelworld_env.env import Observation, PixelWorldEnv, check_settings
+from pixelworld_env.datasets import catalog
+from pixelworld_env.datasets.loading import Split, load_dataset
+from pixelworld_env.envs.env import Observation, PixelWorldEnv, check_settings
 from pixelworld_env.errors import PixelWorldError
-from pixelworld_env.loading import Split, load_dataset
 from pixelworld_env.validation import check_bool, check_int
 
 if TYPE_CHECKING:
-    from pixelworld_env.vector import PixelWorldVectorEnv
+    from pixelworld_env.envs.vector import PixelWorldVectorEnv
 
-ENTRY_POINT = "pixelworld_env.registration:make_env"
-VECTOR_ENTRY_POINT = "pixelworld_env.registration:make_vector_env"
+ENTRY_POINT = "pixelworld_env.envs.registration:make_env"
+VECTOR_ENTRY_POINT = "pixelworld_env.envs.registration:make_vector_env"
 
 
 def env_id(name: str) -> str:
@@ -65,9 +65,9 @@ def make_vector_env(num_envs: int = 1, *, datasets: Sequence[str], split: Split 
                     max_steps: int = 100, observation: Observation = "hand", render_mode: str | None = None,
                     aaai18_reset_bug: bool = False,
                     render_envs: Literal["all", "first"] = "all") -> PixelWorldVectorEnv:
-    """``num_envs`` environments of :func:`make_env` as one :class:`~pixelworld_env.vector.PixelWorldVectorEnv`
+    """``num_envs`` environments of :func:`make_env` as one :class:`~pixelworld_env.envs.vector.PixelWorldVectorEnv`
     (the ids' ``vector_entry_point``); settings the vector env refuses are refused before any dataset is loaded."""
-    from pixelworld_env.vector import RENDER_ENVS, PixelWorldVectorEnv  # numba: only when a vector env is made
+    from pixelworld_env.envs.vector import RENDER_ENVS, PixelWorldVectorEnv  # numba: only when a vector env is made
 
     check_int(num_envs, "num_envs", 1)
     if check_bool(aaai18_reset_bug, "aaai18_reset_bug") or render_mode == "human" or render_envs not in RENDER_ENVS:

@@ -1,6 +1,6 @@
-"""PixelWorld's physics, compiled (numba), in one place: the moves of :class:`pixelworld_env.world.World`, of the
-native vector env (:class:`pixelworld_env.vector.PixelWorldVectorEnv`, whose batched steps and observations are here
-too) and of ``sb3_smc``'s compiled SMC calls.
+"""PixelWorld's physics, compiled (numba), in one place: the moves of :class:`pixelworld_env.core.world.World`, of
+the native vector env (:class:`pixelworld_env.envs.vector.PixelWorldVectorEnv`, whose batched steps and observations
+are here too) and of ``sb3_smc``'s compiled SMC calls.
 
 :func:`self_target_free` is the self-only move's rule: the self may enter a cell iff the padded owner array has it
 empty or owned by the self (``World.move`` where only the self moves; ``sb3_smc.common.kernels.leaf_call`` calls it
@@ -25,7 +25,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from pixelworld_env.constants import EMPTY, OUTSIDE
+from pixelworld_env.core.constants import EMPTY, OUTSIDE
 
 __all__ = ["NEED_DRAWS", "NEED_SCENES", "OK", "draw_objects", "observe_states", "observe_windows", "push_move",
            "reset_envs", "self_target_free", "step_envs"]

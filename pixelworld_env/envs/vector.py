@@ -8,13 +8,13 @@ How: the environments' state is a handful of arrays (scene index, self cell, ste
 the block of scene draws and the PCG64 state of each environment's generator); the scenes are arrays too (initial
 colours and owners, the self's start, labels, and the bring-about goal per self cell, computed per scene the first
 time an environment is reset into it with the single env's own test, ``Concept.self_evaluator``). A step of all
-environments is :func:`pixelworld_env.kernels.step_envs` and their observations
-:func:`~pixelworld_env.kernels.observe_windows` / :func:`~pixelworld_env.kernels.observe_states`. Where only the self
-moves (all AAAI-18 data) an environment needs no world arrays of its own: a move is
-:func:`~pixelworld_env.kernels.self_target_free` on the scene's initial owners. In worlds where objects besides the
-self move (the pushable datasets, ``World.self_only`` false) each environment keeps its own padded colours, owners
-and object positions, moved by :func:`~pixelworld_env.kernels.push_move` (``World.move``'s pushing, compiled); a
-bring-about goal there is ``Concept.holds_objects`` in Python, as in the single env, memoised per scene and object
+environments is :func:`pixelworld_env.core.kernels.step_envs` and their observations
+:func:`~pixelworld_env.core.kernels.observe_windows` / :func:`~pixelworld_env.core.kernels.observe_states`. Where
+only the self moves (all AAAI-18 data) an environment needs no world arrays of its own: a move is
+:func:`~pixelworld_env.core.kernels.self_target_free` on the scene's initial owners. In worlds where objects besides
+the self move (the pushable datasets, ``World.self_only`` false) each environment keeps its own padded colours, owners
+and object positions, moved by :func:`~pixelworld_env.core.kernels.push_move` (``World.move``'s pushing, compiled);
+a bring-about goal there is ``Concept.holds_objects`` in Python, as in the single env, memoised per scene and object
 positions.
 """
 
@@ -29,10 +29,14 @@ from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from pixelworld_env import kernels
 from pixelworld_env.concepts.evaluate import SelfEvaluator
-from pixelworld_env.constants import NUM_COLORS
-from pixelworld_env.env import (
+from pixelworld_env.core import kernels
+from pixelworld_env.core.constants import NUM_COLORS
+from pixelworld_env.core.objects import Cell
+from pixelworld_env.core.render import rgb_image
+from pixelworld_env.core.scene import Scene
+from pixelworld_env.core.world import World
+from pixelworld_env.envs.env import (
     BRING_ABOUT,
     CLASSIFICATION_REWARD,
     GOAL_POTENTIAL,
@@ -40,11 +44,7 @@ from pixelworld_env.env import (
     PixelWorldEnv,
 )
 from pixelworld_env.errors import PixelWorldError, PixelWorldTypeError
-from pixelworld_env.objects import Cell
-from pixelworld_env.render import rgb_image
-from pixelworld_env.scene import Scene
 from pixelworld_env.validation import check_int
-from pixelworld_env.world import World
 
 DRAW_BLOCK = 256
 """Scene indices drawn at a time from an environment's generator, as :meth:`PixelWorldEnv.reset` draws them."""

@@ -19,7 +19,7 @@ form the macro table (docs/design.md, "Macros"). A ``+@name`` reference must nam
 file itself or in a file it includes (directly or not). Curriculum entries are grouped by the stem of the file that
 defines them (:attr:`DefinitionSet.curricula`).
 
-The experiment files that use these definitions are read by :mod:`pixelworld_env.experiment_files`.
+The experiment files that use these definitions are read by :mod:`pixelworld_env.generation.experiment_files`.
 
 Every error is a :class:`DefinitionError` whose message names the file and, where there is one, the line.
 """
@@ -37,9 +37,9 @@ import yaml
 from pixelworld_env.errors import PixelWorldError, PixelWorldKeyError
 
 if TYPE_CHECKING:
-    from pixelworld_env.constants import Kind
-    from pixelworld_env.dataset_spec import DatasetSpec
-    from pixelworld_env.env import PixelWorldEnv
+    from pixelworld_env.core.constants import Kind
+    from pixelworld_env.envs.env import PixelWorldEnv
+    from pixelworld_env.generation.dataset_spec import DatasetSpec
 
 #: Top-level keys with a meaning of their own (everything else that is a list of strings is a named list).
 SECTIONS = ("concepts", "generators", "datasets", "curriculum")
@@ -157,8 +157,8 @@ class DefinitionSet:
         return table
 
     def dataset_spec(self, name: str, num_samples: int = 50) -> DatasetSpec:
-        """The generation spec of dataset ``name`` (for :func:`pixelworld_env.generation.generate`)."""
-        from pixelworld_env.dataset_spec import DatasetSpec
+        """The generation spec of dataset ``name`` (for :func:`pixelworld_env.generation.dataset.generate`)."""
+        from pixelworld_env.generation.dataset_spec import DatasetSpec
 
         if name not in self.datasets:
             close = difflib.get_close_matches(name, list(self.datasets), n=3)
@@ -172,12 +172,12 @@ class DefinitionSet:
 
     def make_env(self, name: str, *, split: str = "train", seed: int = 0, num_samples: int = 50,
                  **kwargs: Any) -> PixelWorldEnv:
-        """A :class:`~pixelworld_env.env.PixelWorldEnv` over dataset ``name``: generated with ``seed`` (not
+        """A :class:`~pixelworld_env.envs.env.PixelWorldEnv` over dataset ``name``: generated with ``seed`` (not
         cached), split 50/50 stratified like the catalog's (``split`` "train", "test" or "all"); ``kwargs`` go to
         the environment."""
-        from pixelworld_env.env import PixelWorldEnv
-        from pixelworld_env.generation import generate
-        from pixelworld_env.generation import split as stratified_split
+        from pixelworld_env.envs.env import PixelWorldEnv
+        from pixelworld_env.generation.dataset import generate
+        from pixelworld_env.generation.dataset import split as stratified_split
 
         if split not in ("train", "test", "all"):
             raise PixelWorldError(f"split must be 'train', 'test' or 'all', got {split!r}")

@@ -5,8 +5,8 @@ A generator is a concept expression whose variables (plus ``self``) each become 
 are sampled from a constraint problem: per term a shape family, a ``shape_idx`` (0..49, template =
 ``shape_idx mod family size``), a colour, a target flag and a position, subject to the generator's
 positive clauses, a global no-overlap constraint and the frame / padding bounds. Negated groups are
-checked by rejection on the finished assignment (:mod:`pixelworld_env.sampling`: the search;
-:mod:`pixelworld_env.placement`: where each object may go). :func:`generate` then draws from the generators
+checked by rejection on the finished assignment (:mod:`pixelworld_env.generation.sampling`: the search;
+:mod:`pixelworld_env.generation.placement`: where each object may go). :func:`generate` then draws from the generators
 (uniformly at random), drops duplicates, labels each scene with the dataset's concept and fills the
 label quotas (classification) or keeps only scenes in which the goal does not hold (bring-about).
 
@@ -28,33 +28,20 @@ from dataclasses import dataclass
 import numpy as np
 
 from pixelworld_env.concepts import Concept, ConceptError
-from pixelworld_env.dataset_spec import KINDS, DatasetSpec
+from pixelworld_env.core.objects import frame_object
+from pixelworld_env.core.scene import Scene
 from pixelworld_env.errors import PixelWorldError
-from pixelworld_env.objects import frame_object
-from pixelworld_env.oracle import goal_reachable
-from pixelworld_env.placement import BOUNDS as _BOUNDS  # noqa: F401 - tests/test_generation.py reads it here
-from pixelworld_env.placement import library_object
-from pixelworld_env.sampling import COLORS, NUM_SHAPE_IDX, GenerationError, GeneratorSampler
-from pixelworld_env.scene import Scene
+from pixelworld_env.generation.dataset_spec import DatasetSpec
+from pixelworld_env.generation.oracle import goal_reachable
+from pixelworld_env.generation.sampling import GenerationError, GeneratorSampler
 from pixelworld_env.validation import check_seed
 
-__all__ = [
-    "COLORS",
-    "GENERATOR_VERSION",
-    "KINDS",
-    "NUM_SHAPE_IDX",
-    "DatasetSpec",
-    "GeneratedDataset",
-    "GenerationError",
-    "GeneratorStats",
-    "generate",
-    "library_object",
-    "split",
-]
+__all__ = ["GENERATOR_VERSION", "GeneratedDataset", "GeneratorStats", "generate", "split"]
 
 GENERATOR_VERSION = 2  # 2: bring-about scenes whose goal cannot be reached are dropped
-"""Bump whenever a change of this module, :mod:`~pixelworld_env.sampling`, :mod:`~pixelworld_env.placement` or
-:mod:`~pixelworld_env.dataset_spec` can change generated datasets (part of the cache key)."""
+"""Bump whenever a change of this module, :mod:`~pixelworld_env.generation.sampling`,
+:mod:`~pixelworld_env.generation.placement` or :mod:`~pixelworld_env.generation.dataset_spec` can change generated
+datasets (part of the cache key)."""
 DRAWS_PER_SAMPLE = 200
 """Default draw budget of :func:`generate`: this many draws per sample of the quota (``num_samples``)."""
 
@@ -85,7 +72,7 @@ class GeneratedDataset:
     ``draws`` counts generator samples taken, ``duplicates`` those identical to an earlier sample, and
     ``filtered`` those dropped by the concept filter (bring-about: goal already true; classification:
     label quota already full); ``unreachable`` counts bring-about scenes dropped because no sequence of moves
-    reaches the goal (:func:`pixelworld_env.oracle.goal_reachable`).
+    reaches the goal (:func:`pixelworld_env.generation.oracle.goal_reachable`).
     """
 
     spec: DatasetSpec

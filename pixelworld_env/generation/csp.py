@@ -1,7 +1,7 @@
 """The generator CSP (docs/design.md, "The constraint problem and the sampler") written for python-constraint
 (``python-constraint2``).
 
-:mod:`pixelworld_env.sampling` samples generators with its own randomized backtracking search because
+:mod:`pixelworld_env.generation.sampling` samples generators with its own randomized backtracking search because
 python-constraint's solvers are 100-10,000x slower on the positional constraints (measurements in that
 module's docstring). This module states the same problem independently, variable by variable, so that the
 fast sampler can be checked against it (:func:`satisfies_generator`) and small generators can be sampled
@@ -27,12 +27,12 @@ import constraint
 from pixelworld_env.concepts import Concept, expand, parse
 from pixelworld_env.concepts.parser import SELF
 from pixelworld_env.concepts.predicates import PREDICATES, EvalContext
-from pixelworld_env.constants import FLOOR_HEIGHT, HEIGHT, PADDING, WIDTH, Color
-from pixelworld_env.objects import WorldObject, frame_object
-from pixelworld_env.placement import library_object
-from pixelworld_env.sampling import COLORS, NUM_SHAPE_IDX
-from pixelworld_env.scene import Scene
-from pixelworld_env.shapes import FAMILIES, shape_library
+from pixelworld_env.core.constants import FLOOR_HEIGHT, HEIGHT, PADDING, WIDTH, Color
+from pixelworld_env.core.objects import WorldObject, frame_object
+from pixelworld_env.core.scene import Scene
+from pixelworld_env.core.shapes import FAMILIES, shape_library
+from pixelworld_env.generation.placement import library_object
+from pixelworld_env.generation.sampling import COLORS, NUM_SHAPE_IDX
 
 ATTRIBUTES = ("shape", "shape_idx", "color", "is_target", "x", "y")
 _UNPADDED = frozenset({"floor_shape", "wall"})
@@ -156,7 +156,7 @@ def sample_generator(logic: str, macros: Mapping[str, str] | None = None, *, see
     """One scene from the generator, solved by python-constraint with every domain shuffled (random DFS).
 
     Solutions whose negated groups hold are rejected (up to ``max_tries``). Practical only for small
-    generators: use :func:`pixelworld_env.generation.generate` for datasets.
+    generators: use :func:`pixelworld_env.generation.dataset.generate` for datasets.
     """
     rng = random.Random(seed)
     problem, terms = generator_problem(logic, macros, height=height, width=width, allow_targets=allow_targets)

@@ -1,14 +1,14 @@
 """Disk cache of generated datasets.
 
 ``load_or_generate(spec, seed)`` returns the cached dataset when a valid cache file exists and otherwise
-generates it (:func:`pixelworld_env.generation.generate`) and writes the file.
+generates it (:func:`pixelworld_env.generation.dataset.generate`) and writes the file.
 
 * Location: ``$PIXELWORLD_CACHE`` if set, else ``$XDG_CACHE_HOME/pixelworld``, else
   ``~/.cache/pixelworld`` (:func:`cache_dir`).
 * Key: the SHA-256 of a canonical JSON document of everything that affects the result — the spec's
   name, kind, concept and generator logic, the macros they actually use (after following macro
   references), settings, ``num_samples``, world size, floor height and padding, the seed,
-  :data:`~pixelworld_env.generation.GENERATOR_VERSION`, this file format's version and the shape
+  :data:`~pixelworld_env.generation.dataset.GENERATOR_VERSION`, this file format's version and the shape
   library parameters (:func:`cache_key`).
 * File: ``<cache>/<name>-<first 16 hex digits of the key>.json.gz``, gzip (fixed mtime, so the bytes
   are reproducible) of two lines: a JSON header ``{"format", "key", "name", "seed", "count",
@@ -41,12 +41,12 @@ from pathlib import Path
 from typing import Any
 
 from pixelworld_env.atomic import atomic_write
-from pixelworld_env.dataset_spec import DatasetSpec
-from pixelworld_env.generation import GENERATOR_VERSION, GeneratedDataset, GeneratorStats, generate
-from pixelworld_env.objects import WorldObject, frame_object
-from pixelworld_env.placement import library_object
-from pixelworld_env.scene import Scene
-from pixelworld_env.shapes import LibraryParams
+from pixelworld_env.core.objects import WorldObject, frame_object
+from pixelworld_env.core.scene import Scene
+from pixelworld_env.core.shapes import LibraryParams
+from pixelworld_env.generation.dataset import GENERATOR_VERSION, GeneratedDataset, GeneratorStats, generate
+from pixelworld_env.generation.dataset_spec import DatasetSpec
+from pixelworld_env.generation.placement import library_object
 from pixelworld_env.validation import check_seed
 
 __all__ = [

@@ -9,11 +9,11 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from pixelworld_env.concepts import parse
-from pixelworld_env.constants import FLOOR_HEIGHT, HEIGHT, PADDING, WIDTH
+from pixelworld_env.core.constants import FLOOR_HEIGHT, HEIGHT, PADDING, WIDTH
 from pixelworld_env.errors import PixelWorldError, PixelWorldKeyError
 
 if TYPE_CHECKING:
-    from pixelworld_env.definitions import DefinitionSet
+    from pixelworld_env.generation.definitions import DefinitionSet
 
 __all__ = ["KINDS", "SUPPORTED_SETTINGS", "DatasetSpec"]
 
@@ -71,7 +71,7 @@ class DatasetSpec:
 
     @classmethod
     def from_definitions(cls, definitions: DefinitionSet, name: str, **overrides: Any) -> DatasetSpec:
-        """The spec of dataset ``name`` of a :class:`~pixelworld_env.definitions.DefinitionSet`."""
+        """The spec of dataset ``name`` of a :class:`~pixelworld_env.generation.definitions.DefinitionSet`."""
         try:
             dataset = definitions.datasets[name]
         except KeyError:

@@ -8,7 +8,7 @@ from functools import cached_property
 
 import numpy as np
 
-from pixelworld_env.constants import MOVEABLE_CLASSES, Color, ObjectClass
+from pixelworld_env.core.constants import MOVEABLE_CLASSES, Color, ObjectClass
 from pixelworld_env.errors import PixelWorldError
 
 Cell = tuple[int, int]

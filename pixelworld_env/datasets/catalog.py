@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 from importlib import resources
 from typing import Any, NamedTuple
 
-from pixelworld_env.constants import Kind
+from pixelworld_env.core.constants import Kind
 from pixelworld_env.errors import PixelWorldError, PixelWorldKeyError
 
 FORMAT = "pixelworld-catalog"

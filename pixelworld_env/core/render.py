@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 from gymnasium.error import DependencyNotInstalled
 
-from pixelworld_env.constants import Color
+from pixelworld_env.core.constants import Color
 
 PALETTE = np.zeros((len(Color), 3), dtype=np.uint8)
 PALETTE[Color.EMPTY] = (0, 0, 0)

@@ -1,6 +1,6 @@
 """The search that samples one generator's objects: a seeded randomized depth-first search over the constraint
 problem of docs/design.md, "The constraint problem and the sampler" (:class:`GeneratorSampler`;
-:func:`pixelworld_env.generation.generate` draws from it).
+:func:`pixelworld_env.generation.dataset.generate` draws from it).
 
 Search method
 -------------
@@ -70,12 +70,12 @@ from functools import cache
 from pixelworld_env.concepts import Concept, ConceptError, expand, parse
 from pixelworld_env.concepts.parser import SELF, Clause, Expression
 from pixelworld_env.concepts.predicates import PREDICATES, EvalContext
-from pixelworld_env.constants import Color
-from pixelworld_env.dataset_spec import DatasetSpec
+from pixelworld_env.core.constants import Color
+from pixelworld_env.core.objects import WorldObject
+from pixelworld_env.core.shapes import FAMILIES, shape_library
 from pixelworld_env.errors import PixelWorldError
-from pixelworld_env.objects import WorldObject
-from pixelworld_env.placement import BOUNDS, CONJUNCTS, BoundFn, make_object, template_data, template_mask
-from pixelworld_env.shapes import FAMILIES, shape_library
+from pixelworld_env.generation.dataset_spec import DatasetSpec
+from pixelworld_env.generation.placement import BOUNDS, CONJUNCTS, BoundFn, make_object, template_data, template_mask
 
 __all__ = ["COLORS", "FRAME_EXEMPT", "MAX_REJECTIONS", "MAX_SEARCH_STEPS", "NUM_SHAPE_IDX", "RESTART_STEPS",
            "GenerationError", "GeneratorSampler"]
