@@ -48,3 +48,35 @@ def test_python_constraint_samples_a_small_generator() -> None:
     assert scenes[0] == sample_generator(logic, seed=0)
     assert len({s.self_object.position for s in scenes}) > 1
     assert sample_generator("?x container(x) & noncontainer(x)", seed=0) is None
+
+
+def test_each_unary_predicate_reads_only_what_the_table_says() -> None:
+    """The CSP constrains a unary predicate over the attributes its PredicateSpec names (``reads``): changing any
+    other attribute of an object must not change its truth (a predicate that read more would be pruned wrongly)."""
+    import itertools
+
+    from pixelworld_env.concepts.predicates import PREDICATES, EvalContext
+    from pixelworld_env.core.shapes import FAMILIES
+    from pixelworld_env.generation.placement import library_object
+
+    ctx = EvalContext(floor_row=15)
+    base = {"shape": "pixel", "shape_idx": 0, "color": 2, "is_target": False, "x": 3, "y": 4}
+    variants = {"shape": list(FAMILIES)[:8], "shape_idx": [0, 1, 3], "color": [1, 2, 5], "is_target": [False, True],
+                "x": [2, 9], "y": [3, 12]}
+    checked = 0
+    for name, spec in PREDICATES.items():
+        if spec.arity != 1 or spec.reads is None:
+            continue
+        fixed = [a for a in base if a not in spec.reads]
+        for read_values in itertools.product(*(variants[a] for a in spec.reads)):
+            values = {**base, **dict(zip(spec.reads, read_values, strict=True))}
+            answers = set()
+            for attribute in fixed:
+                for value in variants[attribute]:
+                    v = {**values, attribute: value}
+                    obj = library_object(v["shape"], v["shape_idx"], v["color"], (v["y"], v["x"]),
+                                         is_target=v["is_target"])
+                    answers.add(bool(spec.fn(obj, ctx)))
+            assert len(answers) == 1, (name, values)
+            checked += 1
+    assert checked > 100

@@ -29,9 +29,15 @@ Predicate = Callable[..., bool]
 
 @dataclass(frozen=True)
 class PredicateSpec:
+    """A predicate of the vocabulary: its ``name``, ``arity`` and function ``fn(objects..., ctx)``. ``reads`` (unary
+    predicates) names the attributes of an object it depends on, among generation's ``shape``, ``shape_idx``,
+    ``color``, ``is_target``, ``x``, ``y``: the constraint problem of dataset generation
+    (:mod:`pixelworld_env.generation.csp`) constrains only those; ``None`` means any of them."""
+
     name: str
     arity: int
     fn: Predicate
+    reads: tuple[str, ...] | None = None
 
 
 # ---------------------------------------------------------------------------------------------- geometry
@@ -283,7 +289,13 @@ def _build_registry() -> dict[str, PredicateSpec]:
         "diff_kind": lambda a, b, ctx: a.family != b.family,
         "same_shape": lambda a, b, ctx: a.family == b.family and a.shape_idx == b.shape_idx,
     })
-    registry = {name: PredicateSpec(name, 1, fn) for name, fn in unary.items()}
+    reads: dict[str, tuple[str, ...]] = {
+        **{name: ("shape",) for name in (*FAMILIES, *_GROUPS)},
+        **{name: ("color",) for name in _COLORS},
+        "floor": ("shape", "y"),
+        "target": ("is_target",),
+    }
+    registry = {name: PredicateSpec(name, 1, fn, reads.get(name)) for name, fn in unary.items()}
     registry.update({name: PredicateSpec(name, 2, fn) for name, fn in binary.items()})
     registry.update({f.__name__: PredicateSpec(f.__name__, 3, f) for f in (h_between, v_between)})
     return registry

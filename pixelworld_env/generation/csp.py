@@ -36,15 +36,6 @@ from pixelworld_env.generation.sampling import COLORS, NUM_SHAPE_IDX
 
 ATTRIBUTES = ("shape", "shape_idx", "color", "is_target", "x", "y")
 _UNPADDED = frozenset({"floor_shape", "wall"})
-# The attributes each unary predicate reads (shape families and groups read the shape only).
-_UNARY_READS: dict[str, tuple[str, ...]] = {
-    **{name: ("shape",) for name, spec in PREDICATES.items()
-       if spec.arity == 1 and name not in {"white", "red", "blue", "green", "yellow", "orange", "target", "pushable",
-                                           "floor"}},
-    **{color: ("color",) for color in ("white", "red", "blue", "green", "yellow", "orange")},
-    "target": ("is_target",),
-    "floor": ("shape", "y"),
-}
 
 
 def _object(term: str, shape: str, shape_idx: int, color: int, is_target: bool, x: int, y: int) -> WorldObject:
@@ -99,7 +90,7 @@ def generator_problem(logic: str, macros: Mapping[str, str] | None = None, *, he
     for clause in expression.positives:
         fn = PREDICATES[clause.name].fn
         args = clause.args
-        reads = _UNARY_READS.get(clause.name) if len(args) == 1 else None
+        reads = PREDICATES[clause.name].reads if len(args) == 1 else None  # what the predicate table says it reads
         if reads is not None:  # a unary predicate of a few attributes: a small constraint prunes early
             probe = {"shape": "pixel", "shape_idx": 0, "color": 0, "is_target": False, "x": 0, "y": 0}
 
