@@ -199,7 +199,8 @@ def test_train_smc_on_the_native_env_is_bit_identical(algo: str, frame_stack: in
     selected update and weights."""
     import sb3_smc.training as training
 
-    settings = dict(algo=algo, total_timesteps=768, n_envs=4, n_steps=64, seed=5, frame_stack=frame_stack)
+    settings = dict(algo=algo, total_timesteps=768, n_envs=4, n_steps=64, seed=5, frame_stack=frame_stack,
+                    **({"batch_size": 128} if algo == "PPO" else {}))
     native = train_smc("PW-ba_self-in-container-v0", **settings)
     assert isinstance(native.model.get_env().unwrapped, FlatSMCVecEnv)
     monkeypatch.setattr(training, "make_vec_env", functools.partial(training.make_vec_env, native=False))
