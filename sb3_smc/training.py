@@ -67,7 +67,12 @@ from sb3_smc.wrapper import HierarchicalSMCWrapper
 __all__ = ["check_model_settings", "make_vec_env", "resolve_children", "train_smc", "untrained_smc"]
 
 
-def resolve_children(children: Any, names: Sequence[str] | None = None) -> tuple[SMC, ...]:
+Children = Sequence[SMC] | tuple[Mapping[str, SMC], Sequence[str]] | Mapping[str, SMC] | None
+"""What ``children=`` takes: SMCs, ``(library, [names])``, or a library (a mapping ``name -> SMC``) whose SMCs the
+spec names."""
+
+
+def resolve_children(children: Children, names: Sequence[str] | None = None) -> tuple[SMC, ...]:
     """The child SMCs: from ``None``, a sequence of SMCs, ``(library, [names])``, or a mapping ``name -> SMC``
     (an :class:`~sb3_smc.library.SMCLibrary`) looked up with ``names`` (a spec's children)."""
     if isinstance(children, Mapping):
@@ -84,7 +89,7 @@ def resolve_children(children: Any, names: Sequence[str] | None = None) -> tuple
         library, chosen = children
         resolved = tuple(library[name] for name in chosen)
     else:
-        resolved = tuple(children)
+        resolved = tuple(cast("Sequence[SMC]", children))  # checked just below: a user may pass anything
     bad = [type(c).__name__ for c in resolved if not isinstance(c, SMC)]
     if bad:
         raise SMCTypeError(f"children must be SMCs, (library, [names]) or a library, got {bad}")
@@ -174,7 +179,7 @@ def _native_vector_env(spec: TrainingSpec, children: Sequence[SMC]) -> PixelWorl
 def train_smc(
     task: str | TrainingSpec,
     *,
-    children: Any = None,
+    children: Children = None,
     tensorboard_log: str | None = None,
     log_every: int | None = None,
     callback: Any = None,
@@ -236,7 +241,7 @@ def train_smc(
                   printer=printer)
 
 
-def untrained_smc(task: str | TrainingSpec, *, children: Any = None, **settings: Any) -> SMC:
+def untrained_smc(task: str | TrainingSpec, *, children: Children = None, **settings: Any) -> SMC:
     """The SMC :func:`train_smc` starts from: the model as built (signal bias set), no update run. ``task`` and
     ``children`` as for ``train_smc``, with its keyword settings and hyperparameters (``total_timesteps`` aside: the
     returned spec's budget is 0 steps); for tests, benchmarks and baselines that need a model, not a trained
@@ -252,7 +257,7 @@ def untrained_smc(task: str | TrainingSpec, *, children: Any = None, **settings:
     return _train(spec, kids, tensorboard_log=None, log_every=0, callback=None, printer=print)
 
 
-def _spec_and_children(task: str | TrainingSpec, children: Any, settings: dict[str, Any],
+def _spec_and_children(task: str | TrainingSpec, children: Children, settings: dict[str, Any],
                        hyperparams: dict[str, Any]) -> tuple[TrainingSpec, tuple[SMC, ...]]:
     """The spec of :func:`train_smc`'s arguments and the child SMCs it names."""
     if isinstance(task, TrainingSpec):

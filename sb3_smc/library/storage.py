@@ -51,6 +51,7 @@ from sb3_smc.library.manifest import (
 from sb3_smc.smc import SMC
 
 if TYPE_CHECKING:
+    from stable_baselines3.common.base_class import BaseAlgorithm
     from stable_baselines3.common.on_policy_algorithm import OnPolicyAlgorithm
 
 __all__ = ["ALGORITHMS", "FORMAT", "FORMAT_VERSION", "MANIFEST", "MODELS", "add_to_library", "check_manifest",
@@ -297,7 +298,7 @@ def check_model_file(root: Path, name: str, entry: Mapping[str, Any]) -> None:
                                 "manifest (modified or corrupt since it was saved)")
 
 
-def load_model(root: Path, name: str, entry: Mapping[str, Any]) -> Any:
+def load_model(root: Path, name: str, entry: Mapping[str, Any]) -> BaseAlgorithm:
     """The SB3 model of entry ``name``, after checking its file (:func:`check_model_file`)."""
     check_model_file(root, name, entry)
     file = root / entry["model"]
