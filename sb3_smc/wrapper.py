@@ -1,5 +1,5 @@
-"""``HierarchicalSMCWrapper``: SMCs as extra actions of a PixelWorld environment (docs/design.md, "Hierarchy: SMC
-calls")."""
+"""``HierarchicalSMCWrapper``: SMCs as extra actions of a task: a PixelWorld environment or an SMC task on any
+Gymnasium environment (:mod:`sb3_smc.tasks`) (docs/design.md, "Hierarchy: SMC calls")."""
 
 from __future__ import annotations
 
@@ -63,7 +63,10 @@ def _smc_actions(smcs: Any) -> tuple[SMC, ...]:
 
 
 class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
-    """A PixelWorld env whose actions are its signals, the four moves and one action per SMC.
+    """A task whose actions are its signals, its primitive actions (PixelWorld: the four moves) and one action per
+    SMC. The task is the :class:`~sb3_smc.tasks.TaskEnv` under ``env``: a PixelWorld environment, or an
+    :class:`~sb3_smc.tasks.SMCTask` on any Gymnasium environment (stepped through its own ``step``; the compiled
+    calls below are PixelWorld's).
 
     Choosing an SMC runs its frozen policy on the same world, from a fresh recurrent state and stochastically
     (seeded by ``reset(seed=...)``), until it emits one of its signals or ``call_step_cap`` primitive moves have
