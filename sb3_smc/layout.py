@@ -40,11 +40,15 @@ class Layout:
             raise SMCError(f"primitive action names must be unique, non-empty, and neither signals nor "
                            f"'{CALL_PREFIX}...', got {list(self.primitives)}")
 
+    @property
+    def sensor_name(self) -> str:
+        """What the sensor part of the observation is called: PixelWorld's ``window``, else ``sensor``."""
+        return "window" if self == PIXELWORLD_LAYOUT else "sensor"
+
     def describe(self, n_children: int, n_actions: int) -> str:
         """The observation in words: ``"81 window + 2 outcomes + 8 previous action"`` (``sensor`` off PixelWorld)."""
-        sensor = "window" if self == Layout() else "sensor"
-        return (f"{self.sensor_size} {sensor} + {n_children} outcome{'s' * (n_children != 1)} + {n_actions} previous "
-                f"action")
+        outcomes = f"{n_children} outcome{'s' * (n_children != 1)}"
+        return f"{self.sensor_size} {self.sensor_name} + {outcomes} + {n_actions} previous action"
 
 
 PIXELWORLD_LAYOUT = Layout()

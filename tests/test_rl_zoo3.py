@@ -53,6 +53,10 @@ class Installed:
         return self.run("import sys; from rl_zoo3.cli import main; sys.argv = ['rl_zoo3', *sys.argv[1:]]; main()",
                         *args, **kwargs)
 
+    def sb3_smc(self, *args: str, **kwargs) -> subprocess.CompletedProcess:
+        """``sb3-smc ARGS`` (the console script's entry point, ``sb3_smc.cli:main``)."""
+        return self.run("import sys; from sb3_smc.cli import main; sys.exit(main(sys.argv[1:]))", *args, **kwargs)
+
     def module(self, name: str, *args: str, **kwargs) -> subprocess.CompletedProcess:
         """``python -m NAME ARGS``."""
         return self.run("import runpy, sys; sys.argv = [sys.argv[1], *sys.argv[2:]]; "
@@ -179,8 +183,7 @@ def test_enjoy_states_the_split_and_record_video_writes_an_mp4(installed: Instal
 def test_import_zoo_then_a_level2_zoo_run_calling_it(installed: Installed) -> None:
     installed.zoo("train", "--algo", "trpo", "--env", FLAT, "-conf", "sb3_smc.zoo.trpo", "-n", "2000",
                   "--num-threads", "1", "-f", "child")
-    out = installed.run("import sys; from sb3_smc.cli import main; sys.exit(main(sys.argv[1:]))", "import-zoo",
-                        f"child/trpo/{FLAT}_1", "--library", "lib", "--name", "corner")
+    out = installed.sb3_smc("import-zoo", f"child/trpo/{FLAT}_1", "--library", "lib", "--name", "corner")
     assert "added SMC 'corner' (classification, TRPO)" in out.stdout
     # a level-2 run: the shipped TRPO settings with the imported SMC as an extra action
     settings = yaml.safe_load((ROOT / "zoo_configs" / "trpo.yml").read_text())["default"]
@@ -224,8 +227,7 @@ def test_import_zoo_refuses_a_run_without_the_smc_wrapper(installed: Installed) 
     if not (installed.work / "literal-trpo").is_dir():
         installed.zoo("train", "--algo", "trpo", "--env", FLAT, "-n", "2000", "--num-threads", "1", "-f",
                       "literal-trpo")
-    out = installed.run("import sys; from sb3_smc.cli import main; sys.exit(main(sys.argv[1:]))", "import-zoo",
-                        f"literal-trpo/trpo/{FLAT}_1", "--library", "lib2", check=False)
+    out = installed.sb3_smc("import-zoo", f"literal-trpo/trpo/{FLAT}_1", "--library", "lib2", check=False)
     assert out.returncode == 2
     assert "did not use sb3-smc's wrapper" in out.stderr and "-conf sb3_smc.zoo.trpo" in out.stderr
     assert not (installed.work / "lib2").exists()
@@ -239,8 +241,7 @@ def test_a_zoo_run_on_a_minigrid_smc_task_imports_with_its_layout(installed: Ins
                                     "DoorKey5-doorkey-v0")
     installed.zoo("train", "--algo", "ppo", "--env", child_id, "--gym-packages", package, "-conf", "sb3_smc.zoo.ppo",
                   "-n", "2000", "--num-threads", "1", "-f", "mg")
-    out = installed.run("import sys; from sb3_smc.cli import main; sys.exit(main(sys.argv[1:]))", "import-zoo",
-                        f"mg/ppo/{child_id}_1", "--library", "mglib", "--name", "get-key")
+    out = installed.sb3_smc("import-zoo", f"mg/ppo/{child_id}_1", "--library", "mglib", "--name", "get-key")
     assert "added SMC 'get-key' (bring-about, PPO)" in out.stdout
     settings = yaml.safe_load((ROOT / "zoo_configs" / "ppo.yml").read_text())["default"]
     settings["env_wrapper"] = [{"sb3_smc.zoo.smc_env": {"library": str(installed.work / "mglib"),

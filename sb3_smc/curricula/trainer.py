@@ -383,16 +383,17 @@ def _run(merged: Curriculum, scheduler: _Scheduler, order: list[str], directory:
                     continue
                 earlier = scheduler.damaged.get(name)
                 differs = earlier is not None and not _trained_alike(earlier, outcome.record)
+                above = _above(scheduler, node_name) if differs else []
                 if differs:  # what was trained with the damaged copy goes, even if the run dies after storing
                     atomic_write(directory / PENDING_RETRAIN, json.dumps(
-                        {"repaired": name, "jobs": _jobs_above(scheduler, node_name)}, indent=1))
+                        {"repaired": name, "jobs": [job_name(n, seed) for n, seed in above]}, indent=1))
                 _store(scheduler, outcome)
                 scheduler.records[node_name][int(seed_text)] = outcome.record
                 bar.running = len(scheduler.running)
                 bar.finished(_rounded(scheduler.budget(merged.node(node_name))))
                 if differs:
-                    for above in _retrain_above(scheduler, node_name, name, bar.note):
-                        bar.undone(_rounded(scheduler.budget(merged.node(above))))
+                    for undone in _retrain_above(scheduler, above, name, bar.note):
+                        bar.undone(_rounded(scheduler.budget(merged.node(undone))))
                     (directory / PENDING_RETRAIN).unlink()
     finally:
         executor.shutdown()
@@ -475,15 +476,11 @@ def _above(scheduler: _Scheduler, node_name: str) -> list[tuple[str, int]]:
             if seed in scheduler.records[n] or job_name(n, seed) in scheduler.damaged]
 
 
-def _jobs_above(scheduler: _Scheduler, node_name: str) -> list[str]:
-    return [job_name(n, seed) for n, seed in _above(scheduler, node_name)]
-
-
-def _retrain_above(scheduler: _Scheduler, node_name: str, name: str, note: Callable[[str], None]) -> list[str]:
+def _retrain_above(scheduler: _Scheduler, jobs: list[tuple[str, int]], name: str, note: Callable[[str], None]
+                   ) -> list[str]:
     """A damaged job ``name`` trained again differs from its earlier record (another CPU or code): the finished jobs
-    of every node above its node were trained with the earlier one and are taken out of the library to be trained
-    again (:func:`replace_jobs`). Returns the node of each such job that counted as done."""
-    jobs = _above(scheduler, node_name)
+    above its node (``jobs``, :func:`_above`) were trained with the earlier one and are taken out of the library to
+    be trained again (:func:`replace_jobs`). Returns the node of each such job that counted as done."""
     if not jobs:
         return []
     line = replace_jobs(scheduler.directory, [job_name(n, seed) for n, seed in jobs])

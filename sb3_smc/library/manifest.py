@@ -48,8 +48,7 @@ _V1_ALGORITHMS = ("RecurrentPPO", "TRPO")
 def observation_layout(n_children: int, n_actions: int, layout: Layout = PIXELWORLD_LAYOUT) -> dict[str, int]:
     """The manifest's ``observation``: total ``size``, then the parts in order (PixelWorld's ``window`` or another
     environment's ``sensor``, outcomes, previous action)."""
-    sensor = "window" if layout == PIXELWORLD_LAYOUT else "sensor"
-    return {"size": observation_size(n_children, n_actions, layout.sensor_size), sensor: layout.sensor_size,
+    return {"size": observation_size(n_children, n_actions, layout.sensor_size), layout.sensor_name: layout.sensor_size,
             "outcomes": n_children, "previous_action": n_actions}
 
 
