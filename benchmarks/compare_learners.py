@@ -43,8 +43,7 @@ def result_path(out: str | Path, learner: str, node: str, seed: int) -> Path:
 
 def library_with(headlines: list[str], job: str) -> Path:
     """The library of the first run directory in ``headlines`` that has the SMC ``job``."""
-    from sb3_smc.library.manifest import MANIFEST, check_manifest
-    from sb3_smc.library.storage import read_manifest
+    from sb3_smc.library.storage import MANIFEST, check_manifest, read_manifest
 
     for headline in headlines:
         library = Path(headline) / "library"

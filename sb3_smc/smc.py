@@ -11,6 +11,7 @@ are what its task gives (:mod:`sb3_smc.tasks`), recorded as the SMC's :class:`~s
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
@@ -86,6 +87,18 @@ class SMC:
             if wrong:
                 detail = "; ".join(f"{k}: spec {a!r}, SMC {b!r}" for k, (a, b) in wrong.items())
                 raise SMCError(f"SMC {self.name!r}: its training spec does not match it ({detail})")
+
+    @classmethod
+    def from_spec(cls, spec: TrainingSpec, policy: StepPolicy, children: Sequence[SMC] = (), *, name: str | None = None,
+                  model: Any = None, record: TrainingRecord | None = None,
+                  evaluations: Sequence[EvaluationRecord] = ()) -> SMC:
+        """The SMC trained by ``spec``: its kind, primitives setting and layout are the spec's, its ``children`` the
+        SMCs the spec names (in its order), its name the spec's unless ``name`` is given."""
+        if spec.task.kind is None:
+            raise SMCError(f"SMC {spec.name!r}: the kind of task {spec.task.env_id!r} is not known")
+        return cls(spec.name if name is None else name, spec.task.kind, policy, tuple(children),
+                   spec.wrapper.include_primitives, model=model, spec=spec, record=record,
+                   evaluations=tuple(evaluations), layout=spec.task.smc_layout)
 
     def __deepcopy__(self, memo: dict) -> SMC:
         # An SMC is frozen once built: copies of env specs, wrappers and configs share it (its model may hold

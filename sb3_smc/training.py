@@ -351,5 +351,4 @@ def _train(spec: TrainingSpec, children: tuple[SMC, ...], *, tensorboard_log: st
         torch_threads=torch.get_num_threads(),
         versions=package_versions(),
     )
-    return SMC(spec.name, kind, policy, children=children, include_primitives=spec.wrapper.include_primitives,
-               model=model, spec=spec, record=record, layout=layout)
+    return SMC.from_spec(spec, policy, children, model=model, record=record)

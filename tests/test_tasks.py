@@ -253,6 +253,7 @@ def test_foreign_smcs_round_trip_through_a_library(tmp_path) -> None:
     import json
 
     from sb3_smc import SMCLibrary
+    from sb3_smc.library import storage
     from sb3_smc.library.errors import LayoutMismatchError
 
     env_id = _register_corridor()
@@ -263,9 +264,9 @@ def test_foreign_smcs_round_trip_through_a_library(tmp_path) -> None:
     library = SMCLibrary([parent])
     library.save(tmp_path / "lib")
     manifest = json.loads((tmp_path / "lib" / "manifest.json").read_text())
-    entry = manifest["smcs"]["walk-twice"]
-    assert entry["layout"] == {"sensor_size": 5, "primitives": ["L", "R", "S"]}
-    assert entry["observation"] == {"size": 5 + 1 + 5, "sensor": 5, "outcomes": 1, "previous_action": 5}
+    assert manifest["smcs"]["walk-twice"]["spec"]["task"]["layout"] == {"sensor_size": 5, "primitives": ["L", "R", "S"]}
+    entry = storage.check_manifest(manifest, tmp_path / "lib" / "manifest.json")["walk-twice"]
+    assert entry.observation == {"size": 5 + 1 + 5, "sensor": 5, "outcomes": 1, "previous_action": 5}
     loaded = SMCLibrary.load(tmp_path / "lib")
     assert loaded["walk-twice"].layout == parent.layout and loaded["walk"].layout == child.layout
     assert loaded["walk-twice"].spec == parent.spec and loaded["walk-twice"].action_names == parent.action_names
@@ -274,9 +275,7 @@ def test_foreign_smcs_round_trip_through_a_library(tmp_path) -> None:
     probabilities, _ = loaded["walk-twice"].policy.probabilities(obs, loaded["walk-twice"].policy.initial_state())
     ours, _ = parent.policy.probabilities(obs, parent.policy.initial_state())
     np.testing.assert_allclose(probabilities, ours)
-    manifest["smcs"]["walk"].pop("layout")  # the child now claims PixelWorld's layout
-    manifest["smcs"]["walk"]["action_names"] = ["SIG1", "DOWN", "RIGHT", "UP", "LEFT"]
-    manifest["smcs"]["walk"]["observation"] = {"size": 86, "window": 81, "outcomes": 0, "previous_action": 5}
+    manifest["smcs"]["walk"]["spec"]["task"].pop("layout")  # the child now claims PixelWorld's layout
     (tmp_path / "lib" / "manifest.json").write_text(json.dumps(manifest))
     with pytest.raises(LayoutMismatchError, match=r"SMC 'walk-twice' .* calls \['walk'\], which act on another"):
         SMCLibrary.load(tmp_path / "lib")

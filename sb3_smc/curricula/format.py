@@ -36,6 +36,7 @@ from typing import Any
 
 import yaml
 
+from sb3_smc.dag import CycleError, children_first
 from sb3_smc.errors import SMCError
 from sb3_smc.hyperparameters import ALGORITHMS
 
@@ -385,7 +386,7 @@ def _validate(curriculum: Curriculum) -> None:
             if used not in seen:
                 raise CurriculumError(f"{at(node)}: node {node.name!r} uses an unknown node {used!r}"
                                       f"{_suggest(used, seen)}")
-    _check_cycles(curriculum.nodes, seen, at)
+    _check_cycles(seen, at)
     for k, target in enumerate(curriculum.targets):
         if target not in seen:
             raise CurriculumError(f"{source}: target {target!r} is not a node{_suggest(target, seen)}")
@@ -393,22 +394,11 @@ def _validate(curriculum: Curriculum) -> None:
             raise CurriculumError(f"{source}: target {target!r} is listed twice")
 
 
-def _check_cycles(nodes: Sequence[Node], by_name: Mapping[str, Node], at: Any) -> None:
-    state: dict[str, int] = {}
-
-    def visit(name: str, path: list[str]) -> None:
-        if state.get(name) == 2:
-            return
-        if state.get(name) == 1:
-            cycle = path[path.index(name):] + [name]
-            raise CurriculumError(f"{at(by_name[name])}: nodes use each other in a cycle: {' -> '.join(cycle)}")
-        state[name] = 1
-        for used in by_name[name].uses:
-            visit(used, [*path, name])
-        state[name] = 2
-
-    for node in nodes:
-        visit(node.name, [])
+def _check_cycles(by_name: Mapping[str, Node], at: Any) -> None:
+    try:
+        children_first({name: node.uses for name, node in by_name.items()})
+    except CycleError as err:
+        raise CurriculumError(f"{at(by_name[err.cycle[0]])}: nodes use each other in a cycle: {err}") from None
 
 
 def merge(curricula: Sequence[Curriculum]) -> Curriculum:

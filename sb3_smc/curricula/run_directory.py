@@ -194,13 +194,13 @@ def replace_jobs(directory: Path, names: Sequence[str]) -> str:
     return f"  {len(names)} trained SMC(s) to train again ({shown}); the library as it was: {kept / 'library'}"
 
 
-def library_jobs(library: Path) -> dict[str, tuple[dict[str, Any], str | None]]:
+def library_jobs(library: Path) -> dict[str, tuple[storage.LibraryEntry, str | None]]:
     """Every SMC of a run's library: its manifest entry, and what is wrong with its model file (``None``: nothing;
     :func:`sb3_smc.library.storage.check_model_file`)."""
     if not (library / storage.MANIFEST).is_file():
         return {}
     manifest, where = storage.read_manifest(library)
-    out: dict[str, tuple[dict[str, Any], str | None]] = {}
+    out: dict[str, tuple[storage.LibraryEntry, str | None]] = {}
     for name, entry in storage.check_manifest(manifest, where).items():
         try:
             storage.check_model_file(library, name, entry)

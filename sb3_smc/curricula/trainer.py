@@ -421,11 +421,11 @@ def _load_done(scheduler: _Scheduler) -> dict[str, str]:
     damaged: dict[str, str] = {}
     for name, (entry, problem) in library_jobs(scheduler.library).items():
         node_name, sep, seed_text = name.rpartition(SEED_SEPARATOR)
-        if sep and node_name in scheduler.records and seed_text.isdigit() and entry["record"] is not None:
+        if sep and node_name in scheduler.records and seed_text.isdigit() and entry.record is not None:
             if problem is None:
-                scheduler.records[node_name][int(seed_text)] = entry["record"]
+                scheduler.records[node_name][int(seed_text)] = entry.record
             elif name not in scheduler.skip:
-                scheduler.damaged[name] = entry["record"]
+                scheduler.damaged[name] = entry.record
                 damaged[name] = problem
     return damaged
 
@@ -433,9 +433,7 @@ def _load_done(scheduler: _Scheduler) -> dict[str, str]:
 def _store(scheduler: _Scheduler, result: JobResult) -> None:
     """Add a finished job to the library (replacing the entry of a damaged one)."""
     spec = result.spec
-    assert spec.task.kind is not None  # a trained SMC's spec names its task's kind
-    entry = storage.make_entry(spec.task.kind, result.algo, spec.children, spec.wrapper.include_primitives,
-                               spec.frame_stack, spec, result.record, layout=spec.task.smc_layout)
+    entry = storage.entry_json(spec.name, result.algo, spec.frame_stack, spec, result.record)
     earlier = scheduler.damaged.pop(spec.name, None)
     storage.add_to_library(scheduler.library, spec.name, entry, result.model, replace=earlier is not None)
 

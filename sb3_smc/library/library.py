@@ -1,13 +1,13 @@
 """``SMCLibrary``: a directory of trained SMCs with a versioned manifest (the API; the disk format is
 :mod:`sb3_smc.library.storage`).
 
-Each manifest entry records what the SMC is (kind, algorithm, action names, observation layout, children by
-name), how it was trained and what came out (its :class:`~sb3_smc.records.TrainingSpec`,
-:class:`~sb3_smc.records.TrainingRecord` and :class:`~sb3_smc.records.EvaluationRecord` list), plus the SHA-256 of its
-model file. :meth:`SMCLibrary.load` validates all of it and rebuilds every :class:`~sb3_smc.smc.SMC` (children
-first, its policy by :func:`sb3_smc.policies.policy_from_model`); :meth:`SMCLibrary.save` writes a complete copy
-beside the target and swaps it in, so an interrupted save never leaves a half-written library. Libraries of
-version 1 (sb3-smc 0.1) load through :func:`~sb3_smc.library.storage.upgrade_v1`. See ``docs/library.md``.
+Each manifest entry records how the SMC was trained and what came out (its :class:`~sb3_smc.records.TrainingSpec`,
+from which its kind, algorithm and children by name are read, :class:`~sb3_smc.records.TrainingRecord` and
+:class:`~sb3_smc.records.EvaluationRecord` list), plus its model file and that file's SHA-256. :meth:`SMCLibrary.load`
+validates all of it and rebuilds every :class:`~sb3_smc.smc.SMC` (children first, its policy by
+:func:`sb3_smc.policies.policy_from_model`); :meth:`SMCLibrary.save` writes a complete copy beside the target and swaps
+it in, so an interrupted save never leaves a half-written library. Libraries of earlier versions load through
+:mod:`sb3_smc.library.upgrade`. See ``docs/library.md``.
 """
 
 from __future__ import annotations
@@ -250,22 +250,24 @@ class SMCLibrary(Mapping[str, SMC]):
         for name in order:
             entry = entries[name]
             model = storage.load_model(root, name, entry)
-            size = entry["observation"]["size"]
-            stack = entry.get("frame_stack", 1)
-            layout = storage.entry_layout(entry)
-            storage.check_model_layout(name, model, entry["action_names"], size,
-                                       f"the {entry['algo']} model in {root / entry['model']}", stack, layout)
+            size, stack = entry.observation_size, entry.frame_stack
+            storage.check_model_layout(name, model, entry.action_names, size,
+                                       f"the {entry.algo} model in {root / entry.model}", stack, entry.layout)
             try:
                 policy: StepPolicy = policy_from_model(model)
                 if stack > 1:
                     policy = FrameStackPolicy(policy, stack, size)
             except (TypeError, ValueError) as err:
                 raise CorruptModelError(
-                    f"SMC {name!r}: cannot run the model in {root / entry['model']}: {err}") from err
-            children = tuple(library._smcs[c] for c in entry["children"])
-            library._smcs[name] = SMC(name, entry["kind"], policy, children, entry["include_primitives"], model=model,
-                                      spec=entry["spec"], record=entry["record"],
-                                      evaluations=tuple(entry["evaluations"]), layout=layout)
+                    f"SMC {name!r}: cannot run the model in {root / entry.model}: {err}") from err
+            children = tuple(library._smcs[c] for c in entry.children)
+            if entry.spec is not None:
+                smc = SMC.from_spec(entry.spec, policy, children, name=name, model=model, record=entry.record,
+                                    evaluations=entry.evaluations)
+            else:
+                smc = SMC(name, entry.kind, policy, children, entry.include_primitives, model=model,
+                          record=entry.record, evaluations=entry.evaluations, layout=entry.layout)
+            library._smcs[name] = smc
         return library
 
     @classmethod
@@ -333,7 +335,7 @@ class SMCLibrary(Mapping[str, SMC]):
         return wrapped
 
 
-def _descendants(entries: Mapping[str, Any], names: Sequence[str], where: Path) -> set[str]:
+def _descendants(entries: Mapping[str, storage.LibraryEntry], names: Sequence[str], where: Path) -> set[str]:
     seen: set[str] = set()
     stack = list(names)
     while stack:
@@ -342,7 +344,7 @@ def _descendants(entries: Mapping[str, Any], names: Sequence[str], where: Path) 
             raise UnknownSMCError(f"{where}: no SMC named {name!r}{suggest(str(name), list(entries))}")
         if name not in seen:
             seen.add(name)
-            stack.extend(entries[name]["children"])
+            stack.extend(entries[name].children)
     return seen
 
 

@@ -56,7 +56,7 @@ def _lower_level(curriculum: str | Curriculum) -> list[str]:
     return [node.name for node in shipped.nodes if node.name in used]
 
 
-def _shipped_entries(root: Path) -> dict[str, dict]:
+def _shipped_entries(root: Path) -> dict[str, storage.LibraryEntry]:
     if not (root / storage.MANIFEST).is_file():
         return {}
     manifest, where = storage.read_manifest(root)
@@ -141,7 +141,7 @@ def build_pretrained(runs: Sequence[str | Path], curricula: Sequence[str | Curri
     entries = {run: storage.check_manifest(*storage.read_manifest(run / "library")) for run in runs_}
     chosen: list[tuple[str, Path, list[str]]] = []
     for node in dict.fromkeys(n for c in curricula for n in _lower_level(c)):
-        found = [(run, {int(name.rpartition(SEED_SEPARATOR)[2]): entry["record"] for name, entry in held.items()
+        found = [(run, {int(name.rpartition(SEED_SEPARATOR)[2]): entry.record for name, entry in held.items()
                         if node_of(name) == node}) for run, held in entries.items()]
         run, records = max(found, key=lambda item: len(item[1]))
         settings = read_settings(run)
@@ -149,10 +149,11 @@ def build_pretrained(runs: Sequence[str | Path], curricula: Sequence[str | Curri
             raise LibraryError(f"{run} holds no run (no run.json); build_pretrained takes run directories of "
                                "sb3-smc train or experiment")
         seeds = settings["seeds"]
-        if len(records) != seeds or any(record is None for record in records.values()):
-            raise LibraryError(f"node {node!r}: {run / 'library'} holds {len(records)} of the run's {seeds} seeds "
+        trained = {seed: record for seed, record in records.items() if record is not None}
+        if len(trained) != seeds:
+            raise LibraryError(f"node {node!r}: {run / 'library'} holds {len(trained)} of the run's {seeds} seeds "
                                "with training records; the two best can only be chosen among all of them")
-        chosen.append((node, run, [job_name(node, seed) for seed in rank_seeds(records)[:PRETRAINED_SEEDS]]))
+        chosen.append((node, run, [job_name(node, seed) for seed in rank_seeds(trained)[:PRETRAINED_SEEDS]]))
     library = SMCLibrary.load(target) if (target / storage.MANIFEST).is_file() else SMCLibrary()
     for node, run, names in chosen:
         for stale in [name for name in library.names if node_of(name) == node]:

@@ -1,12 +1,13 @@
 """How an SMC library lies on disk: reading and writing the manifest file, model files and checksums, adding and
 removing SMCs in place, and the atomic save (:mod:`pixelworld_env.atomic`). The manifest's schema and validation
 (and the conversion of version-1 manifests) are :mod:`sb3_smc.library.manifest`'s; its names that callers use
-through this module (``check_manifest``, ``topological_order``, ``FORMAT`` ...) are re-exported here.
+through this module (``topological_order``, ``FORMAT`` ...) are re-exported here; :func:`check_manifest` reads a
+manifest of any version (:mod:`sb3_smc.library.upgrade`).
 
 Layout::
 
     my-library/
-        manifest.json        {"format": "sb3-smc-library", "version": 2, "created_with": {...}, "smcs": {...}}
+        manifest.json        {"format": "sb3-smc-library", "version": 3, "created_with": {...}, "smcs": {...}}
         models/<name>.zip    one SB3 ``model.save`` archive per SMC
 
 Nothing here knows about :class:`~sb3_smc.library.SMCLibrary` beyond the SMCs it is given.
@@ -40,24 +41,24 @@ from sb3_smc.library.manifest import (
     FORMAT,
     FORMAT_VERSION,
     MANIFEST,
-    check_manifest,
-    check_version,
-    entry_layout,
-    make_entry,
+    SUMMARY_FIELDS,
+    LibraryEntry,
+    check_entries,
+    entry_json,
     new_manifest,
     topological_order,
-    upgrade_v1,
 )
+from sb3_smc.library.upgrade import upgrade
 from sb3_smc.smc import SMC
 
 if TYPE_CHECKING:
     from stable_baselines3.common.base_class import BaseAlgorithm
     from stable_baselines3.common.on_policy_algorithm import OnPolicyAlgorithm
 
-__all__ = ["ALGORITHMS", "FORMAT", "FORMAT_VERSION", "MANIFEST", "MODELS", "add_to_library", "check_manifest",
-           "check_model_file", "entry_for", "entry_layout", "interrupted_hint", "link_copy", "load_model", "make_entry",
-           "model_files", "new_manifest", "read_manifest", "remove_from_library", "sha256", "topological_order",
-           "upgrade_v1", "write_library"]
+__all__ = ["ALGORITHMS", "FORMAT", "FORMAT_VERSION", "MANIFEST", "MODELS", "SUMMARY_FIELDS", "LibraryEntry",
+           "add_to_library", "check_manifest", "check_model_file", "entry_for", "entry_json", "interrupted_hint",
+           "link_copy", "load_model", "model_files", "new_manifest", "read_manifest", "remove_from_library", "sha256",
+           "topological_order", "write_library"]
 
 MODELS = "models"
 SAVING_MARKER = ".saving-"
@@ -149,8 +150,9 @@ def check_model_layout(name: str, model: Any, action_names: Sequence[str], size:
 
 def entry_for(smc: SMC) -> dict[str, Any]:
     """The manifest entry of ``smc`` (without the ``model`` file and ``sha256`` fields the save adds)."""
-    return make_entry(smc.kind, type(smc.model).__name__, [c.name for c in smc.children], smc.include_primitives,
-                      frame_stack_of(smc), smc.spec, smc.record, smc.evaluations, smc.test_score, smc.layout)
+    return entry_json(smc.name, type(smc.model).__name__, frame_stack_of(smc), smc.spec, smc.record, smc.evaluations,
+                      kind=smc.kind, children=tuple(c.name for c in smc.children),
+                      include_primitives=smc.include_primitives, layout=smc.layout)
 
 
 def write_library(target: Path, smcs: Mapping[str, SMC], manifest: dict[str, Any]) -> None:
@@ -179,17 +181,15 @@ def write_library(target: Path, smcs: Mapping[str, SMC], manifest: dict[str, Any
         raise
 
 
-def _current_manifest(root: Path) -> tuple[dict[str, Any], Path]:
-    """The manifest of the library in ``root`` (a new, empty one where there is none), which must be of the current
-    version to be written."""
+def _current_manifest(root: Path) -> tuple[dict[str, Any], dict[str, LibraryEntry], Path]:
+    """The manifest of the library in ``root`` as the current version (a library of an earlier version is converted:
+    the next write stores it in the current one), its checked entries, and its path; a new, empty manifest where
+    there is none."""
     manifest_path = root / MANIFEST
     if not manifest_path.is_file():
-        return new_manifest({}), manifest_path
-    manifest, _ = read_manifest(root)
-    if check_version(manifest, manifest_path) != FORMAT_VERSION:
-        raise ManifestError(f"{manifest_path}: version {manifest['version']} library; convert it first "
-                            "(SMCLibrary.load(path).save())")
-    return manifest, manifest_path
+        return new_manifest({}), {}, manifest_path
+    manifest = upgrade(read_manifest(root)[0], manifest_path)
+    return manifest, check_entries(manifest, manifest_path), manifest_path
 
 
 def add_to_library(root: Path, name: str, entry: dict[str, Any], model: bytes, *, replace: bool = False) -> None:
@@ -201,7 +201,7 @@ def add_to_library(root: Path, name: str, entry: dict[str, Any], model: bytes, *
     ``name`` must be there already (an SMC whose model file was damaged, trained again); its model file and entry
     are replaced the same way.
     """
-    manifest, manifest_path = _current_manifest(root)
+    manifest, _, manifest_path = _current_manifest(root)
     smcs = manifest["smcs"]
     if name in smcs and not replace:
         raise LibraryError(f"{manifest_path}: already has an SMC named {name!r}")
@@ -216,12 +216,12 @@ def add_to_library(root: Path, name: str, entry: dict[str, Any], model: bytes, *
 def remove_from_library(root: Path, names: Collection[str]) -> None:
     """Remove the SMCs ``names`` from the library in ``root``: the manifest first (atomically), then their model
     files. No SMC left may call one of them."""
-    manifest, manifest_path = _current_manifest(root)
+    manifest, entries, manifest_path = _current_manifest(root)
     smcs = manifest["smcs"]
     unknown = sorted(set(names) - set(smcs))
     if unknown:
         raise LibraryError(f"{manifest_path}: has no SMC named {unknown[0]!r}{suggest(unknown[0], list(smcs))}")
-    callers = sorted(n for n, e in smcs.items() if n not in names and set(e["children"]) & set(names))
+    callers = sorted(n for n, e in entries.items() if n not in names and set(e.children) & set(names))
     if callers:
         raise LibraryError(f"{manifest_path}: cannot remove {sorted(names)}: {callers} call them")
     files = [smcs.pop(name)["model"] for name in names]
@@ -264,6 +264,12 @@ def interrupted_hint(root: Path) -> str:
             "recover it)")
 
 
+def check_manifest(manifest: Any, where: Path) -> dict[str, LibraryEntry]:
+    """The entries of a manifest of any version (an earlier one converted: :func:`sb3_smc.library.upgrade.upgrade`),
+    checked and with their records parsed."""
+    return check_entries(upgrade(manifest, where), where)
+
+
 def read_manifest(root: Path) -> tuple[dict[str, Any], Path]:
     """The manifest of the library in ``root`` as JSON data (any version), and its path."""
     manifest_path = root / MANIFEST
@@ -275,10 +281,10 @@ def read_manifest(root: Path) -> tuple[dict[str, Any], Path]:
         raise ManifestError(f"{manifest_path} is not valid JSON (corrupt or truncated?): {err}") from None
 
 
-def check_model_file(root: Path, name: str, entry: Mapping[str, Any]) -> None:
+def check_model_file(root: Path, name: str, entry: LibraryEntry) -> None:
     """:class:`CorruptModelError` unless entry ``name``'s model file is there, a readable SB3 zip, with the recorded
     SHA-256."""
-    file = root / entry["model"]
+    file = root / entry.model
     if not file.is_file():
         raise CorruptModelError(f"SMC {name!r}: model file {file} is missing")
     try:
@@ -293,25 +299,25 @@ def check_model_file(root: Path, name: str, entry: Mapping[str, Any]) -> None:
     if "data" not in members or "policy.pth" not in members:
         raise CorruptModelError(f"SMC {name!r}: model file {file} is not a Stable-Baselines3 model archive "
                                 f"(members: {sorted(members)})")
-    if sha256(file) != entry["sha256"]:
+    if sha256(file) != entry.sha256:
         raise CorruptModelError(f"SMC {name!r}: model file {file} does not match the SHA-256 recorded in the "
                                 "manifest (modified or corrupt since it was saved)")
 
 
-def load_model(root: Path, name: str, entry: Mapping[str, Any]) -> BaseAlgorithm:
+def load_model(root: Path, name: str, entry: LibraryEntry) -> BaseAlgorithm:
     """The SB3 model of entry ``name``, after checking its file (:func:`check_model_file`)."""
     check_model_file(root, name, entry)
-    file = root / entry["model"]
-    algorithm = ALGORITHM_REGISTRY[entry["algo"]]
+    file = root / entry.model
+    algorithm = ALGORITHM_REGISTRY[entry.algo]
     cls = algorithm.load_class()
     try:
         model = cls.load(file, device="cpu")
     except Exception as err:  # noqa: BLE001 - SB3 raises many kinds of errors for a bad archive
-        raise CorruptModelError(f"SMC {name!r}: cannot load model file {file} as {entry['algo']}: "
+        raise CorruptModelError(f"SMC {name!r}: cannot load model file {file} as {entry.algo}: "
                                 f"{type(err).__name__}: {err}") from err
     from sb3_contrib.common.recurrent.policies import RecurrentActorCriticPolicy
 
     if isinstance(model.policy, RecurrentActorCriticPolicy) != algorithm.recurrent:
-        raise CorruptModelError(f"SMC {name!r}: the manifest says {entry['algo']}, but {file} holds a "
+        raise CorruptModelError(f"SMC {name!r}: the manifest says {entry.algo}, but {file} holds a "
                                 f"{type(model.policy).__name__} (a model of another algorithm)")
     return model
