@@ -6,12 +6,20 @@ import argparse
 import difflib
 import os
 import sys
+import warnings
 from collections.abc import Sequence
+from pathlib import Path
 from typing import TextIO
 
 import numpy as np
+from PIL import Image, ImageDraw
+from tqdm import tqdm
 
+from pixelworld_env.core.constants import Color
+from pixelworld_env.core.render import rgb_image
 from pixelworld_env.datasets import catalog
+from pixelworld_env.datasets.cache import CacheWarning, cache_dir, load_or_generate
+from pixelworld_env.datasets.loading import dataset_spec
 from pixelworld_env.envs.env import PixelWorldEnv
 from pixelworld_env.envs.registration import make_env, registered_ids
 from pixelworld_env.errors import PixelWorldError
@@ -57,10 +65,6 @@ LABEL_COLORS = {1: (0, 150, 0), 0: (200, 0, 0), None: (60, 60, 60)}
 def _sheet(env: PixelWorldEnv, count: int) -> np.ndarray:
     """The first ``count`` scenes as a sheet of tiles, each captioned with its index (and label: positives framed
     green, negatives red)."""
-    from PIL import Image, ImageDraw
-
-    from pixelworld_env.core.render import rgb_image
-
     tiles = [rgb_image(s.grid(), cell_size=4) for s in env.scenes[:count]]
     cols = min(4, count)
     rows = -(-count // cols)
@@ -87,10 +91,6 @@ def cmd_show(args: argparse.Namespace, out: TextIO) -> None:
     env = _env(args, "ansi")
     indices = range(len(env.scenes)) if args.all else [args.index]
     if args.png:
-        from pathlib import Path
-
-        from PIL import Image
-
         path = Path(args.png)
         if path.suffix.lower() != ".png":
             raise SystemExit(f"pixelworld show: --png needs a file name ending in .png, got {args.png!r}")
@@ -107,18 +107,9 @@ def cmd_show(args: argparse.Namespace, out: TextIO) -> None:
 
 
 def cmd_generate(args: argparse.Namespace, out: TextIO) -> None:
-    from tqdm import tqdm
-
-    from pixelworld_env.datasets.cache import load_or_generate
-    from pixelworld_env.datasets.loading import dataset_spec
-
     names = catalog.dataset_names() if args.all else [n for name in args.names for n in _resolve(name)[1]]
     if not names:
         raise SystemExit("pixelworld generate: name datasets or ids, or pass --all")
-    import warnings
-
-    from pixelworld_env.datasets.cache import CacheWarning, cache_dir
-
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", CacheWarning)
         for name in (bar := tqdm(names, unit="dataset", file=sys.stderr)):
@@ -135,8 +126,6 @@ def cmd_generate(args: argparse.Namespace, out: TextIO) -> None:
 
 
 def cmd_play(args: argparse.Namespace, out: TextIO, keys: TextIO) -> None:
-    from pixelworld_env.core.constants import Color
-
     env = _env(args, "ansi")
     _, info = env.reset(seed=args.episode_seed, options=None if args.index is None else {"index": args.index})
     names = env.action_names

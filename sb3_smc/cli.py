@@ -19,21 +19,29 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from pixelworld_env.errors import PixelWorldError
+from sb3_smc import curricula
+from sb3_smc.curricula import trainer
+from sb3_smc.curricula.executors import BACKENDS
+from sb3_smc.curricula.format import describe
+from sb3_smc.curricula.jobs import DEFAULT_REUSE, DEFAULT_SEEDS, REUSE, check_curriculum
+from sb3_smc.curricula.run_directory import status
+from sb3_smc.errors import SMCError
+from sb3_smc.experiments import report, runner
+from sb3_smc.experiments.design import CATEGORIES, DEFAULT_REPEATS, METHODS
+from sb3_smc.hyperparameters import ALGORITHMS, DEFAULT_ALGORITHM, DEFAULT_TIMESTEPS, RECURRENT_POLICIES
+
 __all__ = ["main"]
 
 
 def _curricula(args: argparse.Namespace) -> int:
-    from sb3_smc.curricula import resolve_curriculum, shipped_curricula
-    from sb3_smc.curricula.format import describe
-    from sb3_smc.curricula.jobs import check_curriculum
-
     if args.name:
-        curriculum = resolve_curriculum(args.name)
+        curriculum = curricula.resolve_curriculum(args.name)
         check_curriculum(curriculum)  # what sb3-smc train checks, with its default settings
         print(describe(curriculum))
         return 0
     rows = [("name", "method", "targets", "nodes per level")]
-    for name, curriculum in shipped_curricula().items():
+    for name, curriculum in curricula.shipped_curricula().items():
         levels = " + ".join(str(len(level)) for level in curriculum.levels())
         rows.append((name, curriculum.method or "", str(len(curriculum.targets)), levels))
     widths = [max(len(row[i]) for row in rows) for i in range(4)]
@@ -44,20 +52,16 @@ def _curricula(args: argparse.Namespace) -> int:
 
 
 def _train(args: argparse.Namespace) -> int:
-    from sb3_smc.curricula.trainer import train_curriculum
-
     targets = [t for item in args.targets for t in item.split(",") if t] if args.targets else None
-    run = train_curriculum(args.curriculum, args.out, targets=targets, seeds=args.seeds, timesteps=args.timesteps,
-                           reuse=args.reuse, workers=args.workers, backend=args.backend, algo=args.algo,
-                           rnn=args.rnn, ray_address=args.ray_address, tensorboard=not args.no_tensorboard,
-                           accept_changes=args.accept_changes)
+    run = trainer.train_curriculum(args.curriculum, args.out, targets=targets, seeds=args.seeds,
+                                   timesteps=args.timesteps, reuse=args.reuse, workers=args.workers,
+                                   backend=args.backend, algo=args.algo, rnn=args.rnn, ray_address=args.ray_address,
+                                   tensorboard=not args.no_tensorboard, accept_changes=args.accept_changes)
     print(f"library: {run.library}")
     return 1 if run.failed else 0
 
 
 def _status(args: argparse.Namespace) -> int:
-    from sb3_smc.curricula.run_directory import status
-
     state = status(args.directory)
     settings = state["settings"]
     print(f"{args.directory}: curriculum {settings['curriculum']}, {len(settings['nodes'])} nodes x "
@@ -78,8 +82,6 @@ def _resume_command(directory: Path, settings: dict[str, Any]) -> str:
     """The command that resumes the run in ``directory``: an experiment's recorded command, else ``sb3-smc train``
     with the settings of ``run.json`` (its curriculum named so where it is a file; where curricula were merged, what
     to look for)."""
-    from sb3_smc.curricula import shipped_curricula
-
     try:
         command = json.loads((directory / "results.json").read_text(encoding="utf-8")).get("command")
     except (OSError, ValueError, AttributeError):
@@ -87,10 +89,11 @@ def _resume_command(directory: Path, settings: dict[str, Any]) -> str:
     if isinstance(command, str):
         return command
     name = settings["curriculum"]
-    if "+" in name and name not in shipped_curricula():  # curricula merged: an experiment, or several in Python
+    shipped = curricula.shipped_curricula()
+    if "+" in name and name not in shipped:  # curricula merged: an experiment, or several in Python
         return (f"the command or call that started it, with the same options (for an experiment: sb3-smc experiment "
                 f"--out {shlex.quote(str(directory))} ...)")
-    curriculum = name if name in shipped_curricula() else f"<the curriculum file of {name!r}>"
+    curriculum = name if name in shipped else f"<the curriculum file of {name!r}>"
     options = [("--out", str(directory)), ("--targets", ",".join(settings["targets"])), ("--seeds", settings["seeds"]),
                ("--timesteps", settings.get("timesteps")), ("--reuse", settings.get("reuse")),
                ("--algo", settings.get("algo")), ("--rnn", settings.get("rnn"))]
@@ -99,11 +102,9 @@ def _resume_command(directory: Path, settings: dict[str, Any]) -> str:
 
 
 def _experiment(args: argparse.Namespace) -> int:
-    from sb3_smc.experiments.runner import run_experiment
-
     methods = [m for item in args.methods.split(",") if (m := item.strip())]
     targets = [t for item in args.targets for t in item.split(",") if t] if args.targets else None
-    run_experiment(args.out, methods=methods, targets=targets, category=args.category, seeds=args.seeds,
+    runner.run_experiment(args.out, methods=methods, targets=targets, category=args.category, seeds=args.seeds,
                    timesteps=args.timesteps, repeats=args.repeats, workers=args.workers, backend=args.backend,
                    ray_address=args.ray_address, algo=args.algo, rnn=args.rnn, train=not args.no_train)
     print(f"next: sb3-smc report {shlex.quote(args.out)}")
@@ -111,9 +112,7 @@ def _experiment(args: argparse.Namespace) -> int:
 
 
 def _report(args: argparse.Namespace) -> int:
-    from sb3_smc.experiments.report import write_report
-
-    for path in write_report(args.directories, out=args.out, trajectories=args.trajectories,
+    for path in report.write_report(args.directories, out=args.out, trajectories=args.trajectories,
                              behaviour=not args.no_behaviour):
         print(f"wrote {path}")
     return 0
@@ -140,8 +139,6 @@ def _positive(text: str) -> int:
 
 
 def _learner_arguments(parser: argparse.ArgumentParser) -> None:
-    from sb3_smc.hyperparameters import ALGORITHMS, DEFAULT_ALGORITHM, RECURRENT_POLICIES
-
     parser.add_argument("--algo", default=None, choices=ALGORITHMS,
                         help=f"algorithm of every SMC (default: each node's, else {DEFAULT_ALGORITHM})")
     parser.add_argument("--rnn", default=None, choices=sorted(RECURRENT_POLICIES),
@@ -150,11 +147,6 @@ def _learner_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    from sb3_smc.curricula.executors import BACKENDS
-    from sb3_smc.curricula.jobs import DEFAULT_REUSE, DEFAULT_SEEDS, REUSE
-    from sb3_smc.experiments.design import CATEGORIES, DEFAULT_REPEATS, METHODS
-    from sb3_smc.hyperparameters import DEFAULT_TIMESTEPS
-
     parser = argparse.ArgumentParser(prog="sb3-smc", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = parser.add_subparsers(dest="command", required=True)
@@ -228,9 +220,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.set_defaults(run=_status)
 
     args = parser.parse_args(argv)
-    from pixelworld_env.errors import PixelWorldError
-    from sb3_smc.errors import SMCError
-
     try:
         return args.run(args)
     except (SMCError, PixelWorldError) as err:  # bad input, said in one line; anything else is a bug: its traceback

@@ -20,6 +20,9 @@ import time
 from pathlib import Path
 
 from pixelworld_env.demo import play
+from sb3_smc.curricula.run_directory import RunSettingsError
+from sb3_smc.experiments.report import write_report
+from sb3_smc.experiments.runner import run_experiment
 
 TARGET = "cl_self-in-container_vs_noncontainer"
 METHODS = ("cnn", "base", "curr")
@@ -28,11 +31,7 @@ METHODS = ("cnn", "base", "curr")
 def experiment(out: str | Path = "demo-output", seed_count: int = 2, timesteps: int = 100_000,
                workers: int = 2) -> Path:
     """Run the small experiment into ``out`` and write its report; returns the report's path."""
-    import torch
-
-    from sb3_smc.curricula.run_directory import RunSettingsError
-    from sb3_smc.experiments.report import write_report
-    from sb3_smc.experiments.runner import run_experiment
+    import torch  # only for the experiment: the play-only demo loads no torch
 
     torch.set_num_threads(1)
     start = time.perf_counter()

@@ -8,19 +8,20 @@ SMC's environment here, so the observation layout, action list and wrapper setti
 from __future__ import annotations
 
 import dataclasses
+import difflib
+import inspect
 from collections.abc import Mapping, Sequence
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import gymnasium as gym
 
+from pixelworld_env.envs.env import PixelWorldEnv  # pixelworld_env registers the PW-* ids on import
+from pixelworld_env.envs.registration import make_env
 from sb3_smc.errors import SMCError, SMCTypeError
 from sb3_smc.records import TaskSpec, TrainingSpec, WrapperSettings
 from sb3_smc.smc import SMC
 from sb3_smc.tasks import TaskEnv, task_layer
 from sb3_smc.wrapper import HierarchicalSMCWrapper
-
-if TYPE_CHECKING:
-    from pixelworld_env.envs.env import PixelWorldEnv
 
 __all__ = ["check_env_kwargs", "is_pixelworld_id", "make_smc_env", "pixelworld_base", "spec_for_smc", "task_base",
            "wrap_with_smcs"]
@@ -42,8 +43,6 @@ def task_base(env: gym.Env) -> TaskEnv:
 
 def pixelworld_base(env: gym.Env) -> PixelWorldEnv:
     """:func:`task_base`, which must be a :class:`~pixelworld_env.envs.env.PixelWorldEnv` (``TypeError`` otherwise)."""
-    from pixelworld_env.envs.env import PixelWorldEnv
-
     base = task_base(env)
     if not isinstance(base, PixelWorldEnv):
         raise SMCTypeError(f"SMCs act on PixelWorld environments here; got {type(env.unwrapped).__name__}")
@@ -70,8 +69,6 @@ def make_smc_env(spec: TrainingSpec, children: Sequence[SMC] = (), *, env: gym.E
                        f"{list(names)}")
     settings = wrapper or spec.wrapper
     if env is None:
-        import pixelworld_env  # noqa: F401  (registers the PW-* ids)
-
         env_id = env_id or spec.task.env_id
         kwargs = {"disable_env_checker": True, **check_env_kwargs(env_id, {**spec.task.env_kwargs,
                                                                            **_mapping(env_kwargs)})}
@@ -95,8 +92,6 @@ def _mapping(env_kwargs: Any) -> dict[str, Any]:
 
 def is_pixelworld_id(env_id: str) -> bool:
     """Whether ``env_id`` is registered with PixelWorld's entry point (a ``PW-*`` id or one made like them)."""
-    from pixelworld_env.envs.registration import make_env
-
     try:
         entry = gym.spec(env_id).entry_point
     except gym.error.Error:
@@ -108,11 +103,6 @@ def check_env_kwargs(env_id: str, kwargs: dict[str, Any]) -> dict[str, Any]:
     """``kwargs`` for ``gym.make(env_id, split=..., max_steps=..., **kwargs)``: :class:`SMCError` for ``split`` or
     ``max_steps`` (set by the spec or make_smc_env's arguments) and, for a PixelWorld id, for a name its
     environment does not take (the values are checked by the environment)."""
-    import difflib
-    import inspect
-
-    from pixelworld_env.envs.registration import make_env
-
     clash = sorted({"split", "max_steps"} & set(kwargs))
     if clash:
         raise SMCError(f"env_kwargs {clash}: the split is make_smc_env's split= (else the spec's task.split), "

@@ -33,7 +33,14 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from pixelworld_env.envs.env import BRING_ABOUT, CLASSIFICATION, CLASSIFICATION_REWARD, GOAL_POTENTIAL, GOAL_REWARD
+from pixelworld_env.envs.env import (
+    BRING_ABOUT,
+    CLASSIFICATION,
+    CLASSIFICATION_REWARD,
+    GOAL_POTENTIAL,
+    GOAL_REWARD,
+    PixelWorldEnv,
+)
 from sb3_smc.errors import SMCError, SMCTypeError
 from sb3_smc.layout import SIGNALS, Layout
 
@@ -280,8 +287,6 @@ class SMCTask(gym.Wrapper, gym.utils.RecordConstructorArgs):
 def task_layer(env: gym.Env) -> TaskEnv:
     """The task under ``env``'s wrappers that SMC calls act on: a :class:`pixelworld_env.PixelWorldEnv` or an
     :class:`SMCTask` (the outermost one); :class:`SMCTypeError` if there is none."""
-    from pixelworld_env.envs.env import PixelWorldEnv
-
     layer: Any = env
     while True:
         if isinstance(layer, PixelWorldEnv | SMCTask):

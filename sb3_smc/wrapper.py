@@ -9,6 +9,7 @@ from typing import Any, Protocol, TypeVar, cast
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
+from gymnasium.wrappers import OrderEnforcing, PassiveEnvChecker
 
 from pixelworld_env.core.constants import NUM_COLORS
 from pixelworld_env.core.world import MOVES as MOVE_OFFSETS
@@ -39,8 +40,6 @@ class _CompiledPolicy(StepPolicy, Protocol):
 
 
 def _only_order_checks(env: gym.Env, base: gym.Env) -> bool:
-    from gymnasium.wrappers import OrderEnforcing, PassiveEnvChecker
-
     layer = env
     while layer is not base:
         if type(layer) not in (OrderEnforcing, PassiveEnvChecker):

@@ -12,6 +12,7 @@ import numpy as np
 
 from pixelworld_env.core.constants import FLOOR_HEIGHT, Color, ObjectClass
 from pixelworld_env.core.objects import Cell, WorldObject, cell_extent, frame_object, object_class
+from pixelworld_env.core.shapes import check_family, shape_library
 from pixelworld_env.errors import PixelWorldError, PixelWorldTypeError
 
 _PIXEL_CLASSES = frozenset({ObjectClass.SELF, ObjectClass.BASIC, ObjectClass.IMMOVEABLE})
@@ -28,8 +29,6 @@ ASCII_LEGEND = {
 
 
 def _known_family(family: str, what: str) -> str:
-    from pixelworld_env.core.shapes import check_family
-
     try:
         return check_family(family)
     except ValueError as exc:
@@ -42,8 +41,6 @@ def _template_size(family: str | None, shape_idx: int, cells: tuple[Cell, ...]) 
     Library objects (the original samples) keep their library template's size, which may include empty
     rows or columns; anything else gets the extent of its cells.
     """
-    from pixelworld_env.core.shapes import shape_library
-
     templates = shape_library().get(family or "")
     if templates:
         tmpl = templates[shape_idx % len(templates)]

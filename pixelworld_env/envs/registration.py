@@ -13,18 +13,16 @@ Making an env loads (or generates, once) only the datasets it uses.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Literal
+from typing import Literal
 
 import gymnasium as gym
 
 from pixelworld_env.datasets import catalog
 from pixelworld_env.datasets.loading import Split, load_dataset
 from pixelworld_env.envs.env import Observation, PixelWorldEnv, check_settings
+from pixelworld_env.envs.vector import RENDER_ENVS, PixelWorldVectorEnv
 from pixelworld_env.errors import PixelWorldError
 from pixelworld_env.validation import check_bool, check_int
-
-if TYPE_CHECKING:
-    from pixelworld_env.envs.vector import PixelWorldVectorEnv
 
 ENTRY_POINT = "pixelworld_env.envs.registration:make_env"
 VECTOR_ENTRY_POINT = "pixelworld_env.envs.registration:make_vector_env"
@@ -67,8 +65,6 @@ def make_vector_env(num_envs: int = 1, *, datasets: Sequence[str], split: Split 
                     render_envs: Literal["all", "first"] = "all") -> PixelWorldVectorEnv:
     """``num_envs`` environments of :func:`make_env` as one :class:`~pixelworld_env.envs.vector.PixelWorldVectorEnv`
     (the ids' ``vector_entry_point``); settings the vector env refuses are refused before any dataset is loaded."""
-    from pixelworld_env.envs.vector import RENDER_ENVS, PixelWorldVectorEnv  # numba: only when a vector env is made
-
     check_int(num_envs, "num_envs", 1)
     if check_bool(aaai18_reset_bug, "aaai18_reset_bug") or render_mode == "human" or render_envs not in RENDER_ENVS:
         PixelWorldVectorEnv.check_settings(aaai18_reset_bug=aaai18_reset_bug, render_mode=render_mode,

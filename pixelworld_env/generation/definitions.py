@@ -34,12 +34,15 @@ from typing import TYPE_CHECKING, Any, cast
 
 import yaml
 
+from pixelworld_env.concepts import PREDICATES, Concept, ConceptError, parse
 from pixelworld_env.errors import PixelWorldError, PixelWorldKeyError
+from pixelworld_env.generation.dataset import generate
+from pixelworld_env.generation.dataset import split as stratified_split
+from pixelworld_env.generation.dataset_spec import DatasetSpec
 
 if TYPE_CHECKING:
     from pixelworld_env.core.constants import Kind
     from pixelworld_env.envs.env import PixelWorldEnv
-    from pixelworld_env.generation.dataset_spec import DatasetSpec
 
 #: Top-level keys with a meaning of their own (everything else that is a list of strings is a named list).
 SECTIONS = ("concepts", "generators", "datasets", "curriculum")
@@ -158,8 +161,6 @@ class DefinitionSet:
 
     def dataset_spec(self, name: str, num_samples: int = 50) -> DatasetSpec:
         """The generation spec of dataset ``name`` (for :func:`pixelworld_env.generation.dataset.generate`)."""
-        from pixelworld_env.generation.dataset_spec import DatasetSpec
-
         if name not in self.datasets:
             close = difflib.get_close_matches(name, list(self.datasets), n=3)
             hint = f"; did you mean {', '.join(repr(c) for c in close)}?" if close else ""
@@ -176,8 +177,6 @@ class DefinitionSet:
         cached), split 50/50 stratified like the catalog's (``split`` "train", "test" or "all"); ``kwargs`` go to
         the environment."""
         from pixelworld_env.envs.env import PixelWorldEnv
-        from pixelworld_env.generation.dataset import generate
-        from pixelworld_env.generation.dataset import split as stratified_split
 
         if split not in ("train", "test", "all"):
             raise PixelWorldError(f"split must be 'train', 'test' or 'all', got {split!r}")
@@ -310,8 +309,6 @@ def _check_expressions(result: DefinitionSet) -> None:
     """Compile every concept and generator against the complete macro table (syntax, predicates and macros,
     arities), used by a dataset or not; errors name the file and line of the definition. Only the release's
     known defect (:data:`RELEASE_UNRESOLVED`, unused) is recorded instead."""
-    from pixelworld_env.concepts import PREDICATES, Concept, ConceptError, parse
-
     macros = result.macros
     used = {name for d in result.datasets.values() for name in (d.concept, *d.generators)}
     for section in ("concepts", "generators"):

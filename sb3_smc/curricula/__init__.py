@@ -32,7 +32,7 @@ def resolve_curriculum(curriculum: str | Path | Curriculum) -> Curriculum:
 
 
 def __getattr__(name: str):
-    if name == "train_curriculum":  # imports torch: only on use
+    if name == "train_curriculum":  # loads pixelworld_env (numba, Gymnasium, SciPy): only on use
         from sb3_smc.curricula.trainer import train_curriculum
 
         return train_curriculum

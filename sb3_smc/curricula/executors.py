@@ -7,8 +7,11 @@ Each executor takes the function that trains a job (:func:`~sb3_smc.curricula.jo
 
 from __future__ import annotations
 
+import multiprocessing
 import os
 from collections.abc import Callable
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
 from typing import Any
 
 from sb3_smc.curricula.jobs import Job, JobResult
@@ -35,7 +38,7 @@ class _InProcess:
         self._jobs[handle] = job
         return handle
 
-    def wait(self, handles: list[int]) -> list[tuple[int, Any]]:
+    def wait(self, handles: list[int]) -> list[tuple[int, JobResult | Exception]]:
         handle = handles[0]
         try:
             return [(handle, self._run(self._jobs.pop(handle)))]
@@ -51,9 +54,6 @@ class _Processes:
     again."""
 
     def __init__(self, run: Callable[[Job], JobResult], workers: int) -> None:
-        import multiprocessing
-        from concurrent.futures import ProcessPoolExecutor
-
         def make() -> ProcessPoolExecutor:
             return ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"))
 
@@ -61,15 +61,12 @@ class _Processes:
         self._make = make
         self._pool = make()
 
-    def submit(self, job: Job) -> Any:
+    def submit(self, job: Job) -> Future[JobResult]:
         return self._pool.submit(self._run, job)
 
-    def wait(self, handles: list[Any]) -> list[tuple[Any, Any]]:
-        from concurrent.futures import FIRST_COMPLETED, wait
-        from concurrent.futures.process import BrokenProcessPool
-
+    def wait(self, handles: list[Future[JobResult]]) -> list[tuple[Future[JobResult], JobResult | BaseException]]:
         done, _ = wait(handles, return_when=FIRST_COMPLETED)
-        out = []
+        out: list[tuple[Future[JobResult], JobResult | BaseException]] = []
         broken = False
         for future in done:
             error = future.exception()
@@ -131,7 +128,8 @@ class _Ray:
         self._pending.clear()
 
 
-def make_executor(backend: str, workers: int, address: str | None, run: Callable[[Job], JobResult]) -> Any:
+def make_executor(backend: str, workers: int, address: str | None,
+                  run: Callable[[Job], JobResult]) -> _InProcess | _Processes | _Ray:
     """The executor of a run's ``backend`` (``workers`` local processes, or this process for one worker; Ray tasks
     on the cluster at ``address``), training each job with ``run``."""
     if backend == "ray":

@@ -14,8 +14,10 @@ import json
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+from sb3_smc.common.threads import torch_threads
 from sb3_smc.curricula.format import SEED_SEPARATOR, Curriculum, CurriculumError, Node
 from sb3_smc.hyperparameters import DEFAULT_ALGORITHM, DEFAULT_TIMESTEPS, recurrent_policy
+from sb3_smc.library import SMCLibrary
 from sb3_smc.records import Budget, TaskSpec, TrainingRecord, TrainingSpec, WrapperSettings
 
 __all__ = ["DEFAULT_REUSE", "DEFAULT_SEEDS", "REUSE", "Job", "JobResult", "check_curriculum", "file_stem", "job_name",
@@ -70,9 +72,7 @@ class JobResult:
 def run_job(job: Job) -> JobResult:
     """Train ``job`` (one torch thread; the caller's count is restored) and return its result; the same in any
     process or Ray worker."""
-    from sb3_smc.common.threads import torch_threads
-    from sb3_smc.library import SMCLibrary
-    from sb3_smc.training import train_smc
+    from sb3_smc.training import train_smc  # torch and Stable-Baselines3: in the worker only
 
     spec = job.spec
     children = SMCLibrary.load(job.library, names=spec.children) if spec.children else {}

@@ -19,9 +19,11 @@ this module writes).
 from __future__ import annotations
 
 import argparse
+import difflib
 from importlib import resources
 from pathlib import Path
 
+from sb3_smc.curricula.designed import designed_curricula
 from sb3_smc.curricula.format import Curriculum, CurriculumError, Node, parse_curriculum
 
 __all__ = ["DATA", "build_shipped", "shipped_curricula", "shipped_curriculum", "write_shipped"]
@@ -97,8 +99,6 @@ def build_shipped() -> dict[str, Curriculum]:
             out[name] = Curriculum(name=name, nodes=(*flat.values(), *upper), targets=tuple(targets),
                                    method=method + ("-noprim" if not primitives else ""), description=description,
                                    source=f"shipped curriculum {name!r}")
-    from sb3_smc.curricula.designed import designed_curricula
-
     out.update(designed_curricula())
     return dict(sorted(out.items()))
 
@@ -134,8 +134,6 @@ def shipped_curriculum(name: str) -> Curriculum:
     """The shipped curriculum ``name`` (``CurriculumError`` with close names otherwise)."""
     curricula = shipped_curricula()
     if name not in curricula:
-        import difflib
-
         close = difflib.get_close_matches(name, list(curricula), n=3, cutoff=0.5)
         hint = f"; did you mean {' or '.join(repr(c) for c in close)}?" if close else \
             f" (shipped: {', '.join(curricula)})"

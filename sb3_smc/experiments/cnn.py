@@ -19,11 +19,15 @@ from __future__ import annotations
 
 import time
 from dataclasses import asdict, dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from sb3_smc.common.threads import torch_threads
 from sb3_smc.errors import SMCError
+
+if TYPE_CHECKING:
+    from torch import nn
 
 __all__ = ["CHANNELS", "CNNResult", "encode", "train_cnn"]
 
@@ -54,7 +58,7 @@ def encode(grids: list[np.ndarray]) -> np.ndarray:
     return np.stack([(stack == code) for code in CHANNELS], axis=1).astype(np.float32)
 
 
-def _network(height: int, width: int) -> Any:
+def _network(height: int, width: int) -> nn.Sequential:
     from torch import nn
 
     return nn.Sequential(
@@ -67,7 +71,6 @@ def train_cnn(target: str, seed: int, *, dataset_seed: int = 0) -> CNNResult:
     """Train the CNN on ``target``'s training split with ``seed`` and test it on the test split (one torch thread;
     the caller's count is restored)."""
     from pixelworld_env.datasets import catalog
-    from sb3_smc.common.threads import torch_threads
 
     if catalog.dataset(target).kind != "classification":
         raise SMCError(f"the CNN baseline classifies: {target!r} is a bring-about dataset")

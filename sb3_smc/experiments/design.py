@@ -12,6 +12,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+from sb3_smc.curricula import shipped_curricula
 from sb3_smc.curricula.format import Curriculum, CurriculumError, Node, merge
 from sb3_smc.errors import SMCError
 
@@ -65,8 +66,7 @@ def level2_targets(category: str = "all") -> list[str]:
     """The higher-level target datasets of one category, or ``all`` the paper's 51 of the released benchmark (34
     classification, 17 bring-about; ``pushable``: the 8 nodes above level 1 of the designed pushable
     curriculum)."""
-    from pixelworld_env.datasets import catalog
-    from sb3_smc.curricula import shipped_curricula
+    from pixelworld_env.datasets import catalog  # pixelworld_env (numba, Gymnasium): on use
 
     if category != "all" and category not in CATEGORIES:
         raise SMCError(f"category must be one of {(*CATEGORIES, 'all')}, got {category!r}")
@@ -99,8 +99,7 @@ class ExperimentPlan:
 
 def plan(targets: Sequence[str], methods: Sequence[str]) -> ExperimentPlan:
     """The curricula and nodes of ``methods`` for ``targets`` (dataset names)."""
-    from pixelworld_env.datasets import catalog
-    from sb3_smc.curricula import shipped_curricula
+    from pixelworld_env.datasets import catalog  # pixelworld_env (numba, Gymnasium): on use
 
     unknown = [m for m in methods if m not in METHODS]
     if unknown:

@@ -21,9 +21,12 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, cast
 
+import gymnasium as gym
 import numpy as np
 
-from pixelworld_env.atomic import atomic_write
+from pixelworld_env.atomic import atomic_write  # pixelworld_env registers the PW-* ids on import
+from pixelworld_env.core.render import rgb_image
+from sb3_smc.evaluation import episode_seed, make_evaluation_env, run_episode, start_seed
 from sb3_smc.experiments.design import METHOD_REGISTRY
 
 if TYPE_CHECKING:
@@ -78,16 +81,10 @@ def goal_cells(env: PixelWorldEnv, index: int) -> list[tuple[int, int]]:
     return out
 
 
-def trajectory_figure(smcs: Mapping[str, Any], target: str, path: str | Path, *, environments: int = 6,
+def trajectory_figure(smcs: Mapping[str, SMC], target: str, path: str | Path, *, environments: int = 6,
                       repeats: int = 10, seed: int = 0) -> Path:
     """Fig. 4: the visited cells of ``repeats`` test episodes of each SMC (``method -> SMC``) on the first
     ``environments`` test environments of ``target``."""
-    import gymnasium as gym
-
-    import pixelworld_env  # noqa: F401  (registers the PW-* ids)
-    from pixelworld_env.core.render import rgb_image
-    from sb3_smc.evaluation import episode_seed, make_evaluation_env, run_episode
-
     plt = pyplot()
     env = cast("PixelWorldEnv", gym.make(f"PW-{target}-v0", split="test").unwrapped)
     count = min(environments, len(env.scenes))
@@ -143,9 +140,6 @@ def timeline_figure(smc: SMC, target: str, path: str | Path, *, index: int = 0, 
     """Fig. 1: one test episode of ``smc`` on environment ``index`` of ``target``: a row per depth (0 = the SMC
     itself), a bar per primitive move coloured by the acting SMC, each call's outcome written at its end.
     ``env_id`` (default ``PW-<target>-v0``) may be another environment's SMC task: its test start state ``index``."""
-    import pixelworld_env  # noqa: F401
-    from sb3_smc.evaluation import make_evaluation_env, run_episode, start_seed
-
     plt = pyplot()
     env = make_evaluation_env(smc, env_id or f"PW-{target}-v0")  # the SMC's own settings, test split
     start = None if env.pixelworld else start_seed("test", index)

@@ -23,9 +23,11 @@ from typing import Any
 import numpy as np
 
 from pixelworld_env.atomic import atomic_write
+from sb3_smc.curricula.designed import designed_curricula
+from sb3_smc.curricula.jobs import job_name
 from sb3_smc.errors import SMCError
 from sb3_smc.experiments.design import CATEGORIES, METHOD_REGISTRY, METHODS, PAPER_CATEGORIES, SMC_METHODS
-from sb3_smc.experiments.figures import Panel, bar_panels
+from sb3_smc.experiments.figures import Panel, bar_panels, timeline_figure, trajectory_figure
 from sb3_smc.experiments.paper import PAPER_CONCEPTS, PAPER_COUNTS, PAPER_MEANS, PAPER_NOPRIM, PAPER_TTESTS
 from sb3_smc.experiments.runner import experiment_command, read_results
 from sb3_smc.experiments.statistics import (
@@ -38,6 +40,8 @@ from sb3_smc.experiments.statistics import (
     seed_summary,
     wins,
 )
+from sb3_smc.hyperparameters import ALGORITHM_REGISTRY
+from sb3_smc.library import SMCLibrary, storage
 
 __all__ = ["pushable_levels", "write_report"]
 
@@ -93,10 +97,6 @@ def _behaviour(directory: Path, figures: Path, reported: Sequence[dict[str, Any]
     """The Fig. 4 / Fig. 1 pictures of the best SMCs of ``target`` (trained in ``directory``) into ``figures``; or
     none and the reason, when the run directory does not hold their models (a run kept as records:
     ``docs/experiments.md``)."""
-    from sb3_smc.curricula.jobs import job_name
-    from sb3_smc.experiments.figures import timeline_figure, trajectory_figure
-    from sb3_smc.library import SMCLibrary, storage
-
     best = {r["method"]: job_name(r["curriculum"], r["seed"]) for r in reported
             if r["target"] == target and r["method"] in SMC_METHODS}
     if not best:
@@ -387,8 +387,6 @@ def _code_line(results: dict[str, Any]) -> list[str]:
 
 def pushable_levels() -> dict[str, int]:
     """Dataset -> level (1 = flat) of every concept of the designed pushable curriculum."""
-    from sb3_smc.curricula.designed import designed_curricula
-
     curriculum = designed_curricula()["pushable"]
     return {curriculum.node(name).task: depth for depth, names in enumerate(curriculum.levels(), start=1)
             for name in names}
@@ -406,8 +404,6 @@ def _pushable_figure(folder: Path, table: _Table, targets: Sequence[str], level:
 def _learner(settings: dict[str, Any]) -> str:
     """The algorithm and cell of the run's SMCs (runs from before the ``--algo`` / ``--rnn`` options: the
     defaults, RecurrentPPO with an LSTM)."""
-    from sb3_smc.hyperparameters import ALGORITHM_REGISTRY
-
     algo = settings.get("algo", "RecurrentPPO")
     recurrent = algo in ALGORITHM_REGISTRY and ALGORITHM_REGISTRY[algo].recurrent
     return f"{algo} ({settings.get('rnn', 'lstm').upper() if recurrent else 'MLP'})"

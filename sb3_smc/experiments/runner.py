@@ -32,13 +32,18 @@ from pathlib import Path
 from typing import Any
 
 from pixelworld_env.atomic import atomic_write
+from pixelworld_env.datasets import catalog
+from sb3_smc.common.threads import torch_threads
 from sb3_smc.curricula.executors import BACKENDS
 from sb3_smc.curricula.jobs import DEFAULT_SEEDS, file_stem, job_name, name_of_file
 from sb3_smc.curricula.run_directory import RunFileError, RunSettingsError, read_json
 from sb3_smc.curricula.trainer import check_run_options, finished_jobs, train_curriculum
 from sb3_smc.errors import SMCError, SMCRuntimeError
+from sb3_smc.evaluation import evaluate
+from sb3_smc.experiments.cnn import train_cnn
 from sb3_smc.experiments.design import DEFAULT_REPEATS, METHOD_REGISTRY, METHODS, level2_targets, plan
 from sb3_smc.hyperparameters import DEFAULT_ALGORITHM, DEFAULT_TIMESTEPS
+from sb3_smc.library import SMCLibrary
 from sb3_smc.records import package_versions
 
 __all__ = ["RESULT_FIELDS", "read_results", "run_experiment"]
@@ -73,8 +78,6 @@ def run_experiment(
     ``train=False`` trains nothing: it tabulates what the directory's run has finished so far (while it may still be
     training): the finished SMCs are evaluated (and the CNN trained), the rest are listed in ``missing`` and the
     results are marked ``"complete": false`` (the report says so). Running with ``train=True`` completes them."""
-    from pixelworld_env.datasets import catalog
-
     if targets is not None and category is not None:
         raise SMCError("give targets or a category, not both")
     if isinstance(repeats, bool) or not isinstance(repeats, int) or repeats < 1:
@@ -266,10 +269,6 @@ def _evaluation(directory: Path, name: str, repeats: int) -> dict[str, Any]:
     saved = _saved_evaluation(path, repeats)
     if saved is not None:
         return saved
-    from sb3_smc.common.threads import torch_threads
-    from sb3_smc.evaluation import evaluate
-    from sb3_smc.library import SMCLibrary
-
     smc = SMCLibrary.load(directory / "library", names=[name])[name]
     with torch_threads(1):
         result = evaluate(smc, repeats=repeats, seed=0, record_cells=False)
@@ -291,8 +290,6 @@ def _cnn(directory: Path, target: str, seed: int) -> dict[str, Any]:
         if not isinstance(saved, dict) or not isinstance(saved.get("test_score"), int | float):
             raise RunFileError(f"{path} is not a CNN result (no test_score); delete it to train that CNN again")
         return saved
-    from sb3_smc.experiments.cnn import train_cnn
-
     result = train_cnn(target, seed).to_dict()
     atomic_write(path, json.dumps(result, indent=2) + "\n")
     return result

@@ -14,6 +14,7 @@ from typing import Any
 
 import yaml
 
+from pixelworld_env.atomic import atomic_write
 from sb3_smc.errors import SMCError
 from sb3_smc.hyperparameters import ALGORITHM_REGISTRY, DEFAULT_N_ENVS, DEFAULT_TIMESTEPS, STEPS_PER_UPDATE
 
@@ -88,8 +89,6 @@ def render_config(zoo_algo: str) -> str:
 
 def write_configs(directory: str | Path) -> list[Path]:
     """Write every ``<zoo_algo>.yml`` into ``directory``; returns the paths."""
-    from pixelworld_env.atomic import atomic_write
-
     return [atomic_write(Path(directory) / f"{zoo_algo}.yml", render_config(zoo_algo)) for zoo_algo in ZOO_ALGOS]
 
 

@@ -6,11 +6,19 @@ from __future__ import annotations
 import functools
 import sys
 from collections.abc import Sequence
-from typing import Any
+from typing import TYPE_CHECKING
 
+from pixelworld_env.envs.env import PixelWorldEnv
 from sb3_smc.callbacks import SMCTrainingCallback
+from sb3_smc.envs import task_base, wrap_with_smcs
 from sb3_smc.errors import SMCError, SMCTypeError
+from sb3_smc.library import SMCLibrary
 from sb3_smc.records import WrapperSettings
+
+if TYPE_CHECKING:
+    import gymnasium as gym
+
+    from sb3_smc.wrapper import HierarchicalSMCWrapper
 
 __all__ = ["SMCZooCallback", "smc_env"]
 
@@ -18,14 +26,12 @@ _ANNOUNCED: set[tuple[str, str | None]] = set()
 
 
 @functools.lru_cache(maxsize=8)
-def _library(path: str) -> Any:
-    from sb3_smc.library import SMCLibrary
-
+def _library(path: str) -> SMCLibrary:
     return SMCLibrary.load(path)
 
 
-def smc_env(env: Any, library: str | None = None, names: Sequence[str] = (), include_primitives: bool = True,
-            count_primitive_steps: bool = False, call_step_cap: int = 100) -> Any:
+def smc_env(env: gym.Env, library: str | None = None, names: Sequence[str] = (), include_primitives: bool = True,
+            count_primitive_steps: bool = False, call_step_cap: int = 100) -> HierarchicalSMCWrapper:
     """rl_zoo3 ``env_wrapper`` entry: ``env`` with the SMCs ``names`` of the library at ``library`` as actions.
 
     ``env`` is a PixelWorld environment or an SMC task on any environment (:class:`~sb3_smc.tasks.SMCTask`, its
@@ -35,9 +41,6 @@ def smc_env(env: Any, library: str | None = None, names: Sequence[str] = (), inc
     split it serves (``rl_zoo3 enjoy`` evaluates on what it says: pass ``--env-kwargs split:"'test'"`` for the test
     environments).
     """
-    from pixelworld_env.envs.env import PixelWorldEnv
-    from sb3_smc.envs import task_base, wrap_with_smcs
-
     if names and library is None:
         raise SMCError(f"smc_env: names {list(names)} given without the library they come from")
     smcs = [_library(str(library))[name] for name in names] if library is not None else []

@@ -8,12 +8,12 @@ import numpy as np
 import torch
 from sb3_contrib import RecurrentPPO
 from sb3_contrib.common.recurrent.buffers import RecurrentRolloutBuffer
+from sb3_contrib.common.recurrent.type_aliases import RecurrentRolloutBufferSamples
 
 from sb3_smc.common.recurrent.policies import SequenceLstmPolicy
 from sb3_smc.common.recurrent.type_aliases import SequenceStates
 
 if TYPE_CHECKING:
-    from sb3_contrib.common.recurrent.type_aliases import RecurrentRolloutBufferSamples
     from stable_baselines3.common.vec_env import VecNormalize
 
 __all__ = ["CompactRecurrentRolloutBuffer", "use_compact_buffer"]
@@ -33,8 +33,6 @@ class CompactRecurrentRolloutBuffer(RecurrentRolloutBuffer):
     def _get_samples(  # type: ignore[override]
             self, batch_inds: np.ndarray, env_change: np.ndarray, env: VecNormalize | None = None
     ) -> RecurrentRolloutBufferSamples:
-        from sb3_contrib.common.recurrent.type_aliases import RecurrentRolloutBufferSamples
-
         episode_starts = self.episode_starts[batch_inds].reshape(-1)
         seq_start = np.logical_or(episode_starts, env_change[batch_inds].reshape(-1))
         seq_start[0] = True

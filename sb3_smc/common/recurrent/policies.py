@@ -14,6 +14,7 @@ from stable_baselines3.common.torch_layers import FlattenExtractor
 from torch import nn
 from torch.distributions import Categorical
 
+from sb3_smc.common import kernels
 from sb3_smc.common.recurrent.type_aliases import SequenceStates
 
 if TYPE_CHECKING:
@@ -177,8 +178,6 @@ class SequenceLstmPolicy(RecurrentActorCriticPolicy):
     def _compiled_forward(self, weights: tuple[Any, ...], obs: torch.Tensor, lstm_states: RNNStates,
                           episode_starts: torch.Tensor, deterministic: bool):
         """:meth:`forward`'s compiled step (see there)."""
-        from sb3_smc.common import kernels
-
         n_seq = obs.shape[0]
         uniforms = np.zeros(n_seq) if deterministic else torch.rand(n_seq, dtype=torch.float64).numpy()
         starts = episode_starts.detach().numpy().astype(np.float64, copy=False).reshape(n_seq)
