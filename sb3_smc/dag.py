@@ -5,10 +5,12 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 
+from sb3_smc.errors import SMCError
+
 __all__ = ["CycleError", "children_first"]
 
 
-class CycleError(Exception):
+class CycleError(SMCError):
     """The graph has a cycle: ``cycle`` lists it, its first name repeated at the end (``a -> b -> a``); callers turn
     it into their own error, naming their file."""
 
