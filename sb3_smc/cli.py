@@ -4,6 +4,7 @@
     sb3-smc curricula con2-cl              # one curriculum's DAG by level (a name or a .yml file)
     sb3-smc train con2-cl --out runs/con2-cl --targets cl_self-in-container_vs_noncontainer --seeds 2
     sb3-smc status runs/con2-cl            # done, running, failed, skipped and left jobs
+    sb3-smc library runs/con2-cl/library   # its SMCs: kind, children, seed, selected update, test score
     sb3-smc experiment --out runs/headline --targets cl_self-left-of-two-objects-vs-one
     sb3-smc report runs/headline           # report.md and figures/, the paper's numbers beside ours
 """
@@ -30,6 +31,7 @@ from sb3_smc.errors import SMCError
 from sb3_smc.experiments import report, runner
 from sb3_smc.experiments.design import CATEGORIES, DEFAULT_REPEATS, METHODS
 from sb3_smc.hyperparameters import ALGORITHMS, DEFAULT_ALGORITHM, DEFAULT_TIMESTEPS, RECURRENT_POLICIES
+from sb3_smc.library import SMCLibrary, storage
 
 __all__ = ["main"]
 
@@ -105,16 +107,43 @@ def _experiment(args: argparse.Namespace) -> int:
     methods = [m for item in args.methods.split(",") if (m := item.strip())]
     targets = [t for item in args.targets for t in item.split(",") if t] if args.targets else None
     runner.run_experiment(args.out, methods=methods, targets=targets, category=args.category, seeds=args.seeds,
-                   timesteps=args.timesteps, repeats=args.repeats, workers=args.workers, backend=args.backend,
-                   ray_address=args.ray_address, algo=args.algo, rnn=args.rnn, train=not args.no_train)
+                          timesteps=args.timesteps, repeats=args.repeats, workers=args.workers, backend=args.backend,
+                          ray_address=args.ray_address, algo=args.algo, rnn=args.rnn, train=not args.no_train)
     print(f"next: sb3-smc report {shlex.quote(args.out)}")
     return 0
 
 
 def _report(args: argparse.Namespace) -> int:
     for path in report.write_report(args.directories, out=args.out, trajectories=args.trajectories,
-                             behaviour=not args.no_behaviour):
+                                    behaviour=not args.no_behaviour):
         print(f"wrote {path}")
+    return 0
+
+
+def _library(args: argparse.Namespace) -> int:
+    root = Path(args.directory)
+    manifest, where = storage.read_manifest(root)
+    entries = storage.check_manifest(manifest, where)
+    if args.check:  # every model file: there, intact, its checksum, loads with its class, fits its SMC
+        SMCLibrary.load(root)
+    rows = [{"name": name, "kind": entry.kind, "algo": entry.algo, "children": list(entry.children),
+             **entry.summary()} for name, entry in entries.items()]
+    if args.json:
+        print(json.dumps(rows, indent=1))
+        return 0
+    made = (manifest.get("created_with") or {}).get("sb3_smc", "an unknown sb3_smc")
+    checked = ", every model file checked and loaded" if args.check else ""
+    print(f"{root}: {len(rows)} SMC(s), manifest version {manifest['version']} (written by sb3_smc {made}){checked}")
+    table = [("name", "kind", "algo", "children", "env id", "seed", "update", "return", "test %")]
+    for row in rows:
+        number = {key: "-" if row[key] is None else row[key] for key in ("seed", "selected_update")}
+        table.append((row["name"], row["kind"], row["algo"], ",".join(row["children"]) or "-", row["env_id"] or "-",
+                      str(number["seed"]), str(number["selected_update"]),
+                      "-" if row["training_return"] is None else f"{row['training_return']:.3f}",
+                      "-" if row["test_score"] is None else f"{100 * row['test_score']:.1f}"))
+    widths = [max(len(row[i]) for row in table) for i in range(len(table[0]))]
+    for cells in table:
+        print("  ".join(cell.ljust(width) for cell, width in zip(cells, widths, strict=True)).rstrip())
     return 0
 
 
@@ -214,6 +243,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--model", choices=("final", "best"), default="final",
                    help="the zoo's final model (<env id>.zip) or its best_model.zip")
     p.set_defaults(run=_import_zoo)
+
+    p = sub.add_parser("library", help="what an SMC library holds: one row per SMC, read from its manifest")
+    p.add_argument("directory", help="the library directory (e.g. runs/con2-cl/library)")
+    p.add_argument("--check", action="store_true",
+                   help="also check every model file (checksum, loads with its class, fits its SMC)")
+    p.add_argument("--json", action="store_true", help="the rows as JSON")
+    p.set_defaults(run=_library)
 
     p = sub.add_parser("status", help="what a run directory holds: done, running, failed, skipped, left")
     p.add_argument("directory")

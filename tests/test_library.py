@@ -36,6 +36,7 @@ from sb3_smc.policies import ScriptedPolicy, policy_from_model
 from sb3_smc.records import Budget, EvaluationRecord, TaskSpec, TrainingRecord, TrainingSpec, package_versions
 from sb3_smc.smc import SMC
 from sb3_smc.wrapper import HierarchicalSMCWrapper
+from tests.helpers import sb3_smc_cli
 
 CL_ID = "PW-cl_self-in-left-corner_vs_on-hline-v0"
 BA_ID = "PW-ba_self-in-container_from_on-floor-v0"
@@ -415,6 +416,27 @@ def test_unknown_algorithm(copy):
     _edit(copy, lambda m: m["smcs"]["corner"]["spec"].update(algo="A2C"))
     with pytest.raises(ManifestError, match="entry 'corner': .*algo.*'A2C'"):
         SMCLibrary.load(copy)
+
+
+def test_the_library_command_shows_each_smc_without_loading_a_model(saved, copy):
+    code, out, err = sb3_smc_cli("library", str(saved))
+    assert code == 0, err
+    lines = out.splitlines()
+    assert lines[0] == f"{saved}: 4 SMC(s), manifest version 3 (written by sb3_smc {package_versions()['sb3_smc']})"
+    climber = next(line.split() for line in lines if line.startswith("climber "))
+    assert climber == ["climber", "bring-about", "RecurrentPPO", "corner,container", BA_ID, "3", "3", "0.250", "50.0"]
+    code, out, _ = sb3_smc_cli("library", str(saved), "--json")
+    rows = {row["name"]: row for row in json.loads(out)}
+    assert rows["corner-ppo"] == {"name": "corner-ppo", "kind": "classification", "algo": "PPO", "children": [],
+                                  "env_id": CL_ID, "datasets": ["cl_self-in-left-corner_vs_on-hline"], "seed": 2,
+                                  "selected_update": 3, "training_return": 0.25, "test_score": 0.5,
+                                  "total_timesteps": 64}
+    with open(copy / "models" / "corner.zip", "r+b") as handle:  # damaged: only --check opens the models
+        handle.seek(100)
+        handle.write(b"\0" * 8)
+    assert sb3_smc_cli("library", str(copy))[0] == 0
+    code, _, err = sb3_smc_cli("library", str(copy), "--check")
+    assert code == 2 and "sb3-smc library: error: SMC 'corner': model file" in err
 
 
 # ------------------------------------------------------------------------------------------------ atomic saves
