@@ -12,23 +12,11 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 from sb3_smc.curricula.format import Curriculum, CurriculumError, Node, load_curriculum, parse_curriculum
-from sb3_smc.curricula.shipped import shipped_curricula, shipped_curriculum
+from sb3_smc.curricula.shipped import resolve_curriculum, shipped_curricula, shipped_curriculum
 
 __all__ = ["Curriculum", "CurriculumError", "Node", "load_curriculum", "parse_curriculum", "resolve_curriculum",
            "shipped_curricula", "shipped_curriculum", "train_curriculum"]
-
-
-def resolve_curriculum(curriculum: str | Path | Curriculum) -> Curriculum:
-    """A curriculum object, a path to a curriculum file, or the name of a shipped curriculum."""
-    if isinstance(curriculum, Curriculum):
-        return curriculum
-    text = str(curriculum)
-    if text.endswith((".yml", ".yaml")) or Path(text).is_file():
-        return load_curriculum(text)
-    return shipped_curriculum(text)
 
 
 def __getattr__(name: str):

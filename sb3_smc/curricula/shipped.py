@@ -24,9 +24,9 @@ from importlib import resources
 from pathlib import Path
 
 from sb3_smc.curricula.designed import designed_curricula
-from sb3_smc.curricula.format import Curriculum, CurriculumError, Node, parse_curriculum
+from sb3_smc.curricula.format import Curriculum, CurriculumError, Node, load_curriculum, parse_curriculum
 
-__all__ = ["DATA", "build_shipped", "shipped_curricula", "shipped_curriculum", "write_shipped"]
+__all__ = ["DATA", "build_shipped", "resolve_curriculum", "shipped_curricula", "shipped_curriculum", "write_shipped"]
 
 DATA = "data"
 CANON_SUFFIX = "_canon"
@@ -139,6 +139,17 @@ def shipped_curriculum(name: str) -> Curriculum:
             f" (shipped: {', '.join(curricula)})"
         raise CurriculumError(f"no shipped curriculum named {name!r}{hint}; a path to a .yml file also works")
     return curricula[name]
+
+
+
+def resolve_curriculum(curriculum: str | Path | Curriculum) -> Curriculum:
+    """A curriculum object, a path to a curriculum file, or the name of a shipped curriculum."""
+    if isinstance(curriculum, Curriculum):
+        return curriculum
+    text = str(curriculum)
+    if text.endswith((".yml", ".yaml")) or Path(text).is_file():
+        return load_curriculum(text)
+    return shipped_curriculum(text)
 
 
 def main() -> None:

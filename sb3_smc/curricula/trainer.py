@@ -25,8 +25,10 @@ The names of the modules above that this one offered before it was split are imp
 
 from __future__ import annotations
 
+import fcntl
 import json
 import shutil
+import sys
 import time
 import traceback
 from collections.abc import Callable, Collection, Sequence
@@ -67,6 +69,7 @@ from sb3_smc.curricula.run_directory import (
     status,
     write_state,
 )
+from sb3_smc.curricula.shipped import resolve_curriculum
 from sb3_smc.errors import SMCError, SMCTypeError
 from sb3_smc.hyperparameters import STEPS_PER_UPDATE, algorithm, recurrent_policy
 from sb3_smc.library import storage
@@ -311,8 +314,6 @@ def _plan_skip(curriculum: Curriculum, order: list[str], targets: Sequence[str],
 def _resolve_run(curriculum: Any, targets: Sequence[str] | None, seeds: int, timesteps: int | None, reuse: str,
                  algo: str | None, rnn: str | None) -> tuple[Curriculum, list[str], dict[str, Any]]:
     """The merged curriculum, the nodes to train (lower levels first) and the settings of a run (checked)."""
-    from sb3_smc.curricula import resolve_curriculum
-
     check_run_options(seeds=seeds, timesteps=timesteps, reuse=reuse, algo=algo, rnn=rnn)
     items = curriculum if isinstance(curriculum, list | tuple) else [curriculum]
     merged = merge([resolve_curriculum(item) for item in items])
@@ -324,8 +325,6 @@ def _resolve_run(curriculum: Any, targets: Sequence[str] | None, seeds: int, tim
 def _lock(directory: Path) -> Any:
     """Hold ``DIR/.lock`` for the run: a second coordinator on the same directory is refused (it would write the
     same manifest)."""
-    import fcntl
-
     handle = open(directory / ".lock", "a+")  # noqa: SIM115 - held open for the whole run
     try:
         fcntl.flock(handle.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
@@ -511,8 +510,6 @@ class _Progress:
 
     def __init__(self, total: int, done: int, steps_total: int, steps_done: int,
                  printer: Callable[[str], None] | None) -> None:
-        import sys
-
         self.total, self.done, self.steps_total, self.steps_done = total, done, steps_total, steps_done
         self.printer = printer
         self.start = time.perf_counter()
