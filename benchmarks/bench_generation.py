@@ -34,7 +34,7 @@ def specs_from_reference(reference: Path = REFERENCE) -> list[DatasetSpec]:
     if not files:
         raise SystemExit(f"no *.datasets files under {reference / 'aaai18' / 'DATA'} (set PIXELWORLD_REFERENCE)")
     definitions = load_definitions(files)
-    return [DatasetSpec.from_definitions(definitions, name) for name in sorted(definitions.datasets)]
+    return [definitions.dataset_spec(name) for name in sorted(definitions.datasets)]
 
 
 def specs_from_catalog() -> list[DatasetSpec]:

@@ -132,7 +132,7 @@ def policy_from_model(model: BaseAlgorithm | BasePolicy, dtype: Any = np.float64
 
     if RecurrentActorCriticPolicy is not None and isinstance(policy, RecurrentActorCriticPolicy):
         _check_overrides(policy, RecurrentActorCriticPolicy, ("get_distribution", "_process_sequence"), what)
-        from sb3_smc.common.recurrent.gru import GRUAsLSTM
+        from sb3_smc.common.recurrent.layers import GRUAsLSTM
 
         if isinstance(policy.lstm_actor, GRUAsLSTM):
             return NumpyGRUPolicy(_gru_layers(policy.lstm_actor.gru), head, observation_size, dtype)

@@ -44,7 +44,7 @@ def definitions() -> DefinitionSet:
 
 @cache
 def generated(name: str, seed: int = 0) -> GeneratedDataset:
-    return generate(DatasetSpec.from_definitions(definitions(), name), seed)
+    return generate(definitions().dataset_spec(name), seed)
 
 
 def check_dataset(ds: GeneratedDataset) -> None:
@@ -120,7 +120,7 @@ def test_both_generators_contribute_and_scenes_are_shuffled() -> None:
 
 def test_same_seed_is_byte_identical_and_other_seed_differs() -> None:
     name = "ba_self-ontop-object_from_left-touches-on-floor_with_distraction"
-    spec = DatasetSpec.from_definitions(definitions(), name)
+    spec = definitions().dataset_spec(name)
     again = generate(spec, 0)
 
     def dump(ds: GeneratedDataset) -> str:
@@ -149,19 +149,19 @@ def test_same_generator_same_seed_gives_the_same_stream() -> None:
 
 
 def test_dataset_spec_helpers() -> None:
-    spec = DatasetSpec.from_definitions(definitions(), "ba_self-in-container_from_directly-above")
+    spec = definitions().dataset_spec("ba_self-in-container_from_directly-above")
     assert spec.kind == "bring-about" and spec.size == 50
     used = spec.used_macros()
     assert {"wobf1", "bfw1", "blue-floor"} <= set(used) and "wobf2" not in used
     assert all(spec.macros[k] == v for k, v in used.items())
     with pytest.raises(KeyError, match="did you mean"):
-        DatasetSpec.from_definitions(definitions(), "ba_self-in-container_from_directly-abov")
+        definitions().dataset_spec("ba_self-in-container_from_directly-abov")
     with pytest.raises(ValueError, match="kind"):
         DatasetSpec(name="x", kind="regression", concept="?x white(x)", generators=(("g", FLOOR_GENERATOR),))
     with pytest.raises(ValueError, match="unsupported settings"):
         DatasetSpec(name="x", kind="bring-about", concept="?x white(x)", generators=(("g", FLOOR_GENERATOR),),
                     settings={"objects_are_white": True})
-    assert hash(spec) == hash(DatasetSpec.from_definitions(definitions(), spec.name))
+    assert hash(spec) == hash(definitions().dataset_spec(spec.name))
 
 
 def test_bring_about_drops_scenes_whose_goal_cannot_be_reached() -> None:

@@ -3,17 +3,13 @@ settings, quota and world size), read from the catalog or from definition files.
 
 from __future__ import annotations
 
-import difflib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from pixelworld_env.concepts import parse
 from pixelworld_env.core.constants import FLOOR_HEIGHT, HEIGHT, PADDING, WIDTH
-from pixelworld_env.errors import PixelWorldError, PixelWorldKeyError
-
-if TYPE_CHECKING:
-    from pixelworld_env.generation.definitions import DefinitionSet
+from pixelworld_env.errors import PixelWorldError
 
 __all__ = ["KINDS", "SUPPORTED_SETTINGS", "DatasetSpec"]
 
@@ -68,24 +64,6 @@ class DatasetSpec:
     def __hash__(self) -> int:  # equal specs hash equally (the mappings are left out)
         return hash((self.name, self.kind, self.concept, self.generators, self.num_samples, self.height, self.width,
                      self.floor_height, self.padding))
-
-    @classmethod
-    def from_definitions(cls, definitions: DefinitionSet, name: str, **overrides: Any) -> DatasetSpec:
-        """The spec of dataset ``name`` of a :class:`~pixelworld_env.generation.definitions.DefinitionSet`."""
-        try:
-            dataset = definitions.datasets[name]
-        except KeyError:
-            close = difflib.get_close_matches(name, list(definitions.datasets), n=3)
-            hint = f"; did you mean {', '.join(close)}?" if close else ""
-            raise PixelWorldKeyError(f"unknown dataset {name!r}{hint}") from None
-        macros = definitions.macros
-        values: dict[str, Any] = {
-            "name": name, "kind": dataset.kind, "concept": definitions.concepts[dataset.concept].logic,
-            "generators": tuple((g, definitions.generators[g].logic) for g in dataset.generators),
-            "macros": macros, "settings": dict(dataset.settings),
-        }
-        values.update(overrides)
-        return cls(**values)
 
     @property
     def allow_targets(self) -> bool:

@@ -159,17 +159,20 @@ class DefinitionSet:
         table.update({key: d.logic for key, d in self.generators.items()})
         return table
 
-    def dataset_spec(self, name: str, num_samples: int = 50) -> DatasetSpec:
-        """The generation spec of dataset ``name`` (for :func:`pixelworld_env.generation.dataset.generate`)."""
+    def dataset_spec(self, name: str, **overrides: Any) -> DatasetSpec:
+        """The generation spec of dataset ``name`` (for :func:`pixelworld_env.generation.dataset.generate`);
+        ``overrides`` replace its fields (``num_samples``, the world's size ...)."""
         if name not in self.datasets:
             close = difflib.get_close_matches(name, list(self.datasets), n=3)
             hint = f"; did you mean {', '.join(repr(c) for c in close)}?" if close else ""
             raise PixelWorldKeyError(f"no dataset {name!r} in these definitions{hint}")
         dataset = self.datasets[name]
         macros = self.macros
-        return DatasetSpec(name=name, kind=dataset.kind, concept=macros[dataset.concept],
-                           generators=tuple((g, macros[g]) for g in dataset.generators), macros=macros,
-                           settings=dataset.settings, num_samples=num_samples)
+        values: dict[str, Any] = {
+            "name": name, "kind": dataset.kind, "concept": macros[dataset.concept],
+            "generators": tuple((g, macros[g]) for g in dataset.generators), "macros": macros,
+            "settings": dict(dataset.settings), **overrides}
+        return DatasetSpec(**values)
 
     def make_env(self, name: str, *, split: str = "train", seed: int = 0, num_samples: int = 50,
                  **kwargs: Any) -> PixelWorldEnv:
@@ -180,7 +183,7 @@ class DefinitionSet:
 
         if split not in ("train", "test", "all"):
             raise PixelWorldError(f"split must be 'train', 'test' or 'all', got {split!r}")
-        spec = self.dataset_spec(name, num_samples)
+        spec = self.dataset_spec(name, num_samples=num_samples)
         generated = generate(spec, seed)
         indices = range(len(generated.scenes)) if split == "all" else \
             stratified_split(generated.labels)[0 if split == "train" else 1]

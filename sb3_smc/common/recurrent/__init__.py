@@ -7,7 +7,8 @@ minibatches without padding (tested to 1e-6); :class:`SequenceGruPolicy` is the 
 """
 
 from sb3_smc.common.recurrent.buffers import CompactRecurrentRolloutBuffer, use_compact_buffer
-from sb3_smc.common.recurrent.gru import GRUAsLSTM, SequenceGruPolicy
+from sb3_smc.common.recurrent.gru import SequenceGruPolicy
+from sb3_smc.common.recurrent.layers import GRUAsLSTM
 from sb3_smc.common.recurrent.policies import SequenceLstmPolicy
 from sb3_smc.common.recurrent.type_aliases import SequenceStates
 

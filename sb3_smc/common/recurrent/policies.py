@@ -18,7 +18,7 @@ from sb3_smc.common import kernels
 from sb3_smc.common.recurrent.type_aliases import SequenceStates
 
 if TYPE_CHECKING:
-    from sb3_smc.common.recurrent.gru import GRUAsLSTM
+    from sb3_smc.common.recurrent.layers import GRUAsLSTM
 
 __all__ = ["SequenceLstmPolicy"]
 
