@@ -4,6 +4,7 @@ models with the trained weights), loaded by curriculum name and put on an enviro
 from __future__ import annotations
 
 import io
+import json
 import shutil
 import zipfile
 
@@ -13,9 +14,12 @@ import torch
 
 import pixelworld_env  # noqa: F401
 from sb3_smc.curricula import Curriculum, Node
+from sb3_smc.curricula.pretrained import build_pretrained, lower_level
+from sb3_smc.curricula.shipped import shipped_curricula
 from sb3_smc.curricula.trainer import rank_seeds, train_curriculum
 from sb3_smc.library import LibraryError, SMCLibrary
-from sb3_smc.library.pretrained import build_pretrained, load_pretrained, pretrained_curricula, pretrained_names
+from sb3_smc.library.errors import ManifestError
+from sb3_smc.library.pretrained import INDEX, pretrained_curricula, pretrained_names, pretrained_root
 
 LEFT, RIGHT = "cl_self-in-left-corner_vs_on-hline", "cl_self-in-right-corner_vs_on-hline"
 TARGET = "ba_self-in-target-container_from_nontarget-container"
@@ -67,8 +71,15 @@ def test_build_and_load_a_pretrained_library(tmp_path):
     assert (tmp_path / "notes" / "keep.txt").read_text() == "mine"
     library = SMCLibrary.load(out)
     # loaded by curriculum name from a library root (the package's by default) and used as actions
-    with pytest.raises(LibraryError, match="no pretrained SMCs for curriculum 'tiny'"):
-        load_pretrained("tiny", out)  # only shipped curricula have names
+    assert pretrained_curricula(out) == ["tiny"]  # no shipped curriculum has all its lower-level nodes here
+    assert SMCLibrary.pretrained("tiny", out).names == library.names == tuple(pretrained_names("tiny", out))
+    with pytest.raises(LibraryError, match="no pretrained SMCs for curriculum 'tinyy'; did you mean 'tiny'"):
+        SMCLibrary.pretrained("tinyy", out)
+    index = json.loads((out / INDEX).read_text())
+    index["nodes"][LEFT].append(f"{LEFT}@9")
+    (out / INDEX).write_text(json.dumps(index))
+    with pytest.raises(ManifestError, match=f"names SMCs that are not in the library: \\['{LEFT}@9'\\]"):
+        SMCLibrary.pretrained("tiny", out)
     env = library.wrap(gym.make(f"PW-{TARGET}-v0"), library.names)
     assert list(env.action_names)[-4:] == [f"SMC:{name}" for name in library.names]
     env.reset(seed=0)
@@ -77,9 +88,13 @@ def test_build_and_load_a_pretrained_library(tmp_path):
 
 
 def test_the_shipped_pretrained_library():
-    """What the package ships: every listed curriculum loads by name, with a test score per SMC."""
+    """What the package ships: every listed curriculum loads by name, with a test score per SMC; its index says
+    what the shipped curricula say."""
     shipped = pretrained_curricula()
     assert "search2-canon" in shipped and "con2-cl-canon" in shipped
+    index = json.loads((pretrained_root() / INDEX).read_text())
+    curricula = shipped_curricula()
+    assert index["curricula"] == {name: lower_level(curricula[name]) for name in shipped}
     for curriculum in shipped:  # two seeds of each lower-level node (names from the manifest: no model loaded)
         nodes = {name.rpartition("@")[0] for name in pretrained_names(curriculum)}
         assert len(pretrained_names(curriculum)) == 2 * len(nodes)

@@ -128,6 +128,13 @@ def test_each_install_imports_its_own_copy(request: pytest.FixtureRequest, insta
     assert all(path.startswith(str(home)) for path in where.stdout.split())
 
 
+def test_the_wheel_ships_the_pretrained_library(installed: Installed) -> None:
+    """Package data: the pretrained library's manifest, index and models are in the wheel and load by name."""
+    check = ("from sb3_smc import SMCLibrary; from sb3_smc.library.pretrained import pretrained_curricula; "
+             "print(len(pretrained_curricula()), len(SMCLibrary.pretrained('search2-canon')))")
+    assert installed.run(check).stdout.split() == ["6", "26"]
+
+
 @pytest.mark.parametrize("install", INSTALLS)
 def test_the_readme_command_on_a_concept_pool(request: pytest.FixtureRequest, install: str) -> None:
     """The README's first zoo line, as typed, in a wheel install and in the editable install of a clone."""

@@ -1,7 +1,7 @@
 #!/usr/bin/env python
 """Add the lower-level SMCs of shipped curricula to the package's pretrained library (``sb3_smc/library/data/
 pretrained``) from the libraries of finished runs: the two best seeds of each node, evaluated on the test split and
-stored compact (:func:`sb3_smc.library.pretrained.build_pretrained`).
+stored compact (:func:`sb3_smc.curricula.pretrained.build_pretrained`).
 
 Usage::
 
@@ -17,7 +17,7 @@ import argparse
 import sys
 
 from sb3_smc.common.threads import torch_threads
-from sb3_smc.library.pretrained import build_pretrained
+from sb3_smc.curricula.pretrained import build_pretrained
 
 
 def main(argv: list[str] | None = None) -> int:

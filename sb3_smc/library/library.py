@@ -29,6 +29,7 @@ from sb3_smc.library.errors import (
     UnknownSMCError,
     suggest,
 )
+from sb3_smc.library.pretrained import pretrained_names, pretrained_root
 from sb3_smc.records import WrapperSettings
 from sb3_smc.smc import SMC, StepPolicy
 
@@ -271,12 +272,12 @@ class SMCLibrary(Mapping[str, SMC]):
         return library
 
     @classmethod
-    def pretrained(cls, curriculum: str) -> SMCLibrary:
-        """The pretrained lower-level SMCs of a shipped curriculum, two best seeds of each node, shipped with the
-        package (:mod:`sb3_smc.library.pretrained`; ``docs/library.md``): ``SMCLibrary.pretrained("search2-canon")``."""
-        from sb3_smc.library.pretrained import load_pretrained
-
-        return load_pretrained(curriculum)
+    def pretrained(cls, curriculum: str, root: str | os.PathLike | None = None) -> SMCLibrary:
+        """The pretrained lower-level SMCs of a curriculum, two best seeds of each node, shipped with the package
+        (:mod:`sb3_smc.library.pretrained`; ``docs/library.md``): ``SMCLibrary.pretrained("search2-canon")``.
+        ``root``: another pretrained library (built by :func:`sb3_smc.curricula.pretrained.build_pretrained`)."""
+        path = pretrained_root() if root is None else Path(root)
+        return cls.load(path, names=pretrained_names(curriculum, path))
 
     # ------------------------------------------------------------------------------------------ environments
 

@@ -1,0 +1,128 @@
+"""Building a pretrained library (:mod:`sb3_smc.library.pretrained`) from the libraries of curriculum or experiment
+runs: the two best seeds of each lower-level node of the given curricula, evaluated on the test split and stored
+compact, with the index that loads them by curriculum name (``tools/build_pretrained.py``)."""
+
+from __future__ import annotations
+
+import io
+import json
+import tempfile
+import zipfile
+from collections.abc import Sequence
+from pathlib import Path
+
+from pixelworld_env.atomic import atomic_write, replace_directory
+from sb3_smc.curricula.format import SEED_SEPARATOR, Curriculum
+from sb3_smc.curricula.jobs import job_name, node_of, rank_seeds
+from sb3_smc.curricula.run_directory import read_settings
+from sb3_smc.curricula.shipped import resolve_curriculum, shipped_curricula
+from sb3_smc.library import SMCLibrary, storage
+from sb3_smc.library.errors import LibraryError
+from sb3_smc.library.pretrained import INDEX, pretrained_index, pretrained_root
+
+__all__ = ["PRETRAINED_SEEDS", "build_pretrained", "compact_model", "lower_level"]
+
+PRETRAINED_SEEDS = 2
+"""Seeds shipped per node: the two best, as the paper's SMC filter gives a caller (docs/design.md, "Curricula:
+reuse of the best seeds")."""
+_OPTIMIZER = "policy.optimizer.pth"
+
+
+def lower_level(curriculum: Curriculum) -> list[str]:
+    """The nodes a curriculum's targets call (its lower-level SMCs), in the order of its file."""
+    used = {name for target in curriculum.targets for name in curriculum.node(target).uses}
+    return [node.name for node in curriculum.nodes if node.name in used]
+
+
+def compact_model(path: Path) -> None:
+    """Rewrite the SB3 archive ``path`` without the optimiser's running state (an empty state of the same
+    parameter groups: loading still matches the model's parameters) and compressed, atomically."""
+    import torch
+
+    buffer = io.BytesIO()
+    with zipfile.ZipFile(path) as source, zipfile.ZipFile(buffer, "w", zipfile.ZIP_DEFLATED, compresslevel=9) as out:
+        for item in source.infolist():
+            data = source.read(item.filename)
+            if item.filename == _OPTIMIZER:
+                state = torch.load(io.BytesIO(data), map_location="cpu", weights_only=True)
+                state["state"] = {}
+                stripped = io.BytesIO()
+                torch.save(state, stripped)
+                data = stripped.getvalue()
+            out.writestr(item.filename, data)
+    atomic_write(path, buffer.getvalue())
+
+
+def build_pretrained(runs: Sequence[str | Path], curricula: Sequence[str | Curriculum],
+                     out: str | Path | None = None, *, repeats: int = 10) -> Path:
+    """Collect the two best seeds of every lower-level node of ``curricula`` from the libraries of ``runs`` (run
+    directories holding ``library/``), evaluate each on its test split (``repeats``, seed 0), and write them, with
+    what ``out`` already holds (default: the package's pretrained library), as a compact library to ``out``.
+
+    A node is ranked over all its seeds (the trainer's rule: best selected training return, ties to the lower
+    seed), so every seed of the run (``run.json``'s ``seeds``) must be in one run's library. A node already in
+    ``out`` is replaced by its new best seeds. ``out`` must be missing, empty or a library. The index
+    (:data:`~sb3_smc.library.pretrained.INDEX`) then lists ``curricula``, the curricula it listed before and every
+    shipped curriculum whose lower-level nodes are all held.
+    """
+    from sb3_smc.evaluation import evaluate  # loads torch and SB3: only when a library is built
+
+    resolved = [resolve_curriculum(c) for c in curricula]
+    target = Path(out) if out is not None else pretrained_root()
+    if target.exists() and (not target.is_dir() or (any(target.iterdir())
+                                                    and not (target / storage.MANIFEST).is_file())):
+        raise LibraryError(f"refusing to write the pretrained library to {target}: it is a file or a non-empty "
+                           f"directory without {storage.MANIFEST} (not an SMC library)")
+    runs_ = [Path(run) for run in runs]
+    entries = {run: storage.check_manifest(*storage.read_manifest(run / "library")) for run in runs_}
+    chosen: list[tuple[str, Path, list[str]]] = []
+    for node in dict.fromkeys(n for c in resolved for n in lower_level(c)):
+        found = [(run, {int(name.rpartition(SEED_SEPARATOR)[2]): entry.record for name, entry in held.items()
+                        if node_of(name) == node}) for run, held in entries.items()]
+        run, records = max(found, key=lambda item: len(item[1]))
+        settings = read_settings(run)
+        if settings is None:
+            raise LibraryError(f"{run} holds no run (no run.json); build_pretrained takes run directories of "
+                               "sb3-smc train or experiment")
+        seeds = settings["seeds"]
+        trained = {seed: record for seed, record in records.items() if record is not None}
+        if len(trained) != seeds:
+            raise LibraryError(f"node {node!r}: {run / 'library'} holds {len(trained)} of the run's {seeds} seeds "
+                               "with training records; the two best can only be chosen among all of them")
+        chosen.append((node, run, [job_name(node, seed) for seed in rank_seeds(trained)[:PRETRAINED_SEEDS]]))
+    held = target / storage.MANIFEST
+    before = pretrained_index(target)["curricula"] if held.is_file() else {}
+    library = SMCLibrary.load(target) if held.is_file() else SMCLibrary()
+    for node, run, names in chosen:
+        for stale in [name for name in library.names if node_of(name) == node]:
+            library.remove(stale)
+        loaded = SMCLibrary.load(run / "library", names=names)
+        for name in names:
+            smc = loaded[name]
+            evaluate(smc, repeats=repeats, seed=0, record_cells=False)
+            library.add(smc)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(dir=target.parent) as tmp:
+        staged = library.save(Path(tmp) / "library")
+        manifest = json.loads((staged / storage.MANIFEST).read_text(encoding="utf-8"))
+        for entry in manifest["smcs"].values():
+            compact_model(staged / entry["model"])
+            entry["sha256"] = storage.sha256(staged / entry["model"])
+        atomic_write(staged / storage.MANIFEST, json.dumps(manifest, indent=2, allow_nan=False) + "\n")
+        atomic_write(staged / INDEX, json.dumps(_index(library.names, before, resolved), indent=1) + "\n")
+        SMCLibrary.load(staged)  # the compact copy loads and checks out before it replaces anything
+        pretrained_index(staged)
+        replace_directory(staged, target)
+    return target
+
+
+def _index(names: Sequence[str], before: dict[str, list[str]], built: Sequence[Curriculum]) -> dict:
+    """The index of a library holding ``names``: the curricula of ``before``, ``built`` and the shipped ones whose
+    lower-level nodes it all holds, and each node's SMCs."""
+    nodes: dict[str, list[str]] = {}
+    for name in names:
+        nodes.setdefault(node_of(name), []).append(name)
+    wanted = {**before, **{c.name: lower_level(c) for c in built},
+              **{name: lower_level(c) for name, c in shipped_curricula().items() if name not in before}}
+    curricula = {name: lower for name, lower in wanted.items() if lower and set(lower) <= set(nodes)}
+    return {"curricula": curricula, "nodes": nodes}
