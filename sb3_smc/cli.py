@@ -124,6 +124,7 @@ def _library(args: argparse.Namespace) -> int:
     root = Path(args.directory)
     manifest, where = storage.read_manifest(root)
     entries = storage.check_manifest(manifest, where)
+    storage.topological_order(entries, where)  # SMCs that call each other in a cycle: an error, as on load
     if args.check:  # every model file: there, intact, its checksum, loads with its class, fits its SMC
         SMCLibrary.load(root)
     rows = [{"name": name, "kind": entry.kind, "algo": entry.algo, "children": list(entry.children),
@@ -133,7 +134,7 @@ def _library(args: argparse.Namespace) -> int:
         return 0
     made = (manifest.get("created_with") or {}).get("sb3_smc", "an unknown sb3_smc")
     checked = ", every model file checked and loaded" if args.check else ""
-    print(f"{root}: {len(rows)} SMC(s), manifest version {manifest['version']} (written by sb3_smc {made}){checked}")
+    print(f"{root}: {len(rows)} SMC(s), manifest version {manifest['version']} (sb3_smc {made}){checked}")
     table = [("name", "kind", "algo", "children", "env id", "seed", "update", "return", "test %")]
     for row in rows:
         number = {key: "-" if row[key] is None else row[key] for key in ("seed", "selected_update")}

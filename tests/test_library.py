@@ -422,7 +422,7 @@ def test_the_library_command_shows_each_smc_without_loading_a_model(saved, copy)
     code, out, err = sb3_smc_cli("library", str(saved))
     assert code == 0, err
     lines = out.splitlines()
-    assert lines[0] == f"{saved}: 4 SMC(s), manifest version 3 (written by sb3_smc {package_versions()['sb3_smc']})"
+    assert lines[0] == f"{saved}: 4 SMC(s), manifest version 3 (sb3_smc {package_versions()['sb3_smc']})"
     climber = next(line.split() for line in lines if line.startswith("climber "))
     assert climber == ["climber", "bring-about", "RecurrentPPO", "corner,container", BA_ID, "3", "3", "0.250", "50.0"]
     code, out, _ = sb3_smc_cli("library", str(saved), "--json")
@@ -659,10 +659,44 @@ def test_adding_to_a_version_2_library_writes_version_3(v2_library, smcs, tmp_pa
     manifest = json.loads((v2_library / "manifest.json").read_text())
     assert manifest["version"] == 3 and list(manifest["smcs"]) == [*json.loads(V2_MANIFEST.read_text())["smcs"],
                                                                      "corner"]
+    assert manifest["created_with"] == package_versions()  # who wrote it as version 3
     assert all(set(entry) == {"model", "sha256", "spec", "record", "evaluations"}
                for entry in manifest["smcs"].values())
     library = SMCLibrary.load(v2_library)
     assert library["corner"].spec == smcs["corner"].spec and library[V2_NAME].test_score == 0.97
+
+
+def test_an_old_library_is_not_rewritten_where_that_would_lose_something(v2_library, smcs, tmp_path):
+    """Fields a user added to a version-2 entry, or a version-1 library's metadata, are not dropped by an add."""
+    smcs["corner"].model.save(tmp_path / "corner.zip")
+    add = lambda: storage.add_to_library(v2_library, "corner", storage.entry_for(smcs["corner"]),  # noqa: E731
+                                         (tmp_path / "corner.zip").read_bytes())
+    before = (v2_library / "manifest.json").read_text()
+    _edit(v2_library, lambda m: m["smcs"][V2_NAME].update(notes="keep me"))
+    edited = (v2_library / "manifest.json").read_text()
+    with pytest.raises(ManifestError, match=f"entry '{V2_NAME}': \\['notes'\\]\\); move them elsewhere first"):
+        add()
+    assert (v2_library / "manifest.json").read_text() == edited != before
+    SMCLibrary.load(v2_library)  # reading it is fine
+    _edit(v2_library, lambda m: m.update(version=1))
+    with pytest.raises(ManifestError, match="version-1 library .*convert it first: SMCLibrary.load\\(path\\).save"):
+        add()
+
+
+def test_a_version_2_entry_without_a_spec_loads(smcs, tmp_path):
+    """Version 2 wrote an SMC trained elsewhere with its kind, algo, children ... and null records."""
+    bare = dataclasses.replace(smcs["corner-ppo"], spec=None, record=None, evaluations=())
+    path = SMCLibrary([bare]).save(tmp_path / "library")
+    manifest = json.loads((path / "manifest.json").read_text())
+    entry = manifest["smcs"]["corner-ppo"]
+    smc = entry.pop("smc")
+    entry.update(smc, action_names=list(bare.action_names), env_id=None, datasets=[], seed=None,
+                 selected_update=None, training_return=None, test_score=None, total_timesteps=None,
+                 observation={"size": 87, "window": 81, "outcomes": 0, "previous_action": 6})
+    (path / "manifest.json").write_text(json.dumps({**manifest, "version": 2}))
+    loaded = SMCLibrary.load(path)["corner-ppo"]
+    assert (loaded.kind, loaded.spec, type(loaded.model).__name__) == ("classification", None, "PPO")
+    assert loaded.action_names == bare.action_names
 
 
 def test_version_0_1_models_name_a_policy_class_that_still_imports():

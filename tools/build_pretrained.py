@@ -1,7 +1,8 @@
 #!/usr/bin/env python
-"""Add the lower-level SMCs of shipped curricula to the package's pretrained library (``sb3_smc/library/data/
-pretrained``) from the libraries of finished runs: the two best seeds of each node, evaluated on the test split and
-stored compact (:func:`sb3_smc.curricula.pretrained.build_pretrained`).
+"""Add the lower-level SMCs of curricula (shipped ones by name, or curriculum files) to the package's pretrained
+library (``sb3_smc/library/data/pretrained``) from the libraries of finished runs: the two best seeds of each node,
+evaluated on the test split and stored compact, with the index that loads them by curriculum name
+(:func:`sb3_smc.curricula.pretrained.build_pretrained`).
 
 Usage::
 
@@ -23,7 +24,8 @@ from sb3_smc.curricula.pretrained import build_pretrained
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--run", action="append", required=True, help="a run directory (repeatable)")
-    parser.add_argument("--curricula", required=True, help="comma-separated shipped curriculum names")
+    parser.add_argument("--curricula", required=True,
+                        help="comma-separated curricula: shipped names or curriculum files")
     parser.add_argument("--out", default=None, help="the library directory (default: the package's)")
     args = parser.parse_args(argv)
     with torch_threads(1):

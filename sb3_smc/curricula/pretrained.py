@@ -91,7 +91,7 @@ def build_pretrained(runs: Sequence[str | Path], curricula: Sequence[str | Curri
                                "with training records; the two best can only be chosen among all of them")
         chosen.append((node, run, [job_name(node, seed) for seed in rank_seeds(trained)[:PRETRAINED_SEEDS]]))
     held = target / storage.MANIFEST
-    before = pretrained_index(target)["curricula"] if held.is_file() else {}
+    before = pretrained_index(target)["curricula"] if (target / INDEX).is_file() else {}
     library = SMCLibrary.load(target) if held.is_file() else SMCLibrary()
     for node, run, names in chosen:
         for stale in [name for name in library.names if node_of(name) == node]:
@@ -122,7 +122,7 @@ def _index(names: Sequence[str], before: dict[str, list[str]], built: Sequence[C
     nodes: dict[str, list[str]] = {}
     for name in names:
         nodes.setdefault(node_of(name), []).append(name)
-    wanted = {**before, **{c.name: lower_level(c) for c in built},
-              **{name: lower_level(c) for name, c in shipped_curricula().items() if name not in before}}
+    wanted = {**{name: lower_level(c) for name, c in shipped_curricula().items()}, **before,
+              **{c.name: lower_level(c) for c in built}}
     curricula = {name: lower for name, lower in wanted.items() if lower and set(lower) <= set(nodes)}
     return {"curricula": curricula, "nodes": nodes}

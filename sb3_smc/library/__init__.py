@@ -1,8 +1,10 @@
 """SMC libraries: trained SMCs in a directory with a versioned manifest.
 
 * :mod:`sb3_smc.library.library` — :class:`SMCLibrary`, the API (a mapping name -> SMC; add, save, load, wrap);
-* :mod:`sb3_smc.library.manifest` — the manifest: its schema, validation of any version (the version-1
-  conversion), the load order;
+* :mod:`sb3_smc.library.manifest` — the manifest: its schema (version 3), :class:`LibraryEntry`, validation, the
+  load order;
+* :mod:`sb3_smc.library.upgrade` — manifests of versions 1 and 2, converted on read;
+* :mod:`sb3_smc.library.pretrained` — the shipped pretrained library: its index, names by curriculum;
 * :mod:`sb3_smc.library.storage` — the files: reading and writing the manifest, model files and checksums, adding
   and removing SMCs in place, the atomic save;
 * :mod:`sb3_smc.library.errors` — the :class:`LibraryError` family.

@@ -42,6 +42,10 @@ def pretrained_index(root: str | Path | None = None) -> dict[str, Any]:
     root = pretrained_root() if root is None else Path(root)
     path = root / INDEX
     if not path.is_file():
+        if (root / storage.MANIFEST).is_file():
+            raise ManifestError(f"{root} is an SMC library without {INDEX} (the index of a pretrained library, "
+                                "written by build_pretrained since manifest version 3): build it again with "
+                                "tools/build_pretrained.py")
         return {"curricula": {}, "nodes": {}}
     try:
         index = json.loads(path.read_text(encoding="utf-8"))
@@ -53,7 +57,7 @@ def pretrained_index(root: str | Path | None = None) -> dict[str, Any]:
     if not ok:
         raise ManifestError(f"{path}: expected {{'curricula': {{name: [nodes]}}, 'nodes': {{node: [SMC names]}}}}, "
                             "every node of a curriculum among 'nodes'")
-    held = set(storage.read_manifest(root)[0].get("smcs", {}))
+    held = set(_names(root))
     missing = sorted({name for names in nodes.values() for name in names} - held)
     if missing:
         raise ManifestError(f"{path} names SMCs that are not in the library: {missing}")
@@ -76,4 +80,9 @@ def pretrained_names(curriculum: str, root: str | Path | None = None) -> list[st
                            f"{suggest(curriculum, available, ' (none is shipped yet)')}; pretrained: "
                            f"{', '.join(available) or 'none'}")
     wanted = {name for node in index["curricula"][curriculum] for name in index["nodes"][node]}
-    return [name for name in storage.read_manifest(root)[0]["smcs"] if name in wanted]
+    return [name for name in _names(root) if name in wanted]
+
+
+def _names(root: Path) -> list[str]:
+    """The SMC names of the library in ``root``, in its order (its manifest checked)."""
+    return list(storage.check_manifest(*storage.read_manifest(root)))

@@ -2,7 +2,7 @@
 removing SMCs in place, and the atomic save (:mod:`pixelworld_env.atomic`). The manifest's schema and validation
 (and the conversion of version-1 manifests) are :mod:`sb3_smc.library.manifest`'s; its names that callers use
 through this module (``topological_order``, ``FORMAT`` ...) are re-exported here; :func:`check_manifest` reads a
-manifest of any version (:mod:`sb3_smc.library.upgrade`).
+manifest of any version (the conversions: :mod:`sb3_smc.library.upgrade`).
 
 Layout::
 
@@ -44,11 +44,13 @@ from sb3_smc.library.manifest import (
     SUMMARY_FIELDS,
     LibraryEntry,
     check_entries,
+    check_version,
     entry_json,
     new_manifest,
     topological_order,
 )
-from sb3_smc.library.upgrade import upgrade
+from sb3_smc.library.upgrade import dropped_fields, upgrade
+from sb3_smc.records import package_versions
 from sb3_smc.smc import SMC
 
 if TYPE_CHECKING:
@@ -182,13 +184,28 @@ def write_library(target: Path, smcs: Mapping[str, SMC], manifest: dict[str, Any
 
 
 def _current_manifest(root: Path) -> tuple[dict[str, Any], dict[str, LibraryEntry], Path]:
-    """The manifest of the library in ``root`` as the current version (a library of an earlier version is converted:
-    the next write stores it in the current one), its checked entries, and its path; a new, empty manifest where
-    there is none."""
+    """The manifest of the library in ``root`` as the current version, its checked entries, and its path; a new,
+    empty manifest where there is none.
+
+    A version-2 library is converted (the next write stores it as version 3, ``created_with`` saying who converted
+    it), unless an entry holds fields of its own that the conversion would drop; a version-1 library is refused
+    (its conversion drops metadata): :class:`ManifestError` saying how to convert it.
+    """
     manifest_path = root / MANIFEST
     if not manifest_path.is_file():
         return new_manifest({}), {}, manifest_path
-    manifest = upgrade(read_manifest(root)[0], manifest_path)
+    manifest = read_manifest(root)[0]
+    version = check_version(manifest, manifest_path)
+    if version == 1:
+        raise ManifestError(f"{manifest_path}: version-1 library (sb3-smc 0.1); convert it first: "
+                            "SMCLibrary.load(path).save() writes it in the current version")
+    if version < FORMAT_VERSION:
+        extra = dropped_fields(manifest)
+        if extra:
+            shown = "; ".join(f"entry {name!r}: {fields}" for name, fields in extra.items())
+            raise ManifestError(f"{manifest_path}: version-{version} library whose entries hold fields that writing "
+                                f"it as version {FORMAT_VERSION} would drop ({shown}); move them elsewhere first")
+        manifest = {**upgrade(manifest, manifest_path), "created_with": package_versions()}
     return manifest, check_entries(manifest, manifest_path), manifest_path
 
 
@@ -196,10 +213,10 @@ def add_to_library(root: Path, name: str, entry: dict[str, Any], model: bytes, *
     """Add one SMC to the library directory ``root`` without touching what is already there.
 
     The model file is written atomically first, then the manifest (read, the entry added, written atomically), so
-    an interruption leaves the library as it was or with the SMC complete; an existing library must be of the
-    current version, and ``name`` must be new. Creates the library when ``root`` has no manifest. ``replace=True``:
-    ``name`` must be there already (an SMC whose model file was damaged, trained again); its model file and entry
-    are replaced the same way.
+    an interruption leaves the library as it was or with the SMC complete; a version-2 library is written as the
+    current version (:func:`_current_manifest`), and ``name`` must be new. Creates the library when ``root`` has no
+    manifest. ``replace=True``: ``name`` must be there already (an SMC whose model file was damaged, trained
+    again); its model file and entry are replaced the same way.
     """
     manifest, _, manifest_path = _current_manifest(root)
     smcs = manifest["smcs"]

@@ -40,7 +40,7 @@ from sb3_smc.records import (
     WrapperSettings,
 )
 
-__all__ = ["upgrade", "upgrade_v1", "upgrade_v2"]
+__all__ = ["dropped_fields", "upgrade", "upgrade_v1", "upgrade_v2"]
 
 
 def upgrade(manifest: Any, where: Path) -> dict[str, Any]:
@@ -62,6 +62,20 @@ _V2_FIELDS: dict[str, tuple[type, ...]] = {
     "model": (str,), "kind": (str,), "algo": (str,), "children": (list,), "include_primitives": (bool,),
     "action_names": (list,), "observation": (dict,),
 }
+
+
+_V2_ENTRY = {*_V2_FIELDS, "sha256", "spec", "record", "evaluations", "frame_stack", "layout", *SUMMARY_FIELDS}
+"""Every field version 2 wrote in an entry."""
+
+
+def dropped_fields(manifest: dict[str, Any]) -> dict[str, list[str]]:
+    """Entry name -> the fields of a version-2 entry that are none of version 2's own (a user's additions, which the
+    conversion to version 3 does not keep)."""
+    smcs = manifest.get("smcs")
+    if not isinstance(smcs, dict):
+        return {}
+    return {name: extra for name, entry in smcs.items()
+            if isinstance(entry, dict) and (extra := sorted(set(entry) - _V2_ENTRY))}
 
 
 def upgrade_v2(manifest: dict[str, Any], where: Path) -> dict[str, Any]:
