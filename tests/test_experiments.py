@@ -288,6 +288,30 @@ def test_the_report_has_the_noprim_table_and_the_cnn_tests_per_category(tmp_path
     assert f"| {t:.2f} | 3 | {p:.2g} |" in row
 
 
+def test_the_report_sets_the_flat_smc_beside_the_original_runs(tmp_path):
+    """The objects concepts whose flat results the release's files record: ours beside them, a paired t-test."""
+    from scipy import stats
+
+    from sb3_smc.experiments.paper import ORIGINAL_FLAT_RUNS
+
+    targets = [t for t in ORIGINAL_FLAT_RUNS if t.startswith("cl_")][:3]
+    rows = [{"target": t, "kind": "classification", "category": "objects", "method": "base", "curriculum": "base",
+             "seed": seed, "test_score": 0.5 + 0.1 * k + 0.02 * seed} for k, t in enumerate(targets) for seed in (0, 1)]
+    (tmp_path / "results.json").write_text(json.dumps({
+        "rows": rows, "reported": reported(rows), "wall_time_s": 60.0, "command": None, "machine": {},
+        "settings": {"methods": ["base"], "targets": targets, "seeds": 2, "timesteps": 400_000, "repeats": 10,
+                     "workers": 1, "backend": "local"}}))
+    [report] = write_report(tmp_path, behaviour=False)
+    section = report.read_text().split("## The flat SMC beside the original runs'")[1].split("## ")[0]
+    first = targets[0]
+    assert f"| {first} | classification | 52.0 (51.0 ± 1.4) | {ORIGINAL_FLAT_RUNS[first][0]:.1f} " in section
+    ours = [0.52 + 0.1 * k for k in range(3)]
+    theirs = [ORIGINAL_FLAT_RUNS[t][0] / 100 for t in targets]
+    t, p = stats.ttest_rel(ours, theirs)
+    assert f"classification, 3 concepts: mean best seed ours {100 * np.mean(ours):.1f}, original " \
+           f"{100 * np.mean(theirs):.1f}; paired t(2) = {t:.2f}, p = {p:.2g}." in section
+
+
 def test_the_report_orders_the_pushable_curriculum_by_level(tmp_path):
     from pixelworld_env.datasets import catalog
     from sb3_smc.experiments.report import pushable_levels

@@ -6,7 +6,7 @@ training return; means over the level-2 concepts of each kind.
 
 from __future__ import annotations
 
-__all__ = ["PAPER_CONCEPTS", "PAPER_COUNTS", "PAPER_MEANS", "PAPER_NOPRIM", "PAPER_TTESTS"]
+__all__ = ["ORIGINAL_FLAT_RUNS", "PAPER_CONCEPTS", "PAPER_COUNTS", "PAPER_MEANS", "PAPER_NOPRIM", "PAPER_TTESTS"]
 
 PAPER_COUNTS: dict[str, int] = {"classification": 34, "bring-about": 17}
 """How many level-2 concepts the paper's means and t-tests are over."""
@@ -35,3 +35,24 @@ PAPER_CONCEPTS: dict[str, dict[str, float]] = {
     "ba_self-in-container_from_between-potential-containers": {"base": 48.4, "curr": 82.0, "canon": 71.2},
 }
 """The per-concept numbers the paper gives (the headline targets)."""
+
+ORIGINAL_FLAT_RUNS: dict[str, tuple[float, float]] = {
+    "cl_object-above-floor_vs_no-object": (55.0, 53.0),
+    "cl_object-on-floor_vs_no-object": (65.0, 58.0),
+    "cl_object-on-floor_vs_not-on-floor": (66.0, 60.0),
+    "cl_object-on-floor_vs_not": (64.0, 58.0),
+    "cl_self-between-two-objects_vs_not-between-on-floor": (79.0, 72.0),
+    "cl_two-objects-on-floor_vs_not": (70.0, 62.0),
+    "cl_two-objects-on-floor_vs_one": (66.0, 64.0),
+    "cl_two-objects-on-floor_vs_two-objects-one-on-floor": (49.0, 45.0),
+    "cl_two-objects-one-above-and-one-on-floor_vs_not": (52.0, 51.0),
+    "ba_self-ontop-object_from_anywhere-on-floor": (80.0, 62.0),
+    "ba_self-between-two-objects_from_not-between-on-floor": (48.0, 32.0),
+    "ba_self-second_from_left_from_anywhere-on-floor": (21.0, 10.0),
+    "ba_self-second_from_right_from_anywhere-on-floor": (20.0, 9.0),
+    "ba_self-left-of-two-objects_from_not-left-on-floor": (100.0, 37.0),
+    "ba_self-right-of-two-objects_from_not-right-on-floor": (100.0, 78.0),
+}
+"""The original runs' flat SMCs of the objects concepts: (best seed, mean over seeds), as the comments of the
+release's ``objects2-cl-canon`` / ``objects2-ba-canon`` curriculum files record them (their "Max" and "Avg" columns;
+the paper itself gives no per-concept numbers). The only per-concept reference for the flat baseline (``base``)."""

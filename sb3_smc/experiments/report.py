@@ -28,7 +28,14 @@ from sb3_smc.curricula.jobs import job_name
 from sb3_smc.errors import SMCError
 from sb3_smc.experiments.design import CATEGORIES, METHOD_REGISTRY, METHODS, PAPER_CATEGORIES, SMC_METHODS
 from sb3_smc.experiments.figures import Panel, bar_panels, timeline_figure, trajectory_figure
-from sb3_smc.experiments.paper import PAPER_CONCEPTS, PAPER_COUNTS, PAPER_MEANS, PAPER_NOPRIM, PAPER_TTESTS
+from sb3_smc.experiments.paper import (
+    ORIGINAL_FLAT_RUNS,
+    PAPER_CONCEPTS,
+    PAPER_COUNTS,
+    PAPER_MEANS,
+    PAPER_NOPRIM,
+    PAPER_TTESTS,
+)
 from sb3_smc.experiments.runner import experiment_command, read_results
 from sb3_smc.experiments.statistics import (
     claims,
@@ -37,6 +44,7 @@ from sb3_smc.experiments.statistics import (
     method_mean,
     method_test,
     p_at_df,
+    paired_ttest,
     seed_summary,
     wins,
 )
@@ -197,6 +205,7 @@ def _write(sources: Sequence[tuple[Path, dict[str, Any]]], out: Path, trajectori
                       + (", ..." if len(missing) > 12 else "") + ".", ""]
     lines += _claims_section(table)
     lines += _concept_section(table)
+    lines += _original_flat_section(table)
     lines += _means_section(table)
     lines += _ttest_section(table)
     lines += _noprim_section(table)
@@ -255,6 +264,33 @@ def _concept_section(table: _Table) -> list[str]:
             parts = [f"{m} {_diff(table.score.get((target, m)), PAPER_CONCEPTS[target].get(m))}"
                      for m in ("base", "curr", "canon") if (target, m) in table.score]
             lines.append(f"- {target}: " + ", ".join(parts))
+    return lines
+
+
+def _original_flat_section(table: _Table) -> list[str]:
+    """Our flat SMCs beside the original runs' on the concepts whose numbers the release's files record."""
+    given = [t for t in table.targets if t in ORIGINAL_FLAT_RUNS and (t, "base") in table.score]
+    if not given:
+        return []
+    lines = ["", "## The flat SMC beside the original runs'", "",
+             "The release's curriculum files record the original runs' flat SMCs on the objects concepts (best seed "
+             "and mean over seeds, their comments' \"Max\" and \"Avg\"); ours (`base`) beside them.", "",
+             "| target | kind | ours: best (mean ± s.d.) | original: best (mean) | best: ours - original |",
+             "|---|---|---:|---:|---:|"]
+    for target in given:
+        best, mean = ORIGINAL_FLAT_RUNS[target]
+        lines.append(f"| {target} | {table.kind_of[target]} | {table.cell(target, 'base')} | {best:.1f} ({mean:.1f}) "
+                     f"| {_diff(table.score[(target, 'base')], best)} |")
+    for kind in KINDS:
+        members = [t for t in given if table.kind_of[t] == kind]
+        if not members:
+            continue
+        ours = [table.score[(t, "base")] for t in members]
+        theirs = [ORIGINAL_FLAT_RUNS[t][0] / 100 for t in members]
+        test = paired_ttest(ours, theirs)
+        tested = f"; paired t({test[0]}) = {test[1]:.2f}, p = {test[2]:.2g}" if test else ""
+        lines.append(f"\n{kind}, {len(members)} concepts: mean best seed ours {100 * sum(ours) / len(ours):.1f}, "
+                     f"original {100 * sum(theirs) / len(theirs):.1f}{tested}.")
     return lines
 
 
