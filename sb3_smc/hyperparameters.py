@@ -31,6 +31,7 @@ from sb3_smc.errors import SMCError
 
 if TYPE_CHECKING:
     from stable_baselines3.common.on_policy_algorithm import OnPolicyAlgorithm
+    from stable_baselines3.common.policies import ActorCriticPolicy
 
 __all__ = [
     "ALGORITHMS",
@@ -255,7 +256,7 @@ def resolve_hyperparameters(algo: str, overrides: Mapping[str, Any] | None = Non
     return {key: encode_value(value, key) for key, value in resolved.items()}
 
 
-def constructor_arguments(hyperparameters: Mapping[str, Any]) -> tuple[Any, dict[str, Any]]:
+def constructor_arguments(hyperparameters: Mapping[str, Any]) -> tuple[str | type[ActorCriticPolicy], dict[str, Any]]:
     """``(policy, keyword arguments)`` for the algorithm's constructor from stored hyperparameters.
 
     ``"SequenceLstmPolicy"`` / ``"SequenceGruPolicy"`` become the classes of :mod:`sb3_smc.common.recurrent` (SB3

@@ -10,6 +10,7 @@ the numpy code here. They hold numpy arrays only (no torch modules), so they pic
 from __future__ import annotations
 
 from collections.abc import Sequence
+from types import ModuleType
 from typing import Any
 
 import numpy as np
@@ -339,7 +340,7 @@ def _one_by_one(policy: Any, x: np.ndarray, states: Sequence[Any]) -> tuple[np.n
     return np.array([a[0] for a in answers]), [a[1] for a in answers]
 
 
-_KERNELS: Any = None
+_KERNELS: ModuleType | None = None
 
 
 def _flat(observation: np.ndarray, size: int) -> np.ndarray:
@@ -352,7 +353,7 @@ def _flat(observation: np.ndarray, size: int) -> np.ndarray:
     return x
 
 
-def _kernels() -> Any:
+def _kernels() -> ModuleType:
     """:mod:`sb3_smc.common.kernels`, imported on first use (numba loads in about a second)."""
     global _KERNELS
     if _KERNELS is None:
