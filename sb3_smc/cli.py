@@ -32,6 +32,7 @@ from sb3_smc.experiments import report, runner
 from sb3_smc.experiments.design import CATEGORIES, DEFAULT_REPEATS, METHODS
 from sb3_smc.hyperparameters import ALGORITHMS, DEFAULT_ALGORITHM, DEFAULT_TIMESTEPS, RECURRENT_POLICIES
 from sb3_smc.library import SMCLibrary, storage
+from sb3_smc.library.pretrained import pretrained_root
 
 __all__ = ["main"]
 
@@ -58,7 +59,8 @@ def _train(args: argparse.Namespace) -> int:
     run = trainer.train_curriculum(args.curriculum, args.out, targets=targets, seeds=args.seeds,
                                    timesteps=args.timesteps, reuse=args.reuse, workers=args.workers,
                                    backend=args.backend, algo=args.algo, rnn=args.rnn, ray_address=args.ray_address,
-                                   tensorboard=not args.no_tensorboard, accept_changes=args.accept_changes)
+                                   tensorboard=not args.no_tensorboard, accept_changes=args.accept_changes,
+                                   reuse_from=_reuse_from(args.reuse_from))
     print(f"library: {run.library}")
     return 1 if run.failed else 0
 
@@ -108,7 +110,8 @@ def _experiment(args: argparse.Namespace) -> int:
     targets = [t for item in args.targets for t in item.split(",") if t] if args.targets else None
     runner.run_experiment(args.out, methods=methods, targets=targets, category=args.category, seeds=args.seeds,
                           timesteps=args.timesteps, repeats=args.repeats, workers=args.workers, backend=args.backend,
-                          ray_address=args.ray_address, algo=args.algo, rnn=args.rnn, train=not args.no_train)
+                          ray_address=args.ray_address, algo=args.algo, rnn=args.rnn, train=not args.no_train,
+                          reuse_from=_reuse_from(args.reuse_from))
     print(f"next: sb3-smc report {shlex.quote(args.out)}")
     return 0
 
@@ -168,7 +171,18 @@ def _positive(text: str) -> int:
     return value
 
 
+def _reuse_from(value: str | None) -> Path | None:
+    """``--reuse-from``: a library directory, or ``pretrained`` for the package's pretrained library."""
+    if value is None:
+        return None
+    return pretrained_root() if value == "pretrained" else Path(value)
+
+
 def _learner_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--reuse-from", default=None, metavar="LIBRARY",
+                        help="copy the SMCs this library holds with the spec the run would train them with instead "
+                             "of training them ('pretrained': the package's pretrained library, whose nodes' other "
+                             "seeds are then not trained)")
     parser.add_argument("--algo", default=None, choices=ALGORITHMS,
                         help=f"algorithm of every SMC (default: each node's, else {DEFAULT_ALGORITHM})")
     parser.add_argument("--rnn", default=None, choices=sorted(RECURRENT_POLICIES),

@@ -15,11 +15,13 @@ import torch
 import pixelworld_env  # noqa: F401
 from sb3_smc.curricula import Curriculum, Node
 from sb3_smc.curricula.pretrained import build_pretrained, lower_level
+from sb3_smc.curricula.run_directory import status
 from sb3_smc.curricula.shipped import shipped_curricula
 from sb3_smc.curricula.trainer import rank_seeds, train_curriculum
 from sb3_smc.library import LibraryError, SMCLibrary
 from sb3_smc.library.errors import ManifestError
 from sb3_smc.library.pretrained import INDEX, pretrained_curricula, pretrained_names, pretrained_root
+from tests.helpers import sb3_smc_cli
 
 LEFT, RIGHT = "cl_self-in-left-corner_vs_on-hline", "cl_self-in-right-corner_vs_on-hline"
 TARGET = "ba_self-in-target-container_from_nontarget-container"
@@ -85,6 +87,47 @@ def test_build_and_load_a_pretrained_library(tmp_path):
     env.reset(seed=0)
     *_, info = env.step(env.action_names.index(f"SMC:{library.names[0]}"))
     assert info["smc_calls"]  # the pretrained SMC ran as an action
+
+
+def test_a_run_reuses_what_a_library_holds_instead_of_training_it(tmp_path):
+    """From a pretrained library a fresh run copies the two best seeds of each lower-level node (their other seed is
+    not trained) and trains only what is left; its top SMCs are those of the run the library came from, bit for bit.
+    From a whole run library it copies every job it holds with the spec it would train it with."""
+    tiny = Curriculum("tiny", (Node(LEFT, LEFT), Node(RIGHT, RIGHT), Node("top", TARGET, (LEFT, RIGHT))), ("top",))
+    first = tmp_path / "first"
+    train_curriculum(tiny, first, seeds=3, timesteps=256, progress=False)
+    out = build_pretrained([first], [tiny], tmp_path / "pretrained", repeats=1)
+    assert json.loads((out / INDEX).read_text())["seeds"] == {LEFT: 3, RIGHT: 3}
+    lines: list[str] = []
+    again = train_curriculum(tiny, tmp_path / "again", seeds=3, timesteps=256, printer=lines.append,
+                             reuse_from=out)
+    assert lines[0].startswith("tiny: 3 nodes x 3 seeds = 9 jobs (6 already done, 2 of them skipped)")
+    assert len(again.rows) == 4 + 3  # the 4 copied jobs and the 3 of "top", the only ones trained
+    trained, reused = SMCLibrary.load(first / "library"), SMCLibrary.load(again.library)
+    pretrained = SMCLibrary.load(out)
+    assert sorted(n for n in reused.names if not n.startswith("top")) == sorted(pretrained.names)
+    assert status(tmp_path / "again")["skipped"] == sorted(set(trained.names) - set(reused.names))
+    for name in (f"top@{seed}" for seed in range(3)):
+        assert reused[name].spec == trained[name].spec and reused[name].record.training_returns == \
+            trained[name].record.training_returns
+        ours, theirs = reused[name].model.policy.state_dict(), trained[name].model.policy.state_dict()
+        assert all(torch.equal(ours[k], theirs[k]) for k in theirs)
+    lines.clear()
+    copied = train_curriculum(tiny, tmp_path / "copied", seeds=3, timesteps=256, printer=lines.append,
+                              reuse_from=first / "library")
+    assert lines[0].startswith("tiny: 3 nodes x 3 seeds = 9 jobs (9 already done)")
+    assert sorted(SMCLibrary.load(copied.library).names) == sorted(trained.names)
+    with pytest.raises(LibraryError, match="no SMC library at"):
+        train_curriculum(tiny, tmp_path / "never", seeds=3, timesteps=256, progress=False,
+                         reuse_from=tmp_path / "nowhere")
+    assert not (tmp_path / "never").exists()  # refused before anything was written
+    (tmp_path / "tiny.yml").write_text(f"curriculum: tiny\nnodes:\n  - name: {LEFT}\n    task: {LEFT}\n"
+                                       f"  - name: {RIGHT}\n    task: {RIGHT}\n  - name: top\n    task: {TARGET}\n"
+                                       f"    uses: [{LEFT}, {RIGHT}]\ntargets: [top]\n")
+    code, stdout, err = sb3_smc_cli("train", str(tmp_path / "tiny.yml"), "--out", str(tmp_path / "cli"), "--seeds",
+                                    "3", "--timesteps", "256", "--no-tensorboard", "--reuse-from", str(out))
+    assert code == 0, err
+    assert "9 jobs (6 already done, 2 of them skipped)" in stdout
 
 
 def test_the_shipped_pretrained_library():

@@ -3,7 +3,8 @@
 # commit with its own environment. Rerun to resume (finished jobs and evaluations are kept).
 #   tools/paper_table.sh run [categories...]     train + evaluate (default: search objects containment objcon)
 #   tools/paper_table.sh keep <category> [repo]   copy a run's records (no models) into docs/results/paper/<category>
-# Environment: RUNS (default /work/runs), RUN_ENV (default /work/run-env: a venv with the worktree installed).
+# Environment: RUNS (default /work/runs), RUN_ENV (default /work/run-env: a venv with the worktree installed),
+# REUSE_FROM (optional: --reuse-from for the runs, e.g. "pretrained": lower-level SMCs copied, not trained again).
 set -eu
 RUNS=${RUNS:-/work/runs}; RUN_ENV=${RUN_ENV:-/work/run-env}
 case ${1:-} in
@@ -13,7 +14,8 @@ case ${1:-} in
     for cat in ${@:-search objects containment objcon}; do
       echo "=== $cat start $(date -Is)"
       rc=0
-      "$RUN_ENV/bin/sb3-smc" experiment --out "$RUNS/paper-$cat" --category "$cat" --seeds 5 --workers 2 || rc=$?
+      "$RUN_ENV/bin/sb3-smc" experiment --out "$RUNS/paper-$cat" --category "$cat" --seeds 5 --workers 2 \
+        ${REUSE_FROM:+--reuse-from "$REUSE_FROM"} || rc=$?
       echo "=== $cat end $(date -Is) rc=$rc"
     done ;;
   keep)

@@ -76,6 +76,7 @@ def build_pretrained(runs: Sequence[str | Path], curricula: Sequence[str | Curri
     runs_ = [Path(run) for run in runs]
     entries = {run: storage.check_manifest(*storage.read_manifest(run / "library")) for run in runs_}
     chosen: list[tuple[str, Path, list[str]]] = []
+    ranked_among: dict[str, int] = {}
     for node in dict.fromkeys(n for c in resolved for n in lower_level(c)):
         found = [(run, {int(name.rpartition(SEED_SEPARATOR)[2]): entry.record for name, entry in held.items()
                         if node_of(name) == node}) for run, held in entries.items()]
@@ -90,8 +91,9 @@ def build_pretrained(runs: Sequence[str | Path], curricula: Sequence[str | Curri
             raise LibraryError(f"node {node!r}: {run / 'library'} holds {len(trained)} of the run's {seeds} seeds "
                                "with training records; the two best can only be chosen among all of them")
         chosen.append((node, run, [job_name(node, seed) for seed in rank_seeds(trained)[:PRETRAINED_SEEDS]]))
+        ranked_among[node] = seeds
     held = target / storage.MANIFEST
-    before = pretrained_index(target)["curricula"] if (target / INDEX).is_file() else {}
+    before = pretrained_index(target) if (target / INDEX).is_file() else {"curricula": {}, "seeds": {}}
     library = SMCLibrary.load(target) if held.is_file() else SMCLibrary()
     for node, run, names in chosen:
         for stale in [name for name in library.names if node_of(name) == node]:
@@ -109,20 +111,22 @@ def build_pretrained(runs: Sequence[str | Path], curricula: Sequence[str | Curri
             compact_model(staged / entry["model"])
             entry["sha256"] = storage.sha256(staged / entry["model"])
         atomic_write(staged / storage.MANIFEST, json.dumps(manifest, indent=2, allow_nan=False) + "\n")
-        atomic_write(staged / INDEX, json.dumps(_index(library.names, before, resolved), indent=1) + "\n")
+        index = _index(library.names, before["curricula"], resolved, {**before["seeds"], **ranked_among})
+        atomic_write(staged / INDEX, json.dumps(index, indent=1) + "\n")
         SMCLibrary.load(staged)  # the compact copy loads and checks out before it replaces anything
         pretrained_index(staged)
         replace_directory(staged, target)
     return target
 
 
-def _index(names: Sequence[str], before: dict[str, list[str]], built: Sequence[Curriculum]) -> dict:
+def _index(names: Sequence[str], before: dict[str, list[str]], built: Sequence[Curriculum],
+           ranked_among: dict[str, int]) -> dict:
     """The index of a library holding ``names``: the curricula of ``before``, ``built`` and the shipped ones whose
-    lower-level nodes it all holds, and each node's SMCs."""
+    lower-level nodes it all holds, each node's SMCs, and the number of seeds each node's were ranked among."""
     nodes: dict[str, list[str]] = {}
     for name in names:
         nodes.setdefault(node_of(name), []).append(name)
     wanted = {**{name: lower_level(c) for name, c in shipped_curricula().items()}, **before,
               **{c.name: lower_level(c) for c in built}}
     curricula = {name: lower for name, lower in wanted.items() if lower and set(lower) <= set(nodes)}
-    return {"curricula": curricula, "nodes": nodes}
+    return {"curricula": curricula, "nodes": nodes, "seeds": {node: ranked_among[node] for node in nodes}}

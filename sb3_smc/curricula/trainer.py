@@ -55,6 +55,7 @@ from sb3_smc.curricula.jobs import (
     rank_seeds,
     run_job,
 )
+from sb3_smc.curricula.reuse import ReuseLibrary
 from sb3_smc.curricula.run_directory import (
     PENDING_RETRAIN,
     RunFileError,
@@ -113,6 +114,7 @@ class _Scheduler:
         self.directory = directory
         self.library = directory / "library"
         self.records: dict[str, dict[int, TrainingRecord]] = {name: {} for name in order}
+        self.best_of: dict[str, list[int]] = {}  # nodes reused with their best seeds only (curricula.reuse)
         self.running: set[str] = set()
         self.failed: dict[str, str] = {}
         self.damaged: dict[str, TrainingRecord] = {}  # finished jobs whose model file is damaged: their old records
@@ -131,9 +133,14 @@ class _Scheduler:
     def children(self, node: Node) -> tuple[str, ...]:
         names: list[str] = []
         for used in node.uses:
-            best = rank_seeds(self.records[used])[: min(self.k, self.seeds)]
+            best = self.best_of.get(used) or rank_seeds(self.records[used])[: min(self.k, self.seeds)]
             names.extend(job_name(used, seed) for seed in best)
         return tuple(names)
+
+    def complete(self, node: str) -> bool:
+        """Whether every job of ``node`` that others use is done: all its seeds, or its reused best seeds."""
+        held = self.records[node]
+        return len(held) == self.seeds or node in self.best_of and all(s in held for s in self.best_of[node])
 
     def ready(self) -> list[tuple[str, int]]:
         """The jobs that can start, those with the longest chain of nodes still above them first (then in
@@ -147,7 +154,7 @@ class _Scheduler:
             if self.done(node_name, seed) or name in self.running or name in self.failed:
                 continue
             node = self.curriculum.node(node_name)
-            if all(len(self.records[u]) == self.seeds for u in node.uses) and not self.below[node_name] & repairing:
+            if all(self.complete(u) for u in node.uses) and not self.below[node_name] & repairing:
                 out.append((node_name, seed))
         return out
 
@@ -203,6 +210,7 @@ def train_curriculum(
     printer: Callable[[str], None] = print,
     skip: Collection[str] = (),
     accept_changes: bool = False,
+    reuse_from: str | Path | None = None,
 ) -> TrainingRun:
     """Train ``curriculum`` (a shipped name, a file, a :class:`Curriculum`, or several: their nodes are merged, a
     node shared by several is trained once) into ``out``, resuming whatever ``out`` already holds.
@@ -219,9 +227,12 @@ def train_curriculum(
     trained again. ``accept_changes``: ``out`` holds this run with other node settings (or other nodes); the jobs
     of the changed nodes and of every node above them are trained again (the SMCs they replace are kept in
     ``DIR/replaced/``), the other nodes keep theirs. Every setting and node is checked before anything is written
-    or trained. Returns a :class:`TrainingRun`.
+    or trained. ``reuse_from``: a library whose SMCs this run copies instead of training them where it holds them
+    with the very spec the run would train (a pretrained library: a node's best seeds, its other seeds then not
+    trained; :mod:`sb3_smc.curricula.reuse`). Returns a :class:`TrainingRun`.
     """
     check_run_options(workers=workers, backend=backend, ray_address=ray_address)
+    source = ReuseLibrary(reuse_from) if reuse_from is not None else None
     merged, order, settings = _resolve_run(curriculum, targets, seeds, timesteps, reuse, algo, rnn)
     directory = Path(out)
     order, skipped = _plan_skip(merged, order, settings["targets"], seeds, skip)
@@ -241,7 +252,7 @@ def train_curriculum(
                 changes.apply(directory, printer if progress else None)
             atomic_write(directory / "run.json", json.dumps(settings, indent=2) + "\n")
         return _run(merged, scheduler, order, directory, seeds, backend, workers, ray_address, tensorboard, progress,
-                    printer)
+                    printer, source, settings)
     finally:
         lock.close()
 
@@ -336,10 +347,16 @@ def _lock(directory: Path) -> Any:
 
 
 def _run(merged: Curriculum, scheduler: _Scheduler, order: list[str], directory: Path, seeds: int, backend: str,
-         workers: int, ray_address: str | None, tensorboard: bool, progress: bool,
-         printer: Callable[[str], None]) -> TrainingRun:
+         workers: int, ray_address: str | None, tensorboard: bool, progress: bool, printer: Callable[[str], None],
+         source: ReuseLibrary | None, settings: dict[str, Any]) -> TrainingRun:
     _finish_pending_retrain(directory, printer)
     damaged = _load_done(scheduler)
+    if source is not None:
+        reused = source.reuse(merged, order, set(settings["targets"]), seeds, scheduler.k, scheduler.records,
+                              scheduler.best_of, scheduler.complete, lambda n: scheduler.children(merged.node(n)),
+                              scheduler.library, timesteps=scheduler.timesteps, algo=scheduler.algo,
+                              rnn=scheduler.rnn)
+        scheduler.skip = scheduler.skip | reused
     failed_dir = directory / "failed"
     total = len(scheduler.jobs())
     done_before = sum(scheduler.done(n, s) for n, s in scheduler.jobs())

@@ -69,6 +69,7 @@ def run_experiment(
     train: bool = True,
     progress: bool = True,
     printer: Callable[[str], None] = print,
+    reuse_from: str | Path | None = None,
 ) -> dict[str, Any]:
     """Run the paper's protocol for ``methods`` on ``targets`` (dataset names) or a ``category`` of the level-2
     targets (default: all 51) into ``out``; returns the ``results.json`` content. Resumable: re-run to continue.
@@ -77,7 +78,9 @@ def run_experiment(
 
     ``train=False`` trains nothing: it tabulates what the directory's run has finished so far (while it may still be
     training): the finished SMCs are evaluated (and the CNN trained), the rest are listed in ``missing`` and the
-    results are marked ``"complete": false`` (the report says so). Running with ``train=True`` completes them."""
+    results are marked ``"complete": false`` (the report says so). Running with ``train=True`` completes them.
+    ``reuse_from``: a library whose SMCs the run copies instead of training them (:func:`train_curriculum`), such as
+    the pretrained library: the results are the same."""
     if targets is not None and category is not None:
         raise SMCError("give targets or a category, not both")
     if isinstance(repeats, bool) or not isinstance(repeats, int) or repeats < 1:
@@ -103,7 +106,8 @@ def run_experiment(
     elif design.curriculum is not None:
         run = train_curriculum(design.curriculum, directory, targets=design.training_targets, seeds=seeds,
                                timesteps=timesteps, workers=workers, backend=backend, ray_address=ray_address,
-                               algo=algo, rnn=rnn, progress=progress, printer=printer, skip=set(kept))
+                               algo=algo, rnn=rnn, progress=progress, printer=printer, skip=set(kept),
+                               reuse_from=reuse_from)
         if run.failed:
             raise SMCRuntimeError(f"{len(run.failed)} training job(s) failed ({', '.join(sorted(run.failed)[:5])}; "
                                   f"tracebacks in {directory / 'failed'}): nothing evaluated; run the same command "

@@ -28,7 +28,9 @@ from sb3_smc.library.errors import LibraryError, ManifestError, suggest
 __all__ = ["INDEX", "pretrained_curricula", "pretrained_index", "pretrained_names", "pretrained_root"]
 
 INDEX = "pretrained.json"
-"""The index of a pretrained library: ``{"curricula": {curriculum: [nodes]}, "nodes": {node: [SMC names]}}``."""
+"""The index of a pretrained library: ``{"curricula": {curriculum: [nodes]}, "nodes": {node: [SMC names]},
+"seeds": {node: n}}``: the nodes each curriculum calls, the SMCs (best seeds) that stand for each node, and how many
+seeds of its run those were ranked among."""
 
 
 def pretrained_root() -> Path:
@@ -46,17 +48,18 @@ def pretrained_index(root: str | Path | None = None) -> dict[str, Any]:
             raise ManifestError(f"{root} is an SMC library without {INDEX} (the index of a pretrained library, "
                                 "written by build_pretrained since manifest version 3): build it again with "
                                 "tools/build_pretrained.py")
-        return {"curricula": {}, "nodes": {}}
+        return {"curricula": {}, "nodes": {}, "seeds": {}}
     try:
         index = json.loads(path.read_text(encoding="utf-8"))
-        curricula, nodes = index["curricula"], index["nodes"]
+        curricula, nodes, seeds = index["curricula"], index["nodes"], index["seeds"]
         ok = all(isinstance(v, list) and all(isinstance(n, str) and n in nodes for n in v) for v in curricula.values())
         ok = ok and all(isinstance(v, list) and all(isinstance(n, str) for n in v) for v in nodes.values())
+        ok = ok and set(seeds) == set(nodes) and all(type(n) is int and n >= len(nodes[k]) for k, n in seeds.items())
     except (ValueError, KeyError, TypeError, AttributeError) as err:
         raise ManifestError(f"{path} is damaged ({type(err).__name__}: {err})") from None
     if not ok:
-        raise ManifestError(f"{path}: expected {{'curricula': {{name: [nodes]}}, 'nodes': {{node: [SMC names]}}}}, "
-                            "every node of a curriculum among 'nodes'")
+        raise ManifestError(f"{path}: expected {{'curricula': {{name: [nodes]}}, 'nodes': {{node: [SMC names]}}, "
+                            "'seeds': {node: seeds ranked among}}, every node of a curriculum among 'nodes'")
     held = set(_names(root))
     missing = sorted({name for names in nodes.values() for name in names} - held)
     if missing:
