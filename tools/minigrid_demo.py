@@ -110,9 +110,14 @@ def report(args: argparse.Namespace) -> int:
     lines = ["# SMCs on Minigrid: DoorKey flat and as a curriculum", "",
              f"`python tools/minigrid_demo.py` ({(out / 'doorkey.yml').read_text().splitlines()[1].split(': ', 1)[1]}"
              f"): test score = success rate on {args.starts} held-out start states x {args.repeats} repeats "
-             "(`sb3_smc.evaluate`), best seed and mean ± s.d. over seeds.", "",
-             "| node | role | seeds | best seed | mean ± s.d. | per seed | mean decisions | training wall time (s) |",
-             "|---|---|---:|---:|---:|---|---:|---:|"]
+             "(`sb3_smc.evaluate`), best seed and mean ± s.d. over seeds.", ""]
+    seeds = json.loads((out / "run" / "run.json").read_text())["seeds"]
+    expected = (len(CHILDREN) + len(METHODS)) * seeds
+    if len(rows) < expected:
+        lines += [f"**Partial results**: {len(rows)} of the run's {expected} SMCs were trained when this was written; "
+                  "the run goes on (`train` again resumes it).", ""]
+    lines += ["| node | role | seeds | best seed | mean ± s.d. | per seed | mean decisions | training wall time (s) |",
+              "|---|---|---:|---:|---:|---|---:|---:|"]
     for node, node_rows in sorted(by_node.items(), key=lambda kv: (kv[0] not in METHODS, kv[0])):
         node_rows.sort(key=lambda r: r["seed"])
         scores = [r["test_score"] for r in node_rows]
