@@ -13,7 +13,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from pathlib import Path
 
-from sb3_smc.curricula.format import Curriculum
+from sb3_smc.curricula.format import SEED_SEPARATOR, Curriculum
 from sb3_smc.curricula.jobs import job_name, node_of, node_spec, rank_seeds
 from sb3_smc.library import storage
 from sb3_smc.library.pretrained import INDEX, pretrained_index
@@ -37,8 +37,9 @@ class ReuseLibrary:
         among as many seeds); ``None`` otherwise."""
         if self.ranked_among.get(node) != seeds:
             return None
-        held = {int(name.rpartition("@")[2]): entry.record for name, entry in self.entries.items()
-                if node_of(name) == node and entry.record is not None}
+        held = {int(seed): entry.record for name, entry in self.entries.items()
+                for head, _, seed in [name.rpartition(SEED_SEPARATOR)]
+                if head == node and seed.isdigit() and entry.record is not None}
         return rank_seeds(held)[:k] if len(held) >= k else None
 
     def copy(self, curriculum: Curriculum, name: str, seed: int, children: tuple[str, ...], library: Path, *,
