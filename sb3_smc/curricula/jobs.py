@@ -11,17 +11,17 @@ from __future__ import annotations
 
 import io
 import json
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 from sb3_smc.common.threads import torch_threads
 from sb3_smc.curricula.format import SEED_SEPARATOR, Curriculum, CurriculumError, Node
 from sb3_smc.hyperparameters import DEFAULT_ALGORITHM, DEFAULT_TIMESTEPS, recurrent_policy
-from sb3_smc.library import SMCLibrary
+from sb3_smc.library import SMCLibrary, storage
 from sb3_smc.records import Budget, TaskSpec, TrainingRecord, TrainingSpec, WrapperSettings
 
 __all__ = ["DEFAULT_REUSE", "DEFAULT_SEEDS", "REUSE", "Job", "JobResult", "check_curriculum", "file_stem", "job_name",
-           "name_of_file", "node_budget", "node_of", "node_spec", "rank_seeds", "run_job"]
+           "name_of_file", "node_budget", "node_of", "node_records", "node_spec", "rank_seeds", "run_job"]
 
 REUSE = {"one_best": 1, "two_best": 2}
 """SMC filters of the paper: how many seeds of each lower-level node a caller gets."""
@@ -38,6 +38,17 @@ def job_name(node: str, seed: int) -> str:
 def node_of(name: str) -> str:
     """The node of the library name ``name`` (:func:`job_name`'s inverse, for the node)."""
     return name.rpartition(SEED_SEPARATOR)[0]
+
+
+def node_records(entries: Mapping[str, storage.LibraryEntry], node: str) -> dict[int, TrainingRecord | None]:
+    """The training records (``None`` where an entry has none) of ``node``'s jobs among a library's ``entries``, by
+    seed."""
+    out: dict[int, TrainingRecord | None] = {}
+    for name, entry in entries.items():
+        head, sep, seed = name.rpartition(SEED_SEPARATOR)
+        if sep and head == node and seed.isdigit():
+            out[int(seed)] = entry.record
+    return out
 
 
 def file_stem(name: str) -> str:

@@ -12,8 +12,8 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from pixelworld_env.atomic import atomic_write, replace_directory
-from sb3_smc.curricula.format import SEED_SEPARATOR, Curriculum
-from sb3_smc.curricula.jobs import job_name, node_of, rank_seeds
+from sb3_smc.curricula.format import Curriculum
+from sb3_smc.curricula.jobs import job_name, node_of, node_records, rank_seeds
 from sb3_smc.curricula.run_directory import read_settings
 from sb3_smc.curricula.shipped import resolve_curriculum, shipped_curricula
 from sb3_smc.library import SMCLibrary, storage
@@ -78,8 +78,7 @@ def build_pretrained(runs: Sequence[str | Path], curricula: Sequence[str | Curri
     chosen: list[tuple[str, Path, list[str]]] = []
     ranked_among: dict[str, int] = {}
     for node in dict.fromkeys(n for c in resolved for n in lower_level(c)):
-        found = [(run, {int(name.rpartition(SEED_SEPARATOR)[2]): entry.record for name, entry in held.items()
-                        if node_of(name) == node}) for run, held in entries.items()]
+        found = [(run, node_records(held, node)) for run, held in entries.items()]
         run, records = max(found, key=lambda item: len(item[1]))
         settings = read_settings(run)
         if settings is None:

@@ -13,8 +13,8 @@ from __future__ import annotations
 from collections.abc import Callable
 from pathlib import Path
 
-from sb3_smc.curricula.format import SEED_SEPARATOR, Curriculum
-from sb3_smc.curricula.jobs import job_name, node_of, node_spec, rank_seeds
+from sb3_smc.curricula.format import Curriculum
+from sb3_smc.curricula.jobs import job_name, node_of, node_records, node_spec, rank_seeds
 from sb3_smc.library import storage
 from sb3_smc.library.pretrained import INDEX, pretrained_index
 from sb3_smc.records import TrainingRecord
@@ -28,7 +28,7 @@ class ReuseLibrary:
     def __init__(self, root: str | Path) -> None:
         self.root = Path(root)
         self.entries = storage.check_manifest(*storage.read_manifest(self.root))
-        index = pretrained_index(self.root) if (self.root / INDEX).is_file() else {"seeds": {}}
+        index = pretrained_index(self.root, list(self.entries)) if (self.root / INDEX).is_file() else {"seeds": {}}
         self.ranked_among: dict[str, int] = dict(index["seeds"])
         """Node -> the number of seeds its held (best) seeds were ranked among, for a pretrained library."""
 
@@ -37,9 +37,7 @@ class ReuseLibrary:
         among as many seeds); ``None`` otherwise."""
         if self.ranked_among.get(node) != seeds:
             return None
-        held = {int(seed): entry.record for name, entry in self.entries.items()
-                for head, _, seed in [name.rpartition(SEED_SEPARATOR)]
-                if head == node and seed.isdigit() and entry.record is not None}
+        held = {seed: record for seed, record in node_records(self.entries, node).items() if record is not None}
         return rank_seeds(held)[:k] if len(held) >= k else None
 
     def copy(self, curriculum: Curriculum, name: str, seed: int, children: tuple[str, ...], library: Path, *,

@@ -18,6 +18,7 @@ lists what is shipped and its size.
 from __future__ import annotations
 
 import json
+from collections.abc import Sequence
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -38,9 +39,10 @@ def pretrained_root() -> Path:
     return Path(str(resources.files("sb3_smc.library").joinpath("data", "pretrained")))
 
 
-def pretrained_index(root: str | Path | None = None) -> dict[str, Any]:
+def pretrained_index(root: str | Path | None = None, names: Sequence[str] | None = None) -> dict[str, Any]:
     """The index of the pretrained library in ``root`` (the package's by default; empty where there is none),
-    checked against its manifest: every SMC it names is in the library."""
+    checked against its manifest: every SMC it names is in the library (``names``: the library's SMC names, for a
+    caller that has read its manifest already)."""
     root = pretrained_root() if root is None else Path(root)
     path = root / INDEX
     if not path.is_file():
@@ -60,7 +62,7 @@ def pretrained_index(root: str | Path | None = None) -> dict[str, Any]:
     if not ok:
         raise ManifestError(f"{path}: expected {{'curricula': {{name: [nodes]}}, 'nodes': {{node: [SMC names]}}, "
                             "'seeds': {node: seeds ranked among}}, every node of a curriculum among 'nodes'")
-    held = set(_names(root))
+    held = set(_names(root) if names is None else names)
     missing = sorted({name for names in nodes.values() for name in names} - held)
     if missing:
         raise ManifestError(f"{path} names SMCs that are not in the library: {missing}")
@@ -76,14 +78,15 @@ def pretrained_names(curriculum: str, root: str | Path | None = None) -> list[st
     """The SMC names (``<node>@<seed>``) the pretrained library holds for ``curriculum``'s lower-level nodes, in the
     library's order."""
     root = pretrained_root() if root is None else Path(root)
-    index = pretrained_index(root)
+    names = _names(root) if (root / storage.MANIFEST).is_file() else []
+    index = pretrained_index(root, names)
     if curriculum not in index["curricula"]:
         available = list(index["curricula"])
         raise LibraryError(f"no pretrained SMCs for curriculum {curriculum!r}"
                            f"{suggest(curriculum, available, ' (none is shipped yet)')}; pretrained: "
                            f"{', '.join(available) or 'none'}")
     wanted = {name for node in index["curricula"][curriculum] for name in index["nodes"][node]}
-    return [name for name in _names(root) if name in wanted]
+    return [name for name in names if name in wanted]
 
 
 def _names(root: Path) -> list[str]:
