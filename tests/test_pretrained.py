@@ -130,6 +130,21 @@ def test_a_run_reuses_what_a_library_holds_instead_of_training_it(tmp_path):
     assert "9 jobs (6 already done, 2 of them skipped)" in stdout
 
 
+def test_reuse_on_a_run_whose_finished_target_needs_nothing_more(tmp_path):
+    """A resumed run whose target is finished (its jobs skipped, as an experiment skips evaluated targets) leaves
+    that target's children out of the plan; reusing a library then copies only for the nodes still to train (this
+    once raised KeyError on the children left out)."""
+    tiny = Curriculum("tiny", (Node(LEFT, LEFT), Node(RIGHT, RIGHT), Node("top", TARGET, (LEFT, RIGHT)),
+                               Node("flat", TARGET)), ("top", "flat"))
+    first = tmp_path / "first"
+    train_curriculum(tiny, first, seeds=2, timesteps=256, targets=[LEFT, RIGHT], progress=False)
+    lines: list[str] = []
+    run = train_curriculum(tiny, tmp_path / "again", seeds=2, timesteps=256, printer=lines.append,
+                           skip=["top@0", "top@1"], reuse_from=first / "library")
+    assert lines[0].startswith("tiny: 2 nodes x 2 seeds = 4 jobs (2 already done, 2 of them skipped)")
+    assert sorted(SMCLibrary.load(run.library).names) == ["flat@0", "flat@1"]
+
+
 def test_the_shipped_pretrained_library():
     """What the package ships: every listed curriculum loads by name, with a test score per SMC; its index says
     what the shipped curricula say."""

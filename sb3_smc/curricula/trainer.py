@@ -352,7 +352,9 @@ def _run(merged: Curriculum, scheduler: _Scheduler, order: list[str], directory:
     _finish_pending_retrain(directory, printer)
     damaged = _load_done(scheduler)
     if source is not None:
-        reused = source.reuse(merged, order, set(settings["targets"]), seeds, scheduler.k, scheduler.records,
+        to_train = [n for n in order if not all(scheduler.done(n, s) for s in range(seeds))]
+        # a node whose jobs are all done or skipped needs nothing, and its children may be out of the plan
+        reused = source.reuse(merged, to_train, set(settings["targets"]), seeds, scheduler.k, scheduler.records,
                               scheduler.best_of, scheduler.complete, lambda n: scheduler.children(merged.node(n)),
                               scheduler.library, timesteps=scheduler.timesteps, algo=scheduler.algo,
                               rnn=scheduler.rnn)
