@@ -66,6 +66,11 @@ def test_build_and_load_a_pretrained_library(tmp_path):
     held.save()
     with pytest.raises(LibraryError, match=f"node '{RIGHT}': .* holds 2 of the run's 3 seeds"):
         build_pretrained([partial], [tiny], tmp_path / "elsewhere", repeats=1)
+    # ... unless only its finished nodes are wanted (a run still going): the curriculum is not listed until whole
+    finished = build_pretrained([partial], [tiny], tmp_path / "finished", repeats=1, finished_only=True)
+    index = json.loads((finished / INDEX).read_text())
+    assert sorted(index["nodes"]) == [LEFT] and index["curricula"] == {} and index["seeds"] == {LEFT: 3}
+    assert sorted(SMCLibrary.load(finished).names) == sorted(n for n in best_names if n.startswith(LEFT))
     (tmp_path / "notes").mkdir()
     (tmp_path / "notes" / "keep.txt").write_text("mine")
     with pytest.raises(LibraryError, match="refusing to write the pretrained library"):

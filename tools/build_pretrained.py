@@ -6,10 +6,11 @@ evaluated on the test split and stored compact, with the index that loads them b
 
 Usage::
 
-    python tools/build_pretrained.py --run runs/paper-search --curricula search2-canon [--out DIR]
+    python tools/build_pretrained.py --run runs/paper-search --curricula search2-canon [--out DIR] [--finished-only]
 
 A run is an experiment or curriculum directory whose ``library/`` holds every seed of the curricula's lower-level
-nodes (the ranking needs all of them). What the pretrained library already holds is kept.
+nodes (the ranking needs all of them); with ``--finished-only``, of a run still going, only the nodes whose seeds are
+all trained are taken. What the pretrained library already holds is kept.
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ import sys
 
 from sb3_smc.common.threads import torch_threads
 from sb3_smc.curricula.pretrained import build_pretrained
+from sb3_smc.library.pretrained import pretrained_index
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -27,10 +29,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--curricula", required=True,
                         help="comma-separated curricula: shipped names or curriculum files")
     parser.add_argument("--out", default=None, help="the library directory (default: the package's)")
+    parser.add_argument("--finished-only", action="store_true",
+                        help="take only the nodes whose every seed is trained (of a run still going)")
     args = parser.parse_args(argv)
     with torch_threads(1):
-        path = build_pretrained(args.run, [c for c in args.curricula.split(",") if c], args.out)
-    print(f"wrote {path}")
+        path = build_pretrained(args.run, [c for c in args.curricula.split(",") if c], args.out,
+                                finished_only=args.finished_only)
+    nodes = pretrained_index(path)["nodes"]
+    print(f"wrote {path}: {sum(map(len, nodes.values()))} SMCs of {len(nodes)} nodes")
     return 0
 
 

@@ -54,14 +54,16 @@ def compact_model(path: Path) -> None:
 
 
 def build_pretrained(runs: Sequence[str | Path], curricula: Sequence[str | Curriculum],
-                     out: str | Path | None = None, *, repeats: int = 10) -> Path:
+                     out: str | Path | None = None, *, repeats: int = 10, finished_only: bool = False) -> Path:
     """Collect the two best seeds of every lower-level node of ``curricula`` from the libraries of ``runs`` (run
     directories holding ``library/``), evaluate each on its test split (``repeats``, seed 0), and write them, with
     what ``out`` already holds (default: the package's pretrained library), as a compact library to ``out``.
 
     A node is ranked over all its seeds (the trainer's rule: best selected training return, ties to the lower
     seed), so every seed of the run (``run.json``'s ``seeds``) must be in one run's library. A node already in
-    ``out`` is replaced by its new best seeds. ``out`` must be missing, empty or a library. The index
+    ``out`` is replaced by its new best seeds; ``finished_only`` leaves out, instead of refusing, the nodes whose
+    seeds are not all trained yet (a run still going: its finished nodes now, the rest in a later build). ``out``
+    must be missing, empty or a library. The index
     (:data:`~sb3_smc.library.pretrained.INDEX`) then lists ``curricula``, the curricula it listed before and every
     shipped curriculum whose lower-level nodes are all held.
     """
@@ -87,6 +89,8 @@ def build_pretrained(runs: Sequence[str | Path], curricula: Sequence[str | Curri
         seeds = settings["seeds"]
         trained = {seed: record for seed, record in records.items() if record is not None}
         if len(trained) != seeds:
+            if finished_only:
+                continue
             raise LibraryError(f"node {node!r}: {run / 'library'} holds {len(trained)} of the run's {seeds} seeds "
                                "with training records; the two best can only be chosen among all of them")
         chosen.append((node, run, [job_name(node, seed) for seed in rank_seeds(trained)[:PRETRAINED_SEEDS]]))
