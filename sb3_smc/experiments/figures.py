@@ -222,11 +222,10 @@ def bar_panels(panels: Sequence[Panel], methods: Sequence[str], title: str, path
         ax.tick_params(labelsize=6)
         ax.set_title(panel.title, fontsize=8)
     handles, names = axes.flat[0].get_legend_handles_labels()
-    fig.legend(handles, names, loc="upper center", ncol=min(3, len(methods)), fontsize=6, frameon=False,
-               bbox_to_anchor=(0.5, 1.0))
+    legend = fig.legend(handles, names, loc="upper center", ncol=min(3, len(methods)), fontsize=6, frameon=False,
+                        bbox_to_anchor=(0.5, 1.0))
     title = textwrap.fill(title, int(14 * fig.get_figwidth()))
-    fig.suptitle(title, fontsize=8, y=0.005, va="bottom")
-    legend_in, title_in = 0.2 + 0.16 * math.ceil(len(methods) / 3), 0.18 * (1 + title.count("\n"))
-    height = fig.get_figheight()
-    fig.tight_layout(rect=(0, title_in / height, 1, 1 - legend_in / height))
+    fig.supxlabel(title, fontsize=8, y=0.005, va="bottom")  # a caption below: tight_layout keeps room for it there
+    legend_top = legend.get_window_extent(fig.canvas.get_renderer()).height / fig.bbox.height  # its share on top
+    fig.tight_layout(rect=(0, 0, 1, 1 - legend_top))
     return save_figure(fig, path)
