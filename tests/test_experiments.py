@@ -457,3 +457,21 @@ def test_the_whole_table_report_over_two_directories(tmp_path):
     with pytest.raises(ValueError, match=f"{containment[0]} with base is in both"):
         write_report([tmp_path / "containment", tmp_path / "again"], out=tmp_path / "twice", behaviour=False)
     assert not (tmp_path / "twice").exists()
+
+
+@pytest.mark.parametrize("horizontal", [False, True])
+def test_bar_panels_leave_no_empty_band_under_the_legend(tmp_path, horizontal):
+    """The legend on top, the panels right under it, the caption below (a caption placed as a bottom suptitle once
+    left a band of its own height empty at the top)."""
+    from sb3_smc.experiments.figures import Panel, bar_panels
+
+    methods = ["cnn", "base", "curr", "canon"]
+    panels = [Panel(f"panel {i}", ["a", "b"], {m: [50.0, 70.0] for m in methods}, {m: [5.0, None] for m in methods})
+              for i in range(2)]
+    path = bar_panels(panels, methods, "a caption under the panels", tmp_path / "bars.png", horizontal=horizontal)
+    image = np.asarray(Image.open(path).convert("L"))
+    rows = np.flatnonzero((image < 250).any(axis=1))  # rows with anything drawn
+    blank_runs = np.diff(rows) - 1  # empty rows after each drawn one
+    top = blank_runs[rows[:-1] < image.shape[0] / 3]  # the legend and the panels' titles (it was 78 rows)
+    assert top.max() < 0.25 * 120, top.max()  # no band over a quarter inch (120 dpi)
+    assert rows[-1] > 0.9 * image.shape[0]  # the caption at the bottom
