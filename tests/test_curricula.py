@@ -433,6 +433,52 @@ def test_kill_and_resume_trains_no_job_twice(tmp_path):
         train_curriculum(str(path), tmp_path / "fresh", seeds=2, timesteps=4000, progress=False).library)
 
 
+def _alive(pid: int) -> bool:
+    """Whether process ``pid`` runs (a zombie that no one has reaped yet has ended)."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
+
+
+def _children(pid: int) -> list[int]:
+    """The processes whose parent is ``pid`` (Linux /proc)."""
+    out = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue  # ended meanwhile
+        if int(fields[1]) == pid:
+            out.append(int(stat.parent.name))
+    return out
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").is_file(), reason="reads the process table from /proc")
+def test_a_killed_run_leaves_no_worker_training(tmp_path):
+    """SIGKILL the run's process while its two workers train: the workers end too (within seconds), instead of
+    training their jobs on for nothing."""
+    command = [sys.executable, "-m", "sb3_smc.cli", "train", str(_tiny(tmp_path)), "--out", str(tmp_path / "run"),
+               "--seeds", "2", "--timesteps", "400000", "--workers", "2", "--no-tensorboard"]
+    process = subprocess.Popen(command, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    deadline = time.time() + 120
+    while time.time() < deadline and len(status(tmp_path / "run")["running"] if (tmp_path / "run" / "state.json")
+                                             .is_file() else []) < 2:
+        time.sleep(0.1)
+    time.sleep(3.0)  # the workers have started their jobs
+    workers = _children(process.pid)
+    assert len(workers) >= 2, "the run did not start its workers"
+    process.send_signal(signal.SIGKILL)
+    process.wait()
+    deadline = time.time() + 15
+    while time.time() < deadline and any(map(_alive, workers)):
+        time.sleep(0.2)
+    alive = [pid for pid in workers if _alive(pid)]
+    for pid in alive:  # do not leave them behind on failure
+        os.kill(pid, signal.SIGKILL)
+    assert not alive, "workers went on after their run was killed"
+
+
 def test_cli_lists_shows_trains_and_reports(tmp_path):
     def cli(*args: str) -> subprocess.CompletedProcess:
         return subprocess.run([sys.executable, "-m", "sb3_smc.cli", *args], cwd=ROOT, capture_output=True,

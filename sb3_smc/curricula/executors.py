@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+import threading
+import time
 from collections.abc import Callable
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
@@ -49,13 +51,25 @@ class _InProcess:
         self._jobs.clear()
 
 
+def _exit_with(parent: int) -> None:
+    """A worker's initializer: end the worker (within a second) once ``parent``, the run's process, is gone: a
+    killed run leaves no worker training on for nothing."""
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(1.0)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="exit-with-run", daemon=True).start()
+
+
 class _Processes:
     """Trains jobs in ``workers`` spawned processes; a worker that dies fails its jobs, and the pool is made
-    again."""
+    again. A worker ends when the run's process does, however it ended."""
 
     def __init__(self, run: Callable[[Job], JobResult], workers: int) -> None:
         def make() -> ProcessPoolExecutor:
-            return ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"))
+            return ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
+                                       initializer=_exit_with, initargs=(os.getpid(),))
 
         self._run = run
         self._make = make
