@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import io
 import json
+import shutil
 import tempfile
 import zipfile
 from collections.abc import Sequence
@@ -61,7 +62,7 @@ def build_pretrained(runs: Sequence[str | Path], curricula: Sequence[str | Curri
 
     A node is ranked over all its seeds (the trainer's rule: best selected training return, ties to the lower
     seed), so every seed of the run (``run.json``'s ``seeds``) must be in one run's library. A node already in
-    ``out`` is replaced by its new best seeds; ``finished_only`` leaves out, instead of refusing, the nodes whose
+    ``out`` is replaced by its new best seeds, the others are kept byte for byte; ``finished_only`` leaves out, instead of refusing, the nodes whose
     seeds are not all trained yet (a run still going: its finished nodes now, the rest in a later build). ``out``
     must be missing, empty or a library. The index
     (:data:`~sb3_smc.library.pretrained.INDEX`) then lists ``curricula``, the curricula it listed before and every
@@ -98,6 +99,8 @@ def build_pretrained(runs: Sequence[str | Path], curricula: Sequence[str | Curri
     held = target / storage.MANIFEST
     before = pretrained_index(target) if (target / INDEX).is_file() else {"curricula": {}, "seeds": {}}
     library = SMCLibrary.load(target) if held.is_file() else SMCLibrary()
+    previous = json.loads(held.read_text(encoding="utf-8"))["smcs"] if held.is_file() else {}
+    rebuilt = {name for _, _, names in chosen for name in names}
     for node, run, names in chosen:
         for stale in [name for name in library.names if node_of(name) == node]:
             library.remove(stale)
@@ -110,9 +113,13 @@ def build_pretrained(runs: Sequence[str | Path], curricula: Sequence[str | Curri
     with tempfile.TemporaryDirectory(dir=target.parent) as tmp:
         staged = library.save(Path(tmp) / "library")
         manifest = json.loads((staged / storage.MANIFEST).read_text(encoding="utf-8"))
-        for entry in manifest["smcs"].values():
-            compact_model(staged / entry["model"])
-            entry["sha256"] = storage.sha256(staged / entry["model"])
+        for name, entry in manifest["smcs"].items():
+            if name in previous and name not in rebuilt:  # kept as it was, byte for byte
+                shutil.copyfile(target / previous[name]["model"], staged / entry["model"])
+                entry["sha256"] = previous[name]["sha256"]
+            else:
+                compact_model(staged / entry["model"])
+                entry["sha256"] = storage.sha256(staged / entry["model"])
         atomic_write(staged / storage.MANIFEST, json.dumps(manifest, indent=2, allow_nan=False) + "\n")
         index = _index(library.names, before["curricula"], resolved, {**before["seeds"], **ranked_among})
         atomic_write(staged / INDEX, json.dumps(index, indent=1) + "\n")
