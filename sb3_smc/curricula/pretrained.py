@@ -62,9 +62,9 @@ def build_pretrained(runs: Sequence[str | Path], curricula: Sequence[str | Curri
 
     A node is ranked over all its seeds (the trainer's rule: best selected training return, ties to the lower
     seed), so every seed of the run (``run.json``'s ``seeds``) must be in one run's library. A node already in
-    ``out`` is replaced by its new best seeds, the others are kept byte for byte; ``finished_only`` leaves out, instead of refusing, the nodes whose
-    seeds are not all trained yet (a run still going: its finished nodes now, the rest in a later build). ``out``
-    must be missing, empty or a library. The index
+    ``out`` is replaced by its new best seeds, the others are kept byte for byte; ``finished_only`` leaves out,
+    instead of refusing, the nodes whose seeds are not all trained yet (a run still going: its finished nodes now,
+    the rest in a later build). ``out`` must be missing, empty or a library. The index
     (:data:`~sb3_smc.library.pretrained.INDEX`) then lists ``curricula``, the curricula it listed before and every
     shipped curriculum whose lower-level nodes are all held.
     """
