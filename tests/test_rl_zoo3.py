@@ -11,7 +11,6 @@ without a warning and run the README's literal ``rl_zoo3 train`` line on a conce
 from __future__ import annotations
 
 import json
-
 import os
 import site
 import subprocess

@@ -99,7 +99,7 @@ def build_pretrained(runs: Sequence[str | Path], curricula: Sequence[str | Curri
     held = target / storage.MANIFEST
     before = pretrained_index(target) if (target / INDEX).is_file() else {"curricula": {}, "seeds": {}}
     library = SMCLibrary.load(target) if held.is_file() else SMCLibrary()
-    previous = json.loads(held.read_text(encoding="utf-8"))["smcs"] if held.is_file() else {}
+    previous = storage.check_manifest(*storage.read_manifest(target)) if held.is_file() else {}
     rebuilt = {name for _, _, names in chosen for name in names}
     for node, run, names in chosen:
         for stale in [name for name in library.names if node_of(name) == node]:
@@ -115,8 +115,8 @@ def build_pretrained(runs: Sequence[str | Path], curricula: Sequence[str | Curri
         manifest = json.loads((staged / storage.MANIFEST).read_text(encoding="utf-8"))
         for name, entry in manifest["smcs"].items():
             if name in previous and name not in rebuilt:  # kept as it was, byte for byte
-                shutil.copyfile(target / previous[name]["model"], staged / entry["model"])
-                entry["sha256"] = previous[name]["sha256"]
+                shutil.copyfile(target / previous[name].model, staged / entry["model"])
+                entry["sha256"] = previous[name].sha256
             else:
                 compact_model(staged / entry["model"])
                 entry["sha256"] = storage.sha256(staged / entry["model"])
