@@ -29,7 +29,7 @@ from sb3_smc.curricula.jobs import DEFAULT_REUSE, DEFAULT_SEEDS, REUSE, check_cu
 from sb3_smc.curricula.run_directory import status
 from sb3_smc.errors import SMCError
 from sb3_smc.experiments import report, runner
-from sb3_smc.experiments.design import CATEGORIES, DEFAULT_REPEATS, METHODS
+from sb3_smc.experiments.design import CATEGORIES, DEFAULT_METHODS, DEFAULT_REPEATS, METHODS
 from sb3_smc.hyperparameters import ALGORITHMS, DEFAULT_ALGORITHM, DEFAULT_TIMESTEPS, RECURRENT_POLICIES
 from sb3_smc.library import SMCLibrary, storage
 from sb3_smc.library.pretrained import pretrained_root
@@ -222,8 +222,9 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     p = sub.add_parser("experiment", help="the paper's protocol: train, evaluate, results.csv / results.json")
     p.add_argument("--out", required=True, help="the experiment directory (re-run to resume)")
-    p.add_argument("--methods", default=",".join(METHODS),
-                   help=f"comma-separated: {', '.join(METHODS)} (default: all)")
+    p.add_argument("--methods", default=",".join(DEFAULT_METHODS),
+                   help=f"comma-separated: {', '.join(METHODS)} (default: the paper's {', '.join(DEFAULT_METHODS)}; "
+                        "base-gru: a flat SMC with the paper's learner, RecurrentTRPO + GRU)")
     group = p.add_mutually_exclusive_group()
     group.add_argument("--targets", action="append", help="level-2 target datasets (comma-separated; repeatable)")
     group.add_argument("--category", choices=[*CATEGORIES, "all"],

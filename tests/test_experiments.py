@@ -188,6 +188,40 @@ def test_a_tiny_experiment_end_to_end(tmp_path):
         assert f"figures/{name}.png" in text
 
 
+def test_the_papers_learner_as_a_second_flat_baseline(tmp_path):
+    """``base-gru``: a flat SMC trained with RecurrentTRPO + GRU whatever the run's learner, beside ``base``; its
+    jobs are those of ``base`` run with ``--algo RecurrentTRPO --rnn gru`` but for their names."""
+    from sb3_smc.curricula.jobs import node_spec
+    from sb3_smc.errors import SMCError
+
+    design = plan([LEFT_OF], ["base", "base-gru"])
+    gru = design.curriculum.node(f"base-gru/{LEFT_OF}")
+    as_option = node_spec(design.curriculum.node(LEFT_OF), 3, (), algo="RecurrentTRPO", rnn="gru").to_dict()
+    own = node_spec(gru, 3, ()).to_dict()
+    assert own.pop("name") == f"base-gru/{LEFT_OF}@3" and as_option.pop("name") == f"{LEFT_OF}@3"
+    assert own == as_option and own["hyperparameters"]["policy"] == "SequenceGruPolicy"
+    with pytest.raises(SMCError, match="base-gru has a learner of its own"):  # before any work
+        run_experiment(tmp_path / "refused", methods=["base-gru"], targets=[LEFT_OF], algo="RecurrentPPO")
+    assert not (tmp_path / "refused").exists()
+
+    out = tmp_path / "exp"
+    results = run_experiment(out, methods=["base", "base-gru"], targets=[LEFT_OF], seeds=1, timesteps=2000,
+                             repeats=1, progress=False)
+    assert sorted((r["method"], r["curriculum"]) for r in results["rows"]) == [
+        ("base", LEFT_OF), ("base-gru", f"base-gru/{LEFT_OF}")]
+    spec = json.loads((out / "evaluations" / f"base-gru%2F{LEFT_OF}@0.json").read_text())["spec"]
+    assert (spec["algo"], spec["hyperparameters"]["policy"]) == ("RecurrentTRPO", "SequenceGruPolicy")
+    base_spec = json.loads((out / "evaluations" / f"{LEFT_OF}@0.json").read_text())["spec"]
+    assert base_spec["algo"] == "RecurrentPPO"
+    text = write_report(out, behaviour=False)[0].read_text()
+    assert "- learner: RecurrentPPO (LSTM); base-gru: its own, RecurrentTRPO (GRU)" in text
+    header = next(line for line in text.splitlines() if line.startswith("| target | kind | category |"))
+    assert "| base | base-gru |" in header
+    paper = next(line for line in text.splitlines() if "ours - paper (the same 1 concept(s)" in line)
+    base_gru = next(r["test_score"] for r in results["reported"] if r["method"] == "base-gru")
+    assert paper.strip("|").split("|")[4].strip() == f"{100 * base_gru - 52.6:+.1f}"  # the paper's flat number
+
+
 def test_a_run_reduced_to_its_records_resumes_without_model_files(tmp_path):
     """What docs/results/ commits (run.json + evaluations, no library) is a run that resumes where it stopped."""
     import shutil
@@ -302,7 +336,7 @@ def test_the_report_sets_the_flat_smc_beside_the_original_runs(tmp_path):
         "settings": {"methods": ["base"], "targets": targets, "seeds": 2, "timesteps": 400_000, "repeats": 10,
                      "workers": 1, "backend": "local"}}))
     [report] = write_report(tmp_path, behaviour=False)
-    section = report.read_text().split("## The flat SMC beside the original runs'")[1].split("## ")[0]
+    section = report.read_text().split("## The flat SMC (base) beside the original runs'")[1].split("## ")[0]
     first = targets[0]
     assert f"| {first} | classification | 52.0 (51.0 ± 1.4) | {ORIGINAL_FLAT_RUNS[first][0]:.1f} " in section
     ours = [0.52 + 0.1 * k for k in range(3)]
@@ -363,6 +397,45 @@ def test_the_demo_plays_trains_evaluates_and_reports(tmp_path):
                             "--seeds", "1", "--workers", "1"], cwd=ROOT, capture_output=True, text=True, timeout=300)
     assert other.returncode == 1 and "holds a demo run with other settings" in other.stderr  # say how to go on
     assert "Traceback" not in other.stderr
+
+
+def test_the_whole_table_report_with_a_second_flat_baseline(tmp_path):
+    """``base-gru`` from a directory of its own: its column with the paper's flat numbers, the t-tests and win counts
+    of the hierarchical methods against it (the paper's tests beside them) and its claims, beside ``base``'s."""
+    from pixelworld_env.datasets import catalog
+
+    everything = level2_targets()
+    gain = {"cnn": 0.25, "base": 0.2, "base-gru": 0.3, "curr": 0.4, "canon": 0.35}
+
+    def score(t: str, m: str) -> float:
+        lost = m == "curr" and everything.index(t) % 4 == 0  # curr below base-gru (not base) on every fourth concept
+        return 0.4 + 0.01 * (everything.index(t) % 7) + (0.25 if lost else gain[m]) + 0.003 * everything.index(t) * (
+            m == "base-gru")
+
+    _synthetic_table(tmp_path / "paper", everything, ["cnn", "base", "curr", "canon"], score)
+    _synthetic_table(tmp_path / "gru", everything, ["base-gru"], score)
+    [path] = write_report([tmp_path / "paper", tmp_path / "gru"], out=tmp_path / "report", behaviour=False)
+    text = path.read_text()
+    ba = [t for t in everything if catalog.dataset(t).kind == "bring-about"]
+    means = next(line for line in text.splitlines() if line.startswith("| bring-about | **paper** (all) | 17 |"))
+    cells = [c.strip() for c in means.strip("|").split("|")]
+    assert cells[3:] == ["", "52.7", "74.5", "75.0", "52.7"]  # cnn, base, curr, canon, base-gru: the paper's flat
+    diffs = np.array([score(t, "curr") - score(t, "base-gru") for t in ba])
+    t_hand = diffs.mean() / (diffs.std(ddof=1) / math.sqrt(len(diffs)))
+    row = next(line for line in text.splitlines() if line.startswith("| bring-about | curr vs base-gru |"))
+    cells = [c.strip() for c in row.strip("|").split("|")]
+    assert cells[2:5] == ["17", f"{t_hand:.2f}", "16"] and cells[6] == "t(16) = 4.1, p = 0.0008"
+    assert next(line for line in text.splitlines() if line.startswith("| bring-about | curr vs base |"))
+    won = sum(everything.index(t) % 4 != 0 for t in ba)
+    assert f"| bring-about | curr | base-gru | {won} of 17 |" in text
+    assert "| bring-about | curr | base | 17 of 17 |" in text
+    claims = text.split("## The paper's claims")[1].split("\n## ")[0]
+    gru_mean = 100 * np.mean([score(t, "base-gru") for t in ba])
+    assert f"| bring-about: mean of base-gru (17 concepts) | 52.7 | {gru_mean:.1f} ({gru_mean - 52.7:+.1f}) |" in claims
+    assert "| bring-about: curr > base-gru, paired t-test across concepts | t(16) = 4.1, p = 0.0008 |" in claims
+    assert "beats the flat one (base-gru) | on 14 of 16 concepts |" in claims
+    assert "| classification: cnn above base-gru (mean gap, points) |" in claims
+    assert "## The flat SMC (base-gru) beside the original runs'" in text
 
 
 def _synthetic_table(directory: Path, targets: list[str], methods: list[str], score) -> None:
@@ -430,16 +503,16 @@ def test_the_whole_table_report_over_two_directories(tmp_path):
     # wins: canon below base on every fifth concept
     ba = [t for t in everything if catalog.dataset(t).kind == "bring-about"]
     canon_wins = sum(everything.index(t) % 5 != 0 for t in ba)
-    assert f"| bring-about | canon | {canon_wins} of 17 |" in text
-    assert "| bring-about | curr or canon | 17 of 17 | 14 of 16 |" in text
+    assert f"| bring-about | canon | base | {canon_wins} of 17 |" in text
+    assert "| bring-about | curr or canon | base | 17 of 17 | 14 of 16 |" in text
     # the claims table
     claims = text.split("## The paper's claims")[1].split("\n## ")[0]
     base_mean = 100 * np.mean([score(t, "base") for t in cl])
     assert (f"| classification: mean of base (34 concepts) | 74.5 | {base_mean:.1f} ({base_mean - 74.5:+.1f}) |"
             in claims)
     assert "| classification: curr > base, paired t-test across concepts | t(34) = 4.9, p = 2e-05 |" in claims
-    assert ("hierarchical SMC (best of curr, canon) beats the flat one | on 14 of 16 concepts | on 17 of 17 concepts "
-            "| yes |") in claims
+    assert ("hierarchical SMC (best of curr, canon) beats the flat one (base) | on 14 of 16 concepts | on 17 of 17 "
+            "concepts | yes |") in claims
     # the figures: Fig. 5a/5d and one Fig. 5b/5e per kind, in the combined report's folder
     for name in ("categories", "concepts-classification", "concepts-bring-about"):
         image = np.asarray(Image.open(tmp_path / "paper" / "figures" / f"{name}.png").convert("L"))

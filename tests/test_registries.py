@@ -17,7 +17,15 @@ from sb3_contrib.common.recurrent.policies import RecurrentActorCriticPolicy
 
 from sb3_smc.curricula import shipped_curricula
 from sb3_smc.curricula.trainer import BACKENDS, DEFAULT_REUSE, DEFAULT_SEEDS
-from sb3_smc.experiments.design import CATEGORIES, DEFAULT_REPEATS, METHOD_REGISTRY, METHODS, SMC_METHODS, plan
+from sb3_smc.experiments.design import (
+    CATEGORIES,
+    DEFAULT_METHODS,
+    DEFAULT_REPEATS,
+    METHOD_REGISTRY,
+    METHODS,
+    SMC_METHODS,
+    plan,
+)
 from sb3_smc.hyperparameters import (
     ALGORITHM_REGISTRY,
     ALGORITHMS,
@@ -102,7 +110,11 @@ def test_each_method_trains_what_its_entry_says() -> None:
             assert design.nodes[(LEFT_OF, name)] == ()
             assert ((IN_CONTAINER, name) in design.nodes) != method.classifies_only
         elif method.flat:
-            assert design.nodes[(LEFT_OF, name)] == (LEFT_OF,) and design.nodes[(IN_CONTAINER, name)] == (IN_CONTAINER,)
+            for target in (LEFT_OF, IN_CONTAINER):
+                (node,) = design.nodes[(target, name)]
+                assert node == (f"{name}/{target}" if method.own_learner else target)
+                entry = design.curriculum.node(node)
+                assert (entry.task, entry.algo, entry.uses) == (target, method.algo, ())
         else:
             for target in (LEFT_OF, IN_CONTAINER):
                 for node in design.nodes[(target, name)]:
@@ -126,7 +138,7 @@ def test_the_command_line_takes_its_choices_and_defaults_from_the_registries(
     monkeypatch.setattr("sb3_smc.curricula.trainer.train_curriculum", train)
     assert sb3_smc_cli("experiment", "--out", str(tmp_path / "e"))[0] == 0
     assert sb3_smc_cli("train", "con2-cl", "--out", str(tmp_path / "t"))[0] == 0
-    assert calls["experiment"]["methods"] == list(METHODS)
+    assert calls["experiment"]["methods"] == list(DEFAULT_METHODS) == list(METHODS)[:6]  # the paper's six
     assert calls["experiment"]["repeats"] == DEFAULT_REPEATS
     for command in ("experiment", "train"):
         assert calls[command]["seeds"] == DEFAULT_SEEDS and calls[command]["backend"] == BACKENDS[0]

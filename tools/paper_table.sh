@@ -1,7 +1,8 @@
 #!/bin/bash
 # The paper's whole table (docs/results/paper/README.md), one run directory per category, from a worktree at a fixed
 # commit with its own environment. Rerun to resume (finished jobs and evaluations are kept).
-#   tools/paper_table.sh run [categories...]     train + evaluate (default: search objects containment objcon)
+#   tools/paper_table.sh run [categories...]     train + evaluate (default: search objects containment objcon;
+#                                                base-gru: the second flat baseline, method base-gru on all 51 targets)
 #   tools/paper_table.sh keep <category> [repo]   copy a run's records (no models) into docs/results/paper/<category>
 # Environment: RUNS (default /work/runs), RUN_ENV (default /work/run-env: a venv with the worktree installed),
 # REUSE_FROM (optional: --reuse-from for the runs, e.g. "pretrained": lower-level SMCs copied, not trained again).
@@ -14,7 +15,9 @@ case ${1:-} in
     for cat in ${@:-search objects containment objcon}; do
       echo "=== $cat start $(date -Is)"
       rc=0
-      "$RUN_ENV/bin/sb3-smc" experiment --out "$RUNS/paper-$cat" --category "$cat" --seeds 5 --workers 2 \
+      case $cat in base-gru) chosen="--methods base-gru --category all" ;; *) chosen="--category $cat" ;; esac
+      # shellcheck disable=SC2086
+      "$RUN_ENV/bin/sb3-smc" experiment --out "$RUNS/paper-$cat" $chosen --seeds 5 --workers 2 \
         ${REUSE_FROM:+--reuse-from "$REUSE_FROM"} || rc=$?
       echo "=== $cat end $(date -Is) rc=$rc"
     done ;;

@@ -3,8 +3,10 @@ that train each target with each method. Torch-free.
 
 Methods (:data:`METHOD_REGISTRY`): ``cnn`` (the passive CNN baseline, classification targets only), ``base`` (a
 flat SMC on the target), ``curr`` (the hand-designed smc-curr entries, 1-3 per target), ``canon`` (the canonical
-smc-canon entry) and their ``-noprim`` variants. Every SMC method's jobs are nodes of curricula (shipped ones, or
-base's flat one); :func:`plan` merges them so that a lower-level node shared by several methods is trained once.
+smc-canon entry) and their ``-noprim`` variants (:data:`DEFAULT_METHODS`, the paper's); and ``base-gru``, a flat SMC
+with the paper's learner (RecurrentTRPO with a GRU) whatever the run's learner, a second flat baseline. Every SMC
+method's jobs are nodes of curricula (shipped ones, or a flat method's); :func:`plan` merges them so that a
+lower-level node shared by several methods is trained once.
 """
 
 from __future__ import annotations
@@ -15,9 +17,10 @@ from dataclasses import dataclass
 from sb3_smc.curricula import shipped_curricula
 from sb3_smc.curricula.format import Curriculum, CurriculumError, Node, merge
 from sb3_smc.errors import SMCError
+from sb3_smc.hyperparameters import recurrent_policy
 
-__all__ = ["CATEGORIES", "DEFAULT_REPEATS", "METHODS", "METHOD_REGISTRY", "PAPER_CATEGORIES", "SMC_METHODS",
-           "ExperimentMethod", "ExperimentPlan", "level2_targets", "plan"]
+__all__ = ["CATEGORIES", "DEFAULT_METHODS", "DEFAULT_REPEATS", "METHODS", "METHOD_REGISTRY", "PAPER_CATEGORIES",
+           "SMC_METHODS", "ExperimentMethod", "ExperimentPlan", "level2_targets", "plan"]
 
 
 @dataclass(frozen=True)
@@ -37,11 +40,38 @@ class ExperimentMethod:
     """``False``: the passive CNN baseline (:mod:`sb3_smc.experiments.cnn`), no SMCs."""
     classifies_only: bool = False
     """It has results for classification targets only (none for bring-about targets)."""
+    algo: str | None = None
+    """A flat method's own learner (its nodes' ``algo``); ``None``: the run's (``--algo``)."""
+    rnn: str | None = None
+    """A flat method's own recurrent cell (``"gru"``); ``None``: the run's (``--rnn``)."""
+    paper: str | None = None
+    """The paper's method whose numbers it is compared with, when not its own name (``base-gru``: ``base``, the
+    paper's flat SMC)."""
 
     @property
     def flat(self) -> bool:
         """Whether it trains a flat SMC on each target."""
         return self.smc and self.curricula is None
+
+    @property
+    def paper_name(self) -> str:
+        """The paper's method whose numbers it is compared with."""
+        return self.paper or self.name
+
+    @property
+    def own_learner(self) -> bool:
+        """Whether it fixes its SMCs' learner (the run's ``algo`` / ``rnn`` must then be left unset)."""
+        return self.algo is not None or self.rnn is not None
+
+    def flat_node(self, target: str) -> Node:
+        """The node of its flat SMC on ``target``: named as the target for ``base``, ``<method>/<target>`` for a
+        flat method of its own learner."""
+        if not self.flat:
+            raise SMCError(f"method {self.name!r} trains no flat SMCs")
+        if not self.own_learner:
+            return Node(target, target)
+        hyperparameters = {"policy": recurrent_policy(self.rnn, self.algo)} if self.rnn is not None else {}
+        return Node(f"{self.name}/{target}", target, algo=self.algo, hyperparameters=hyperparameters)
 
 
 METHOD_REGISTRY: dict[str, ExperimentMethod] = {method.name: method for method in (
@@ -51,9 +81,13 @@ METHOD_REGISTRY: dict[str, ExperimentMethod] = {method.name: method for method i
     ExperimentMethod("canon", "canon (canonical curriculum)", "#55a868", curricula="smc-canon"),
     ExperimentMethod("curr-noprim", "curr, no primitive moves", "#f2b48a", curricula="smc-curr-noprim"),
     ExperimentMethod("canon-noprim", "canon, no primitive moves", "#a5d6a7", curricula="smc-canon-noprim"),
+    ExperimentMethod("base-gru", "base-gru (flat SMC, the paper's learner: RecurrentTRPO + GRU)", "#64b5cd",
+                     algo="RecurrentTRPO", rnn="gru", paper="base"),
 )}
 """Every method by name, in the order of the report's columns."""
 METHODS = tuple(METHOD_REGISTRY)
+DEFAULT_METHODS = METHODS[:6]
+"""The paper's six methods: ``sb3-smc experiment``'s default ``--methods``."""
 SMC_METHODS = tuple(name for name, method in METHOD_REGISTRY.items() if method.smc)
 CATEGORIES = ("containment", "objcon", "objects", "search", "pushable")
 PAPER_CATEGORIES = CATEGORIES[:4]
@@ -119,10 +153,10 @@ def plan(targets: Sequence[str], methods: Sequence[str]) -> ExperimentPlan:
     used: list[Curriculum] = []
     chosen_methods = [METHOD_REGISTRY[m] for m in methods]
     for method in (m for m in chosen_methods if m.flat):
-        flat = Curriculum(f"smc-{method.name}", tuple(Node(t, t) for t in targets), tuple(targets),
-                          method=f"smc-{method.name}", description="flat SMCs on the experiment's targets")
-        used.append(flat)
-        nodes.update({(t, method.name): (t,) for t in targets})
+        flat_nodes = tuple(method.flat_node(t) for t in targets)
+        used.append(Curriculum(f"smc-{method.name}", flat_nodes, tuple(n.name for n in flat_nodes),
+                               method=f"smc-{method.name}", description="flat SMCs on the experiment's targets"))
+        nodes.update({(t, method.name): (n.name,) for t, n in zip(targets, flat_nodes, strict=True)})
     for method in (m for m in chosen_methods if m.curricula is not None):
         found: dict[str, list[str]] = {t: [] for t in targets}
         for curriculum in shipped.values():

@@ -144,6 +144,11 @@ class _Table:
                 by_seed[(row["target"], row["method"])].append(row["test_score"])
         self.seeds = dict(by_seed)
 
+    @property
+    def flats(self) -> list[str]:
+        """The flat methods that ran (``base``, and ``base-gru`` where run), each compared with the paper's flat SMC."""
+        return [m for m in self.methods if METHOD_REGISTRY[m].flat]
+
     def of_kind(self, kind: str, category: str | None = None) -> list[str]:
         return [t for t in self.targets if self.kind_of[t] == kind and category in (None, self.category_of[t])]
 
@@ -233,7 +238,7 @@ def _write(sources: Sequence[tuple[Path, dict[str, Any]]], out: Path, trajectori
 
 
 def _claims_section(table: _Table) -> list[str]:
-    found = claims(table.score, table.kind_of, table.category_of)
+    found = claims(table.score, table.kind_of, table.category_of, flats=table.flats or ("base",))
     if not any(c.reproduced != "not run" for c in found):
         return []
     lines = ["## The paper's claims", "",
@@ -261,36 +266,39 @@ def _concept_section(table: _Table) -> list[str]:
     if given:
         lines += ["", "Differences to the paper (ours - paper, points):", ""]
         for target in given:
-            parts = [f"{m} {_diff(table.score.get((target, m)), PAPER_CONCEPTS[target].get(m))}"
-                     for m in ("base", "curr", "canon") if (target, m) in table.score]
+            parts = [f"{m} {_diff(table.score[(target, m)], PAPER_CONCEPTS[target][name])}"
+                     for m in methods if (name := METHOD_REGISTRY[m].paper_name) in PAPER_CONCEPTS[target]
+                     and (target, m) in table.score]
             lines.append(f"- {target}: " + ", ".join(parts))
     return lines
 
 
 def _original_flat_section(table: _Table) -> list[str]:
     """Our flat SMCs beside the original runs' on the concepts whose numbers the release's files record."""
-    given = [t for t in table.targets if t in ORIGINAL_FLAT_RUNS and (t, "base") in table.score]
-    if not given:
-        return []
-    lines = ["", "## The flat SMC beside the original runs'", "",
-             "The release's curriculum files record the original runs' flat SMCs on the objects concepts (best seed "
-             "and mean over seeds, their comments' \"Max\" and \"Avg\"); ours (`base`) beside them.", "",
-             "| target | kind | ours: best (mean ± s.d.) | original: best (mean) | best: ours - original |",
-             "|---|---|---:|---:|---:|"]
-    for target in given:
-        best, mean = ORIGINAL_FLAT_RUNS[target]
-        lines.append(f"| {target} | {table.kind_of[target]} | {table.cell(target, 'base')} | {best:.1f} ({mean:.1f}) "
-                     f"| {_diff(table.score[(target, 'base')], best)} |")
-    for kind in KINDS:
-        members = [t for t in given if table.kind_of[t] == kind]
-        if not members:
+    lines: list[str] = []
+    for flat in table.flats:
+        given = [t for t in table.targets if t in ORIGINAL_FLAT_RUNS and (t, flat) in table.score]
+        if not given:
             continue
-        ours = [table.score[(t, "base")] for t in members]
-        theirs = [ORIGINAL_FLAT_RUNS[t][0] / 100 for t in members]
-        test = paired_ttest(ours, theirs)
-        tested = f"; paired t({test[0]}) = {test[1]:.2f}, p = {test[2]:.2g}" if test else ""
-        lines.append(f"\n{kind}, {len(members)} concepts: mean best seed ours {100 * sum(ours) / len(ours):.1f}, "
-                     f"original {100 * sum(theirs) / len(theirs):.1f}{tested}.")
+        lines += ["", f"## The flat SMC ({flat}) beside the original runs'", "",
+                  "The release's curriculum files record the original runs' flat SMCs on the objects concepts (best "
+                  f"seed and mean over seeds, their comments' \"Max\" and \"Avg\"); ours (`{flat}`) beside them.", "",
+                  "| target | kind | ours: best (mean ± s.d.) | original: best (mean) | best: ours - original |",
+                  "|---|---|---:|---:|---:|"]
+        for target in given:
+            best, mean = ORIGINAL_FLAT_RUNS[target]
+            lines.append(f"| {target} | {table.kind_of[target]} | {table.cell(target, flat)} | {best:.1f} "
+                         f"({mean:.1f}) | {_diff(table.score[(target, flat)], best)} |")
+        for kind in KINDS:
+            members = [t for t in given if table.kind_of[t] == kind]
+            if not members:
+                continue
+            ours = [table.score[(t, flat)] for t in members]
+            theirs = [ORIGINAL_FLAT_RUNS[t][0] / 100 for t in members]
+            test = paired_ttest(ours, theirs)
+            tested = f"; paired t({test[0]}) = {test[1]:.2f}, p = {test[2]:.2g}" if test else ""
+            lines.append(f"\n{kind}, {len(members)} concepts: mean best seed ours {100 * sum(ours) / len(ours):.1f}, "
+                         f"original {100 * sum(theirs) / len(theirs):.1f}{tested}.")
     return lines
 
 
@@ -311,16 +319,16 @@ def _means_section(table: _Table) -> list[str]:
         in_paper = [t for t in in_kind if table.category_of[t] in PAPER_CATEGORIES]
         if not in_paper:  # the designed pushable curriculum: the paper gives no numbers (Fig. 5c only)
             continue
-        paper = PAPER_MEANS[kind]
+        paper = {m: PAPER_MEANS[kind].get(METHOD_REGISTRY[m].paper_name) for m in methods}
         lines.append(f"| {kind} | **paper** (all) | {PAPER_COUNTS[kind]} | "
-                     + " | ".join(f"{paper[m]:.1f}" if m in paper else "" for m in methods) + " |")
+                     + " | ".join(f"{paper[m]:.1f}" if paper[m] is not None else "" for m in methods) + " |")
         if len(in_paper) == PAPER_COUNTS[kind]:  # the paper's whole set: its means
             lines.append(f"| {kind} | ours - paper ({len(in_paper)} concepts) | | " + " | ".join(
-                _diff(method_mean(table.score, in_paper, m), paper.get(m)) for m in methods) + " |")
+                _diff(method_mean(table.score, in_paper, m), paper[m]) for m in methods) + " |")
         else:  # a subset: only against the paper's own numbers for the same concepts, where it gives them
             lines.append(f"| {kind} | ours - paper (the same {len(in_paper)} concept(s), where the paper gives them) "
-                         "| | " + " | ".join(_diff(method_mean(table.score, in_paper, m),
-                                                   mean_of_all([PAPER_CONCEPTS.get(t, {}).get(m) for t in in_paper]))
+                         "| | " + " | ".join(_diff(method_mean(table.score, in_paper, m), mean_of_all(
+                             [PAPER_CONCEPTS.get(t, {}).get(METHOD_REGISTRY[m].paper_name) for t in in_paper]))
                                              for m in methods) + " |")
     return lines
 
@@ -338,10 +346,10 @@ def _ttest_section(table: _Table) -> list[str]:
         in_kind = table.of_kind(kind)
         if not in_kind:
             continue
-        for a, b in (("curr", "base"), ("canon", "base")):
-            whole = len(in_kind) == PAPER_COUNTS[kind] and all(
-                table.category_of[t] in PAPER_CATEGORIES for t in in_kind)  # the paper tested all its concepts
-            paper_test = PAPER_TTESTS[kind].get(f"{a} vs {b}") if whole else None
+        whole = len(in_kind) == PAPER_COUNTS[kind] and all(
+            table.category_of[t] in PAPER_CATEGORIES for t in in_kind)  # the paper tested all its concepts
+        for a, b in ((a, b) for b in table.flats or ["base"] for a in ("curr", "canon")):
+            paper_test = PAPER_TTESTS[kind].get(f"{a} vs {METHOD_REGISTRY[b].paper_name}") if whole else None
             lines.append(_ttest_row(kind, f"{a} vs {b}", in_kind, a, b, table.score, paper_test))
         if kind == "classification":
             for category in CATEGORIES:
@@ -352,14 +360,15 @@ def _ttest_section(table: _Table) -> list[str]:
                                             table.score, None))
     counts = []
     for kind in KINDS:
-        for better, label in ((("curr",), "curr"), (("canon",), "canon"), (("curr", "canon"), "curr or canon")):
-            won, n = wins(table.score, table.of_kind(kind), better, "base")
-            if n:
-                whole = kind == "bring-about" and label == "curr or canon" and n == PAPER_COUNTS[kind]
-                counts.append(f"| {kind} | {label} | {won} of {n} |" + (" 14 of 16 |" if whole else " |"))
+        for flat in table.flats:
+            for better, label in ((("curr",), "curr"), (("canon",), "canon"), (("curr", "canon"), "curr or canon")):
+                won, n = wins(table.score, table.of_kind(kind), better, flat)
+                if n:
+                    whole = kind == "bring-about" and label == "curr or canon" and n == PAPER_COUNTS[kind]
+                    counts.append(f"| {kind} | {label} | {flat} | {won} of {n} |" + (" 14 of 16 |" if whole else " |"))
     if counts:
-        lines += ["", "Concepts on which a hierarchical SMC beats the flat one (reported scores):", "",
-                  "| kind | hierarchical | beats base on | paper |", "|---|---|---:|---|", *counts]
+        lines += ["", "Concepts on which a hierarchical SMC beats a flat one (reported scores):", "",
+                  "| kind | hierarchical | flat | beats it on | paper |", "|---|---|---|---:|---|", *counts]
     return lines
 
 
@@ -392,7 +401,9 @@ def _provenance(sources: Sequence[tuple[Path, dict[str, Any]]], out: Path) -> li
             lines += [f"### {os.path.relpath(directory, out)}", ""]
         lines += [f"- budget: {settings['timesteps']:,} steps per SMC, seeds 0-{settings['seeds'] - 1}, "
                   f"{settings['repeats']} test repeats; {settings['workers']} worker(s), backend {settings['backend']}",
-                  f"- learner: {_learner(settings)}",
+                  f"- learner: {_learner(settings)}" + "".join(
+                      f"; {m}: its own, {_learner(_own_learner(m))}" for m in settings["methods"]
+                      if m in METHOD_REGISTRY and METHOD_REGISTRY[m].own_learner),
                   f"- machine: {_machine_line(machine)}",
                   *_code_line(results),
                   f"- wall time of the last `sb3-smc experiment` run: {results.get('wall_time_s', 0) / 3600:.2f} h"
@@ -443,6 +454,12 @@ def _learner(settings: dict[str, Any]) -> str:
     algo = settings.get("algo", "RecurrentPPO")
     recurrent = algo in ALGORITHM_REGISTRY and ALGORITHM_REGISTRY[algo].recurrent
     return f"{algo} ({settings.get('rnn', 'lstm').upper() if recurrent else 'MLP'})"
+
+
+def _own_learner(method: str) -> dict[str, str]:
+    """The learner settings of a method with a learner of its own (``base-gru``), as :func:`_learner` reads them."""
+    entry = METHOD_REGISTRY[method]
+    return {key: value for key, value in (("algo", entry.algo), ("rnn", entry.rnn)) if value is not None}
 
 
 def _command(directory: Path, settings: dict[str, Any]) -> str:

@@ -41,7 +41,7 @@ from sb3_smc.curricula.trainer import check_run_options, finished_jobs, train_cu
 from sb3_smc.errors import SMCError, SMCRuntimeError
 from sb3_smc.evaluation import evaluate
 from sb3_smc.experiments.cnn import train_cnn
-from sb3_smc.experiments.design import DEFAULT_REPEATS, METHOD_REGISTRY, METHODS, level2_targets, plan
+from sb3_smc.experiments.design import DEFAULT_METHODS, DEFAULT_REPEATS, METHOD_REGISTRY, level2_targets, plan
 from sb3_smc.hyperparameters import DEFAULT_ALGORITHM, DEFAULT_TIMESTEPS
 from sb3_smc.library import SMCLibrary
 from sb3_smc.records import package_versions
@@ -55,7 +55,7 @@ RESULT_FIELDS = ("target", "kind", "category", "method", "curriculum", "seed", "
 def run_experiment(
     out: str | Path,
     *,
-    methods: Sequence[str] = METHODS,
+    methods: Sequence[str] = DEFAULT_METHODS,
     targets: Sequence[str] | None = None,
     category: str | None = None,
     seeds: int = DEFAULT_SEEDS,
@@ -74,7 +74,7 @@ def run_experiment(
     """Run the paper's protocol for ``methods`` on ``targets`` (dataset names) or a ``category`` of the level-2
     targets (default: all 51) into ``out``; returns the ``results.json`` content. Resumable: re-run to continue.
     ``algo`` / ``rnn`` choose the learner of every SMC (default: RecurrentPPO with an LSTM; the paper's is
-    ``algo="RecurrentTRPO", rnn="gru"``).
+    ``algo="RecurrentTRPO", rnn="gru"``); a method with a learner of its own (``base-gru``) refuses them.
 
     ``train=False`` trains nothing: it tabulates what the directory's run has finished so far (while it may still be
     training): the finished SMCs are evaluated (and the CNN trained), the rest are listed in ``missing`` and the
@@ -87,6 +87,10 @@ def run_experiment(
         raise SMCError(f"repeats must be a positive integer, got {repeats!r}")
     check_run_options(seeds=seeds, timesteps=timesteps, workers=workers, backend=backend, ray_address=ray_address,
                       algo=algo, rnn=rnn)
+    own = [m for m in methods if m in METHOD_REGISTRY and METHOD_REGISTRY[m].own_learner]
+    if own and (algo is not None or rnn is not None):
+        raise SMCError(f"method {own[0]} has a learner of its own, which --algo / --rnn would replace: run it without "
+                       "them (in a directory of its own), or run base with them")
     chosen = list(targets) if targets is not None else level2_targets(category or "all")
     design = plan(chosen, list(methods))
     directory = Path(out)

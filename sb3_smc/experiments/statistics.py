@@ -166,12 +166,13 @@ def _order_claim(text: str, paper_gap: float, ours_gap: float | None, tolerance:
 
 
 def claims(score: Score, kind_of: Mapping[str, str], category_of: Mapping[str, str], *,
-           tolerance: float = 5.0) -> list[Claim]:
+           tolerance: float = 5.0, flats: Sequence[str] = ("base",)) -> list[Claim]:
     """Every quantitative claim of the paper's results (means per kind, t-tests, wins, the headline
     concepts, the CNN by category, the noprim ablation) with ours. A mean is reproduced within ``tolerance``
     points; a comparison when its direction is the paper's and it is significant at :data:`ALPHA`. The claims
     over all concepts of a kind are judged only when ``score`` holds all of them (the paper's 34 / 17); a report of
-    fewer says so in one row per kind. The per-concept claims (the headline targets) are judged wherever present."""
+    fewer says so in one row per kind. The per-concept claims (the headline targets) are judged wherever present.
+    ``flats``: our flat methods, each judged against the paper's flat SMC (``base``) in every claim about it."""
     out: list[Claim] = []
     for kind in ("classification", "bring-about"):
         targets = sorted(t for t in kind_of if kind_of[t] == kind and category_of[t] != "pushable")
@@ -182,22 +183,29 @@ def claims(score: Score, kind_of: Mapping[str, str], category_of: Mapping[str, s
                              "noprim)", f"{PAPER_COUNTS[kind]} concepts", f"{len(targets)} concepts here",
                              "not comparable: a subset"))
             continue
+        def ours(method: str) -> Sequence[str]:
+            """Our methods for the paper's ``method``: every flat method for ``base``."""
+            return flats if method == "base" else (method,)
+
         for method, paper in PAPER_MEANS[kind].items():
-            out.append(_mean_claim(kind, method, paper, method_mean(score, targets, method), len(targets), tolerance))
+            out += [_mean_claim(kind, m, paper, method_mean(score, targets, m), len(targets), tolerance)
+                    for m in ours(method)]
         for comparison, paper_test in PAPER_TTESTS[kind].items():
             a, _, b = comparison.split()
-            out.append(_test_claim(kind, a, b, score, targets, paper_test))
+            out += [_test_claim(kind, a, flat, score, targets, paper_test) for flat in ours(b)]
         if kind == "bring-about":
-            won, n = wins(score, targets, ("curr", "canon"), "base")
-            out.append(Claim("bring-about: a hierarchical SMC (best of curr, canon) beats the flat one",
-                             "on 14 of 16 concepts", f"on {won} of {n} concepts" if n else "-",
-                             ("yes" if won / n >= 14 / 16 - 1e-9 else f"no: {won / n:.0%} of concepts against 88%")
-                             if n else "not run"))
+            for flat in flats:
+                won, n = wins(score, targets, ("curr", "canon"), flat)
+                out.append(Claim(f"bring-about: a hierarchical SMC (best of curr, canon) beats the flat one ({flat})",
+                                 "on 14 of 16 concepts", f"on {won} of {n} concepts" if n else "-",
+                                 ("yes" if won / n >= 14 / 16 - 1e-9 else
+                                  f"no: {won / n:.0%} of concepts against 88%") if n else "not run"))
         else:
             paper_means = PAPER_MEANS[kind]
             for a, b in (("cnn", "base"), ("curr", "cnn")):
-                out.append(_order_claim(f"classification: {a} above {b} (mean gap, points)",
-                                        paper_means[a] - paper_means[b], _gap(score, targets, a, b)))
+                out += [_order_claim(f"classification: {a} above {other} (mean gap, points)",
+                                     paper_means[a] - paper_means[b], _gap(score, targets, a, other))
+                        for other in ours(b)]
             out.extend(_cnn_claims(score, targets, category_of))
         for method in ("curr", "canon"):
             paper_with, paper_without = PAPER_NOPRIM[kind][method], PAPER_NOPRIM[kind][f"{method}-noprim"]
