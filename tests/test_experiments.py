@@ -200,6 +200,13 @@ def test_the_papers_learner_as_a_second_flat_baseline(tmp_path):
     own = node_spec(gru, 3, ()).to_dict()
     assert own.pop("name") == f"base-gru/{LEFT_OF}@3" and as_option.pop("name") == f"{LEFT_OF}@3"
     assert own == as_option and own["hyperparameters"]["policy"] == "SequenceGruPolicy"
+    from sb3_smc import train_smc  # and training does not read the name: the same weights under either
+
+    specs = [node_spec(gru, 3, (), timesteps=2000),
+             node_spec(design.curriculum.node(LEFT_OF), 3, (), timesteps=2000, algo="RecurrentTRPO", rnn="gru")]
+    weights = [train_smc(spec, printer=lambda _: None).model.policy.state_dict() for spec in specs]
+    assert weights[0].keys() == weights[1].keys()
+    assert all(torch.equal(weights[0][k], weights[1][k]) for k in weights[0])
     with pytest.raises(SMCError, match="base-gru has a learner of its own"):  # before any work
         run_experiment(tmp_path / "refused", methods=["base-gru"], targets=[LEFT_OF], algo="RecurrentPPO")
     assert not (tmp_path / "refused").exists()
