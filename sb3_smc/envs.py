@@ -74,12 +74,25 @@ def make_smc_env(spec: TrainingSpec, children: Sequence[SMC] = (), *, env: gym.E
                                                                            **_mapping(env_kwargs)})}
         if is_pixelworld_id(env_id):
             kwargs["split"] = split or spec.task.split
-        env = gym.make(env_id, max_steps=settings.max_steps, **kwargs)
+        env = _make(env_id, spec.name, max_steps=settings.max_steps, **kwargs)
     elif env_id is not None or split is not None or env_kwargs:
         raise SMCError("make_smc_env: give either env, or env_id / split / env_kwargs to build one, not both")
     else:
         task_base(env)
     return wrap_with_smcs(env, children, settings, record_cells=record_cells)
+
+
+def _make(env_id: str, name: str, **kwargs: Any) -> gym.Env:
+    """``gym.make(env_id, **kwargs)``; an id Gymnasium does not know is an :class:`SMCError` naming the SMC, with
+    Gymnasium's suggestion, and the ``PW-<name>-v0`` id when ``env_id`` names a PixelWorld dataset or concept pool."""
+    try:
+        return gym.make(env_id, **kwargs)
+    except gym.error.UnregisteredEnv as err:
+        from pixelworld_env.datasets import catalog
+
+        named = env_id in catalog.dataset_names() or env_id in catalog.concept_pools()
+        hint = f"; PixelWorld's {env_id!r} is the id 'PW-{env_id}-v0'" if named else ""
+        raise SMCError(f"SMC {name!r}: unknown environment id {env_id!r}: {err}{hint}") from None
 
 
 def _mapping(env_kwargs: Any) -> dict[str, Any]:

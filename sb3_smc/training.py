@@ -48,7 +48,7 @@ from sb3_smc.common.discounting import SemiMDPDiscount
 # SequenceLstmPolicy: models saved by sb3-smc 0.1 name sb3_smc.training.SequenceLstmPolicy (SB3 pickles the class by
 # reference); importing it here keeps them loadable.
 from sb3_smc.common.recurrent import SequenceLstmPolicy, use_compact_buffer  # noqa: F401
-from sb3_smc.envs import check_env_kwargs, make_smc_env
+from sb3_smc.envs import check_env_kwargs, is_pixelworld_id, make_smc_env
 from sb3_smc.errors import SMCError, SMCKeyError, SMCTypeError
 from sb3_smc.hyperparameters import (
     ALGORITHM_REGISTRY,
@@ -166,8 +166,9 @@ def make_vec_env(spec: TrainingSpec, children: Sequence[SMC] = (), *, native: bo
 def _native_vector_env(spec: TrainingSpec, children: Sequence[SMC]) -> PixelWorldVectorEnv | None:
     """PixelWorld's vector env of ``spec``'s task when the SMC is flat and the id has one, else None."""
     settings = spec.task.env_kwargs
-    if (children or spec.children or not spec.task.env_id.startswith("PW-") or settings.get("aaai18_reset_bug")
-            or settings.get("render_mode") == "human" or gym.spec(spec.task.env_id).vector_entry_point is None):
+    if (children or spec.children or not spec.task.env_id.startswith("PW-") or not is_pixelworld_id(spec.task.env_id)
+            or settings.get("aaai18_reset_bug") or settings.get("render_mode") == "human"
+            or gym.spec(spec.task.env_id).vector_entry_point is None):  # an unknown id: make_smc_env says so
         return None
     kwargs = {"split": spec.task.split, "max_steps": spec.wrapper.max_steps,
               **check_env_kwargs(spec.task.env_id, dict(settings))}

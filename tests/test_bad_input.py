@@ -221,3 +221,12 @@ def test_train_smc_trains_or_says_why_not():
     with pytest.raises(TypeError, match="env_kwargs must be a mapping"):
         make_smc_env(spec, env_kwargs=["seed"])
     assert make_smc_env(spec, env_kwargs={"seed": 2, "aaai18_reset_bug": True}).unwrapped.aaai18_reset_bug
+    # an id Gymnasium does not know: an SMCError naming the SMC, before any training (a dataset's name: its id)
+    with pytest.raises(ValueError, match=rf"SMC '{DATASET}': unknown environment id '{DATASET}': .*PixelWorld's "
+                                         rf"'{DATASET}' is the id '{ENV_ID}'"):
+        train_smc(DATASET, total_timesteps=100, n_envs=1)
+    with pytest.raises(ValueError, match=r"unknown environment id 'PW-cl_self-in-left-cornr_vs_on-hline-v0': .*Did "
+                                         r"you mean: `PW-cl_self-in-left-corner_vs_on-hline`"):  # the native path too
+        train_smc("PW-cl_self-in-left-cornr_vs_on-hline-v0", total_timesteps=100, n_envs=1)
+    with pytest.raises(ValueError, match=r"unknown environment id 'CartPole-v9': .*\[ `v0`, `v1` \]"):
+        train_smc("CartPole-v9", total_timesteps=100, n_envs=1)
