@@ -443,6 +443,12 @@ def test_the_whole_table_report_with_a_second_flat_baseline(tmp_path):
     assert "beats the flat one (base-gru) | on 14 of 16 concepts |" in claims
     assert "| classification: cnn above base-gru (mean gap, points) |" in claims
     assert "## The flat SMC (base-gru) beside the original runs'" in text
+    # base-gru on 16 of the 17 bring-about concepts: its test is over 16, without the paper's (over all 17) beside it
+    _synthetic_table(tmp_path / "gru-part", everything[1:], ["base-gru"], score)
+    [part] = write_report([tmp_path / "paper", tmp_path / "gru-part"], out=tmp_path / "part", behaviour=False)
+    row = next(line for line in part.read_text().splitlines() if line.startswith("| bring-about | curr vs base-gru |"))
+    cells = [c.strip() for c in row.strip("|").split("|")]
+    assert everything[0] in ba and cells[2] == "16" and cells[6:] == ["", ""]
 
 
 def _synthetic_table(directory: Path, targets: list[str], methods: list[str], score) -> None:

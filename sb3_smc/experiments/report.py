@@ -483,7 +483,11 @@ def _machine_line(machine: dict[str, Any]) -> str:
 
 def _ttest_row(label: str, comparison: str, members: Sequence[str], a: str, b: str,
                score: dict[tuple[str, str], float], paper: tuple[int, float, float] | None) -> str:
+    """One row of the t-test table: ``a`` against ``b`` over those of ``members`` where both ran, and ``paper``'s
+    test beside it only when both ran on all of them."""
     compared, test = method_test(score, members, a, b)
+    if compared < len(members):  # the paper's test is over all its concepts: beside ours only when ours is too
+        paper = None
     paper_text = f"t({paper[0]}) = {paper[1]}, p = {paper[2]}" if paper else ""
     if test is None:
         return f"| {label} | {comparison} | {compared} | - | - | - | {paper_text} | |"
