@@ -449,6 +449,12 @@ def test_the_whole_table_report_with_a_second_flat_baseline(tmp_path):
     row = next(line for line in part.read_text().splitlines() if line.startswith("| bring-about | curr vs base-gru |"))
     cells = [c.strip() for c in row.strip("|").split("|")]
     assert everything[0] in ba and cells[2] == "16" and cells[6:] == ["", ""]
+    claims = part.read_text().split("## The paper's claims")[1].split("\n## ")[0]  # nor judged as a claim on all 17
+    assert ("| bring-about: curr > base-gru, paired t-test across concepts | t(16) = 4.1, p = 0.0008 | 16 of 17 "
+            "concepts run | not judged: partial |") in claims
+    assert re.search(r"beats the flat one \(base-gru\) \| on 14 of 16 concepts \| on \d+ of 16 concepts \| not "
+                     r"judged: partial \|", claims)
+    assert "| bring-about: curr > base, paired t-test across concepts | t(16) = 4.1, p = 0.0008 | t(16) = " in claims
 
 
 def _synthetic_table(directory: Path, targets: list[str], methods: list[str], score) -> None:

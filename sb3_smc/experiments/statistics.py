@@ -139,10 +139,13 @@ def _value_claim(text: str, paper: float, ours: float | None, tolerance: float) 
 def _test_claim(kind: str, a: str, b: str, score: Score, targets: Sequence[str],
                 paper: tuple[int, float, float]) -> Claim:
     df_paper, t_paper, p_paper = paper
-    _, test = method_test(score, targets, a, b)
+    compared, test = method_test(score, targets, a, b)
     text = f"{kind}: {a} > {b}, paired t-test across concepts"
     if test is None:
         return Claim(text, f"t({df_paper}) = {t_paper}, p = {p_paper}", "-", "not run")
+    if compared < len(targets):
+        return Claim(text, f"t({df_paper}) = {t_paper}, p = {p_paper}", f"{compared} of {len(targets)} concepts run",
+                     "not judged: partial")
     df, t, p = test
     same_direction = (t > 0) == (t_paper > 0)
     significant = p < ALPHA
@@ -196,10 +199,10 @@ def claims(score: Score, kind_of: Mapping[str, str], category_of: Mapping[str, s
         if kind == "bring-about":
             for flat in flats:
                 won, n = wins(score, targets, ("curr", "canon"), flat)
+                verdict = ("not run" if not n else "not judged: partial" if n < len(targets) else "yes"
+                           if won / n >= 14 / 16 - 1e-9 else f"no: {won / n:.0%} of concepts against 88%")
                 out.append(Claim(f"bring-about: a hierarchical SMC (best of curr, canon) beats the flat one ({flat})",
-                                 "on 14 of 16 concepts", f"on {won} of {n} concepts" if n else "-",
-                                 ("yes" if won / n >= 14 / 16 - 1e-9 else
-                                  f"no: {won / n:.0%} of concepts against 88%") if n else "not run"))
+                                 "on 14 of 16 concepts", f"on {won} of {n} concepts" if n else "-", verdict))
         else:
             paper_means = PAPER_MEANS[kind]
             for a, b in (("cnn", "base"), ("curr", "cnn")):
