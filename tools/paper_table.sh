@@ -4,10 +4,18 @@
 #   tools/paper_table.sh run [categories...]     train + evaluate (default: search objects containment objcon;
 #                                                base-gru: the second flat baseline, method base-gru on all 51 targets)
 #   tools/paper_table.sh keep <category> [repo]   copy a run's records (no models) into docs/results/paper/<category>
+#   tools/paper_table.sh partial <category>       at a session's end: tabulate what the running category has finished
+#                                                (--no-train), keep it and make its partial report
 # Environment: RUNS (default /work/runs), RUN_ENV (default /work/run-env: a venv with the worktree installed),
 # REUSE_FROM (optional: --reuse-from for the runs, e.g. "pretrained": lower-level SMCs copied, not trained again).
 set -eu
 RUNS=${RUNS:-/work/runs}; RUN_ENV=${RUN_ENV:-/work/run-env}
+repo=$(cd "$(dirname "$0")/.." && pwd)
+
+selection() {  # the experiment options of a category (base-gru: its method on all 51 targets)
+  case $1 in base-gru) echo "--methods base-gru --category all" ;; *) echo "--category $1" ;; esac
+}
+
 case ${1:-} in
   run)
     shift
@@ -15,19 +23,25 @@ case ${1:-} in
     for cat in ${@:-search objects containment objcon}; do
       echo "=== $cat start $(date -Is)"
       rc=0
-      case $cat in base-gru) chosen="--methods base-gru --category all" ;; *) chosen="--category $cat" ;; esac
-      # shellcheck disable=SC2086
-      "$RUN_ENV/bin/sb3-smc" experiment --out "$RUNS/paper-$cat" $chosen --seeds 5 --workers 2 \
+      # shellcheck disable=SC2046
+      "$RUN_ENV/bin/sb3-smc" experiment --out "$RUNS/paper-$cat" $(selection "$cat") --seeds 5 --workers 2 \
         ${REUSE_FROM:+--reuse-from "$REUSE_FROM"} || rc=$?
       echo "=== $cat end $(date -Is) rc=$rc"
     done ;;
   keep)
-    cat=$2; repo=${3:-$(cd "$(dirname "$0")/.." && pwd)}
+    cat=$2; repo=${3:-$repo}
     src=$RUNS/paper-$cat; dst=$repo/docs/results/paper/$cat
     mkdir -p "$dst"
     cp "$src/run.json" "$dst/"
     for f in results.csv results.json; do if [ -f "$src/$f" ]; then cp "$src/$f" "$dst/"; fi; done
     for d in evaluations cnn; do if [ -d "$src/$d" ]; then rm -rf "${dst:?}/$d"; cp -r "$src/$d" "$dst/$d"; fi; done
     du -sh "$dst" ;;
-  *) echo "usage: $0 run [categories...] | keep <category> [repo]" >&2; exit 2 ;;
+  partial)
+    cat=$2
+    export OMP_NUM_THREADS=1 MKL_NUM_THREADS=1
+    # shellcheck disable=SC2046
+    "$RUN_ENV/bin/sb3-smc" experiment --out "$RUNS/paper-$cat" $(selection "$cat") --seeds 5 --workers 2 --no-train
+    "$0" keep "$cat"
+    "$repo/.venv/bin/sb3-smc" report "$repo/docs/results/paper/$cat" --no-behaviour ;;
+  *) echo "usage: $0 run [categories...] | keep <category> [repo] | partial <category>" >&2; exit 2 ;;
 esac
