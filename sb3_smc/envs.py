@@ -87,12 +87,23 @@ def _make(env_id: str, name: str, **kwargs: Any) -> gym.Env:
     Gymnasium's suggestion, and the ``PW-<name>-v0`` id when ``env_id`` names a PixelWorld dataset or concept pool."""
     try:
         return gym.make(env_id, **kwargs)
-    except gym.error.UnregisteredEnv as err:
+    except gym.error.Error as err:
+        if _registered(env_id):  # the error is its environment's own
+            raise
         from pixelworld_env.datasets import catalog
 
         named = env_id in catalog.dataset_names() or env_id in catalog.concept_pools()
         hint = f"; PixelWorld's {env_id!r} is the id 'PW-{env_id}-v0'" if named else ""
         raise SMCError(f"SMC {name!r}: unknown environment id {env_id!r}: {err}{hint}") from None
+
+
+def _registered(env_id: str) -> bool:
+    """Whether Gymnasium knows ``env_id`` (after ``gym.make`` imported the module of a ``"module:Id-v0"`` id)."""
+    try:
+        gym.spec(env_id.rsplit(":", 1)[-1])
+    except gym.error.Error:
+        return False
+    return True
 
 
 def _mapping(env_kwargs: Any) -> dict[str, Any]:

@@ -5,6 +5,8 @@ Each case raises with a message that says what was given and what is expected (n
 
 from __future__ import annotations
 
+import dataclasses
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -191,7 +193,7 @@ def test_report_errors_name_the_file_and_what_to_do(tmp_path, monkeypatch):
 
 def test_train_smc_trains_or_says_why_not():
     from sb3_smc.envs import make_smc_env
-    from sb3_smc.records import TrainingSpec
+    from sb3_smc.records import TaskSpec, TrainingSpec
     from sb3_smc.training import train_smc, untrained_smc
 
     with pytest.raises(ValueError, match=r"total_timesteps must be >= 1, got 0 \(nothing would be trained\); "
@@ -226,7 +228,18 @@ def test_train_smc_trains_or_says_why_not():
                                          rf"'{DATASET}' is the id '{ENV_ID}'"):
         train_smc(DATASET, total_timesteps=100, n_envs=1)
     with pytest.raises(ValueError, match=r"unknown environment id 'PW-cl_self-in-left-cornr_vs_on-hline-v0': .*Did "
-                                         r"you mean: `PW-cl_self-in-left-corner_vs_on-hline`"):  # the native path too
+                                         r"you mean: `PW-cl_self-in-left-corner_vs_on-hline`"):  # a PW-* id: not native
         train_smc("PW-cl_self-in-left-cornr_vs_on-hline-v0", total_timesteps=100, n_envs=1)
     with pytest.raises(ValueError, match=r"unknown environment id 'CartPole-v9': .*\[ `v0`, `v1` \]"):
         train_smc("CartPole-v9", total_timesteps=100, n_envs=1)
+
+    class MakesAnother(gym.Env):  # a registered environment whose own construction fails keeps its own error
+        def __init__(self, **_: object) -> None:
+            gym.make("NotRegistered-v0")
+
+    gym.register("BadInputMakesAnother-v0", entry_point=MakesAnother)
+    try:
+        with pytest.raises(gym.error.NameNotFound, match="`NotRegistered` doesn't exist"):
+            make_smc_env(dataclasses.replace(spec, task=TaskSpec("BadInputMakesAnother-v0", kind="bring-about")))
+    finally:
+        gym.registry.pop("BadInputMakesAnother-v0")

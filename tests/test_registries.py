@@ -115,6 +115,8 @@ def test_each_method_trains_what_its_entry_says() -> None:
                 assert node == (f"{name}/{target}" if method.own_learner else target)
                 entry = design.curriculum.node(node)
                 assert (entry.task, entry.algo, entry.uses) == (target, method.algo, ())
+                policy = entry.hyperparameters.get("policy")
+                assert policy == (recurrent_policy(method.rnn, method.algo) if method.rnn else None)
         else:
             for target in (LEFT_OF, IN_CONTAINER):
                 for node in design.nodes[(target, name)]:
@@ -138,7 +140,10 @@ def test_the_command_line_takes_its_choices_and_defaults_from_the_registries(
     monkeypatch.setattr("sb3_smc.curricula.trainer.train_curriculum", train)
     assert sb3_smc_cli("experiment", "--out", str(tmp_path / "e"))[0] == 0
     assert sb3_smc_cli("train", "con2-cl", "--out", str(tmp_path / "t"))[0] == 0
-    assert calls["experiment"]["methods"] == list(DEFAULT_METHODS) == list(METHODS)[:6]  # the paper's six
+    assert calls["experiment"]["methods"] == list(DEFAULT_METHODS) == [  # the paper's six
+        "cnn", "base", "curr", "canon", "curr-noprim", "canon-noprim"]
+    assert not any(METHOD_REGISTRY[m].own_learner or METHOD_REGISTRY[m].paper for m in DEFAULT_METHODS)
+    assert set(METHODS) - set(DEFAULT_METHODS) == {"base-gru"}
     assert calls["experiment"]["repeats"] == DEFAULT_REPEATS
     for command in ("experiment", "train"):
         assert calls[command]["seeds"] == DEFAULT_SEEDS and calls[command]["backend"] == BACKENDS[0]

@@ -10,9 +10,9 @@ test").
 * :mod:`sb3_smc.experiments.paper` — the paper's numbers.
 """
 
-from sb3_smc.experiments.design import CATEGORIES, METHODS, level2_targets, plan
+from sb3_smc.experiments.design import CATEGORIES, DEFAULT_METHODS, METHODS, level2_targets, plan
 
-__all__ = ["CATEGORIES", "METHODS", "level2_targets", "plan", "run_experiment", "write_report"]
+__all__ = ["CATEGORIES", "DEFAULT_METHODS", "METHODS", "level2_targets", "plan", "run_experiment", "write_report"]
 
 
 def __getattr__(name: str):

@@ -86,6 +86,7 @@ METHOD_REGISTRY: dict[str, ExperimentMethod] = {method.name: method for method i
 )}
 """Every method by name, in the order of the report's columns."""
 METHODS = tuple(METHOD_REGISTRY)
+"""Every method's name (the paper's six and ``base-gru``)."""
 DEFAULT_METHODS = METHODS[:6]
 """The paper's six methods: ``sb3-smc experiment``'s default ``--methods``."""
 SMC_METHODS = tuple(name for name, method in METHOD_REGISTRY.items() if method.smc)

@@ -50,6 +50,7 @@ from sb3_smc.experiments.statistics import (
 )
 from sb3_smc.hyperparameters import ALGORITHM_REGISTRY
 from sb3_smc.library import SMCLibrary, storage
+from sb3_smc.smc import SMC
 
 __all__ = ["pushable_levels", "write_report"]
 
@@ -100,27 +101,33 @@ def _merge(sources: Sequence[tuple[Path, dict[str, Any]]]) -> tuple[list[dict[st
     return rows, reported
 
 
-def _behaviour(directory: Path, figures: Path, reported: Sequence[dict[str, Any]], target: str
+def _behaviour(sources: Sequence[tuple[Path, dict[str, Any]]], figures: Path, target: str
                ) -> tuple[list[Path], str | None]:
-    """The Fig. 4 / Fig. 1 pictures of the best SMCs of ``target`` (trained in ``directory``) into ``figures``; or
-    none and the reason, when the run directory does not hold their models (a run kept as records:
-    ``docs/experiments.md``)."""
-    best = {r["method"]: job_name(r["curriculum"], r["seed"]) for r in reported
-            if r["target"] == target and r["method"] in SMC_METHODS}
+    """The Fig. 4 / Fig. 1 pictures of the best SMCs of ``target``, each loaded from the directory that trained it,
+    into ``figures``; or none and the reason, when a run directory does not hold their models (a run kept as
+    records: ``docs/experiments.md``)."""
+    best = {r["method"]: (directory, job_name(r["curriculum"], r["seed"])) for directory, results in sources
+            for r in results["reported"] if r["target"] == target and r["method"] in SMC_METHODS}
     if not best:
         return [], None
-    library_dir = directory / "library"
-    held = set(storage.read_manifest(library_dir)[0]["smcs"]) if (library_dir / storage.MANIFEST).is_file() else set()
-    absent = sorted(set(best.values()) - held)
-    if absent:
-        return [], (f"The trajectory and timeline pictures of `{target}` need the models of its best SMCs; "
-                    f"{directory} does not hold {', '.join(f'`{n}`' for n in absent)} (trained in an earlier "
-                    "session of a run kept as records). Delete their files in `evaluations/` and run the experiment "
-                    "again to retrain them (alike on the same kind of CPU), then make the report again.")
-    library = SMCLibrary.load(directory / "library", names=sorted(set(best.values())))
-    smcs = {method: library[name] for method, name in best.items()}
+    loaded: dict[str, SMC] = {}
+    for directory in dict.fromkeys(d for d, _ in best.values()):
+        names = sorted({name for d, name in best.values() if d == directory})
+        library_dir = directory / "library"
+        held = set(storage.read_manifest(library_dir)[0]["smcs"]) if (library_dir / storage.MANIFEST).is_file() \
+            else set()
+        absent = [name for name in names if name not in held]
+        if absent:
+            return [], (f"The trajectory and timeline pictures of `{target}` need the models of its best SMCs; "
+                        f"{directory} does not hold {', '.join(f'`{n}`' for n in absent)} (trained in an earlier "
+                        "session of a run kept as records). Delete their files in that directory's `evaluations/` and "
+                        "run its experiment again to retrain them (alike on the same kind of CPU), then make the "
+                        "report again.")
+        library = SMCLibrary.load(library_dir, names=names)
+        loaded.update({method: library[name] for method, (d, name) in best.items() if d == directory})
+    smcs = {method: loaded[method] for method in METHODS if method in loaded}
     paths = [trajectory_figure(smcs, target, figures / "trajectories.png")]
-    hierarchical = [m for m in METHODS if m in smcs and METHOD_REGISTRY[m].curricula is not None]
+    hierarchical = [m for m in smcs if METHOD_REGISTRY[m].curricula is not None]
     if hierarchical:
         paths.append(timeline_figure(smcs[hierarchical[0]], target, figures / "timeline.png"))
     return paths, None
@@ -186,8 +193,7 @@ def _write(sources: Sequence[tuple[Path, dict[str, Any]]], out: Path, trajectori
         chosen = trajectories or targets[0]
         if chosen not in targets:
             raise SMCError(f"--trajectories {chosen!r} is not a target of the report ({', '.join(targets)})")
-        home = next(d for d, results in sources if any(r["target"] == chosen for r in results["reported"]))
-        pictures, behaviour_note = _behaviour(home, figures_dir, reported, chosen)
+        pictures, behaviour_note = _behaviour(sources, figures_dir, chosen)
         figures += pictures
     settings = [results["settings"] for _, results in sources]
     budget = {(s["seeds"], s["timesteps"], s["repeats"]) for s in settings}
@@ -401,9 +407,7 @@ def _provenance(sources: Sequence[tuple[Path, dict[str, Any]]], out: Path) -> li
             lines += [f"### {os.path.relpath(directory, out)}", ""]
         lines += [f"- budget: {settings['timesteps']:,} steps per SMC, seeds 0-{settings['seeds'] - 1}, "
                   f"{settings['repeats']} test repeats; {settings['workers']} worker(s), backend {settings['backend']}",
-                  f"- learner: {_learner(settings)}" + "".join(
-                      f"; {m}: its own, {_learner(_own_learner(m))}" for m in settings["methods"]
-                      if m in METHOD_REGISTRY and METHOD_REGISTRY[m].own_learner),
+                  f"- learner: {_learners(settings)}",
                   f"- machine: {_machine_line(machine)}",
                   *_code_line(results),
                   f"- wall time of the last `sb3-smc experiment` run: {results.get('wall_time_s', 0) / 3600:.2f} h"
@@ -456,10 +460,15 @@ def _learner(settings: dict[str, Any]) -> str:
     return f"{algo} ({settings.get('rnn', 'lstm').upper() if recurrent else 'MLP'})"
 
 
-def _own_learner(method: str) -> dict[str, str]:
-    """The learner settings of a method with a learner of its own (``base-gru``), as :func:`_learner` reads them."""
-    entry = METHOD_REGISTRY[method]
-    return {key: value for key, value in (("algo", entry.algo), ("rnn", entry.rnn)) if value is not None}
+def _learners(settings: dict[str, Any]) -> str:
+    """The run's learner (:func:`_learner`), unless every SMC method of the run has its own, and each method's own
+    (``base-gru``)."""
+    methods = [METHOD_REGISTRY[m] for m in settings["methods"] if m in METHOD_REGISTRY]
+    own = [m for m in methods if m.own_learner]
+    parts = [] if own and all(m.own_learner for m in methods if m.smc) else [_learner(settings)]
+    parts += [f"{m.name}: its own, {_learner({k: v for k, v in (('algo', m.algo), ('rnn', m.rnn)) if v})}"
+              for m in own]
+    return "; ".join(parts)
 
 
 def _command(directory: Path, settings: dict[str, Any]) -> str:

@@ -121,8 +121,25 @@ def _gap(score: Score, targets: Sequence[str], a: str, b: str) -> float | None:
     return None if mean_a is None or mean_b is None else mean_a - mean_b
 
 
-def _mean_claim(kind: str, method: str, paper: float, ours: float | None, n: int, tolerance: float) -> Claim:
-    return _value_claim(f"{kind}: mean of {method} ({n} concepts)", paper, ours, tolerance)
+def _coverage(score: Score, targets: Sequence[str], methods: Sequence[str]) -> int:
+    """On how many of ``targets`` every one of ``methods`` ran."""
+    return sum(all((t, m) in score for m in methods) for t in targets)
+
+
+def _partial(text: str, paper: str, score: Score, targets: Sequence[str], methods: Sequence[str]) -> Claim | None:
+    """The claim ``text`` over ``targets`` marked unjudged when ``methods`` ran on some of them but not all (a table
+    still being run); ``None`` when they ran on all or on none (the caller judges it, or says "not run")."""
+    ran = _coverage(score, targets, methods)
+    if 0 < ran < len(targets):
+        return Claim(text, paper, f"{ran} of {len(targets)} concepts run", "not judged: partial")
+    return None
+
+
+def _mean_claim(kind: str, method: str, paper: float, score: Score, targets: Sequence[str],
+                tolerance: float) -> Claim:
+    text = f"{kind}: mean of {method} ({len(targets)} concepts)"
+    return (_partial(text, f"{paper:.1f}", score, targets, (method,))
+            or _value_claim(text, paper, method_mean(score, targets, method), tolerance))
 
 
 def _value_claim(text: str, paper: float, ours: float | None, tolerance: float) -> Claim:
@@ -139,13 +156,13 @@ def _value_claim(text: str, paper: float, ours: float | None, tolerance: float) 
 def _test_claim(kind: str, a: str, b: str, score: Score, targets: Sequence[str],
                 paper: tuple[int, float, float]) -> Claim:
     df_paper, t_paper, p_paper = paper
-    compared, test = method_test(score, targets, a, b)
+    _, test = method_test(score, targets, a, b)
     text = f"{kind}: {a} > {b}, paired t-test across concepts"
+    partial = _partial(text, f"t({df_paper}) = {t_paper}, p = {p_paper}", score, targets, (a, b))
+    if partial is not None:
+        return partial
     if test is None:
         return Claim(text, f"t({df_paper}) = {t_paper}, p = {p_paper}", "-", "not run")
-    if compared < len(targets):
-        return Claim(text, f"t({df_paper}) = {t_paper}, p = {p_paper}", f"{compared} of {len(targets)} concepts run",
-                     "not judged: partial")
     df, t, p = test
     same_direction = (t > 0) == (t_paper > 0)
     significant = p < ALPHA
@@ -174,9 +191,15 @@ def claims(score: Score, kind_of: Mapping[str, str], category_of: Mapping[str, s
     concepts, the CNN by category, the noprim ablation) with ours. A mean is reproduced within ``tolerance``
     points; a comparison when its direction is the paper's and it is significant at :data:`ALPHA`. The claims
     over all concepts of a kind are judged only when ``score`` holds all of them (the paper's 34 / 17); a report of
-    fewer says so in one row per kind. The per-concept claims (the headline targets) are judged wherever present.
-    ``flats``: our flat methods, each judged against the paper's flat SMC (``base``) in every claim about it."""
+    fewer says so in one row per kind, and a claim whose methods ran on some of them only is "not judged: partial".
+    The per-concept claims (the headline targets) are judged wherever present. ``flats``: our flat methods, each
+    judged against the paper's flat SMC (``base``) in every claim about it."""
     out: list[Claim] = []
+
+    def ours(method: str) -> Sequence[str]:
+        """Our methods for the paper's ``method``: every flat method for ``base``."""
+        return flats if method == "base" else (method,)
+
     for kind in ("classification", "bring-about"):
         targets = sorted(t for t in kind_of if kind_of[t] == kind and category_of[t] != "pushable")
         if not targets:
@@ -186,50 +209,50 @@ def claims(score: Score, kind_of: Mapping[str, str], category_of: Mapping[str, s
                              "noprim)", f"{PAPER_COUNTS[kind]} concepts", f"{len(targets)} concepts here",
                              "not comparable: a subset"))
             continue
-        def ours(method: str) -> Sequence[str]:
-            """Our methods for the paper's ``method``: every flat method for ``base``."""
-            return flats if method == "base" else (method,)
-
         for method, paper in PAPER_MEANS[kind].items():
-            out += [_mean_claim(kind, m, paper, method_mean(score, targets, m), len(targets), tolerance)
-                    for m in ours(method)]
+            out += [_mean_claim(kind, m, paper, score, targets, tolerance) for m in ours(method)]
         for comparison, paper_test in PAPER_TTESTS[kind].items():
             a, _, b = comparison.split()
             out += [_test_claim(kind, a, flat, score, targets, paper_test) for flat in ours(b)]
         if kind == "bring-about":
             for flat in flats:
+                text = f"bring-about: a hierarchical SMC (best of curr, canon) beats the flat one ({flat})"
+                partial = _partial(text, "on 14 of 16 concepts", score, targets, ("curr", "canon", flat))
                 won, n = wins(score, targets, ("curr", "canon"), flat)
-                verdict = ("not run" if not n else "not judged: partial" if n < len(targets) else "yes"
-                           if won / n >= 14 / 16 - 1e-9 else f"no: {won / n:.0%} of concepts against 88%")
-                out.append(Claim(f"bring-about: a hierarchical SMC (best of curr, canon) beats the flat one ({flat})",
-                                 "on 14 of 16 concepts", f"on {won} of {n} concepts" if n else "-", verdict))
+                out.append(partial or Claim(text, "on 14 of 16 concepts", f"on {won} of {n} concepts" if n else "-", (
+                    "yes" if won / n >= 14 / 16 - 1e-9 else f"no: {won / n:.0%} of concepts against 88%")
+                    if n else "not run"))
         else:
             paper_means = PAPER_MEANS[kind]
             for a, b in (("cnn", "base"), ("curr", "cnn")):
-                out += [_order_claim(f"classification: {a} above {other} (mean gap, points)",
-                                     paper_means[a] - paper_means[b], _gap(score, targets, a, other))
-                        for other in ours(b)]
-            out.extend(_cnn_claims(score, targets, category_of))
+                for other in ours(b):
+                    text = f"classification: {a} above {other} (mean gap, points)"
+                    gap = paper_means[a] - paper_means[b]
+                    out.append(_partial(text, f"{gap:+.1f}", score, targets, (a, other))
+                               or _order_claim(text, gap, _gap(score, targets, a, other)))
+            out.extend(_cnn_claims(score, targets, category_of, (*flats, "curr", "canon")))
         for method in ("curr", "canon"):
             paper_with, paper_without = PAPER_NOPRIM[kind][method], PAPER_NOPRIM[kind][f"{method}-noprim"]
-            without = method_mean(score, targets, f"{method}-noprim")
-            out.append(_mean_claim(kind, f"{method}-noprim", paper_without, without, len(targets), tolerance))
-            out.append(_order_claim(f"{kind}: {method} without primitives against with (mean gap, points)",
-                                    paper_without - paper_with, _gap(score, targets, f"{method}-noprim", method)))
+            out.append(_mean_claim(kind, f"{method}-noprim", paper_without, score, targets, tolerance))
+            text = f"{kind}: {method} without primitives against with (mean gap, points)"
+            gap = paper_without - paper_with
+            out.append(_partial(text, f"{gap:+.1f}", score, targets, (f"{method}-noprim", method))
+                       or _order_claim(text, gap, _gap(score, targets, f"{method}-noprim", method)))
     for target, paper_scores in PAPER_CONCEPTS.items():
         for method, value in paper_scores.items():
-            out.append(_value_claim(f"{target}: {method}", value, score.get((target, method)), tolerance))
+            out += [_value_claim(f"{target}: {m}", value, score.get((target, m)), tolerance) for m in ours(method)]
     return out
 
 
-def _cnn_claims(score: Score, targets: Sequence[str], category_of: Mapping[str, str]) -> list[Claim]:
+def _cnn_claims(score: Score, targets: Sequence[str], category_of: Mapping[str, str],
+                smcs: Sequence[str]) -> list[Claim]:
     """The qualitative Fig. 5a claims: SMCs clearly ahead of the CNN on containment; the CNN relatively better on
-    objects and objcon (its gap to the best SMC method smaller there than on containment)."""
+    objects and objcon (its gap to the best SMC method of ``smcs`` smaller there than on containment)."""
     gaps: dict[str, float] = {}
     for category in ("containment", "objcon", "objects"):
         members = [t for t in targets if category_of[t] == category]
-        best = [max(score[(t, m)] for m in ("base", "curr", "canon") if (t, m) in score) - score[(t, "cnn")]
-                for t in members if (t, "cnn") in score and any((t, m) in score for m in ("base", "curr", "canon"))]
+        best = [max(score[(t, m)] for m in smcs if (t, m) in score) - score[(t, "cnn")]
+                for t in members if (t, "cnn") in score and any((t, m) in score for m in smcs)]
         if members and len(best) == len(members):
             gaps[category] = float(np.mean(best))
     out = []
