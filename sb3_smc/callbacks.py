@@ -29,7 +29,11 @@ default) and
   ===================================================  ==========================================================
 
 * optionally prints one progress line every ``log_every`` updates (``rich`` is not a dependency, so SB3's
-  ``progress_bar`` is not used).
+  ``progress_bar`` is not used);
+* with ``stop_at`` (the largest return an episode can earn), ends training once an update's mean training return
+  reaches it: no later update can then be selected (ties keep the earliest), so the selected SMC is the one the
+  whole budget would give, bit for bit; the records end there (SB3 has applied that rollout's update when it
+  stops, at the next step).
 
 The callback is idempotent at the end of training (rl_zoo3 calls ``on_training_end`` twice).
 """
@@ -102,15 +106,18 @@ class SMCTrainingCallback(BaseCallback):
 
     ``children`` are the names of the SMCs the trained policy can call (their curves are written even when a
     child is never called, as zeros); ``kind`` is the task kind ("classification" adds ``smc/accuracy``).
-    ``total_updates`` is only used for the progress line. After training, :attr:`best` holds the selection
-    (``best.state``: a deep copy of the policy's ``state_dict`` of the selected update) and :attr:`history`
-    one dict of statistics per update.
+    ``total_updates`` is only used for the progress line. ``stop_at``: the largest mean training return there is
+    (:data:`sb3_smc.tasks.MAX_RETURN`); training stops once the selection reaches it (:attr:`solved`). After
+    training, :attr:`best` holds the selection (``best.state``: a deep copy of the policy's ``state_dict`` of the
+    selected update) and :attr:`history` one dict of statistics per update.
     """
 
     def __init__(self, *, kind: str, children: Sequence[str] = (), total_updates: int | None = None,
                  log_every: int = 0, name: str = "smc", printer: Callable[[str], None] = print,
-                 verbose: int = 0) -> None:
+                 stop_at: float | None = None, verbose: int = 0) -> None:
         super().__init__(verbose)
+        self.stop_at = stop_at
+        self.solved = False
         self.kind = kind
         self.children = tuple(children)
         self.total_updates = total_updates
@@ -145,6 +152,8 @@ class SMCTrainingCallback(BaseCallback):
                                    call_sig1=dict.fromkeys(self.children, 0))
 
     def _on_step(self) -> bool:
+        if self.solved:  # the first step after the solving rollout's update: the selection can no longer change
+            return False
         stats = self._stats
         rewards = self.locals["rewards"]
         dones = self.locals["dones"]
@@ -183,6 +192,7 @@ class SMCTrainingCallback(BaseCallback):
         stats = self._stats
         policy = self.model.policy
         self.best.update(stats.mean_return, lambda: copy.deepcopy(policy.state_dict()))
+        self.solved = self.stop_at is not None and self.best.best_return >= self.stop_at
         row = self._record(stats)
         self.history.append(row)
         update = len(self.best.returns)
@@ -200,7 +210,8 @@ class SMCTrainingCallback(BaseCallback):
         if self.verbose > 0 or self.log_every > 0:
             best = self.best
             self.printer(f"[{self.name}] done: {self.num_timesteps:,} steps in {self.elapsed:.0f} s; selected update "
-                         f"{best.best_update} (mean training return {best.best_return:.3f})")
+                         f"{best.best_update} (mean training return {best.best_return:.3f}"
+                         + (", the largest there is: stopped there)" if self.solved else ")"))
 
     # -------------------------------------------------------------------------------------------- helpers
 

@@ -44,7 +44,12 @@ from pixelworld_env.envs.env import (
 from sb3_smc.errors import SMCError, SMCTypeError
 from sb3_smc.layout import SIGNALS, Layout
 
-__all__ = ["SMCTask", "TaskEnv", "describe_task", "layout_of", "task_layer"]
+__all__ = ["MAX_RETURN", "SMCTask", "TaskEnv", "describe_task", "layout_of", "task_layer"]
+
+MAX_RETURN = max(CLASSIFICATION_REWARD, GOAL_REWARD)
+"""The largest undiscounted return an episode of an SMC task can earn, a clean success of either kind (1): the right
+signal once, or (the shaping telescoping to at most ``GOAL_POTENTIAL``) SIG1 in the goal. No SMC task returns more,
+PixelWorld's or :class:`SMCTask`'s, whatever the SMC calls."""
 
 Goal = Callable[[gym.Env], bool]
 Label = Callable[[gym.Env], int]

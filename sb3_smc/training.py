@@ -61,6 +61,7 @@ from sb3_smc.layout import PIXELWORLD_LAYOUT
 from sb3_smc.policies import FrameStackPolicy, policy_from_model
 from sb3_smc.records import TrainingRecord, TrainingSpec, package_versions
 from sb3_smc.smc import SMC, StepPolicy
+from sb3_smc.tasks import MAX_RETURN
 from sb3_smc.vec_env import FlatSMCVecEnv, SMCVecEnv
 from sb3_smc.wrapper import HierarchicalSMCWrapper
 
@@ -185,6 +186,7 @@ def train_smc(
     log_every: int | None = None,
     callback: Any = None,
     printer: Callable[[str], None] = print,
+    stop_at_max_return: bool = True,
     algo: str = DEFAULT_ALGORITHM,
     total_timesteps: int = DEFAULT_TIMESTEPS,
     seed: int = 0,
@@ -226,7 +228,10 @@ def train_smc(
     in; ``tensorboard_log`` — a folder for SB3's curves and those of
     :class:`~sb3_smc.callbacks.SMCTrainingCallback` (run name: the SMC's name); ``log_every`` — a progress line
     through ``printer`` every that many updates (0: quiet; ``None``: every 10 updates when training runs 50
-    updates or more); ``callback`` — an extra SB3 callback.
+    updates or more); ``callback`` — an extra SB3 callback; ``stop_at_max_return`` — end training once an update's
+    mean training return is :data:`~sb3_smc.tasks.MAX_RETURN` (every episode a clean success): no later update can
+    be selected then, so the SMC is the one the whole budget would give, bit for bit, and its record ends there
+    (``False``: run the whole budget, for complete learning curves).
 
     The returned SMC's ``policy`` is a numpy copy of the selected snapshot's actor, ``model`` the SB3 model with the
     selected weights loaded, ``spec`` the (resolved) spec and ``record`` the :class:`TrainingRecord`.
@@ -239,7 +244,7 @@ def train_smc(
                        "(nothing would be trained); untrained_smc(...) builds an SMC with its initial policy on "
                        "purpose")
     return _train(spec, kids, tensorboard_log=tensorboard_log, log_every=log_every, callback=callback,
-                  printer=printer)
+                  printer=printer, stop_at_max_return=stop_at_max_return)
 
 
 def untrained_smc(task: str | TrainingSpec, *, children: Children = None, **settings: Any) -> SMC:
@@ -255,7 +260,8 @@ def untrained_smc(task: str | TrainingSpec, *, children: Children = None, **sett
     else:
         known["total_timesteps"] = 0
     spec, kids = _spec_and_children(task, children, {**_KEYWORD_DEFAULTS, **known}, settings)
-    return _train(spec, kids, tensorboard_log=None, log_every=0, callback=None, printer=print)
+    return _train(spec, kids, tensorboard_log=None, log_every=0, callback=None, printer=print,
+                  stop_at_max_return=False)
 
 
 def _spec_and_children(task: str | TrainingSpec, children: Children, settings: dict[str, Any],
@@ -274,14 +280,14 @@ def _spec_and_children(task: str | TrainingSpec, children: Children, settings: d
     raise SMCTypeError(f"train_smc needs an env id or a TrainingSpec, got {type(task).__name__}")
 
 
-_RUN_OPTIONS = ("children", "tensorboard_log", "log_every", "callback", "printer")
+_RUN_OPTIONS = ("children", "tensorboard_log", "log_every", "callback", "printer", "stop_at_max_return")
 _KEYWORD_DEFAULTS = {name: parameter.default for name, parameter in inspect.signature(train_smc).parameters.items()
                      if parameter.kind is inspect.Parameter.KEYWORD_ONLY and name not in _RUN_OPTIONS}
 """The spec settings of :func:`train_smc` and their defaults (its keyword arguments but the run options)."""
 
 
 def _train(spec: TrainingSpec, children: tuple[SMC, ...], *, tensorboard_log: str | None, log_every: int | None,
-           callback: Any, printer: Callable[[str], None]) -> SMC:
+           callback: Any, printer: Callable[[str], None], stop_at_max_return: bool) -> SMC:
     from stable_baselines3.common.callbacks import BaseCallback, CallbackList
 
     if spec.task.kind is not None:
@@ -319,7 +325,8 @@ def _train(spec: TrainingSpec, children: tuple[SMC, ...], *, tensorboard_log: st
     if log_every is None:
         log_every = 10 if total_updates >= 50 else 0
     stats = SMCTrainingCallback(kind=kind, children=spec.children, total_updates=total_updates,
-                                log_every=log_every, name=spec.name, printer=printer)
+                                log_every=log_every, name=spec.name, printer=printer,
+                                stop_at=MAX_RETURN if stop_at_max_return else None)
     parts: list[BaseCallback] = [stats]
     if spec.wrapper.discount == "semi-mdp":
         parts.append(SemiMDPDiscount())

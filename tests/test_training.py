@@ -189,6 +189,27 @@ def test_train_smc_returns_the_selected_snapshot() -> None:
     np.testing.assert_allclose(ours, again)
 
 
+def test_training_stops_at_the_largest_return_with_the_snapshot_the_whole_budget_selects() -> None:
+    """Once an update's mean training return is MAX_RETURN no later one can be selected (ties keep the earliest):
+    training stops there and the SMC is the whole budget's, bit for bit; its record ends at the selected update."""
+    from sb3_smc.tasks import MAX_RETURN
+
+    lines: list[str] = []
+    budget = dict(seed=1, total_timesteps=60_000)  # 30 updates; this seed first reaches return 1 at update 18
+    stopped = train_smc("PW-cl_self-in-container_vs_outside-v0", **budget, printer=lines.append, log_every=100)
+    whole = train_smc("PW-cl_self-in-container_vs_outside-v0", **budget, stop_at_max_return=False, printer=print,
+                      log_every=0)
+    assert MAX_RETURN == 1.0 and stopped.record.selected_return == MAX_RETURN
+    k = stopped.record.selected_update
+    assert stopped.record.updates == k + 1 < whole.record.updates == 30  # stopped, where the whole budget went on
+    assert stopped.record.total_timesteps == (k + 1) * 2000 + 16  # and the one step of the next rollout
+    assert whole.record.selected_update == k and whole.record.training_returns[:k + 1] == stopped.record.training_returns
+    assert max(whole.record.training_returns) == MAX_RETURN
+    first, second = stopped.model.policy.state_dict(), whole.model.policy.state_dict()
+    assert all(torch.equal(first[name], second[name]) for name in first)
+    assert "the largest there is: stopped there" in lines[-1]
+
+
 def test_train_smc_is_deterministic() -> None:
     first = train_smc(CORNER_ID, algo="TRPO", total_timesteps=512, n_envs=4, n_steps=64, seed=3)
     again = train_smc(CORNER_ID, algo="TRPO", total_timesteps=512, n_envs=4, n_steps=64, seed=3)
