@@ -31,9 +31,9 @@ default) and
 * optionally prints one progress line every ``log_every`` updates (``rich`` is not a dependency, so SB3's
   ``progress_bar`` is not used);
 * with ``stop_at`` (the largest return an episode can earn), ends training once an update's mean training return
-  reaches it: no later update can then be selected (ties keep the earliest), so the selected SMC is the one the
-  whole budget would give, bit for bit; the records end there (SB3 has applied that rollout's update when it
-  stops, at the next step).
+  reaches it: no later update can then be selected (ties keep the earliest), so the selected weights are those
+  the whole budget would select; the records end there (SB3 has applied that rollout's update when it stops, at
+  the first step of the next rollout). A callback that has stopped stays stopped (its selection is final).
 
 The callback is idempotent at the end of training (rl_zoo3 calls ``on_training_end`` twice).
 """
@@ -152,8 +152,6 @@ class SMCTrainingCallback(BaseCallback):
                                    call_sig1=dict.fromkeys(self.children, 0))
 
     def _on_step(self) -> bool:
-        if self.solved:  # the first step after the solving rollout's update: the selection can no longer change
-            return False
         stats = self._stats
         rewards = self.locals["rewards"]
         dones = self.locals["dones"]
@@ -186,7 +184,7 @@ class SMCTrainingCallback(BaseCallback):
             self._episode_length[k] = 0
             self.total_primitive_steps += int(primitive[k])
             primitive[k] = 0
-        return True
+        return not self.solved  # False: the first step after the solving rollout's update (its steps counted)
 
     def _on_rollout_end(self) -> None:
         stats = self._stats

@@ -44,12 +44,13 @@ from pixelworld_env.envs.env import (
 from sb3_smc.errors import SMCError, SMCTypeError
 from sb3_smc.layout import SIGNALS, Layout
 
-__all__ = ["MAX_RETURN", "SMCTask", "TaskEnv", "describe_task", "layout_of", "task_layer"]
+__all__ = ["MAX_RETURN", "SMCTask", "TaskEnv", "describe_task", "layout_of", "returns_bounded", "task_layer"]
 
 MAX_RETURN = max(CLASSIFICATION_REWARD, GOAL_REWARD)
 """The largest undiscounted return an episode of an SMC task can earn, a clean success of either kind (1): the right
-signal once, or (the shaping telescoping to at most ``GOAL_POTENTIAL``) SIG1 in the goal. No SMC task returns more,
-PixelWorld's or :class:`SMCTask`'s, whatever the SMC calls."""
+signal once, or (the shaping telescoping to at most ``GOAL_POTENTIAL``) SIG1 in the goal. No task with these rules
+returns more, PixelWorld's or :class:`SMCTask`'s, whatever the SMC calls; a subclass that rewards otherwise, or a
+wrapper that changes the rewards on their way, may (:func:`returns_bounded`)."""
 
 Goal = Callable[[gym.Env], bool]
 Label = Callable[[gym.Env], int]
@@ -287,6 +288,17 @@ class SMCTask(gym.Wrapper, gym.utils.RecordConstructorArgs):
             raise SMCError(f"action must be an integer in [0, {len(self.action_names)}), got {action!r}")
         reward, terminated, truncated, info = self.transition(int(action))
         return self._sensor.copy(), reward, terminated, truncated, info
+
+
+_REWARD_METHODS = {PixelWorldEnv: ("transition", "apply_primitive", "apply_move", "_move"),
+                   SMCTask: ("transition", "apply_primitive")}
+
+
+def returns_bounded(task: TaskEnv) -> bool:
+    """Whether no episode of ``task`` returns more than :data:`MAX_RETURN`: a :class:`pixelworld_env.PixelWorldEnv`
+    or :class:`SMCTask` whose reward methods are those classes' own (not a subclass's)."""
+    return any(isinstance(task, cls) and all(getattr(type(task), name) is getattr(cls, name) for name in names)
+               for cls, names in _REWARD_METHODS.items())
 
 
 def task_layer(env: gym.Env) -> TaskEnv:

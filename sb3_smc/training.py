@@ -230,8 +230,9 @@ def train_smc(
     through ``printer`` every that many updates (0: quiet; ``None``: every 10 updates when training runs 50
     updates or more); ``callback`` — an extra SB3 callback; ``stop_at_max_return`` — end training once an update's
     mean training return is :data:`~sb3_smc.tasks.MAX_RETURN` (every episode a clean success): no later update can
-    be selected then, so the SMC is the one the whole budget would give, bit for bit, and its record ends there
-    (``False``: run the whole budget, for complete learning curves).
+    be selected then, so the SMC has the weights the whole budget would select, and its record ends there (``False``:
+    run the whole budget, for complete learning curves). A task whose rewards may exceed it (a subclass or a wrapper
+    that changes them: :func:`~sb3_smc.tasks.returns_bounded`) runs its whole budget.
 
     The returned SMC's ``policy`` is a numpy copy of the selected snapshot's actor, ``model`` the SB3 model with the
     selected weights loaded, ``spec`` the (resolved) spec and ``record`` the :class:`TrainingRecord`.
@@ -294,11 +295,13 @@ def _train(spec: TrainingSpec, children: tuple[SMC, ...], *, tensorboard_log: st
         check_model_settings(spec)  # a typo in a hyperparameter: a message before any environment is built
     venv = make_vec_env(spec, children)
     under = venv.unwrapped  # the FlatSMCVecEnv or SMCVecEnv under the monitor
-    if isinstance(under, FlatSMCVecEnv):
-        kind, action_names, layout = under.kind, under.action_names, PIXELWORLD_LAYOUT
+    if isinstance(under, FlatSMCVecEnv):  # PixelWorld's compiled vector env: its own rewards
+        kind, action_names, layout, bounded = under.kind, under.action_names, PIXELWORLD_LAYOUT, True
     else:
-        wrapper = cast(HierarchicalSMCWrapper, cast(SMCVecEnv, under).envs[0])
+        wrappers = [cast(HierarchicalSMCWrapper, env) for env in cast(SMCVecEnv, under).envs]
+        wrapper = wrappers[0]
         kind, action_names, layout = wrapper.base.kind, wrapper.action_names, wrapper.layout
+        bounded = all(w.returns_bounded for w in wrappers)
     if spec.task.kind is None or spec.task.smc_layout != layout:  # a user's own task: known once the env exists
         if spec.task.kind not in (None, kind) or spec.task.layout not in (None, layout):
             raise SMCError(f"SMC {spec.name!r}: the spec says a {spec.task.kind} task on {spec.task.smc_layout}, but "
@@ -326,7 +329,7 @@ def _train(spec: TrainingSpec, children: tuple[SMC, ...], *, tensorboard_log: st
         log_every = 10 if total_updates >= 50 else 0
     stats = SMCTrainingCallback(kind=kind, children=spec.children, total_updates=total_updates,
                                 log_every=log_every, name=spec.name, printer=printer,
-                                stop_at=MAX_RETURN if stop_at_max_return else None)
+                                stop_at=MAX_RETURN if stop_at_max_return and bounded else None)
     parts: list[BaseCallback] = [stats]
     if spec.wrapper.discount == "semi-mdp":
         parts.append(SemiMDPDiscount())

@@ -19,7 +19,7 @@ from sb3_smc.errors import SMCError, SMCTypeError
 from sb3_smc.layout import CALL_PREFIX, observation_size, smc_action_names
 from sb3_smc.policies import NumpyGRUPolicy, _kernels, sample_action
 from sb3_smc.smc import SMC, StepPolicy
-from sb3_smc.tasks import layout_of, task_layer
+from sb3_smc.tasks import layout_of, returns_bounded, task_layer
 
 SIGNAL_OUTCOMES = {"SIG1": 1.0, "SIG0": -1.0}
 """The outcome an SMC call records for each signal (0 = not called in this episode, or timed out)."""
@@ -135,6 +135,9 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         # Moves and signals may skip the layers between this wrapper and the base env when those only check the
         # call order (gym.make's OrderEnforcing / PassiveEnvChecker), which the wrapper checks itself.
         self._direct = _only_order_checks(env, cast(gym.Env, base))
+        self.returns_bounded = self._direct and returns_bounded(base)
+        """Whether no episode returns more than :data:`~sb3_smc.tasks.MAX_RETURN`: the task's own rewards reach the
+        wrapper unchanged (:func:`~sb3_smc.tasks.returns_bounded`; between them only Gymnasium's order checks)."""
         self._ended = (False, False)  # (terminated, truncated) when the environment ended the episode in a call
         self._rng: np.random.Generator | None = None
         self._elapsed = 0

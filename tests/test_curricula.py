@@ -719,3 +719,20 @@ def test_a_kill_after_storing_a_differing_repair_still_retrains_what_is_above(tm
     assert not (out / "retrain.json").exists() and status(out)["done"] == ["left@0", "above@0", "container@0"]
     [kept] = (out / "replaced").iterdir()
     assert "container@0" in SMCLibrary.load(kept / "library", names=["container@0"])
+
+
+def test_a_record_that_stopped_at_the_largest_return_is_trained_alike_with_the_whole_budgets() -> None:
+    """A job repaired after training began to stop at the largest return has a shorter record than the damaged copy
+    trained with the whole budget: the same selection, so what was trained with the copy is kept."""
+    from sb3_smc.curricula.trainer import _trained_alike
+    from sb3_smc.records import TrainingRecord
+
+    def record(returns: list[float], selected: int, steps: int) -> TrainingRecord:
+        return TrainingRecord(training_returns=tuple(returns), success_rates=tuple(0.5 for _ in returns),
+                              selected_update=selected, selected_return=returns[selected], total_timesteps=steps,
+                              primitive_steps=steps, wall_time_s=1.0)
+
+    whole = record([0.2, float("nan"), 1.0, 1.0, 0.9], 2, 10_000)
+    assert _trained_alike(whole, record([0.2, float("nan"), 1.0], 2, 6_016))
+    assert not _trained_alike(whole, record([0.3, float("nan"), 1.0], 2, 6_016))  # trained otherwise before
+    assert not _trained_alike(whole, record([0.2, 1.0], 1, 4_016))

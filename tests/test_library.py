@@ -560,7 +560,7 @@ def test_version_1_libraries_load_through_the_conversion(tmp_path):
     trained: dict[str, SMC] = {}
     for name in storage.topological_order(converted, V1_MANIFEST):
         spec = converted[name].spec
-        smc = train_smc(spec, children=trained)
+        smc = train_smc(spec, children=trained, stop_at_max_return=False)  # the whole budget, as 0.1 trained
         trained[name] = smc
         smc.model.save(root / v1["smcs"][name]["model"])
         v1["smcs"][name]["sha256"] = storage.sha256(root / v1["smcs"][name]["model"])

@@ -191,7 +191,8 @@ def test_train_smc_returns_the_selected_snapshot() -> None:
 
 def test_training_stops_at_the_largest_return_with_the_snapshot_the_whole_budget_selects() -> None:
     """Once an update's mean training return is MAX_RETURN no later one can be selected (ties keep the earliest):
-    training stops there and the SMC is the whole budget's, bit for bit; its record ends at the selected update."""
+    training stops there with the weights the whole budget selects; its record ends at the selected update. A task
+    whose rewards a wrapper changes may return more: it runs its whole budget."""
     from sb3_smc.tasks import MAX_RETURN
 
     lines: list[str] = []
@@ -203,11 +204,28 @@ def test_training_stops_at_the_largest_return_with_the_snapshot_the_whole_budget
     k = stopped.record.selected_update
     assert stopped.record.updates == k + 1 < whole.record.updates == 30  # stopped, where the whole budget went on
     assert stopped.record.total_timesteps == (k + 1) * 2000 + 16  # and the one step of the next rollout
-    assert whole.record.selected_update == k and whole.record.training_returns[:k + 1] == stopped.record.training_returns
+    assert whole.record.selected_update == k
+    assert whole.record.training_returns[:k + 1] == stopped.record.training_returns
     assert max(whole.record.training_returns) == MAX_RETURN
     first, second = stopped.model.policy.state_dict(), whole.model.policy.state_dict()
     assert all(torch.equal(first[name], second[name]) for name in first)
     assert "the largest there is: stopped there" in lines[-1]
+
+    from sb3_smc.envs import make_smc_env
+    from sb3_smc.tasks import returns_bounded, task_layer
+    from sb3_smc.wrapper import HierarchicalSMCWrapper
+
+    plain = make_smc_env(stopped.spec)
+    assert plain.returns_bounded and returns_bounded(task_layer(plain))
+    doubled = HierarchicalSMCWrapper(gym.wrappers.TransformReward(gym.make(CORNER_ID), lambda r: 2 * r))
+    assert not doubled.returns_bounded  # a reward of 2: a mean of 1 is not the largest there is
+
+    class Generous(type(task_layer(plain))):  # rewards of its own
+        def transition(self, action):
+            reward, terminated, truncated, info = super().transition(action)
+            return 3 * reward, terminated, truncated, info
+
+    assert not returns_bounded(Generous.__new__(Generous))
 
 
 def test_train_smc_is_deterministic() -> None:

@@ -478,11 +478,15 @@ def _finish_pending_retrain(directory: Path, note: Callable[[str], None]) -> Non
 
 
 def _trained_alike(a: TrainingRecord, b: TrainingRecord) -> bool:
-    """The same training (returns, selection, steps), whatever the wall time and versions."""
-    def trained(record: TrainingRecord) -> dict[str, Any]:
-        return {k: v for k, v in record.to_dict().items() if k not in ("wall_time_s", "versions")}
+    """The same selected SMC by the record: the same selection and the same returns up to it, whatever came after
+    (a run that stopped at the largest return against one that ran its whole budget), wall time and versions."""
+    def selection(record: TrainingRecord) -> tuple[Any, ...]:
+        returns = record.to_dict()["training_returns"]  # NaN as None: comparable
+        end = len(returns) if record.selected_update is None else record.selected_update + 1
+        return (record.selected_update, record.selected_return, returns[:end], record.action_names,
+                record.initial_action_probabilities)
 
-    return trained(a) == trained(b)
+    return selection(a) == selection(b)
 
 
 def _above(scheduler: _Scheduler, node_name: str) -> list[tuple[str, int]]:
@@ -523,9 +527,10 @@ def _rows(scheduler: _Scheduler) -> list[dict[str, Any]]:
 # ---------------------------------------------------------------------------------------------------------------
 
 class _Progress:
-    """One live line: jobs done / total, running, steps/s, ETA (``\\r``-refreshed on a terminal, else one line per
-    round of finished jobs, once their places are refilled (:meth:`show`), so that it counts the jobs running
-    then)."""
+    """One live line: jobs done / total, running, budget steps/s, ETA (``\\r``-refreshed on a terminal, else one line
+    per round of finished jobs, once their places are refilled (:meth:`show`), so that it counts the jobs running
+    then). A finished job counts its whole budget, also when its training stopped at the largest return, so that
+    the rate and the jobs left are in the same units."""
 
     def __init__(self, total: int, done: int, steps_total: int, steps_done: int,
                  printer: Callable[[str], None] | None) -> None:
@@ -542,7 +547,7 @@ class _Progress:
         rate = (self.steps_done - self.steps_at_start) / elapsed if elapsed > 0 else 0.0
         left = self.steps_total - self.steps_done
         eta = f"{left / rate / 60:.0f} min" if rate > 0 else "?"
-        return (f"jobs {self.done}/{self.total}, running {self.running}, {rate:,.0f} steps/s, "
+        return (f"jobs {self.done}/{self.total}, running {self.running}, {rate:,.0f} budget steps/s, "
                 f"ETA {eta if left else '0 min'}")
 
     def show(self, running: int) -> None:
