@@ -24,7 +24,7 @@ import torch
 
 from pixelworld_env.atomic import atomic_write
 from sb3_smc.curricula import resolve_curriculum
-from sb3_smc.curricula.jobs import file_stem, node_records, node_spec, rank_seeds
+from sb3_smc.curricula.jobs import DEFAULT_REUSE, REUSE, file_stem, node_records, node_spec, rank_seeds
 from sb3_smc.evaluation import evaluate
 from sb3_smc.library import SMCLibrary, storage
 from sb3_smc.training import train_smc
@@ -49,7 +49,7 @@ def main() -> None:
     library_entries = storage.check_manifest(manifest, where)
     children = tuple(f"{used}@{seed}" for used in node.uses
                      for seed in rank_seeds({s: r for s, r in node_records(library_entries, used).items()
-                                             if r is not None})[:2])
+                                             if r is not None})[:REUSE[DEFAULT_REUSE]])
     library = SMCLibrary.load(args.library, names=list(children))
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)

@@ -153,8 +153,9 @@ class _Table:
 
     @property
     def flats(self) -> list[str]:
-        """The flat methods that ran (``base``, and ``base-gru`` where run), each compared with the paper's flat SMC."""
-        return [m for m in self.methods if METHOD_REGISTRY[m].flat]
+        """The flat methods that ran (``base``, and ``base-gru`` where run), each compared with the paper's flat SMC;
+        ``["base"]`` when none did (its comparisons then say it did not run)."""
+        return [m for m in self.methods if METHOD_REGISTRY[m].flat] or ["base"]
 
     def of_kind(self, kind: str, category: str | None = None) -> list[str]:
         return [t for t in self.targets if self.kind_of[t] == kind and category in (None, self.category_of[t])]
@@ -244,7 +245,7 @@ def _write(sources: Sequence[tuple[Path, dict[str, Any]]], out: Path, trajectori
 
 
 def _claims_section(table: _Table) -> list[str]:
-    found = claims(table.score, table.kind_of, table.category_of, flats=table.flats or ("base",))
+    found = claims(table.score, table.kind_of, table.category_of, flats=table.flats)
     if not any(c.reproduced != "not run" for c in found):
         return []
     lines = ["## The paper's claims", "",
@@ -354,7 +355,7 @@ def _ttest_section(table: _Table) -> list[str]:
             continue
         whole = len(in_kind) == PAPER_COUNTS[kind] and all(
             table.category_of[t] in PAPER_CATEGORIES for t in in_kind)  # the paper tested all its concepts
-        for a, b in ((a, b) for b in table.flats or ["base"] for a in ("curr", "canon")):
+        for a, b in ((a, b) for b in table.flats for a in ("curr", "canon")):
             paper_test = PAPER_TTESTS[kind].get(f"{a} vs {METHOD_REGISTRY[b].paper_name}") if whole else None
             lines.append(_ttest_row(kind, f"{a} vs {b}", in_kind, a, b, table.score, paper_test))
         if kind == "classification":
