@@ -224,7 +224,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--out", required=True, help="the experiment directory (re-run to resume)")
     p.add_argument("--methods", default=",".join(DEFAULT_METHODS),
                    help=f"comma-separated: {', '.join(METHODS)} (default: the paper's {', '.join(DEFAULT_METHODS)}; "
-                        "base-gru: a flat SMC with the paper's learner, RecurrentTRPO + GRU)")
+                        "base-gru: a flat SMC with the paper's learner, RecurrentTRPO + GRU; canon-scaled: canon "
+                        "with a budget x its SMC actions / 8)")
     group = p.add_mutually_exclusive_group()
     group.add_argument("--targets", action="append", help="level-2 target datasets (comma-separated; repeatable)")
     group.add_argument("--category", choices=[*CATEGORIES, "all"],

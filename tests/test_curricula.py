@@ -26,6 +26,7 @@ from sb3_smc.curricula import (
     resolve_curriculum,
     shipped_curricula,
 )
+from sb3_smc.curricula.format import describe
 from sb3_smc.curricula.shipped import build_shipped, render
 from sb3_smc.curricula.trainer import RunSettingsError, job_name, rank_seeds, status, train_curriculum
 from sb3_smc.library import SMCLibrary
@@ -134,6 +135,10 @@ def test_targets_by_node_or_dataset_name():
     (TINY.replace("  - name: left\n", "  - name: left@2\n"), r"tiny.yml:4: node 'left@2': names may not contain '@'"),
     (TINY.replace("  - name: above\n", "  - name: above\n    timesteps: -5\n"),
      r"tiny.yml:6: node 'above': 'timesteps' must be a positive integer, got -5"),
+    (TINY.replace("  - name: above\n", "  - name: above\n    budget_scale: 0\n"),
+     r"tiny.yml:6: node 'above': 'budget_scale' must be a positive number, got 0"),
+    (TINY.replace("  - name: above\n", "  - name: above\n    budget_scale: .nan\n"),
+     r"tiny.yml:6: node 'above': 'budget_scale' must be a positive number, got nan"),
     ("nodes: []\n", r"tiny.yml: missing key 'curriculum'"),
     (TINY + "1: x\n", r"tiny.yml: top-level keys must be names, got 1"),
     ("- a\n- b\n", r"tiny.yml: a curriculum file is a mapping"),
@@ -154,6 +159,26 @@ def test_a_valid_file_round_trips_and_resolves(tmp_path):
     assert again.nodes == curriculum.nodes and again.targets == curriculum.targets
     with pytest.raises(CurriculumError, match="no shipped curriculum named 'con2-c'; did you mean 'con2-cl'"):
         resolve_curriculum("con2-c")
+
+
+def test_a_budget_scale_multiplies_whichever_budget_a_node_has(tmp_path):
+    """``budget_scale`` multiplies the run's budget, the node's own or the default; it round-trips through the file
+    format, and a node without one has the settings it had before the key existed (runs of then resume)."""
+    from sb3_smc.curricula.jobs import node_budget, node_spec
+    from sb3_smc.hyperparameters import DEFAULT_TIMESTEPS
+
+    text = TINY.replace("    uses: [left, above]", "    uses: [left, above]\n    budget_scale: 2.5")
+    curriculum = parse_curriculum(text.replace("  - name: above\n", "  - name: above\n    timesteps: 3000\n"))
+    container, above, left = map(curriculum.node, ("container", "above", "left"))
+    assert container.budget_scale == 2.5 and left.budget_scale == 1.0
+    assert [node_budget(container, t) for t in (None, 2000)] == [round(2.5 * DEFAULT_TIMESTEPS), 5000]
+    assert [node_budget(above, t) for t in (None, 2000)] == [3000, 2000]
+    assert node_spec(container, 0, ("left@0", "above@0"), timesteps=2000).budget.total_timesteps == 5000
+    assert "budget_scale" not in left.settings() and container.settings()["budget_scale"] == 2.5
+    assert parse_curriculum(curriculum.to_yaml()).nodes == curriculum.nodes
+    assert "budget x2.5" in describe(curriculum)
+    with pytest.raises(CurriculumError, match="node 'x': budget_scale must be a positive number, got -1"):
+        Curriculum("bad", (Node("x", LEFT, budget_scale=-1),), ("x",))
 
 
 def test_bad_hyperparameters_stop_before_any_training(tmp_path):

@@ -232,6 +232,33 @@ def test_the_papers_learner_as_a_second_flat_baseline(tmp_path):
     assert paper.strip("|").split("|")[4].strip() == f"{100 * base_gru - 52.6:+.1f}"  # the paper's flat number
 
 
+def test_canon_with_a_budget_that_grows_with_its_smc_actions():
+    """``canon-scaled``: canon's target nodes as copies named ``canon-scaled/<node>`` whose budget is the run's x
+    their SMC actions / 8 (at least 1), calling the same lower-level nodes as canon's (trained once for both); its
+    jobs are canon's but for their names and budgets."""
+    from sb3_smc.curricula.jobs import node_spec
+    from sb3_smc.experiments.design import METHOD_REGISTRY
+
+    design = plan([LEFT_OF, IN_CONTAINER], ["canon", "canon-scaled"])
+    for target, uses in ((LEFT_OF, 15), (IN_CONTAINER, 13)):
+        (canon,) = design.nodes[(target, "canon")]
+        (scaled,) = design.nodes[(target, "canon-scaled")]
+        assert scaled == f"canon-scaled/{canon}"
+        node, copy = design.curriculum.node(canon), design.curriculum.node(scaled)
+        assert copy.uses == node.uses and len(node.uses) == uses and copy.task == node.task
+        assert copy.budget_scale == uses * 2 / 8 and node.budget_scale == 1.0
+        children = tuple(f"{u}@0" for u in node.uses)
+        own, theirs = (node_spec(n, 1, children, timesteps=2000).to_dict() for n in (copy, node))
+        assert (own.pop("name"), theirs.pop("name")) == (f"{scaled}@1", f"{canon}@1")
+        assert own.pop("budget") == {**theirs.pop("budget"), "total_timesteps": 2000 * uses // 4}
+        assert own == theirs
+    few = next(n for n in plan(level2_targets(), ["canon"]).curriculum.nodes if len(n.uses) == 3)
+    assert METHOD_REGISTRY["canon-scaled"].budget_scale(few) == 1.0  # 6 SMC actions: the run's budget
+    order = design.curriculum.order(design.training_targets)
+    assert len(order) == len(set(order)) == 2 * 2 + len(design.curriculum.closure(
+        [design.nodes[(t, "canon")][0] for t in (LEFT_OF, IN_CONTAINER)])) - 2  # the lower nodes are shared
+
+
 def test_a_run_reduced_to_its_records_resumes_without_model_files(tmp_path):
     """What docs/results/ commits (run.json + evaluations, no library) is a run that resumes where it stopped."""
     import shutil
@@ -430,11 +457,9 @@ def test_the_whole_table_report_with_a_second_flat_baseline(tmp_path):
     means = next(line for line in text.splitlines() if line.startswith("| bring-about | **paper** (all) | 17 |"))
     cells = [c.strip() for c in means.strip("|").split("|")]
     assert cells[3:] == ["", "52.7", "74.5", "75.0", "52.7"]  # cnn, base, curr, canon, base-gru: the paper's flat
-    diffs = np.array([score(t, "curr") - score(t, "base-gru") for t in ba])
-    t_hand = diffs.mean() / (diffs.std(ddof=1) / math.sqrt(len(diffs)))
-    row = next(line for line in text.splitlines() if line.startswith("| bring-about | curr vs base-gru |"))
-    cells = [c.strip() for c in row.strip("|").split("|")]
-    assert cells[2:5] == ["17", f"{t_hand:.2f}", "16"] and cells[6] == "t(16) = 4.1, p = 0.0008"
+    cells = _row_cells(text, "| bring-about | curr vs base-gru |")
+    assert cells[2:5] == ["17", f"{_hand_t(score, ba, 'curr', 'base-gru'):.2f}", "16"]
+    assert cells[6] == "t(16) = 4.1, p = 0.0008"
     assert next(line for line in text.splitlines() if line.startswith("| bring-about | curr vs base |"))
     won = sum(everything.index(t) % 4 != 0 for t in ba)
     assert f"| bring-about | curr | base-gru | {won} of 17 |" in text
@@ -461,6 +486,49 @@ def test_the_whole_table_report_with_a_second_flat_baseline(tmp_path):
     assert "| bring-about: mean of base-gru (17 concepts) | 52.7 | 16 of 17 concepts run | not judged: partial |" \
         in claims
     assert "| bring-about: curr > base, paired t-test across concepts | t(16) = 4.1, p = 0.0008 | t(16) = " in claims
+
+
+def test_the_whole_table_report_with_canon_scaled(tmp_path):
+    """``canon-scaled`` from a directory of its own: a column with the paper's canon numbers beside it, its t-tests
+    against the flat SMC (the paper's canon tests beside them), its win counts and claims, and its budget rule in the
+    provenance."""
+    from pixelworld_env.datasets import catalog
+
+    everything = level2_targets()
+    gain = {"cnn": 0.25, "base": 0.2, "curr": 0.4, "canon": 0.35, "canon-scaled": 0.38}
+
+    def score(t: str, m: str) -> float:
+        return 0.4 + 0.01 * (everything.index(t) % 7) + gain[m] + 0.002 * everything.index(t) * (m == "canon-scaled")
+
+    _synthetic_table(tmp_path / "paper", everything, ["cnn", "base", "curr", "canon"], score)
+    _synthetic_table(tmp_path / "scaled", everything, ["canon-scaled"], score)
+    [path] = write_report([tmp_path / "paper", tmp_path / "scaled"], out=tmp_path / "report", behaviour=False)
+    text = path.read_text()
+    means = next(line for line in text.splitlines() if line.startswith("| classification | **paper** (all) | 34 |"))
+    assert [c.strip() for c in means.strip("|").split("|")][3:] == ["79.9", "74.5", "84.9", "80.2", "80.2"]
+    ba = [t for t in everything if catalog.dataset(t).kind == "bring-about"]
+    cells = _row_cells(text, "| bring-about | canon-scaled vs base |")
+    assert cells[2:5] == ["17", f"{_hand_t(score, ba, 'canon-scaled', 'base'):.2f}", "16"]
+    assert cells[6] == "t(16) = 4.4, p = 0.0005"
+    assert "| bring-about | canon-scaled | base | 17 of 17 |" in text
+    claims = text.split("## The paper's claims")[1].split("\n## ")[0]
+    mean = 100 * np.mean([score(t, "canon-scaled") for t in ba])
+    assert f"| bring-about: mean of canon-scaled (17 concepts) | 75.0 | {mean:.1f} ({mean - 75.0:+.1f}) |" in claims
+    assert "| classification: canon-scaled > base, paired t-test across concepts | t(34) = 2.3, p = 0.025 |" in claims
+    assert "| cl_self-left-of-two-objects-vs-one: canon-scaled | 89.0 |" in claims
+    assert "400,000 steps per SMC (canon-scaled's target nodes: that x their SMC actions / 8, at least 1)" in text
+
+
+def _row_cells(text: str, start: str) -> list[str]:
+    """The cells of the report's table row that begins with ``start``."""
+    row = next(line for line in text.splitlines() if line.startswith(start))
+    return [c.strip() for c in row.strip("|").split("|")]
+
+
+def _hand_t(score, targets: list[str], a: str, b: str) -> float:
+    """The paired t of ``a`` against ``b`` over ``targets``, by hand: mean difference over its standard error."""
+    diffs = np.array([score(t, a) - score(t, b) for t in targets])
+    return float(diffs.mean() / (diffs.std(ddof=1) / math.sqrt(len(diffs))))
 
 
 def _synthetic_table(directory: Path, targets: list[str], methods: list[str], score) -> None:

@@ -2,7 +2,8 @@
 # The paper's whole table (docs/results/paper/README.md), one run directory per category, from a worktree at a fixed
 # commit with its own environment. Rerun to resume (finished jobs and evaluations are kept).
 #   tools/paper_table.sh run [categories...]     train + evaluate (default: search objects containment objcon;
-#                                                base-gru: the second flat baseline, method base-gru on all 51 targets)
+#                                                base-gru: the second flat baseline, method base-gru on all 51 targets;
+#                                                canon-scaled: canon with its budget x SMC actions / 8, all 51)
 #   tools/paper_table.sh keep <category> [repo]   copy a run's records (no models) into docs/results/paper/<category>
 #   tools/paper_table.sh partial <category>       at a session's end: tabulate what the running category has finished
 #                                                (--no-train), keep it and make its partial report
@@ -13,8 +14,8 @@ set -eu
 RUNS=${RUNS:-/work/runs}; RUN_ENV=${RUN_ENV:-/work/run-env}
 repo=$(cd "$(dirname "$0")/.." && pwd)
 
-selection() {  # the experiment options of a category (base-gru: its method on all 51 targets)
-  case $1 in base-gru) echo "--methods base-gru --category all" ;; *) echo "--category $1" ;; esac
+selection() {  # the experiment options of a category (base-gru, canon-scaled: that method on all 51 targets)
+  case $1 in base-gru|canon-scaled) echo "--methods $1 --category all" ;; *) echo "--category $1" ;; esac
 }
 
 case ${1:-} in
@@ -46,7 +47,7 @@ case ${1:-} in
     "$repo/.venv/bin/sb3-smc" report "$repo/docs/results/paper/$cat" --no-behaviour ;;
   report)
     dirs=()
-    for cat in search objects containment objcon base-gru; do
+    for cat in search objects containment objcon base-gru canon-scaled; do
       if [ -f "$repo/docs/results/paper/$cat/results.json" ]; then dirs+=("$repo/docs/results/paper/$cat"); fi
     done
     "$repo/.venv/bin/sb3-smc" report "${dirs[@]}" --out "$repo/docs/results/paper" --no-behaviour ;;

@@ -7,7 +7,7 @@ lower-level nodes as actions. Example::
     curriculum: my-containment
     method: smc-curr                 # optional: smc-base | smc-curr | smc-canon | anything (reports group by it)
     description: corners, then containment
-    defaults: {timesteps: 200000}    # optional: algo, timesteps, primitives, hyperparameters for every node
+    defaults: {timesteps: 200000}    # optional: algo, timesteps, budget_scale, primitives, hyperparameters
     nodes:
       - name: cl_self-in-left-corner_vs_on-hline
         task: cl_self-in-left-corner_vs_on-hline
@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import dataclasses
 import difflib
+import math
 import os
 import re
 from collections.abc import Iterable, Mapping, Sequence
@@ -45,8 +46,8 @@ __all__ = ["FORMAT_KEYS", "NODE_KEYS", "SEED_SEPARATOR", "Curriculum", "Curricul
 
 FORMAT_KEYS = ("curriculum", "method", "description", "defaults", "nodes", "targets")
 """Top-level keys of a curriculum file."""
-NODE_KEYS = ("name", "task", "uses", "primitives", "algo", "timesteps", "hyperparameters")
-"""Keys of a node (``defaults`` takes the last four)."""
+NODE_KEYS = ("name", "task", "uses", "primitives", "algo", "timesteps", "budget_scale", "hyperparameters")
+"""Keys of a node (``defaults`` takes the last five)."""
 SEED_SEPARATOR = "@"
 """SMC names in a curriculum's library are ``<node>@<seed>``; node names may not contain it."""
 
@@ -60,6 +61,7 @@ class Node:
     """One SMC to train: ``task`` (a dataset or concept-pool name) with the nodes it ``uses`` as actions.
 
     ``algo`` / ``timesteps`` ``None``: the run's settings (``train_curriculum``'s ``algo`` and ``timesteps``).
+    ``budget_scale`` multiplies the node's budget, whichever gives it (a node that calls many SMCs may need longer).
     ``line`` is where the node was defined (not part of its identity).
     """
 
@@ -70,6 +72,7 @@ class Node:
     algo: str | None = None
     timesteps: int | None = None
     hyperparameters: dict[str, Any] = field(default_factory=dict)
+    budget_scale: float = 1.0
     line: int | None = field(default=None, compare=False)
 
     @property
@@ -79,9 +82,11 @@ class Node:
         return self.task if is_env_id(self.task) else f"PW-{self.task}-v0"
 
     def settings(self) -> dict[str, Any]:
-        """What decides the trained SMCs (two nodes of the same name must agree on it)."""
+        """What decides the trained SMCs (two nodes of the same name must agree on it); ``budget_scale`` only where
+        it is not 1 (so that the settings of runs from before it stay the same)."""
+        scale = {"budget_scale": self.budget_scale} if self.budget_scale != 1 else {}
         return {"task": self.task, "uses": list(self.uses), "primitives": self.include_primitives,
-                "algo": self.algo, "timesteps": self.timesteps, "hyperparameters": self.hyperparameters}
+                "algo": self.algo, "timesteps": self.timesteps, **scale, "hyperparameters": self.hyperparameters}
 
 
 @dataclass(frozen=True)
@@ -172,6 +177,8 @@ class Curriculum:
             for key in ("algo", "timesteps"):
                 if getattr(node, key) is not None:
                     item[key] = getattr(node, key)
+            if node.budget_scale != 1:
+                item["budget_scale"] = node.budget_scale
             if node.hyperparameters:
                 item["hyperparameters"] = node.hyperparameters
             nodes.append(item)
@@ -304,12 +311,16 @@ def _node(item: Any, line: int, defaults: Mapping[str, Any], source: str) -> Nod
     timesteps = settings.get("timesteps")
     if timesteps is not None and (isinstance(timesteps, bool) or not isinstance(timesteps, int) or timesteps < 1):
         raise CurriculumError(f"{where}: {label}: 'timesteps' must be a positive integer, got {timesteps!r}")
+    scale = settings.get("budget_scale", 1.0)
+    if isinstance(scale, bool) or not isinstance(scale, int | float) or not math.isfinite(scale) or scale <= 0:
+        raise CurriculumError(f"{where}: {label}: 'budget_scale' must be a positive number, got {scale!r}")
     hyper = settings.get("hyperparameters") or {}
     if not isinstance(hyper, dict):
         raise CurriculumError(f"{where}: {label}: 'hyperparameters' must be a mapping, got {hyper!r}")
     try:
         return Node(name=item["name"], task=item["task"], uses=tuple(uses), include_primitives=primitives,
-                    algo=settings.get("algo"), timesteps=timesteps, hyperparameters=hyper, line=line)
+                    algo=settings.get("algo"), timesteps=timesteps, hyperparameters=hyper, budget_scale=float(scale),
+                    line=line)
     except CurriculumError as err:
         raise CurriculumError(f"{where}: {label}: {err}") from None
 
@@ -373,6 +384,10 @@ def _validate(curriculum: Curriculum) -> None:
         if node.algo is not None and node.algo not in ALGORITHMS:
             raise CurriculumError(f"{at(node)}: node {node.name!r}: algo must be one of {ALGORITHMS}, got "
                                   f"{node.algo!r}")
+        if not (isinstance(node.budget_scale, int | float) and math.isfinite(node.budget_scale)
+                and node.budget_scale > 0):
+            raise CurriculumError(f"{at(node)}: node {node.name!r}: budget_scale must be a positive number, got "
+                                  f"{node.budget_scale!r}")
         if node.name in node.uses:
             raise CurriculumError(f"{at(node)}: node {node.name!r} uses itself")
         if len(set(node.uses)) != len(node.uses):
@@ -442,6 +457,8 @@ def describe(curriculum: Curriculum) -> str:
                 extra.append(node.algo)
             if node.timesteps:
                 extra.append(f"{node.timesteps:,} steps")
+            if node.budget_scale != 1:
+                extra.append(f"budget x{node.budget_scale:g}")
             head = f"  {mark} {name}" + (f" ({', '.join(extra)})" if extra else "")
             lines.append(head + (f" uses {', '.join(node.uses)}" if node.uses else ""))
     lines.append("(* = target)")

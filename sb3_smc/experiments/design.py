@@ -3,19 +3,22 @@ that train each target with each method. Torch-free.
 
 Methods (:data:`METHOD_REGISTRY`): ``cnn`` (the passive CNN baseline, classification targets only), ``base`` (a
 flat SMC on the target), ``curr`` (the hand-designed smc-curr entries, 1-3 per target), ``canon`` (the canonical
-smc-canon entry) and their ``-noprim`` variants (:data:`DEFAULT_METHODS`, the paper's); and ``base-gru``, a flat SMC
-with the paper's learner (RecurrentTRPO with a GRU) whatever the run's learner, a second flat baseline. Every SMC
+smc-canon entry) and their ``-noprim`` variants (:data:`DEFAULT_METHODS`, the paper's); ``base-gru``, a flat SMC
+with the paper's learner (RecurrentTRPO with a GRU) whatever the run's learner, a second flat baseline; and
+``canon-scaled``, canon with a budget that grows with the SMC actions of each target node. Every SMC
 method's jobs are nodes of curricula (shipped ones, or a flat method's); :func:`plan` merges them so that a
 lower-level node shared by several methods is trained once.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass
 
 from sb3_smc.curricula import shipped_curricula
 from sb3_smc.curricula.format import Curriculum, CurriculumError, Node, merge
+from sb3_smc.curricula.jobs import DEFAULT_REUSE, REUSE
 from sb3_smc.errors import SMCError
 from sb3_smc.hyperparameters import recurrent_policy
 
@@ -47,6 +50,10 @@ class ExperimentMethod:
     paper: str | None = None
     """The paper's method whose numbers it is compared with, when not its own name (``base-gru``: ``base``, the
     paper's flat SMC)."""
+    budget_actions: int | None = None
+    """The SMC actions the run's budget is meant for: a target node with more (the nodes it uses x the seeds each
+    gives) trains proportionally longer (``canon-scaled``: 8, the median of curr's level-2 nodes, which learn within
+    the paper's budget); ``None``: the run's budget for every node."""
 
     @property
     def flat(self) -> bool:
@@ -62,6 +69,26 @@ class ExperimentMethod:
     def own_learner(self) -> bool:
         """Whether it fixes its SMCs' learner (the run's ``algo`` / ``rnn`` must then be left unset)."""
         return self.algo is not None or self.rnn is not None
+
+    def budget_scale(self, node: Node) -> float:
+        """The factor on the run's budget for target ``node``: its SMC actions over :attr:`budget_actions`, at least
+        1 (the two best seeds of each node it uses are its SMC actions)."""
+        if self.budget_actions is None:
+            return 1.0
+        return max(1.0, len(node.uses) * REUSE[DEFAULT_REUSE] / self.budget_actions)
+
+    def targets_of(self, curriculum: Curriculum, names: Sequence[str]) -> tuple[Curriculum, list[str]]:
+        """``curriculum`` and its target nodes ``names`` as this method trains them: as they are, or (a method with
+        :attr:`budget_actions`) with copies of them named ``<method>/<node>`` with their budget scaled, beside
+        the nodes they use (shared with the other methods)."""
+        if self.budget_actions is None:
+            return curriculum, list(names)
+        copies = [dataclasses.replace(node, name=f"{self.name}/{node.name}", budget_scale=self.budget_scale(node),
+                                      line=None) for node in map(curriculum.node, names)]
+        return Curriculum(f"{self.name}/{curriculum.name}", (*curriculum.nodes, *copies),
+                          tuple(c.name for c in copies), method=f"smc-{self.name}",
+                          description=f"{curriculum.name}, the budget of its targets scaled by their SMC actions"), \
+            [c.name for c in copies]
 
     def flat_node(self, target: str) -> Node:
         """The node of its flat SMC on ``target``: named as the target for ``base``, ``<method>/<target>`` for a
@@ -83,10 +110,12 @@ METHOD_REGISTRY: dict[str, ExperimentMethod] = {method.name: method for method i
     ExperimentMethod("canon-noprim", "canon, no primitive moves", "#a5d6a7", curricula="smc-canon-noprim"),
     ExperimentMethod("base-gru", "base-gru (flat SMC, the paper's learner: RecurrentTRPO + GRU)", "#64b5cd",
                      algo="RecurrentTRPO", rnn="gru", paper="base"),
+    ExperimentMethod("canon-scaled", "canon-scaled (canon, budget x SMC actions / 8)", "#2e7d32",
+                     curricula="smc-canon", paper="canon", budget_actions=8),
 )}
 """Every method by name, in the order of the report's columns."""
 METHODS = tuple(METHOD_REGISTRY)
-"""Every method's name (the paper's six and ``base-gru``)."""
+"""Every method's name (the paper's six, ``base-gru`` and ``canon-scaled``)."""
 DEFAULT_METHODS = METHODS[:6]
 """The paper's six methods: ``sb3-smc experiment``'s default ``--methods``."""
 SMC_METHODS = tuple(name for name, method in METHOD_REGISTRY.items() if method.smc)
@@ -165,9 +194,10 @@ def plan(targets: Sequence[str], methods: Sequence[str]) -> ExperimentPlan:
                 continue
             chosen = [n for n in curriculum.targets if curriculum.node(n).task in found]
             if chosen:
-                used.append(curriculum)
-                for name in chosen:
-                    found[curriculum.node(name).task].append(name)
+                trained, names = method.targets_of(curriculum, chosen)
+                used.append(trained)
+                for name in names:
+                    found[trained.node(name).task].append(name)
         for target, names in found.items():
             if names:
                 nodes[(target, method.name)] = tuple(names)

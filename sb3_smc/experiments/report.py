@@ -151,11 +151,21 @@ class _Table:
                 by_seed[(row["target"], row["method"])].append(row["test_score"])
         self.seeds = dict(by_seed)
 
+    def like(self, paper: str) -> list[str]:
+        """Our methods that ran compared with the paper's method ``paper`` (``base``: ``base`` and ``base-gru``;
+        ``canon``: ``canon`` and ``canon-scaled``), or ``[paper]`` when none did (its comparisons then say it did
+        not run)."""
+        return [m for m in self.methods if METHOD_REGISTRY[m].paper_name == paper] or [paper]
+
     @property
     def flats(self) -> list[str]:
-        """The flat methods that ran (``base``, and ``base-gru`` where run), each compared with the paper's flat SMC;
-        ``["base"]`` when none did (its comparisons then say it did not run)."""
-        return [m for m in self.methods if METHOD_REGISTRY[m].flat] or ["base"]
+        """The flat methods that ran, each compared with the paper's flat SMC (:meth:`like` ``base``)."""
+        return self.like("base")
+
+    @property
+    def hierarchical(self) -> list[str]:
+        """The hierarchical methods compared with the flat ones: those of the paper's ``curr`` and ``canon``."""
+        return [*self.like("curr"), *self.like("canon")]
 
     def of_kind(self, kind: str, category: str | None = None) -> list[str]:
         return [t for t in self.targets if self.kind_of[t] == kind and category in (None, self.category_of[t])]
@@ -245,7 +255,8 @@ def _write(sources: Sequence[tuple[Path, dict[str, Any]]], out: Path, trajectori
 
 
 def _claims_section(table: _Table) -> list[str]:
-    found = claims(table.score, table.kind_of, table.category_of, flats=table.flats)
+    found = claims(table.score, table.kind_of, table.category_of,
+                   variants={paper: table.like(paper) for paper in ("base", "curr", "canon")})
     if not any(c.reproduced != "not run" for c in found):
         return []
     lines = ["## The paper's claims", "",
@@ -355,8 +366,8 @@ def _ttest_section(table: _Table) -> list[str]:
             continue
         whole = len(in_kind) == PAPER_COUNTS[kind] and all(
             table.category_of[t] in PAPER_CATEGORIES for t in in_kind)  # the paper tested all its concepts
-        for a, b in ((a, b) for b in table.flats for a in ("curr", "canon")):
-            paper_test = PAPER_TTESTS[kind].get(f"{a} vs {METHOD_REGISTRY[b].paper_name}") if whole else None
+        for a, b in ((a, b) for b in table.flats for a in table.hierarchical):
+            paper_test = PAPER_TTESTS[kind].get(f"{_paper_name(a)} vs {_paper_name(b)}") if whole else None
             lines.append(_ttest_row(kind, f"{a} vs {b}", in_kind, a, b, table.score, paper_test))
         if kind == "classification":
             for category in CATEGORIES:
@@ -368,7 +379,7 @@ def _ttest_section(table: _Table) -> list[str]:
     counts = []
     for kind in KINDS:
         for flat in table.flats:
-            for better, label in ((("curr",), "curr"), (("canon",), "canon"), (("curr", "canon"), "curr or canon")):
+            for better, label in (*(((m,), m) for m in table.hierarchical), (("curr", "canon"), "curr or canon")):
                 won, n = wins(table.score, table.of_kind(kind), better, flat)
                 if n:
                     whole = kind == "bring-about" and label == "curr or canon" and n == PAPER_COUNTS[kind]
@@ -377,6 +388,11 @@ def _ttest_section(table: _Table) -> list[str]:
         lines += ["", "Concepts on which a hierarchical SMC beats a flat one (reported scores):", "",
                   "| kind | hierarchical | flat | beats it on | paper |", "|---|---|---|---:|---|", *counts]
     return lines
+
+
+def _paper_name(method: str) -> str:
+    """The paper's method that ``method`` is compared with (``method`` itself when it is none of ours)."""
+    return METHOD_REGISTRY[method].paper_name if method in METHOD_REGISTRY else method
 
 
 def _noprim_section(table: _Table) -> list[str]:
@@ -406,8 +422,9 @@ def _provenance(sources: Sequence[tuple[Path, dict[str, Any]]], out: Path) -> li
         machine = results.get("machine", {})
         if len(sources) > 1:
             lines += [f"### {os.path.relpath(directory, out)}", ""]
-        lines += [f"- budget: {settings['timesteps']:,} steps per SMC, seeds 0-{settings['seeds'] - 1}, "
-                  f"{settings['repeats']} test repeats; {settings['workers']} worker(s), backend {settings['backend']}",
+        lines += [f"- budget: {settings['timesteps']:,} steps per SMC{_scaled_budgets(settings)}, seeds "
+                  f"0-{settings['seeds'] - 1}, {settings['repeats']} test repeats; {settings['workers']} worker(s), "
+                  f"backend {settings['backend']}",
                   f"- learner: {_learners(settings)}",
                   f"- machine: {_machine_line(machine)}",
                   *_code_line(results),
@@ -420,6 +437,14 @@ def _provenance(sources: Sequence[tuple[Path, dict[str, Any]]], out: Path) -> li
     if len(sources) > 1:
         lines.append(f"Wall time of all runs of the {len(sources)} directories: {total / 3600:.2f} h.")
     return lines
+
+
+def _scaled_budgets(settings: dict[str, Any]) -> str:
+    """The methods of the run whose target nodes train longer than the run's budget (``canon-scaled``), and how."""
+    scaled = [METHOD_REGISTRY[m] for m in settings["methods"]
+              if m in METHOD_REGISTRY and METHOD_REGISTRY[m].budget_actions is not None]
+    return "".join(f" ({m.name}'s target nodes: that x their SMC actions / {m.budget_actions}, at least 1)"
+                   for m in scaled)
 
 
 def _code_line(results: dict[str, Any]) -> list[str]:

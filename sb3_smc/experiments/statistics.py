@@ -192,19 +192,22 @@ def _order_claim(text: str, paper_gap: float, score: Score, targets: Sequence[st
 
 
 def claims(score: Score, kind_of: Mapping[str, str], category_of: Mapping[str, str], *,
-           tolerance: float = 5.0, flats: Sequence[str] = ("base",)) -> list[Claim]:
+           tolerance: float = 5.0, variants: Mapping[str, Sequence[str]] | None = None) -> list[Claim]:
     """Every quantitative claim of the paper's results (means per kind, t-tests, wins, the headline
     concepts, the CNN by category, the noprim ablation) with ours. A mean is reproduced within ``tolerance``
     points; a comparison when its direction is the paper's and it is significant at :data:`ALPHA`. The claims
     over all concepts of a kind are judged only when ``score`` holds all of them (the paper's 34 / 17); a report of
     fewer says so in one row per kind, and a claim whose methods ran on some of them only is "not judged: partial".
-    The per-concept claims (the headline targets) are judged wherever present. ``flats``: our flat methods, each
-    judged against the paper's flat SMC (``base``) in every claim about it."""
+    The per-concept claims (the headline targets) are judged wherever present. ``variants``: the paper's method ->
+    our methods each judged in every claim about it (``{"base": ["base", "base-gru"]}``); default: the method
+    itself."""
     out: list[Claim] = []
 
     def ours(method: str) -> Sequence[str]:
-        """Our methods for the paper's ``method``: every flat method for ``base``."""
-        return flats if method == "base" else (method,)
+        """Our methods for the paper's ``method``."""
+        return (variants or {}).get(method, (method,))
+
+    flats = ours("base")
 
     for kind in ("classification", "bring-about"):
         targets = sorted(t for t in kind_of if kind_of[t] == kind and category_of[t] != "pushable")
@@ -219,7 +222,7 @@ def claims(score: Score, kind_of: Mapping[str, str], category_of: Mapping[str, s
             out += [_mean_claim(kind, m, paper, score, targets, tolerance) for m in ours(method)]
         for comparison, paper_test in PAPER_TTESTS[kind].items():
             a, _, b = comparison.split()
-            out += [_test_claim(kind, a, flat, score, targets, paper_test) for flat in ours(b)]
+            out += [_test_claim(kind, mine, flat, score, targets, paper_test) for mine in ours(a) for flat in ours(b)]
         if kind == "bring-about":
             for flat in flats:
                 text = f"bring-about: a hierarchical SMC (best of curr, canon) beats the flat one ({flat})"
@@ -233,7 +236,7 @@ def claims(score: Score, kind_of: Mapping[str, str], category_of: Mapping[str, s
             for a, b in (("cnn", "base"), ("curr", "cnn")):
                 out += [_order_claim(f"classification: {a} above {other} (mean gap, points)",
                                      paper_means[a] - paper_means[b], score, targets, a, other) for other in ours(b)]
-            out.extend(_cnn_claims(score, targets, category_of, (*flats, "curr", "canon")))
+            out.extend(_cnn_claims(score, targets, category_of, (*flats, *ours("curr"), *ours("canon"))))
         for method in ("curr", "canon"):
             paper_with, paper_without = PAPER_NOPRIM[kind][method], PAPER_NOPRIM[kind][f"{method}-noprim"]
             out.append(_mean_claim(kind, f"{method}-noprim", paper_without, score, targets, tolerance))
