@@ -519,6 +519,41 @@ def test_the_whole_table_report_with_canon_scaled(tmp_path):
     assert "400,000 steps per SMC (canon-scaled's target nodes: that x their SMC actions / 8, at least 1)" in text
 
 
+def test_the_readme_gets_the_whole_tables_means_and_tests_from_the_report(tmp_path):
+    """``tools/readme_table.py`` copies the report's category means and t-tests between the README's markers, says
+    when the table is partial, leaves the rest of the README as it was, and refuses a README without its markers."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("readme_table", ROOT / "tools" / "readme_table.py")
+    readme_table = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(readme_table)
+    everything = level2_targets()
+
+    def score(t: str, m: str) -> float:
+        return 0.5 + 0.01 * (everything.index(t) % 7) + 0.1 * ("curr" in m)
+
+    _synthetic_table(tmp_path / "run", everything, ["base", "curr"], score)
+    [report] = write_report([tmp_path / "run"], out=tmp_path / "docs", behaviour=False)
+    readme = tmp_path / "README.md"
+    readme.write_text(f"# Title\n\nbefore\n{readme_table.START}\nold\n{readme_table.END}\nafter\n")
+    for _ in range(2):  # the same README again: nothing else changes
+        assert readme_table.main(["--report", str(report), "--readme", str(readme)]) == 0
+        text = readme.read_text()
+        assert text.startswith("# Title\n\nbefore\n<!-- paper-table:start -->\n") and text.endswith("-->\nafter\n")
+        assert "old" not in text and "partial" not in text and "(docs/report.md)" in text
+        assert text.count("| bring-about | **paper** (all) | 17 | 52.7 | 74.5 |") == 1
+        assert "| bring-about | curr vs base | 17 | " in text and "t(16) = 4.1, p = 0.0008" in text
+    results = json.loads((tmp_path / "run" / "results.json").read_text())
+    (tmp_path / "run" / "results.json").write_text(json.dumps({**results, "complete": False, "missing": ["x@0"]}))
+    [report] = write_report([tmp_path / "run"], out=tmp_path / "docs", behaviour=False)
+    readme_table.main(["--report", str(report), "--readme", str(readme)])
+    assert "**partial: the table is still being run**" in readme.read_text()
+    readme.write_text("# no markers\n")
+    with pytest.raises(SystemExit, match="needs exactly one <!-- paper-table:start -->"):
+        readme_table.main(["--report", str(report), "--readme", str(readme)])
+    assert readme.read_text() == "# no markers\n"
+
+
 def _row_cells(text: str, start: str) -> list[str]:
     """The cells of the report's table row that begins with ``start``."""
     row = next(line for line in text.splitlines() if line.startswith(start))

@@ -7,7 +7,8 @@
 #   tools/paper_table.sh keep <category> [repo]   copy a run's records (no models) into docs/results/paper/<category>
 #   tools/paper_table.sh partial <category>       at a session's end: tabulate what the running category has finished
 #                                                (--no-train), keep it and make its partial report
-#   tools/paper_table.sh report                  one report over every kept directory: docs/results/paper/report.md
+#   tools/paper_table.sh report                  one report over every kept directory: docs/results/paper/report.md,
+#                                                its means and t-tests copied into the README (tools/readme_table.py)
 # Environment: RUNS (default /work/runs), RUN_ENV (default /work/run-env: a venv with the worktree installed),
 # REUSE_FROM (optional: --reuse-from for the runs, e.g. "pretrained": lower-level SMCs copied, not trained again).
 set -eu
@@ -50,6 +51,7 @@ case ${1:-} in
     for cat in search objects containment objcon base-gru canon-scaled; do
       if [ -f "$repo/docs/results/paper/$cat/results.json" ]; then dirs+=("$repo/docs/results/paper/$cat"); fi
     done
-    "$repo/.venv/bin/sb3-smc" report "${dirs[@]}" --out "$repo/docs/results/paper" --no-behaviour ;;
+    "$repo/.venv/bin/sb3-smc" report "${dirs[@]}" --out "$repo/docs/results/paper" --no-behaviour
+    "$repo/.venv/bin/python" "$repo/tools/readme_table.py" ;;
   *) echo "usage: $0 run [categories...] | keep <category> [repo] | partial <category> | report" >&2; exit 2 ;;
 esac

@@ -337,17 +337,19 @@ def _means_section(table: _Table) -> list[str]:
         in_paper = [t for t in in_kind if table.category_of[t] in PAPER_CATEGORIES]
         if not in_paper:  # the designed pushable curriculum: the paper gives no numbers (Fig. 5c only)
             continue
-        paper = {m: PAPER_MEANS[kind].get(METHOD_REGISTRY[m].paper_name) for m in methods}
+        names = {m: METHOD_REGISTRY[m].paper_name for m in methods}  # the noprim means: that paragraph's
+        paper = {m: PAPER_MEANS[kind].get(name, PAPER_NOPRIM[kind].get(name)) for m, name in names.items()}
         lines.append(f"| {kind} | **paper** (all) | {PAPER_COUNTS[kind]} | "
                      + " | ".join(f"{paper[m]:.1f}" if paper[m] is not None else "" for m in methods) + " |")
         if len(in_paper) == PAPER_COUNTS[kind]:  # the paper's whole set: its means
             lines.append(f"| {kind} | ours - paper ({len(in_paper)} concepts) | | " + " | ".join(
                 _diff(method_mean(table.score, in_paper, m), paper[m]) for m in methods) + " |")
         else:  # a subset: only against the paper's own numbers for the same concepts, where it gives them
-            lines.append(f"| {kind} | ours - paper (the same {len(in_paper)} concept(s), where the paper gives them) "
-                         "| | " + " | ".join(_diff(method_mean(table.score, in_paper, m), mean_of_all(
-                             [PAPER_CONCEPTS.get(t, {}).get(METHOD_REGISTRY[m].paper_name) for t in in_paper]))
-                                             for m in methods) + " |")
+            diffs = [_diff(method_mean(table.score, in_paper, m), mean_of_all(
+                [PAPER_CONCEPTS.get(t, {}).get(METHOD_REGISTRY[m].paper_name) for t in in_paper])) for m in methods]
+            if any(diffs):
+                lines.append(f"| {kind} | ours - paper (the same {len(in_paper)} concept(s), where the paper gives "
+                             "them) | | " + " | ".join(diffs) + " |")
     return lines
 
 
