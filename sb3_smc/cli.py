@@ -207,7 +207,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--seeds", type=_positive, default=DEFAULT_SEEDS,
                    help=f"seeds 0..N-1 per node (default {DEFAULT_SEEDS}, the paper's)")
     p.add_argument("--timesteps", type=_positive, default=None,
-                   help=f"steps per job, replacing the nodes' own (default: the node's, else {DEFAULT_TIMESTEPS:,})")
+                   help=f"steps per job, replacing the nodes' own (default: the node's, else {DEFAULT_TIMESTEPS:,}), "
+                        "times a node's budget_scale")
     p.add_argument("--reuse", choices=list(REUSE), default=DEFAULT_REUSE,
                    help="seeds of each lower-level node a caller gets (default two_best)")
     p.add_argument("--workers", type=_positive, default=1, help="jobs in parallel (local processes or Ray tasks)")

@@ -5,6 +5,7 @@ files trained again, bad node settings and run files reported before anything ru
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 import re
@@ -26,7 +27,7 @@ from sb3_smc.curricula import (
     resolve_curriculum,
     shipped_curricula,
 )
-from sb3_smc.curricula.format import describe
+from sb3_smc.curricula.format import describe, merge
 from sb3_smc.curricula.shipped import build_shipped, render
 from sb3_smc.curricula.trainer import RunSettingsError, job_name, rank_seeds, status, train_curriculum
 from sb3_smc.library import SMCLibrary
@@ -179,6 +180,14 @@ def test_a_budget_scale_multiplies_whichever_budget_a_node_has(tmp_path):
     assert "budget x2.5" in describe(curriculum)
     with pytest.raises(CurriculumError, match="node 'x': budget_scale must be a positive number, got -1"):
         Curriculum("bad", (Node("x", LEFT, budget_scale=-1),), ("x",))
+    with pytest.raises(CurriculumError, match="node 'x': budget_scale must be a positive number, got True"):
+        Curriculum("bad", (Node("x", LEFT, budget_scale=True),), ("x",))
+    assert node_budget(Node("x", LEFT, budget_scale=1e-9), 2000) == 1  # never a budget of nothing
+    everywhere = parse_curriculum(TINY.replace("nodes:", "defaults: {budget_scale: 3}\nnodes:"))
+    assert {n.budget_scale for n in everywhere.nodes} == {3.0}  # a default like the other settings
+    with pytest.raises(CurriculumError, match="node 'container' is defined differently"):  # part of a node's identity
+        merge([curriculum, Curriculum("other", (*curriculum.nodes[:2], dataclasses.replace(container, budget_scale=1)),
+                                      ("container",))])
 
 
 def test_bad_hyperparameters_stop_before_any_training(tmp_path):

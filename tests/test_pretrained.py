@@ -78,6 +78,10 @@ def test_build_and_load_a_pretrained_library(tmp_path):
     build_pretrained([partial], [tiny], out, repeats=1, finished_only=True)  # LEFT's best seeds: held alike
     after = {p.name: p.read_bytes() for p in (out / "models").iterdir()}
     assert after == whole and (out / "manifest.json").read_bytes() == manifest
+    build_pretrained([partial], [tiny], out, repeats=2, finished_only=True)  # tested otherwise: LEFT tested again
+    again = SMCLibrary.load(out)
+    assert {e.repeats for n in again.names if n.startswith(LEFT) for e in again[n].evaluations} == {2}
+    assert {e.repeats for n in again.names if n.startswith(RIGHT) for e in again[n].evaluations} == {1}
     assert pretrained_curricula(out) == ["tiny"]
     (tmp_path / "notes").mkdir()
     (tmp_path / "notes" / "keep.txt").write_text("mine")

@@ -384,8 +384,8 @@ def _validate(curriculum: Curriculum) -> None:
         if node.algo is not None and node.algo not in ALGORITHMS:
             raise CurriculumError(f"{at(node)}: node {node.name!r}: algo must be one of {ALGORITHMS}, got "
                                   f"{node.algo!r}")
-        if not (isinstance(node.budget_scale, int | float) and math.isfinite(node.budget_scale)
-                and node.budget_scale > 0):
+        if isinstance(node.budget_scale, bool) or not (isinstance(node.budget_scale, int | float)
+                                                       and math.isfinite(node.budget_scale) and node.budget_scale > 0):
             raise CurriculumError(f"{at(node)}: node {node.name!r}: budget_scale must be a positive number, got "
                                   f"{node.budget_scale!r}")
         if node.name in node.uses:

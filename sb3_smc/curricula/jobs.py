@@ -108,7 +108,7 @@ def rank_seeds(records: dict[int, TrainingRecord]) -> list[int]:
 def node_budget(node: Node, timesteps: int | None) -> int:
     """The steps a job of ``node`` trains: the run's ``timesteps``, else the node's own, else the default, times the
     node's ``budget_scale``."""
-    return round(node.budget_scale * (timesteps or node.timesteps or DEFAULT_TIMESTEPS))
+    return max(1, round(node.budget_scale * (timesteps or node.timesteps or DEFAULT_TIMESTEPS)))
 
 
 def node_spec(node: Node, seed: int, children: tuple[str, ...], *, timesteps: int | None = None,

@@ -62,8 +62,8 @@ def build_pretrained(runs: Sequence[str | Path], curricula: Sequence[str | Curri
 
     A node is ranked over all its seeds (the trainer's rule: best selected training return, ties to the lower
     seed), so every seed of the run (``run.json``'s ``seeds``) must be in one run's library. A node already in
-    ``out`` is replaced by its new best seeds, unless it holds those seeds with the same specs (the same SMCs); the
-    others are kept byte for byte; ``finished_only`` leaves out,
+    ``out`` is replaced by its new best seeds, unless it holds those seeds with the same specs (the same SMCs), tested
+    with the same ``repeats``; the others are kept byte for byte; ``finished_only`` leaves out,
     instead of refusing, the nodes whose seeds are not all trained yet (a run still going: its finished nodes now,
     the rest in a later build). ``out`` must be missing, empty or a library. The index
     (:data:`~sb3_smc.library.pretrained.INDEX`) then lists ``curricula``, the curricula it listed before and every
@@ -104,9 +104,13 @@ def build_pretrained(runs: Sequence[str | Path], curricula: Sequence[str | Curri
 
     def held_alike(node: str, run: Path, names: list[str]) -> bool:
         """Whether ``out`` holds the same best seeds of ``node`` with the same specs (a run that copied them, or
-        trained them again: the same SMCs, training being deterministic): kept as they are."""
+        trained them again: the same SMCs, training being deterministic), tested as this build would test them:
+        kept as they are."""
         mine = {name for name in previous if node_of(name) == node}
-        return mine == set(names) and all(previous[name].spec == entries[run][name].spec for name in names)
+        return mine == set(names) and all(
+            previous[name].spec == entries[run][name].spec
+            and any((e.split, e.repeats, e.seed) == ("test", repeats, 0) for e in library[name].evaluations)
+            for name in names)
 
     chosen = [(node, run, names) for node, run, names in chosen if not held_alike(node, run, names)]
     rebuilt = {name for _, _, names in chosen for name in names}

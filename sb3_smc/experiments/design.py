@@ -83,8 +83,13 @@ class ExperimentMethod:
         the nodes they use (shared with the other methods)."""
         if self.budget_actions is None:
             return curriculum, list(names)
-        copies = [dataclasses.replace(node, name=f"{self.name}/{node.name}", budget_scale=self.budget_scale(node),
-                                      line=None) for node in map(curriculum.node, names)]
+        used = {u for node in curriculum.nodes for u in node.uses}
+        if used & set(names):
+            raise CurriculumError(f"{curriculum.name}: {sorted(used & set(names))[0]!r} is used by another node: "
+                                  f"method {self.name} scales the budget of top nodes only")
+        copies = [dataclasses.replace(node, name=f"{self.name}/{node.name}", line=None,
+                                      budget_scale=node.budget_scale * self.budget_scale(node))
+                  for node in map(curriculum.node, names)]
         return Curriculum(f"{self.name}/{curriculum.name}", (*curriculum.nodes, *copies),
                           tuple(c.name for c in copies), method=f"smc-{self.name}",
                           description=f"{curriculum.name}, the budget of its targets scaled by their SMC actions"), \

@@ -212,7 +212,9 @@ def _write(sources: Sequence[tuple[Path, dict[str, Any]]], out: Path, trajectori
     lines = [f"# Experiment report: {out.name}", "",
              f"Methods {', '.join(methods)}; {len(targets)} target(s)"
              + (f" from {len(sources)} run directories" if len(sources) > 1 else "") + "; "
-             + (f"{seeds} seed(s); {timesteps:,} steps per SMC; test: {repeats} repeats per test environment"
+             + (f"{seeds} seed(s); {timesteps:,} steps per SMC"
+                + "".join(dict.fromkeys(_scaled_budgets(s) for s in settings))
+                + f"; test: {repeats} repeats per test environment"
                 if seeds is not None else "seeds, budgets and repeats per directory below")
              + ", stochastic policy, the update with the best training return. Scores in %; the paper's numbers "
                "(Hay et al., AAAI-18) beside ours where it gives them.", ""]

@@ -236,7 +236,7 @@ def claims(score: Score, kind_of: Mapping[str, str], category_of: Mapping[str, s
             for a, b in (("cnn", "base"), ("curr", "cnn")):
                 out += [_order_claim(f"classification: {a} above {other} (mean gap, points)",
                                      paper_means[a] - paper_means[b], score, targets, a, other) for other in ours(b)]
-            out.extend(_cnn_claims(score, targets, category_of, (*flats, *ours("curr"), *ours("canon"))))
+            out.extend(_cnn_claims(score, targets, category_of, (*flats, "curr", "canon")))
         for method in ("curr", "canon"):
             paper_with, paper_without = PAPER_NOPRIM[kind][method], PAPER_NOPRIM[kind][f"{method}-noprim"]
             out.append(_mean_claim(kind, f"{method}-noprim", paper_without, score, targets, tolerance))
