@@ -344,8 +344,11 @@ def test_changed_settings_are_refused_with_the_differences(tmp_path):
                          progress=False)
     (tmp_path / "other").mkdir()
     (tmp_path / "other" / "notes.txt").write_text("mine")
-    with pytest.raises(RunSettingsError, match="not empty and holds no run.json"):
+    with pytest.raises(RunSettingsError, match=r"not empty and holds no run.json: not a curriculum run directory$"):
         train_curriculum(str(path), tmp_path / "other", seeds=1, timesteps=2000, progress=False)
+    (tmp_path / "kept" / "evaluations").mkdir(parents=True)  # records copied back without their run.json
+    with pytest.raises(RunSettingsError, match=r"no run.json: .*\(a run kept as records .*copy its run.json too\)"):
+        train_curriculum(str(path), tmp_path / "kept", seeds=1, timesteps=2000, progress=False)
 
 
 def test_a_failing_job_is_reported_and_retried(tmp_path, monkeypatch):

@@ -105,7 +105,10 @@ def read_settings(directory: Path) -> dict[str, Any] | None:
     path = directory / "run.json"
     if not path.is_file():
         if directory.is_dir() and any(p.name != ".lock" for p in directory.iterdir()):
-            raise RunSettingsError(f"{directory} is not empty and holds no run.json: not a curriculum run directory")
+            kept = " (a run kept as records resumes from its run.json and evaluations/: copy its run.json too)" \
+                if (directory / "evaluations").is_dir() else ""
+            raise RunSettingsError(f"{directory} is not empty and holds no run.json: not a curriculum run directory"
+                                   + kept)
         return None
     settings = read_json(path, "the settings of a curriculum run (sb3-smc train writes it)")
     if not isinstance(settings, dict) or settings.get("format") != RUN_FORMAT \
