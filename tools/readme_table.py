@@ -36,13 +36,12 @@ def block(report: str, source: str) -> str:
     lines = [START, "", f"From [the whole table's report]({source})" + (
         ", **partial: the table is still being run** (a method without all of a kind's concepts has no mean there)"
         if partial else "") + "; scores in %, ours beside the paper's (Hay et al., AAAI-18).", ""]
-    for heading in SECTIONS:
+    for heading in SECTIONS:  # their tables only: the report explains them
         body = section(report, heading)
-        while body and not body[0].strip():
-            body.pop(0)
-        while body and not body[-1].strip():
-            body.pop()
-        lines += [f"**{heading.removeprefix('## ')}**", "", *body, ""]
+        tables = [line for k, line in enumerate(body) if line.startswith("|")
+                  or (not line.strip() and 0 < k < len(body) - 1 and body[k - 1].startswith("|")
+                      and any(b.startswith("|") for b in body[k + 1:]))]
+        lines += [f"**{heading.removeprefix('## ')}**", "", *tables, ""]
     return "\n".join([*lines, END])
 
 
