@@ -525,13 +525,16 @@ def test_the_whole_table_report_with_canon_scaled(tmp_path):
 
 
 def test_the_readme_gets_the_whole_tables_means_and_tests_from_the_report(tmp_path):
-    """``tools/readme_table.py`` copies the report's category means and t-tests between the README's markers, says
-    when the table is partial, leaves the rest of the README as it was, and refuses a README without its markers."""
+    """``tools/readme_table.py`` copies the report's means and t-tests per kind between the README's markers (a
+    kind's categories only while it has no mean over all its concepts), says when the table is partial, leaves the
+    rest of the README as it was, and refuses a README without its markers."""
     import importlib.util
 
     spec = importlib.util.spec_from_file_location("readme_table", ROOT / "tools" / "readme_table.py")
     readme_table = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(readme_table)
+    from pixelworld_env.datasets import catalog
+
     everything = level2_targets()
 
     def score(t: str, m: str) -> float:
@@ -548,6 +551,16 @@ def test_the_readme_gets_the_whole_tables_means_and_tests_from_the_report(tmp_pa
         assert "old" not in text and "partial" not in text and "(docs/report.md)" in text
         assert text.count("| bring-about | **paper** (all) | 17 | 52.7 | 74.5 |") == 1
         assert "| bring-about | curr vs base | 17 | " in text and "t(16) = 4.1, p = 0.0008" in text
+        assert "| classification | all | 34 | " in text and "| bring-about | all | 17 | " in text
+        assert "| classification | objects |" not in text and "| bring-about / containment |" not in text
+    # one classification concept missing: that kind shows its categories, bring-about its mean over all 17
+    first = next(t for t in everything if catalog.dataset(t).kind == "classification")
+    _synthetic_table(tmp_path / "part", [t for t in everything if t != first], ["base", "curr"], score)
+    [report] = write_report([tmp_path / "part"], out=tmp_path / "docs", behaviour=False)
+    readme_table.main(["--report", str(report), "--readme", str(readme)])
+    text = readme.read_text()
+    assert "| classification | objects |" in text and "| classification | all |" not in text
+    assert "| bring-about | all | 17 | " in text and "| bring-about | objects |" not in text
     results = json.loads((tmp_path / "run" / "results.json").read_text())
     (tmp_path / "run" / "results.json").write_text(json.dumps({**results, "complete": False, "missing": ["x@0"]}))
     [report] = write_report([tmp_path / "run"], out=tmp_path / "docs", behaviour=False)

@@ -3,7 +3,8 @@ a failing method tries (docs/results/paper/README.md, "Where a method fails").
 
 The node's children are the two best seeds of each node it uses in a run's library (as the curriculum trainer
 picks them); the node is trained with each ``--seeds`` seed, with ``--timesteps`` / ``--algo`` / ``--rnn`` /
-``--smc-weight`` (the signal bias's weight of each SMC action) changed, and evaluated on the test split (10
+``--smc-weight`` (the signal bias's weight of each SMC action) / ``--count-moves`` (a call costs the episode its
+moves) changed, and evaluated on the test split (10
 repeats). One JSON record per seed goes to ``--out`` (the spec, the training returns, selected update, test score,
 wall time); a seed whose record is there is not trained again.
 
@@ -40,6 +41,8 @@ def main() -> None:
     parser.add_argument("--algo", default=None)
     parser.add_argument("--rnn", default=None)
     parser.add_argument("--smc-weight", type=float, default=None, help="signal-bias weight of each SMC action")
+    parser.add_argument("--count-moves", action="store_true",
+                        help="a call costs the episode the moves it made, not one step (count_primitive_steps)")
     parser.add_argument("--out", required=True)
     args = parser.parse_args()
     torch.set_num_threads(1)
@@ -58,6 +61,8 @@ def main() -> None:
         if args.smc_weight is not None:
             spec = dataclasses.replace(spec, signal_bias=dataclasses.replace(spec.signal_bias,
                                                                              smc_weight=args.smc_weight))
+        if args.count_moves:
+            spec = dataclasses.replace(spec, wrapper=dataclasses.replace(spec.wrapper, count_primitive_steps=True))
         path = out / f"{file_stem(spec.name)}.json"
         if path.is_file():
             print(f"{spec.name}: kept {path}")

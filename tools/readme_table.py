@@ -1,8 +1,10 @@
 #!/usr/bin/env python
-"""Put the whole table's category means and t-tests, beside the paper's, into the README: the sections "Means per
-kind and category" and "Paired t-tests across concepts" of ``docs/results/paper/report.md`` (what ``sb3-smc report``
-wrote), copied between the README's markers ``<!-- paper-table:start -->`` and ``<!-- paper-table:end -->``. The
-numbers stay where the report computes them; this only copies them.
+"""Put the whole table's means and t-tests per kind, beside the paper's, into the README: from the sections "Means
+per kind and category" and "Paired t-tests across concepts" of ``docs/results/paper/report.md`` (what ``sb3-smc
+report`` wrote), the rows over all concepts of a kind (means, the paper's, ours - paper; t-tests with a result; win
+counts the paper gives), copied between the README's markers ``<!-- paper-table:start -->`` and
+``<!-- paper-table:end -->``. The per-category rows stay in the report, and the numbers where the report computes
+them; this only copies rows.
 
 Usage::
 
@@ -30,18 +32,55 @@ def section(report: str, heading: str) -> list[str]:
     return lines[start:end]
 
 
+def cells(row: str) -> list[str]:
+    """The cells of a Markdown table row."""
+    return [cell.strip() for cell in row.strip().strip("|").split("|")]
+
+
+KEEP = {  # a table's header -> which of its rows the README keeps
+    "| kind | category |": lambda c: c[1] in ("all", "**paper** (all)") or c[1].startswith("ours - paper"),
+    "| kind / category |": lambda c: "/" not in c[0] and c[2] != "0",
+    "| kind | hierarchical |": lambda c: bool(c[4]),
+}
+
+
+def incomplete(table: list[str]) -> set[str]:
+    """The kinds of the means table with fewer concepts than the paper's (the table is partial)."""
+    counts = {(c[0], c[1]): c[2] for c in map(cells, table[2:])}
+    paper = "**paper** (all)"
+    return {kind for kind, label in counts if label == "all" and counts[kind, label] != counts.get((kind, paper))}
+
+
+def kind_rows(table: list[str]) -> list[str]:
+    """``table`` (its lines) with the header and the rows over all concepts of a kind (:data:`KEEP`); in the means
+    table, a kind with fewer concepts than the paper's keeps its categories' rows instead."""
+    keep = next((rule for header, rule in KEEP.items() if table[0].startswith(header)), None)
+    if keep is None:
+        raise SystemExit(f"the report has a table the README does not know: {table[0]!r}")
+    partial = incomplete(table) if table[0].startswith("| kind | category |") else set()
+    return table[:2] + [row for row in table[2:]
+                        if (cells(row)[1] != "all" if cells(row)[0] in partial else keep(cells(row)))]
+
+
 def block(report: str, source: str) -> str:
-    """The README's block: a line on what it is (partial or whole), then the two sections, headed in bold."""
+    """The README's block: a line on what it is (partial or whole), then the two sections' rows per kind, headed in
+    bold."""
     partial = "**Partial results**" in report
     lines = [START, "", f"From [the whole table's report]({source})" + (
         ", **partial: the table is still being run** (a method without all of a kind's concepts has no mean there)"
         if partial else "") + "; scores in %, ours beside the paper's (Hay et al., AAAI-18).", ""]
     for heading in SECTIONS:  # their tables only: the report explains them
-        body = section(report, heading)
-        tables = [line for k, line in enumerate(body) if line.startswith("|")
-                  or (not line.strip() and 0 < k < len(body) - 1 and body[k - 1].startswith("|")
-                      and any(b.startswith("|") for b in body[k + 1:]))]
-        lines += [f"**{heading.removeprefix('## ')}**", "", *tables, ""]
+        tables: list[list[str]] = []
+        previous = ""
+        for line in section(report, heading):
+            if line.startswith("|"):
+                if not previous.startswith("|"):
+                    tables.append([])
+                tables[-1].append(line)
+            previous = line
+        lines += [f"**{heading.removeprefix('## ')}** (per kind; per category in the report)", ""]
+        for table in tables:
+            lines += [*kind_rows(table), ""]
     return "\n".join([*lines, END])
 
 
