@@ -29,7 +29,7 @@ from sb3_smc.curricula.jobs import DEFAULT_REUSE, DEFAULT_SEEDS, REUSE, check_cu
 from sb3_smc.curricula.run_directory import status
 from sb3_smc.errors import SMCError
 from sb3_smc.experiments import report, runner
-from sb3_smc.experiments.design import CATEGORIES, DEFAULT_METHODS, DEFAULT_REPEATS, METHODS
+from sb3_smc.experiments.design import CATEGORIES, DEFAULT_METHODS, DEFAULT_REPEATS, METHOD_REGISTRY, METHODS
 from sb3_smc.hyperparameters import ALGORITHMS, DEFAULT_ALGORITHM, DEFAULT_TIMESTEPS, RECURRENT_POLICIES
 from sb3_smc.library import SMCLibrary, storage
 from sb3_smc.library.pretrained import pretrained_root
@@ -225,8 +225,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--out", required=True, help="the experiment directory (re-run to resume)")
     p.add_argument("--methods", default=",".join(DEFAULT_METHODS),
                    help=f"comma-separated: {', '.join(METHODS)} (default: the paper's {', '.join(DEFAULT_METHODS)}; "
-                        "base-gru: a flat SMC with the paper's learner, RecurrentTRPO + GRU; canon-scaled: canon "
-                        "with a budget x its SMC actions / 8)")
+                        + "; ".join(METHOD_REGISTRY[m].label for m in METHODS if m not in DEFAULT_METHODS) + ")")
     group = p.add_mutually_exclusive_group()
     group.add_argument("--targets", action="append", help="level-2 target datasets (comma-separated; repeatable)")
     group.add_argument("--category", choices=[*CATEGORIES, "all"],

@@ -140,6 +140,8 @@ def test_targets_by_node_or_dataset_name():
      r"tiny.yml:6: node 'above': 'budget_scale' must be a positive number, got 0"),
     (TINY.replace("  - name: above\n", "  - name: above\n    budget_scale: .nan\n"),
      r"tiny.yml:6: node 'above': 'budget_scale' must be a positive number, got nan"),
+    (TINY.replace("  - name: above\n", "  - name: above\n    count_primitive_steps: yes please\n"),
+     r"tiny.yml:6: node 'above': 'count_primitive_steps' must be true or false, got 'yes please'"),
     ("nodes: []\n", r"tiny.yml: missing key 'curriculum'"),
     (TINY + "1: x\n", r"tiny.yml: top-level keys must be names, got 1"),
     ("- a\n- b\n", r"tiny.yml: a curriculum file is a mapping"),
@@ -187,6 +189,28 @@ def test_a_budget_scale_multiplies_whichever_budget_a_node_has(tmp_path):
     assert {n.budget_scale for n in everywhere.nodes} == {3.0}  # a default like the other settings
     with pytest.raises(CurriculumError, match="node 'container' is defined differently"):  # part of a node's identity
         merge([curriculum, Curriculum("other", (*curriculum.nodes[:2], dataclasses.replace(container, budget_scale=1)),
+                                      ("container",))])
+
+
+def test_a_node_whose_calls_cost_their_moves(tmp_path):
+    """``count_primitive_steps: true`` makes the node's SMC calls cost the episode the moves they made (its spec's
+    wrapper setting); it round-trips through the file format, is part of a node's identity, and a node without it has
+    the settings it had before the key existed (runs of then resume)."""
+    from sb3_smc.curricula.jobs import node_spec
+
+    curriculum = parse_curriculum(TINY.replace("    uses: [left, above]",
+                                               "    uses: [left, above]\n    count_primitive_steps: true"))
+    container, left = curriculum.node("container"), curriculum.node("left")
+    assert container.count_primitive_steps and not left.count_primitive_steps
+    assert node_spec(container, 0, ("left@0", "above@0")).wrapper.count_primitive_steps
+    assert not node_spec(left, 0, ()).wrapper.count_primitive_steps
+    assert "count_primitive_steps" not in left.settings() and container.settings()["count_primitive_steps"] is True
+    assert parse_curriculum(curriculum.to_yaml()).nodes == curriculum.nodes
+    with pytest.raises(CurriculumError, match="node 'x': count_primitive_steps must be true or false, got 1"):
+        Curriculum("bad", (Node("x", LEFT, count_primitive_steps=1),), ("x",))  # type: ignore[arg-type]
+    with pytest.raises(CurriculumError, match="node 'container' is defined differently"):
+        merge([curriculum, Curriculum("other", (*curriculum.nodes[:2],
+                                                dataclasses.replace(container, count_primitive_steps=False)),
                                       ("container",))])
 
 

@@ -260,6 +260,28 @@ def test_canon_with_a_budget_that_grows_with_its_smc_actions():
         [design.nodes[(t, "canon")][0] for t in (LEFT_OF, IN_CONTAINER)])) - 2  # the lower nodes are shared
 
 
+def test_curr_with_calls_that_cost_their_moves():
+    """``curr-moves``: curr's target nodes as copies named ``curr-moves/<node>`` whose SMC calls cost the episode
+    the moves they made, calling the same lower-level nodes as curr's (trained once for both); its jobs are curr's
+    but for their names and that wrapper setting."""
+    from sb3_smc.curricula.jobs import node_spec
+
+    design = plan([LEFT_OF, IN_CONTAINER], ["curr", "curr-moves"])
+    for target in (LEFT_OF, IN_CONTAINER):
+        curr, moves = design.nodes[(target, "curr")], design.nodes[(target, "curr-moves")]
+        assert moves == tuple(f"curr-moves/{n}" for n in curr) and len(curr) >= 1
+        for name in curr:
+            node, copy = design.curriculum.node(name), design.curriculum.node(f"curr-moves/{name}")
+            assert copy.uses == node.uses and copy.count_primitive_steps and not node.count_primitive_steps
+            children = tuple(f"{u}@0" for u in node.uses)
+            own, theirs = (node_spec(n, 1, children, timesteps=2000).to_dict() for n in (copy, node))
+            assert own.pop("name") == f"curr-moves/{theirs.pop('name')}"
+            assert own.pop("wrapper") == {**theirs.pop("wrapper"), "count_primitive_steps": True}
+            assert own == theirs
+    order = design.curriculum.order(design.training_targets)
+    assert len(order) == len(set(order))  # the lower nodes are shared
+
+
 def test_a_run_reduced_to_its_records_resumes_without_model_files(tmp_path):
     """What docs/results/ commits (run.json + evaluations, no library) is a run that resumes where it stopped."""
     import shutil
@@ -489,25 +511,35 @@ def test_the_whole_table_report_with_a_second_flat_baseline(tmp_path):
     assert "| bring-about: curr > base, paired t-test across concepts | t(16) = 4.1, p = 0.0008 | t(16) = " in claims
 
 
-def test_the_whole_table_report_with_canon_scaled(tmp_path):
-    """``canon-scaled`` from a directory of its own: a column with the paper's canon numbers beside it, its t-tests
-    against the flat SMC (the paper's canon tests beside them), its win counts and claims, and its budget rule in the
-    provenance."""
+def test_the_whole_table_report_with_canon_scaled_and_curr_moves(tmp_path):
+    """``canon-scaled`` and ``curr-moves`` (bring-about only) from directories of their own: columns with the paper's
+    canon and curr numbers beside them, their t-tests against the flat SMC (the paper's canon and curr tests beside
+    them), their win counts and claims, and their rules in the provenance."""
     from pixelworld_env.datasets import catalog
 
     everything = level2_targets()
-    gain = {"cnn": 0.25, "base": 0.2, "curr": 0.4, "canon": 0.35, "canon-scaled": 0.38}
+    gain = {"cnn": 0.25, "base": 0.2, "curr": 0.4, "canon": 0.35, "canon-scaled": 0.38, "curr-moves": 0.3}
 
     def score(t: str, m: str) -> float:
-        return 0.4 + 0.01 * (everything.index(t) % 7) + gain[m] + 0.002 * everything.index(t) * (m == "canon-scaled")
+        spread = 0.002 * everything.index(t) * (m in ("canon-scaled", "curr-moves"))
+        return 0.4 + 0.01 * (everything.index(t) % 7) + gain[m] + spread
 
     _synthetic_table(tmp_path / "paper", everything, ["cnn", "base", "curr", "canon"], score)
     _synthetic_table(tmp_path / "scaled", everything, ["canon-scaled"], score)
-    [path] = write_report([tmp_path / "paper", tmp_path / "scaled"], out=tmp_path / "report", behaviour=False)
+    ba = [t for t in everything if catalog.dataset(t).kind == "bring-about"]
+    _synthetic_table(tmp_path / "moves", ba, ["curr-moves"], score)
+    [path] = write_report([tmp_path / "paper", tmp_path / "scaled", tmp_path / "moves"], out=tmp_path / "report",
+                         behaviour=False)
     text = path.read_text()
     means = next(line for line in text.splitlines() if line.startswith("| classification | **paper** (all) | 34 |"))
-    assert [c.strip() for c in means.strip("|").split("|")][3:] == ["79.9", "74.5", "84.9", "80.2", "80.2"]
-    ba = [t for t in everything if catalog.dataset(t).kind == "bring-about"]
+    assert [c.strip() for c in means.strip("|").split("|")][3:] == ["79.9", "74.5", "84.9", "80.2", "80.2", "84.9"]
+    cells = _row_cells(text, "| bring-about | curr-moves vs base |")
+    assert cells[2:5] == ["17", f"{_hand_t(score, ba, 'curr-moves', 'base'):.2f}", "16"]
+    assert cells[6] == "t(16) = 4.1, p = 0.0008"
+    mean = 100 * np.mean([score(t, "curr-moves") for t in ba])
+    assert f"| bring-about: mean of curr-moves (17 concepts) | 74.5 | {mean:.1f} ({mean - 74.5:+.1f}) |" in text
+    assert "(curr-moves: an SMC call of its target nodes costs the episode's steps the moves it made)" in text
+    assert "| classification | curr-moves vs base | 0 |" in text  # it ran on no classification concept
     cells = _row_cells(text, "| bring-about | canon-scaled vs base |")
     assert cells[2:5] == ["17", f"{_hand_t(score, ba, 'canon-scaled', 'base'):.2f}", "16"]
     assert cells[6] == "t(16) = 4.4, p = 0.0005"

@@ -117,14 +117,17 @@ def test_each_method_trains_what_its_entry_says() -> None:
                 assert (entry.task, entry.algo, entry.uses) == (target, method.algo, ())
                 policy = entry.hyperparameters.get("policy")
                 assert policy == (recurrent_policy(method.rnn, method.algo) if method.rnn else None)
-        else:  # the shipped entries' target nodes, or (a budget of its own) copies of them, scaled
+        else:  # the shipped entries' target nodes, or (settings of its own) copies of them, changed
             for target in (LEFT_OF, IN_CONTAINER):
                 for node in design.nodes[(target, name)]:
                     entry = design.curriculum.node(node)
-                    shipped_name = node.removeprefix(f"{name}/") if method.budget_actions else node
+                    shipped_name = node.removeprefix(f"{name}/") if method.changes_targets else node
+                    assert node != shipped_name or not method.changes_targets
                     assert any(c.method == method.curricula and shipped_name in c.targets for c in shipped), node
                     assert entry.budget_scale == method.budget_scale(entry) >= 1
                     assert (entry.budget_scale > 1) == (method.budget_actions is not None)
+                    assert entry.count_primitive_steps == method.count_primitive_steps
+                    assert not any(design.curriculum.node(u).count_primitive_steps for u in entry.uses)
     assert design.cnn_skipped == [IN_CONTAINER]
 
 
@@ -147,7 +150,7 @@ def test_the_command_line_takes_its_choices_and_defaults_from_the_registries(
     assert calls["experiment"]["methods"] == list(DEFAULT_METHODS) == [  # the paper's six
         "cnn", "base", "curr", "canon", "curr-noprim", "canon-noprim"]
     assert not any(METHOD_REGISTRY[m].own_learner or METHOD_REGISTRY[m].paper for m in DEFAULT_METHODS)
-    assert set(METHODS) - set(DEFAULT_METHODS) == {"base-gru", "canon-scaled"}
+    assert set(METHODS) - set(DEFAULT_METHODS) == {"base-gru", "canon-scaled", "curr-moves"}
     assert calls["experiment"]["repeats"] == DEFAULT_REPEATS
     for command in ("experiment", "train"):
         assert calls[command]["seeds"] == DEFAULT_SEEDS and calls[command]["backend"] == BACKENDS[0]

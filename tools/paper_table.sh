@@ -3,7 +3,8 @@
 # commit with its own environment. Rerun to resume (finished jobs and evaluations are kept).
 #   tools/paper_table.sh run [categories...]     train + evaluate (default: search objects containment objcon;
 #                                                base-gru: the second flat baseline, method base-gru on all 51 targets;
-#                                                canon-scaled: canon with its budget x SMC actions / 8, all 51)
+#                                                canon-scaled: canon with its budget x SMC actions / 8, all 51;
+#                                                curr-moves: curr whose calls cost their moves, the 17 bring-about)
 #   tools/paper_table.sh keep <category> [repo]   copy a run's records (no models) into docs/results/paper/<category>
 #   tools/paper_table.sh partial <category>       at a session's end: tabulate what the running category has finished
 #                                                (--no-train), keep it and make its partial report
@@ -15,8 +16,15 @@ set -eu
 RUNS=${RUNS:-/work/runs}; RUN_ENV=${RUN_ENV:-/work/run-env}
 repo=$(cd "$(dirname "$0")/.." && pwd)
 
-selection() {  # the experiment options of a category (base-gru, canon-scaled: that method on all 51 targets)
-  case $1 in base-gru|canon-scaled) echo "--methods $1 --category all" ;; *) echo "--category $1" ;; esac
+selection() {  # the experiment options of a category (base-gru, canon-scaled: that method on all 51 targets;
+  # curr-moves: on the 17 bring-about targets)
+  case $1 in
+    base-gru|canon-scaled) echo "--methods $1 --category all" ;;
+    curr-moves) echo "--methods $1 --targets $("$RUN_ENV/bin/python" -c 'from pixelworld_env.datasets import catalog
+from sb3_smc.experiments import level2_targets
+print(",".join(t for t in level2_targets() if catalog.dataset(t).kind == "bring-about"))')" ;;
+    *) echo "--category $1" ;;
+  esac
 }
 
 case ${1:-} in
@@ -48,7 +56,7 @@ case ${1:-} in
     "$repo/.venv/bin/sb3-smc" report "$repo/docs/results/paper/$cat" --no-behaviour ;;
   report)
     dirs=()
-    for cat in search objects containment objcon base-gru canon-scaled; do
+    for cat in search objects containment objcon base-gru canon-scaled curr-moves; do
       if [ -f "$repo/docs/results/paper/$cat/results.json" ]; then dirs+=("$repo/docs/results/paper/$cat"); fi
     done
     "$repo/.venv/bin/sb3-smc" report "${dirs[@]}" --out "$repo/docs/results/paper" --no-behaviour

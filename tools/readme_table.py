@@ -67,8 +67,8 @@ def block(report: str, source: str) -> str:
     bold."""
     partial = "**Partial results**" in report
     lines = [START, "", f"From [the whole table's report]({source})" + (
-        ", **partial: the table is still being run** (a method without all of a kind's concepts has no mean there)"
-        if partial else "") + "; scores in %, ours beside the paper's (Hay et al., AAAI-18).", ""]
+        ", **partial: the table is still being run**" if partial else "")
+        + "; scores in %, ours beside the paper's (Hay et al., AAAI-18).", ""]
     for heading in SECTIONS:  # their tables only: the report explains them
         tables: list[list[str]] = []
         previous = ""
@@ -78,7 +78,7 @@ def block(report: str, source: str) -> str:
                     tables.append([])
                 tables[-1].append(line)
             previous = line
-        lines += [f"**{heading.removeprefix('## ')}** (per kind; per category in the report)", ""]
+        lines += [f"**{heading.removeprefix('## ')}**", ""]
         for table in tables:
             lines += [*kind_rows(table), ""]
     return "\n".join([*lines, END])

@@ -7,7 +7,8 @@ lower-level nodes as actions. Example::
     curriculum: my-containment
     method: smc-curr                 # optional: smc-base | smc-curr | smc-canon | anything (reports group by it)
     description: corners, then containment
-    defaults: {timesteps: 200000}    # optional: algo, timesteps, budget_scale, primitives, hyperparameters
+    defaults: {timesteps: 200000}    # optional: algo, timesteps, budget_scale, primitives, count_primitive_steps,
+                                     #           hyperparameters
     nodes:
       - name: cl_self-in-left-corner_vs_on-hline
         task: cl_self-in-left-corner_vs_on-hline
@@ -46,8 +47,9 @@ __all__ = ["FORMAT_KEYS", "NODE_KEYS", "SEED_SEPARATOR", "Curriculum", "Curricul
 
 FORMAT_KEYS = ("curriculum", "method", "description", "defaults", "nodes", "targets")
 """Top-level keys of a curriculum file."""
-NODE_KEYS = ("name", "task", "uses", "primitives", "algo", "timesteps", "budget_scale", "hyperparameters")
-"""Keys of a node (``defaults`` takes the last five)."""
+NODE_KEYS = ("name", "task", "uses", "primitives", "algo", "timesteps", "budget_scale", "count_primitive_steps",
+             "hyperparameters")
+"""Keys of a node (``defaults`` takes the last six)."""
 SEED_SEPARATOR = "@"
 """SMC names in a curriculum's library are ``<node>@<seed>``; node names may not contain it."""
 
@@ -62,7 +64,9 @@ class Node:
 
     ``algo`` / ``timesteps`` ``None``: the run's settings (``train_curriculum``'s ``algo`` and ``timesteps``).
     ``budget_scale`` multiplies the node's budget, whichever gives it (a node that calls many SMCs may need longer).
-    ``line`` is where the node was defined (not part of its identity).
+    ``count_primitive_steps``: a call of a used node costs the episode the moves it made instead of one step
+    (:class:`~sb3_smc.wrapper.HierarchicalSMCWrapper`). ``line`` is where the node was defined (not part of its
+    identity).
     """
 
     name: str
@@ -73,6 +77,7 @@ class Node:
     timesteps: int | None = None
     hyperparameters: dict[str, Any] = field(default_factory=dict)
     budget_scale: float = 1.0
+    count_primitive_steps: bool = False
     line: int | None = field(default=None, compare=False)
 
     @property
@@ -83,10 +88,13 @@ class Node:
 
     def settings(self) -> dict[str, Any]:
         """What decides the trained SMCs (two nodes of the same name must agree on it); ``budget_scale`` only where
-        it is not 1 (so that the settings of runs from before it stay the same)."""
+        it is not 1, ``count_primitive_steps`` only where true (so that the settings of runs from before them stay
+        the same)."""
         scale = {"budget_scale": self.budget_scale} if self.budget_scale != 1 else {}
+        count = {"count_primitive_steps": True} if self.count_primitive_steps else {}
         return {"task": self.task, "uses": list(self.uses), "primitives": self.include_primitives,
-                "algo": self.algo, "timesteps": self.timesteps, **scale, "hyperparameters": self.hyperparameters}
+                "algo": self.algo, "timesteps": self.timesteps, **scale, **count,
+                "hyperparameters": self.hyperparameters}
 
 
 @dataclass(frozen=True)
@@ -179,6 +187,8 @@ class Curriculum:
                     item[key] = getattr(node, key)
             if node.budget_scale != 1:
                 item["budget_scale"] = node.budget_scale
+            if node.count_primitive_steps:
+                item["count_primitive_steps"] = True
             if node.hyperparameters:
                 item["hyperparameters"] = node.hyperparameters
             nodes.append(item)
@@ -306,8 +316,10 @@ def _node(item: Any, line: int, defaults: Mapping[str, Any], source: str) -> Nod
     if not isinstance(uses, list) or not all(isinstance(u, str) for u in uses):
         raise CurriculumError(f"{where}: {label}: 'uses' must be a list of node names, got {uses!r}")
     primitives = settings.get("primitives", True)
-    if not isinstance(primitives, bool):
-        raise CurriculumError(f"{where}: {label}: 'primitives' must be true or false, got {primitives!r}")
+    count = settings.get("count_primitive_steps", False)
+    for key, value in (("primitives", primitives), ("count_primitive_steps", count)):
+        if not isinstance(value, bool):
+            raise CurriculumError(f"{where}: {label}: {key!r} must be true or false, got {value!r}")
     timesteps = settings.get("timesteps")
     if timesteps is not None and (isinstance(timesteps, bool) or not isinstance(timesteps, int) or timesteps < 1):
         raise CurriculumError(f"{where}: {label}: 'timesteps' must be a positive integer, got {timesteps!r}")
@@ -320,7 +332,7 @@ def _node(item: Any, line: int, defaults: Mapping[str, Any], source: str) -> Nod
     try:
         return Node(name=item["name"], task=item["task"], uses=tuple(uses), include_primitives=primitives,
                     algo=settings.get("algo"), timesteps=timesteps, hyperparameters=hyper, budget_scale=float(scale),
-                    line=line)
+                    count_primitive_steps=count, line=line)
     except CurriculumError as err:
         raise CurriculumError(f"{where}: {label}: {err}") from None
 
@@ -388,6 +400,9 @@ def _validate(curriculum: Curriculum) -> None:
                                                        and math.isfinite(node.budget_scale) and node.budget_scale > 0):
             raise CurriculumError(f"{at(node)}: node {node.name!r}: budget_scale must be a positive number, got "
                                   f"{node.budget_scale!r}")
+        if not isinstance(node.count_primitive_steps, bool):
+            raise CurriculumError(f"{at(node)}: node {node.name!r}: count_primitive_steps must be true or false, got "
+                                  f"{node.count_primitive_steps!r}")
         if node.name in node.uses:
             raise CurriculumError(f"{at(node)}: node {node.name!r} uses itself")
         if len(set(node.uses)) != len(node.uses):

@@ -121,7 +121,9 @@ def node_spec(node: Node, seed: int, children: tuple[str, ...], *, timesteps: in
         hyperparameters["policy"] = recurrent_policy(rnn, algo)
     return TrainingSpec(name=job_name(node.name, seed), task=TaskSpec(node.env_id).resolved(), algo=algo,
                         hyperparameters=hyperparameters, seed=seed, budget=Budget(node_budget(node, timesteps)),
-                        wrapper=WrapperSettings(include_primitives=node.include_primitives), children=children)
+                        wrapper=WrapperSettings(include_primitives=node.include_primitives,
+                                                count_primitive_steps=node.count_primitive_steps),
+                        children=children)
 
 
 def check_curriculum(curriculum: Curriculum, names: Sequence[str] | None = None, *, timesteps: int | None = None,

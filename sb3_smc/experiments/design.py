@@ -4,8 +4,9 @@ that train each target with each method. Torch-free.
 Methods (:data:`METHOD_REGISTRY`): ``cnn`` (the passive CNN baseline, classification targets only), ``base`` (a
 flat SMC on the target), ``curr`` (the hand-designed smc-curr entries, 1-3 per target), ``canon`` (the canonical
 smc-canon entry) and their ``-noprim`` variants (:data:`DEFAULT_METHODS`, the paper's); ``base-gru``, a flat SMC
-with the paper's learner (RecurrentTRPO with a GRU) whatever the run's learner, a second flat baseline; and
-``canon-scaled``, canon with a budget that grows with the SMC actions of each target node. Every SMC
+with the paper's learner (RecurrentTRPO with a GRU) whatever the run's learner, a second flat baseline;
+``canon-scaled``, canon with a budget that grows with the SMC actions of each target node; and ``curr-moves``, curr
+whose target nodes' SMC calls cost the episode their moves (at most 100 moves an episode, as a flat SMC). Every SMC
 method's jobs are nodes of curricula (shipped ones, or a flat method's); :func:`plan` merges them so that a
 lower-level node shared by several methods is trained once.
 """
@@ -54,6 +55,9 @@ class ExperimentMethod:
     """The SMC actions the run's budget is meant for: a target node with more (the nodes it uses x the seeds each
     gives) trains proportionally longer (``canon-scaled``: 8, the median of curr's level-2 nodes, which learn within
     the paper's budget); ``None``: the run's budget for every node."""
+    count_primitive_steps: bool = False
+    """Its target nodes' calls cost the episode the moves they made, not one step each (``curr-moves``): the
+    episode's 100 steps bound the moves as a flat SMC's do."""
 
     @property
     def flat(self) -> bool:
@@ -77,22 +81,34 @@ class ExperimentMethod:
             return 1.0
         return max(1.0, len(node.uses) * REUSE[DEFAULT_REUSE] / self.budget_actions)
 
+    @property
+    def changes_targets(self) -> bool:
+        """Whether it trains the target nodes of its curricula with settings of its own (:meth:`targets_of`)."""
+        return self.budget_actions is not None or self.count_primitive_steps
+
+    @property
+    def _change(self) -> str:
+        changes = (["the budget of its targets scaled by their SMC actions"] if self.budget_actions is not None
+                   else []) + (["the calls of its targets costing their moves"] if self.count_primitive_steps else [])
+        return " and ".join(changes)
+
     def targets_of(self, curriculum: Curriculum, names: Sequence[str]) -> tuple[Curriculum, list[str]]:
-        """``curriculum`` and its target nodes ``names`` as this method trains them: as they are, or (a method with
-        :attr:`budget_actions`) with copies of them named ``<method>/<node>`` with their budget scaled, beside
-        the nodes they use (shared with the other methods)."""
-        if self.budget_actions is None:
+        """``curriculum`` and its target nodes ``names`` as this method trains them: as they are, or (a method that
+        :attr:`changes_targets`) with copies of them named ``<method>/<node>`` with their budget scaled and / or
+        their calls costing their moves, beside the nodes they use (shared with the other methods)."""
+        if not self.changes_targets:
             return curriculum, list(names)
         used = {u for node in curriculum.nodes for u in node.uses}
         if used & set(names):
             raise CurriculumError(f"{curriculum.name}: {sorted(used & set(names))[0]!r} is used by another node: "
-                                  f"method {self.name} scales the budget of top nodes only")
+                                  f"method {self.name} changes top nodes only")
         copies = [dataclasses.replace(node, name=f"{self.name}/{node.name}", line=None,
-                                      budget_scale=node.budget_scale * self.budget_scale(node))
+                                      budget_scale=node.budget_scale * self.budget_scale(node),
+                                      count_primitive_steps=node.count_primitive_steps or self.count_primitive_steps)
                   for node in map(curriculum.node, names)]
         return Curriculum(f"{self.name}/{curriculum.name}", (*curriculum.nodes, *copies),
                           tuple(c.name for c in copies), method=f"smc-{self.name}",
-                          description=f"{curriculum.name}, the budget of its targets scaled by their SMC actions"), \
+                          description=f"{curriculum.name}, {self._change}"), \
             [c.name for c in copies]
 
     def flat_node(self, target: str) -> Node:
@@ -117,10 +133,12 @@ METHOD_REGISTRY: dict[str, ExperimentMethod] = {method.name: method for method i
                      algo="RecurrentTRPO", rnn="gru", paper="base"),
     ExperimentMethod("canon-scaled", "canon-scaled (canon, budget x SMC actions / 8)", "#2e7d32",
                      curricula="smc-canon", paper="canon", budget_actions=8),
+    ExperimentMethod("curr-moves", "curr-moves (curr, a call costs its moves)", "#a0522d", curricula="smc-curr",
+                     paper="curr", count_primitive_steps=True),
 )}
 """Every method by name, in the order of the report's columns."""
 METHODS = tuple(METHOD_REGISTRY)
-"""Every method's name (the paper's six, ``base-gru`` and ``canon-scaled``)."""
+"""Every method's name (the paper's six, ``base-gru``, ``canon-scaled`` and ``curr-moves``)."""
 DEFAULT_METHODS = METHODS[:6]
 """The paper's six methods: ``sb3-smc experiment``'s default ``--methods``."""
 SMC_METHODS = tuple(name for name, method in METHOD_REGISTRY.items() if method.smc)

@@ -213,7 +213,7 @@ def _write(sources: Sequence[tuple[Path, dict[str, Any]]], out: Path, trajectori
              f"Methods {', '.join(methods)}; {len(targets)} target(s)"
              + (f" from {len(sources)} run directories" if len(sources) > 1 else "") + "; "
              + (f"{seeds} seed(s); {timesteps:,} steps per SMC"
-                + "".join(dict.fromkeys(_scaled_budgets(s) for s in settings))
+                + "".join(dict.fromkeys(_target_rules(s) for s in settings))
                 + f"; test: {repeats} repeats per test environment"
                 if seeds is not None else "seeds, budgets and repeats per directory below")
              + ", stochastic policy, the update with the best training return. Scores in %; the paper's numbers "
@@ -426,7 +426,7 @@ def _provenance(sources: Sequence[tuple[Path, dict[str, Any]]], out: Path) -> li
         machine = results.get("machine", {})
         if len(sources) > 1:
             lines += [f"### {os.path.relpath(directory, out)}", ""]
-        lines += [f"- budget: {settings['timesteps']:,} steps per SMC{_scaled_budgets(settings)}, seeds "
+        lines += [f"- budget: {settings['timesteps']:,} steps per SMC{_target_rules(settings)}, seeds "
                   f"0-{settings['seeds'] - 1}, {settings['repeats']} test repeats; {settings['workers']} worker(s), "
                   f"backend {settings['backend']}",
                   f"- learner: {_learners(settings)}",
@@ -443,12 +443,15 @@ def _provenance(sources: Sequence[tuple[Path, dict[str, Any]]], out: Path) -> li
     return lines
 
 
-def _scaled_budgets(settings: dict[str, Any]) -> str:
-    """The methods of the run whose target nodes train longer than the run's budget (``canon-scaled``), and how."""
-    scaled = [METHOD_REGISTRY[m] for m in settings["methods"]
-              if m in METHOD_REGISTRY and METHOD_REGISTRY[m].budget_actions is not None]
-    return "".join(f" ({m.name}'s target nodes: that x their SMC actions / {m.budget_actions}, at least 1)"
-                   for m in scaled)
+def _target_rules(settings: dict[str, Any]) -> str:
+    """The methods of the run whose target nodes train otherwise than the run says (``canon-scaled``: longer,
+    ``curr-moves``: calls costing their moves), and how."""
+    methods = [METHOD_REGISTRY[m] for m in settings["methods"] if m in METHOD_REGISTRY]
+    return "".join(
+        [f" ({m.name}'s target nodes: that x their SMC actions / {m.budget_actions}, at least 1)"
+         for m in methods if m.budget_actions is not None]
+        + [f" ({m.name}: an SMC call of its target nodes costs the episode's steps the moves it made)"
+           for m in methods if m.count_primitive_steps])
 
 
 def _code_line(results: dict[str, Any]) -> list[str]:

@@ -1,0 +1,118 @@
+"""How many world moves a run's best SMCs make per test episode, and what they score when the episode's 100 steps
+count moves instead of decisions (docs/results/paper/README.md, "Moves per episode").
+
+An SMC call is one step of the episode's 100 (the package's default and, as far as the paper says, its choice), so
+a hierarchical SMC may make far more than 100 moves in an episode, a flat one at most 100. For each target x method
+of a run directory this tests the best seed (the report's choice: the highest test score; curr over its curricula)
+twice with the paper's protocol (test split, 10 repeats, stochastic policy, evaluation seed 0):
+
+* as trained (``count_primitive_steps`` off): the score (checked against the run's recorded one), the moves per
+  episode (mean, median, 90th percentile, the share of episodes over 100) and the score of the episodes that made
+  at most 100 moves;
+* with ``count_primitive_steps=True``: each call costs the moves it made and is cut at the budget left, so an
+  episode makes at most 100 moves as a flat SMC's does (the policy is the same; it was not trained this way).
+
+    python tools/probe_moves.py /work/runs/paper-containment --kind bring-about --methods base,curr,canon \\
+        --out docs/results/paper/probes/moves-containment.csv
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import dataclasses
+import io
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from pixelworld_env.atomic import atomic_write
+from sb3_smc.envs import make_smc_env, spec_for_smc
+from sb3_smc.evaluation import episode_seed, run_episode
+from sb3_smc.library import SMCLibrary
+from sb3_smc.library.errors import UnknownSMCError
+from sb3_smc.smc import SMC
+
+FIELDS = ("target", "category", "method", "smc", "recorded", "score", "moves_mean", "moves_median", "moves_p90",
+          "over_100", "score_within_100", "score_counting_moves")
+
+
+def best_rows(run: Path, kind: str, methods: list[str]) -> list[dict[str, str]]:
+    """The best seed's row of each target x method (highest test score, the first such row on a tie)."""
+    with open(run / "results.csv", newline="") as handle:
+        rows = [row for row in csv.DictReader(handle) if row["kind"] == kind and row["method"] in methods]
+    best: dict[tuple[str, str], dict[str, str]] = {}
+    for row in rows:
+        key = (row["target"], row["method"])
+        if key not in best or float(row["test_score"]) > float(best[key]["test_score"]):
+            best[key] = row
+    return [best[key] for key in sorted(best, key=lambda k: (k[0], methods.index(k[1])))]
+
+
+def test(smc: SMC, count_moves: bool, repeats: int = 10) -> tuple[list[bool], list[int]]:
+    """Success and moves of every test episode (the evaluation's seeds), calls costing one step or their moves."""
+    spec = spec_for_smc(smc, smc.spec.task.env_id)
+    wrapper = dataclasses.replace(spec.wrapper, count_primitive_steps=count_moves)
+    env = make_smc_env(spec, smc.children, split="test", wrapper=wrapper)
+    try:
+        successes, moves = [], []
+        for index in range(len(env.base.scenes)):
+            for repeat in range(repeats):
+                episode = run_episode(smc, env, index=index, seed=episode_seed(0, repeat, index), record_cells=False)
+                successes.append(episode.success)
+                moves.append(episode.primitive_steps)
+    finally:
+        env.close()
+    return successes, moves
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("runs", nargs="+", type=Path, help="run directories (results.csv and library/)")
+    parser.add_argument("--kind", default="bring-about", choices=("bring-about", "classification"))
+    parser.add_argument("--methods", default="base,curr,canon")
+    parser.add_argument("--out", type=Path, required=True, help="a CSV, written as rows finish (resumable)")
+    args = parser.parse_args()
+    torch.set_num_threads(1)
+    methods = args.methods.split(",")
+    done: list[dict[str, str]] = []
+    if args.out.exists():
+        with open(args.out, newline="") as handle:
+            done = list(csv.DictReader(handle))
+    finished = {(row["target"], row["method"]) for row in done}
+    for run in args.runs:
+        for row in best_rows(run, args.kind, methods):
+            if (row["target"], row["method"]) in finished:
+                continue
+            name = f"{row['curriculum']}@{row['seed']}"
+            try:
+                smc = SMCLibrary.load(run / "library", names=[name])[name]
+            except UnknownSMCError:  # a run resumed on another machine keeps records, not every model
+                print(f"skipped {name}: not in {run / 'library'}", flush=True)
+                continue
+            successes, moves = test(smc, count_moves=False)
+            recorded = float(row["test_score"])
+            if abs(float(np.mean(successes)) - recorded) > 1e-9:
+                sys.exit(f"{name}: tested {np.mean(successes)}, the run recorded {recorded}: not the run's SMC or code")
+            counted, _ = test(smc, count_moves=True) if row["method"] != "base" else (successes, moves)
+            within = [s and m <= 100 for s, m in zip(successes, moves, strict=True)]
+            done.append({"target": row["target"], "category": row["category"], "method": row["method"], "smc": name,
+                         "recorded": f"{recorded:.3f}", "score": f"{np.mean(successes):.3f}",
+                         "moves_mean": f"{np.mean(moves):.1f}", "moves_median": f"{np.median(moves):.0f}",
+                         "moves_p90": f"{np.percentile(moves, 90):.0f}",
+                         "over_100": f"{np.mean(np.array(moves) > 100):.3f}",
+                         "score_within_100": f"{np.mean(within):.3f}",
+                         "score_counting_moves": f"{np.mean(counted):.3f}"})
+            text = io.StringIO()
+            writer = csv.DictWriter(text, fieldnames=FIELDS, lineterminator="\n")
+            writer.writeheader()
+            writer.writerows(done)
+            atomic_write(args.out, text.getvalue())
+            print(json.dumps(done[-1]), flush=True)
+
+
+if __name__ == "__main__":
+    main()
