@@ -20,7 +20,7 @@ selection() {  # the experiment options of a category (base-gru, canon-scaled: t
   # curr-moves: on the 17 bring-about targets)
   case $1 in
     base-gru|canon-scaled) echo "--methods $1 --category all" ;;
-    curr-moves) echo "--methods $1 --targets $("$RUN_ENV/bin/python" -c 'from pixelworld_env.datasets import catalog
+    curr-moves) echo "--methods $1 --targets $("$RUN_ENV/bin/python" -I -c 'from pixelworld_env.datasets import catalog
 from sb3_smc.experiments import level2_targets
 print(",".join(t for t in level2_targets() if catalog.dataset(t).kind == "bring-about"))')" ;;
     *) echo "--category $1" ;;
