@@ -17,6 +17,8 @@ import argparse
 import sys
 from pathlib import Path
 
+from sb3_smc.experiments.design import DEFAULT_METHODS
+
 ROOT = Path(__file__).resolve().parents[1]
 START, END = "<!-- paper-table:start -->", "<!-- paper-table:end -->"
 SECTIONS = ("## Means per kind and category (Fig. 5a/5d)", "## Paired t-tests across concepts")
@@ -45,15 +47,24 @@ KEEP = {  # a table's header -> which of its rows the README keeps
 
 
 def incomplete(table: list[str]) -> set[str]:
-    """The kinds of the means table with fewer concepts than the paper's (the table is partial)."""
-    counts = {(c[0], c[1]): c[2] for c in map(cells, table[2:])}
-    paper = "**paper** (all)"
-    return {kind for kind, label in counts if label == "all" and counts[kind, label] != counts.get((kind, paper))}
+    """The kinds of the means table where one of the paper's methods has no mean over all concepts yet, or which
+    have fewer concepts than the paper's (the table is partial)."""
+    header = cells(table[0])
+    rows = {(c[0], c[1]): c for c in map(cells, table[2:])}
+    out = set()
+    for (kind, label), ours in rows.items():
+        paper = rows.get((kind, "**paper** (all)"))
+        if label != "all" or paper is None:
+            continue
+        if ours[2] != paper[2] or any(ours[i] == "-" and paper[i] not in ("", "-") and header[i] in DEFAULT_METHODS
+                                      for i in range(3, len(header))):
+            out.add(kind)
+    return out
 
 
 def kind_rows(table: list[str]) -> list[str]:
     """``table`` (its lines) with the header and the rows over all concepts of a kind (:data:`KEEP`); in the means
-    table, a kind with fewer concepts than the paper's keeps its categories' rows instead."""
+    table, a kind not whole yet (:func:`incomplete`) keeps its categories' rows instead."""
     keep = next((rule for header, rule in KEEP.items() if table[0].startswith(header)), None)
     if keep is None:
         raise SystemExit(f"the report has a table the README does not know: {table[0]!r}")
