@@ -206,6 +206,7 @@ def test_a_node_whose_calls_cost_their_moves(tmp_path):
     assert not node_spec(left, 0, ()).wrapper.count_primitive_steps
     assert "count_primitive_steps" not in left.settings() and container.settings()["count_primitive_steps"] is True
     assert parse_curriculum(curriculum.to_yaml()).nodes == curriculum.nodes
+    assert "calls cost their moves" in describe(curriculum) and describe(curriculum).count("calls cost") == 1
     with pytest.raises(CurriculumError, match="node 'x': count_primitive_steps must be true or false, got 1"):
         Curriculum("bad", (Node("x", LEFT, count_primitive_steps=1),), ("x",))  # type: ignore[arg-type]
     with pytest.raises(CurriculumError, match="node 'container' is defined differently"):

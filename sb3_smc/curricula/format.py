@@ -474,6 +474,8 @@ def describe(curriculum: Curriculum) -> str:
                 extra.append(f"{node.timesteps:,} steps")
             if node.budget_scale != 1:
                 extra.append(f"budget x{node.budget_scale:g}")
+            if node.count_primitive_steps:
+                extra.append("calls cost their moves")
             head = f"  {mark} {name}" + (f" ({', '.join(extra)})" if extra else "")
             lines.append(head + (f" uses {', '.join(node.uses)}" if node.uses else ""))
     lines.append("(* = target)")
