@@ -26,7 +26,7 @@ from pixelworld_env.validation import check_int, check_seed
 from sb3_smc.envs import make_smc_env, spec_for_smc
 from sb3_smc.errors import SMCError
 from sb3_smc.policies import sample_action
-from sb3_smc.records import EvaluationRecord
+from sb3_smc.records import EvaluationRecord, WrapperSettings
 from sb3_smc.smc import SMC
 
 if TYPE_CHECKING:
@@ -209,15 +209,19 @@ def run_episode(smc: SMC, env: HierarchicalSMCWrapper, *, index: int | None = No
 
 
 def make_evaluation_env(smc: SMC, env_id: str | None = None, *, split: str = "test", max_steps: int | None = None,
-                        env_kwargs: Mapping[str, Any] | None = None) -> HierarchicalSMCWrapper:
+                        env_kwargs: Mapping[str, Any] | None = None,
+                        wrapper: WrapperSettings | None = None) -> HierarchicalSMCWrapper:
     """The environment ``smc`` was trained in (:func:`sb3_smc.envs.make_smc_env` with its spec), on ``split``.
 
-    ``env_id`` defaults to the SMC's own task; ``max_steps`` replaces the episode length it was trained with. The
-    wrapper reports the cells of every move (those inside SMC calls too) for :func:`run_episode`.
+    ``env_id`` defaults to the SMC's own task; ``wrapper`` replaces the wrapper settings it was trained with (e.g.
+    ``count_primitive_steps``), ``max_steps`` the episode length. The wrapper reports the cells of every move (those
+    inside SMC calls too) for :func:`run_episode`.
     """
     env_id = _env_id(smc, env_id)
     spec = spec_for_smc(smc, env_id)
-    wrapper = spec.wrapper if max_steps is None else dataclasses.replace(spec.wrapper, max_steps=max_steps)
+    wrapper = wrapper or spec.wrapper
+    if max_steps is not None:
+        wrapper = dataclasses.replace(wrapper, max_steps=max_steps)
     return make_smc_env(spec, smc.children, env_id=env_id, split=split, wrapper=wrapper, env_kwargs=env_kwargs,
                         record_cells=True)
 
@@ -240,7 +244,7 @@ def start_seed(split: str, index: int) -> int:
 
 def evaluate(smc: SMC, env_id: str | None = None, *, split: str = "test", repeats: int = 10, seed: int = 0,
              max_steps: int | None = None, record_cells: bool = True, env_kwargs: Mapping[str, Any] | None = None,
-             keep: bool = True, starts: int | None = None) -> EvaluationResult:
+             keep: bool = True, starts: int | None = None, wrapper: WrapperSettings | None = None) -> EvaluationResult:
     """The paper's test: every environment of ``split`` run ``repeats`` times, stochastic policy.
 
     On a task without datasets (an :class:`~sb3_smc.tasks.SMCTask` on any Gymnasium environment) the environments
@@ -251,7 +255,8 @@ def evaluate(smc: SMC, env_id: str | None = None, *, split: str = "test", repeat
     ``env_id`` defaults to the task the SMC was trained on. Returns an :class:`EvaluationResult` with the overall
     ``score`` (mean of final-step reward > 0 over environments x repeats), one :class:`EnvironmentResult` per
     environment (its score, label and episodes) and, per episode, the visited cells. Deterministic for a given
-    ``seed``. The SMC's children, primitive-action setting and wrapper settings are those of its spec. With
+    ``seed``. The SMC's children, primitive-action setting and wrapper settings are those of its spec (``wrapper``
+    replaces the latter, e.g. to count the moves of calls against the episode's steps). With
     ``keep=True`` (default) the result's :class:`~sb3_smc.records.EvaluationRecord` is added to
     ``smc.evaluations`` (replacing an earlier one of the same env id and split), so a library saves it.
     """
@@ -259,7 +264,7 @@ def evaluate(smc: SMC, env_id: str | None = None, *, split: str = "test", repeat
     seed = check_seed(seed, "evaluation seed")
     env_id = _env_id(smc, env_id)
     smc.check_layout()
-    env = make_evaluation_env(smc, env_id, split=split, max_steps=max_steps, env_kwargs=env_kwargs)
+    env = make_evaluation_env(smc, env_id, split=split, max_steps=max_steps, env_kwargs=env_kwargs, wrapper=wrapper)
     try:
         base = env.base
         if base.kind != smc.kind:

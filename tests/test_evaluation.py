@@ -10,6 +10,7 @@ from pixelworld_env.datasets.loading import load_dataset
 from sb3_smc.evaluation import evaluate
 from sb3_smc.layout import smc_action_names
 from sb3_smc.policies import ScriptedPolicy
+from sb3_smc.records import WrapperSettings
 from sb3_smc.smc import SMC
 from tests.helpers import UniformPolicy
 
@@ -121,6 +122,19 @@ def test_hierarchical_smc_records_child_moves_and_calls() -> None:
         assert e.actions[0] == len(ACTIONS)
         # the child's moves are in the visited cells although the parent made no move itself
         assert len(e.cells) == e.primitive_steps + 1
+
+
+def test_wrapper_settings_replace_the_specs_in_the_test() -> None:
+    """``wrapper=`` replaces the SMC's wrapper settings for the test: with the calls' moves counted against an
+    episode of 3 steps, no episode makes more than 3 moves; as trained (a call one step), some make more."""
+    walker = scripted("walker", corner_rule)
+    parent = scripted("parent", parent_rule, children=(walker,))
+    as_trained = evaluate(parent, CORNER_ID, repeats=1, keep=False)
+    counted = evaluate(parent, CORNER_ID, repeats=1, keep=False,
+                       wrapper=WrapperSettings(count_primitive_steps=True, max_steps=3))
+    assert max(e.primitive_steps for e in as_trained.episodes) > 3
+    assert max(e.primitive_steps for e in counted.episodes) <= 3 < len(counted.episodes)
+    assert counted.score < as_trained.score == 1.0
 
 
 def test_kind_mismatch_is_an_error() -> None:

@@ -3,8 +3,8 @@ count moves instead of decisions (docs/results/paper/README.md, "Moves per episo
 
 An SMC call is one step of the episode's 100 (the package's default and, as far as the paper says, its choice), so
 a hierarchical SMC may make far more than 100 moves in an episode, a flat one at most 100. For each target x method
-of a run directory this tests the best seed (the report's choice: the highest test score; curr over its curricula)
-twice with the paper's protocol (test split, 10 repeats, stochastic policy, evaluation seed 0):
+of a run directory this tests the best seed (the run's ``reported`` row: the highest test score; curr over its
+curricula) twice with the paper's protocol (:func:`sb3_smc.evaluate`: test split, 10 repeats, evaluation seed 0):
 
 * as trained (``count_primitive_steps`` off): the score (checked against the run's recorded one), the moves per
   episode (mean, median, 90th percentile, the share of episodes over 100) and the score of the episodes that made
@@ -25,13 +25,14 @@ import io
 import json
 import sys
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import torch
 
 from pixelworld_env.atomic import atomic_write
-from sb3_smc.envs import make_smc_env, spec_for_smc
-from sb3_smc.evaluation import episode_seed, run_episode
+from sb3_smc.envs import spec_for_smc
+from sb3_smc.evaluation import evaluate
 from sb3_smc.library import SMCLibrary
 from sb3_smc.library.errors import UnknownSMCError
 from sb3_smc.smc import SMC
@@ -40,33 +41,19 @@ FIELDS = ("target", "category", "method", "smc", "recorded", "score", "moves_mea
           "over_100", "score_within_100", "score_counting_moves")
 
 
-def best_rows(run: Path, kind: str, methods: list[str]) -> list[dict[str, str]]:
-    """The best seed's row of each target x method (highest test score, the first such row on a tie)."""
-    with open(run / "results.csv", newline="") as handle:
-        rows = [row for row in csv.DictReader(handle) if row["kind"] == kind and row["method"] in methods]
-    best: dict[tuple[str, str], dict[str, str]] = {}
-    for row in rows:
-        key = (row["target"], row["method"])
-        if key not in best or float(row["test_score"]) > float(best[key]["test_score"]):
-            best[key] = row
-    return [best[key] for key in sorted(best, key=lambda k: (k[0], methods.index(k[1])))]
+def best_rows(run: Path, kind: str, methods: list[str]) -> list[dict[str, Any]]:
+    """The best seed's row of each target x method of ``kind`` (the run's ``reported`` rows), by target, then in the
+    order of ``methods``."""
+    rows = json.loads((run / "results.json").read_text())["reported"]
+    chosen = [row for row in rows if row["kind"] == kind and row["method"] in methods]
+    return sorted(chosen, key=lambda row: (row["target"], methods.index(row["method"])))
 
 
-def test(smc: SMC, count_moves: bool, repeats: int = 10) -> tuple[list[bool], list[int]]:
-    """Success and moves of every test episode (the evaluation's seeds), calls costing one step or their moves."""
-    spec = spec_for_smc(smc, smc.spec.task.env_id)
-    wrapper = dataclasses.replace(spec.wrapper, count_primitive_steps=count_moves)
-    env = make_smc_env(spec, smc.children, split="test", wrapper=wrapper)
-    try:
-        successes, moves = [], []
-        for index in range(len(env.base.scenes)):
-            for repeat in range(repeats):
-                episode = run_episode(smc, env, index=index, seed=episode_seed(0, repeat, index), record_cells=False)
-                successes.append(episode.success)
-                moves.append(episode.primitive_steps)
-    finally:
-        env.close()
-    return successes, moves
+def test(smc: SMC, count_moves: bool) -> tuple[list[bool], list[int]]:
+    """Success and moves of every test episode of the paper's test, calls costing one step or their moves."""
+    wrapper = dataclasses.replace(spec_for_smc(smc, smc.spec.task.env_id).wrapper, count_primitive_steps=count_moves)
+    result = evaluate(smc, record_cells=False, keep=False, wrapper=wrapper)
+    return [e.success for e in result.episodes], [e.primitive_steps for e in result.episodes]
 
 
 def main() -> None:
