@@ -3,7 +3,7 @@ a failing method tries (docs/results/paper/README.md, "Where a method fails").
 
 The node's children are the two best seeds of each node it uses in a run's library (as the curriculum trainer
 picks them); the node is trained with each ``--seeds`` seed, with ``--timesteps`` / ``--algo`` / ``--rnn`` /
-``--smc-weight`` (the signal bias's weight of each SMC action) / ``--count-moves`` (a call costs the episode its
+``--smc-weight`` (the signal bias's weight of the SMC actions together) / ``--count-moves`` (a call costs the episode its
 moves) changed, and evaluated on the test split (10
 repeats). One JSON record per seed goes to ``--out`` (the spec, the training returns, selected update, test score,
 wall time); a seed whose record is there is not trained again.
@@ -40,7 +40,9 @@ def main() -> None:
     parser.add_argument("--timesteps", type=int, default=None)
     parser.add_argument("--algo", default=None)
     parser.add_argument("--rnn", default=None)
-    parser.add_argument("--smc-weight", type=float, default=None, help="signal-bias weight of each SMC action")
+    parser.add_argument("--smc-weight", type=float, default=None,
+                        help="signal-bias weight of the SMC actions together (default 20: with moves, 20/41 of the "
+                             "initial probability)")
     parser.add_argument("--count-moves", action="store_true",
                         help="a call costs the episode the moves it made, not one step (count_primitive_steps)")
     parser.add_argument("--out", required=True)
