@@ -798,3 +798,18 @@ def test_a_record_that_stopped_at_the_largest_return_is_trained_alike_with_the_w
     assert _trained_alike(whole, record([0.2, float("nan"), 1.0], 2, 6_016))
     assert not _trained_alike(whole, record([0.3, float("nan"), 1.0], 2, 6_016))  # trained otherwise before
     assert not _trained_alike(whole, record([0.2, 1.0], 1, 4_016))
+
+
+def test_the_probe_picks_the_worst_seeds_as_the_original_release_does():
+    """``tools/probe_node.py --children worst``: the release's selection helper (a stable ascending sort of the seeds
+    by training return, the first two kept); ``best``: the package's rule."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("probe_node", Path(__file__).parents[1] / "tools" / "probe_node.py")
+    probe_node = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(probe_node)
+    records = {0: _record(0.2), 1: _record(0.9), 2: _record(None), 3: _record(0.9), 4: _record(0.5)}
+    assert probe_node.chosen_seeds(records, "best") == [1, 3]
+    assert probe_node.chosen_seeds(records, "worst") == [2, 0]  # never-selected first, then the lowest return
+    tied = {s: _record(1.0) for s in range(5)}
+    assert probe_node.chosen_seeds(tied, "worst") == probe_node.chosen_seeds(tied, "best") == [0, 1]

@@ -2,7 +2,8 @@
 a failing method tries (docs/results/paper/README.md, "Where a method fails").
 
 The node's children are the two best seeds of each node it uses in a run's library (as the curriculum trainer
-picks them); the node is trained with each ``--seeds`` seed, with ``--timesteps`` / ``--algo`` / ``--rnn`` /
+picks them; ``--children worst``: the two worst, as the original release's selection helper picks them, sorting the
+seeds by training return in ascending order and keeping the first two); the node is trained with each ``--seeds`` seed, with ``--timesteps`` / ``--algo`` / ``--rnn`` /
 ``--smc-weight`` (the signal bias's weight of the SMC actions together) / ``--count-moves`` (a call costs the episode its
 moves) changed, and evaluated on the test split (10
 repeats). One JSON record per seed goes to ``--out`` (the spec, the training returns, selected update, test score,
@@ -28,7 +29,21 @@ from sb3_smc.curricula import resolve_curriculum
 from sb3_smc.curricula.jobs import DEFAULT_REUSE, REUSE, file_stem, node_records, node_spec, rank_seeds
 from sb3_smc.evaluation import evaluate
 from sb3_smc.library import SMCLibrary, storage
+from sb3_smc.records import TrainingRecord
 from sb3_smc.training import train_smc
+
+
+def chosen_seeds(records: dict[int, TrainingRecord], which: str) -> list[int]:
+    """The seeds a caller gets: the best (:func:`rank_seeds`) or the worst; the worst as a stable ascending sort by
+    training return over the seeds in order keeps them (a seed that never selected an update first)."""
+    k = REUSE[DEFAULT_REUSE]
+    if which == "best":
+        return rank_seeds(records)[:k]
+
+    def key(seed: int) -> tuple[int, float, int]:
+        value = records[seed].selected_return
+        return (0, 0.0, seed) if value is None else (1, value, seed)
+    return sorted(records, key=key)[:k]
 
 
 def main() -> None:
@@ -45,6 +60,9 @@ def main() -> None:
                              "initial probability)")
     parser.add_argument("--count-moves", action="store_true",
                         help="a call costs the episode the moves it made, not one step (count_primitive_steps)")
+    parser.add_argument("--children", choices=("best", "worst"), default="best",
+                        help="which seeds of each node it uses: the best (the paper's text, the package's rule) or the "
+                             "worst (the original release's selection helper)")
     parser.add_argument("--out", required=True)
     args = parser.parse_args()
     torch.set_num_threads(1)
@@ -53,8 +71,8 @@ def main() -> None:
     manifest, where = storage.read_manifest(Path(args.library))
     library_entries = storage.check_manifest(manifest, where)
     children = tuple(f"{used}@{seed}" for used in node.uses
-                     for seed in rank_seeds({s: r for s, r in node_records(library_entries, used).items()
-                                             if r is not None})[:REUSE[DEFAULT_REUSE]])
+                     for seed in chosen_seeds({s: r for s, r in node_records(library_entries, used).items()
+                                               if r is not None}, args.children))
     library = SMCLibrary.load(args.library, names=list(children))
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
