@@ -5,6 +5,10 @@
 #                                                base-gru: the second flat baseline, method base-gru on all 51 targets;
 #                                                canon-scaled: canon with its budget x SMC actions / 8, all 51;
 #                                                curr-moves: curr whose calls cost their moves, the 17 bring-about)
+#   tools/paper_table.sh continue                the queue (docs/results/paper/queue.txt), on this machine or a new one:
+#                                                waits for a running `run`, then for each category whose records are not
+#                                                complete sets up its commit's worktree and venv (once), restores its run
+#                                                directory from the kept records (once) and runs it
 #   tools/paper_table.sh keep <category> [repo]   copy a run's records (no models) into docs/results/paper/<category>
 #   tools/paper_table.sh partial <category>       at a session's end: tabulate what the running category has finished
 #                                                (--no-train), keep it and make its partial report
@@ -27,7 +31,54 @@ print(",".join(t for t in level2_targets() if catalog.dataset(t).kind == "bring-
   esac
 }
 
+complete() {  # whether the results.json $1 says its run is complete
+  [ -f "$1" ] && python3 -c 'import json, sys; sys.exit(not json.load(open(sys.argv[1]))["complete"])' "$1"
+}
+
+environment() {  # the venv of commit $1 (a worktree of it, found or added, installed into $RUNS/env-$1, once)
+  local commit=$1 src env
+  src=$(git -C "$repo" worktree list --porcelain | awk -v c="$commit" '/^worktree /{w=$2} /^HEAD /{if (index($2, c) == 1) print w}' | head -1)
+  if [ -z "$src" ]; then src=$RUNS/src-$commit; git -C "$repo" worktree add --detach "$src" "$commit" >&2; fi
+  env=$RUNS/env-$commit
+  if [ ! -x "$env/bin/sb3-smc" ]; then
+    python3 -m venv "$env" >&2 && "$env/bin/pip" install -q torch==2.13.0 >&2 && "$env/bin/pip" install -q -e "$src" >&2
+  fi
+  echo "$env"
+}
+
+reuse_path() {  # --reuse-from of a queue line: - (none), pretrained, or pretrained@<commit> (extracted once)
+  case $1 in
+    -) echo "" ;;
+    pretrained@*)
+      local commit=${1#pretrained@} dst=$RUNS/pretrained-${1#pretrained@}
+      if [ ! -f "$dst/manifest.json" ]; then
+        rm -rf "$dst.tmp" && mkdir -p "$dst.tmp"
+        git -C "$repo" archive "$commit" sb3_smc/library/data/pretrained | tar -x -C "$dst.tmp"
+        mv "$dst.tmp/sb3_smc/library/data/pretrained" "$dst" && rm -rf "$dst.tmp"
+      fi
+      echo "$dst" ;;
+    *) echo "$1" ;;
+  esac
+}
+
 case ${1:-} in
+  continue)
+    mkdir -p "$RUNS" && exec 9>"$RUNS/.paper_table.lock"
+    flock -n 9 || { echo "another 'paper_table.sh continue' is running" >&2; exit 1; }
+    while pgrep -f "paper_table.sh run" >/dev/null; do sleep 60; done
+    grep -v '^#' "$repo/docs/results/paper/queue.txt" | while read -r cat commit reuse; do
+      [ -n "$cat" ] || continue
+      if complete "$RUNS/paper-$cat/results.json" || complete "$repo/docs/results/paper/$cat/results.json"; then
+        echo "=== $cat: complete"; continue
+      fi
+      env=$(environment "$commit")
+      kept=$repo/docs/results/paper/$cat; dir=$RUNS/paper-$cat
+      if [ ! -f "$dir/run.json" ] && [ -f "$kept/run.json" ]; then  # a new machine: resume from the kept records
+        mkdir -p "$dir" && cp "$kept/run.json" "$dir/"
+        if [ -d "$kept/evaluations" ]; then cp -r "$kept/evaluations" "$dir/"; fi
+      fi
+      RUN_ENV=$env REUSE_FROM=$(reuse_path "$reuse") nice -n 5 "$0" run "$cat" < /dev/null
+    done ;;
   run)
     shift
     export OMP_NUM_THREADS=1 MKL_NUM_THREADS=1
@@ -61,5 +112,6 @@ case ${1:-} in
     done
     "$repo/.venv/bin/sb3-smc" report "${dirs[@]}" --out "$repo/docs/results/paper" --no-behaviour
     "$repo/.venv/bin/python" "$repo/tools/readme_table.py" ;;
-  *) echo "usage: $0 run [categories...] | keep <category> [repo] | partial <category> | report" >&2; exit 2 ;;
+  *) echo "usage: $0 run [categories...] | continue | keep <category> [repo] | partial <category> | report" >&2
+     exit 2 ;;
 esac
