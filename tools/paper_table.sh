@@ -4,7 +4,8 @@
 #   tools/paper_table.sh run [categories...]     train + evaluate (default: search objects containment objcon;
 #                                                base-gru: the second flat baseline, method base-gru on all 51 targets;
 #                                                canon-scaled: canon with its budget x SMC actions / 8, all 51;
-#                                                curr-moves: curr whose calls cost their moves, the 17 bring-about)
+#                                                curr-moves, curr-moves-cl: curr whose calls cost their moves,
+#                                                the 17 bring-about, the 34 classification targets)
 #   tools/paper_table.sh continue                the queue (docs/results/paper/queue.txt), on this machine or a new one:
 #                                                waits for a running `run`, then for each category whose records are not
 #                                                complete sets up its commit's worktree and venv (once), restores its run
@@ -21,12 +22,14 @@ RUNS=${RUNS:-/work/runs}; RUN_ENV=${RUN_ENV:-/work/run-env}
 repo=$(cd "$(dirname "$0")/.." && pwd)
 
 selection() {  # the experiment options of a category (base-gru, canon-scaled: that method on all 51 targets;
-  # curr-moves: on the 17 bring-about targets)
+  # curr-moves: on the 17 bring-about targets; curr-moves-cl: on the 34 classification targets)
   case $1 in
     base-gru|canon-scaled) echo "--methods $1 --category all" ;;
-    curr-moves) echo "--methods $1 --targets $("$RUN_ENV/bin/python" -I -c 'from pixelworld_env.datasets import catalog
+    curr-moves|curr-moves-cl) echo "--methods curr-moves --targets $("$RUN_ENV/bin/python" -I -c 'import sys
+from pixelworld_env.datasets import catalog
 from sb3_smc.experiments import level2_targets
-print(",".join(t for t in level2_targets() if catalog.dataset(t).kind == "bring-about"))')" ;;
+kind = "classification" if sys.argv[1] == "curr-moves-cl" else "bring-about"
+print(",".join(t for t in level2_targets() if catalog.dataset(t).kind == kind))' "$1")" ;;
     *) echo "--category $1" ;;
   esac
 }
@@ -107,7 +110,7 @@ case ${1:-} in
     "$repo/.venv/bin/sb3-smc" report "$repo/docs/results/paper/$cat" --no-behaviour ;;
   report)
     dirs=()
-    for cat in search objects containment objcon base-gru canon-scaled curr-moves; do
+    for cat in search objects containment objcon base-gru canon-scaled curr-moves curr-moves-cl; do
       if [ -f "$repo/docs/results/paper/$cat/results.json" ]; then dirs+=("$repo/docs/results/paper/$cat"); fi
     done
     "$repo/.venv/bin/sb3-smc" report "${dirs[@]}" --out "$repo/docs/results/paper" --no-behaviour
