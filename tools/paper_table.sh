@@ -10,6 +10,8 @@
 #                                                waits for a running `run`, then for each category whose records are not
 #                                                complete sets up its commit's worktree and venv (once), restores its run
 #                                                directory from the kept records (once) and runs it
+#   tools/paper_table.sh checkpoint              at a session's end: keep every queued category this machine has run
+#                                                (partial while unfinished), then the report
 #   tools/paper_table.sh keep <category> [repo]   copy a run's records (no models) into docs/results/paper/<category>
 #   tools/paper_table.sh partial <category>       at a session's end: tabulate what the running category has finished
 #                                                (--no-train), keep it and make its partial report
@@ -82,6 +84,18 @@ case ${1:-} in
       fi
       RUN_ENV=$env REUSE_FROM=$(reuse_path "$reuse") nice -n 5 "$0" run "$cat" < /dev/null
     done ;;
+  checkpoint)
+    grep -v '^#' "$repo/docs/results/paper/queue.txt" | while read -r cat commit reuse; do
+      if [ -z "$cat" ] || [ ! -f "$RUNS/paper-$cat/run.json" ] || complete "$repo/docs/results/paper/$cat/results.json"
+      then continue; fi
+      echo "=== checkpoint $cat $(date -Is)"
+      if complete "$RUNS/paper-$cat/results.json"; then
+        "$0" keep "$cat" && "$repo/.venv/bin/sb3-smc" report "$repo/docs/results/paper/$cat" --no-behaviour
+      else
+        RUN_ENV=$(environment "$commit") "$0" partial "$cat" < /dev/null
+      fi
+    done
+    "$0" report ;;
   run)
     shift
     export OMP_NUM_THREADS=1 MKL_NUM_THREADS=1
@@ -115,6 +129,6 @@ case ${1:-} in
     done
     "$repo/.venv/bin/sb3-smc" report "${dirs[@]}" --out "$repo/docs/results/paper" --no-behaviour
     "$repo/.venv/bin/python" "$repo/tools/readme_table.py" ;;
-  *) echo "usage: $0 run [categories...] | continue | keep <category> [repo] | partial <category> | report" >&2
+  *) echo "usage: $0 run [categories...] | continue | checkpoint | keep <category> [repo] | partial <category> | report" >&2
      exit 2 ;;
 esac
