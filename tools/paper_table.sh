@@ -36,6 +36,10 @@ print(",".join(t for t in level2_targets() if catalog.dataset(t).kind == kind))'
   esac
 }
 
+queue() {  # the queue's lines: category, commit, --reuse-from
+  grep -v '^#' "$repo/docs/results/paper/queue.txt"
+}
+
 complete() {  # whether the results.json $1 says its run is complete
   [ -f "$1" ] && python3 -c 'import json, sys; sys.exit(not json.load(open(sys.argv[1]))["complete"])' "$1"
 }
@@ -71,7 +75,7 @@ case ${1:-} in
     mkdir -p "$RUNS" && exec 9>"$RUNS/.paper_table.lock"
     flock -n 9 || { echo "another 'paper_table.sh continue' is running" >&2; exit 1; }
     while pgrep -f "paper_table.sh run" >/dev/null; do sleep 60; done
-    grep -v '^#' "$repo/docs/results/paper/queue.txt" | while read -r cat commit reuse; do
+    queue | while read -r cat commit reuse; do
       [ -n "$cat" ] || continue
       if complete "$RUNS/paper-$cat/results.json" || complete "$repo/docs/results/paper/$cat/results.json"; then
         echo "=== $cat: complete"; continue
@@ -85,15 +89,11 @@ case ${1:-} in
       RUN_ENV=$env REUSE_FROM=$(reuse_path "$reuse") nice -n 5 "$0" run "$cat" < /dev/null
     done ;;
   checkpoint)
-    grep -v '^#' "$repo/docs/results/paper/queue.txt" | while read -r cat commit reuse; do
+    queue | while read -r cat commit reuse; do
       if [ -z "$cat" ] || [ ! -f "$RUNS/paper-$cat/run.json" ] || complete "$repo/docs/results/paper/$cat/results.json"
       then continue; fi
       echo "=== checkpoint $cat $(date -Is)"
-      if complete "$RUNS/paper-$cat/results.json"; then
-        "$0" keep "$cat" && "$repo/.venv/bin/sb3-smc" report "$repo/docs/results/paper/$cat" --no-behaviour
-      else
-        RUN_ENV=$(environment "$commit") "$0" partial "$cat" < /dev/null
-      fi
+      RUN_ENV=$(environment "$commit") "$0" partial "$cat" < /dev/null  # a complete run: tabulated again, kept
     done
     "$0" report ;;
   run)

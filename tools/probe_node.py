@@ -3,9 +3,9 @@ a failing method tries (docs/results/paper/README.md, "Where a method fails").
 
 The node's children are the two best seeds of each node it uses in a run's library (as the curriculum trainer
 picks them; ``--children worst``: the two worst, as the original release's selection helper picks them, sorting the
-seeds by training return in ascending order and keeping the first two); the node is trained with each ``--seeds`` seed, with ``--timesteps`` / ``--algo`` / ``--rnn`` /
-``--smc-weight`` (the signal bias's weight of the SMC actions together) / ``--count-moves`` (a call costs the episode its
-moves) changed, and evaluated on the test split (10
+seeds by training return in ascending order and keeping the first two); the node is trained with each ``--seeds``
+seed, with ``--timesteps`` / ``--algo`` / ``--rnn`` / ``--smc-weight`` (the signal bias's weight of the SMC actions
+together) / ``--count-moves`` (a call costs the episode its moves) changed, and evaluated on the test split (10
 repeats). One JSON record per seed goes to ``--out`` (the spec, the training returns, selected update, test score,
 wall time); a seed whose record is there is not trained again.
 
