@@ -558,8 +558,9 @@ def test_the_whole_table_report_with_canon_scaled_and_curr_moves(tmp_path):
 
 def test_the_readme_gets_the_whole_tables_means_and_tests_from_the_report(tmp_path):
     """``tools/readme_table.py`` copies the report's means and t-tests per kind between the README's markers (a
-    kind's categories only while it has no mean over all its concepts), says when the table is partial, leaves the
-    rest of the README as it was, and refuses a README without its markers."""
+    kind's categories only while it has no mean over all its concepts), says when the table is partial (which run
+    directories, and whether the paper's methods are whole), leaves the rest of the README as it was, and refuses a
+    README without its markers."""
     import importlib.util
 
     spec = importlib.util.spec_from_file_location("readme_table", ROOT / "tools" / "readme_table.py")
@@ -606,6 +607,22 @@ def test_the_readme_gets_the_whole_tables_means_and_tests_from_the_report(tmp_pa
     [report] = write_report([tmp_path / "run"], out=tmp_path / "docs", behaviour=False)
     readme_table.main(["--report", str(report), "--readme", str(readme)])
     assert "**partial: the table is still being run**" in readme.read_text()
+    # over several directories: the partial ones by name, and whether the paper's methods are whole all the same
+    def mark_partial(directory: Path) -> None:
+        results = json.loads((directory / "results.json").read_text())
+        (directory / "results.json").write_text(json.dumps({**results, "complete": False, "missing": ["x@0"]}))
+
+    mark_partial(tmp_path / "curr")  # curr on 33 of 34: classification is not whole
+    [report] = write_report([tmp_path / "flat", tmp_path / "curr"], out=tmp_path / "docs", behaviour=False)
+    readme_table.main(["--report", str(report), "--readme", str(readme)])
+    assert "report.md), **partial: `curr` is still being run**; scores in %" in readme.read_text()
+    _synthetic_table(tmp_path / "more", everything, ["curr"], score)
+    mark_partial(tmp_path / "flat")
+    mark_partial(tmp_path / "more")
+    [report] = write_report([tmp_path / "flat", tmp_path / "more"], out=tmp_path / "docs", behaviour=False)
+    readme_table.main(["--report", str(report), "--readme", str(readme)])
+    assert ("report.md), **partial: `flat` and `more` are still being run**; the paper's methods are whole; scores"
+            in readme.read_text())
     readme.write_text("# no markers\n")
     with pytest.raises(SystemExit, match="needs exactly one <!-- paper-table:start -->"):
         readme_table.main(["--report", str(report), "--readme", str(readme)])

@@ -14,6 +14,7 @@ Usage::
 from __future__ import annotations
 
 import argparse
+import re
 import sys
 from pathlib import Path
 
@@ -73,24 +74,46 @@ def kind_rows(table: list[str]) -> list[str]:
                         if (cells(row)[1] != "all" if cells(row)[0] in partial else keep(cells(row)))]
 
 
+def tables_of(report: str, heading: str) -> list[list[str]]:
+    """The Markdown tables (their lines) of the report's section ``heading``."""
+    tables: list[list[str]] = []
+    previous = ""
+    for line in section(report, heading):
+        if line.startswith("|"):
+            if not previous.startswith("|"):
+                tables.append([])
+            tables[-1].append(line)
+        previous = line
+    return tables
+
+
+PARTIAL = re.compile(r"^\*\*Partial results\*\*(?: \((?P<run>[^)]+)\))?:", re.MULTILINE)
+
+
+def partial_note(report: str) -> str:
+    """What of the table is still being run, for the block's first line: nothing when the report is whole; else the
+    run directories the report names as partial, and whether the paper's methods are whole over both kinds all
+    the same."""
+    runs = [match["run"] for match in PARTIAL.finditer(report)]
+    if not runs:
+        return ""
+    if not all(runs):  # a report over one directory names none
+        return ", **partial: the table is still being run**"
+    names = " and ".join(", ".join(f"`{run}`" for run in runs).rsplit(", ", 1))
+    whole = not any(incomplete(table) for table in tables_of(report, SECTIONS[0])
+                    if table[0].startswith("| kind | category |"))
+    return (f", **partial: {names} {'is' if len(runs) == 1 else 'are'} still being run**"
+            + ("; the paper's methods are whole" if whole else ""))
+
+
 def block(report: str, source: str) -> str:
-    """The README's block: a line on what it is (partial or whole), then the two sections' rows per kind, headed in
-    bold."""
-    partial = "**Partial results**" in report
-    lines = [START, "", f"From [the whole table's report]({source})" + (
-        ", **partial: the table is still being run**" if partial else "")
-        + "; scores in %, ours beside the paper's (Hay et al., AAAI-18).", ""]
+    """The README's block: a line on what it is (whole, or what is still being run), then the two sections' rows per
+    kind, headed in bold."""
+    lines = [START, "", f"From [the whole table's report]({source})" + partial_note(report)
+             + "; scores in %, ours beside the paper's (Hay et al., AAAI-18).", ""]
     for heading in SECTIONS:  # their tables only: the report explains them
-        tables: list[list[str]] = []
-        previous = ""
-        for line in section(report, heading):
-            if line.startswith("|"):
-                if not previous.startswith("|"):
-                    tables.append([])
-                tables[-1].append(line)
-            previous = line
         lines += [f"**{heading.removeprefix('## ')}**", ""]
-        for table in tables:
+        for table in tables_of(report, heading):
             lines += [*kind_rows(table), ""]
     return "\n".join([*lines, END])
 
