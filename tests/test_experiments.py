@@ -735,6 +735,39 @@ def test_the_whole_table_report_over_two_directories(tmp_path):
     assert not (tmp_path / "twice").exists()
 
 
+def test_the_report_gives_means_and_tests_over_seeds_beside_the_best_seeds(tmp_path):
+    """Besides the paper's best seed per concept, the report gives each kind's and category's means from every
+    concept's mean over its seeds, and the hierarchical-against-flat t-tests over those means (checked by hand): a
+    flat method that learns in one seed of three keeps its best seed but not its mean."""
+    from pixelworld_env.datasets import catalog
+
+    targets = [t for t in level2_targets() if catalog.dataset(t).category == "objects"
+               and catalog.dataset(t).kind == "bring-about"][:4]
+    seeds = {"base": lambda k: [0.9, 0.05 * k, 0.0],  # learns in seed 0 only
+             "curr": lambda k: [0.95, 0.9 - 0.1 * k, 0.85]}
+    rows = [{"target": t, "kind": "bring-about", "category": "objects", "method": m, "curriculum": m, "seed": seed,
+             "test_score": value}
+            for k, t in enumerate(targets) for m, of in seeds.items() for seed, value in enumerate(of(k))]
+    run = tmp_path / "run"
+    run.mkdir()
+    (run / "results.json").write_text(json.dumps({
+        "rows": rows, "reported": reported(rows), "wall_time_s": 60.0, "command": "sb3-smc experiment", "machine": {},
+        "settings": {"methods": ["base", "curr"], "targets": targets, "seeds": 3, "timesteps": 400_000,
+                     "repeats": 10, "workers": 1, "backend": "local"}}))
+    [path] = write_report(run, out=tmp_path / "report", behaviour=False)
+    text = path.read_text().split("## Over seeds")[1]
+    means = {m: np.array([np.mean(of(k)) for k in range(4)]) for m, of in seeds.items()}
+    se = {m: v.std(ddof=1) / 2 for m, v in means.items()}
+    assert _row_cells(text, "| bring-about | all |") == [
+        "bring-about", "all", "4", f"{100 * means['base'].mean():.1f} ± {100 * se['base']:.1f}",
+        f"{100 * means['curr'].mean():.1f} ± {100 * se['curr']:.1f}"]
+    diffs = means["curr"] - means["base"]
+    t_hand = diffs.mean() / (diffs.std(ddof=1) / 2)
+    assert _row_cells(text, "| bring-about | curr vs base |")[2:5] == ["4", f"{t_hand:.2f}", "3"]
+    best = path.read_text().split("## Means per kind")[1]  # the best seeds: base at 90.0 on every concept
+    assert _row_cells(best, "| bring-about | all |")[3] == "90.0 ± 0.0"
+
+
 @pytest.mark.parametrize("horizontal", [False, True])
 def test_bar_panels_leave_no_empty_band_under_the_legend(tmp_path, horizontal):
     """The legend on top, the panels right under it, the caption below (a caption placed as a bottom suptitle once

@@ -124,7 +124,7 @@ case ${1:-} in
     "$repo/.venv/bin/sb3-smc" report "$repo/docs/results/paper/$cat" --no-behaviour ;;
   report)
     dirs=()
-    for cat in search objects containment objcon base-gru canon-scaled curr-moves curr-moves-cl; do
+    for cat in $(queue | awk '{print $1}'); do
       if [ -f "$repo/docs/results/paper/$cat/results.json" ]; then dirs+=("$repo/docs/results/paper/$cat"); fi
     done
     "$repo/.venv/bin/sb3-smc" report "${dirs[@]}" --out "$repo/docs/results/paper" --no-behaviour
