@@ -768,6 +768,25 @@ def test_the_report_gives_means_and_tests_over_seeds_beside_the_best_seeds(tmp_p
     assert _row_cells(best, "| bring-about | all |")[3] == "90.0 ± 0.0"
 
 
+def test_the_concept_figures_name_only_the_methods_of_their_kind(tmp_path, monkeypatch):
+    """Fig. 5b/5e: the bring-about figure has no CNN in its bars or legend (the CNN classifies only); the category
+    figure, with both kinds, has every method."""
+    from sb3_smc.experiments import report as report_module
+
+    drawn: dict[str, tuple[list[str], list[list[str]]]] = {}
+
+    def record(panels, methods, caption, path, horizontal=False):
+        drawn[Path(path).stem] = (list(methods), [sorted(panel.values) for panel in panels])
+        return Path(path)
+
+    monkeypatch.setattr(report_module, "bar_panels", record)
+    targets = level2_targets()
+    _synthetic_table(tmp_path / "run", [targets[0], targets[-1]], ["cnn", "base", "curr"], lambda t, m: 0.5)
+    write_report(tmp_path / "run", out=tmp_path / "report", behaviour=False)
+    assert drawn["categories"][0] == drawn["concepts-classification"][0] == ["cnn", "base", "curr"]
+    assert drawn["concepts-bring-about"] == (["base", "curr"], [["base", "curr"]])
+
+
 @pytest.mark.parametrize("horizontal", [False, True])
 def test_bar_panels_leave_no_empty_band_under_the_legend(tmp_path, horizontal):
     """The legend on top, the panels right under it, the caption below (a caption placed as a bottom suptitle once

@@ -602,16 +602,19 @@ def _figures(folder: Path, table: _Table) -> list[Path]:
         groups = [c for c in CATEGORIES if table.of_kind(kind, c)]
         if not groups:
             continue
-        concept_panels = [_concept_panel(table, f"{kind} / {c}", table.of_kind(kind, c)) for c in groups]
-        paths.append(bar_panels(concept_panels, methods, f"{kind}: test score per concept (best seed; error bars: "
+        ran = [m for m in methods if any((t, m) in table.score for t in table.of_kind(kind))]  # none of cnn's bars
+        concept_panels = [_concept_panel(table, f"{kind} / {c}", table.of_kind(kind, c), ran) for c in groups]
+        paths.append(bar_panels(concept_panels, ran, f"{kind}: test score per concept (best seed; error bars: "
                                 "standard deviation across the seeds of the reported curriculum)",
                                 folder / f"concepts-{kind}.png", horizontal=True))
     return paths
 
 
-def _concept_panel(table: _Table, title: str, targets: Sequence[str]) -> Panel:
-    values = {m: [100 * table.score.get((t, m), math.nan) for t in targets] for m in table.methods}
-    errors = {m: [_sd(table.seeds.get((t, m), [])) for t in targets] for m in table.methods}
+def _concept_panel(table: _Table, title: str, targets: Sequence[str], methods: Sequence[str] | None = None) -> Panel:
+    """Every target's reported score per method (all the table's methods unless given), s.d. across seeds."""
+    methods = table.methods if methods is None else methods
+    values = {m: [100 * table.score.get((t, m), math.nan) for t in targets] for m in methods}
+    errors = {m: [_sd(table.seeds.get((t, m), [])) for t in targets] for m in methods}
     return Panel(title, list(targets), values, errors)
 
 
