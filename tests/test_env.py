@@ -370,3 +370,29 @@ def test_hand_observation_is_the_one_hot_window_after_any_moves(env_id: str) -> 
             np.testing.assert_array_equal(env.hand_observation(), expected.reshape(-1))
             out = np.zeros(90, dtype=np.float32)
             assert env.hand_observation(out=out) is out and np.array_equal(out[:81], expected.reshape(-1))
+
+
+def test_the_fewest_moves_to_a_goal_cell_by_breadth_first_search(capsys):
+    """``tools/probe_paths.py``: the fewest moves from the self to a cell where the concept holds, around a
+    container's wall (5 here: four right over the wall, one down into it), ``None`` when an object shuts the goal
+    off, and a classification dataset refused before any work."""
+    import importlib.util
+    from pathlib import Path
+
+    spec = importlib.util.spec_from_file_location("probe_paths", Path(__file__).parents[1] / "tools" / "probe_paths.py")
+    probe_paths = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(probe_paths)
+    concept = "?x container(x) & inside_supported(self,x)"
+
+    def env_of(grid: str) -> PixelWorldEnv:
+        env = PixelWorldEnv([Scene.from_ascii(grid, kinds={"a": "container"})], kind="bring-about", concept=concept)
+        env.reset(seed=0)
+        return env
+
+    open_world = env_of("###########\n#.........#\n#..S......#\n#.....a..a#\n#.....aaaa#\n#=========#\n###########")
+    assert probe_paths.fewest_moves(open_world) == 5
+    shut = env_of("###########\n#.....bbbb#\n#..S..b...#\n#.....ba.a#\n#.....baaa#\n#=========#\n###########")
+    assert probe_paths.fewest_moves(shut) is None
+    with pytest.raises(SystemExit):
+        probe_paths.main(["cl_self-in-container_vs_noncontainer"])
+    assert "only bring-about datasets have goal cells" in capsys.readouterr().err

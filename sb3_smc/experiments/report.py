@@ -6,8 +6,8 @@ and mean ± s.d. over seeds) where the paper gives them, per kind and category (
 concepts) for every method that ran, the paired t-tests across concepts (also read at the paper's degrees of
 freedom), how often a hierarchical SMC beats the flat one, the same means and tests from each concept's mean over
 its seeds, a claims table of every quantitative claim of the paper, the noprim table when those methods ran, and the
-settings, machine, wall time and command of every directory. Figures (matplotlib, headless): Fig. 5a/5d category means and Fig. 5b/5e every concept in panels by kind
-and category. The numbers: :mod:`sb3_smc.experiments.statistics`.
+settings, machine, wall time and command of every directory. Figures (matplotlib, headless): Fig. 5a/5d category
+means and Fig. 5b/5e every concept in panels by kind and category. The numbers: :mod:`sb3_smc.experiments.statistics`.
 """
 
 from __future__ import annotations
