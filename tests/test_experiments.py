@@ -97,6 +97,35 @@ def test_cnn_input_and_it_beats_chance_on_an_easy_concept():
         train_cnn(IN_CONTAINER, seed=0)
 
 
+def test_the_moves_probe_retests_a_runs_best_seeds_counting_their_moves(tmp_path, capsys):
+    """``tools/probe_moves.py`` on a tiny run: each target x method's best seed tested again with the run's own test
+    (its recorded score reproduced), its moves per episode, and its score with calls costing their moves (a flat SMC
+    makes at most 100 moves, so counting them changes nothing); resumable; a directory that is not an experiment's is
+    refused before any work."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("probe_moves", ROOT / "tools" / "probe_moves.py")
+    probe_moves = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(probe_moves)
+    out = tmp_path / "exp"
+    run_experiment(out, methods=["base", "curr"], targets=[LEFT_OF], seeds=1, timesteps=2000, repeats=1, progress=False)
+    table = tmp_path / "moves.csv"
+    argv = [str(out), "--kind", "classification", "--methods", "base,curr", "--out", str(table)]
+    assert probe_moves.main(argv) == 0
+    rows = {row["method"]: row for row in csv.DictReader(table.open())}
+    assert sorted(rows) == ["base", "curr"] and all(row["score"] == row["recorded"] for row in rows.values())
+    base, curr = rows["base"], rows["curr"]
+    assert float(base["moves_p90"]) <= 100 and base["over_100"] == "0.000"
+    assert base["score_counting_moves"] == base["score_within_100"] == base["score"]
+    assert float(curr["score_within_100"]) <= float(curr["score"]) and float(curr["moves_mean"]) > 0
+    written = table.read_text()
+    capsys.readouterr()
+    assert probe_moves.main(argv) == 0 and table.read_text() == written and capsys.readouterr().out == ""
+    with pytest.raises(SystemExit):
+        probe_moves.main([str(tmp_path), "--out", str(tmp_path / "other.csv")])
+    assert "not an experiment directory" in capsys.readouterr().err and not (tmp_path / "other.csv").exists()
+
+
 def test_reported_scores_are_the_best_seed_and_curriculum():
     rows = [{"target": "t", "kind": "classification", "category": "objcon", "method": "curr", "curriculum": c,
              "seed": s, "test_score": v} for c, s, v in (("a", 0, 0.5), ("a", 1, 0.7), ("b", 0, 0.9), ("b", 1, 0.1))]

@@ -4,7 +4,8 @@ count moves instead of decisions (docs/results/paper/README.md, "Moves per episo
 An SMC call is one step of the episode's 100 (the package's default and, as far as the paper says, its choice), so
 a hierarchical SMC may make far more than 100 moves in an episode, a flat one at most 100. For each target x method
 of a run directory this tests the best seed (the run's ``reported`` row: the highest test score; curr over its
-curricula) twice with the paper's protocol (:func:`sb3_smc.evaluate`: test split, 10 repeats, evaluation seed 0):
+curricula) twice with the run's test (:func:`sb3_smc.evaluate`: test split, the run's repeats, 10 in the paper's
+protocol, evaluation seed 0):
 
 * as trained (``count_primitive_steps`` off): the score (checked against the run's recorded one), the moves per
   episode (mean, median, 90th percentile, the share of episodes over 100) and the score of the episodes that made
@@ -49,20 +50,23 @@ def best_rows(run: Path, kind: str, methods: list[str]) -> list[dict[str, Any]]:
     return sorted(chosen, key=lambda row: (row["target"], methods.index(row["method"])))
 
 
-def test(smc: SMC, count_moves: bool) -> tuple[list[bool], list[int]]:
-    """Success and moves of every test episode of the paper's test, calls costing one step or their moves."""
+def test(smc: SMC, count_moves: bool, repeats: int) -> tuple[list[bool], list[int]]:
+    """Success and moves of every test episode of the run's test, calls costing one step or their moves."""
     wrapper = dataclasses.replace(spec_for_smc(smc, smc.spec.task.env_id).wrapper, count_primitive_steps=count_moves)
-    result = evaluate(smc, record_cells=False, keep=False, wrapper=wrapper)
+    result = evaluate(smc, repeats=repeats, seed=0, record_cells=False, keep=False, wrapper=wrapper)
     return [e.success for e in result.episodes], [e.primitive_steps for e in result.episodes]
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("runs", nargs="+", type=Path, help="run directories (results.csv and library/)")
     parser.add_argument("--kind", default="bring-about", choices=("bring-about", "classification"))
     parser.add_argument("--methods", default="base,curr,canon")
     parser.add_argument("--out", type=Path, required=True, help="a CSV, written as rows finish (resumable)")
-    args = parser.parse_args()
+    args = parser.parse_args(argv)
+    for run in args.runs:  # every run checked before any work
+        if not (run / "results.json").is_file() or not (run / "library").is_dir():
+            parser.error(f"{run}: not an experiment directory (it needs results.json and library/)")
     torch.set_num_threads(1)
     methods = args.methods.split(",")
     done: list[dict[str, str]] = []
@@ -71,6 +75,7 @@ def main() -> None:
             done = list(csv.DictReader(handle))
     finished = {(row["target"], row["method"]) for row in done}
     for run in args.runs:
+        repeats = int(json.loads((run / "results.json").read_text())["settings"]["repeats"])
         for row in best_rows(run, args.kind, methods):
             if (row["target"], row["method"]) in finished:
                 continue
@@ -80,11 +85,12 @@ def main() -> None:
             except UnknownSMCError:  # a run resumed on another machine keeps records, not every model
                 print(f"skipped {name}: not in {run / 'library'}", flush=True)
                 continue
-            successes, moves = test(smc, count_moves=False)
+            successes, moves = test(smc, count_moves=False, repeats=repeats)
             recorded = float(row["test_score"])
             if abs(float(np.mean(successes)) - recorded) > 1e-9:
                 sys.exit(f"{name}: tested {np.mean(successes)}, the run recorded {recorded}: not the run's SMC or code")
-            counted, _ = test(smc, count_moves=True) if row["method"] != "base" else (successes, moves)
+            flat = not smc.spec.children  # a flat SMC's moves are its steps: counting them changes nothing
+            counted, _ = (successes, moves) if flat else test(smc, count_moves=True, repeats=repeats)
             within = [s and m <= 100 for s, m in zip(successes, moves, strict=True)]
             done.append({"target": row["target"], "category": row["category"], "method": row["method"], "smc": name,
                          "recorded": f"{recorded:.3f}", "score": f"{np.mean(successes):.3f}",
@@ -99,7 +105,8 @@ def main() -> None:
             writer.writerows(done)
             atomic_write(args.out, text.getvalue())
             print(json.dumps(done[-1]), flush=True)
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())
