@@ -412,7 +412,8 @@ def test_the_report_has_the_noprim_table_and_the_cnn_tests_per_category(tmp_path
 
 
 def test_the_report_sets_the_flat_smc_beside_the_original_runs(tmp_path):
-    """The objects concepts whose flat results the release's files record: ours beside them, a paired t-test."""
+    """The objects concepts whose flat results the release's files record: ours beside them, paired t-tests of our
+    best seeds against theirs and of our means over seeds against theirs."""
     from scipy import stats
 
     from sb3_smc.experiments.paper import ORIGINAL_FLAT_RUNS
@@ -428,11 +429,14 @@ def test_the_report_sets_the_flat_smc_beside_the_original_runs(tmp_path):
     section = report.read_text().split("## The flat SMC (base) beside the original runs'")[1].split("## ")[0]
     first = targets[0]
     assert f"| {first} | classification | 52.0 (51.0 ± 1.4) | {ORIGINAL_FLAT_RUNS[first][0]:.1f} " in section
-    ours = [0.52 + 0.1 * k for k in range(3)]
-    theirs = [ORIGINAL_FLAT_RUNS[t][0] / 100 for t in targets]
-    t, p = stats.ttest_rel(ours, theirs)
-    assert f"classification, 3 concepts: mean best seed ours {100 * np.mean(ours):.1f}, original " \
-           f"{100 * np.mean(theirs):.1f}; paired t(2) = {t:.2f}, p = {p:.2g}." in section
+    sentences = []  # the best seeds against the original best, the means over seeds against the original means
+    for which, ours, column in (("best seed", [0.52 + 0.1 * k for k in range(3)], 0),
+                                ("mean over seeds", [0.51 + 0.1 * k for k in range(3)], 1)):
+        theirs = [ORIGINAL_FLAT_RUNS[t][column] / 100 for t in targets]
+        t, p = stats.ttest_rel(ours, theirs)
+        sentences.append(f"{which} ours {100 * np.mean(ours):.1f}, original {100 * np.mean(theirs):.1f} (paired "
+                         f"t(2) = {t:.2f}, p = {p:.2g})")
+    assert f"classification, 3 concepts, means: {sentences[0]}; {sentences[1]}." in section
 
 
 def test_the_report_orders_the_pushable_curriculum_by_level(tmp_path):
