@@ -1,0 +1,332 @@
+"""The report's numbers: :class:`ResultTable` (the merged results of one experiment directory or several) and the
+Markdown sections :func:`number_sections` writes from it: the claims table, every concept (best seed, mean ± s.d.
+over seeds), the flat SMC beside the original runs', means per kind and category ± s.e. across concepts, the paired
+t-tests (with the paper's beside them) and win counts, the same means and tests over seeds, and the noprim table.
+The statistics themselves: :mod:`sb3_smc.experiments.statistics`; the paper's numbers:
+:mod:`sb3_smc.experiments.paper`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import defaultdict
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from sb3_smc.errors import SMCError
+from sb3_smc.experiments.design import CATEGORIES, METHOD_REGISTRY, METHODS, PAPER_CATEGORIES
+from sb3_smc.experiments.paper import (
+    ORIGINAL_FLAT_RUNS,
+    PAPER_CONCEPTS,
+    PAPER_COUNTS,
+    PAPER_MEANS,
+    PAPER_NOPRIM,
+    PAPER_TTESTS,
+)
+from sb3_smc.experiments.statistics import (
+    Score,
+    claims,
+    mean_of_all,
+    mean_se,
+    method_mean,
+    method_test,
+    p_at_df,
+    paired_ttest,
+    seed_summary,
+    wins,
+)
+
+__all__ = ["KINDS", "ResultTable", "number_sections"]
+
+KINDS = ("classification", "bring-about")
+
+
+def _pct(value: float | None) -> str:
+    return "-" if value is None or (isinstance(value, float) and math.isnan(value)) else f"{100 * value:.1f}"
+
+
+def _diff(ours: float | None, paper: float | None) -> str:
+    if ours is None or paper is None:
+        return ""
+    return f"{100 * ours - paper:+.1f}"
+
+
+class ResultTable:
+    """The merged results of a report: reported scores, seed scores, kinds and categories."""
+
+    def __init__(self, rows: Sequence[dict[str, Any]], reported: Sequence[dict[str, Any]]) -> None:
+        if not reported:
+            raise SMCError("no results to report")
+        self.methods = [m for m in METHODS if any(r["method"] == m for r in reported)]
+        self.score = {(r["target"], r["method"]): r["test_score"] for r in reported}
+        self.targets = sorted({r["target"] for r in reported})
+        self.kind_of = {r["target"]: r["kind"] for r in reported}
+        self.category_of = {r["target"]: r["category"] for r in reported}
+        best_curriculum = {(r["target"], r["method"]): r["curriculum"] for r in reported}
+        by_seed: dict[tuple[str, str], list[float]] = defaultdict(list)
+        for row in rows:  # the seeds of the reported curriculum
+            if row["curriculum"] == best_curriculum.get((row["target"], row["method"])):
+                by_seed[(row["target"], row["method"])].append(row["test_score"])
+        self.seeds = dict(by_seed)
+        self.seed_mean = {key: float(np.mean(self.seeds.get(key) or [value])) for key, value in self.score.items()}
+        """Each target x method's mean over the seeds of its reported curriculum (the reported score where the
+        records have no seeds)."""
+
+    def like(self, paper: str) -> list[str]:
+        """Our methods that ran compared with the paper's method ``paper`` (``base``: ``base`` and ``base-gru``;
+        ``canon``: ``canon`` and ``canon-scaled``), or ``[paper]`` when none did (its comparisons then say it did
+        not run)."""
+        return [m for m in self.methods if METHOD_REGISTRY[m].paper_name == paper] or [paper]
+
+    @property
+    def flats(self) -> list[str]:
+        """The flat methods that ran, each compared with the paper's flat SMC (:meth:`like` ``base``)."""
+        return self.like("base")
+
+    @property
+    def hierarchical(self) -> list[str]:
+        """The hierarchical methods compared with the flat ones: those of the paper's ``curr`` and ``canon``."""
+        return [*self.like("curr"), *self.like("canon")]
+
+    def of_kind(self, kind: str, category: str | None = None) -> list[str]:
+        return [t for t in self.targets if self.kind_of[t] == kind and category in (None, self.category_of[t])]
+
+    def cell(self, target: str, method: str) -> str:
+        """Best seed (mean ± s.d. over seeds)."""
+        if (target, method) not in self.score:
+            return "-"
+        scores = self.seeds.get((target, method)) or [self.score[(target, method)]]
+        return seed_summary(scores).text()
+
+    def mean_se(self, members: Sequence[str], method: str,
+                score: Score | None = None) -> tuple[float, float | None] | None:
+        """Mean and s.e. of ``method``'s ``score`` (the reported one unless given) across ``members``
+        (:func:`mean_se`); ``None`` unless all of them ran."""
+        score = self.score if score is None else score
+        values = [score[(t, method)] for t in members if (t, method) in score]
+        return mean_se(values) if values and len(values) == len(members) else None
+
+    def mean_cell(self, members: Sequence[str], method: str, score: Score | None = None) -> str:
+        """Mean ± s.e. across ``members`` (all of them must have run)."""
+        found = self.mean_se(members, method, score)
+        if found is None:
+            return "-"
+        mean, se = found
+        return f"{100 * mean:.1f}" + (f" ± {100 * se:.1f}" if se is not None else "")
+
+
+def _claims_section(table: ResultTable) -> list[str]:
+    found = claims(table.score, table.kind_of, table.category_of,
+                   variants={paper: table.like(paper) for paper in ("base", "curr", "canon")})
+    if not any(c.reproduced != "not run" for c in found):
+        return []
+    lines = ["## The paper's claims", "",
+             "Every quantitative claim of the paper's results with ours: a mean is reproduced within 5 points, a "
+             "comparison when it has the paper's direction and is significant (p < 0.05, our degrees of freedom). "
+             "The claims over all concepts of a kind are judged only on all of them (the whole table).", "",
+             "| claim | paper | ours | reproduced |", "|---|---|---|---|"]
+    lines += [f"| {c.claim} | {c.paper} | {c.ours} | {c.reproduced} |" for c in found if c.reproduced != "not run"]
+    return lines + [""]
+
+
+def _concept_section(table: ResultTable) -> list[str]:
+    methods = table.methods
+    lines = ["## Per concept", "",
+             "Best seed (curr: best curriculum) as the paper reports, then the mean ± s.d. over the seeds of that "
+             "curriculum.", "",
+             "| target | kind | category | " + " | ".join(methods) + " | paper (base / curr / canon) |",
+             "|---|---|---|" + "---:|" * len(methods) + "---|"]
+    for target in table.targets:
+        paper = PAPER_CONCEPTS.get(target)
+        paper_text = " / ".join(f"{paper[m]:.1f}" for m in ("base", "curr", "canon")) if paper else ""
+        lines.append(f"| {target} | {table.kind_of[target]} | {table.category_of[target]} | "
+                     + " | ".join(table.cell(target, m) for m in methods) + f" | {paper_text} |")
+    given = [t for t in table.targets if t in PAPER_CONCEPTS]
+    if given:
+        lines += ["", "Differences to the paper (ours - paper, points):", ""]
+        for target in given:
+            parts = [f"{m} {_diff(table.score[(target, m)], PAPER_CONCEPTS[target][name])}"
+                     for m in methods if (name := METHOD_REGISTRY[m].paper_name) in PAPER_CONCEPTS[target]
+                     and (target, m) in table.score]
+            lines.append(f"- {target}: " + ", ".join(parts))
+    return lines
+
+
+def _original_flat_section(table: ResultTable) -> list[str]:
+    """Our flat SMCs beside the original runs' on the concepts whose numbers the release's files record."""
+    lines: list[str] = []
+    for flat in table.flats:
+        given = [t for t in table.targets if t in ORIGINAL_FLAT_RUNS and (t, flat) in table.score]
+        if not given:
+            continue
+        lines += ["", f"## The flat SMC ({flat}) beside the original runs'", "",
+                  "The release's curriculum files record the original runs' flat SMCs on the objects concepts (best "
+                  f"seed and mean over seeds, their comments' \"Max\" and \"Avg\"); ours (`{flat}`) beside them.", "",
+                  "| target | kind | ours: best (mean ± s.d.) | original: best (mean) | best: ours - original |",
+                  "|---|---|---:|---:|---:|"]
+        for target in given:
+            best, mean = ORIGINAL_FLAT_RUNS[target]
+            lines.append(f"| {target} | {table.kind_of[target]} | {table.cell(target, flat)} | {best:.1f} "
+                         f"({mean:.1f}) | {_diff(table.score[(target, flat)], best)} |")
+        for kind in KINDS:
+            members = [t for t in given if table.kind_of[t] == kind]
+            if not members:
+                continue
+            sentences = []
+            for which, score, column in (("best seed", table.score, 0), ("mean over seeds", table.seed_mean, 1)):
+                ours = [score[(t, flat)] for t in members]
+                theirs = [ORIGINAL_FLAT_RUNS[t][column] / 100 for t in members]
+                test = paired_ttest(ours, theirs)
+                tested = f" (paired t({test[0]}) = {test[1]:.2f}, p = {test[2]:.2g})" if test else ""
+                sentences.append(f"{which} ours {100 * sum(ours) / len(ours):.1f}, original "
+                                 f"{100 * sum(theirs) / len(theirs):.1f}{tested}")
+            lines.append(f"\n{kind}, {len(members)} concepts, means: {'; '.join(sentences)}.")
+    return lines
+
+
+def _means_section(table: ResultTable) -> list[str]:
+    methods = table.methods
+    lines = ["", "## Means per kind and category (Fig. 5a/5d)", "",
+             "Mean of the reported scores ± standard error across concepts.", "",
+             "| kind | category | concepts | " + " | ".join(methods) + " |",
+             "|---|---|---:|" + "---:|" * len(methods)]
+    for kind in KINDS:
+        in_kind = table.of_kind(kind)
+        if not in_kind:
+            continue
+        groups = [(c, table.of_kind(kind, c)) for c in CATEGORIES]
+        for label, members in [*[(c, m) for c, m in groups if m], ("all", in_kind)]:
+            lines.append(f"| {kind} | {label} | {len(members)} | "
+                         + " | ".join(table.mean_cell(members, m) for m in methods) + " |")
+        in_paper = [t for t in in_kind if table.category_of[t] in PAPER_CATEGORIES]
+        if not in_paper:  # the designed pushable curriculum: the paper gives no numbers (Fig. 5c only)
+            continue
+        names = {m: METHOD_REGISTRY[m].paper_name for m in methods}  # the noprim means: that paragraph's
+        paper = {m: PAPER_MEANS[kind].get(name, PAPER_NOPRIM[kind].get(name)) for m, name in names.items()}
+        lines.append(f"| {kind} | **paper** (all) | {PAPER_COUNTS[kind]} | "
+                     + " | ".join(f"{paper[m]:.1f}" if paper[m] is not None else "" for m in methods) + " |")
+        if len(in_paper) == PAPER_COUNTS[kind]:  # the paper's whole set: its means
+            lines.append(f"| {kind} | ours - paper ({len(in_paper)} concepts) | | " + " | ".join(
+                _diff(method_mean(table.score, in_paper, m), paper[m]) for m in methods) + " |")
+        else:  # a subset: only against the paper's own numbers for the same concepts, where it gives them
+            diffs = [_diff(method_mean(table.score, in_paper, m), mean_of_all(
+                [PAPER_CONCEPTS.get(t, {}).get(METHOD_REGISTRY[m].paper_name) for t in in_paper])) for m in methods]
+            if any(diffs):
+                lines.append(f"| {kind} | ours - paper (the same {len(in_paper)} concept(s), where the paper gives "
+                             "them) | | " + " | ".join(diffs) + " |")
+    return lines
+
+
+def _seed_means_section(table: ResultTable) -> list[str]:
+    """The means per kind and category and the hierarchical-against-flat tests from each concept's mean over its
+    seeds instead of its best seed."""
+    methods = table.methods
+    lines = ["", "## Over seeds: means and tests from each concept's mean over its seeds", "",
+             "The paper reports each concept's best seed. Here each concept's score is the mean over the seeds of its "
+             "reported curriculum instead: what a method gives in a typical seed, without the luck of the best one "
+             "(a method that learns a concept in one seed of five keeps its best seed above, not here). Mean ± "
+             "standard error across concepts; paired t-tests across concepts, df = concepts - 1.", "",
+             "| kind | category | concepts | " + " | ".join(methods) + " |",
+             "|---|---|---:|" + "---:|" * len(methods)]
+    tests = []
+    for kind in KINDS:
+        in_kind = table.of_kind(kind)
+        if not in_kind:
+            continue
+        groups = [(c, table.of_kind(kind, c)) for c in CATEGORIES]
+        for label, members in [*[(c, m) for c, m in groups if m], ("all", in_kind)]:
+            lines.append(f"| {kind} | {label} | {len(members)} | "
+                         + " | ".join(table.mean_cell(members, m, table.seed_mean) for m in methods) + " |")
+        for a, b in ((a, b) for b in table.flats for a in table.hierarchical):
+            compared, test = method_test(table.seed_mean, in_kind, a, b)
+            if test is not None:
+                df, t, p = test
+                tests.append(f"| {kind} | {a} vs {b} | {compared} | {t:.2f} | {df} | {p:.2g} |")
+    if tests:
+        lines += ["", "| kind | comparison | concepts | t | df | p |", "|---|---|---:|---:|---:|---:|", *tests]
+    return lines
+
+
+def _ttest_section(table: ResultTable) -> list[str]:
+    methods = table.methods
+    lines = ["", "## Paired t-tests across concepts", "",
+             "Two-sided paired t-tests of the reported scores (scipy `ttest_rel`); df = concepts - 1. Where the "
+             "paper tested the same comparison over the same concepts (all of a kind), its t, df and p are beside "
+             "ours, and the last column reads our t at the paper's degrees of freedom (it gives df 34 for 34 "
+             "classification concepts).", "",
+             "| kind / category | comparison | concepts | t | df | p | paper | p at the paper's df |",
+             "|---|---|---:|---:|---:|---:|---|---:|"]
+    for kind in KINDS:
+        in_kind = table.of_kind(kind)
+        if not in_kind:
+            continue
+        whole = len(in_kind) == PAPER_COUNTS[kind] and all(
+            table.category_of[t] in PAPER_CATEGORIES for t in in_kind)  # the paper tested all its concepts
+        for a, b in ((a, b) for b in table.flats for a in table.hierarchical):
+            paper_test = PAPER_TTESTS[kind].get(f"{_paper_name(a)} vs {_paper_name(b)}") if whole else None
+            lines.append(_ttest_row(kind, f"{a} vs {b}", in_kind, a, b, table.score, paper_test))
+        if kind == "classification":
+            for category in CATEGORIES:
+                members = table.of_kind(kind, category)
+                if members:
+                    best_smc = "curr" if "curr" in methods else "canon"
+                    lines.append(_ttest_row(f"{kind} / {category}", f"{best_smc} vs cnn", members, best_smc, "cnn",
+                                            table.score, None))
+    counts = []
+    for kind in KINDS:
+        for flat in table.flats:
+            for better, label in (*(((m,), m) for m in table.hierarchical), (("curr", "canon"), "curr or canon")):
+                won, n = wins(table.score, table.of_kind(kind), better, flat)
+                if n:
+                    whole = kind == "bring-about" and label == "curr or canon" and n == PAPER_COUNTS[kind]
+                    counts.append(f"| {kind} | {label} | {flat} | {won} of {n} |" + (" 14 of 16 |" if whole else " |"))
+    if counts:
+        lines += ["", "Concepts on which a hierarchical SMC beats a flat one (reported scores):", "",
+                  "| kind | hierarchical | flat | beats it on | paper |", "|---|---|---|---:|---|", *counts]
+    return lines
+
+
+def _paper_name(method: str) -> str:
+    """The paper's method that ``method`` is compared with (``method`` itself when it is none of ours)."""
+    return METHOD_REGISTRY[method].paper_name if method in METHOD_REGISTRY else method
+
+
+def _noprim_section(table: ResultTable) -> list[str]:
+    if not any(m in table.methods for m in ("curr-noprim", "canon-noprim")):
+        return []
+    lines = ["", "## The role of hierarchy: without primitive moves", "",
+             "| kind | method | with primitives | without | paper with | paper without |",
+             "|---|---|---:|---:|---:|---:|"]
+    for kind in KINDS:  # over the paper's concepts (the pushable curriculum has no noprim variant)
+        in_kind = [t for t in table.of_kind(kind) if table.category_of[t] in PAPER_CATEGORIES]
+        for method in ("curr", "canon"):
+            if f"{method}-noprim" not in table.methods or not in_kind:
+                continue
+            paper = PAPER_NOPRIM[kind]
+            lines.append(f"| {kind} | {method} | {_pct(method_mean(table.score, in_kind, method))} | "
+                         f"{_pct(method_mean(table.score, in_kind, method + '-noprim'))} | "
+                         f"{paper[method]:.1f} | {paper[method + '-noprim']:.1f} |")
+    return lines
+
+
+def _ttest_row(label: str, comparison: str, members: Sequence[str], a: str, b: str,
+               score: dict[tuple[str, str], float], paper: tuple[int, float, float] | None) -> str:
+    """One row of the t-test table: ``a`` against ``b`` over those of ``members`` where both ran, and ``paper``'s
+    test beside it only when both ran on all of them."""
+    compared, test = method_test(score, members, a, b)
+    if compared < len(members):  # the paper's test is over all its concepts: beside ours only when ours is too
+        paper = None
+    paper_text = f"t({paper[0]}) = {paper[1]}, p = {paper[2]}" if paper else ""
+    if test is None:
+        return f"| {label} | {comparison} | {compared} | - | - | - | {paper_text} | |"
+    df, t, p = test
+    at_paper = f"{p_at_df(t, paper[0]):.2g}" if paper else ""
+    return f"| {label} | {comparison} | {compared} | {t:.2f} | {df} | {p:.2g} | {paper_text} | {at_paper} |"
+
+
+def number_sections(table: ResultTable) -> list[str]:
+    """The report's Markdown sections of numbers, in the report's order."""
+    return [*_claims_section(table), *_concept_section(table), *_original_flat_section(table),
+            *_means_section(table), *_ttest_section(table), *_seed_means_section(table), *_noprim_section(table)]
