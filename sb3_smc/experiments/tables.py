@@ -186,20 +186,27 @@ def _original_flat_section(table: ResultTable) -> list[str]:
     return lines
 
 
+def _means_header(methods: Sequence[str]) -> list[str]:
+    return ["| kind | category | concepts | " + " | ".join(methods) + " |", "|---|---|---:|" + "---:|" * len(methods)]
+
+
+def _category_rows(table: ResultTable, kind: str, score: Score) -> list[str]:
+    """A kind's rows of a means table: each category's mean ± s.e. of ``score`` per method, then all of the kind's."""
+    groups = [(c, table.of_kind(kind, c)) for c in CATEGORIES]
+    return [f"| {kind} | {label} | {len(members)} | "
+            + " | ".join(table.mean_cell(members, m, score) for m in table.methods) + " |"
+            for label, members in [*[(c, m) for c, m in groups if m], ("all", table.of_kind(kind))]]
+
+
 def _means_section(table: ResultTable) -> list[str]:
     methods = table.methods
     lines = ["", "## Means per kind and category (Fig. 5a/5d)", "",
-             "Mean of the reported scores ± standard error across concepts.", "",
-             "| kind | category | concepts | " + " | ".join(methods) + " |",
-             "|---|---|---:|" + "---:|" * len(methods)]
+             "Mean of the reported scores ± standard error across concepts.", "", *_means_header(methods)]
     for kind in KINDS:
         in_kind = table.of_kind(kind)
         if not in_kind:
             continue
-        groups = [(c, table.of_kind(kind, c)) for c in CATEGORIES]
-        for label, members in [*[(c, m) for c, m in groups if m], ("all", in_kind)]:
-            lines.append(f"| {kind} | {label} | {len(members)} | "
-                         + " | ".join(table.mean_cell(members, m) for m in methods) + " |")
+        lines += _category_rows(table, kind, table.score)
         in_paper = [t for t in in_kind if table.category_of[t] in PAPER_CATEGORIES]
         if not in_paper:  # the designed pushable curriculum: the paper gives no numbers (Fig. 5c only)
             continue
@@ -228,17 +235,13 @@ def _seed_means_section(table: ResultTable) -> list[str]:
              "reported curriculum instead: what a method gives in a typical seed, without the luck of the best one "
              "(a method that learns a concept in one seed of five keeps its best seed above, not here). Mean ± "
              "standard error across concepts; paired t-tests across concepts, df = concepts - 1.", "",
-             "| kind | category | concepts | " + " | ".join(methods) + " |",
-             "|---|---|---:|" + "---:|" * len(methods)]
+             *_means_header(methods)]
     tests = []
     for kind in KINDS:
         in_kind = table.of_kind(kind)
         if not in_kind:
             continue
-        groups = [(c, table.of_kind(kind, c)) for c in CATEGORIES]
-        for label, members in [*[(c, m) for c, m in groups if m], ("all", in_kind)]:
-            lines.append(f"| {kind} | {label} | {len(members)} | "
-                         + " | ".join(table.mean_cell(members, m, table.seed_mean) for m in methods) + " |")
+        lines += _category_rows(table, kind, table.seed_mean)
         for a, b in ((a, b) for b in table.flats for a in table.hierarchical):
             compared, test = method_test(table.seed_mean, in_kind, a, b)
             if test is not None:
