@@ -836,3 +836,31 @@ def test_bar_panels_leave_no_empty_band_under_the_legend(tmp_path, horizontal):
     top = blank_runs[rows[:-1] < image.shape[0] / 3]  # the legend and the panels' titles (it was 78 rows)
     assert top.max() < 0.25 * 120, top.max()  # no band over a quarter inch (120 dpi)
     assert rows[-1] > 0.9 * image.shape[0]  # the caption at the bottom
+
+
+def test_the_whole_tables_script_keeps_a_runs_records_without_its_models(tmp_path):
+    """``tools/paper_table.sh keep <category> <repo>``: a run directory's records (run.json, results, evaluations,
+    the CNN's) copied into ``docs/results/paper/<category>`` (no library, no curves), a later keep replacing the
+    evaluations whole; an unknown command is refused with the usage."""
+    import os
+    import subprocess
+
+    run = tmp_path / "runs" / "paper-objects"
+    for name in ("run.json", "results.csv", "results.json", "evaluations/a@0.json", "cnn/t@0.json",
+                 "library/models/a@0.zip", "tensorboard/a/events"):
+        (run / name).parent.mkdir(parents=True, exist_ok=True)
+        (run / name).write_text(name)
+    script, env = str(ROOT / "tools" / "paper_table.sh"), {**os.environ, "RUNS": str(tmp_path / "runs")}
+
+    def keep() -> None:
+        subprocess.run([script, "keep", "objects", str(tmp_path / "repo")], env=env, check=True, capture_output=True)
+
+    keep()
+    kept = tmp_path / "repo" / "docs" / "results" / "paper" / "objects"
+    assert sorted(str(p.relative_to(kept)) for p in kept.rglob("*") if p.is_file()) == [
+        "cnn/t@0.json", "evaluations/a@0.json", "results.csv", "results.json", "run.json"]
+    (run / "evaluations" / "a@0.json").rename(run / "evaluations" / "a@1.json")
+    keep()
+    assert [p.name for p in (kept / "evaluations").iterdir()] == ["a@1.json"]
+    refused = subprocess.run([script, "nonsense"], env=env, capture_output=True, text=True)
+    assert refused.returncode == 2 and "usage:" in refused.stderr
