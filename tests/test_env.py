@@ -373,9 +373,9 @@ def test_hand_observation_is_the_one_hot_window_after_any_moves(env_id: str) -> 
 
 
 def test_the_fewest_moves_to_a_goal_cell_by_breadth_first_search(capsys):
-    """``tools/probe_paths.py``: the fewest moves from the self to a cell where the concept holds, around a
-    container's wall (5 here: four right over the wall, one down into it), ``None`` when an object shuts the goal
-    off, and a classification dataset refused before any work."""
+    """``tools/probe_paths.py``: the fewest moves from the self to where the concept holds (the package's planner),
+    around a container's wall (5 here: four right over the wall, one down into it), ``None`` when an object shuts the
+    goal off, and a classification dataset refused before any work."""
     import importlib.util
     from pathlib import Path
 

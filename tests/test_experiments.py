@@ -97,12 +97,14 @@ def test_cnn_input_and_it_beats_chance_on_an_easy_concept():
         train_cnn(IN_CONTAINER, seed=0)
 
 
-def test_the_moves_probe_retests_a_runs_best_seeds_counting_their_moves(tmp_path, capsys):
+def test_the_moves_probe_retests_a_runs_best_seeds_counting_their_moves(tmp_path, capsys, monkeypatch):
     """``tools/probe_moves.py`` on a tiny run: each target x method's best seed tested again with the run's own test
     (its recorded score reproduced), its moves per episode, and its score with calls costing their moves (a flat SMC
-    makes at most 100 moves, so counting them changes nothing); resumable; a directory that is not an experiment's is
-    refused before any work."""
+    makes at most 100 moves and is not tested twice); resumable; a directory that is not an experiment's and an
+    unknown method are refused before any work."""
     import importlib.util
+
+    from sb3_smc.library import SMCLibrary
 
     spec = importlib.util.spec_from_file_location("probe_moves", ROOT / "tools" / "probe_moves.py")
     probe_moves = importlib.util.module_from_spec(spec)
@@ -111,19 +113,30 @@ def test_the_moves_probe_retests_a_runs_best_seeds_counting_their_moves(tmp_path
     run_experiment(out, methods=["base", "curr"], targets=[LEFT_OF], seeds=1, timesteps=2000, repeats=1, progress=False)
     table = tmp_path / "moves.csv"
     argv = [str(out), "--kind", "classification", "--methods", "base,curr", "--out", str(table)]
+    tested = []  # (SMC, calls costing their moves) of every test the probe runs
+    real_test = probe_moves.test
+
+    def test(smc, count_moves, repeats):
+        tested.append((smc.name, count_moves, repeats))
+        return real_test(smc, count_moves, repeats)
+
+    monkeypatch.setattr(probe_moves, "test", test)
     assert probe_moves.main(argv) == 0
     rows = {row["method"]: row for row in csv.DictReader(table.open())}
     assert sorted(rows) == ["base", "curr"] and all(row["score"] == row["recorded"] for row in rows.values())
     base, curr = rows["base"], rows["curr"]
-    assert float(base["moves_p90"]) <= 100 and base["over_100"] == "0.000"
-    assert base["score_counting_moves"] == base["score_within_100"] == base["score"]
-    assert float(curr["score_within_100"]) <= float(curr["score"]) and float(curr["moves_mean"]) > 0
+    assert tested == [(base["smc"], False, 1), (curr["smc"], False, 1), (curr["smc"], True, 1)]  # the run's repeats
+    assert float(base["moves_p90"]) <= 100 and base["over_100"] == "0.000"  # a flat SMC: at most 100 moves
+    counted = real_test(SMCLibrary.load(out / "library", names=[curr["smc"]])[curr["smc"]], True, 1)[0]
+    assert curr["score_counting_moves"] == f"{np.mean(counted):.3f}" and float(curr["moves_mean"]) > 0
     written = table.read_text()
     capsys.readouterr()
     assert probe_moves.main(argv) == 0 and table.read_text() == written and capsys.readouterr().out == ""
-    with pytest.raises(SystemExit):
-        probe_moves.main([str(tmp_path), "--out", str(tmp_path / "other.csv")])
-    assert "not an experiment directory" in capsys.readouterr().err and not (tmp_path / "other.csv").exists()
+    for bad, says in (([str(tmp_path)], "not an experiment directory"),
+                      ([str(out), "--methods", "base,cur"], "--methods: unknown cur")):
+        with pytest.raises(SystemExit):
+            probe_moves.main([*bad, "--out", str(tmp_path / "other.csv")])
+        assert says in capsys.readouterr().err and not (tmp_path / "other.csv").exists()
 
 
 def test_reported_scores_are_the_best_seed_and_curriculum():
@@ -592,8 +605,8 @@ def test_the_whole_table_report_with_canon_scaled_and_curr_moves(tmp_path):
 def test_the_readme_gets_the_whole_tables_means_and_tests_from_the_report(tmp_path):
     """``tools/readme_table.py`` copies the report's means and t-tests per kind between the README's markers (a
     kind's categories only while it has no mean over all its concepts), says when the table is partial (which run
-    directories, and whether the paper's methods are whole), leaves the rest of the README as it was, and refuses a
-    README without its markers."""
+    directories, and whether every one of the paper's methods has all its concepts), leaves the rest of the README
+    as it was, and refuses a README without its markers."""
     import importlib.util
 
     spec = importlib.util.spec_from_file_location("readme_table", ROOT / "tools" / "readme_table.py")
@@ -654,8 +667,13 @@ def test_the_readme_gets_the_whole_tables_means_and_tests_from_the_report(tmp_pa
     mark_partial(tmp_path / "more")
     [report] = write_report([tmp_path / "flat", tmp_path / "more"], out=tmp_path / "docs", behaviour=False)
     readme_table.main(["--report", str(report), "--readme", str(readme)])
-    assert ("report.md), **partial: `flat` and `more` are still being run**; the paper's methods are whole; scores"
-            in readme.read_text())
+    assert "report.md), **partial: `flat` and `more` are still being run**; scores" in readme.read_text()  # no cnn
+    _synthetic_table(tmp_path / "rest", everything, ["cnn", "canon", "curr-noprim", "canon-noprim"], score)
+    [report] = write_report([tmp_path / "flat", tmp_path / "more", tmp_path / "rest"], out=tmp_path / "docs",
+                            behaviour=False)
+    readme_table.main(["--report", str(report), "--readme", str(readme)])
+    assert ("report.md), **partial: `flat` and `more` are still being run**; the paper's methods have all their "
+            "concepts; scores" in readme.read_text())
     readme.write_text("# no markers\n")
     with pytest.raises(SystemExit, match="needs exactly one <!-- paper-table:start -->"):
         readme_table.main(["--report", str(report), "--readme", str(readme)])
@@ -843,7 +861,6 @@ def test_the_whole_tables_script_keeps_a_runs_records_without_its_models(tmp_pat
     the CNN's) copied into ``docs/results/paper/<category>`` (no library, no curves), a later keep replacing the
     evaluations whole; an unknown command is refused with the usage."""
     import os
-    import subprocess
 
     run = tmp_path / "runs" / "paper-objects"
     for name in ("run.json", "results.csv", "results.json", "evaluations/a@0.json", "cnn/t@0.json",
@@ -864,3 +881,30 @@ def test_the_whole_tables_script_keeps_a_runs_records_without_its_models(tmp_pat
     assert [p.name for p in (kept / "evaluations").iterdir()] == ["a@1.json"]
     refused = subprocess.run([script, "nonsense"], env=env, capture_output=True, text=True)
     assert refused.returncode == 2 and "usage:" in refused.stderr
+
+
+def test_the_whole_tables_script_reports_the_queued_directories_it_has(tmp_path):
+    """``tools/paper_table.sh report``: one ``sb3-smc report`` over the kept directories of the queue's categories,
+    in the queue's order (a category with no records yet left out), then the README's table."""
+    import os
+    import shutil
+
+    repo = tmp_path / "repo"
+    (repo / "tools").mkdir(parents=True)
+    shutil.copy(ROOT / "tools" / "paper_table.sh", repo / "tools")
+    paper = repo / "docs" / "results" / "paper"
+    paper.mkdir(parents=True)
+    (paper / "queue.txt").write_text("# category, commit, reuse\nobjects  abc  -\nsearch  abc  -\nlater  abc  -\n")
+    for category in ("search", "objects"):
+        (paper / category).mkdir()
+        (paper / category / "results.json").write_text("{}")
+    (repo / ".venv" / "bin").mkdir(parents=True)
+    for name, body in (("sb3-smc", f'echo "sb3-smc $*" >> {tmp_path}/calls'),
+                       ("python", f'echo "python $*" >> {tmp_path}/calls')):
+        (repo / ".venv" / "bin" / name).write_text(f"#!/bin/sh\n{body}\n")
+        (repo / ".venv" / "bin" / name).chmod(0o755)
+    subprocess.run([str(repo / "tools" / "paper_table.sh"), "report"], check=True, capture_output=True,
+                   env={**os.environ, "RUNS": str(tmp_path / "runs")})
+    assert (tmp_path / "calls").read_text().splitlines() == [
+        f"sb3-smc report {paper}/objects {paper}/search --out {paper} --no-behaviour",
+        f"python {repo}/tools/readme_table.py"]

@@ -33,7 +33,10 @@ import torch
 
 from pixelworld_env.atomic import atomic_write
 from sb3_smc.envs import spec_for_smc
+from sb3_smc.errors import SMCError
 from sb3_smc.evaluation import evaluate
+from sb3_smc.experiments.design import METHODS
+from sb3_smc.experiments.runner import read_results
 from sb3_smc.library import SMCLibrary
 from sb3_smc.library.errors import UnknownSMCError
 from sb3_smc.smc import SMC
@@ -45,7 +48,7 @@ FIELDS = ("target", "category", "method", "smc", "recorded", "score", "moves_mea
 def best_rows(run: Path, kind: str, methods: list[str]) -> list[dict[str, Any]]:
     """The best seed's row of each target x method of ``kind`` (the run's ``reported`` rows), by target, then in the
     order of ``methods``."""
-    rows = json.loads((run / "results.json").read_text())["reported"]
+    rows = read_results(run)["reported"]
     chosen = [row for row in rows if row["kind"] == kind and row["method"] in methods]
     return sorted(chosen, key=lambda row: (row["target"], methods.index(row["method"])))
 
@@ -59,23 +62,30 @@ def test(smc: SMC, count_moves: bool, repeats: int) -> tuple[list[bool], list[in
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("runs", nargs="+", type=Path, help="run directories (results.csv and library/)")
+    parser.add_argument("runs", nargs="+", type=Path, help="experiment directories (results.json and library/)")
     parser.add_argument("--kind", default="bring-about", choices=("bring-about", "classification"))
     parser.add_argument("--methods", default="base,curr,canon")
     parser.add_argument("--out", type=Path, required=True, help="a CSV, written as rows finish (resumable)")
     args = parser.parse_args(argv)
+    methods = args.methods.split(",")
+    unknown = [m for m in methods if m not in METHODS]
+    if unknown:
+        parser.error(f"--methods: unknown {', '.join(unknown)} (methods: {', '.join(METHODS)})")
+    repeats = {}
     for run in args.runs:  # every run checked before any work
         if not (run / "results.json").is_file() or not (run / "library").is_dir():
             parser.error(f"{run}: not an experiment directory (it needs results.json and library/)")
+        try:
+            repeats[run] = int(read_results(run)["settings"]["repeats"])
+        except (SMCError, KeyError, TypeError, ValueError) as error:
+            parser.error(f"{run / 'results.json'}: not the results of an sb3-smc experiment ({error})")
     torch.set_num_threads(1)
-    methods = args.methods.split(",")
     done: list[dict[str, str]] = []
     if args.out.exists():
         with open(args.out, newline="") as handle:
             done = list(csv.DictReader(handle))
     finished = {(row["target"], row["method"]) for row in done}
     for run in args.runs:
-        repeats = int(json.loads((run / "results.json").read_text())["settings"]["repeats"])
         for row in best_rows(run, args.kind, methods):
             if (row["target"], row["method"]) in finished:
                 continue
@@ -85,12 +95,12 @@ def main(argv: list[str] | None = None) -> int:
             except UnknownSMCError:  # a run resumed on another machine keeps records, not every model
                 print(f"skipped {name}: not in {run / 'library'}", flush=True)
                 continue
-            successes, moves = test(smc, count_moves=False, repeats=repeats)
+            successes, moves = test(smc, count_moves=False, repeats=repeats[run])
             recorded = float(row["test_score"])
             if abs(float(np.mean(successes)) - recorded) > 1e-9:
                 sys.exit(f"{name}: tested {np.mean(successes)}, the run recorded {recorded}: not the run's SMC or code")
             flat = not smc.spec.children  # a flat SMC's moves are its steps: counting them changes nothing
-            counted, _ = (successes, moves) if flat else test(smc, count_moves=True, repeats=repeats)
+            counted, _ = (successes, moves) if flat else test(smc, count_moves=True, repeats=repeats[run])
             within = [s and m <= 100 for s, m in zip(successes, moves, strict=True)]
             done.append({"target": row["target"], "category": row["category"], "method": row["method"], "smc": name,
                          "recorded": f"{recorded:.3f}", "score": f"{np.mean(successes):.3f}",

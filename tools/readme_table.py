@@ -92,18 +92,21 @@ PARTIAL = re.compile(r"^\*\*Partial results\*\*(?: \((?P<run>[^)]+)\))?:", re.MU
 
 def partial_note(report: str) -> str:
     """What of the table is still being run, for the block's first line: nothing when the report is whole; else the
-    run directories the report names as partial, and whether the paper's methods are whole over both kinds all
-    the same."""
+    run directories the report names as partial, and whether the paper's methods (every one of them, on both kinds)
+    have all their concepts all the same."""
     runs = [match["run"] for match in PARTIAL.finditer(report)]
     if not runs:
         return ""
     if not all(runs):  # a report over one directory names none
         return ", **partial: the table is still being run**"
     names = " and ".join(", ".join(f"`{run}`" for run in runs).rsplit(", ", 1))
-    whole = not any(incomplete(table) for table in tables_of(report, SECTIONS[0])
-                    if table[0].startswith("| kind | category |"))
+    means = [table for table in tables_of(report, SECTIONS[0]) if table[0].startswith("| kind | category |")]
+    kinds = {cells(row)[0] for table in means for row in table[2:]}
+    columns = {column for table in means for column in cells(table[0])}
+    whole = (kinds >= {"classification", "bring-about"} and columns >= set(DEFAULT_METHODS)
+             and not any(incomplete(table) for table in means))
     return (f", **partial: {names} {'is' if len(runs) == 1 else 'are'} still being run**"
-            + ("; the paper's methods are whole" if whole else ""))
+            + ("; the paper's methods have all their concepts" if whole else ""))
 
 
 def block(report: str, source: str) -> str:

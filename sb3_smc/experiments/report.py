@@ -295,7 +295,7 @@ def _figures(folder: Path, table: ResultTable) -> list[Path]:
         groups = [c for c in CATEGORIES if table.of_kind(kind, c)]
         if not groups:
             continue
-        ran = [m for m in methods if any((t, m) in table.score for t in table.of_kind(kind))]  # none of cnn's bars
+        ran = [m for m in methods if any((t, m) in table.score for t in table.of_kind(kind))]  # the CNN classifies only
         concept_panels = [_concept_panel(table, f"{kind} / {c}", table.of_kind(kind, c), ran) for c in groups]
         paths.append(bar_panels(concept_panels, ran, f"{kind}: test score per concept (best seed; error bars: "
                                 "standard deviation across the seeds of the reported curriculum)",

@@ -70,9 +70,9 @@ class ResultTable:
             if row["curriculum"] == best_curriculum.get((row["target"], row["method"])):
                 by_seed[(row["target"], row["method"])].append(row["test_score"])
         self.seeds = dict(by_seed)
-        self.seed_mean = {key: float(np.mean(self.seeds.get(key) or [value])) for key, value in self.score.items()}
-        """Each target x method's mean over the seeds of its reported curriculum (the reported score where the
-        records have no seeds)."""
+        self.seed_mean = {key: float(np.mean(scores)) for key, scores in self.seeds.items()}
+        """Each target x method's mean over the seeds of its reported curriculum (none where the records have no
+        seeds: the means over seeds then leave it out)."""
 
     def like(self, paper: str) -> list[str]:
         """Our methods that ran compared with the paper's method ``paper`` (``base``: ``base`` and ``base-gru``;
@@ -233,7 +233,8 @@ def _seed_means_section(table: ResultTable) -> list[str]:
     lines = ["", "## Over seeds: means and tests from each concept's mean over its seeds", "",
              "The paper reports each concept's best seed. Here each concept's score is the mean over the seeds of its "
              "reported curriculum instead: what a method gives in a typical seed, without the luck of the best one "
-             "(a method that learns a concept in one seed of five keeps its best seed above, not here). Mean ± "
+             "(a method that learns a concept in one seed of five keeps its best seed above, not here; curr's "
+             "curriculum per concept is still the one with the best seed). Mean ± "
              "standard error across concepts; paired t-tests across concepts, df = concepts - 1.", "",
              *_means_header(methods)]
     tests = []
@@ -315,7 +316,7 @@ def _noprim_section(table: ResultTable) -> list[str]:
 
 
 def _ttest_row(label: str, comparison: str, members: Sequence[str], a: str, b: str,
-               score: dict[tuple[str, str], float], paper: tuple[int, float, float] | None) -> str:
+               score: Score, paper: tuple[int, float, float] | None) -> str:
     """One row of the t-test table: ``a`` against ``b`` over those of ``members`` where both ran, and ``paper``'s
     test beside it only when both ran on all of them."""
     compared, test = method_test(score, members, a, b)
