@@ -908,3 +908,42 @@ def test_the_whole_tables_script_reports_the_queued_directories_it_has(tmp_path)
     assert (tmp_path / "calls").read_text().splitlines() == [
         f"sb3-smc report {paper}/objects {paper}/search --out {paper} --no-behaviour",
         f"python {repo}/tools/readme_table.py"]
+
+
+def test_the_whole_tables_script_keeps_nothing_of_a_run_with_nothing_evaluated(tmp_path):
+    """``tools/paper_table.sh partial <category>`` at a session's end: a run whose tabulation has no row yet (no
+    target node finished) or fails is not kept and does not stop the checkpoint (exit 0, said on its output); one
+    with rows is kept."""
+    import os
+
+    run = tmp_path / "runs" / "paper-objects"
+    run.mkdir(parents=True)
+    (run / "run.json").write_text("{}")
+    stub = tmp_path / "env" / "bin" / "sb3-smc"  # the run's sb3-smc: writes the tabulation it is given
+    stub.parent.mkdir(parents=True)
+    stub.write_text(f'#!/bin/sh\n[ -f {tmp_path}/fail ] && exit 1\ncp {tmp_path}/results.json {run}/results.json\n')
+    stub.chmod(0o755)
+    repo = tmp_path / "repo"
+    (repo / "tools").mkdir(parents=True)
+    (repo / "tools" / "paper_table.sh").write_bytes((ROOT / "tools" / "paper_table.sh").read_bytes())
+    (repo / "tools" / "paper_table.sh").chmod(0o755)
+    (repo / ".venv" / "bin").mkdir(parents=True)
+    (repo / ".venv" / "bin" / "sb3-smc").write_text(f'#!/bin/sh\necho "$*" > {tmp_path}/reported\n')
+    (repo / ".venv" / "bin" / "sb3-smc").chmod(0o755)
+    env = {**os.environ, "RUNS": str(tmp_path / "runs"), "RUN_ENV": str(tmp_path / "env")}
+
+    def partial() -> str:
+        done = subprocess.run([str(repo / "tools" / "paper_table.sh"), "partial", "objects"], env=env,
+                              capture_output=True, text=True)
+        assert done.returncode == 0, done.stderr
+        return done.stdout
+
+    kept = repo / "docs" / "results" / "paper" / "objects"
+    (tmp_path / "results.json").write_text(json.dumps({"rows": [], "complete": False}))
+    assert "objects: nothing evaluated yet, not kept" in partial() and not kept.exists()
+    (tmp_path / "fail").touch()
+    assert "objects: not tabulated (the error above), not kept" in partial() and not kept.exists()
+    (tmp_path / "fail").unlink()
+    (tmp_path / "results.json").write_text(json.dumps({"rows": [{"target": "t"}], "complete": False}))
+    partial()
+    assert (kept / "results.json").is_file() and (tmp_path / "reported").read_text().startswith(f"report {kept}")

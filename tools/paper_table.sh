@@ -14,7 +14,8 @@
 #                                                (partial while unfinished), then the report
 #   tools/paper_table.sh keep <category> [repo]   copy a run's records (no models) into docs/results/paper/<category>
 #   tools/paper_table.sh partial <category>       at a session's end: tabulate what the running category has finished
-#                                                (--no-train), keep it and make its partial report
+#                                                (--no-train), keep it and make its partial report (nothing kept
+#                                                while it has no evaluated SMC)
 #   tools/paper_table.sh report                  one report over every kept directory: docs/results/paper/report.md,
 #                                                its means and t-tests copied into the README (tools/readme_table.py)
 # Environment: RUNS (default /work/runs), RUN_ENV (default /work/run-env: a venv with the worktree installed),
@@ -119,7 +120,10 @@ case ${1:-} in
     cat=$2
     export OMP_NUM_THREADS=1 MKL_NUM_THREADS=1
     # shellcheck disable=SC2046
-    "$RUN_ENV/bin/sb3-smc" experiment --out "$RUNS/paper-$cat" $(selection "$cat") --seeds 5 --workers 2 --no-train
+    if ! "$RUN_ENV/bin/sb3-smc" experiment --out "$RUNS/paper-$cat" $(selection "$cat") --seeds 5 --workers 2 \
+        --no-train; then echo "=== $cat: not tabulated (the error above), not kept"; exit 0; fi
+    if ! python3 -c 'import json, sys; sys.exit(not json.load(open(sys.argv[1]))["rows"])' "$RUNS/paper-$cat/results.json"
+    then echo "=== $cat: nothing evaluated yet, not kept"; exit 0; fi
     "$0" keep "$cat"
     "$repo/.venv/bin/sb3-smc" report "$repo/docs/results/paper/$cat" --no-behaviour ;;
   report)
