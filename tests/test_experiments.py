@@ -8,6 +8,7 @@ import json
 import math
 import re
 import shlex
+import shutil
 import subprocess
 import sys
 from collections.abc import Callable
@@ -326,8 +327,6 @@ def test_curr_with_calls_that_cost_their_moves():
 
 def test_a_run_reduced_to_its_records_resumes_without_model_files(tmp_path):
     """What docs/results/ commits (run.json + evaluations, no library) is a run that resumes where it stopped."""
-    import shutil
-
     from sb3_smc.curricula.trainer import file_stem
     from sb3_smc.library import SMCLibrary
 
@@ -856,6 +855,24 @@ def test_bar_panels_leave_no_empty_band_under_the_legend(tmp_path, horizontal):
     assert rows[-1] > 0.9 * image.shape[0]  # the caption at the bottom
 
 
+def _executable(path: Path, body: str) -> None:
+    """A shell script at ``path`` running ``body``."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(f"#!/bin/sh\n{body}\n")
+    path.chmod(0o755)
+
+
+def _script_repo(tmp_path: Path, stubs: dict[str, str]) -> Path:
+    """A repository with ``tools/paper_table.sh`` and, in ``.venv/bin``, stub programs (name -> shell body) for the
+    binaries it calls there."""
+    repo = tmp_path / "repo"
+    (repo / "tools").mkdir(parents=True)
+    shutil.copy(ROOT / "tools" / "paper_table.sh", repo / "tools")  # with its mode
+    for name, body in stubs.items():
+        _executable(repo / ".venv" / "bin" / name, body)
+    return repo
+
+
 def test_the_whole_tables_script_keeps_a_runs_records_without_its_models(tmp_path):
     """``tools/paper_table.sh keep <category> <repo>``: a run directory's records (run.json, results, evaluations,
     the CNN's) copied into ``docs/results/paper/<category>`` (no library, no curves), a later keep replacing the
@@ -887,22 +904,15 @@ def test_the_whole_tables_script_reports_the_queued_directories_it_has(tmp_path)
     """``tools/paper_table.sh report``: one ``sb3-smc report`` over the kept directories of the queue's categories,
     in the queue's order (a category with no records yet left out), then the README's table."""
     import os
-    import shutil
 
-    repo = tmp_path / "repo"
-    (repo / "tools").mkdir(parents=True)
-    shutil.copy(ROOT / "tools" / "paper_table.sh", repo / "tools")
+    repo = _script_repo(tmp_path, {"sb3-smc": f'echo "sb3-smc $*" >> {tmp_path}/calls',
+                                   "python": f'echo "python $*" >> {tmp_path}/calls'})
     paper = repo / "docs" / "results" / "paper"
     paper.mkdir(parents=True)
     (paper / "queue.txt").write_text("# category, commit, reuse\nobjects  abc  -\nsearch  abc  -\nlater  abc  -\n")
     for category in ("search", "objects"):
         (paper / category).mkdir()
         (paper / category / "results.json").write_text("{}")
-    (repo / ".venv" / "bin").mkdir(parents=True)
-    for name, body in (("sb3-smc", f'echo "sb3-smc $*" >> {tmp_path}/calls'),
-                       ("python", f'echo "python $*" >> {tmp_path}/calls')):
-        (repo / ".venv" / "bin" / name).write_text(f"#!/bin/sh\n{body}\n")
-        (repo / ".venv" / "bin" / name).chmod(0o755)
     subprocess.run([str(repo / "tools" / "paper_table.sh"), "report"], check=True, capture_output=True,
                    env={**os.environ, "RUNS": str(tmp_path / "runs")})
     assert (tmp_path / "calls").read_text().splitlines() == [
@@ -919,17 +929,9 @@ def test_the_whole_tables_script_keeps_nothing_of_a_run_with_nothing_evaluated(t
     run = tmp_path / "runs" / "paper-objects"
     run.mkdir(parents=True)
     (run / "run.json").write_text("{}")
-    stub = tmp_path / "env" / "bin" / "sb3-smc"  # the run's sb3-smc: writes the tabulation it is given
-    stub.parent.mkdir(parents=True)
-    stub.write_text(f'#!/bin/sh\n[ -f {tmp_path}/fail ] && exit 1\ncp {tmp_path}/results.json {run}/results.json\n')
-    stub.chmod(0o755)
-    repo = tmp_path / "repo"
-    (repo / "tools").mkdir(parents=True)
-    (repo / "tools" / "paper_table.sh").write_bytes((ROOT / "tools" / "paper_table.sh").read_bytes())
-    (repo / "tools" / "paper_table.sh").chmod(0o755)
-    (repo / ".venv" / "bin").mkdir(parents=True)
-    (repo / ".venv" / "bin" / "sb3-smc").write_text(f'#!/bin/sh\necho "$*" > {tmp_path}/reported\n')
-    (repo / ".venv" / "bin" / "sb3-smc").chmod(0o755)
+    _executable(tmp_path / "env" / "bin" / "sb3-smc",  # the run's sb3-smc: writes the tabulation it is given
+                f"[ -f {tmp_path}/fail ] && exit 1\ncp {tmp_path}/results.json {run}/results.json")
+    repo = _script_repo(tmp_path, {"sb3-smc": f'echo "$*" > {tmp_path}/reported'})
     env = {**os.environ, "RUNS": str(tmp_path / "runs"), "RUN_ENV": str(tmp_path / "env")}
 
     def partial() -> str:

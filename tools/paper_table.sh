@@ -41,8 +41,12 @@ queue() {  # the queue's lines: category, commit, --reuse-from
   grep -v '^#' "$repo/docs/results/paper/queue.txt"
 }
 
+holds() {  # whether the JSON file $1 exists and its key $2 is true (not false, empty or absent)
+  [ -f "$1" ] && python3 -c 'import json, sys; sys.exit(not json.load(open(sys.argv[1])).get(sys.argv[2]))' "$1" "$2"
+}
+
 complete() {  # whether the results.json $1 says its run is complete
-  [ -f "$1" ] && python3 -c 'import json, sys; sys.exit(not json.load(open(sys.argv[1]))["complete"])' "$1"
+  holds "$1" complete
 }
 
 environment() {  # the venv of commit $1 (a worktree of it, found or added, installed into $RUNS/env-$1, once)
@@ -122,8 +126,7 @@ case ${1:-} in
     # shellcheck disable=SC2046
     if ! "$RUN_ENV/bin/sb3-smc" experiment --out "$RUNS/paper-$cat" $(selection "$cat") --seeds 5 --workers 2 \
         --no-train; then echo "=== $cat: not tabulated (the error above), not kept"; exit 0; fi
-    if ! python3 -c 'import json, sys; sys.exit(not json.load(open(sys.argv[1]))["rows"])' "$RUNS/paper-$cat/results.json"
-    then echo "=== $cat: nothing evaluated yet, not kept"; exit 0; fi
+    if ! holds "$RUNS/paper-$cat/results.json" rows; then echo "=== $cat: nothing evaluated yet, not kept"; exit 0; fi
     "$0" keep "$cat"
     "$repo/.venv/bin/sb3-smc" report "$repo/docs/results/paper/$cat" --no-behaviour ;;
   report)

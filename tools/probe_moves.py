@@ -45,11 +45,10 @@ FIELDS = ("target", "category", "method", "smc", "recorded", "score", "moves_mea
           "over_100", "score_within_100", "score_counting_moves")
 
 
-def best_rows(run: Path, kind: str, methods: list[str]) -> list[dict[str, Any]]:
-    """The best seed's row of each target x method of ``kind`` (the run's ``reported`` rows), by target, then in the
-    order of ``methods``."""
-    rows = read_results(run)["reported"]
-    chosen = [row for row in rows if row["kind"] == kind and row["method"] in methods]
+def best_rows(results: dict[str, Any], kind: str, methods: list[str]) -> list[dict[str, Any]]:
+    """The best seed's row of each target x method of ``kind`` (a run's ``results.json``: its ``reported`` rows), by
+    target, then in the order of ``methods``."""
+    chosen = [row for row in results["reported"] if row["kind"] == kind and row["method"] in methods]
     return sorted(chosen, key=lambda row: (row["target"], methods.index(row["method"])))
 
 
@@ -71,12 +70,13 @@ def main(argv: list[str] | None = None) -> int:
     unknown = [m for m in methods if m not in METHODS]
     if unknown:
         parser.error(f"--methods: unknown {', '.join(unknown)} (methods: {', '.join(METHODS)})")
-    repeats = {}
+    results, repeats = {}, {}
     for run in args.runs:  # every run checked before any work
         if not (run / "results.json").is_file() or not (run / "library").is_dir():
             parser.error(f"{run}: not an experiment directory (it needs results.json and library/)")
         try:
-            repeats[run] = int(read_results(run)["settings"]["repeats"])
+            results[run] = read_results(run)
+            repeats[run] = int(results[run]["settings"]["repeats"])
         except (SMCError, KeyError, TypeError, ValueError) as error:
             parser.error(f"{run / 'results.json'}: not the results of an sb3-smc experiment ({error})")
     torch.set_num_threads(1)
@@ -86,7 +86,7 @@ def main(argv: list[str] | None = None) -> int:
             done = list(csv.DictReader(handle))
     finished = {(row["target"], row["method"]) for row in done}
     for run in args.runs:
-        for row in best_rows(run, args.kind, methods):
+        for row in best_rows(results[run], args.kind, methods):
             if (row["target"], row["method"]) in finished:
                 continue
             name = f"{row['curriculum']}@{row['seed']}"
