@@ -69,11 +69,11 @@ def _recall_rate(model, episodes: int = 200) -> float:
     return total / episodes
 
 
-def _recurrent(algo: type, seed: int, **kwargs):
+def _recurrent(algo: type, seed: int, device: str = "cpu", **kwargs):
     env = make_vec_env(CueRecallEnv, n_envs=8, seed=seed)
     model = algo("MlpGruPolicy" if algo is RecurrentTRPO else SequenceGruPolicy, env, n_steps=64, seed=seed,
-                 policy_kwargs={"lstm_hidden_size": 16, "net_arch": [], "shared_lstm": False,
-                                "enable_critic_lstm": True}, **kwargs)
+                 device=device, policy_kwargs={"lstm_hidden_size": 16, "net_arch": [], "shared_lstm": False,
+                                               "enable_critic_lstm": True}, **kwargs)
     use_compact_buffer(model)
     return model
 

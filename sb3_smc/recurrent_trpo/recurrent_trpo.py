@@ -14,6 +14,7 @@ baseline of the paper (``baseline="linear_feature"``, rllab's ``LinearFeatureBas
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable
 from functools import partial
 from typing import TYPE_CHECKING, Any, ClassVar, TypeVar, cast
@@ -36,6 +37,7 @@ __all__ = ["BASELINES", "LinearFeatureBaseline", "RecurrentTRPO"]
 
 SelfRecurrentTRPO = TypeVar("SelfRecurrentTRPO", bound="RecurrentTRPO")
 BASELINES = ("critic", "linear_feature")
+_UNPACKED = "RNN module weights are not part of single contiguous chunk"  # torch's warning on a cuDNN call
 
 
 class LinearFeatureBaseline:
@@ -222,7 +224,10 @@ class RecurrentTRPO(RecurrentPPO):
             actions = data.actions.long().flatten()
 
             def evaluate(data=data):
-                evaluated = self.policy.evaluate_sequences(data.observations, data.lstm_states, data.episode_starts)
+                with warnings.catch_warnings():  # on a GPU, while ``_set`` has the parameters apart from cuDNN's
+                    warnings.filterwarnings("ignore", _UNPACKED, UserWarning)  # packed copy (packed again below)
+                    evaluated = self.policy.evaluate_sequences(data.observations, data.lstm_states,
+                                                               data.episode_starts)
                 if evaluated is None:
                     raise RuntimeError("RecurrentTRPO needs the compact recurrent buffer's minibatches")
                 return evaluated[0]
@@ -260,6 +265,9 @@ class RecurrentTRPO(RecurrentPPO):
             successes.append(success)
             objectives.append(float((new_objective if success else objective).detach()))
             kls.append(float(new_kl) if success else 0.0)
+        for module in self.policy.modules():  # the data swaps of ``_set`` leave cuDNN's packed recurrent weights
+            if isinstance(module, torch.nn.RNNBase):  # apart; pack them again (a no-op on the CPU)
+                module.flatten_parameters()
 
         if self.linear_baseline is None:
             for _ in range(self.n_critic_updates):
