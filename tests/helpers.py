@@ -82,13 +82,23 @@ class UniformPolicy:
         return np.full(self.n_actions, 1.0 / self.n_actions), None
 
 
-def import_benchmark(name: str) -> ModuleType:
-    """The script ``benchmarks/<name>.py`` imported as a module (benchmarks are not a package)."""
-    path = Path(__file__).resolve().parents[1] / "benchmarks" / f"{name}.py"
+def import_script(folder: str, name: str) -> ModuleType:
+    """The script ``<folder>/<name>.py`` of the repository (``benchmarks``, ``tools``: not packages) as a module."""
+    path = Path(__file__).resolve().parents[1] / folder / f"{name}.py"
     spec = importlib.util.spec_from_file_location(name, path)
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
+
+
+def import_benchmark(name: str) -> ModuleType:
+    """The script ``benchmarks/<name>.py`` imported as a module."""
+    return import_script("benchmarks", name)
+
+
+def import_tool(name: str) -> ModuleType:
+    """The script ``tools/<name>.py`` imported as a module."""
+    return import_script("tools", name)
 
 
 def sb3_smc_cli(*argv: str) -> tuple[int, str, str]:

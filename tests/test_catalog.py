@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import importlib.util
 import json
 from collections import Counter
 from pathlib import Path
@@ -11,9 +10,8 @@ import pytest
 
 from pixelworld_env.concepts import Concept, ConceptError, expand, parse
 from pixelworld_env.datasets import catalog
-from tests.helpers import REFERENCE, require_reference
+from tests.helpers import REFERENCE, import_tool, require_reference
 
-ROOT = Path(__file__).resolve().parents[1]
 #: The three generators of bfaw-search.generators that name the undefined `potential-container`.
 BROKEN_GENERATORS = {
     "bfaw-self-and-two-potential-containers-in-nontarget",
@@ -29,10 +27,7 @@ def ref() -> dict:
 
 
 def _build_tool():
-    spec = importlib.util.spec_from_file_location("build_catalog", ROOT / "tools" / "build_catalog.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return import_tool("build_catalog")
 
 
 def _released() -> list[str]:

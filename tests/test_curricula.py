@@ -32,7 +32,7 @@ from sb3_smc.curricula.shipped import build_shipped, render
 from sb3_smc.curricula.trainer import RunSettingsError, job_name, rank_seeds, status, train_curriculum
 from sb3_smc.library import SMCLibrary
 from sb3_smc.records import TrainingRecord
-from tests.helpers import sb3_smc_cli
+from tests.helpers import import_tool, sb3_smc_cli
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / "sb3_smc" / "curricula" / "data"
@@ -803,11 +803,7 @@ def test_a_record_that_stopped_at_the_largest_return_is_trained_alike_with_the_w
 def test_the_probe_picks_the_worst_seeds_as_the_original_release_does():
     """``tools/probe_node.py --children worst``: the release's selection helper (a stable ascending sort of the seeds
     by training return, the first two kept); ``best``: the package's rule."""
-    import importlib.util
-
-    spec = importlib.util.spec_from_file_location("probe_node", Path(__file__).parents[1] / "tools" / "probe_node.py")
-    probe_node = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(probe_node)
+    probe_node = import_tool("probe_node")
     records = {0: _record(0.2), 1: _record(0.9), 2: _record(None), 3: _record(0.9), 4: _record(0.5)}
     assert probe_node.chosen_seeds(records, "best") == [1, 3]
     assert probe_node.chosen_seeds(records, "worst") == [2, 0]  # never-selected first, then the lowest return

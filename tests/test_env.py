@@ -15,7 +15,7 @@ from stable_baselines3.common.env_checker import check_env as sb3_check_env
 from pixelworld_env import Color, PixelWorldEnv, Scene
 from pixelworld_env.core.constants import NUM_COLORS
 from pixelworld_env.core.render import HUMAN_CELL_SIZE, rgb_image
-from tests.helpers import CONTAINER, IN_CONTAINER, classification_env, make
+from tests.helpers import CONTAINER, IN_CONTAINER, classification_env, import_tool, make
 
 DOWN, RIGHT, UP, LEFT = "DOWN", "RIGHT", "UP", "LEFT"
 
@@ -376,12 +376,7 @@ def test_the_fewest_moves_to_a_goal_cell_by_breadth_first_search(capsys):
     """``tools/probe_paths.py``: the fewest moves from the self to where the concept holds (the package's planner),
     around a container's wall (5 here: four right over the wall, one down into it), ``None`` when an object shuts the
     goal off, and a classification dataset refused before any work."""
-    import importlib.util
-    from pathlib import Path
-
-    spec = importlib.util.spec_from_file_location("probe_paths", Path(__file__).parents[1] / "tools" / "probe_paths.py")
-    probe_paths = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(probe_paths)
+    probe_paths = import_tool("probe_paths")
     concept = "?x container(x) & inside_supported(self,x)"
 
     def env_of(grid: str) -> PixelWorldEnv:

@@ -25,6 +25,7 @@ from sb3_smc.experiments.cnn import CHANNELS, encode, train_cnn
 from sb3_smc.experiments.report import write_report
 from sb3_smc.experiments.runner import RESULT_FIELDS, reported, run_experiment
 from sb3_smc.experiments.statistics import paired_ttest
+from tests.helpers import import_tool
 
 ROOT = Path(__file__).resolve().parents[1]
 LEFT_OF = "cl_self-left-of-two-objects-vs-one"
@@ -103,13 +104,9 @@ def test_the_moves_probe_retests_a_runs_best_seeds_counting_their_moves(tmp_path
     (its recorded score reproduced), its moves per episode, and its score with calls costing their moves (a flat SMC
     makes at most 100 moves and is not tested twice); resumable; a directory that is not an experiment's and an
     unknown method are refused before any work."""
-    import importlib.util
-
     from sb3_smc.library import SMCLibrary
 
-    spec = importlib.util.spec_from_file_location("probe_moves", ROOT / "tools" / "probe_moves.py")
-    probe_moves = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(probe_moves)
+    probe_moves = import_tool("probe_moves")
     out = tmp_path / "exp"
     run_experiment(out, methods=["base", "curr"], targets=[LEFT_OF], seeds=1, timesteps=2000, repeats=1, progress=False)
     table = tmp_path / "moves.csv"
@@ -138,6 +135,41 @@ def test_the_moves_probe_retests_a_runs_best_seeds_counting_their_moves(tmp_path
         with pytest.raises(SystemExit):
             probe_moves.main([*bad, "--out", str(tmp_path / "other.csv")])
         assert says in capsys.readouterr().err and not (tmp_path / "other.csv").exists()
+
+
+def test_the_paired_seeds_tool_counts_what_a_longer_run_does_to_each_seed(tmp_path, capsys):
+    """``tools/paired_seeds.py``: seed s of one method against seed s of another (the reported curriculum's seeds
+    only), the seeds lifted or lowered by 5 points, the first method's weak seeds (more than 15 below its concept's
+    best) brought within 15 of it, the best of the paired seeds; bad input refused before any output."""
+    paired_seeds = import_tool("paired_seeds")
+
+    def results(directory, method, scores, unreported=()):
+        rows = [{"target": t, "kind": k, "category": "objcon", "method": method, "curriculum": curriculum,
+                 "seed": seed, "test_score": v}
+                for curriculum, table in (("c", scores), ("other", unreported))
+                for t, k, values in table for seed, v in enumerate(values)]
+        directory.mkdir()
+        (directory / "results.json").write_text(json.dumps({"rows": rows, "reported": reported(rows)}))
+        return str(directory)
+
+    canon = results(tmp_path / "canon", "canon", [("cl_t", "classification", [0.27, 0.44, 0.60, 0.23, 0.29]),
+                                                  ("ba_t", "bring-about", [1.0, 1.0, 0.98, 1.0, 1.0])])
+    scaled = results(tmp_path / "scaled", "canon-scaled",
+                     [("cl_t", "classification", [0.91, 0.53, 0.76, 0.39, 0.29]), ("ba_t", "bring-about", [1.0, 0.9])],
+                     unreported=[("cl_t", "classification", [0.2] * 5)])  # a lower curriculum: not paired
+    assert paired_seeds.main([canon, scaled, "--methods", "canon,canon-scaled", "--by-target"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[2] == "| classification | 1 | 5 | 36.6 | 57.6 | 60.0 | 91.0 | 4 | 0 | 4 | 2 |"
+    assert lines[3] == "| bring-about | 1 | 2 | 100.0 | 95.0 | 100.0 | 100.0 | 0 | 1 | 0 | 0 |"
+    assert lines[4] == "| all | 2 | 7 | 54.7 | 68.3 | 80.0 | 95.5 | 4 | 1 | 4 | 2 |"
+    assert "| `ba_t` | 100.0 / 100.0 / 98.0 / 100.0 / 100.0 | 100.0 / 90.0 / - / - / - |" in lines
+    for argv, says in (([canon, "--methods", "canon"], "--methods: two of"),
+                       ([canon, str(tmp_path), "--methods", "canon,canon-scaled"], "results.json not found"),
+                       ([canon, "--methods", "canon,canon-scaled"], "no target has seeds of both")):
+        with pytest.raises(SystemExit):
+            paired_seeds.main(argv)
+        captured = capsys.readouterr()
+        assert says in captured.err and captured.out == ""
 
 
 def test_reported_scores_are_the_best_seed_and_curriculum():
@@ -606,12 +638,9 @@ def test_the_readme_gets_the_whole_tables_means_and_tests_from_the_report(tmp_pa
     kind's categories only while it has no mean over all its concepts), says when the table is partial (which run
     directories, and whether every one of the paper's methods has all its concepts), leaves the rest of the README
     as it was, and refuses a README without its markers."""
-    import importlib.util
-
-    spec = importlib.util.spec_from_file_location("readme_table", ROOT / "tools" / "readme_table.py")
-    readme_table = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(readme_table)
     from pixelworld_env.datasets import catalog
+
+    readme_table = import_tool("readme_table")
 
     everything = level2_targets()
 
