@@ -138,33 +138,39 @@ def test_the_moves_probe_retests_a_runs_best_seeds_counting_their_moves(tmp_path
 
 
 def test_the_paired_seeds_tool_counts_what_a_longer_run_does_to_each_seed(tmp_path, capsys):
-    """``tools/paired_seeds.py``: seed s of one method against seed s of another (the reported curriculum's seeds
-    only), the seeds lifted or lowered by 5 points, the first method's weak seeds (more than 15 below its concept's
-    best) brought within 15 of it, the best of the paired seeds; bad input refused before any output."""
+    """``tools/paired_seeds.py``: seed s of one method against seed s of another on the same curriculum node (the
+    reported curriculum's seeds only), the seeds lifted or lowered by 5 points or more, the first method's weak
+    seeds (more than 15 below its concept's best) brought within 15 of it, exactly at those boundaries; targets on
+    different nodes named and left out; bad input refused before any output."""
     paired_seeds = import_tool("paired_seeds")
 
-    def results(directory, method, scores, unreported=()):
-        rows = [{"target": t, "kind": k, "category": "objcon", "method": method, "curriculum": curriculum,
-                 "seed": seed, "test_score": v}
-                for curriculum, table in (("c", scores), ("other", unreported))
-                for t, k, values in table for seed, v in enumerate(values)]
-        directory.mkdir()
-        (directory / "results.json").write_text(json.dumps({"rows": rows, "reported": reported(rows)}))
-        return str(directory)
+    def results(name, method, scores, unreported=()):
+        rows = [{"target": t, "kind": "bring-about" if t.startswith("ba_") else "classification",
+                 "category": "objcon", "method": method, "curriculum": curriculum, "seed": seed, "test_score": v}
+                for table in (scores, unreported) for t, curriculum, values in table for seed, v in enumerate(values)]
+        (tmp_path / name).mkdir()
+        (tmp_path / name / "results.json").write_text(json.dumps({"rows": rows, "reported": reported(rows)}))
+        return str(tmp_path / name)
 
-    canon = results(tmp_path / "canon", "canon", [("cl_t", "classification", [0.27, 0.44, 0.60, 0.23, 0.29]),
-                                                  ("ba_t", "bring-about", [1.0, 1.0, 0.98, 1.0, 1.0])])
-    scaled = results(tmp_path / "scaled", "canon-scaled",
-                     [("cl_t", "classification", [0.91, 0.53, 0.76, 0.39, 0.29]), ("ba_t", "bring-about", [1.0, 0.9])],
-                     unreported=[("cl_t", "classification", [0.2] * 5)])  # a lower curriculum: not paired
+    canon = results("canon", "canon", [("cl_t", "c", [0.27, 0.44, 0.60, 0.23, 0.29]),
+                                       ("cl_edge", "e", [0.90, 0.75, 0.20]), ("cl_other", "o", [0.5]),
+                                       ("ba_t", "b", [1.0, 1.0, 0.98, 1.0, 1.0])])
+    scaled = results("scaled", "canon-scaled",
+                     [("cl_t", "canon-scaled/c", [0.91, 0.53, 0.76, 0.39, 0.29]),
+                      ("cl_edge", "canon-scaled/e", [0.95, 0.70, 0.75]),  # +5, -5, and 15 below the best
+                      ("cl_other", "d", [0.9]), ("ba_t", "canon-scaled/b", [1.0, 0.9])],
+                     unreported=[("cl_t", "lower", [0.2] * 5)])  # a lower curriculum: not paired
     assert paired_seeds.main([canon, scaled, "--methods", "canon,canon-scaled", "--by-target"]) == 0
     lines = capsys.readouterr().out.splitlines()
-    assert lines[2] == "| classification | 1 | 5 | 36.6 | 57.6 | 60.0 | 91.0 | 4 | 0 | 4 | 2 |"
+    assert lines[2] == "| classification | 2 | 8 | 46.0 | 66.0 | 75.0 | 93.0 | 6 | 1 | 5 | 3 |"
     assert lines[3] == "| bring-about | 1 | 2 | 100.0 | 95.0 | 100.0 | 100.0 | 0 | 1 | 0 | 0 |"
-    assert lines[4] == "| all | 2 | 7 | 54.7 | 68.3 | 80.0 | 95.5 | 4 | 1 | 4 | 2 |"
+    assert lines[4] == "| all | 3 | 10 | 56.8 | 71.8 | 83.3 | 95.3 | 6 | 2 | 5 | 3 |"
+    assert lines[6] == "Not paired (the reported curricula are different nodes): cl_other"
     assert "| `ba_t` | 100.0 / 100.0 / 98.0 / 100.0 / 100.0 | 100.0 / 90.0 / - / - / - |" in lines
+    again = results("again", "canon", [("cl_t", "c", [0.28])])  # seed 0 of canon once more, another score
     for argv, says in (([canon, "--methods", "canon"], "--methods: two of"),
                        ([canon, str(tmp_path), "--methods", "canon,canon-scaled"], "results.json not found"),
+                       ([canon, again, scaled, "--methods", "canon,canon-scaled"], "seed 0: two results"),
                        ([canon, "--methods", "canon,canon-scaled"], "no target has seeds of both")):
         with pytest.raises(SystemExit):
             paired_seeds.main(argv)

@@ -1,11 +1,13 @@
 """Two methods of the whole table compared seed by seed (docs/results/paper/README.md: does `canon-scaled`'s larger
 budget lift canon's weak seeds?).
 
-A method that gives the same node a longer run (``canon-scaled`` against ``canon``) trains each seed along the same
-path for as long as the shorter run lasts, so seed ``s`` of one is paired with seed ``s`` of the other. For each
-kind this counts, over the targets both methods ran, the seeds the second method lifts or lowers by 5 points or
-more, and the first method's weak seeds (more than 15 points below that concept's best seed) that the second
-brings within 15 points of it; with ``--by-target``, every target's seeds side by side.
+A method that gives the same node a longer run (``canon-scaled`` against ``canon``: the same curriculum node, its
+name prefixed by the method) trains each seed along the same path for as long as the shorter run lasts (with
+constant hyperparameters, the package's defaults; a ``lin_`` schedule depends on the budget), so seed ``s`` of one
+is paired with seed ``s`` of the other, on the targets whose reported curricula are the same node. For each kind
+this counts the seeds the second method lifts or lowers by 5 points or more, and the first method's weak seeds
+(more than 15 points below that concept's best seed) that the second brings within 15 points of it; with
+``--by-target``, every target's seeds side by side.
 
     python tools/paired_seeds.py docs/results/paper/{search,objects,containment,objcon,canon-scaled} \\
         --methods canon,canon-scaled
@@ -15,7 +17,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-from collections import defaultdict
 from pathlib import Path
 from typing import Any
 
@@ -25,19 +26,29 @@ from sb3_smc.errors import SMCError
 from sb3_smc.experiments.design import METHODS
 from sb3_smc.experiments.runner import read_results
 
-MOVED = 0.05  # a seed lifted or lowered: by 5 points or more
-WEAK = 0.15  # a weak seed: more than 15 points below its concept's best
+MOVED = 5.0  # a seed lifted or lowered: by 5 points or more
+WEAK = 15.0  # a weak seed: more than 15 points below its concept's best
 
 
-def seed_scores(results: list[dict[str, Any]], method: str) -> dict[str, dict[int, float]]:
-    """Each target's seed scores for ``method`` (the seeds of its reported curriculum, as the report takes them)."""
-    reported = {(r["target"], r["curriculum"]) for res in results for r in res["reported"] if r["method"] == method}
-    scores: dict[str, dict[int, float]] = defaultdict(dict)
+def points(score: float) -> float:
+    """A test score (a fraction) in points, to 0.1 (so that differences compare exactly at 5 and 15 points)."""
+    return round(100 * score, 1)
+
+
+def seed_scores(results: list[dict[str, Any]], method: str) -> dict[str, tuple[str, dict[int, float]]]:
+    """Each target's reported curriculum for ``method`` and its seeds' scores in points (the seeds the report
+    takes); a seed found twice with different scores is an error."""
+    reported = {r["target"]: r["curriculum"] for res in results for r in res["reported"] if r["method"] == method}
+    scores: dict[str, dict[int, float]] = {target: {} for target in reported}
     for res in results:
         for row in res["rows"]:
-            if row["method"] == method and (row["target"], row["curriculum"]) in reported:
-                scores[row["target"]][int(row["seed"])] = float(row["test_score"])
-    return dict(scores)
+            target, seed = row["target"], int(row["seed"])
+            if row["method"] != method or row["curriculum"] != reported.get(target):
+                continue
+            score = points(float(row["test_score"]))
+            if scores[target].setdefault(seed, score) != score:
+                raise SMCError(f"{method} on {target}, seed {seed}: two results ({scores[target][seed]} and {score})")
+    return {target: (reported[target], scores[target]) for target in reported}
 
 
 def summary(a: dict[str, dict[int, float]], b: dict[str, dict[int, float]], targets: list[str]) -> dict[str, Any]:
@@ -46,13 +57,14 @@ def summary(a: dict[str, dict[int, float]], b: dict[str, dict[int, float]], targ
     seeds, and the mean across targets of the best paired seed."""
     paired = {t: sorted(set(a[t]) & set(b[t])) for t in targets}
     pairs = [(a[t][s], b[t][s], max(a[t].values())) for t in targets for s in paired[t]]
-    weak = [(x, y, best) for x, y, best in pairs if x < best - WEAK]
+    weak = [(x, y, best) for x, y, best in pairs if round(best - x, 1) > WEAK]
     return {"targets": len(targets), "seeds": len(pairs),
             "mean_a": float(np.mean([x for x, _, _ in pairs])), "mean_b": float(np.mean([y for _, y, _ in pairs])),
             "best_a": float(np.mean([max(a[t][s] for s in paired[t]) for t in targets])),
             "best_b": float(np.mean([max(b[t][s] for s in paired[t]) for t in targets])),
-            "lifted": sum(y - x >= MOVED for x, y, _ in pairs), "lowered": sum(x - y >= MOVED for x, y, _ in pairs),
-            "weak": len(weak), "weak_lifted": sum(y >= best - WEAK for _, y, best in weak)}
+            "lifted": sum(round(y - x, 1) >= MOVED for x, y, _ in pairs),
+            "lowered": sum(round(x - y, 1) >= MOVED for x, y, _ in pairs),
+            "weak": len(weak), "weak_lifted": sum(round(best - y, 1) <= WEAK for _, y, best in weak)}
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -64,31 +76,36 @@ def main(argv: list[str] | None = None) -> int:
     methods = args.methods.split(",")
     if len(methods) != 2 or any(m not in METHODS for m in methods):
         parser.error(f"--methods: two of {', '.join(METHODS)}, comma-separated (got {args.methods!r})")
-    try:  # every directory read before any counting
+    try:  # every directory read, and every seed checked, before any counting
         results = [read_results(run) for run in args.runs]
+        found_a, found_b = (seed_scores(results, m) for m in methods)
     except (OSError, SMCError) as error:
         parser.error(str(error))
-    a, b = (seed_scores(results, m) for m in methods)
-    kind_of = {r["target"]: r["kind"] for res in results for r in res["reported"]}
-    both = sorted(t for t in a if t in b and set(a[t]) & set(b[t]))
+    common = sorted(t for t in found_a if t in found_b and set(found_a[t][1]) & set(found_b[t][1]))
+    both = [t for t in common if found_b[t][0] in (found_a[t][0], f"{methods[1]}/{found_a[t][0]}")]
     if not both:
-        parser.error(f"no target has seeds of both {methods[0]} and {methods[1]} in {', '.join(map(str, args.runs))}")
-    pct = "{:.1f}".format
+        parser.error(f"no target has seeds of both {methods[0]} and {methods[1]} on the same curriculum node in "
+                     f"{', '.join(map(str, args.runs))}")
+    a, b = ({t: found[t][1] for t in both} for found in (found_a, found_b))
+    kind_of = {r["target"]: r["kind"] for res in results for r in res["reported"]}
     print(f"| kind | targets | paired seeds | mean {methods[0]} | mean {methods[1]} | best paired {methods[0]} | "
-          f"best paired {methods[1]} | lifted >= 5 | lowered >= 5 | weak seeds of {methods[0]} | brought within 15 |")
+          f"best paired {methods[1]} | lifted >= 5 | lowered >= 5 | weak seeds of {methods[0]} (> 15 below its "
+          "best) | brought within 15 |")
     print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     for kind in ("classification", "bring-about", None):
         targets = [t for t in both if kind in (None, kind_of[t])]
-        if not targets:
-            continue
-        s = summary(a, b, targets)
-        print(f"| {kind or 'all'} | {s['targets']} | {s['seeds']} | {pct(100 * s['mean_a'])} | "
-              f"{pct(100 * s['mean_b'])} | {pct(100 * s['best_a'])} | {pct(100 * s['best_b'])} | {s['lifted']} | "
-              f"{s['lowered']} | {s['weak']} | {s['weak_lifted']} |")
+        if targets:
+            s = summary(a, b, targets)
+            print(f"| {kind or 'all'} | {s['targets']} | {s['seeds']} | {s['mean_a']:.1f} | {s['mean_b']:.1f} | "
+                  f"{s['best_a']:.1f} | {s['best_b']:.1f} | {s['lifted']} | {s['lowered']} | {s['weak']} | "
+                  f"{s['weak_lifted']} |")
+    apart = [t for t in common if t not in both]
+    if apart:
+        print(f"\nNot paired (the reported curricula are different nodes): {', '.join(apart)}")
     if args.by_target:
         print(f"\n| target | {methods[0]} by seed | {methods[1]} by seed |\n|---|---|---|")
         for t in both:
-            cells = (" / ".join(pct(100 * m[t][s]) if s in m[t] else "-" for s in sorted(set(a[t]) | set(b[t])))
+            cells = (" / ".join(f"{m[t][s]:.1f}" if s in m[t] else "-" for s in sorted(set(a[t]) | set(b[t])))
                      for m in (a, b))
             print(f"| `{t}` | " + " | ".join(cells) + " |")
     return 0

@@ -215,60 +215,65 @@ class RecurrentTRPO(RecurrentPPO):
             return policy.value_net(policy.mlp_extractor.forward_critic(critic(features))).flatten()
         return policy.evaluate_sequences(data.observations, data.lstm_states, data.episode_starts)[1].flatten()
 
+    def _policy_step(self, data: Any) -> tuple[list[torch.nn.Parameter], bool, float, float]:
+        """TRPO's step of the actor on the batch ``data``: the actor's parameters, whether the line search took a
+        step, the surrogate after it (before, when none) and the step's mean KL (0 when none)."""
+        actions = data.actions.long().flatten()
+
+        def evaluate():
+            evaluated = self.policy.evaluate_sequences(data.observations, data.lstm_states, data.episode_starts)
+            if evaluated is None:
+                raise RuntimeError("RecurrentTRPO needs the compact recurrent buffer's minibatches")
+            return evaluated[0]
+
+        distribution = evaluate()
+        logits = distribution.distribution.logits
+        probs = distribution.distribution.probs.detach()
+        old = Categorical(probs=probs)
+        advantages = data.advantages
+        if self.normalize_advantage and len(advantages) > 1:
+            advantages = (advantages - advantages.mean()) / (advantages.std() + 1e-8)
+        objective = (advantages * torch.exp(distribution.log_prob(actions) - data.old_log_prob)).mean()
+        params = list(self.policy.parameters())
+        grads = torch.autograd.grad(objective, params, retain_graph=True, allow_unused=True)
+        actor_params = [p for p, g in zip(params, grads, strict=True) if g is not None]  # the critic is unused
+        objective_grad = torch.cat([g.reshape(-1) for g in grads if g is not None])
+        originals = [param.detach().clone() for param in actor_params]
+        fisher = partial(self.fisher_vector_product, actor_params, originals, logits, probs, evaluate)
+        direction = conjugate_gradient_solver(fisher, objective_grad, max_iter=self.cg_max_steps)
+        curvature = float(torch.dot(direction, fisher(direction)))
+        max_step = np.sqrt(2 * self.target_kl / curvature) if curvature > 0 else 0.0
+        success, coefficient, new_kl = False, 1.0, torch.zeros(())
+        with torch.no_grad():
+            for _ in range(self.line_search_max_iter):
+                self._set(actor_params, originals, coefficient * max_step, direction)
+                candidate = evaluate()
+                new_objective = (advantages * torch.exp(candidate.log_prob(actions) - data.old_log_prob)).mean()
+                new_kl = kl_divergence(candidate.distribution, old).mean()
+                if new_kl < self.target_kl and new_objective > objective:
+                    success = True
+                    break
+                coefficient *= self.line_search_shrinking_factor
+            if not success:
+                self._set(actor_params, originals, 0.0, direction)
+        return (actor_params, success, float((new_objective if success else objective).detach()),
+                float(new_kl) if success else 0.0)
+
     def train(self) -> None:
         self.policy.set_training_mode(True)
         self._update_learning_rate(self.policy.optimizer)
-        objectives, kls, successes, value_losses = [], [], [], []
-        actor_params: list[torch.nn.Parameter] = []
-        for data in self.rollout_buffer.get(batch_size=None):  # the whole batch, sequence after sequence
-            actions = data.actions.long().flatten()
-
-            def evaluate(data=data):
-                with warnings.catch_warnings():  # on a GPU, while ``_set`` has the parameters apart from cuDNN's
-                    warnings.filterwarnings("ignore", _UNPACKED, UserWarning)  # packed copy (packed again below)
-                    evaluated = self.policy.evaluate_sequences(data.observations, data.lstm_states,
-                                                               data.episode_starts)
-                if evaluated is None:
-                    raise RuntimeError("RecurrentTRPO needs the compact recurrent buffer's minibatches")
-                return evaluated[0]
-
-            distribution = evaluate()
-            logits = distribution.distribution.logits
-            probs = distribution.distribution.probs.detach()
-            old = Categorical(probs=probs)
-            advantages = data.advantages
-            if self.normalize_advantage and len(advantages) > 1:
-                advantages = (advantages - advantages.mean()) / (advantages.std() + 1e-8)
-            objective = (advantages * torch.exp(distribution.log_prob(actions) - data.old_log_prob)).mean()
-            params = list(self.policy.parameters())
-            grads = torch.autograd.grad(objective, params, retain_graph=True, allow_unused=True)
-            actor_params = [p for p, g in zip(params, grads, strict=True) if g is not None]  # the critic is unused
-            objective_grad = torch.cat([g.reshape(-1) for g in grads if g is not None])
-            originals = [param.detach().clone() for param in actor_params]
-            fisher = partial(self.fisher_vector_product, actor_params, originals, logits, probs, evaluate)
-            direction = conjugate_gradient_solver(fisher, objective_grad, max_iter=self.cg_max_steps)
-            curvature = float(torch.dot(direction, fisher(direction)))
-            max_step = np.sqrt(2 * self.target_kl / curvature) if curvature > 0 else 0.0
-            success, coefficient, new_kl = False, 1.0, torch.zeros(())
-            with torch.no_grad():
-                for _ in range(self.line_search_max_iter):
-                    self._set(actor_params, originals, coefficient * max_step, direction)
-                    candidate = evaluate()
-                    new_objective = (advantages * torch.exp(candidate.log_prob(actions) - data.old_log_prob)).mean()
-                    new_kl = kl_divergence(candidate.distribution, old).mean()
-                    if new_kl < self.target_kl and new_objective > objective:
-                        success = True
-                        break
-                    coefficient *= self.line_search_shrinking_factor
-                if not success:
-                    self._set(actor_params, originals, 0.0, direction)
-            successes.append(success)
-            objectives.append(float((new_objective if success else objective).detach()))
-            kls.append(float(new_kl) if success else 0.0)
+        with warnings.catch_warnings():  # on a GPU, ``_set`` holds the parameters apart from cuDNN's packed copy
+            warnings.filterwarnings("ignore", _UNPACKED, UserWarning)  # during the search (packed again below)
+            steps = [self._policy_step(data) for data in self.rollout_buffer.get(batch_size=None)]
         for module in self.policy.modules():  # the data swaps of ``_set`` leave cuDNN's packed recurrent weights
             if isinstance(module, torch.nn.RNNBase):  # apart; pack them again (a no-op on the CPU)
                 module.flatten_parameters()
+        actor_params = steps[-1][0]  # (the whole batch is one minibatch: one step)
+        successes = [success for _, success, _, _ in steps]
+        objectives = [objective for _, _, objective, _ in steps]
+        kls = [kl for _, _, _, kl in steps]
 
+        value_losses: list[float] = []
         if self.linear_baseline is None:
             for _ in range(self.n_critic_updates):
                 for data in self.rollout_buffer.get(self.batch_size):

@@ -39,7 +39,7 @@ def _lstm_by_length(lstm: torch.nn.LSTM, features: torch.Tensor, starts: torch.T
         members = torch.nonzero((lengths > low) & (lengths <= high)).flatten()
         if len(members):
             longest = int(lengths[members].max())
-            offsets = torch.arange(longest)
+            offsets = torch.arange(longest, device=starts.device)
             index = starts[members, None] + offsets[None, :]  # (n_bucket, longest)
             valid = offsets[None, :] < lengths[members, None]
             index = torch.where(valid, index, starts[members, None])  # rows past the end: any row (causal LSTM)
