@@ -20,6 +20,7 @@ import torch
 from PIL import Image
 
 from sb3_smc.curricula.trainer import RunSettingsError
+from sb3_smc.errors import SMCError
 from sb3_smc.experiments import CATEGORIES, level2_targets, plan
 from sb3_smc.experiments.cnn import CHANNELS, encode, train_cnn
 from sb3_smc.experiments.report import write_report
@@ -586,12 +587,74 @@ def test_the_whole_table_report_with_a_second_flat_baseline(tmp_path):
     assert everything[0] in ba and cells[2] == "16" and cells[6:] == ["", ""]
     claims = part.read_text().split("## The paper's claims")[1].split("\n## ")[0]  # nor judged as a claim on all 17
     assert ("| bring-about: curr > base-gru, paired t-test across concepts | t(16) = 4.1, p = 0.0008 | 16 of 17 "
-            "concepts run | not judged: partial |") in claims
-    assert "beats the flat one (base-gru) | on 14 of 16 concepts | 16 of 17 concepts run | not judged: partial |" \
+            "concepts finished | not judged: partial |") in claims
+    assert "beats the flat one (base-gru) | on 14 of 16 concepts | 16 of 17 concepts finished | not judged: partial |" \
         in claims
-    assert "| bring-about: mean of base-gru (17 concepts) | 52.7 | 16 of 17 concepts run | not judged: partial |" \
+    assert "| bring-about: mean of base-gru (17 concepts) | 52.7 | 16 of 17 concepts finished | not judged: partial |" \
         in claims
     assert "| bring-about: curr > base, paired t-test across concepts | t(16) = 4.1, p = 0.0008 | t(16) = " in claims
+
+
+def test_a_run_still_training_is_marked_partial_and_not_judged(tmp_path, monkeypatch):
+    """A directory tabulated while it trains (``missing``): a target x method with seeds not trained yet has its
+    numbers marked partial, no claim is judged on it, the paper's test is not put beside a partial one; the pairs
+    that finished are judged as before. A missing SMC the run's plan does not know is refused, naming the file."""
+    from pixelworld_env.datasets import catalog
+
+    everything = level2_targets()
+    ba = [t for t in everything if catalog.dataset(t).kind == "bring-about"]
+    gain = {"cnn": 0.25, "base": 0.2, "base-gru": 0.3, "curr": 0.4, "canon": 0.35}
+
+    def score(t: str, m: str) -> float:
+        return 0.4 + 0.01 * (everything.index(t) % 7) + gain[m] + 0.003 * everything.index(t) * (m == "base-gru")
+
+    _synthetic_table(tmp_path / "paper", everything, ["cnn", "base", "curr", "canon"], score)
+    _synthetic_table(tmp_path / "gru", everything, ["base-gru"], score)
+    results = json.loads((tmp_path / "gru" / "results.json").read_text())  # seed 1 of the bring-about ones to train
+    results["rows"] = [r for r in results["rows"] if r["kind"] == "classification" or r["seed"] == 0]
+    results["reported"] = reported(results["rows"])
+    results.update(complete=False, missing=[f"base-gru/{t}@1" for t in ba])
+    (tmp_path / "gru" / "results.json").write_text(json.dumps(results))
+    import sb3_smc.experiments.report as report_module
+
+    legends: list[set[str]] = []
+    bar_panels = report_module.bar_panels
+    monkeypatch.setattr(report_module, "bar_panels", lambda *args, partial=(), **kwargs: legends.append(set(partial))
+                        or bar_panels(*args, partial=partial, **kwargs))
+    [path] = write_report([tmp_path / "paper", tmp_path / "gru"], out=tmp_path / "report", behaviour=False)
+    assert legends == [{"base-gru"}] * 3  # the figures' legends: "base-gru (...) (partial)"
+    text = path.read_text()
+    claims = text.split("## The paper's claims")[1].split("\n## ")[0]
+    assert "| bring-about: mean of base-gru (17 concepts) | 52.7 | 0 of 17 concepts finished | not judged: partial |" \
+        in claims
+    assert ("| bring-about: curr > base-gru, paired t-test across concepts | t(16) = 4.1, p = 0.0008 | 0 of 17 "
+            "concepts finished | not judged: partial |") in claims
+    assert "beats the flat one (base-gru) | on 14 of 16 concepts | 0 of 17 concepts finished | not judged: partial |" \
+        in claims
+    target = "ba_self-in-container_from_between-potential-containers"
+    assert f"| {target}: base-gru | 48.4 | {100 * score(target, 'base-gru'):.1f} so far | not judged: partial |" \
+        in claims
+    cl_mean = 100 * np.mean([score(t, "base-gru") for t in everything if t not in ba])  # finished: judged
+    assert f"| classification: mean of base-gru (34 concepts) | 74.5 | {cl_mean:.1f} ({cl_mean - 74.5:+.1f}) |" \
+        in claims
+    base = 100 * np.mean([score(t, "base") for t in ba])
+    assert f"| bring-about: mean of base (17 concepts) | 52.7 | {base:.1f} ({base - 52.7:+.1f}) |" in claims
+    cells = _row_cells(text, "| bring-about | curr vs base-gru (partial) |")  # ours, without the paper's beside it
+    assert cells[2:5] == ["17", f"{_hand_t(score, ba, 'curr', 'base-gru'):.2f}", "16"] and cells[6:] == ["", ""]
+    assert _row_cells(text, "| bring-about | curr vs base |")[6] == "t(16) = 4.1, p = 0.0008"
+    means = _row_cells(text, "| bring-about | all | 17 |")
+    assert means[-1].endswith(" (partial)") and not any(c.endswith("(partial)") for c in means[:-1])
+    assert not _row_cells(text, "| classification | all | 34 |")[-1].endswith("(partial)")
+    assert _row_cells(text, "| bring-about | ours - paper (17 concepts) |")[-1].endswith(" (partial)")
+    concept = _row_cells(text, f"| {ba[0]} | bring-about |")  # seed 0 of 2 so far: marked
+    assert concept[-2] == f"{100 * score(ba[0], 'base-gru'):.1f} (partial)" and "partial" not in concept[-3]
+    assert "| bring-about | curr | base-gru (partial) | 17 of 17 |" in text
+    assert "is marked (partial), and no claim is judged on it" in text
+    results["missing"].append("base-gru/no-such-node@1")
+    (tmp_path / "gru" / "results.json").write_text(json.dumps(results))
+    with pytest.raises(SMCError, match=r"gru/results.json: the untrained SMC 'base-gru/no-such-node@1'"):
+        write_report([tmp_path / "paper", tmp_path / "gru"], out=tmp_path / "again", behaviour=False)
+    assert not (tmp_path / "again").exists()
 
 
 def test_the_whole_table_report_with_canon_scaled_and_curr_moves(tmp_path):
@@ -683,14 +746,16 @@ def test_the_readme_gets_the_whole_tables_means_and_tests_from_the_report(tmp_pa
     assert "| classification | objects |" in text and "| classification | all |" not in text
     assert "| bring-about | all | 17 | " in text
     results = json.loads((tmp_path / "run" / "results.json").read_text())
-    (tmp_path / "run" / "results.json").write_text(json.dumps({**results, "complete": False, "missing": ["x@0"]}))
+    (tmp_path / "run" / "results.json").write_text(json.dumps({**results, "complete": False,
+                                                                     "missing": [f"{everything[0]}@2"]}))  # base
     [report] = write_report([tmp_path / "run"], out=tmp_path / "docs", behaviour=False)
     readme_table.main(["--report", str(report), "--readme", str(readme)])
     assert "**partial: the table is still being run**" in readme.read_text()
     # over several directories: the partial ones by name, and whether the paper's methods are whole all the same
     def mark_partial(directory: Path) -> None:
         results = json.loads((directory / "results.json").read_text())
-        (directory / "results.json").write_text(json.dumps({**results, "complete": False, "missing": ["x@0"]}))
+        node = next(iter(plan(everything, results["settings"]["methods"]).nodes.values()))[0]  # one of its own
+        (directory / "results.json").write_text(json.dumps({**results, "complete": False, "missing": [f"{node}@2"]}))
 
     mark_partial(tmp_path / "curr")  # curr on 33 of 34: classification is not whole
     [report] = write_report([tmp_path / "flat", tmp_path / "curr"], out=tmp_path / "docs", behaviour=False)
@@ -860,7 +925,7 @@ def test_the_concept_figures_name_only_the_methods_of_their_kind(tmp_path, monke
 
     drawn: dict[str, tuple[list[str], list[list[str]]]] = {}
 
-    def record(panels, methods, caption, path, horizontal=False):
+    def record(panels, methods, caption, path, horizontal=False, partial=()):
         drawn[Path(path).stem] = (list(methods), [sorted(panel.values) for panel in panels])
         return Path(path)
 

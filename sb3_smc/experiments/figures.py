@@ -16,7 +16,7 @@ import io
 import math
 import textwrap
 from collections import Counter
-from collections.abc import Mapping, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, cast
@@ -186,10 +186,12 @@ class Panel:
 
 
 def bar_panels(panels: Sequence[Panel], methods: Sequence[str], title: str, path: Path, *,
-               horizontal: bool = False) -> Path:
+               horizontal: bool = False, partial: Collection[str] = ()) -> Path:
     """Grouped bars, one bar per method and label, in one panel per :class:`Panel`: side by side, or stacked with
-    horizontal bars (``horizontal``, for long concept names) in heights proportional to their labels."""
+    horizontal bars (``horizontal``, for long concept names) in heights proportional to their labels; the methods of
+    ``partial`` (still being trained) are marked so in the legend."""
     plt = pyplot()
+    legend_labels = {m: METHOD_LABELS.get(m, m) + (" (partial)" if m in partial else "") for m in methods}
     width = 0.8 / max(1, len(methods))
     if horizontal:
         heights = [max(1.2, 0.1 * len(methods) * len(p.labels) + 0.5) for p in panels]
@@ -206,10 +208,10 @@ def bar_panels(panels: Sequence[Panel], methods: Sequence[str], title: str, path
             offsets = positions + (k - (len(methods) - 1) / 2) * width
             if horizontal:
                 ax.barh(offsets, panel.values[method], width, xerr=errors, color=METHOD_COLORS.get(method),
-                        capsize=1.5, error_kw={"elinewidth": 0.6}, label=METHOD_LABELS.get(method, method))
+                        capsize=1.5, error_kw={"elinewidth": 0.6}, label=legend_labels[method])
             else:
                 ax.bar(offsets, panel.values[method], width, yerr=errors, color=METHOD_COLORS.get(method),
-                       capsize=2, error_kw={"elinewidth": 0.8}, label=METHOD_LABELS.get(method, method))
+                       capsize=2, error_kw={"elinewidth": 0.8}, label=legend_labels[method])
         if horizontal:
             ax.set_yticks(positions, panel.labels, fontsize=6)
             ax.invert_yaxis()

@@ -24,9 +24,9 @@ import numpy as np
 
 from pixelworld_env.atomic import atomic_write
 from sb3_smc.curricula.designed import designed_curricula
-from sb3_smc.curricula.jobs import job_name
+from sb3_smc.curricula.jobs import job_name, node_of
 from sb3_smc.errors import SMCError
-from sb3_smc.experiments.design import CATEGORIES, METHOD_REGISTRY, METHODS, SMC_METHODS
+from sb3_smc.experiments.design import CATEGORIES, METHOD_REGISTRY, METHODS, SMC_METHODS, plan
 from sb3_smc.experiments.figures import Panel, bar_panels, timeline_figure, trajectory_figure
 from sb3_smc.experiments.runner import experiment_command, read_results
 from sb3_smc.experiments.tables import KINDS, ResultTable, number_sections
@@ -71,6 +71,27 @@ def _merge(sources: Sequence[tuple[Path, dict[str, Any]]]) -> tuple[list[dict[st
     return rows, reported
 
 
+def _unfinished(sources: Sequence[tuple[Path, dict[str, Any]]]) -> set[tuple[str, str]]:
+    """The target x method pairs with SMCs not trained yet in a partial tabulation (``missing``), found through the
+    directory's plan (and its rows); a missing SMC no pair of the plan trains is refused."""
+    pairs: set[tuple[str, str]] = set()
+    for directory, results in sources:
+        missing = results.get("missing") or []
+        if not missing:
+            continue
+        settings = results["settings"]
+        design = plan(settings["targets"], settings["methods"])
+        pair_of = {node: key for key, nodes in design.nodes.items() for node in nodes}
+        pair_of.update({row["curriculum"]: (row["target"], row["method"]) for row in results["rows"]})
+        for name in missing:
+            if node_of(name) not in pair_of:
+                raise SMCError(f"{directory / 'results.json'}: the untrained SMC {name!r} of 'missing' belongs to no "
+                               "target x method of the run's plan (its curricula changed since): tabulate the run "
+                               "again (sb3-smc experiment --no-train) with the code that runs it")
+            pairs.add(pair_of[node_of(name)])
+    return pairs
+
+
 def _behaviour(sources: Sequence[tuple[Path, dict[str, Any]]], figures: Path, target: str
                ) -> tuple[list[Path], str | None]:
     """The Fig. 4 / Fig. 1 pictures of the best SMCs of ``target``, each loaded from the directory that trained it,
@@ -106,7 +127,7 @@ def _behaviour(sources: Sequence[tuple[Path, dict[str, Any]]], figures: Path, ta
 def _write(sources: Sequence[tuple[Path, dict[str, Any]]], out: Path, trajectories: str | None,
            behaviour: bool) -> Path:
     rows, reported = _merge(sources)
-    table = ResultTable(rows, reported)
+    table = ResultTable(rows, reported, _unfinished(sources))
     methods, targets = table.methods, table.targets
     figures_dir = out / "figures"
     figures_dir.mkdir(parents=True, exist_ok=True)
@@ -136,8 +157,9 @@ def _write(sources: Sequence[tuple[Path, dict[str, Any]]], out: Path, trajectori
             where = f" ({directory.name})" if len(sources) > 1 else ""
             lines += [f"**Partial results**{where}: {len(missing)} SMC(s) of the run were not trained "
                       "yet when these were tabulated (`sb3-smc experiment --no-train`); every score below is the best "
-                      "over the seeds and curricula finished so far, and a target x method with none is absent. Not "
-                      "yet trained: " + ", ".join(f"`{name}`" for name in missing[:12])
+                      "over the seeds and curricula finished so far, and a target x method with none is absent; a "
+                      "number over a target x method with SMCs not trained yet is marked (partial), and no claim is "
+                      "judged on it. Not yet trained: " + ", ".join(f"`{name}`" for name in missing[:12])
                       + (", ..." if len(missing) > 12 else "") + ".", ""]
     lines += number_sections(table)
     pushable = [t for t in targets if table.category_of[t] == "pushable"]
@@ -289,8 +311,9 @@ def _figures(folder: Path, table: ResultTable) -> list[Path]:
                 values[m].append(100 * mean)
                 errors[m].append(None if se is None else 100 * se)
         panels.append(Panel(kind, list(members), values, errors))
+    partial = {m for _, m in table.unfinished}
     paths = [bar_panels(panels, methods, "Mean test score per category and kind (best seed of each concept; error "
-                        "bars: standard error across the concepts)", folder / "categories.png")]
+                        "bars: standard error across the concepts)", folder / "categories.png", partial=partial)]
     for kind in KINDS:
         groups = [c for c in CATEGORIES if table.of_kind(kind, c)]
         if not groups:
@@ -299,7 +322,7 @@ def _figures(folder: Path, table: ResultTable) -> list[Path]:
         concept_panels = [_concept_panel(table, f"{kind} / {c}", table.of_kind(kind, c), ran) for c in groups]
         paths.append(bar_panels(concept_panels, ran, f"{kind}: test score per concept (best seed; error bars: "
                                 "standard deviation across the seeds of the reported curriculum)",
-                                folder / f"concepts-{kind}.png", horizontal=True))
+                                folder / f"concepts-{kind}.png", horizontal=True, partial=partial))
     return paths
 
 

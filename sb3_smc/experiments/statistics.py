@@ -9,7 +9,7 @@ percentages.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -23,6 +23,8 @@ ALPHA = 0.05
 """Significance level of the claims table."""
 Score = Mapping[tuple[str, str], float]
 """(target, method) -> the reported score (best seed; curr: best curriculum)."""
+Pairs = Collection[tuple[str, str]]
+"""(target, method) pairs: those of a run still being trained (some of their SMCs not trained yet)."""
 
 
 def paired_ttest(ours: Sequence[float], theirs: Sequence[float]) -> tuple[int, float, float] | None:
@@ -121,24 +123,24 @@ def _gap(score: Score, targets: Sequence[str], a: str, b: str) -> float | None:
     return None if mean_a is None or mean_b is None else mean_a - mean_b
 
 
-def _coverage(score: Score, targets: Sequence[str], methods: Sequence[str]) -> int:
-    """On how many of ``targets`` every one of ``methods`` ran."""
-    return sum(all((t, m) in score for m in methods) for t in targets)
-
-
-def _partial(text: str, paper: str, score: Score, targets: Sequence[str], methods: Sequence[str]) -> Claim | None:
-    """The claim ``text`` over ``targets`` marked unjudged when ``methods`` ran on some of them but not all (a table
-    still being run); ``None`` when they ran on all or on none (the caller judges it, or says "not run")."""
-    ran = _coverage(score, targets, methods)
-    if 0 < ran < len(targets):
-        return Claim(text, paper, f"{ran} of {len(targets)} concepts run", "not judged: partial")
+def _partial(text: str, paper: str, score: Score, targets: Sequence[str], methods: Sequence[str],
+             unfinished: Pairs) -> Claim | None:
+    """The claim ``text`` over ``targets`` marked unjudged while ``methods`` have each begun on them but have not all
+    finished on all of them (a table still being run: a concept not run yet, or one whose seeds or curricula are not
+    all trained); ``None`` when they finished on all, or one of them has not begun (the caller judges it, or says
+    "not run")."""
+    if not all(any((t, m) in score for t in targets) for m in methods):
+        return None
+    done = sum(all((t, m) in score and (t, m) not in unfinished for m in methods) for t in targets)
+    if done < len(targets):
+        return Claim(text, paper, f"{done} of {len(targets)} concepts finished", "not judged: partial")
     return None
 
 
 def _mean_claim(kind: str, method: str, paper: float, score: Score, targets: Sequence[str],
-                tolerance: float) -> Claim:
+                tolerance: float, unfinished: Pairs) -> Claim:
     text = f"{kind}: mean of {method} ({len(targets)} concepts)"
-    return (_partial(text, f"{paper:.1f}", score, targets, (method,))
+    return (_partial(text, f"{paper:.1f}", score, targets, (method,), unfinished)
             or _value_claim(text, paper, method_mean(score, targets, method), tolerance))
 
 
@@ -154,11 +156,11 @@ def _value_claim(text: str, paper: float, ours: float | None, tolerance: float) 
 
 
 def _test_claim(kind: str, a: str, b: str, score: Score, targets: Sequence[str],
-                paper: tuple[int, float, float]) -> Claim:
+                paper: tuple[int, float, float], unfinished: Pairs) -> Claim:
     df_paper, t_paper, p_paper = paper
     _, test = method_test(score, targets, a, b)
     text = f"{kind}: {a} > {b}, paired t-test across concepts"
-    partial = _partial(text, f"t({df_paper}) = {t_paper}, p = {p_paper}", score, targets, (a, b))
+    partial = _partial(text, f"t({df_paper}) = {t_paper}, p = {p_paper}", score, targets, (a, b), unfinished)
     if partial is not None:
         return partial
     if test is None:
@@ -173,11 +175,11 @@ def _test_claim(kind: str, a: str, b: str, score: Score, targets: Sequence[str],
 
 
 def _order_claim(text: str, paper_gap: float, score: Score, targets: Sequence[str], a: str, b: str,
-                 tolerance: float = 2.0) -> Claim:
+                 unfinished: Pairs, tolerance: float = 2.0) -> Claim:
     """A claim that the mean of ``a`` is above that of ``b`` over ``targets``: the paper's gap and ours, in points
-    (unjudged while they ran on some of the targets only); a gap the paper gives as under one point is a claim of
+    (unjudged until they finished on all the targets); a gap the paper gives as under one point is a claim of
     about equal means (reproduced within ``tolerance`` points)."""
-    partial = _partial(text, f"{paper_gap:+.1f}", score, targets, (a, b))
+    partial = _partial(text, f"{paper_gap:+.1f}", score, targets, (a, b), unfinished)
     if partial is not None:
         return partial
     ours_gap = _gap(score, targets, a, b)
@@ -192,7 +194,8 @@ def _order_claim(text: str, paper_gap: float, score: Score, targets: Sequence[st
 
 
 def claims(score: Score, kind_of: Mapping[str, str], category_of: Mapping[str, str], *,
-           tolerance: float = 5.0, variants: Mapping[str, Sequence[str]] | None = None) -> list[Claim]:
+           tolerance: float = 5.0, variants: Mapping[str, Sequence[str]] | None = None,
+           unfinished: Pairs = ()) -> list[Claim]:
     """Every quantitative claim of the paper's results (means per kind, t-tests, wins, the headline
     concepts, the CNN by category, the noprim ablation) with ours. A mean is reproduced within ``tolerance``
     points; a comparison when its direction is the paper's and it is significant at :data:`ALPHA`. The claims
@@ -200,7 +203,8 @@ def claims(score: Score, kind_of: Mapping[str, str], category_of: Mapping[str, s
     fewer says so in one row per kind, and a claim whose methods ran on some of them only is "not judged: partial".
     The per-concept claims (the headline targets) are judged wherever present. ``variants``: the paper's method ->
     our methods each judged in every claim about it (``{"base": ["base", "base-gru"]}``); default: the method
-    itself."""
+    itself. ``unfinished``: target x method pairs still being trained; no claim is judged on them (the CNN claims
+    leave them out of a concept's best SMC method)."""
     out: list[Claim] = []
 
     def ours(method: str) -> Sequence[str]:
@@ -219,14 +223,15 @@ def claims(score: Score, kind_of: Mapping[str, str], category_of: Mapping[str, s
                              "not comparable: a subset"))
             continue
         for method, paper in PAPER_MEANS[kind].items():
-            out += [_mean_claim(kind, m, paper, score, targets, tolerance) for m in ours(method)]
+            out += [_mean_claim(kind, m, paper, score, targets, tolerance, unfinished) for m in ours(method)]
         for comparison, paper_test in PAPER_TTESTS[kind].items():
             a, _, b = comparison.split()
-            out += [_test_claim(kind, mine, flat, score, targets, paper_test) for mine in ours(a) for flat in ours(b)]
+            out += [_test_claim(kind, mine, flat, score, targets, paper_test, unfinished)
+                    for mine in ours(a) for flat in ours(b)]
         if kind == "bring-about":
             for flat in flats:
                 text = f"bring-about: a hierarchical SMC (best of curr, canon) beats the flat one ({flat})"
-                partial = _partial(text, "on 14 of 16 concepts", score, targets, ("curr", "canon", flat))
+                partial = _partial(text, "on 14 of 16 concepts", score, targets, ("curr", "canon", flat), unfinished)
                 won, n = wins(score, targets, ("curr", "canon"), flat)
                 out.append(partial or Claim(text, "on 14 of 16 concepts", f"on {won} of {n} concepts" if n else "-", (
                     "yes" if won / n >= 14 / 16 - 1e-9 else f"no: {won / n:.0%} of concepts against 88%")
@@ -235,16 +240,23 @@ def claims(score: Score, kind_of: Mapping[str, str], category_of: Mapping[str, s
             paper_means = PAPER_MEANS[kind]
             for a, b in (("cnn", "base"), ("curr", "cnn")):
                 out += [_order_claim(f"classification: {a} above {other} (mean gap, points)",
-                                     paper_means[a] - paper_means[b], score, targets, a, other) for other in ours(b)]
-            out.extend(_cnn_claims(score, targets, category_of, (*flats, "curr", "canon")))
+                                     paper_means[a] - paper_means[b], score, targets, a, other, unfinished)
+                        for other in ours(b)]
+            finished = {key: value for key, value in score.items() if key not in unfinished}
+            out.extend(_cnn_claims(finished, targets, category_of, (*flats, "curr", "canon")))
         for method in ("curr", "canon"):
             paper_with, paper_without = PAPER_NOPRIM[kind][method], PAPER_NOPRIM[kind][f"{method}-noprim"]
-            out.append(_mean_claim(kind, f"{method}-noprim", paper_without, score, targets, tolerance))
+            out.append(_mean_claim(kind, f"{method}-noprim", paper_without, score, targets, tolerance, unfinished))
             out.append(_order_claim(f"{kind}: {method} without primitives against with (mean gap, points)",
-                                    paper_without - paper_with, score, targets, f"{method}-noprim", method))
+                                    paper_without - paper_with, score, targets, f"{method}-noprim", method,
+                                    unfinished))
     for target, paper_scores in PAPER_CONCEPTS.items():
         for method, value in paper_scores.items():
-            out += [_value_claim(f"{target}: {m}", value, score.get((target, m)), tolerance) for m in ours(method)]
+            for m in ours(method):
+                text, ran = f"{target}: {m}", score.get((target, m))
+                out.append(Claim(text, f"{value:.1f}", f"{100 * ran:.1f} so far", "not judged: partial")
+                           if ran is not None and (target, m) in unfinished
+                           else _value_claim(text, value, ran, tolerance))
     return out
 
 

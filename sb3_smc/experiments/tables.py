@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 from collections import defaultdict
-from collections.abc import Sequence
+from collections.abc import Collection, Sequence
 from typing import Any
 
 import numpy as np
@@ -47,18 +47,31 @@ def _pct(value: float | None) -> str:
     return "-" if value is None or (isinstance(value, float) and math.isnan(value)) else f"{100 * value:.1f}"
 
 
+def _marked(text: str, mark: str) -> str:
+    """``text`` and ``mark`` (``""`` stays ``""``: no number, nothing to mark)."""
+    return text + mark if text and text != "-" else text
+
+
 def _diff(ours: float | None, paper: float | None) -> str:
     if ours is None or paper is None:
         return ""
     return f"{100 * ours - paper:+.1f}"
 
 
-class ResultTable:
-    """The merged results of a report: reported scores, seed scores, kinds and categories."""
+PARTIAL = " (partial)"
+"""The mark of a number over a target x method with SMCs not trained yet (:attr:`ResultTable.unfinished`)."""
 
-    def __init__(self, rows: Sequence[dict[str, Any]], reported: Sequence[dict[str, Any]]) -> None:
+
+class ResultTable:
+    """The merged results of a report: reported scores, seed scores, kinds and categories; ``unfinished``: the
+    target x method pairs of a run still being trained (some of their seeds or curricula not trained yet), whose
+    numbers are marked partial and whose claims are not judged."""
+
+    def __init__(self, rows: Sequence[dict[str, Any]], reported: Sequence[dict[str, Any]],
+                 unfinished: Collection[tuple[str, str]] = ()) -> None:
         if not reported:
             raise SMCError("no results to report")
+        self.unfinished = frozenset(unfinished)
         self.methods = [m for m in METHODS if any(r["method"] == m for r in reported)]
         self.score = {(r["target"], r["method"]): r["test_score"] for r in reported}
         self.targets = sorted({r["target"] for r in reported})
@@ -93,12 +106,16 @@ class ResultTable:
     def of_kind(self, kind: str, category: str | None = None) -> list[str]:
         return [t for t in self.targets if self.kind_of[t] == kind and category in (None, self.category_of[t])]
 
+    def partial(self, members: Sequence[str], *methods: str) -> str:
+        """:data:`PARTIAL` when any of ``methods`` is unfinished on any of ``members``, else ``""``."""
+        return PARTIAL if any((t, m) in self.unfinished for t in members for m in methods) else ""
+
     def cell(self, target: str, method: str) -> str:
-        """Best seed (mean ± s.d. over seeds)."""
+        """Best seed (mean ± s.d. over seeds), marked partial while the pair is unfinished."""
         if (target, method) not in self.score:
             return "-"
         scores = self.seeds.get((target, method)) or [self.score[(target, method)]]
-        return seed_summary(scores).text()
+        return seed_summary(scores).text() + self.partial([target], method)
 
     def mean_se(self, members: Sequence[str], method: str,
                 score: Score | None = None) -> tuple[float, float | None] | None:
@@ -109,17 +126,18 @@ class ResultTable:
         return mean_se(values) if values and len(values) == len(members) else None
 
     def mean_cell(self, members: Sequence[str], method: str, score: Score | None = None) -> str:
-        """Mean ± s.e. across ``members`` (all of them must have run)."""
+        """Mean ± s.e. across ``members`` (all of them must have run), marked partial while any is unfinished."""
         found = self.mean_se(members, method, score)
         if found is None:
             return "-"
         mean, se = found
-        return f"{100 * mean:.1f}" + (f" ± {100 * se:.1f}" if se is not None else "")
+        return f"{100 * mean:.1f}" + (f" ± {100 * se:.1f}" if se is not None else "") + self.partial(members, method)
 
 
 def _claims_section(table: ResultTable) -> list[str]:
     found = claims(table.score, table.kind_of, table.category_of,
-                   variants={paper: table.like(paper) for paper in ("base", "curr", "canon")})
+                   variants={paper: table.like(paper) for paper in ("base", "curr", "canon")},
+                   unfinished=table.unfinished)
     if not any(c.reproduced != "not run" for c in found):
         return []
     lines = ["## The paper's claims", "",
@@ -147,7 +165,7 @@ def _concept_section(table: ResultTable) -> list[str]:
     if given:
         lines += ["", "Differences to the paper (ours - paper, points):", ""]
         for target in given:
-            parts = [f"{m} {_diff(table.score[(target, m)], PAPER_CONCEPTS[target][name])}"
+            parts = [f"{m} {_diff(table.score[(target, m)], PAPER_CONCEPTS[target][name])}{table.partial([target], m)}"
                      for m in methods if (name := METHOD_REGISTRY[m].paper_name) in PAPER_CONCEPTS[target]
                      and (target, m) in table.score]
             lines.append(f"- {target}: " + ", ".join(parts))
@@ -169,7 +187,7 @@ def _original_flat_section(table: ResultTable) -> list[str]:
         for target in given:
             best, mean = ORIGINAL_FLAT_RUNS[target]
             lines.append(f"| {target} | {table.kind_of[target]} | {table.cell(target, flat)} | {best:.1f} "
-                         f"({mean:.1f}) | {_diff(table.score[(target, flat)], best)} |")
+                         f"({mean:.1f}) | {_diff(table.score[(target, flat)], best)}{table.partial([target], flat)} |")
         for kind in KINDS:
             members = [t for t in given if table.kind_of[t] == kind]
             if not members:
@@ -182,7 +200,8 @@ def _original_flat_section(table: ResultTable) -> list[str]:
                 tested = f" (paired t({test[0]}) = {test[1]:.2f}, p = {test[2]:.2g})" if test else ""
                 sentences.append(f"{which} ours {100 * sum(ours) / len(ours):.1f}, original "
                                  f"{100 * sum(theirs) / len(theirs):.1f}{tested}")
-            lines.append(f"\n{kind}, {len(members)} concepts, means: {'; '.join(sentences)}.")
+            lines.append(f"\n{kind}, {len(members)} concepts{table.partial(members, flat)}, means: "
+                         f"{'; '.join(sentences)}.")
     return lines
 
 
@@ -216,10 +235,12 @@ def _means_section(table: ResultTable) -> list[str]:
                      + " | ".join(f"{paper[m]:.1f}" if paper[m] is not None else "" for m in methods) + " |")
         if len(in_paper) == PAPER_COUNTS[kind]:  # the paper's whole set: its means
             lines.append(f"| {kind} | ours - paper ({len(in_paper)} concepts) | | " + " | ".join(
-                _diff(method_mean(table.score, in_paper, m), paper[m]) for m in methods) + " |")
+                _marked(_diff(method_mean(table.score, in_paper, m), paper[m]), table.partial(in_paper, m))
+                for m in methods) + " |")
         else:  # a subset: only against the paper's own numbers for the same concepts, where it gives them
-            diffs = [_diff(method_mean(table.score, in_paper, m), mean_of_all(
-                [PAPER_CONCEPTS.get(t, {}).get(METHOD_REGISTRY[m].paper_name) for t in in_paper])) for m in methods]
+            diffs = [_marked(_diff(method_mean(table.score, in_paper, m), mean_of_all(
+                [PAPER_CONCEPTS.get(t, {}).get(METHOD_REGISTRY[m].paper_name) for t in in_paper])),
+                table.partial(in_paper, m)) for m in methods]
             if any(diffs):
                 lines.append(f"| {kind} | ours - paper (the same {len(in_paper)} concept(s), where the paper gives "
                              "them) | | " + " | ".join(diffs) + " |")
@@ -247,7 +268,8 @@ def _seed_means_section(table: ResultTable) -> list[str]:
             compared, test = method_test(table.seed_mean, in_kind, a, b)
             if test is not None:
                 df, t, p = test
-                tests.append(f"| {kind} | {a} vs {b} | {compared} | {t:.2f} | {df} | {p:.2g} |")
+                tests.append(f"| {kind} | {a} vs {b}{table.partial(in_kind, a, b)} | {compared} | {t:.2f} | {df} | "
+                             f"{p:.2g} |")
     if tests:
         lines += ["", "| kind | comparison | concepts | t | df | p |", "|---|---|---:|---:|---:|---:|", *tests]
     return lines
@@ -269,23 +291,29 @@ def _ttest_section(table: ResultTable) -> list[str]:
         whole = len(in_kind) == PAPER_COUNTS[kind] and all(
             table.category_of[t] in PAPER_CATEGORIES for t in in_kind)  # the paper tested all its concepts
         for a, b in ((a, b) for b in table.flats for a in table.hierarchical):
-            paper_test = PAPER_TTESTS[kind].get(f"{_paper_name(a)} vs {_paper_name(b)}") if whole else None
-            lines.append(_ttest_row(kind, f"{a} vs {b}", in_kind, a, b, table.score, paper_test))
+            partial = table.partial(in_kind, a, b)  # not beside the paper's test until finished
+            paper_test = PAPER_TTESTS[kind].get(f"{_paper_name(a)} vs {_paper_name(b)}") \
+                if whole and not partial else None
+            lines.append(_ttest_row(kind, f"{a} vs {b}{partial}", in_kind, a, b, table.score, paper_test))
         if kind == "classification":
             for category in CATEGORIES:
                 members = table.of_kind(kind, category)
                 if members:
                     best_smc = "curr" if "curr" in methods else "canon"
-                    lines.append(_ttest_row(f"{kind} / {category}", f"{best_smc} vs cnn", members, best_smc, "cnn",
-                                            table.score, None))
+                    lines.append(_ttest_row(f"{kind} / {category}",
+                                            f"{best_smc} vs cnn{table.partial(members, best_smc, 'cnn')}", members,
+                                            best_smc, "cnn", table.score, None))
     counts = []
     for kind in KINDS:
         for flat in table.flats:
             for better, label in (*(((m,), m) for m in table.hierarchical), (("curr", "canon"), "curr or canon")):
                 won, n = wins(table.score, table.of_kind(kind), better, flat)
                 if n:
-                    whole = kind == "bring-about" and label == "curr or canon" and n == PAPER_COUNTS[kind]
-                    counts.append(f"| {kind} | {label} | {flat} | {won} of {n} |" + (" 14 of 16 |" if whole else " |"))
+                    partial = table.partial(table.of_kind(kind), *better, flat)
+                    whole = (kind == "bring-about" and label == "curr or canon" and n == PAPER_COUNTS[kind]
+                             and not partial)
+                    counts.append(f"| {kind} | {label} | {flat}{partial} | {won} of {n} |"
+                                  + (" 14 of 16 |" if whole else " |"))
     if counts:
         lines += ["", "Concepts on which a hierarchical SMC beats a flat one (reported scores):", "",
                   "| kind | hierarchical | flat | beats it on | paper |", "|---|---|---|---:|---|", *counts]
@@ -309,8 +337,9 @@ def _noprim_section(table: ResultTable) -> list[str]:
             if f"{method}-noprim" not in table.methods or not in_kind:
                 continue
             paper = PAPER_NOPRIM[kind]
-            lines.append(f"| {kind} | {method} | {_pct(method_mean(table.score, in_kind, method))} | "
-                         f"{_pct(method_mean(table.score, in_kind, method + '-noprim'))} | "
+            with_, without = (_marked(_pct(method_mean(table.score, in_kind, m)), table.partial(in_kind, m))
+                              for m in (method, f"{method}-noprim"))
+            lines.append(f"| {kind} | {method} | {with_} | {without} | "
                          f"{paper[method]:.1f} | {paper[method + '-noprim']:.1f} |")
     return lines
 
