@@ -725,6 +725,13 @@ def test_the_readme_gets_the_whole_tables_means_and_tests_from_the_report(tmp_pa
         text = readme.read_text()
         assert text.startswith("# Title\n\nbefore\n<!-- paper-table:start -->\n") and text.endswith("-->\nafter\n")
         assert "old" not in text and "partial" not in text and "(docs/report.md)" in text
+        verdicts = [row.rsplit("|", 2)[1].strip() for row in report.read_text().split("## The paper's claims")[1]
+                    .split("\n## ")[0].splitlines() if row.startswith("| ") and not row.startswith("| claim |")]
+        counted = re.search(r"\*\*\[The paper's claims\]\(docs/report\.md#the-papers-claims\)\*\* \((\d+)\): "
+                            r"(\d+) reproduced, (\d+) not\.", text)  # all judged: none partial, no direction only
+        assert counted and [int(n) for n in counted.groups()] == [
+            len(verdicts), sum(v.startswith("yes") for v in verdicts), sum(v.startswith("no:") for v in verdicts)]
+        assert len(verdicts) > 5 and 0 < int(counted[2]) < len(verdicts)
         assert text.count("| bring-about | **paper** (all) | 17 | 52.7 | 74.5 |") == 1
         assert "| bring-about | curr vs base | 17 | " in text and "t(16) = 4.1, p = 0.0008" in text
         assert "| classification | all | 34 | " in text and "| bring-about | all | 17 | " in text

@@ -1,10 +1,11 @@
 #!/usr/bin/env python
-"""Put the whole table's means and t-tests per kind, beside the paper's, into the README: from the sections "Means
+"""Put the whole table's means and t-tests per kind, beside the paper's, into a README: from the sections "Means
 per kind and category" and "Paired t-tests across concepts" of ``docs/results/paper/report.md`` (what ``sb3-smc
 report`` wrote), the rows over all concepts of a kind (means, the paper's, ours - paper; t-tests with a result; win
-counts the paper gives), copied between the README's markers ``<!-- paper-table:start -->`` and
-``<!-- paper-table:end -->``. The per-category rows stay in the report, and the numbers where the report computes
-them; this only copies rows.
+counts the paper gives), and how many of its claims are reproduced, copied between the README's markers
+``<!-- paper-table:start -->`` and ``<!-- paper-table:end -->``. The per-category rows stay in the report, and the
+numbers where the report computes them; this only copies rows and counts verdicts. ``tools/paper_table.sh report``
+runs it on the project's README and on the results' own (``docs/results/paper/README.md``).
 
 Usage::
 
@@ -109,11 +110,31 @@ def partial_note(report: str) -> str:
             + ("; the paper's methods have all their concepts" if whole else ""))
 
 
+CLAIMS = "## The paper's claims"
+VERDICTS = (("yes", "reproduced"), ("direction only", "in direction only (not significant)"), ("no:", "not"),
+            ("not judged", "not judged yet (partial)"))
+"""The claims table's verdicts by how they begin, and how the README counts them."""
+
+
+def claims_line(report: str, source: str) -> str:
+    """How many of the report's claims are reproduced, in direction only, not, and not judged yet; ``""`` when the
+    report has no claims table."""
+    if CLAIMS not in report.splitlines():
+        return ""
+    rows = [cells(line) for line in section(report, CLAIMS) if line.startswith("|")][2:]
+    counts = {label: sum(row[-1].startswith(start) for row in rows) for start, label in VERDICTS}
+    return (f"**[The paper's claims]({source}#the-papers-claims)** ({len(rows)}): "
+            + ", ".join(f"{n} {label}" for label, n in counts.items() if n) + ".")
+
+
 def block(report: str, source: str) -> str:
-    """The README's block: a line on what it is (whole, or what is still being run), then the two sections' rows per
-    kind, headed in bold."""
+    """The README's block: a line on what it is (whole, or what is still being run), the count of the claims
+    reproduced, then the two sections' rows per kind, headed in bold."""
     lines = [START, "", f"From [the whole table's report]({source})" + partial_note(report)
              + "; scores in %, ours beside the paper's (Hay et al., AAAI-18).", ""]
+    counted = claims_line(report, source)
+    if counted:
+        lines += [counted, ""]
     for heading in SECTIONS:  # their tables only: the report explains them
         lines += [f"**{heading.removeprefix('## ')}**", ""]
         for table in tables_of(report, heading):
