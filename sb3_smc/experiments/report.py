@@ -73,7 +73,7 @@ def _merge(sources: Sequence[tuple[Path, dict[str, Any]]]) -> tuple[list[dict[st
 
 def _unfinished(sources: Sequence[tuple[Path, dict[str, Any]]]) -> set[tuple[str, str]]:
     """The target x method pairs with SMCs not trained yet in a partial tabulation (``missing``), found through the
-    directory's plan (and its rows); a missing SMC no pair of the plan trains is refused."""
+    directory's plan; a missing SMC no pair of the plan trains is refused."""
     pairs: set[tuple[str, str]] = set()
     for directory, results in sources:
         missing = results.get("missing") or []
@@ -82,7 +82,6 @@ def _unfinished(sources: Sequence[tuple[Path, dict[str, Any]]]) -> set[tuple[str
         settings = results["settings"]
         design = plan(settings["targets"], settings["methods"])
         pair_of = {node: key for key, nodes in design.nodes.items() for node in nodes}
-        pair_of.update({row["curriculum"]: (row["target"], row["method"]) for row in results["rows"]})
         for name in missing:
             if node_of(name) not in pair_of:
                 raise SMCError(f"{directory / 'results.json'}: the untrained SMC {name!r} of 'missing' belongs to no "
