@@ -639,6 +639,12 @@ def test_a_run_still_training_is_marked_partial_and_not_judged(tmp_path, monkeyp
         in claims
     base = 100 * np.mean([score(t, "base") for t in ba])
     assert f"| bring-about: mean of base (17 concepts) | 52.7 | {base:.1f} ({base - 52.7:+.1f}) |" in claims
+    verdicts = [row.rsplit("|", 2)[1].strip() for row in claims.splitlines()[6:] if row.startswith("| ")]
+    counts = {label: sum(v.startswith(start) for v in verdicts) for start, label in
+              (("yes", "reproduced"), ("no:", "not"), ("not judged", "not judged yet (partial)"))}
+    assert all(counts.values()) and sum(counts.values()) == len(verdicts)  # the report counts its own verdicts
+    assert f"**In all** ({len(verdicts)}): " + ", ".join(f"{n} {label}" for label, n in counts.items()) + "." \
+        in claims
     cells = _row_cells(text, "| bring-about | curr vs base-gru (partial) |")  # ours, without the paper's beside it
     assert cells[2:5] == ["17", f"{_hand_t(score, ba, 'curr', 'base-gru'):.2f}", "16"] and cells[6:] == ["", ""]
     assert _row_cells(text, "| bring-about | curr vs base |")[6] == "t(16) = 4.1, p = 0.0008"

@@ -2,9 +2,9 @@
 """Put the whole table's means and t-tests per kind, beside the paper's, into a README: from the sections "Means
 per kind and category" and "Paired t-tests across concepts" of ``docs/results/paper/report.md`` (what ``sb3-smc
 report`` wrote), the rows over all concepts of a kind (means, the paper's, ours - paper; t-tests with a result; win
-counts the paper gives), and how many of its claims are reproduced, copied between the README's markers
+counts the paper gives), and the report's count of its claims' verdicts, copied between the README's markers
 ``<!-- paper-table:start -->`` and ``<!-- paper-table:end -->``. The per-category rows stay in the report, and the
-numbers where the report computes them; this only copies rows and counts verdicts. ``tools/paper_table.sh report``
+numbers and counts where the report computes them; this only copies them. ``tools/paper_table.sh report``
 runs it on the project's README and on the results' own (``docs/results/paper/README.md``).
 
 Usage::
@@ -20,6 +20,7 @@ import sys
 from pathlib import Path
 
 from sb3_smc.experiments.design import DEFAULT_METHODS
+from sb3_smc.experiments.tables import CLAIMS_COUNT
 
 ROOT = Path(__file__).resolve().parents[1]
 START, END = "<!-- paper-table:start -->", "<!-- paper-table:end -->"
@@ -111,20 +112,18 @@ def partial_note(report: str) -> str:
 
 
 CLAIMS = "## The paper's claims"
-VERDICTS = (("yes", "reproduced"), ("direction only", "in direction only (not significant)"), ("no:", "not"),
-            ("not judged", "not judged yet (partial)"))
-"""The claims table's verdicts by how they begin, and how the README counts them."""
 
 
 def claims_line(report: str, source: str) -> str:
-    """How many of the report's claims are reproduced, in direction only, not, and not judged yet; ``""`` when the
-    report has no claims table."""
+    """The report's count of its claims' verdicts (the line under its claims table), linked to the table; ``""``
+    when the report has no claims table."""
     if CLAIMS not in report.splitlines():
         return ""
-    rows = [cells(line) for line in section(report, CLAIMS) if line.startswith("|")][2:]
-    counts = {label: sum(row[-1].startswith(start) for row in rows) for start, label in VERDICTS}
-    return (f"**[The paper's claims]({source}#the-papers-claims)** ({len(rows)}): "
-            + ", ".join(f"{n} {label}" for label, n in counts.items() if n) + ".")
+    counted = [line for line in section(report, CLAIMS) if line.startswith(CLAIMS_COUNT)]
+    if len(counted) != 1:
+        raise SystemExit(f"the report's section {CLAIMS!r} has no line {CLAIMS_COUNT!r}: make it again with "
+                         "tools/paper_table.sh report")
+    return f"**[The paper's claims]({source}#the-papers-claims)**" + counted[0].removeprefix(CLAIMS_COUNT)
 
 
 def block(report: str, source: str) -> str:

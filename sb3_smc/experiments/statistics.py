@@ -98,6 +98,23 @@ class Claim:
     ours: str
     reproduced: str
 
+    @property
+    def outcome(self) -> str:
+        """The verdict's class, one of :data:`OUTCOMES`' values, from how the verdict begins."""
+        return next(label for start, label in OUTCOMES if self.reproduced.startswith(start))
+
+
+OUTCOMES = (("yes", "reproduced"), ("direction only", "in direction only (not significant)"), ("no:", "not"),
+            ("not judged", "not judged yet (partial)"), ("not comparable", "not comparable (a subset)"),
+            ("not run", "not run"))
+"""How a claim's verdict begins -> its class, in the order :func:`tally` counts them."""
+
+
+def tally(found: Sequence[Claim]) -> str:
+    """How many of the claims ``found`` are reproduced, in direction only, not, ... (the classes present only)."""
+    counts = {label: sum(c.outcome == label for c in found) for _, label in OUTCOMES}
+    return ", ".join(f"{n} {label}" for label, n in counts.items() if n)
+
 
 def mean_of_all(values: Sequence[float | None]) -> float | None:
     """The mean of ``values``; ``None`` when there are none or any is missing (``None``)."""
@@ -275,11 +292,11 @@ def _cnn_claims(score: Score, targets: Sequence[str], category_of: Mapping[str, 
     if "containment" in gaps:
         out.append(Claim("classification / containment: the best SMC method clearly above the cnn",
                          "qualitative (Fig. 5a)", f"{100 * gaps['containment']:+.1f} points",
-                         "yes" if gaps["containment"] >= 0.05 else "no"))
+                         "yes" if gaps["containment"] >= 0.05 else "no: a lead under 5 points"))
     for category in ("objects", "objcon"):
         if category in gaps and "containment" in gaps:
             out.append(Claim(f"classification / {category}: the cnn relatively better than on containment",
                              "qualitative (Fig. 5a)",
                              f"SMC lead {100 * gaps[category]:+.1f} against {100 * gaps['containment']:+.1f}",
-                             "yes" if gaps[category] < gaps["containment"] else "no"))
+                             "yes" if gaps[category] < gaps["containment"] else "no: the SMCs' lead is not smaller"))
     return out

@@ -35,12 +35,15 @@ from sb3_smc.experiments.statistics import (
     p_at_df,
     paired_ttest,
     seed_summary,
+    tally,
     wins,
 )
 
-__all__ = ["KINDS", "ResultTable", "number_sections"]
+__all__ = ["CLAIMS_COUNT", "KINDS", "ResultTable", "number_sections"]
 
 KINDS = ("classification", "bring-about")
+CLAIMS_COUNT = "**In all**"
+"""How the line under the claims table that counts their verdicts begins."""
 
 
 def _pct(value: float | None) -> str:
@@ -145,8 +148,9 @@ def _claims_section(table: ResultTable) -> list[str]:
              "comparison when it has the paper's direction and is significant (p < 0.05, our degrees of freedom). "
              "The claims over all concepts of a kind are judged only on all of them (the whole table).", "",
              "| claim | paper | ours | reproduced |", "|---|---|---|---|"]
-    lines += [f"| {c.claim} | {c.paper} | {c.ours} | {c.reproduced} |" for c in found if c.reproduced != "not run"]
-    return lines + [""]
+    shown = [c for c in found if c.reproduced != "not run"]
+    lines += [f"| {c.claim} | {c.paper} | {c.ours} | {c.reproduced} |" for c in shown]
+    return lines + ["", f"{CLAIMS_COUNT} ({len(shown)}): {tally(shown)}.", ""]
 
 
 def _concept_section(table: ResultTable) -> list[str]:
