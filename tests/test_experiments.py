@@ -141,37 +141,57 @@ def test_the_moves_probe_retests_a_runs_best_seeds_counting_their_moves(tmp_path
 def test_the_paired_seeds_tool_counts_what_a_longer_run_does_to_each_seed(tmp_path, capsys):
     """``tools/paired_seeds.py``: seed s of one method against seed s of another on the same curriculum node (the
     reported curriculum's seeds only), the seeds lifted or lowered by 5 points or more, the first method's weak
-    seeds (more than 15 below its concept's best) brought within 15 of it, exactly at those boundaries; targets on
+    seeds (more than 15 below its concept's best) brought within 15 of it, exactly at those boundaries; the seeds
+    on other lower-level SMCs (their evaluations' children) counted apart, not as a continuation; targets on
     different nodes named and left out; bad input refused before any output."""
+    from sb3_smc.curricula.jobs import file_stem, job_name
+
     paired_seeds = import_tool("paired_seeds")
 
-    def results(name, method, scores, unreported=()):
+    def results(name, method, scores, unreported=(), other=()):
+        """A run directory: results.json and each seed's evaluation, its children ``["c@1"]``, or ``["c@2"]`` for
+        the (target, seed) in ``other``."""
         rows = [{"target": t, "kind": "bring-about" if t.startswith("ba_") else "classification",
                  "category": "objcon", "method": method, "curriculum": curriculum, "seed": seed, "test_score": v}
                 for table in (scores, unreported) for t, curriculum, values in table for seed, v in enumerate(values)]
-        (tmp_path / name).mkdir()
+        (tmp_path / name / "evaluations").mkdir(parents=True)
         (tmp_path / name / "results.json").write_text(json.dumps({"rows": rows, "reported": reported(rows)}))
+        for row in rows:
+            children = ["c@2"] if (row["target"], row["seed"]) in other else ["c@1"]
+            (tmp_path / name / "evaluations" / f"{file_stem(job_name(row['curriculum'], row['seed']))}.json") \
+                .write_text(json.dumps({"test_score": row["test_score"], "spec": {"children": children}}))
         return str(tmp_path / name)
 
     canon = results("canon", "canon", [("cl_t", "c", [0.27, 0.44, 0.60, 0.23, 0.29]),
                                        ("cl_edge", "e", [0.90, 0.75, 0.20]), ("cl_other", "o", [0.5]),
-                                       ("ba_t", "b", [1.0, 1.0, 0.98, 1.0, 1.0])])
+                                       ("ba_t", "b", [1.0, 1.0, 0.98, 1.0, 1.0]), ("ba_u", "u/b", [0.5, 0.6])])
     scaled = results("scaled", "canon-scaled",
                      [("cl_t", "canon-scaled/c", [0.91, 0.53, 0.76, 0.39, 0.29]),
                       ("cl_edge", "canon-scaled/e", [0.95, 0.70, 0.75]),  # +5, -5, and 15 below the best
-                      ("cl_other", "d", [0.9]), ("ba_t", "canon-scaled/b", [1.0, 0.9])],
-                     unreported=[("cl_t", "lower", [0.2] * 5)])  # a lower curriculum: not paired
+                      ("cl_other", "d", [0.9]), ("ba_t", "canon-scaled/b", [1.0, 0.9]),
+                      ("ba_u", "canon-scaled/u/b", [0.4, 0.7])],
+                     unreported=[("cl_t", "lower", [0.2] * 5)],  # a lower curriculum: not paired
+                     other=[("ba_u", 0), ("ba_u", 1)])  # on other children: apart
     assert paired_seeds.main([canon, scaled, "--methods", "canon,canon-scaled", "--by-target"]) == 0
     lines = capsys.readouterr().out.splitlines()
-    assert lines[2] == "| classification | 2 | 8 | 46.0 | 66.0 | 75.0 | 93.0 | 6 | 1 | 5 | 3 |"
-    assert lines[3] == "| bring-about | 1 | 2 | 100.0 | 95.0 | 100.0 | 100.0 | 0 | 1 | 0 | 0 |"
-    assert lines[4] == "| all | 3 | 10 | 56.8 | 71.8 | 83.3 | 95.3 | 6 | 2 | 5 | 3 |"
-    assert lines[6] == "Not paired (the reported curricula are different nodes): cl_other"
-    assert "| `ba_t` | 100.0 / 100.0 / 98.0 / 100.0 / 100.0 | 100.0 / 90.0 / - / - / - |" in lines
+    assert lines[0] == "Seeds continuing the shorter run (the same lower-level SMCs):"
+    assert lines[4] == "| classification | 2 | 8 | 46.0 | 66.0 | 75.0 | 93.0 | 6 | 1 | 5 | 3 |"
+    assert lines[5] == "| bring-about | 1 | 2 | 100.0 | 95.0 | 100.0 | 100.0 | 0 | 1 | 0 | 0 |"
+    assert lines[6] == "| all | 3 | 10 | 56.8 | 71.8 | 83.3 | 95.3 | 6 | 2 | 5 | 3 |"
+    assert lines[8] == "Seeds on other lower-level SMCs (not a continuation):"
+    assert lines[12:14] == ["| bring-about | 1 | 2 | 55.0 | 55.0 | 60.0 | 70.0 | 1 | 1 | 0 | 0 |",
+                            "| all | 1 | 2 | 55.0 | 55.0 | 60.0 | 70.0 | 1 | 1 | 0 | 0 |"]
+    assert lines[15] == "Not paired (the reported curricula are different nodes): cl_other"
+    assert "| `ba_t` | 100.0 / 100.0 / 98.0 / 100.0 / 100.0 | 100.0 / 90.0 / - / - / - |  |" in lines
+    assert "| `ba_u` | 50.0 / 60.0 | 40.0 / 70.0 | 0, 1 |" in lines
     again = results("again", "canon", [("cl_t", "c", [0.28])])  # seed 0 of canon once more, another score
+    (tmp_path / "bare").mkdir()
+    (tmp_path / "bare" / "results.json").write_text((tmp_path / "canon" / "results.json").read_text())
     for argv, says in (([canon, "--methods", "canon"], "--methods: two of"),
                        ([canon, str(tmp_path), "--methods", "canon,canon-scaled"], "results.json not found"),
                        ([canon, again, scaled, "--methods", "canon,canon-scaled"], "seed 0: two results"),
+                       ([str(tmp_path / "bare"), scaled, "--methods", "canon,canon-scaled"],
+                        "bare/evaluations/c@0.json not found: the evaluation of c@0"),
                        ([canon, "--methods", "canon,canon-scaled"], "no target has seeds of both")):
         with pytest.raises(SystemExit):
             paired_seeds.main(argv)

@@ -3,10 +3,12 @@ budget lift canon's weak seeds?).
 
 A method that gives the same node a longer run (``canon-scaled`` against ``canon``: the same curriculum node, its
 name prefixed by the method) trains each seed along the same path for as long as the shorter run lasts (with
-constant hyperparameters, the package's defaults; a ``lin_`` schedule depends on the budget), so seed ``s`` of one
-is paired with seed ``s`` of the other, on the targets whose reported curricula are the same node. For each kind
-this counts the seeds the second method lifts or lowers by 5 points or more, and the first method's weak seeds
-(more than 15 points below that concept's best seed) that the second brings within 15 points of it; with
+constant hyperparameters, the package's defaults; a ``lin_`` schedule depends on the budget), provided it calls the
+same lower-level SMCs (its spec's children, in the run's ``evaluations/``): seed ``s`` of one is paired with seed
+``s`` of the other, on the targets whose reported curricula are the same node. For each kind this counts the seeds
+the second method lifts or lowers by 5 points or more, and the first method's weak seeds (more than 15 points below
+that concept's best seed) that the second brings within 15 points of it: over the seeds that continue the shorter
+run (the same children), then over those on other children (another run's lower level: not a continuation); with
 ``--by-target``, every target's seeds side by side.
 
     python tools/paired_seeds.py docs/results/paper/{search,objects,containment,objcon,canon-scaled} \\
@@ -22,6 +24,8 @@ from typing import Any
 
 import numpy as np
 
+from sb3_smc.curricula.jobs import file_stem, job_name
+from sb3_smc.curricula.run_directory import read_json
 from sb3_smc.errors import SMCError
 from sb3_smc.experiments.design import METHODS
 from sb3_smc.experiments.runner import read_results
@@ -35,36 +39,72 @@ def points(score: float) -> float:
     return round(100 * score, 1)
 
 
-def seed_scores(results: list[dict[str, Any]], method: str) -> dict[str, tuple[str, dict[int, float]]]:
-    """Each target's reported curriculum for ``method`` and its seeds' scores in points (the seeds the report
-    takes); a seed found twice with different scores is an error."""
-    reported = {r["target"]: r["curriculum"] for res in results for r in res["reported"] if r["method"] == method}
-    scores: dict[str, dict[int, float]] = {target: {} for target in reported}
-    for res in results:
+def children(run: Path, node: str, seed: int) -> list[str]:
+    """The lower-level SMCs that seed ``seed`` of ``node`` called, from its evaluation record in ``run``."""
+    path = run / "evaluations" / f"{file_stem(job_name(node, seed))}.json"
+    if not path.is_file():
+        raise SMCError(f"{path} not found: the evaluation of {job_name(node, seed)} (its spec names the lower-level "
+                       "SMCs it called) is needed to pair its seed")
+    saved = read_json(path, "an SMC's evaluation with its spec (an sb3-smc experiment writes it)")
+    spec = saved.get("spec") if isinstance(saved, dict) else None
+    if not isinstance(spec, dict) or not isinstance(spec.get("children"), list):
+        raise SMCError(f"{path} has no spec with its children: it should be an SMC's evaluation that sb3-smc "
+                       "experiment wrote")
+    return spec["children"]
+
+
+Seeds = dict[int, tuple[float, list[str]]]
+"""A target's seeds: seed -> (test score in points, the lower-level SMCs it called)."""
+
+
+def seed_scores(runs: list[tuple[Path, dict[str, Any]]], method: str) -> dict[str, tuple[str, Seeds]]:
+    """Each target's reported curriculum for ``method`` and its seeds (the seeds the report takes) from the runs
+    (directory, results); a seed found twice with different scores is an error."""
+    reported = {r["target"]: r["curriculum"] for _, res in runs for r in res["reported"] if r["method"] == method}
+    scores: dict[str, Seeds] = {target: {} for target in reported}
+    for run, res in runs:
         for row in res["rows"]:
             target, seed = row["target"], int(row["seed"])
             if row["method"] != method or row["curriculum"] != reported.get(target):
                 continue
             score = points(float(row["test_score"]))
-            if scores[target].setdefault(seed, score) != score:
-                raise SMCError(f"{method} on {target}, seed {seed}: two results ({scores[target][seed]} and {score})")
+            found = scores[target].setdefault(seed, (score, children(run, row["curriculum"], seed)))[0]
+            if found != score:
+                raise SMCError(f"{method} on {target}, seed {seed}: two results ({found} and {score})")
     return {target: (reported[target], scores[target]) for target in reported}
 
 
-def summary(a: dict[str, dict[int, float]], b: dict[str, dict[int, float]], targets: list[str]) -> dict[str, Any]:
-    """The counts of one kind over ``targets``: seeds paired, lifted, lowered, A's weak seeds (against the best of
-    all of A's seeds of the concept) and how many B brings within ``WEAK`` of that best, the means over paired
-    seeds, and the mean across targets of the best paired seed."""
+def summary(a: dict[str, dict[int, float]], b: dict[str, dict[int, float]], targets: list[str],
+            best: dict[str, float]) -> dict[str, Any]:
+    """The counts of one kind over ``targets``: seeds paired, lifted, lowered, A's weak seeds (against ``best``, the
+    best of all of A's seeds of the concept) and how many B brings within ``WEAK`` of that best, the means over
+    paired seeds, and the mean across targets of the best paired seed."""
     paired = {t: sorted(set(a[t]) & set(b[t])) for t in targets}
-    pairs = [(a[t][s], b[t][s], max(a[t].values())) for t in targets for s in paired[t]]
-    weak = [(x, y, best) for x, y, best in pairs if round(best - x, 1) > WEAK]
+    pairs = [(a[t][s], b[t][s], best[t]) for t in targets for s in paired[t]]
+    weak = [(x, y, top) for x, y, top in pairs if round(top - x, 1) > WEAK]
     return {"targets": len(targets), "seeds": len(pairs),
             "mean_a": float(np.mean([x for x, _, _ in pairs])), "mean_b": float(np.mean([y for _, y, _ in pairs])),
             "best_a": float(np.mean([max(a[t][s] for s in paired[t]) for t in targets])),
             "best_b": float(np.mean([max(b[t][s] for s in paired[t]) for t in targets])),
             "lifted": sum(round(y - x, 1) >= MOVED for x, y, _ in pairs),
             "lowered": sum(round(x - y, 1) >= MOVED for x, y, _ in pairs),
-            "weak": len(weak), "weak_lifted": sum(round(best - y, 1) <= WEAK for _, y, best in weak)}
+            "weak": len(weak), "weak_lifted": sum(round(top - y, 1) <= WEAK for _, y, top in weak)}
+
+
+def print_table(title: str, methods: list[str], a: dict[str, dict[int, float]], b: dict[str, dict[int, float]],
+                kind_of: dict[str, str], best: dict[str, float]) -> None:
+    """The counts (:func:`summary`) per kind and over all of the targets of ``kind_of``, under ``title``."""
+    print(f"{title}:\n\n| kind | targets | paired seeds | mean {methods[0]} | mean {methods[1]} | best paired "
+          f"{methods[0]} | best paired {methods[1]} | lifted >= 5 | lowered >= 5 | weak seeds of {methods[0]} (> 15 "
+          "below its best) | brought within 15 |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+    for kind in ("classification", "bring-about", None):
+        targets = [t for t in kind_of if kind in (None, kind_of[t])]
+        if targets:
+            s = summary(a, b, targets, best)
+            print(f"| {kind or 'all'} | {s['targets']} | {s['seeds']} | {s['mean_a']:.1f} | {s['mean_b']:.1f} | "
+                  f"{s['best_a']:.1f} | {s['best_b']:.1f} | {s['lifted']} | {s['lowered']} | {s['weak']} | "
+                  f"{s['weak_lifted']} |")
+    print()
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -77,8 +117,8 @@ def main(argv: list[str] | None = None) -> int:
     if len(methods) != 2 or any(m not in METHODS for m in methods):
         parser.error(f"--methods: two of {', '.join(METHODS)}, comma-separated (got {args.methods!r})")
     try:  # every directory read, and every seed checked, before any counting
-        results = [read_results(run) for run in args.runs]
-        found_a, found_b = (seed_scores(results, m) for m in methods)
+        runs = [(run, read_results(run)) for run in args.runs]
+        found_a, found_b = (seed_scores(runs, m) for m in methods)
     except (OSError, SMCError) as error:
         parser.error(str(error))
     common = sorted(t for t in found_a if t in found_b and set(found_a[t][1]) & set(found_b[t][1]))
@@ -86,28 +126,28 @@ def main(argv: list[str] | None = None) -> int:
     if not both:
         parser.error(f"no target has seeds of both {methods[0]} and {methods[1]} on the same curriculum node in "
                      f"{', '.join(map(str, args.runs))}")
-    a, b = ({t: found[t][1] for t in both} for found in (found_a, found_b))
-    kind_of = {r["target"]: r["kind"] for res in results for r in res["reported"]}
-    print(f"| kind | targets | paired seeds | mean {methods[0]} | mean {methods[1]} | best paired {methods[0]} | "
-          f"best paired {methods[1]} | lifted >= 5 | lowered >= 5 | weak seeds of {methods[0]} (> 15 below its "
-          "best) | brought within 15 |")
-    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
-    for kind in ("classification", "bring-about", None):
-        targets = [t for t in both if kind in (None, kind_of[t])]
-        if targets:
-            s = summary(a, b, targets)
-            print(f"| {kind or 'all'} | {s['targets']} | {s['seeds']} | {s['mean_a']:.1f} | {s['mean_b']:.1f} | "
-                  f"{s['best_a']:.1f} | {s['best_b']:.1f} | {s['lifted']} | {s['lowered']} | {s['weak']} | "
-                  f"{s['weak_lifted']} |")
+    kind_of = {r["target"]: r["kind"] for _, res in runs for r in res["reported"]}
+    other = {t: {s for s in set(found_a[t][1]) & set(found_b[t][1]) if found_a[t][1][s][1] != found_b[t][1][s][1]}
+             for t in both}  # the seeds on another lower level
+    best = {t: max(v[0] for v in found_a[t][1].values()) for t in both}
+    for title, same in (("continuing the shorter run (the same lower-level SMCs)", True),
+                        ("on other lower-level SMCs (not a continuation)", False)):
+        a, b = ({t: {s: v[0] for s, v in found[t][1].items() if (s in other[t]) != same} for t in both}
+                for found in (found_a, found_b))
+        paired = [t for t in both if set(a[t]) & set(b[t])]
+        if paired:
+            print_table(f"Seeds {title}", methods, a, b, {t: kind_of[t] for t in paired}, best)
     apart = [t for t in common if t not in both]
     if apart:
-        print(f"\nNot paired (the reported curricula are different nodes): {', '.join(apart)}")
+        print(f"Not paired (the reported curricula are different nodes): {', '.join(apart)}\n")
     if args.by_target:
-        print(f"\n| target | {methods[0]} by seed | {methods[1]} by seed |\n|---|---|---|")
+        print(f"| target | {methods[0]} by seed | {methods[1]} by seed | seeds on other lower-level SMCs |\n"
+              "|---|---|---|---|")
         for t in both:
-            cells = (" / ".join(f"{m[t][s]:.1f}" if s in m[t] else "-" for s in sorted(set(a[t]) | set(b[t])))
-                     for m in (a, b))
-            print(f"| `{t}` | " + " | ".join(cells) + " |")
+            a_t, b_t = found_a[t][1], found_b[t][1]
+            cells = (" / ".join(f"{m[s][0]:.1f}" if s in m else "-" for s in sorted(set(a_t) | set(b_t)))
+                     for m in (a_t, b_t))
+            print(f"| `{t}` | " + " | ".join(cells) + f" | {', '.join(map(str, sorted(other[t])))} |")
     return 0
 
 
