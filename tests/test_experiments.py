@@ -181,7 +181,11 @@ def test_the_paired_seeds_tool_counts_what_a_longer_run_does_to_each_seed(tmp_pa
     assert lines[8] == "Seeds on other lower-level SMCs (not a continuation):"
     assert lines[12:14] == ["| bring-about | 1 | 2 | 55.0 | 55.0 | 60.0 | 70.0 | 1 | 1 | 0 | 0 |",
                             "| all | 1 | 2 | 55.0 | 55.0 | 60.0 | 70.0 | 1 | 1 | 0 | 0 |"]
-    assert lines[15] == "Not paired (the reported curricula are different nodes): cl_other"
+    assert lines[15] == "All paired seeds:" and lines[19:22] == [
+        "| classification | 2 | 8 | 46.0 | 66.0 | 75.0 | 93.0 | 6 | 1 | 5 | 3 |",
+        "| bring-about | 2 | 4 | 77.5 | 75.0 | 80.0 | 85.0 | 1 | 2 | 0 | 0 |",
+        "| all | 4 | 12 | 56.5 | 69.0 | 77.5 | 89.0 | 7 | 3 | 5 | 3 |"]
+    assert lines[23] == "Not paired (the reported curricula are different nodes): cl_other"
     assert "| `ba_t` | 100.0 / 100.0 / 98.0 / 100.0 / 100.0 | 100.0 / 90.0 / - / - / - |  |" in lines
     assert "| `ba_u` | 50.0 / 60.0 | 40.0 / 70.0 | 0, 1 |" in lines
     again = results("again", "canon", [("cl_t", "c", [0.28])])  # seed 0 of canon once more, another score
@@ -613,6 +617,34 @@ def test_the_whole_table_report_with_a_second_flat_baseline(tmp_path):
     assert "| bring-about: mean of base-gru (17 concepts) | 52.7 | 16 of 17 concepts finished | not judged: partial |" \
         in claims
     assert "| bring-about: curr > base, paired t-test across concepts | t(16) = 4.1, p = 0.0008 | t(16) = " in claims
+
+
+def test_every_claim_verdict_has_a_class_that_the_count_names():
+    """The claims' verdicts, whatever the scores (reproduced, in direction only, not, not judged while a method
+    trains, not comparable on a subset, not run), each have a class (``Claim.outcome``), and ``tally`` counts them
+    in ``OUTCOMES``' order; a verdict of no known class is refused, naming the claim."""
+    from pixelworld_env.datasets import catalog
+    from sb3_smc.experiments.statistics import OUTCOMES, Claim, claims, tally
+
+    everything = level2_targets()
+    kind_of = {t: catalog.dataset(t).kind for t in everything}
+    category_of = {t: catalog.dataset(t).category for t in everything}
+    gain = {"cnn": 0.45, "base": 0.3, "curr": 0.303, "canon": 0.5}
+
+    def score(t: str, m: str) -> float:  # curr a little above base, with noise: in direction only
+        i = everything.index(t)
+        return 0.2 + 0.01 * (i % 7) + gain[m] + 0.02 * (i % 3 - 1) * (m == "curr")
+
+    table = {(t, m): score(t, m) for t in everything for m in gain if m != "cnn" or kind_of[t] == "classification"}
+    found = claims(table, kind_of, category_of, unfinished={(everything[0], "canon")})
+    found += claims(table, {t: kind_of[t] for t in everything[:5]}, category_of)  # a subset: not comparable
+    classes = [c.outcome for c in found]
+    assert set(classes) == {label for _, label in OUTCOMES}
+    assert tally(found) == ", ".join(f"{classes.count(label)} {label}" for _, label in OUTCOMES)
+    assert tally([Claim("a", "", "", "yes"), Claim("b", "", "", "no: 6.0 points below"),
+                  Claim("c", "", "", "yes (about equal)")]) == "2 reproduced, 1 not"
+    with pytest.raises(ValueError, match="the claim 'x' has a verdict of no known class: 'no'"):
+        Claim("x", "", "", "no").outcome
 
 
 def test_a_run_still_training_is_marked_partial_and_not_judged(tmp_path, monkeypatch):

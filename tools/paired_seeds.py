@@ -4,12 +4,13 @@ budget lift canon's weak seeds?).
 A method that gives the same node a longer run (``canon-scaled`` against ``canon``: the same curriculum node, its
 name prefixed by the method) trains each seed along the same path for as long as the shorter run lasts (with
 constant hyperparameters, the package's defaults; a ``lin_`` schedule depends on the budget), provided it calls the
-same lower-level SMCs (its spec's children, in the run's ``evaluations/``): seed ``s`` of one is paired with seed
-``s`` of the other, on the targets whose reported curricula are the same node. For each kind this counts the seeds
-the second method lifts or lowers by 5 points or more, and the first method's weak seeds (more than 15 points below
-that concept's best seed) that the second brings within 15 points of it: over the seeds that continue the shorter
-run (the same children), then over those on other children (another run's lower level: not a continuation); with
-``--by-target``, every target's seeds side by side.
+same lower-level SMCs (its spec's children, by name, in the run's ``evaluations/``; a run resumed on another machine
+may have trained a child again under the same name): seed ``s`` of one is paired with seed ``s`` of the other, on the
+targets whose reported curricula are the same node. For each kind this counts the seeds the second method lifts or
+lowers by 5 points or more, and the first method's weak seeds (more than 15 points below that concept's best seed)
+that the second brings within 15 points of it: over the seeds that continue the shorter run (the same children),
+over those on other children (another run's lower level: not a continuation), and over all; with ``--by-target``,
+every target's seeds side by side.
 
     python tools/paired_seeds.py docs/results/paper/{search,objects,containment,objcon,canon-scaled} \\
         --methods canon,canon-scaled
@@ -130,13 +131,15 @@ def main(argv: list[str] | None = None) -> int:
     other = {t: {s for s in set(found_a[t][1]) & set(found_b[t][1]) if found_a[t][1][s][1] != found_b[t][1][s][1]}
              for t in both}  # the seeds on another lower level
     best = {t: max(v[0] for v in found_a[t][1].values()) for t in both}
-    for title, same in (("continuing the shorter run (the same lower-level SMCs)", True),
-                        ("on other lower-level SMCs (not a continuation)", False)):
-        a, b = ({t: {s: v[0] for s, v in found[t][1].items() if (s in other[t]) != same} for t in both}
+    for title, keep in (("Seeds continuing the shorter run (the same lower-level SMCs)",
+                         lambda t, s: s not in other[t]),
+                        ("Seeds on other lower-level SMCs (not a continuation)", lambda t, s: s in other[t]),
+                        ("All paired seeds", lambda t, s: True)):
+        a, b = ({t: {s: v[0] for s, v in found[t][1].items() if keep(t, s)} for t in both}
                 for found in (found_a, found_b))
         paired = [t for t in both if set(a[t]) & set(b[t])]
         if paired:
-            print_table(f"Seeds {title}", methods, a, b, {t: kind_of[t] for t in paired}, best)
+            print_table(title, methods, a, b, {t: kind_of[t] for t in paired}, best)
     apart = [t for t in common if t not in both]
     if apart:
         print(f"Not paired (the reported curricula are different nodes): {', '.join(apart)}\n")

@@ -121,8 +121,8 @@ def claims_line(report: str, source: str) -> str:
         return ""
     counted = [line for line in section(report, CLAIMS) if line.startswith(CLAIMS_COUNT)]
     if len(counted) != 1:
-        raise SystemExit(f"the report's section {CLAIMS!r} has no line {CLAIMS_COUNT!r}: make it again with "
-                         "tools/paper_table.sh report")
+        raise SystemExit(f"the report's section {CLAIMS!r} needs exactly one line beginning {CLAIMS_COUNT!r} (it has "
+                         f"{len(counted)}): make it again with tools/paper_table.sh report")
     return f"**[The paper's claims]({source}#the-papers-claims)**" + counted[0].removeprefix(CLAIMS_COUNT)
 
 

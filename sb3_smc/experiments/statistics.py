@@ -101,7 +101,11 @@ class Claim:
     @property
     def outcome(self) -> str:
         """The verdict's class, one of :data:`OUTCOMES`' values, from how the verdict begins."""
-        return next(label for start, label in OUTCOMES if self.reproduced.startswith(start))
+        found = next((label for start, label in OUTCOMES if self.reproduced.startswith(start)), None)
+        if found is None:
+            raise ValueError(f"the claim {self.claim!r} has a verdict of no known class: {self.reproduced!r} (should "
+                             f"begin with one of {', '.join(repr(start) for start, _ in OUTCOMES)})")
+        return found
 
 
 OUTCOMES = (("yes", "reproduced"), ("direction only", "in direction only (not significant)"), ("no:", "not"),
