@@ -644,7 +644,7 @@ def test_every_claim_verdict_has_a_class_that_the_count_names():
     assert tally([Claim("a", "", "", "yes"), Claim("b", "", "", "no: 6.0 points below"),
                   Claim("c", "", "", "yes (about equal)")]) == "2 reproduced, 1 not"
     with pytest.raises(ValueError, match="the claim 'x' has a verdict of no known class: 'no'"):
-        Claim("x", "", "", "no").outcome
+        tally([Claim("x", "", "", "no")])
 
 
 def test_a_run_still_training_is_marked_partial_and_not_judged(tmp_path, monkeypatch):
