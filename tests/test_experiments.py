@@ -816,6 +816,9 @@ def test_the_readme_gets_the_whole_tables_means_and_tests_from_the_report(tmp_pa
     [report] = write_report([tmp_path / "run"], out=tmp_path / "docs", behaviour=False)
     readme_table.main(["--report", str(report), "--readme", str(readme)])
     assert "**partial: the table is still being run**" in readme.read_text()
+    report.write_text("\n".join(line for line in report.read_text().splitlines() if not line.startswith("**In all**")))
+    with pytest.raises(SystemExit, match="needs exactly one line beginning '\\*\\*In all\\*\\*' \\(it has 0\\)"):
+        readme_table.main(["--report", str(report), "--readme", str(readme)])
     # over several directories: the partial ones by name, and whether the paper's methods are whole all the same
     def mark_partial(directory: Path) -> None:
         results = json.loads((directory / "results.json").read_text())
