@@ -151,6 +151,38 @@ def test_a_step_that_does_not_improve_the_surrogate_is_not_taken() -> None:
         assert torch.equal(value, before[name]), name
 
 
+def test_the_conjugate_gradient_is_sb3_contribs_and_keeps_a_finite_iterate_where_that_one_diverges() -> None:
+    """On a positive definite system the solver gives sb3-contrib's ``x`` bit for bit (same start from the same
+    seed); where the product loses its curvature (``p·Ap`` of 0, as a float32 finite-difference Fisher product of
+    a long recurrent batch did on one job of the whole table), sb3-contrib's returns non-finite values and this one
+    its last finite iterate."""
+    from sb3_contrib.common.utils import conjugate_gradient_solver
+
+    from sb3_smc.recurrent_trpo.recurrent_trpo import conjugate_gradient
+
+    generator = torch.Generator().manual_seed(0)
+    m = torch.randn(20, 20, generator=generator)
+    a, b = m @ m.T / 20 + torch.eye(20), torch.randn(20, generator=generator)  # well conditioned
+    torch.manual_seed(3)
+    ours = conjugate_gradient(lambda v: a @ v, b, max_iter=15)
+    torch.manual_seed(3)
+    theirs = conjugate_gradient_solver(lambda v: a @ v, b, max_iter=15)
+    assert torch.equal(ours, theirs) and float(torch.linalg.norm(a @ ours - b)) < 1e-2 * float(torch.linalg.norm(b))
+    calls: list[int] = []
+
+    def flat_after_two(v: torch.Tensor) -> torch.Tensor:  # the curvature gone from the third product on
+        calls.append(1)
+        return a @ v if len(calls) <= 2 else torch.zeros_like(v)
+
+    torch.manual_seed(3)
+    assert not torch.isfinite(conjugate_gradient_solver(lambda v: torch.zeros_like(v), b.clone())).all()
+    torch.manual_seed(3)
+    x = conjugate_gradient(flat_after_two, b)
+    torch.manual_seed(3)
+    start = 1e-4 * torch.randn_like(b)
+    assert torch.isfinite(x).all() and not torch.equal(x, start) and len(calls) == 3  # one step taken, then kept
+
+
 def test_the_linear_feature_baseline_fits_returns_linear_in_its_features() -> None:
     rng = np.random.default_rng(0)
     observations, steps = rng.random((300, 3)), rng.integers(0, 50, 300)

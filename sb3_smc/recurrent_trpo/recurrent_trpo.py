@@ -22,7 +22,6 @@ from typing import TYPE_CHECKING, Any, ClassVar, TypeVar, cast
 import numpy as np
 import torch
 from sb3_contrib import RecurrentPPO
-from sb3_contrib.common.utils import conjugate_gradient_solver
 from stable_baselines3.common.utils import explained_variance
 from torch.distributions import Categorical, kl_divergence
 from torch.nn import functional as F
@@ -72,6 +71,39 @@ class LinearFeatureBaseline:
                 return
             reg *= 10
 
+
+
+def conjugate_gradient(matrix_vector_dot: Callable[[torch.Tensor], torch.Tensor], b: torch.Tensor,
+                       max_iter: int = 10, residual_tol: float = 1e-10) -> torch.Tensor:
+    """An approximate solution of ``A x = b`` (``matrix_vector_dot(v)`` is ``A v``): sb3-contrib's
+    ``conjugate_gradient_solver``, the same arithmetic and random start, so the same ``x`` wherever that one ends
+    finite, but it returns its last finite iterate where a step would not be finite. The finite-difference Fisher
+    product of a long recurrent batch can lose its curvature in float32 (``p·Ap`` shrinking to 0 as ``p`` grows):
+    sb3-contrib's solver then returns NaN and the update raises on NaN logits; the line search judges the finite
+    direction instead (it takes a step only if the exact KL and the surrogate allow)."""
+    x = 1e-4 * torch.randn_like(b)
+    residual = b - matrix_vector_dot(x)
+    residual_squared_norm = torch.matmul(residual, residual)
+    if residual_squared_norm < residual_tol:
+        return x
+    p = residual.clone()
+    for i in range(max_iter):
+        a_dot_p = matrix_vector_dot(p)
+        alpha = residual_squared_norm / p.dot(a_dot_p)
+        stepped = x + alpha * p
+        if not bool(torch.isfinite(stepped).all()):
+            return x
+        x = stepped
+        if i == max_iter - 1:
+            return x
+        residual -= alpha * a_dot_p
+        new_residual_squared_norm = torch.matmul(residual, residual)
+        if new_residual_squared_norm < residual_tol:
+            return x
+        beta = new_residual_squared_norm / residual_squared_norm
+        residual_squared_norm = new_residual_squared_norm
+        p = residual + beta * p
+    return x
 
 class RecurrentTRPO(RecurrentPPO):
     """TRPO with a recurrent policy (``"MlpLstmPolicy"`` or ``"MlpGruPolicy"``), sb3-contrib style.
@@ -240,7 +272,7 @@ class RecurrentTRPO(RecurrentPPO):
         objective_grad = torch.cat([g.reshape(-1) for g in grads if g is not None])
         originals = [param.detach().clone() for param in actor_params]
         fisher = partial(self.fisher_vector_product, actor_params, originals, logits, probs, evaluate)
-        direction = conjugate_gradient_solver(fisher, objective_grad, max_iter=self.cg_max_steps)
+        direction = conjugate_gradient(fisher, objective_grad, max_iter=self.cg_max_steps)
         curvature = float(torch.dot(direction, fisher(direction)))
         max_step = np.sqrt(2 * self.target_kl / curvature) if curvature > 0 else 0.0
         success, coefficient, new_kl = False, 1.0, torch.zeros(())
