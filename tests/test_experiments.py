@@ -845,6 +845,13 @@ def test_the_readme_gets_the_whole_tables_means_and_tests_from_the_report(tmp_pa
     with pytest.raises(SystemExit, match="needs exactly one <!-- paper-table:start -->"):
         readme_table.main(["--report", str(report), "--readme", str(readme)])
     assert readme.read_text() == "# no markers\n"
+    with pytest.raises(SystemExit, match="nope.md not found: the report"):
+        readme_table.main(["--report", str(tmp_path / "nope.md"), "--readme", str(readme)])
+    elsewhere = tmp_path / "other" / "README.md"  # a README beside neither: the link climbs to the report
+    elsewhere.parent.mkdir()
+    elsewhere.write_text(f"{readme_table.START}\n{readme_table.END}\n")
+    readme_table.main(["--report", str(report), "--readme", str(elsewhere)])
+    assert "(../docs/report.md#the-papers-claims)" in elsewhere.read_text()
 
 
 def _row_cells(text: str, start: str) -> list[str]:

@@ -25,11 +25,10 @@ from typing import Any
 
 import numpy as np
 
-from sb3_smc.curricula.jobs import file_stem, job_name
-from sb3_smc.curricula.run_directory import read_json
+from sb3_smc.curricula.jobs import job_name
 from sb3_smc.errors import SMCError
 from sb3_smc.experiments.design import METHODS
-from sb3_smc.experiments.runner import read_results
+from sb3_smc.experiments.runner import evaluation_path, read_evaluation, read_results
 
 MOVED = 5.0  # a seed lifted or lowered: by 5 points or more
 WEAK = 15.0  # a weak seed: more than 15 points below its concept's best
@@ -42,12 +41,11 @@ def points(score: float) -> float:
 
 def children(run: Path, node: str, seed: int) -> list[str]:
     """The lower-level SMCs that seed ``seed`` of ``node`` called, from its evaluation record in ``run``."""
-    path = run / "evaluations" / f"{file_stem(job_name(node, seed))}.json"
+    path = evaluation_path(run, job_name(node, seed))
     if not path.is_file():
         raise SMCError(f"{path} not found: the evaluation of {job_name(node, seed)} (its spec names the lower-level "
                        "SMCs it called) is needed to pair its seed")
-    saved = read_json(path, "an SMC's evaluation with its spec (an sb3-smc experiment writes it)")
-    spec = saved.get("spec") if isinstance(saved, dict) else None
+    spec = read_evaluation(path).get("spec")
     if not isinstance(spec, dict) or not isinstance(spec.get("children"), list):
         raise SMCError(f"{path} has no spec with its children: it should be an SMC's evaluation that sb3-smc "
                        "experiment wrote")

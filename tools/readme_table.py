@@ -15,16 +15,17 @@ Usage::
 from __future__ import annotations
 
 import argparse
+import os
 import re
 import sys
 from pathlib import Path
 
 from sb3_smc.experiments.design import DEFAULT_METHODS
-from sb3_smc.experiments.tables import CLAIMS_COUNT
+from sb3_smc.experiments.tables import CLAIMS_COUNT, CLAIMS_HEADING, MEANS_HEADING, TESTS_HEADING
 
 ROOT = Path(__file__).resolve().parents[1]
 START, END = "<!-- paper-table:start -->", "<!-- paper-table:end -->"
-SECTIONS = ("## Means per kind and category (Fig. 5a/5d)", "## Paired t-tests across concepts")
+SECTIONS = (MEANS_HEADING, TESTS_HEADING)
 
 
 def section(report: str, heading: str) -> list[str]:
@@ -111,18 +112,16 @@ def partial_note(report: str) -> str:
             + ("; the paper's methods have all their concepts" if whole else ""))
 
 
-CLAIMS = "## The paper's claims"
-
 
 def claims_line(report: str, source: str) -> str:
     """The report's count of its claims' verdicts (the line under its claims table), linked to the table; ``""``
     when the report has no claims table."""
-    if CLAIMS not in report.splitlines():
+    if CLAIMS_HEADING not in report.splitlines():
         return ""
-    counted = [line for line in section(report, CLAIMS) if line.startswith(CLAIMS_COUNT)]
+    counted = [line for line in section(report, CLAIMS_HEADING) if line.startswith(CLAIMS_COUNT)]
     if len(counted) != 1:
-        raise SystemExit(f"the report's section {CLAIMS!r} needs exactly one line beginning {CLAIMS_COUNT!r} (it has "
-                         f"{len(counted)}): make it again with tools/paper_table.sh report")
+        raise SystemExit(f"the report's section {CLAIMS_HEADING!r} needs exactly one line beginning {CLAIMS_COUNT!r} "
+                         f"(it has {len(counted)}): make it again with tools/paper_table.sh report")
     return f"**[The paper's claims]({source}#the-papers-claims)**" + counted[0].removeprefix(CLAIMS_COUNT)
 
 
@@ -155,7 +154,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--report", type=Path, default=ROOT / "docs/results/paper/report.md")
     parser.add_argument("--readme", type=Path, default=ROOT / "README.md")
     args = parser.parse_args(argv)
-    source = Path(args.report).resolve().relative_to(Path(args.readme).resolve().parent).as_posix()
+    for path, what in ((args.report, "the report (tools/paper_table.sh report makes it)"),
+                       (args.readme, "the README to update")):
+        if not path.is_file():
+            raise SystemExit(f"{path} not found: {what}")
+    source = Path(os.path.relpath(args.report.resolve(), args.readme.resolve().parent)).as_posix()
     text = update(args.readme.read_text(encoding="utf-8"), block(args.report.read_text(encoding="utf-8"), source))
     tmp = args.readme.with_suffix(".tmp")
     tmp.write_text(text, encoding="utf-8")

@@ -46,7 +46,7 @@ from sb3_smc.hyperparameters import DEFAULT_ALGORITHM, DEFAULT_TIMESTEPS
 from sb3_smc.library import SMCLibrary
 from sb3_smc.records import package_versions
 
-__all__ = ["RESULT_FIELDS", "read_results", "run_experiment"]
+__all__ = ["RESULT_FIELDS", "evaluation_path", "read_evaluation", "read_results", "run_experiment"]
 
 RESULT_FIELDS = ("target", "kind", "category", "method", "curriculum", "seed", "training_return", "selected_update",
                  "test_score", "wall_time_s")
@@ -246,16 +246,29 @@ def _csv(rows: Sequence[dict[str, Any]]) -> str:
     return buffer.getvalue()
 
 
-def _saved_evaluation(path: Path, repeats: int) -> dict[str, Any] | None:
-    """The evaluation saved at ``path`` if it used ``repeats`` (else None: it is made again)."""
+def evaluation_path(directory: Path, name: str) -> Path:
+    """Where an experiment in ``directory`` saves the evaluation of its SMC ``name`` (``node@seed``)."""
+    return directory / "evaluations" / f"{file_stem(name)}.json"
+
+
+def read_evaluation(path: Path) -> dict[str, Any]:
+    """The SMC evaluation an experiment saved at ``path`` (its test score, training record and spec), checked."""
     if not path.is_file():
-        return None
+        raise SMCError(f"{path} not found: an SMC's evaluation (sb3-smc experiment writes it)")
     try:
         saved = json.loads(path.read_text(encoding="utf-8"))
     except json.JSONDecodeError as err:
         raise SMCError(f"{path} is not valid JSON ({err}); delete it to evaluate that SMC again") from None
     if not isinstance(saved, dict) or not isinstance(saved.get("test_score"), int | float):
         raise SMCError(f"{path} is not an sb3-smc evaluation (no test_score); delete it to evaluate that SMC again")
+    return saved
+
+
+def _saved_evaluation(path: Path, repeats: int) -> dict[str, Any] | None:
+    """The evaluation saved at ``path`` if it used ``repeats`` (else None: it is made again)."""
+    if not path.is_file():
+        return None
+    saved = read_evaluation(path)
     return saved if saved.get("repeats") == repeats else None
 
 
@@ -273,7 +286,7 @@ def _kept_evaluations(directory: Path, training_targets: Sequence[str], seeds: i
 
 
 def _evaluation(directory: Path, name: str, repeats: int) -> dict[str, Any]:
-    path = directory / "evaluations" / f"{file_stem(name)}.json"
+    path = evaluation_path(directory, name)
     saved = _saved_evaluation(path, repeats)
     if saved is not None:
         return saved

@@ -39,11 +39,16 @@ from sb3_smc.experiments.statistics import (
     wins,
 )
 
-__all__ = ["CLAIMS_COUNT", "KINDS", "ResultTable", "number_sections"]
+__all__ = ["CLAIMS_COUNT", "CLAIMS_HEADING", "KINDS", "MEANS_HEADING", "ResultTable", "TESTS_HEADING",
+           "number_sections"]
 
 KINDS = ("classification", "bring-about")
 CLAIMS_COUNT = "**In all**"
 """How the line under the claims table that counts their verdicts begins."""
+MEANS_HEADING = "## Means per kind and category (Fig. 5a/5d)"
+TESTS_HEADING = "## Paired t-tests across concepts"
+CLAIMS_HEADING = "## The paper's claims"
+"""The headings of the report's sections that the README quotes (tools/readme_table.py finds them by these)."""
 
 
 def _pct(value: float | None) -> str:
@@ -143,7 +148,7 @@ def _claims_section(table: ResultTable) -> list[str]:
                    unfinished=table.unfinished)
     if not any(c.reproduced != "not run" for c in found):
         return []
-    lines = ["## The paper's claims", "",
+    lines = [CLAIMS_HEADING, "",
              "Every quantitative claim of the paper's results with ours: a mean is reproduced within 5 points, a "
              "comparison when it has the paper's direction and is significant (p < 0.05, our degrees of freedom). "
              "The claims over all concepts of a kind are judged only on all of them (the whole table).", "",
@@ -223,7 +228,7 @@ def _category_rows(table: ResultTable, kind: str, score: Score) -> list[str]:
 
 def _means_section(table: ResultTable) -> list[str]:
     methods = table.methods
-    lines = ["", "## Means per kind and category (Fig. 5a/5d)", "",
+    lines = ["", MEANS_HEADING, "",
              "Mean of the reported scores ± standard error across concepts.", "", *_means_header(methods)]
     for kind in KINDS:
         in_kind = table.of_kind(kind)
@@ -281,7 +286,7 @@ def _seed_means_section(table: ResultTable) -> list[str]:
 
 def _ttest_section(table: ResultTable) -> list[str]:
     methods = table.methods
-    lines = ["", "## Paired t-tests across concepts", "",
+    lines = ["", TESTS_HEADING, "",
              "Two-sided paired t-tests of the reported scores (scipy `ttest_rel`); df = concepts - 1. Where the "
              "paper tested the same comparison over the same concepts (all of a kind), its t, df and p are beside "
              "ours, and the last column reads our t at the paper's degrees of freedom (it gives df 34 for 34 "
