@@ -11,6 +11,7 @@ are what its task gives (:mod:`sb3_smc.tasks`), recorded as the SMC's :class:`~s
 
 from __future__ import annotations
 
+import hashlib
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
@@ -150,6 +151,24 @@ class SMC:
                            f"{n_actions}: {list(self.action_names)}")
         for child in self.children:
             child.check_layout(self.name)
+
+    @property
+    def digest(self) -> str | None:
+        """The SHA-256 of the behaviour this SMC stands for: its model's policy weights (names, dtypes, shapes and
+        values) and its children's digests in order. Two SMCs with the same digest act alike, whichever file,
+        machine or run made them; ``None`` where it or an SMC it calls has no trained model (a scripted policy)."""
+        policy = getattr(self.model, "policy", None)
+        children = [child.digest for child in self.children]
+        if policy is None or None in children:
+            return None
+        digest = hashlib.sha256()
+        for key, tensor in policy.state_dict().items():
+            values = tensor.detach().cpu().numpy()
+            digest.update(f"{key} {values.dtype} {values.shape}".encode())
+            digest.update(np.ascontiguousarray(values).tobytes())
+        for child in children:
+            digest.update(f"child {child}".encode())
+        return digest.hexdigest()
 
     @property
     def depth(self) -> int:

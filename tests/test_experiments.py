@@ -201,6 +201,16 @@ def test_the_paired_seeds_tool_counts_what_a_longer_run_does_to_each_seed(tmp_pa
             paired_seeds.main(argv)
         captured = capsys.readouterr()
         assert says in captured.err and captured.out == ""
+    # the digests of the children's weights, where both records have them, tell the same names apart
+    a, b, c = "a" * 64, "b" * 64, None
+    assert paired_seeds.same_lower_level([("x", a), ("y", b)], [("x", a), ("y", c)])  # an older record: by name
+    assert not paired_seeds.same_lower_level([("x", a), ("y", b)], [("x", a), ("y", a)])  # trained again
+    assert not paired_seeds.same_lower_level([("x", a)], [("y", a)])
+    record = tmp_path / "canon" / "evaluations" / "c@0.json"
+    record.write_text(json.dumps({"test_score": 0.27, "spec": {"children": ["c@1"]}, "children_digests": [a, b]}))
+    with pytest.raises(SystemExit):
+        paired_seeds.main([canon, scaled, "--methods", "canon,canon-scaled"])
+    assert "c@0.json: 'children_digests' must list one digest per child of its spec (1)" in capsys.readouterr().err
 
 
 def test_reported_scores_are_the_best_seed_and_curriculum():
@@ -232,6 +242,15 @@ def test_a_tiny_experiment_end_to_end(tmp_path):
     assert code["commit"] is None or re.fullmatch(r"[0-9a-f]{40}(\+changes)?", code["commit"])
     evaluations = sorted((out / "evaluations").glob("*.json"))
     assert len(evaluations) == 4 and json.loads(evaluations[0].read_text())["evaluation"]["repeats"] == 1
+    from sb3_smc.experiments.runner import evaluation_path, read_evaluation
+    from sb3_smc.library import SMCLibrary
+
+    trained = SMCLibrary.load(out / "library")
+    for name in (f"{LEFT_OF}@0", f"obj-con2-cl/{LEFT_OF}-curr@0"):  # the weights each evaluated SMC called
+        record = read_evaluation(evaluation_path(out, name))
+        assert record["digest"] == trained[name].digest is not None
+        assert record["children_digests"] == [child.digest for child in trained[name].children]
+    assert record["children_digests"] and None not in record["children_digests"]
     stamps = {p: p.stat().st_mtime_ns for p in [*evaluations, *(out / "cnn").glob("*.json")]}
 
     again = run_experiment(out, methods=["cnn", "base", "curr"], targets=[LEFT_OF], seeds=1, timesteps=2000,
@@ -245,8 +264,6 @@ def test_a_tiny_experiment_end_to_end(tmp_path):
     assert all(p.stat().st_mtime_ns == stamp for p, stamp in stamps.items())
 
     # partial results while a run is still training: drop one finished SMC, tabulate without training, complete it
-    from sb3_smc.library import SMCLibrary
-
     dropped = f"obj-con2-cl/{LEFT_OF}-curr2@0"
     library = SMCLibrary.load(out / "library")
     library.remove(dropped)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -165,6 +166,25 @@ def test_round_trip_in_a_fresh_process(smcs, saved, tmp_path):
     result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, cwd=ROOT, timeout=120)
     assert result.returncode == 0, result.stdout + result.stderr
     assert result.stdout.strip().endswith("ok")
+
+
+def test_the_digest_names_the_weights_whatever_file_holds_them(smcs, saved):
+    """``SMC.digest``: the same after a save and load (another model file), another for other weights or other
+    children's weights; ``None`` where a scripted policy is called."""
+    loaded = SMCLibrary.load(saved)
+    digests = {name: smc.digest for name, smc in smcs.items()}
+    assert all(re.fullmatch(r"[0-9a-f]{64}", d) for d in digests.values()) and len(set(digests.values())) == 4
+    assert loaded["climber"].digest == digests["climber"] and loaded["corner"].digest == digests["corner"]
+    model = loaded["corner"].model
+    with torch.no_grad():
+        next(model.policy.parameters()).view(-1)[0] += 1e-6
+    assert loaded["corner"].digest != digests["corner"] and loaded["climber"].digest != digests["climber"]
+    assert loaded["container"].digest == digests["container"]
+    scripted = SMC("walker", "bring-about", ScriptedPolicy(5, lambda obs, step: 1))
+    env = HierarchicalSMCWrapper(gym.make(BA_ID), [scripted])
+    model = PPO("MlpPolicy", env, n_steps=32, batch_size=32, device="cpu")
+    assert scripted.digest is None
+    assert SMC("parent", "bring-about", policy_from_model(model), children=[scripted], model=model).digest is None
 
 
 def test_manifest_records_each_smc_once(saved, smcs):

@@ -4,13 +4,13 @@ budget lift canon's weak seeds?).
 A method that gives the same node a longer run (``canon-scaled`` against ``canon``: the same curriculum node, its
 name prefixed by the method) trains each seed along the same path for as long as the shorter run lasts (with
 constant hyperparameters, the package's defaults; a ``lin_`` schedule depends on the budget), provided it calls the
-same lower-level SMCs (its spec's children, by name, in the run's ``evaluations/``; a run resumed on another machine
-may have trained a child again under the same name): seed ``s`` of one is paired with seed ``s`` of the other, on the
-targets whose reported curricula are the same node. For each kind this counts the seeds the second method lifts or
-lowers by 5 points or more, and the first method's weak seeds (more than 15 points below that concept's best seed)
-that the second brings within 15 points of it: over the seeds that continue the shorter run (the same children),
-over those on other children (another run's lower level: not a continuation), and over all; with ``--by-target``,
-every target's seeds side by side.
+same lower-level SMCs (its spec's children in the run's ``evaluations/``: by name, and by the digests of their
+weights where the records have them; a run resumed on another machine may have trained a child again under the same
+name): seed ``s`` of one is paired with seed ``s`` of the other, on the targets whose reported curricula are the same
+node. For each kind this counts the seeds the second method lifts or lowers by 5 points or more, and the first
+method's weak seeds (more than 15 points below that concept's best seed) that the second brings within 15 points of
+it: over the seeds that continue the shorter run (the same children), over those on other children (another run's
+lower level: not a continuation), and over all; with ``--by-target``, every target's seeds side by side.
 
     python tools/paired_seeds.py docs/results/paper/{search,objects,containment,objcon,canon-scaled} \\
         --methods canon,canon-scaled
@@ -39,20 +39,36 @@ def points(score: float) -> float:
     return round(100 * score, 1)
 
 
-def children(run: Path, node: str, seed: int) -> list[str]:
+LowerLevel = list[tuple[str, str | None]]
+"""The lower-level SMCs a seed called: (name, digest of its weights where the evaluation recorded it)."""
+
+
+def children(run: Path, node: str, seed: int) -> LowerLevel:
     """The lower-level SMCs that seed ``seed`` of ``node`` called, from its evaluation record in ``run``."""
     path = evaluation_path(run, job_name(node, seed))
     if not path.is_file():
         raise SMCError(f"{path} not found: the evaluation of {job_name(node, seed)} (its spec names the lower-level "
                        "SMCs it called) is needed to pair its seed")
-    spec = read_evaluation(path).get("spec")
+    saved = read_evaluation(path)
+    spec = saved.get("spec")
     if not isinstance(spec, dict) or not isinstance(spec.get("children"), list):
         raise SMCError(f"{path} has no spec with its children: it should be an SMC's evaluation that sb3-smc "
                        "experiment wrote")
-    return spec["children"]
+    digests = saved.get("children_digests") or [None] * len(spec["children"])
+    if not isinstance(digests, list) or len(digests) != len(spec["children"]):
+        raise SMCError(f"{path}: 'children_digests' must list one digest per child of its spec "
+                       f"({len(spec['children'])}), got {digests!r}")
+    return list(zip(spec["children"], digests, strict=True))
 
 
-Seeds = dict[int, tuple[float, list[str]]]
+def same_lower_level(a: LowerLevel, b: LowerLevel) -> bool:
+    """Whether two seeds called the same lower-level SMCs: the same names and, where both evaluations recorded
+    them, the same weights (older records name their children only)."""
+    return [name for name, _ in a] == [name for name, _ in b] and all(
+        x is None or y is None or x == y for (_, x), (_, y) in zip(a, b, strict=True))
+
+
+Seeds = dict[int, tuple[float, LowerLevel]]
 """A target's seeds: seed -> (test score in points, the lower-level SMCs it called)."""
 
 
@@ -126,7 +142,8 @@ def main(argv: list[str] | None = None) -> int:
         parser.error(f"no target has seeds of both {methods[0]} and {methods[1]} on the same curriculum node in "
                      f"{', '.join(map(str, args.runs))}")
     kind_of = {r["target"]: r["kind"] for _, res in runs for r in res["reported"]}
-    other = {t: {s for s in set(found_a[t][1]) & set(found_b[t][1]) if found_a[t][1][s][1] != found_b[t][1][s][1]}
+    other = {t: {s for s in set(found_a[t][1]) & set(found_b[t][1])
+                if not same_lower_level(found_a[t][1][s][1], found_b[t][1][s][1])}
              for t in both}  # the seeds on another lower level
     best = {t: max(v[0] for v in found_a[t][1].values()) for t in both}
     for title, keep in (("Seeds continuing the shorter run (the same lower-level SMCs)",

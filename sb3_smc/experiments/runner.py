@@ -299,6 +299,7 @@ def _evaluation(directory: Path, name: str, repeats: int) -> dict[str, Any]:
              "selected_update": record.selected_update if record is not None else None,
              "wall_time_s": record.wall_time_s if record is not None else None,
              "spec": smc.spec.to_dict() if smc.spec is not None else None,
+             "digest": smc.digest, "children_digests": [child.digest for child in smc.children],
              "evaluation": result.record.to_dict()}
     atomic_write(path, json.dumps(saved, indent=2) + "\n")
     return saved
