@@ -102,16 +102,18 @@ def test_cnn_input_and_it_beats_chance_on_an_easy_concept():
 
 def test_the_moves_probe_retests_a_runs_best_seeds_counting_their_moves(tmp_path, capsys, monkeypatch):
     """``tools/probe_moves.py`` on a tiny run: each target x method's best seed tested again with the run's own test
-    (its recorded score reproduced), its moves per episode, and its score with calls costing their moves (a flat SMC
-    makes at most 100 moves and is not tested twice); resumable; a directory that is not an experiment's and an
-    unknown method are refused before any work."""
+    (its recorded score reproduced), how its other episodes ended (a wrong signal or none), its moves per episode,
+    and its score with calls costing their moves (a flat SMC makes at most 100 moves, and curr-moves was trained
+    counting them: neither is tested twice); resumable; a directory that is not an experiment's and an unknown
+    method are refused before any work."""
     from sb3_smc.library import SMCLibrary
 
     probe_moves = import_tool("probe_moves")
     out = tmp_path / "exp"
-    run_experiment(out, methods=["base", "curr"], targets=[LEFT_OF], seeds=1, timesteps=2000, repeats=1, progress=False)
+    run_experiment(out, methods=["base", "curr", "curr-moves"], targets=[LEFT_OF], seeds=1, timesteps=2000, repeats=1,
+                   progress=False)
     table = tmp_path / "moves.csv"
-    argv = [str(out), "--kind", "classification", "--methods", "base,curr", "--out", str(table)]
+    argv = [str(out), "--kind", "classification", "--methods", "base,curr,curr-moves", "--out", str(table)]
     tested = []  # (SMC, calls costing their moves) of every test the probe runs
     real_test = probe_moves.test
 
@@ -122,9 +124,14 @@ def test_the_moves_probe_retests_a_runs_best_seeds_counting_their_moves(tmp_path
     monkeypatch.setattr(probe_moves, "test", test)
     assert probe_moves.main(argv) == 0
     rows = {row["method"]: row for row in csv.DictReader(table.open())}
-    assert sorted(rows) == ["base", "curr"] and all(row["score"] == row["recorded"] for row in rows.values())
-    base, curr = rows["base"], rows["curr"]
-    assert tested == [(base["smc"], False, 1), (curr["smc"], False, 1), (curr["smc"], True, 1)]  # the run's repeats
+    assert sorted(rows) == ["base", "curr", "curr-moves"]
+    assert all(row["score"] == row["recorded"] for row in rows.values())
+    base, curr, moves = rows["base"], rows["curr"], rows["curr-moves"]
+    assert tested == [(base["smc"], False, 1), (curr["smc"], False, 1), (curr["smc"], True, 1),
+                      (moves["smc"], True, 1)]  # the run's repeats; curr-moves as trained, counting moves
+    assert moves["score_counting_moves"] == moves["score"] and float(moves["moves_p90"]) <= 100
+    for row in rows.values():  # every episode right, wrong or without a signal
+        assert float(row["score"]) + float(row["wrong_signal"]) + float(row["no_signal"]) == pytest.approx(1, abs=2e-3)
     assert float(base["moves_p90"]) <= 100 and base["over_100"] == "0.000"  # a flat SMC: at most 100 moves
     counted = real_test(SMCLibrary.load(out / "library", names=[curr["smc"]])[curr["smc"]], True, 1)[0]
     assert curr["score_counting_moves"] == f"{np.mean(counted):.3f}" and float(curr["moves_mean"]) > 0

@@ -4,14 +4,16 @@ count moves instead of decisions (docs/results/paper/README.md, "Moves per episo
 An SMC call is one step of the episode's 100 (the package's default and, as far as the paper says, its choice), so
 a hierarchical SMC may make far more than 100 moves in an episode, a flat one at most 100. For each target x method
 of a run directory this tests the best seed (the run's ``reported`` row: the highest test score; curr over its
-curricula) twice with the run's test (:func:`sb3_smc.evaluate`: test split, the run's repeats, 10 in the paper's
+curricula) with the run's test (:func:`sb3_smc.evaluate`: test split, the run's repeats, 10 in the paper's
 protocol, evaluation seed 0):
 
-* as trained (``count_primitive_steps`` off): the score (checked against the run's recorded one), the moves per
-  episode (mean, median, 90th percentile, the share of episodes over 100) and the score of the episodes that made
-  at most 100 moves;
-* with ``count_primitive_steps=True``: each call costs the moves it made and is cut at the budget left, so an
-  episode makes at most 100 moves as a flat SMC's does (the policy is the same; it was not trained this way).
+* as trained (its spec's ``count_primitive_steps``): the score (checked against the run's recorded one), how the
+  other episodes ended (a wrong signal, or no signal: the steps or moves ran out), the moves per episode (mean,
+  median, 90th percentile, the share of episodes over 100) and the score of the episodes that made at most 100
+  moves;
+* for an SMC trained with a call as one step, again with ``count_primitive_steps=True``: each call costs the moves
+  it made and is cut at the budget left, so an episode makes at most 100 moves as a flat SMC's does (the policy is
+  the same; it was not trained this way). A flat SMC, or one trained so (``curr-moves``), is not tested twice.
 
     python tools/probe_moves.py /work/runs/paper-containment --kind bring-about --methods base,curr,canon \\
         --out docs/results/paper/probes/moves-containment.csv
@@ -42,7 +44,7 @@ from sb3_smc.library.errors import UnknownSMCError
 from sb3_smc.smc import SMC
 
 FIELDS = ("target", "category", "method", "smc", "recorded", "score", "moves_mean", "moves_median", "moves_p90",
-          "over_100", "score_within_100", "score_counting_moves")
+          "over_100", "score_within_100", "score_counting_moves", "wrong_signal", "no_signal")
 
 
 def best_rows(results: dict[str, Any], kind: str, methods: list[str]) -> list[dict[str, Any]]:
@@ -52,11 +54,13 @@ def best_rows(results: dict[str, Any], kind: str, methods: list[str]) -> list[di
     return sorted(chosen, key=lambda row: (row["target"], methods.index(row["method"])))
 
 
-def test(smc: SMC, count_moves: bool, repeats: int) -> tuple[list[bool], list[int]]:
-    """Success and moves of every test episode of the run's test, calls costing one step or their moves."""
+def test(smc: SMC, count_moves: bool, repeats: int) -> tuple[list[bool], list[int], list[bool]]:
+    """Success, moves and whether it ended on a signal, of every test episode of the run's test, calls costing one
+    step or their moves."""
     wrapper = dataclasses.replace(spec_for_smc(smc, smc.spec.task.env_id).wrapper, count_primitive_steps=count_moves)
     result = evaluate(smc, repeats=repeats, seed=0, record_cells=False, keep=False, wrapper=wrapper)
-    return [e.success for e in result.episodes], [e.primitive_steps for e in result.episodes]
+    return ([e.success for e in result.episodes], [e.primitive_steps for e in result.episodes],
+            [e.signalled for e in result.episodes])
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -95,20 +99,25 @@ def main(argv: list[str] | None = None) -> int:
             except UnknownSMCError:  # a run resumed on another machine keeps records, not every model
                 print(f"skipped {name}: not in {run / 'library'}", flush=True)
                 continue
-            successes, moves = test(smc, count_moves=False, repeats=repeats[run])
+            counting = smc.spec.wrapper.count_primitive_steps  # as trained: curr-moves counts them
+            successes, moves, signalled = test(smc, count_moves=counting, repeats=repeats[run])
             recorded = float(row["test_score"])
             if abs(float(np.mean(successes)) - recorded) > 1e-9:
                 sys.exit(f"{name}: tested {np.mean(successes)}, the run recorded {recorded}: not the run's SMC or code")
             flat = not smc.spec.children  # a flat SMC's moves are its steps: counting them changes nothing
-            counted, _ = (successes, moves) if flat else test(smc, count_moves=True, repeats=repeats[run])
+            counted = successes if flat or counting else test(smc, count_moves=True, repeats=repeats[run])[0]
             within = [s and m <= 100 for s, m in zip(successes, moves, strict=True)]
+            wrong = [g and not s for s, g in zip(successes, signalled, strict=True)]  # the other episodes' ends
+            silent = [not g and not s for s, g in zip(successes, signalled, strict=True)]
             done.append({"target": row["target"], "category": row["category"], "method": row["method"], "smc": name,
                          "recorded": f"{recorded:.3f}", "score": f"{np.mean(successes):.3f}",
                          "moves_mean": f"{np.mean(moves):.1f}", "moves_median": f"{np.median(moves):.0f}",
                          "moves_p90": f"{np.percentile(moves, 90):.0f}",
                          "over_100": f"{np.mean(np.array(moves) > 100):.3f}",
                          "score_within_100": f"{np.mean(within):.3f}",
-                         "score_counting_moves": f"{np.mean(counted):.3f}"})
+                         "score_counting_moves": f"{np.mean(counted):.3f}",
+                         "wrong_signal": f"{np.mean(wrong):.3f}",
+                         "no_signal": f"{np.mean(silent):.3f}"})
             text = io.StringIO()
             writer = csv.DictWriter(text, fieldnames=FIELDS, lineterminator="\n")
             writer.writeheader()
