@@ -11,6 +11,7 @@ import shlex
 import shutil
 import subprocess
 import sys
+import time
 from collections.abc import Callable
 from pathlib import Path
 
@@ -225,6 +226,44 @@ def test_reported_scores_are_the_best_seed_and_curriculum():
              "seed": s, "test_score": v} for c, s, v in (("a", 0, 0.5), ("a", 1, 0.7), ("b", 0, 0.9), ("b", 1, 0.1))]
     assert reported(rows) == [{"target": "t", "kind": "classification", "category": "objcon", "method": "curr",
                                "test_score": 0.9, "seed": 0, "curriculum": "b"}]
+
+
+def test_the_wall_clock_keeps_a_stopped_runs_time(tmp_path):
+    """``DIR/wall_time.json``: each run's entry is rewritten while it runs, so a run killed without warning keeps
+    its time up to its last beat; a directory from before the ledger starts from its results' recorded total; runs
+    at once keep their own entries; a damaged ledger is refused before any work."""
+    from sb3_smc.curricula.run_directory import RunFileError
+    from sb3_smc.experiments.wall_clock import LEDGER, WallClock
+
+    run = tmp_path / "run"
+    run.mkdir()
+    (run / "results.json").write_text(json.dumps({"wall_time_s": 10.0, "wall_time_total_s": 100.0}))
+    script = ("import sys, time; from pathlib import Path; from sb3_smc.experiments.wall_clock import WallClock\n"
+              "clock = WallClock(Path(sys.argv[1]), train=True, interval=0.05).__enter__()\n"
+              "print('started', flush=True); time.sleep(60)")
+    killed = subprocess.Popen([sys.executable, "-c", script, str(run)], cwd=ROOT, stdout=subprocess.PIPE, text=True)
+    assert killed.stdout is not None and killed.stdout.readline() == "started\n"
+    deadline = time.time() + 30
+    while time.time() < deadline and not (run / LEDGER).is_file():
+        time.sleep(0.05)
+    time.sleep(0.5)
+    killed.kill()
+    killed.wait()
+    ledger = json.loads((run / LEDGER).read_text())
+    assert ledger["before"] == 100.0 and len(ledger["runs"]) == 1
+    [stopped] = ledger["runs"]
+    assert stopped["ended"] is False and stopped["train"] is True and stopped["seconds"] >= 0.3
+    with WallClock(run, train=False, interval=0.05) as first, WallClock(run, train=True, interval=0.05):
+        time.sleep(0.2)
+    runs = json.loads((run / LEDGER).read_text())["runs"]
+    assert len(runs) == 3 and runs[0] == stopped and all(r["ended"] for r in runs[1:])
+    assert first.total() == pytest.approx(100.0 + sum(r["seconds"] for r in runs))
+    (run / LEDGER).write_text('{"format": "sb3-smc-wall-time", "runs": "many"}')
+    with pytest.raises(RunFileError, match="wall_time.json is not an sb3-smc wall-time ledger"):
+        WallClock(run, train=True)
+    (run / LEDGER).write_text("{")
+    with pytest.raises(RunFileError, match="wall_time.json is not valid JSON"):
+        WallClock(run, train=True)
 
 
 def test_a_tiny_experiment_end_to_end(tmp_path):
@@ -1073,14 +1112,14 @@ def _script_repo(tmp_path: Path, stubs: dict[str, str]) -> Path:
 
 
 def test_the_whole_tables_script_keeps_a_runs_records_without_its_models(tmp_path):
-    """``tools/paper_table.sh keep <category> <repo>``: a run directory's records (run.json, results, evaluations,
-    the CNN's) copied into ``docs/results/paper/<category>`` (no library, no curves), a later keep replacing the
-    evaluations whole; an unknown command is refused with the usage."""
+    """``tools/paper_table.sh keep <category> <repo>``: a run directory's records (run.json, results, the wall-time
+    ledger, evaluations, the CNN's) copied into ``docs/results/paper/<category>`` (no library, no curves, no lock), a
+    later keep replacing the evaluations whole; an unknown command is refused with the usage."""
     import os
 
     run = tmp_path / "runs" / "paper-objects"
-    for name in ("run.json", "results.csv", "results.json", "evaluations/a@0.json", "cnn/t@0.json",
-                 "library/models/a@0.zip", "tensorboard/a/events"):
+    for name in ("run.json", "results.csv", "results.json", "wall_time.json", "evaluations/a@0.json", "cnn/t@0.json",
+                 "library/models/a@0.zip", "tensorboard/a/events", ".wall_time.json.lock"):
         (run / name).parent.mkdir(parents=True, exist_ok=True)
         (run / name).write_text(name)
     script, env = str(ROOT / "tools" / "paper_table.sh"), {**os.environ, "RUNS": str(tmp_path / "runs")}
@@ -1091,7 +1130,7 @@ def test_the_whole_tables_script_keeps_a_runs_records_without_its_models(tmp_pat
     keep()
     kept = tmp_path / "repo" / "docs" / "results" / "paper" / "objects"
     assert sorted(str(p.relative_to(kept)) for p in kept.rglob("*") if p.is_file()) == [
-        "cnn/t@0.json", "evaluations/a@0.json", "results.csv", "results.json", "run.json"]
+        "cnn/t@0.json", "evaluations/a@0.json", "results.csv", "results.json", "run.json", "wall_time.json"]
     (run / "evaluations" / "a@0.json").rename(run / "evaluations" / "a@1.json")
     keep()
     assert [p.name for p in (kept / "evaluations").iterdir()] == ["a@1.json"]

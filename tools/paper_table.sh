@@ -90,6 +90,9 @@ case ${1:-} in
       if [ ! -f "$dir/run.json" ] && [ -f "$kept/run.json" ]; then  # a new machine: resume from the kept records
         mkdir -p "$dir" && cp "$kept/run.json" "$dir/"
         if [ -d "$kept/evaluations" ]; then cp -r "$kept/evaluations" "$dir/"; fi
+        for f in wall_time.json results.json; do  # its wall time so far goes on from the kept ledger
+          if [ -f "$kept/$f" ]; then cp "$kept/$f" "$dir/"; fi
+        done
       fi
       RUN_ENV=$env REUSE_FROM=$(reuse_path "$reuse") nice -n 5 "$0" run "$cat" < /dev/null
     done ;;
@@ -117,7 +120,7 @@ case ${1:-} in
     src=$RUNS/paper-$cat; dst=$repo/docs/results/paper/$cat
     mkdir -p "$dst"
     cp "$src/run.json" "$dst/"
-    for f in results.csv results.json; do if [ -f "$src/$f" ]; then cp "$src/$f" "$dst/"; fi; done
+    for f in results.csv results.json wall_time.json; do if [ -f "$src/$f" ]; then cp "$src/$f" "$dst/"; fi; done
     for d in evaluations cnn; do if [ -d "$src/$d" ]; then rm -rf "${dst:?}/$d"; cp -r "$src/$d" "$dst/$d"; fi; done
     du -sh "$dst" ;;
   partial)

@@ -26,7 +26,6 @@ import os
 import platform
 import shlex
 import subprocess
-import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
@@ -41,7 +40,15 @@ from sb3_smc.curricula.trainer import check_run_options, finished_jobs, train_cu
 from sb3_smc.errors import SMCError, SMCRuntimeError
 from sb3_smc.evaluation import evaluate
 from sb3_smc.experiments.cnn import train_cnn
-from sb3_smc.experiments.design import DEFAULT_METHODS, DEFAULT_REPEATS, METHOD_REGISTRY, level2_targets, plan
+from sb3_smc.experiments.design import (
+    DEFAULT_METHODS,
+    DEFAULT_REPEATS,
+    METHOD_REGISTRY,
+    ExperimentPlan,
+    level2_targets,
+    plan,
+)
+from sb3_smc.experiments.wall_clock import WallClock
 from sb3_smc.hyperparameters import DEFAULT_ALGORITHM, DEFAULT_TIMESTEPS
 from sb3_smc.library import SMCLibrary
 from sb3_smc.records import package_versions
@@ -100,22 +107,55 @@ def run_experiment(
     if progress and design.cnn_skipped:
         printer(f"cnn skipped for {len(design.cnn_skipped)} bring-about target(s) (it classifies only): "
                 f"{', '.join(design.cnn_skipped)}")
-    start = time.time()
-    finished: set[str] | None = None
-    kept = _kept_evaluations(directory, design.training_targets, seeds, repeats) \
-        if design.curriculum is not None else {}
-    if design.curriculum is not None and not train:
-        finished = set(kept) | finished_jobs(design.curriculum, directory, targets=design.training_targets, seeds=seeds,
-                                        timesteps=timesteps, algo=algo, rnn=rnn)
-    elif design.curriculum is not None:
-        run = train_curriculum(design.curriculum, directory, targets=design.training_targets, seeds=seeds,
-                               timesteps=timesteps, workers=workers, backend=backend, ray_address=ray_address,
-                               algo=algo, rnn=rnn, progress=progress, printer=printer, skip=set(kept),
-                               reuse_from=reuse_from)
-        if run.failed:
-            raise SMCRuntimeError(f"{len(run.failed)} training job(s) failed ({', '.join(sorted(run.failed)[:5])}; "
-                                  f"tracebacks in {directory / 'failed'}): nothing evaluated; run the same command "
-                                  "again to retry them")
+    with WallClock(directory, train=train) as clock:  # this run's wall time, kept in the directory as it goes
+        kept = _kept_evaluations(directory, design.training_targets, seeds, repeats) \
+            if design.curriculum is not None else {}
+        finished: set[str] | None = None
+        if design.curriculum is not None and not train:
+            finished = set(kept) | finished_jobs(design.curriculum, directory, targets=design.training_targets,
+                                                 seeds=seeds, timesteps=timesteps, algo=algo, rnn=rnn)
+        elif design.curriculum is not None:
+            run = train_curriculum(design.curriculum, directory, targets=design.training_targets, seeds=seeds,
+                                   timesteps=timesteps, workers=workers, backend=backend, ray_address=ray_address,
+                                   algo=algo, rnn=rnn, progress=progress, printer=printer, skip=set(kept),
+                                   reuse_from=reuse_from)
+            if run.failed:
+                raise SMCRuntimeError(f"{len(run.failed)} training job(s) failed ("
+                                      f"{', '.join(sorted(run.failed)[:5])}; tracebacks in {directory / 'failed'}): "
+                                      "nothing evaluated; run the same command again to retry them")
+        rows, missing = _tabulate(directory, design, seeds, repeats, kept, finished, progress, printer)
+    settings = {"methods": list(methods), "targets": chosen, "seeds": seeds,
+                "timesteps": timesteps or DEFAULT_TIMESTEPS, "repeats": repeats, "workers": workers, "backend": backend,
+                "algo": algo or DEFAULT_ALGORITHM, "rnn": rnn or "lstm"}
+    results = {
+        "format": "sb3-smc-results", "version": 1,
+        "settings": settings,
+        "command": experiment_command(out, methods=methods, targets=targets,
+                                      category=category or ("all" if targets is None else None), seeds=seeds,
+                                      timesteps=timesteps, repeats=repeats, workers=workers, backend=backend,
+                                      algo=algo, rnn=rnn, train=train),
+        "machine": machine(),
+        "code": {"versions": package_versions(), "commit": code_commit()},
+        "wall_time_s": clock.entry["seconds"],
+        "wall_time_total_s": clock.total(),
+        "complete": not missing,
+        "missing": missing,
+        "rows": rows,
+        "reported": reported(rows),
+    }
+    atomic_write(directory / "results.json", json.dumps(results, indent=2) + "\n")
+    atomic_write(directory / "results.csv", _csv(rows))
+    if progress:
+        printer(f"results: {directory / 'results.csv'} ({len(rows)} rows"
+                + (f"; partial: {len(missing)} SMC(s) not trained yet)" if missing else ")"))
+    return results
+
+
+def _tabulate(directory: Path, design: ExperimentPlan, seeds: int, repeats: int, kept: dict[str, dict[str, Any]],
+              finished: set[str] | None, progress: bool, printer: Callable[[str], None]
+              ) -> tuple[list[dict[str, Any]], list[str]]:
+    """Every target x method x curriculum x seed's row (evaluated where not ``kept``; the CNN trained where it has no
+    result) and the jobs still missing (those not ``finished``, when tabulating without training)."""
     rows: list[dict[str, Any]] = []
     missing: list[str] = []
     for (target, method), nodes in sorted(design.nodes.items()):
@@ -136,32 +176,7 @@ def run_experiment(
                                  evaluation["selected_update"], evaluation["test_score"], evaluation["wall_time_s"]))
         if progress:
             printer(f"evaluated {target} / {method}")
-    settings = {"methods": list(methods), "targets": chosen, "seeds": seeds,
-                "timesteps": timesteps or DEFAULT_TIMESTEPS, "repeats": repeats, "workers": workers, "backend": backend,
-                "algo": algo or DEFAULT_ALGORITHM, "rnn": rnn or "lstm"}
-    wall = time.time() - start
-    results = {
-        "format": "sb3-smc-results", "version": 1,
-        "settings": settings,
-        "command": experiment_command(out, methods=methods, targets=targets,
-                                      category=category or ("all" if targets is None else None), seeds=seeds,
-                                      timesteps=timesteps, repeats=repeats, workers=workers, backend=backend,
-                                      algo=algo, rnn=rnn, train=train),
-        "machine": machine(),
-        "code": {"versions": package_versions(), "commit": code_commit()},
-        "wall_time_s": wall,
-        "wall_time_total_s": _previous_total(directory) + wall,
-        "complete": not missing,
-        "missing": missing,
-        "rows": rows,
-        "reported": reported(rows),
-    }
-    atomic_write(directory / "results.json", json.dumps(results, indent=2) + "\n")
-    atomic_write(directory / "results.csv", _csv(rows))
-    if progress:
-        printer(f"results: {directory / 'results.csv'} ({len(rows)} rows"
-                + (f"; partial: {len(missing)} SMC(s) not trained yet)" if missing else ")"))
-    return results
+    return rows, missing
 
 
 def experiment_command(out: str | Path, *, methods: Sequence[str], targets: Sequence[str] | None = None,
@@ -193,15 +208,6 @@ def machine() -> dict[str, Any]:
     the number of cores."""
     return {"platform": platform.platform(), "python": platform.python_version(),
             "processor": cpu_model() or platform.processor() or platform.machine(), "cores": os.cpu_count()}
-
-
-def _previous_total(directory: Path) -> float:
-    """The wall time of the runs recorded in ``directory/results.json`` so far (0 without one)."""
-    try:
-        previous = json.loads((directory / "results.json").read_text())
-        return float(previous.get("wall_time_total_s", previous.get("wall_time_s", 0.0)))
-    except (OSError, ValueError, AttributeError, TypeError):
-        return 0.0
 
 
 def code_commit() -> str | None:

@@ -1,0 +1,110 @@
+"""The wall time an experiment directory has taken over all its runs, kept while each runs (``DIR/wall_time.json``).
+
+Every ``sb3-smc experiment`` on a directory (training or ``--no-train``) adds one entry to the directory's ledger and
+rewrites it every ``interval`` seconds while it runs, and once at its end: a run stopped without warning (a
+machine's or working session's end, a kill) loses at most its last interval, not all its time. ``results.json``'s
+``wall_time_total_s`` is the ledger's total. A directory from before the ledger starts it from the total its
+``results.json`` recorded (``"before"``). Runs on the same directory at once (a ``--no-train`` tabulation beside
+training) each write their own entry under a lock.
+"""
+
+from __future__ import annotations
+
+import fcntl
+import json
+import os
+import threading
+import time
+import uuid
+from datetime import UTC, datetime
+from pathlib import Path
+from types import TracebackType
+from typing import Any
+
+from pixelworld_env.atomic import atomic_write
+from sb3_smc.curricula.run_directory import RunFileError
+
+__all__ = ["LEDGER", "WallClock"]
+
+LEDGER = "wall_time.json"
+FORMAT = "sb3-smc-wall-time"
+
+
+def _recorded_total(directory: Path) -> float:
+    """The total wall time ``directory/results.json`` recorded (0 without one): where a ledger starts."""
+    try:
+        previous = json.loads((directory / "results.json").read_text())
+        return float(previous.get("wall_time_total_s", previous.get("wall_time_s", 0.0)))
+    except (OSError, ValueError, AttributeError, TypeError):
+        return 0.0
+
+
+def _read(path: Path) -> dict[str, Any] | None:
+    """The ledger at ``path`` (None where there is none), checked."""
+    if not path.is_file():
+        return None
+    try:
+        ledger = json.loads(path.read_text(encoding="utf-8"))
+    except json.JSONDecodeError as err:
+        raise RunFileError(f"{path} is not valid JSON ({err}): the experiment's wall-time ledger; restore it, or "
+                           "delete it to count from the total results.json recorded") from None
+    runs = ledger.get("runs") if isinstance(ledger, dict) else None
+    if (not isinstance(ledger, dict) or ledger.get("format") != FORMAT or not isinstance(runs, list)
+            or not isinstance(ledger.get("before"), int | float)
+            or not all(isinstance(r, dict) and isinstance(r.get("seconds"), int | float) for r in runs)):
+        raise RunFileError(f"{path} is not an sb3-smc wall-time ledger (format {FORMAT!r}, 'before' seconds, "
+                           "'runs' with their 'seconds'); restore it, or delete it to count from the total "
+                           "results.json recorded")
+    return ledger
+
+
+class WallClock:
+    """This run's entry in ``directory``'s ledger, kept up to date by a background thread while the run lasts (use
+    it as a context manager); :attr:`seconds` is this run's wall time, :meth:`total` the directory's."""
+
+    def __init__(self, directory: Path, *, train: bool, interval: float = 60.0) -> None:
+        self.directory, self.interval = Path(directory), interval
+        self.path = self.directory / LEDGER
+        _read(self.path)  # a damaged ledger is reported before any work
+        self.start = time.time()
+        started = datetime.fromtimestamp(self.start, UTC).isoformat(timespec="seconds")
+        self.entry: dict[str, Any] = {"id": uuid.uuid4().hex[:12], "started": started, "pid": os.getpid(),
+                                      "train": train, "seconds": 0.0, "ended": False}
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._beat, name="sb3-smc-wall-clock", daemon=True)
+        self._total = 0.0
+
+    @property
+    def seconds(self) -> float:
+        return time.time() - self.start
+
+    def total(self) -> float:
+        """The directory's wall time over all its runs as last written (this run's included)."""
+        return self._total
+
+    def __enter__(self) -> WallClock:
+        self._thread.start()
+        return self
+
+    def __exit__(self, kind: type[BaseException] | None, error: BaseException | None,
+                 traceback: TracebackType | None) -> None:
+        self._stop.set()
+        self._thread.join()
+        self.write(ended=True)
+
+    def _beat(self) -> None:
+        while not self._stop.wait(self.interval):
+            if self.directory.is_dir():  # a new directory: its run creates it (and checks it is empty) first
+                self.write(ended=False)
+
+    def write(self, *, ended: bool) -> None:
+        """Put this run's entry (its seconds so far) into the ledger, under the directory's lock."""
+        self.directory.mkdir(parents=True, exist_ok=True)
+        with open(self.directory / f".{LEDGER}.lock", "a+") as lock:
+            fcntl.flock(lock.fileno(), fcntl.LOCK_EX)
+            ledger = _read(self.path) or {"format": FORMAT, "version": 1, "before": _recorded_total(self.directory),
+                                          "runs": []}
+            self.entry.update(seconds=round(self.seconds, 3), ended=ended)
+            ledger["runs"] = [r for r in ledger["runs"] if r.get("id") != self.entry["id"]] + [self.entry]
+            atomic_write(self.path, json.dumps(ledger, indent=2) + "\n")
+            self._total = ledger["before"] + sum(r["seconds"] for r in ledger["runs"])
