@@ -154,9 +154,10 @@ class SMC:
 
     @property
     def digest(self) -> str | None:
-        """The SHA-256 of the behaviour this SMC stands for: its model's policy weights (names, dtypes, shapes and
-        values) and its children's digests in order. Two SMCs with the same digest act alike, whichever file,
-        machine or run made them; ``None`` where it or an SMC it calls has no trained model (a scripted policy)."""
+        """The SHA-256 of the trained weights this SMC stands for: its model's policy weights (names, dtypes, shapes
+        and values) and its children's digests in order. Two SMCs with the same digest have the same weights and call
+        SMCs with the same weights, whichever file, machine or run made them (how they are wrapped, its spec, is
+        not part of it); ``None`` where it or an SMC it calls has no trained model (a scripted policy)."""
         policy = getattr(self.model, "policy", None)
         children = [child.digest for child in self.children]
         if policy is None or None in children:

@@ -144,6 +144,11 @@ def test_the_moves_probe_retests_a_runs_best_seeds_counting_their_moves(tmp_path
         with pytest.raises(SystemExit):
             probe_moves.main([*bad, "--out", str(tmp_path / "other.csv")])
         assert says in capsys.readouterr().err and not (tmp_path / "other.csv").exists()
+    older = tmp_path / "older.csv"  # an older version's columns: not resumed with blanks
+    older.write_text(written.splitlines()[0].rsplit(",", 2)[0] + "\n")
+    with pytest.raises(SystemExit):
+        probe_moves.main([str(out), "--out", str(older)])
+    assert "older.csv: its columns are not this tool's" in capsys.readouterr().err
 
 
 def test_the_paired_seeds_tool_counts_what_a_longer_run_does_to_each_seed(tmp_path, capsys):
@@ -218,7 +223,8 @@ def test_the_paired_seeds_tool_counts_what_a_longer_run_does_to_each_seed(tmp_pa
     record.write_text(json.dumps({"test_score": 0.27, "spec": {"children": ["c@1"]}, "children_digests": [a, b]}))
     with pytest.raises(SystemExit):
         paired_seeds.main([canon, scaled, "--methods", "canon,canon-scaled"])
-    assert "c@0.json: 'children_digests' must list one digest per child of its spec (1)" in capsys.readouterr().err
+    assert ("c@0.json: 'children_digests' must list one digest (a string, or null) per child of its spec (1)"
+            in capsys.readouterr().err)
 
 
 def test_reported_scores_are_the_best_seed_and_curriculum():
@@ -258,12 +264,26 @@ def test_the_wall_clock_keeps_a_stopped_runs_time(tmp_path):
     runs = json.loads((run / LEDGER).read_text())["runs"]
     assert len(runs) == 3 and runs[0] == stopped and all(r["ended"] for r in runs[1:])
     assert first.total() == pytest.approx(100.0 + sum(r["seconds"] for r in runs))
+    # the ledger damaged while a run fails: the run's own error is the one raised
+    with (pytest.warns(RuntimeWarning, match="wall time not written"), pytest.raises(KeyError, match="the run's own"),
+          WallClock(run, train=True)):
+        (run / LEDGER).write_text("{")
+        raise KeyError("the run's own")
+    with pytest.raises(RunFileError, match="wall_time.json is not valid JSON"):
+        WallClock(run, train=True)
     (run / LEDGER).write_text('{"format": "sb3-smc-wall-time", "runs": "many"}')
     with pytest.raises(RunFileError, match="wall_time.json is not an sb3-smc wall-time ledger"):
         WallClock(run, train=True)
-    (run / LEDGER).write_text("{")
-    with pytest.raises(RunFileError, match="wall_time.json is not valid JSON"):
-        WallClock(run, train=True)
+    # a directory without an experiment's records gets no ledger: a wrong --out, or a run refused before it wrote
+    other = tmp_path / "notes"
+    other.mkdir()
+    (other / "notes.txt").write_text("mine")
+    with WallClock(other, train=True, interval=0.01) as clock:
+        time.sleep(0.05)
+    assert [p.name for p in other.iterdir()] == ["notes.txt"] and clock.total() == clock.seconds > 0
+    with pytest.raises(SMCError):
+        run_experiment(tmp_path / "new", methods=["base"], targets=[LEFT_OF], seeds=1, train=False, progress=False)
+    assert not (tmp_path / "new").exists() or not any((tmp_path / "new").iterdir())
 
 
 def test_a_tiny_experiment_end_to_end(tmp_path):

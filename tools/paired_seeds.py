@@ -54,9 +54,10 @@ def children(run: Path, node: str, seed: int) -> LowerLevel:
     if not isinstance(spec, dict) or not isinstance(spec.get("children"), list):
         raise SMCError(f"{path} has no spec with its children: it should be an SMC's evaluation that sb3-smc "
                        "experiment wrote")
-    digests = saved.get("children_digests") or [None] * len(spec["children"])
-    if not isinstance(digests, list) or len(digests) != len(spec["children"]):
-        raise SMCError(f"{path}: 'children_digests' must list one digest per child of its spec "
+    digests = saved.get("children_digests", [None] * len(spec["children"]))  # older records name the children only
+    if (not isinstance(digests, list) or len(digests) != len(spec["children"])
+            or not all(d is None or isinstance(d, str) for d in digests)):
+        raise SMCError(f"{path}: 'children_digests' must list one digest (a string, or null) per child of its spec "
                        f"({len(spec['children'])}), got {digests!r}")
     return list(zip(spec["children"], digests, strict=True))
 

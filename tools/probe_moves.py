@@ -87,7 +87,11 @@ def main(argv: list[str] | None = None) -> int:
     done: list[dict[str, str]] = []
     if args.out.exists():
         with open(args.out, newline="") as handle:
-            done = list(csv.DictReader(handle))
+            reader = csv.DictReader(handle)
+            done = list(reader)
+        if tuple(reader.fieldnames or ()) != FIELDS:
+            parser.error(f"{args.out}: its columns are not this tool's ({', '.join(FIELDS)}); an older version "
+                         "wrote it: give another --out, or move it away to test those SMCs again")
     finished = {(row["target"], row["method"]) for row in done}
     for run in args.runs:
         for row in best_rows(results[run], args.kind, methods):

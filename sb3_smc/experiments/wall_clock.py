@@ -5,7 +5,8 @@ rewrites it every ``interval`` seconds while it runs, and once at its end: a run
 machine's or working session's end, a kill) loses at most its last interval, not all its time. ``results.json``'s
 ``wall_time_total_s`` is the ledger's total. A directory from before the ledger starts it from the total its
 ``results.json`` recorded (``"before"``). Runs on the same directory at once (a ``--no-train`` tabulation beside
-training) each write their own entry under a lock.
+training) each write their own entry under a lock. Only a directory that holds an experiment's records gets a
+ledger: a run refused before it wrote any (a wrong ``--out``, a ``--no-train`` run of nothing) leaves none.
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ import os
 import threading
 import time
 import uuid
+import warnings
 from datetime import UTC, datetime
 from pathlib import Path
 from types import TracebackType
@@ -28,6 +30,8 @@ __all__ = ["LEDGER", "WallClock"]
 
 LEDGER = "wall_time.json"
 FORMAT = "sb3-smc-wall-time"
+RECORDS = ("run.json", "results.json", "evaluations", "cnn")
+"""What an experiment writes into its directory: where one of them is, the directory is the experiment's."""
 
 
 def _recorded_total(directory: Path) -> float:
@@ -72,15 +76,21 @@ class WallClock:
                                       "train": train, "seconds": 0.0, "ended": False}
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._beat, name="sb3-smc-wall-clock", daemon=True)
-        self._total = 0.0
+        self._total, self._written = 0.0, False
+        self._end: float | None = None
 
     @property
     def seconds(self) -> float:
-        return time.time() - self.start
+        """This run's wall time so far (its whole time once it has ended)."""
+        return (self._end or time.time()) - self.start
 
     def total(self) -> float:
-        """The directory's wall time over all its runs as last written (this run's included)."""
-        return self._total
+        """The directory's wall time over all its runs as last written (this run's included; before the ledger is
+        written, the recorded total and this run's time so far)."""
+        return self._total if self._written else _recorded_total(self.directory) + self.seconds
+
+    def _holds_records(self) -> bool:
+        return any((self.directory / name).exists() for name in RECORDS)
 
     def __enter__(self) -> WallClock:
         self._thread.start()
@@ -90,16 +100,27 @@ class WallClock:
                  traceback: TracebackType | None) -> None:
         self._stop.set()
         self._thread.join()
-        self.write(ended=True)
+        self._end = time.time()
+        self.entry.update(seconds=round(self.seconds, 3), ended=True)
+        try:
+            self.write(ended=True)
+        except (OSError, RunFileError) as failed:
+            if kind is None:  # a failed run's own error is the one to report
+                raise
+            warnings.warn(f"{self.path}: this run's wall time not written ({failed})", RuntimeWarning, stacklevel=2)
 
     def _beat(self) -> None:
         while not self._stop.wait(self.interval):
-            if self.directory.is_dir():  # a new directory: its run creates it (and checks it is empty) first
+            try:
                 self.write(ended=False)
+            except (OSError, RunFileError) as failed:  # the run goes on; its end writes (or reports) again
+                warnings.warn(f"{self.path}: wall time not written ({failed})", RuntimeWarning, stacklevel=1)
 
     def write(self, *, ended: bool) -> None:
-        """Put this run's entry (its seconds so far) into the ledger, under the directory's lock."""
-        self.directory.mkdir(parents=True, exist_ok=True)
+        """Put this run's entry (its seconds so far) into the ledger, under the directory's lock, once the
+        directory holds the experiment's records (before, nothing is written)."""
+        if not self._holds_records():
+            return
         with open(self.directory / f".{LEDGER}.lock", "a+") as lock:
             fcntl.flock(lock.fileno(), fcntl.LOCK_EX)
             ledger = _read(self.path) or {"format": FORMAT, "version": 1, "before": _recorded_total(self.directory),
@@ -108,3 +129,4 @@ class WallClock:
             ledger["runs"] = [r for r in ledger["runs"] if r.get("id") != self.entry["id"]] + [self.entry]
             atomic_write(self.path, json.dumps(ledger, indent=2) + "\n")
             self._total = ledger["before"] + sum(r["seconds"] for r in ledger["runs"])
+            self._written = True
