@@ -12,6 +12,8 @@ from pixelworld_env.concepts import Concept, ConceptError, expand, parse
 from pixelworld_env.datasets import catalog
 from tests.helpers import REFERENCE, import_tool, require_reference
 
+pytestmark = pytest.mark.reference  # reads the original data: the reference, or the fixture
+
 #: The three generators of bfaw-search.generators that name the undefined `potential-container`.
 BROKEN_GENERATORS = {
     "bfaw-self-and-two-potential-containers-in-nontarget",

@@ -9,7 +9,9 @@ from pixelworld_env.datasets import catalog
 from pixelworld_env.datasets.cache import load_or_generate
 from pixelworld_env.datasets.loading import dataset_spec
 from pixelworld_env.generation.csp import sample_generator, satisfies_generator
-from tests.helpers import SAMPLES, read_samples, require_reference
+from tests.helpers import read_samples, samples_folder
+
+pytestmark = pytest.mark.reference  # reads the original data: the reference, or the fixture
 
 DATASETS = [
     "cl_self-in-container_vs_noncontainer",
@@ -30,8 +32,7 @@ def test_generated_scenes_solve_the_python_constraint_csp(name: str) -> None:
 
 
 def test_original_samples_solve_the_csp_and_moved_selves_do_not() -> None:
-    require_reference()
-    header, samples = read_samples(SAMPLES / "ba_self-in-container_from_directly-above.jsonl.gz")
+    header, samples = read_samples(samples_folder() / "ba_self-in-container_from_directly-above.jsonl.gz")
     logic = catalog.generators()[header["definition"]["generators"][0]["name"]]
     for sample in samples[:20]:
         scene = Scene.from_dict(sample)

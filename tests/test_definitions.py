@@ -12,6 +12,8 @@ from pixelworld_env.generation.definitions import DefinitionError, load_definiti
 from pixelworld_env.generation.experiment_files import load_experiments
 from tests.helpers import REFERENCE, require_reference
 
+pytestmark = pytest.mark.reference  # reads the original data: the reference, or the fixture
+
 AAAI18 = REFERENCE / "aaai18"
 DATA = AAAI18 / "DATA"
 

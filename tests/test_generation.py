@@ -4,6 +4,7 @@ fidelity to AAAI-18."""
 from __future__ import annotations
 
 import collections
+import dataclasses
 import json
 import random
 from collections.abc import Iterable
@@ -26,6 +27,8 @@ from pixelworld_env.generation.placement import library_object
 from pixelworld_env.generation.sampling import GenerationError
 from tests.helpers import read_samples, require_reference, sample_files
 
+pytestmark = pytest.mark.reference  # reads the original data: the reference, or the fixture
+
 REPRESENTATIVE = (
     "cl_self-in-container_vs_noncontainer",  # containment classification, one generator per label
     "ba_self-in-container_from_directly-above",  # dir_above (AAAI-18 quirk) in the generator
@@ -39,12 +42,28 @@ FLOOR_GENERATOR = "?f floor(f) & blue(f) & on_top(self,f)"
 
 @cache
 def definitions() -> DefinitionSet:
+    """The original definition files (the full reference; the calling test is skipped without it)."""
     return load_definitions(sorted((require_reference() / "aaai18" / "DATA").glob("*.datasets")))
 
 
 @cache
 def generated(name: str, seed: int = 0) -> GeneratedDataset:
-    return generate(definitions().dataset_spec(name), seed)
+    return generate(dataset_spec(name), seed)
+
+
+def test_catalog_specs_are_the_original_definitions() -> None:
+    """The catalog's generation spec of every released dataset is the original files' (the macros it uses)."""
+    defs = definitions()
+    names = [name for name in catalog.dataset_names() if name in defs.datasets]
+    assert len(names) == 136
+    def norm(text: str) -> str:  # the catalog collapses whitespace (the concept language ignores it)
+        return " ".join(text.split())
+
+    for name in names:
+        ours, original = dataset_spec(name), defs.dataset_spec(name)
+        assert ours.used_macros() == {k: norm(v) for k, v in original.used_macros().items()}, name
+        assert ours == dataclasses.replace(original, macros=ours.macros, concept=norm(original.concept),
+                                           generators=tuple((g, norm(v)) for g, v in original.generators)), name
 
 
 def check_dataset(ds: GeneratedDataset) -> None:
@@ -120,7 +139,7 @@ def test_both_generators_contribute_and_scenes_are_shuffled() -> None:
 
 def test_same_seed_is_byte_identical_and_other_seed_differs() -> None:
     name = "ba_self-ontop-object_from_left-touches-on-floor_with_distraction"
-    spec = definitions().dataset_spec(name)
+    spec = dataset_spec(name)
     again = generate(spec, 0)
 
     def dump(ds: GeneratedDataset) -> str:
@@ -149,19 +168,22 @@ def test_same_generator_same_seed_gives_the_same_stream() -> None:
 
 
 def test_dataset_spec_helpers() -> None:
-    spec = definitions().dataset_spec("ba_self-in-container_from_directly-above")
+    spec = dataset_spec("ba_self-in-container_from_directly-above")
     assert spec.kind == "bring-about" and spec.size == 50
     used = spec.used_macros()
     assert {"wobf1", "bfw1", "blue-floor"} <= set(used) and "wobf2" not in used
     assert all(spec.macros[k] == v for k, v in used.items())
-    with pytest.raises(KeyError, match="did you mean"):
-        definitions().dataset_spec("ba_self-in-container_from_directly-abov")
     with pytest.raises(ValueError, match="kind"):
         DatasetSpec(name="x", kind="regression", concept="?x white(x)", generators=(("g", FLOOR_GENERATOR),))
     with pytest.raises(ValueError, match="unsupported settings"):
         DatasetSpec(name="x", kind="bring-about", concept="?x white(x)", generators=(("g", FLOOR_GENERATOR),),
                     settings={"objects_are_white": True})
-    assert hash(spec) == hash(definitions().dataset_spec(spec.name))
+    assert hash(spec) == hash(dataset_spec(spec.name))
+
+
+def test_definition_set_names_a_close_dataset() -> None:
+    with pytest.raises(KeyError, match="did you mean"):
+        definitions().dataset_spec("ba_self-in-container_from_directly-abov")
 
 
 def test_bring_about_drops_scenes_whose_goal_cannot_be_reached() -> None:
@@ -312,9 +334,31 @@ def _tv(a: collections.Counter, b: collections.Counter) -> float:
     return 0.5 * sum(abs(a[k] / ta - b[k] / tb) for k in set(a) | set(b))
 
 
-def test_whole_catalog_is_valid_and_faithful() -> None:
-    """All 147 catalog datasets (cached after the first run): every scene valid; shape families, labels and self
-    rows match the 8,700 original samples.
+@cache
+def whole_catalog() -> dict[str, GeneratedDataset]:
+    """Every catalog dataset at seed 0 (cached on disk after the first run)."""
+    return {name: load_or_generate(dataset_spec(name), 0) for name in catalog.dataset_names()}
+
+
+def test_whole_catalog_is_valid_with_the_original_label_counts() -> None:
+    """All 147 catalog datasets: every scene valid, and each released dataset's labels counted as in the original
+    (the headers of the original samples, in the reference or the fixture)."""
+    datasets = whole_catalog()
+    assert len(datasets) == 136 + 11  # the release and the pushable curriculum
+    for ds in datasets.values():
+        check_dataset(ds)
+    compared = set()
+    for path in sample_files():
+        header, _ = read_samples(path)
+        name = header["dataset"]
+        compared.add(name)
+        counts = collections.Counter(datasets[name].labels)
+        assert (counts[1], counts[0]) == (header["num_positive"], header["num_negative"]), name
+    assert len(compared) == 125
+
+
+def test_whole_catalog_is_faithful_to_the_original_samples() -> None:
+    """Shape families, labels and self rows of all 125 generated datasets against the 8,700 original samples.
 
     Tolerances: the family choice that is free in a generator (``lower_corner``, ``potential_container``,
     ``object``) makes the family counts random; two independent draws of ~2,000 objects over ~10 such
@@ -324,10 +368,7 @@ def test_whole_catalog_is_valid_and_faithful() -> None:
     original's, so its tolerance is looser: TV <= 0.1 overall (measured 0.03).
     """
     defs = definitions()
-    datasets = {name: load_or_generate(dataset_spec(name), 0) for name in catalog.dataset_names()}
-    assert len(datasets) == 136 + 11  # the release and the pushable curriculum
-    for ds in datasets.values():
-        check_dataset(ds)
+    datasets = whole_catalog()
     original: dict[str, collections.Counter] = collections.defaultdict(collections.Counter)
     ours: dict[str, collections.Counter] = collections.defaultdict(collections.Counter)
     rows_original: collections.Counter[int] = collections.Counter()

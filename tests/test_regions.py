@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import gzip
 import json
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -18,9 +17,10 @@ from pixelworld_env.core.regions import (
     annotate,
     inside_masks,
 )
+from tests.helpers import shape_library_file
 
-REFERENCE = Path(__file__).resolve().parents[2] / "shared" / "reference"
-LIBRARY_FILE = REFERENCE / "aaai18_samples" / "shape_library.json.gz"
+pytestmark = pytest.mark.reference  # reads the original data: the reference, or the fixture
+
 LIBRARY_ID = "7301d12e1d77"
 
 _LABELS = {"#": SOLID, ".": SPACE, "i": INTERIOR, "s": INSIDE_SUPPORTED}
@@ -28,9 +28,7 @@ _LABELS = {"#": SOLID, ".": SPACE, "i": INTERIOR, "s": INSIDE_SUPPORTED}
 
 @pytest.fixture(scope="module")
 def library() -> dict:
-    if not LIBRARY_FILE.is_file():
-        pytest.fail(f"reference shape library missing: {LIBRARY_FILE} (needs the sibling 'shared' folder)")
-    with gzip.open(LIBRARY_FILE, "rt", encoding="utf-8") as fh:
+    with gzip.open(shape_library_file(), "rt", encoding="utf-8") as fh:
         return json.load(fh)["libraries"][LIBRARY_ID]
 
 

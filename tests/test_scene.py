@@ -7,7 +7,9 @@ import re
 import pytest
 
 from pixelworld_env import Color, ObjectClass, Scene
-from tests.helpers import read_samples, require_reference, sample_files
+from tests.helpers import read_samples, sample_files
+
+pytestmark = pytest.mark.reference  # reads the original data: the reference, or the fixture
 
 ROOM = """
 #########
@@ -66,7 +68,6 @@ def test_bad_ascii(text: str, kinds: dict | None, message: str) -> None:
 
 
 def test_sample_dicts_round_trip_unchanged() -> None:
-    require_reference()
     for path in sample_files():
         _, samples = read_samples(path)
         for sample in samples:
@@ -77,7 +78,6 @@ def test_sample_dicts_round_trip_unchanged() -> None:
 
 
 def test_sample_objects_use_their_library_template_size() -> None:
-    require_reference()
     from pixelworld_env.core.shapes import shape_library
 
     for path in sample_files():

@@ -5,16 +5,15 @@ from __future__ import annotations
 import gzip
 import json
 from functools import cache
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 from pixelworld_env.core.shapes import FAMILIES, LibraryParams, build_library, shape_library, template
+from tests.helpers import shape_library_file
 
-LIBRARY_FILE = (
-    Path(__file__).resolve().parents[2] / "shared" / "reference" / "aaai18_samples" / "shape_library.json.gz"
-)
+pytestmark = pytest.mark.reference  # reads the original data: the reference, or the fixture
+
 LIBRARY_ID = "7301d12e1d77"
 
 COUNTS = {  # spec section 4
@@ -30,14 +29,8 @@ COUNTS = {  # spec section 4
 
 @cache
 def load_reference() -> dict[str, list[np.ndarray]]:
-    """The original templates, family -> list of arrays; the calling test fails if the file is missing."""
-    if not LIBRARY_FILE.is_file():
-        pytest.fail(
-            f"reference shape library not found at {LIBRARY_FILE}: these tests need ../shared/reference "
-            "beside the checkout",
-            pytrace=False,
-        )
-    with gzip.open(LIBRARY_FILE, "rt", encoding="utf-8") as handle:
+    """The original templates, family -> list of arrays (from the reference, or the fixture: the same file)."""
+    with gzip.open(shape_library_file(), "rt", encoding="utf-8") as handle:
         templates = json.load(handle)["libraries"][LIBRARY_ID]["templates"]
     return {family: [np.array(t, dtype=np.uint8) for t in grids] for family, grids in templates.items()}
 
