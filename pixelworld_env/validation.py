@@ -3,14 +3,14 @@ with messages that say what was given and what is expected."""
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Collection, Mapping, Sequence
 from typing import Any
 
 import numpy as np
 
 from pixelworld_env.errors import PixelWorldError, PixelWorldTypeError
 
-__all__ = ["MAX_SEED", "as_integer", "check_action", "check_bool", "check_int", "check_seed"]
+__all__ = ["MAX_SEED", "as_integer", "check_action", "check_bool", "check_int", "check_options", "check_seed"]
 
 MAX_SEED = 2**63 - 1
 """Seeds are integers in ``[0, 2**63 - 1]`` (they are stored in JSON records and numpy ``int64`` arrays)."""
@@ -64,3 +64,20 @@ def check_action(action: Any, action_names: Sequence[str]) -> int:
         raise PixelWorldError(f"invalid action {action!r}: expected an integer in [0, {len(action_names)}); the "
                               f"actions are {list(enumerate(action_names))}")
     return index
+
+
+def check_options(options: Any, known: Collection[str], takes: str) -> dict[str, Any]:
+    """``reset``'s ``options`` as a new dict (``{}`` for ``None``): a dict (any mapping) of the names in ``known``.
+
+    Another type is a ``TypeError``, another name a ``ValueError``; both messages end with ``takes`` (what the reset
+    takes).
+    """
+    if options is None:
+        return {}
+    if not isinstance(options, Mapping):
+        raise PixelWorldTypeError(f"reset options must be a dict, got {options!r} ({type(options).__name__}); "
+                                  f"{takes}")
+    unknown = [key for key in options if key not in known]
+    if unknown:
+        raise PixelWorldError(f"unknown reset option(s) {unknown}; {takes}")
+    return dict(options)

@@ -14,6 +14,7 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 import gymnasium as gym
+from gymnasium.envs.registration import load_env_creator
 
 from pixelworld_env.envs.env import PixelWorldEnv  # pixelworld_env registers the PW-* ids on import
 from pixelworld_env.envs.registration import make_env
@@ -84,9 +85,17 @@ def make_smc_env(spec: TrainingSpec, children: Sequence[SMC] = (), *, env: gym.E
 
 def _make(env_id: str, name: str, **kwargs: Any) -> gym.Env:
     """``gym.make(env_id, **kwargs)``; an id Gymnasium does not know is an :class:`SMCError` naming the SMC, with
-    Gymnasium's suggestion, and the ``PW-<name>-v0`` id when ``env_id`` names a PixelWorld dataset or concept pool."""
+    Gymnasium's suggestion, and the ``PW-<name>-v0`` id when ``env_id`` names a PixelWorld dataset or concept pool;
+    an entry point that takes no ``max_steps`` an :class:`SMCTypeError` saying that it must."""
     try:
         return gym.make(env_id, **kwargs)
+    except TypeError:
+        if _takes_max_steps(env_id):  # the error is its environment's own
+            raise
+        raise SMCTypeError(f"SMC {name!r}: sb3_smc makes its task with gym.make({env_id!r}, max_steps=...) (the "
+                           f"episode length, WrapperSettings.max_steps), and the entry point of {env_id!r} takes no "
+                           "max_steps: register an entry point that takes it and passes it on, e.g. "
+                           "entry_point=lambda max_steps=100: SMCTask(..., max_steps=max_steps)") from None
     except gym.error.Error as err:
         if _registered(env_id):  # the error is its environment's own
             raise
@@ -95,6 +104,22 @@ def _make(env_id: str, name: str, **kwargs: Any) -> gym.Env:
         named = env_id in catalog.dataset_names() or env_id in catalog.concept_pools()
         hint = f"; PixelWorld's {env_id!r} is the id 'PW-{env_id}-v0'" if named else ""
         raise SMCError(f"SMC {name!r}: unknown environment id {env_id!r}: {err}{hint}") from None
+
+
+def _takes_max_steps(env_id: str) -> bool:
+    """Whether the entry point registered as ``env_id`` takes a ``max_steps`` keyword (``True`` where its signature
+    cannot be read)."""
+    entry = gym.spec(env_id.rsplit(":", 1)[-1]).entry_point
+    creator = load_env_creator(entry) if isinstance(entry, str) else entry
+    if not callable(creator):
+        return True
+    try:
+        parameters = inspect.signature(creator).parameters
+    except (TypeError, ValueError):
+        return True
+    taken = parameters.get("max_steps")
+    return (taken is not None and taken.kind is not inspect.Parameter.POSITIONAL_ONLY) or any(
+        p.kind is inspect.Parameter.VAR_KEYWORD for p in parameters.values())
 
 
 def _registered(env_id: str) -> bool:

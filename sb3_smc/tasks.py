@@ -162,8 +162,9 @@ class SMCTask(gym.Wrapper, gym.utils.RecordConstructorArgs):
     ``"bring-about"`` (with ``goal``) or ``"classification"`` (with ``label``): the paper's signals, rewards and
     episode limit (see the module docstring), the environment's observation flattened to its sensor values.
 
-    ``goal(env)`` and ``label(env)`` receive the unwrapped environment (Minigrid's ``MiniGridEnv``, with its
-    ``agent_pos``, ``carrying``, ``grid``). ``primitive_names`` names the environment's actions (default: its
+    ``goal(env)`` (a bool, numpy's too; anything else is a ``TypeError`` naming the function) and ``label(env)``
+    (0 or 1) receive the unwrapped environment (Minigrid's ``MiniGridEnv``, with its ``agent_pos``, ``carrying``,
+    ``grid``). ``primitive_names`` names the environment's actions (default: its
     ``actions`` enum, as Minigrid has, else ``A0``...). It is a Gymnasium environment of its own (``reset`` /
     ``step``, observation the sensor values) and the :class:`TaskEnv` a
     :class:`~sb3_smc.wrapper.HierarchicalSMCWrapper` builds SMC calls on.
@@ -202,13 +203,25 @@ class SMCTask(gym.Wrapper, gym.utils.RecordConstructorArgs):
         self._goal = False
         self._label = 0
         self._steps = 0
+        self._started = False
         self._done = True
 
     # ------------------------------------------------------------------------------------------ the task
 
     def _read_goal(self) -> bool:
         assert self._goal_of is not None
-        return bool(self._goal_of(self.env.unwrapped))
+        holds = self._goal_of(self.env.unwrapped)
+        if not isinstance(holds, bool | np.bool_):
+            name = getattr(self._goal_of, "__qualname__", repr(self._goal_of))
+            raise SMCTypeError(f"goal function {name} must return a bool (True or False, numpy bools too), got "
+                               f"{holds!r} ({type(holds).__name__})")
+        return bool(holds)
+
+    def _check_episode(self, method: str) -> None:
+        """``RuntimeError`` unless an episode is running (``reset`` called, the episode not ended)."""
+        if self._done:
+            raise RuntimeError(f"the episode has ended: call reset() before {method}()" if self._started
+                               else f"no episode has started: call reset() before {method}()")
 
     def _info(self, success: bool = False, signalled: bool = False) -> dict[str, Any]:
         info: dict[str, Any] = {"is_success": success, "signalled": signalled}
@@ -228,8 +241,7 @@ class SMCTask(gym.Wrapper, gym.utils.RecordConstructorArgs):
     def apply_primitive(self, action: int) -> tuple[float, bool, bool]:
         """Primitive ``action`` (an index into :attr:`action_names`) on the environment, not counted against
         ``max_steps``: ``(reward, terminated, truncated)`` (the last two: the environment ended its episode)."""
-        if self._done:
-            raise RuntimeError("the episode has ended: call reset() first")
+        self._check_episode("apply_primitive")
         if not self._n_signals <= action < len(self.action_names):
             raise SMCError(f"action {action} is not a primitive action of this task ({self.action_names})")
         obs, _, terminated, truncated, _ = self.env.step(action - self._n_signals)
@@ -249,8 +261,7 @@ class SMCTask(gym.Wrapper, gym.utils.RecordConstructorArgs):
 
     def transition(self, action: int) -> tuple[float, bool, bool, dict[str, Any]]:
         """One action of the episode: ``(reward, terminated, truncated, info)``."""
-        if self._done:
-            raise RuntimeError("the episode has ended: call reset() before step()")
+        self._check_episode("step")
         self._steps += 1
         if action < self._n_signals:
             value = 1 if self.action_names[action] == "SIG1" else 0
@@ -272,6 +283,7 @@ class SMCTask(gym.Wrapper, gym.utils.RecordConstructorArgs):
         obs, info = self.env.reset(seed=seed, options=options)
         self._sensor = self._flatten(obs)
         self._steps = 0
+        self._started = True
         self._done = False
         if self.kind == BRING_ABOUT:
             self._goal = self._read_goal()

@@ -6,6 +6,7 @@ Each case raises with a message that says what was given and what is expected (n
 from __future__ import annotations
 
 import dataclasses
+import re
 
 import gymnasium as gym
 import numpy as np
@@ -113,6 +114,37 @@ def test_reset_options_max_steps_and_labels_are_checked():
     scenes = [Scene.from_ascii(CONTAINER, {"a": "container"})]
     with pytest.raises(ValueError, match="labels are for classification tasks"):
         PixelWorldEnv(scenes, kind="bring-about", concept=IN_CONTAINER, labels=[1])
+
+
+@pytest.mark.parametrize("index", [-1, [0, -1], np.int64(-1), np.array([-1, 0])])
+def test_negative_scene_indices_are_refused_by_the_vector_env_as_by_the_single_env(index):
+    """The vector env's -1 ("draw a scene") is its own: a user's -1 raises as in the single env and SyncVectorEnv
+    (which passes the options to every env as they are)."""
+    message = re.escape("scene index -1 out of range (0..49)")
+    with pytest.raises(IndexError, match=message):
+        gym.make(ENV_ID).reset(seed=0, options={"index": -1})
+    with pytest.raises(IndexError, match=message):
+        gym.make_vec(ENV_ID, 2, vectorization_mode="sync").reset(seed=0, options={"index": -1})
+    with pytest.raises(IndexError, match=message):
+        gym.make_vec(ENV_ID, 2).reset(seed=0, options={"index": index})
+
+
+@pytest.mark.parametrize("options", [[1], "index", ("index", 1)])
+def test_reset_options_must_be_a_dict(options):
+    with pytest.raises(TypeError, match=re.escape(f"reset options must be a dict, got {options!r} "
+                                                  f"({type(options).__name__}); PixelWorldEnv.reset takes "
+                                                  "options={'index': i}")):
+        gym.make(ENV_ID).reset(seed=0, options=options)
+    with pytest.raises(TypeError, match=re.escape(f"reset options must be a dict, got {options!r} "
+                                                  f"({type(options).__name__}); PixelWorldVectorEnv.reset takes "
+                                                  "options={'index': i or [i, ...], 'reset_mask': mask}")):
+        gym.make_vec(ENV_ID, 2).reset(seed=0, options=options)
+
+
+def test_hand_drawn_scenes_need_their_frame():
+    with pytest.raises(ValueError, match=re.escape("the scene has no frame: draw '#' on its whole border ring (rows 0 "
+                                                   "and 2, columns 0 and 3); PixelWorld's worlds are framed")):
+        Scene.from_ascii("....\n.S..\n....")
 
 
 def test_environments_state_their_split():
@@ -243,3 +275,42 @@ def test_train_smc_trains_or_says_why_not():
             make_smc_env(dataclasses.replace(spec, task=TaskSpec("BadInputMakesAnother-v0", kind="bring-about")))
     finally:
         gym.registry.pop("BadInputMakesAnother-v0")
+
+
+def test_smc_tasks_say_what_their_functions_and_callers_got_wrong():
+    from sb3_smc.tasks import SMCTask
+
+    def answers_no(env: gym.Env) -> str:
+        return "no"
+
+    task = SMCTask(gym.make("CartPole-v1"), "bring-about", goal=answers_no)
+    with pytest.raises(TypeError, match=re.escape("goal function test_smc_tasks_say_what_their_functions_and_callers_"
+                                                  "got_wrong.<locals>.answers_no must return a bool (True or False, "
+                                                  "numpy bools too), got 'no' (str)")):
+        task.reset(seed=0)
+    numpy_bool = SMCTask(gym.make("CartPole-v1"), "bring-about", goal=lambda env: np.bool_(env.state[0] > 9))
+    assert numpy_bool.reset(seed=0)[1]["goal"] is False
+    with pytest.raises(RuntimeError, match=re.escape("no episode has started: call reset() before step()")):
+        SMCTask(gym.make("CartPole-v1"), "bring-about", goal=lambda env: False).step(0)
+    with pytest.raises(RuntimeError, match=re.escape("no episode has started: call reset() before apply_primitive()")):
+        SMCTask(gym.make("CartPole-v1"), "bring-about", goal=lambda env: False).apply_primitive(1)
+    numpy_bool.step(0)  # SIG1 ends the episode
+    with pytest.raises(RuntimeError, match=re.escape("the episode has ended: call reset() before step()")):
+        numpy_bool.step(1)
+
+
+def test_train_smc_says_that_a_registered_task_must_take_max_steps():
+    from sb3_smc.tasks import SMCTask
+    from sb3_smc.training import train_smc
+
+    gym.register("BadInputNoMaxSteps-v0", entry_point=lambda: SMCTask(gym.make("CartPole-v1"), "bring-about",
+                                                                      goal=lambda env: False))
+    try:
+        with pytest.raises(TypeError, match=re.escape(
+                "SMC 'BadInputNoMaxSteps': sb3_smc makes its task with gym.make('BadInputNoMaxSteps-v0', "
+                "max_steps=...) (the episode length, WrapperSettings.max_steps), and the entry point of "
+                "'BadInputNoMaxSteps-v0' takes no max_steps: register an entry point that takes it and passes it on, "
+                "e.g. entry_point=lambda max_steps=100: SMCTask(..., max_steps=max_steps)")):
+            train_smc("BadInputNoMaxSteps-v0", algo="PPO", total_timesteps=64, n_envs=1, n_steps=32, log_every=0)
+    finally:
+        gym.registry.pop("BadInputNoMaxSteps-v0")

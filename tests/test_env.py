@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import os
 import pickle
+import subprocess
 import sys
 import warnings
 
@@ -264,11 +266,41 @@ def pygame_display(monkeypatch: pytest.MonkeyPatch):
 
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="DISPLAY / WAYLAND_DISPLAY are Linux's displays")
-def test_human_rendering_on_a_machine_without_a_display_says_so(pygame_display) -> None:
-    with pytest.raises(RuntimeError, match=r'render_mode="human" opens a window, and pygame finds no display here '
-                                           r"\(video driver: .*DISPLAY=None, WAYLAND_DISPLAY=None\)"):
+def test_human_rendering_on_a_machine_without_a_display_draws_off_screen_and_says_so(pygame_display) -> None:
+    with pytest.warns(UserWarning, match=r'render_mode="human": pygame finds no display here \(video driver: '
+                                         r"(offscreen|dummy); DISPLAY=None, WAYLAND_DISPLAY=None\), so the window is "
+                                         r"drawn off screen and nothing is shown; set SDL_VIDEODRIVER=dummy"):
+        env = make(render_mode="human")
+    env.reset(seed=0)
+    shown = pygame_display.surfarray.array3d(pygame_display.display.get_surface()).swapaxes(0, 1)
+    np.testing.assert_array_equal(shown, rgb_image(env.world.state(), HUMAN_CELL_SIZE, env.world.self_position))
+    env.close()
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="DISPLAY / WAYLAND_DISPLAY are Linux's displays")
+def test_human_rendering_with_a_video_driver_that_cannot_start_says_so(pygame_display,
+                                                                      monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("SDL_VIDEODRIVER", "x11")  # chosen on purpose, and no X display
+    with pytest.raises(RuntimeError, match=r'render_mode="human" draws in a pygame window, and pygame has no video '
+                                           r"driver here \(.*; SDL_VIDEODRIVER='x11', DISPLAY=None, "
+                                           r"WAYLAND_DISPLAY=None\): run it where a screen is attached"):
         make(render_mode="human")
     assert not pygame_display.display.get_init()
+
+
+def test_gymnasium_check_env_passes_every_render_mode_without_a_display() -> None:
+    """``check_env`` builds the env in every mode of ``metadata["render_modes"]``, "human" included: without a
+    display (and without SDL_VIDEODRIVER) that mode draws off screen and warns, as Gymnasium's own envs pass."""
+    pytest.importorskip("pygame", reason="pygame is in the [test] extra")
+    code = ("import gymnasium as gym, pixelworld_env\n"
+            "from gymnasium.utils.env_checker import check_env\n"
+            "for env_id in ('PW-ba_self-in-container-v0', 'PW-cl_self-in-container_vs_noncontainer-v0'):\n"
+            "    check_env(gym.make(env_id).unwrapped)\n"
+            "print('passed')\n")
+    headless = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY", "SDL_VIDEODRIVER")}
+    result = subprocess.run([sys.executable, "-c", code], env=headless, capture_output=True, text=True, timeout=300)
+    assert result.returncode == 0 and result.stdout.splitlines()[-1] == "passed", result.stderr
+    assert "so the window is drawn off screen and nothing is shown" in result.stderr
 
 
 def test_human_window_shows_the_rgb_frame_on_reset_and_step(pygame_display, monkeypatch: pytest.MonkeyPatch) -> None:

@@ -6,6 +6,7 @@ from __future__ import annotations
 import os
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
 from gymnasium.error import DependencyNotInstalled
 
@@ -51,11 +52,14 @@ HEADLESS_DRIVERS = ("offscreen", "dummy")
 
 
 def check_display() -> None:
-    """Raise unless ``render_mode="human"`` can show its window here.
+    """Check that ``render_mode="human"`` can draw here, and warn where its window cannot be seen.
 
-    ``DependencyNotInstalled`` without pygame (the ``render`` extra); ``RuntimeError`` without a display, where SDL
-    would silently fall back to an invisible driver. ``SDL_VIDEODRIVER=dummy`` (or ``offscreen``) set on purpose is
-    accepted: frames are drawn, nothing is shown (tests, recording set-ups).
+    ``DependencyNotInstalled`` without pygame (the ``render`` extra); ``RuntimeError`` where pygame has no video
+    driver at all (one chosen with ``SDL_VIDEODRIVER`` that cannot start). On a machine without a display SDL falls
+    back to an invisible driver (``offscreen``): the frames are drawn and nothing is shown, with a warning, so that
+    headless tests and Gymnasium's ``check_env`` (which builds every mode of ``metadata["render_modes"]``) pass, as
+    they do for Gymnasium's and Minigrid's environments. ``SDL_VIDEODRIVER=dummy`` (or ``offscreen``) chooses that
+    on purpose, without the warning.
     """
     os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
     try:
@@ -63,19 +67,19 @@ def check_display() -> None:
     except ImportError:
         raise DependencyNotInstalled('render_mode="human" draws in a pygame window, and pygame is not installed: '
                                      'pip install "sb3-smc[render]" (or use render_mode="rgb_array")') from None
+    displays = f"DISPLAY={os.environ.get('DISPLAY')!r}, WAYLAND_DISPLAY={os.environ.get('WAYLAND_DISPLAY')!r}"
     try:
         pygame.display.init()
-        driver = pygame.display.get_driver()
     except pygame.error as error:
-        driver = f"none ({error})"
-    if driver in HEADLESS_DRIVERS and driver in os.environ.get("SDL_VIDEODRIVER", ""):
-        return
-    if driver in HEADLESS_DRIVERS or driver.startswith("none"):
-        pygame.display.quit()
-        raise RuntimeError(
-            f'render_mode="human" opens a window, and pygame finds no display here (video driver: {driver}; '
-            f"DISPLAY={os.environ.get('DISPLAY')!r}, WAYLAND_DISPLAY={os.environ.get('WAYLAND_DISPLAY')!r}): run it "
-            'where a screen is attached (or forwarded), or use render_mode="rgb_array"')
+        raise RuntimeError(f'render_mode="human" draws in a pygame window, and pygame has no video driver here '
+                           f"({error}; SDL_VIDEODRIVER={os.environ.get('SDL_VIDEODRIVER')!r}, {displays}): "
+                           "run it where a screen is attached (or forwarded), set SDL_VIDEODRIVER=dummy to draw "
+                           'without one, or use render_mode="rgb_array"') from None
+    driver = pygame.display.get_driver()
+    if driver in HEADLESS_DRIVERS and driver not in os.environ.get("SDL_VIDEODRIVER", ""):
+        gym.logger.warn(f'render_mode="human": pygame finds no display here (video driver: {driver}; {displays}), '
+                        "so the window is drawn off screen and nothing is shown; set SDL_VIDEODRIVER=dummy to do "
+                        'that without this warning, or use render_mode="rgb_array"')
 
 
 class Window:

@@ -132,7 +132,8 @@ class Scene:
 
     @classmethod
     def from_ascii(cls, text: str, kinds: Mapping[str, str] | None = None) -> Scene:
-        """Read a scene drawn as text, frame included (legend in ``ASCII_LEGEND``).
+        """Read a scene drawn as text, frame included (legend in ``ASCII_LEGEND``): ``#`` must fill exactly the
+        border ring, and a drawing without a frame is refused.
 
         ``kinds`` maps object letters to shape families (default ``blob``). Blank leading/trailing lines
         and surrounding whitespace of each row are ignored.
@@ -179,15 +180,17 @@ class Scene:
         objects: list[WorldObject] = []
         for ch in sorted(cells_of, key=lambda k: (k != "=", k)):
             objects.append(_object_from_letter(ch, cells_of[ch], kinds))
-        if frame_cells:
-            frame = frame_object(height, width)
-            if set(frame_cells) != set(frame.cells):
-                bad = sorted(set(frame_cells) - set(frame.cells)) or sorted(set(frame.cells) - set(frame_cells))
-                raise PixelWorldError(
-                    f"'#' is the frame and must fill exactly the border ring; row {bad[0][0]}, column "
-                    f"{bad[0][1]} breaks that"
-                )
-            objects.append(frame)
+        if not frame_cells:
+            raise PixelWorldError(f"the scene has no frame: draw '#' on its whole border ring (rows 0 and "
+                                  f"{height - 1}, columns 0 and {width - 1}); PixelWorld's worlds are framed")
+        frame = frame_object(height, width)
+        if set(frame_cells) != set(frame.cells):
+            bad = sorted(set(frame_cells) - set(frame.cells)) or sorted(set(frame.cells) - set(frame_cells))
+            raise PixelWorldError(
+                f"'#' is the frame and must fill exactly the border ring; row {bad[0][0]}, column "
+                f"{bad[0][1]} breaks that"
+            )
+        objects.append(frame)
         return cls(height=height, width=width, objects=tuple(objects))
 
     def ascii_letters(self) -> dict[int, str]:

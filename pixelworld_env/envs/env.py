@@ -23,7 +23,7 @@ from pixelworld_env.core.render import HUMAN_CELL_SIZE, Window, check_display, r
 from pixelworld_env.core.scene import Scene
 from pixelworld_env.core.world import MOVES, World
 from pixelworld_env.errors import PixelWorldError
-from pixelworld_env.validation import check_action, check_bool, check_int
+from pixelworld_env.validation import check_action, check_bool, check_int, check_options
 
 CLASSIFICATION = "classification"
 BRING_ABOUT = "bring-about"
@@ -50,8 +50,8 @@ def check_settings(*, max_steps: Any = 100, observation: Any = "hand", render_mo
     """Check the settings of a :class:`PixelWorldEnv` before anything is built or loaded; returns ``max_steps``.
 
     ``ValueError`` for an unknown observation or render mode or ``max_steps < 1``, ``TypeError`` for a ``max_steps``
-    that is not an integer or an ``aaai18_reset_bug`` that is not a bool; ``render_mode="human"`` also needs pygame
-    and a display (:func:`pixelworld_env.core.render.check_display`).
+    that is not an integer or an ``aaai18_reset_bug`` that is not a bool; ``render_mode="human"`` also needs pygame,
+    and warns where there is no display (:func:`pixelworld_env.core.render.check_display`).
     """
     if observation not in OBSERVATIONS:
         raise PixelWorldError(f"observation must be one of {OBSERVATIONS}, got {observation!r}")
@@ -62,6 +62,15 @@ def check_settings(*, max_steps: Any = 100, observation: Any = "hand", render_mo
     if render_mode == "human":
         check_display()
     return max_steps
+
+
+def check_scene_index(index: Any, num_scenes: int) -> int:
+    """``options["index"]`` of a reset: an integer (numpy integers too) in ``[0, num_scenes)``; ``TypeError``
+    otherwise, ``IndexError`` out of range (negative indices included)."""
+    index = check_int(index, "options['index']")
+    if not 0 <= index < num_scenes:
+        raise IndexError(f"scene index {index} out of range (0..{num_scenes - 1})")
+    return index
 
 
 class PixelWorldEnv(gym.Env):
@@ -86,7 +95,7 @@ class PixelWorldEnv(gym.Env):
 
     Render modes: ``"rgb_array"`` (10 px per cell, the window outlined), ``"ansi"`` (the text format), ``"human"``
     (the same picture at 20 px per cell in a pygame window, drawn on every ``reset`` and ``step``; pygame is the
-    ``render`` extra).
+    ``render`` extra; without a display the window is drawn off screen, with a warning).
 
     ``gym.make`` of a ``PW-*`` id adds no ``TimeLimit``: the env truncates itself, and its ``spec.max_episode_steps``
     says when (``max_steps``).
@@ -275,14 +284,9 @@ class PixelWorldEnv(gym.Env):
         super().reset(seed=seed)
         if seed is not None:
             self._draws = []
-        unknown = sorted(set(options or {}) - {"index"})
-        if unknown:
-            raise PixelWorldError(f"unknown reset option(s) {unknown}; PixelWorldEnv.reset takes "
-                                  "options={'index': i}")
-        if options and "index" in options:
-            index = check_int(options["index"], "options['index']")
-            if not 0 <= index < len(self.scenes):
-                raise IndexError(f"scene index {index} out of range (0..{len(self.scenes) - 1})")
+        options = check_options(options, ("index",), "PixelWorldEnv.reset takes options={'index': i}")
+        if "index" in options:
+            index = check_scene_index(options["index"], len(self.scenes))
         else:
             if not self._draws:  # uniform scene indices from np_random, drawn in blocks for speed
                 self._draws = self.np_random.integers(len(self.scenes), size=256).tolist()[::-1]

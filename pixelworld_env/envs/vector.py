@@ -42,9 +42,10 @@ from pixelworld_env.envs.env import (
     GOAL_POTENTIAL,
     GOAL_REWARD,
     PixelWorldEnv,
+    check_scene_index,
 )
 from pixelworld_env.errors import PixelWorldError, PixelWorldTypeError
-from pixelworld_env.validation import check_int
+from pixelworld_env.validation import check_int, check_options
 
 DRAW_BLOCK = 256
 """Scene indices drawn at a time from an environment's generator, as :meth:`PixelWorldEnv.reset` draws them."""
@@ -319,12 +320,10 @@ class PixelWorldVectorEnv(VectorEnv):
             if len(seeds) != n:
                 raise PixelWorldError(f"If seeds are passed as a list the length must match num_envs={n} but got "
                                       f"length={len(seeds)}.")
-        options = dict(options or {})
-        mask = self._reset_mask(options.pop("reset_mask", None))
-        index = self._indices(options.pop("index", None))
-        if options:
-            raise PixelWorldError(f"unknown reset option(s) {sorted(options)}; PixelWorldVectorEnv.reset takes "
-                                  "options={'index': i or [i, ...], 'reset_mask': mask}")
+        options = check_options(options, ("index", "reset_mask"), "PixelWorldVectorEnv.reset takes "
+                                "options={'index': i or [i, ...], 'reset_mask': mask}")
+        mask = self._reset_mask(options.get("reset_mask"))
+        index = self._indices(options.get("index"))
         if not self._started and not mask.all():
             raise RuntimeError("the first reset must reset every environment (no reset_mask)")
         for k in np.flatnonzero(mask).tolist():
@@ -355,19 +354,18 @@ class PixelWorldVectorEnv(VectorEnv):
         return mask.copy()
 
     def _indices(self, index: Any) -> np.ndarray:
-        """``options["index"]`` as one scene index per environment (-1: draw one)."""
+        """``options["index"]`` as one scene index per environment (-1, which users cannot give: draw one), each
+        checked as the single env checks it."""
         if index is None:
             return self._no_index
-        if isinstance(index, (list, tuple, np.ndarray)):
+        n = len(self.scenes)
+        if isinstance(index, list | tuple) or isinstance(index, np.ndarray) and index.ndim == 1:
             if len(index) != self.num_envs:
                 raise PixelWorldError(f"options['index'] as a list needs one entry per environment ({self.num_envs}), "
                                       f"got {len(index)}")
-            values = [-1 if i is None else check_int(i, "options['index']") for i in index]
+            values = [-1 if i is None else check_scene_index(i, n) for i in index]
         else:
-            values = [check_int(index, "options['index']")] * self.num_envs
-        for value in values:
-            if value != -1 and not 0 <= value < len(self.scenes):
-                raise IndexError(f"scene index {value} out of range (0..{len(self.scenes) - 1})")
+            values = [check_scene_index(index, n)] * self.num_envs
         return np.array(values, dtype=np.int64)
 
     def step(self, actions: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
