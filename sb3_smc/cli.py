@@ -16,6 +16,7 @@ import errno
 import json
 import shlex
 import sys
+import unicodedata
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -47,9 +48,7 @@ def _curricula(args: argparse.Namespace) -> int:
     for name, curriculum in curricula.shipped_curricula().items():
         levels = " + ".join(str(len(level)) for level in curriculum.levels())
         rows.append((name, curriculum.method or "", str(len(curriculum.targets)), levels))
-    widths = [max(len(row[i]) for row in rows) for i in range(4)]
-    for row in rows:
-        print("  ".join(cell.ljust(width) for cell, width in zip(row, widths, strict=True)).rstrip())
+    _print_table(rows)
     print("\nsb3-smc curricula NAME shows one curriculum; docs/curricula.md describes the file format.")
     return 0
 
@@ -145,10 +144,23 @@ def _library(args: argparse.Namespace) -> int:
                       str(number["seed"]), str(number["selected_update"]),
                       "-" if row["training_return"] is None else f"{row['training_return']:.3f}",
                       "-" if row["test_score"] is None else f"{100 * row['test_score']:.1f}"))
-    widths = [max(len(row[i]) for row in table) for i in range(len(table[0]))]
-    for cells in table:
-        print("  ".join(cell.ljust(width) for cell, width in zip(cells, widths, strict=True)).rstrip())
+    _print_table(table)
     return 0
+
+
+def _display_width(text: str) -> int:
+    """The terminal columns ``text`` takes: two for a wide or full-width character (CJK), none for a combining
+    mark, one for any other."""
+    return sum(0 if unicodedata.combining(char) else 2 if unicodedata.east_asian_width(char) in "WF" else 1
+               for char in text)
+
+
+def _print_table(rows: Sequence[Sequence[str]]) -> None:
+    """``rows`` in columns two spaces apart, aligned by display width (:func:`_display_width`)."""
+    widths = [max(_display_width(row[i]) for row in rows) for i in range(len(rows[0]))]
+    for row in rows:
+        print("  ".join(cell + " " * (width - _display_width(cell)) for cell, width in zip(row, widths, strict=True))
+              .rstrip())
 
 
 def _import_zoo(args: argparse.Namespace) -> int:

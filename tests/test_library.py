@@ -10,6 +10,7 @@ import shutil
 import subprocess
 import sys
 import textwrap
+import unicodedata
 from pathlib import Path
 
 import gymnasium as gym
@@ -33,9 +34,12 @@ from sb3_smc.library import (
     UnknownSMCError,
     storage,
 )
+from sb3_smc.library.manifest import ENTRY_CHECKSUM, MANIFEST_CHECKSUM, content_sha256, seal
 from sb3_smc.policies import ScriptedPolicy, policy_from_model
 from sb3_smc.records import Budget, EvaluationRecord, TaskSpec, TrainingRecord, TrainingSpec, package_versions
 from sb3_smc.smc import SMC
+from sb3_smc.tasks import SMCTask
+from sb3_smc.training import train_smc
 from sb3_smc.wrapper import HierarchicalSMCWrapper
 from tests.helpers import sb3_smc_cli
 
@@ -97,9 +101,12 @@ def copy(saved, tmp_path) -> Path:
 
 
 def _edit(path: Path, change) -> None:
+    """Change the manifest of the library in ``path`` as an edit meant to be kept would (a manifest of the current
+    version is written with fresh checksums: storage.write_manifest)."""
     manifest = json.loads((path / "manifest.json").read_text())
+    sealed = MANIFEST_CHECKSUM in manifest
     change(manifest)
-    (path / "manifest.json").write_text(json.dumps(manifest))
+    (path / "manifest.json").write_text(json.dumps(seal(manifest) if sealed else manifest))
 
 
 def _observations(size: int, n: int = 6, seed: int = 0) -> np.ndarray:
@@ -188,12 +195,15 @@ def test_the_digest_names_the_weights_whatever_file_holds_them(smcs, saved):
 
 
 def test_manifest_records_each_smc_once(saved, smcs):
-    """An entry is its model file, checksum and records; what the SMC is and the summaries are read from them."""
+    """An entry is its model file, checksum and records; what the SMC is and the summaries are read from them. The
+    checksums of the manifest's own content: one per entry, of its name and fields, and one of the whole."""
     manifest = json.loads((saved / "manifest.json").read_text())
-    assert manifest["format"] == FORMAT and manifest["version"] == FORMAT_VERSION == 3
+    assert manifest["format"] == FORMAT and manifest["version"] == FORMAT_VERSION == 4
     assert {"sb3_smc", "stable_baselines3", "sb3_contrib", "torch"} <= set(manifest["created_with"])
     raw = manifest["smcs"]["climber"]
-    assert set(raw) == {"model", "sha256", "spec", "record", "evaluations"}
+    assert set(raw) == {"model", "sha256", "spec", "record", "evaluations", ENTRY_CHECKSUM}
+    assert raw[ENTRY_CHECKSUM] == content_sha256(["climber", {k: v for k, v in raw.items() if k != ENTRY_CHECKSUM}])
+    assert manifest[MANIFEST_CHECKSUM] == content_sha256({k: v for k, v in manifest.items() if k != MANIFEST_CHECKSUM})
     assert raw["model"] == "models/climber.zip" and (saved / raw["model"]).is_file() and len(raw["sha256"]) == 64
     entries = storage.check_manifest(manifest, saved / "manifest.json")
     entry = entries["climber"]
@@ -296,6 +306,75 @@ def test_env_of_the_other_kind_is_a_layout_mismatch(saved):
         library.wrap(library.wrap(gym.make(CL_ID), ["corner"]), ["container"])
 
 
+CART_ID = "TestCartRight-v0"
+"""CartPole as an SMC task (bring-about: the cart right of the centre): a Gymnasium environment that is not PixelWorld,
+sensor 4 values, primitives A0 and A1."""
+
+
+def _cart_right(env: gym.Env) -> bool:
+    return bool(env.state[0] > 0.05)
+
+
+def _cart_task(max_steps: int = 100, **kwargs) -> SMCTask:
+    return SMCTask(gym.make("CartPole-v1"), "bring-about", goal=_cart_right, max_steps=max_steps, **kwargs)
+
+
+def test_smcs_of_an_smc_task_are_actions_of_that_task(saved, tmp_path):
+    """wrap and env_for take any task the wrapper takes (an SMCTask as PixelWorld), and name what does not fit."""
+    if CART_ID not in gym.registry:
+        gym.register(CART_ID, entry_point=_cart_task)
+    settings = dict(algo="PPO", total_timesteps=256, n_envs=2, n_steps=128, batch_size=128, max_steps=20,
+                    log_every=0)
+    child = train_smc(CART_ID, seed=0, name="right", **settings)
+    parent = train_smc(CART_ID, seed=1, name="right-twice", children=[child], **settings)
+    library = SMCLibrary.load(SMCLibrary([parent]).save(tmp_path / "library"))
+    env = library.wrap(gym.make(CART_ID, max_steps=20), ["right"])
+    assert env.action_names == ("SIG1", "A0", "A1", "SMC:right") and env.observation_space.shape == (4 + 1 + 4,)
+    env.reset(seed=0)
+    *_, info = env.step(env.action_names.index("SMC:right"))
+    assert info["smc_calls"][-1]["smc"] == "right"
+    own = library.env_for("right-twice", _cart_task(20))  # the SMC's own view: its model acts on it
+    assert own.action_names == library["right-twice"].action_names == ("SIG1", "A0", "A1", "SMC:right")
+    obs, _ = own.reset(seed=0)
+    action, _ = library["right-twice"].model.predict(obs)
+    own.step(int(action))
+    pixelworld = SMCLibrary.load(saved)
+    with pytest.raises(LayoutMismatchError) as info:
+        pixelworld.wrap(gym.make(CART_ID), ["corner"])
+    assert str(info.value) == (
+        f"SMC 'corner' does not fit the environment '{CART_ID}': it senses 81 values, the task gives 4; its primitive "
+        "actions are ['DOWN', 'RIGHT', 'UP', 'LEFT'], the task's ['A0', 'A1'] (it was trained on another environment "
+        "or observation)")
+    with pytest.raises(LayoutMismatchError, match=re.escape(
+            f"SMC 'right' does not fit the environment '{BA_ID}': it senses 4 values, the task gives 81; its "
+            "primitive actions are ['A0', 'A1'], the task's ['DOWN', 'RIGHT', 'UP', 'LEFT']")):
+        library.wrap(gym.make(BA_ID), ["right"])
+    with pytest.raises(LayoutMismatchError, match=re.escape(
+            "SMC 'right-twice' does not fit the environment 'CartPole-v1': its primitive actions are ['A0', 'A1'], "
+            "the task's ['push-left', 'push-right'] (it was")):
+        library.env_for("right-twice", _cart_task(primitive_names=("push-left", "push-right")))
+    with pytest.raises(LayoutMismatchError, match="'right' acts on bring-about tasks.*is a classification task"):
+        library.env_for("right", SMCTask(gym.make("CartPole-v1"), "classification", label=lambda env: 0))
+    with pytest.raises(LayoutMismatchError, match="a PixelWorld environment or an SMCTask .* got CartPoleEnv"):
+        library.wrap(gym.make("CartPole-v1"), ["right"])  # the bare environment: no task to act on
+
+
+def test_an_smc_of_minigrid_is_an_action_of_minigrid(tmp_path):
+    """The issue's case: an SMC trained on a Minigrid DoorKey task, an action of another DoorKey task."""
+    pytest.importorskip("minigrid")
+    from sb3_smc.examples.minigrid_doorkey import OBSERVATION, at_goal, register, task_id
+
+    register(5)
+    get_key = train_smc(task_id(5, "get-key"), name="GetKey", algo="PPO", total_timesteps=256, n_envs=2,
+                        n_steps=128, batch_size=128, max_steps=20, log_every=0)
+    doorkey = SMCTask(gym.make("MiniGrid-DoorKey-8x8-v0"), "bring-about", goal=at_goal, observation=OBSERVATION)
+    env = SMCLibrary([get_key]).wrap(doorkey, ["GetKey"])
+    assert env.action_names[-1] == "SMC:GetKey" and env.observation_space.shape == (151 + 1 + 9,)
+    env.reset(seed=0)
+    *_, info = env.step(env.action_names.index("SMC:GetKey"))
+    assert info["smc_calls"][-1]["smc"] == "GetKey"
+
+
 # ------------------------------------------------------------------------------------------------ broken libraries
 
 @pytest.mark.parametrize("damage", ["truncated", "random"])
@@ -320,7 +399,7 @@ def test_missing_model_file(copy):
 
 
 @pytest.mark.parametrize(("version", "message"), [
-    (4, "version 4 is newer than this sb3_smc reads .*upgrade sb3_smc"),
+    (5, "version 5 is newer than this sb3_smc reads .*upgrade sb3_smc"),
     (0, "incompatible manifest version 0"),
     ("1", "version must be an integer"),
 ])
@@ -353,7 +432,8 @@ def test_missing_field(copy):
     (lambda e: e.update(record={"training_returns": []}), ManifestError,
      r"entry 'corner': record: missing field\(s\) \['success_rates'"),
     (lambda e: e.update(kind="bring-about"), ManifestError,  # a fact of the spec, stored a second time
-     r"entry 'corner': unknown field\(s\) \['kind'\] \(a version-3 entry reads what the SMC is from its spec\)"),
+     r"entry 'corner': unknown field\(s\) \['kind'\] \(since version 3 an entry reads what the SMC is from its "
+     r"spec\)"),
     (lambda e: e.update(test_score=1.0), ManifestError, r"entry 'corner': unknown field\(s\) \['test_score'\]"),
     (lambda e: e.update(smc={"kind": "classification"}), ManifestError,
      "entry 'corner': an entry with a spec has no 'smc' field"),
@@ -442,7 +522,7 @@ def test_the_library_command_shows_each_smc_without_loading_a_model(saved, copy)
     code, out, err = sb3_smc_cli("library", str(saved))
     assert code == 0, err
     lines = out.splitlines()
-    assert lines[0] == f"{saved}: 4 SMC(s), manifest version 3 (sb3_smc {package_versions()['sb3_smc']})"
+    assert lines[0] == f"{saved}: 4 SMC(s), manifest version 4 (sb3_smc {package_versions()['sb3_smc']})"
     climber = next(line.split() for line in lines if line.startswith("climber "))
     assert climber == ["climber", "bring-about", "RecurrentPPO", "corner,container", BA_ID, "3", "3", "0.250", "50.0"]
     code, out, _ = sb3_smc_cli("library", str(saved), "--json")
@@ -457,6 +537,22 @@ def test_the_library_command_shows_each_smc_without_loading_a_model(saved, copy)
     assert sb3_smc_cli("library", str(copy))[0] == 0
     code, _, err = sb3_smc_cli("library", str(copy), "--check")
     assert code == 2 and "sb3-smc library: error: SMC 'corner': model file" in err
+
+
+def test_the_library_command_aligns_wide_names(copy):
+    """A name of CJK characters takes two columns per character: the table is aligned by display width."""
+    _edit(copy, lambda m: m["smcs"].update({"左の角": m["smcs"].pop("corner-ppo")}))
+    code, out, err = sb3_smc_cli("library", str(copy))
+    assert code == 0, err
+    rows = out.splitlines()[1:]
+    assert [row.split()[0] for row in rows] == ["name", "corner", "container", "climber", "左の角"]
+
+    def columns(text: str) -> int:
+        return sum(2 if unicodedata.east_asian_width(char) in "WF" else 1 for char in text)
+
+    kinds = [next(kind for kind in ("kind", "classification", "bring-about") if kind in row) for row in rows]
+    assert {columns(row[:row.index(kind)]) for row, kind in zip(rows, kinds, strict=True)} == {len("container  ")}
+    assert rows[-1].startswith("左の角" + " " * 5 + "classification  PPO")
 
 
 # ------------------------------------------------------------------------------------------------ atomic saves
@@ -541,8 +637,6 @@ def test_names_that_are_not_file_names(smcs, tmp_path):
 
 def test_train_smc_output_round_trips(tmp_path):
     """What ``train_smc`` returns (here a frame-stacked TRPO SMC) is stored with its provenance and replays."""
-    from sb3_smc.training import train_smc
-
     smc = train_smc(CL_ID, algo="TRPO", total_timesteps=64, n_envs=1, n_steps=32, batch_size=32, frame_stack=2,
                     seed=4, printer=lambda line: None)
     result = evaluate(smc, repeats=1)
@@ -570,8 +664,6 @@ converted specs (the original archives are large); that 0.1's own archives load 
 
 
 def test_version_1_libraries_load_through_the_conversion(tmp_path):
-    from sb3_smc.training import train_smc
-
     v1 = json.loads(V1_MANIFEST.read_text())
     assert v1["version"] == 1
     converted = storage.check_manifest(json.loads(V1_MANIFEST.read_text()), V1_MANIFEST)
@@ -601,8 +693,8 @@ def test_version_1_libraries_load_through_the_conversion(tmp_path):
     (evaluation,) = top.evaluations
     assert (evaluation.split, evaluation.score, evaluation.repeats, evaluation.seed) == ("test", 0.25, None, None)
     # saved again, it is a library of the current version with the same records
-    again = SMCLibrary.load(library.save(tmp_path / "v3"))
-    assert json.loads((tmp_path / "v3" / "manifest.json").read_text())["version"] == FORMAT_VERSION == 3
+    again = SMCLibrary.load(library.save(tmp_path / "v4"))
+    assert json.loads((tmp_path / "v4" / "manifest.json").read_text())["version"] == FORMAT_VERSION
     assert all(again[n].spec == library[n].spec and again[n].evaluations == library[n].evaluations for n in again)
 
 
@@ -646,8 +738,8 @@ def test_version_2_libraries_load_and_their_summaries_are_what_is_derived(v2_lib
         assert entry.summary() == {field: raw[field] for field in storage.SUMMARY_FIELDS}
         assert (list(entry.action_names), entry.observation) == (raw["action_names"], raw["observation"])
         assert (entry.kind, entry.algo, list(entry.children)) == (raw["kind"], raw["algo"], raw["children"])
-    again = SMCLibrary.load(library.save(tmp_path / "v3"))
-    assert json.loads((tmp_path / "v3" / "manifest.json").read_text())["version"] == 3
+    again = SMCLibrary.load(library.save(tmp_path / "v4"))
+    assert json.loads((tmp_path / "v4" / "manifest.json").read_text())["version"] == FORMAT_VERSION
     assert all((again[n].spec, again[n].record, again[n].evaluations) == (library[n].spec, library[n].record,
                                                                           library[n].evaluations) for n in library)
 
@@ -671,17 +763,19 @@ def test_a_version_2_entry_that_contradicts_itself_is_still_an_error(v2_library,
         SMCLibrary.load(v2_library)
 
 
-def test_adding_to_a_version_2_library_writes_version_3(v2_library, smcs, tmp_path):
-    """A run directory's library of version 2 goes on growing: the next SMC stored writes the whole manifest as 3."""
+def test_adding_to_a_version_2_library_writes_the_current_version(v2_library, smcs, tmp_path):
+    """A run directory's library of version 2 goes on growing: the next SMC stored writes the whole manifest as the
+    current version, with the checksums of its content."""
     smcs["corner"].model.save(tmp_path / "corner.zip")
     storage.add_to_library(v2_library, "corner", storage.entry_for(smcs["corner"]),
                            (tmp_path / "corner.zip").read_bytes())
     manifest = json.loads((v2_library / "manifest.json").read_text())
-    assert manifest["version"] == 3 and list(manifest["smcs"]) == [*json.loads(V2_MANIFEST.read_text())["smcs"],
-                                                                     "corner"]
-    assert manifest["created_with"] == package_versions()  # who wrote it as version 3
-    assert all(set(entry) == {"model", "sha256", "spec", "record", "evaluations"}
+    assert manifest["version"] == FORMAT_VERSION and list(manifest["smcs"]) == [
+        *json.loads(V2_MANIFEST.read_text())["smcs"], "corner"]
+    assert manifest["created_with"] == package_versions()  # who converted it
+    assert all(set(entry) == {"model", "sha256", "spec", "record", "evaluations", ENTRY_CHECKSUM}
                for entry in manifest["smcs"].values())
+    assert seal(manifest) == manifest
     library = SMCLibrary.load(v2_library)
     assert library["corner"].spec == smcs["corner"].spec and library[V2_NAME].test_score == 0.97
 
@@ -708,7 +802,9 @@ def test_a_version_2_entry_without_a_spec_loads(smcs, tmp_path):
     bare = dataclasses.replace(smcs["corner-ppo"], spec=None, record=None, evaluations=())
     path = SMCLibrary([bare]).save(tmp_path / "library")
     manifest = json.loads((path / "manifest.json").read_text())
+    manifest.pop(MANIFEST_CHECKSUM)
     entry = manifest["smcs"]["corner-ppo"]
+    entry.pop(ENTRY_CHECKSUM)
     smc = entry.pop("smc")
     entry.update(smc, action_names=list(bare.action_names), env_id=None, datasets=[], seed=None,
                  selected_update=None, training_return=None, test_score=None, total_timesteps=None,
@@ -735,6 +831,73 @@ def test_a_missing_checksum_is_an_error_not_a_skipped_check(copy):
         SMCLibrary.load(copy)
     _edit(copy, lambda m: m["smcs"]["corner"].update(sha256="abc"))
     with pytest.raises(ManifestError, match="'sha256' must be the 64 hex digits"):
+        SMCLibrary.load(copy)
+
+
+def test_an_edited_manifest_is_refused_naming_the_file_and_the_smc(copy):
+    """The manifest's own content is checksummed: an entry changed by hand (here its spec's seed) stops load(), the
+    library command with or without --check, and changes in place, naming the file and the SMC; so does a change
+    outside the entries. How the file is laid out is not its content; an edit meant to be kept is written with
+    fresh checksums."""
+    path = copy / "manifest.json"
+    original = path.read_text()
+
+    def write(change) -> None:
+        manifest = json.loads(original)
+        change(manifest)
+        path.write_text(json.dumps(manifest, indent=2))
+
+    write(lambda m: m["smcs"]["corner"]["spec"].update(seed=7))
+    message = (f"{path}: the entry of SMC 'corner' does not match its 'entry_sha256': edited by hand or damaged "
+               "since sb3_smc wrote it; restore it, or write an edit meant to be kept with "
+               "sb3_smc.library.storage.write_manifest")
+    with pytest.raises(ManifestError) as info:
+        SMCLibrary.load(copy)
+    assert str(info.value) == message
+    for options in ((), ("--check",)):
+        code, _, err = sb3_smc_cli("library", str(copy), *options)
+        assert (code, err) == (2, f"sb3-smc library: error: {message}\n")
+    with pytest.raises(ManifestError, match=re.escape(message)):
+        storage.remove_from_library(copy, ["corner-ppo"])
+    write(lambda m: m["smcs"].update({"corner-ppo2": m["smcs"].pop("corner-ppo")}))  # a name is content too
+    with pytest.raises(ManifestError, match="the entry of SMC 'corner-ppo2' does not match its 'entry_sha256'"):
+        SMCLibrary.load(copy)
+    outside = (f"{path}: the manifest does not match its 'manifest_sha256' outside the SMC entries (its created_with "
+               "changed, or a whole entry was added or removed): edited by hand or damaged")
+    for change in (lambda m: m["created_with"].update(torch="1.0"), lambda m: m["smcs"].pop("corner-ppo")):
+        write(change)
+        with pytest.raises(ManifestError, match=re.escape(outside)):
+            SMCLibrary.load(copy)
+    write(lambda m: m["smcs"]["corner"].pop(ENTRY_CHECKSUM))
+    with pytest.raises(ManifestError, match="entry 'corner': 'entry_sha256' must be the 64 hex digits .* got None"):
+        SMCLibrary.load(copy)
+    write(lambda m: m.update(manifest_sha256="abc"))
+    with pytest.raises(ManifestError, match="'manifest_sha256' must be the 64 hex digits .* got 'abc'"):
+        SMCLibrary.load(copy)
+    path.write_text(json.dumps(json.loads(original)))  # on one line: the same content
+    assert SMCLibrary.load(copy).names == ("corner", "container", "climber", "corner-ppo")
+    manifest = json.loads(original)
+    manifest["smcs"]["corner"]["spec"]["seed"] = 7
+    storage.write_manifest(path, manifest)  # an edit meant to be kept
+    assert SMCLibrary.load(copy)["corner"].spec.seed == 7
+
+
+def test_version_3_libraries_load_and_get_checksums_when_written(copy):
+    """A library written before the manifest's content had checksums (version 3) loads as it is; the next write of
+    its manifest (a save, an SMC added or removed in place) stores it as the current version with them."""
+    manifest = json.loads((copy / "manifest.json").read_text())
+    v3 = {**{k: v for k, v in manifest.items() if k != MANIFEST_CHECKSUM}, "version": 3,
+          "smcs": {name: {k: v for k, v in entry.items() if k != ENTRY_CHECKSUM}
+                   for name, entry in manifest["smcs"].items()}}
+    (copy / "manifest.json").write_text(json.dumps(v3, indent=2))
+    assert SMCLibrary.load(copy).names == ("corner", "container", "climber", "corner-ppo")
+    storage.remove_from_library(copy, ["corner-ppo"])
+    written = json.loads((copy / "manifest.json").read_text())
+    assert written["version"] == FORMAT_VERSION and seal(written) == written
+    assert written["created_with"] == v3["created_with"] and list(written["smcs"]) == ["corner", "container", "climber"]
+    assert SMCLibrary.load(copy).names == ("corner", "container", "climber")
+    _edit(copy, lambda m: m.update(version=3))  # a version-3 manifest that holds checksums: fields it does not have
+    with pytest.raises(ManifestError, match=r"entry 'corner': unknown field\(s\) \['entry_sha256'\]"):
         SMCLibrary.load(copy)
 
 

@@ -276,7 +276,7 @@ def test_foreign_smcs_round_trip_through_a_library(tmp_path) -> None:
     ours, _ = parent.policy.probabilities(obs, parent.policy.initial_state())
     np.testing.assert_allclose(probabilities, ours)
     manifest["smcs"]["walk"]["spec"]["task"].pop("layout")  # the child now claims PixelWorld's layout
-    (tmp_path / "lib" / "manifest.json").write_text(json.dumps(manifest))
+    storage.write_manifest(tmp_path / "lib" / "manifest.json", manifest)  # an edit meant to be kept
     with pytest.raises(LayoutMismatchError, match=r"SMC 'walk-twice' .* calls \['walk'\], which act on another"):
         SMCLibrary.load(tmp_path / "lib")
 

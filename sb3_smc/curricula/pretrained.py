@@ -133,7 +133,7 @@ def build_pretrained(runs: Sequence[str | Path], curricula: Sequence[str | Curri
             else:
                 compact_model(staged / entry["model"])
                 entry["sha256"] = storage.sha256(staged / entry["model"])
-        atomic_write(staged / storage.MANIFEST, json.dumps(manifest, indent=2, allow_nan=False) + "\n")
+        storage.write_manifest(staged / storage.MANIFEST, manifest)
         index = _index(library.names, before["curricula"], resolved, {**before["seeds"], **ranked_among})
         atomic_write(staged / INDEX, json.dumps(index, indent=1) + "\n")
         SMCLibrary.load(staged)  # the compact copy loads and checks out before it replaces anything

@@ -1,9 +1,9 @@
 """SMC libraries: trained SMCs in a directory with a versioned manifest.
 
 * :mod:`sb3_smc.library.library` — :class:`SMCLibrary`, the API (a mapping name -> SMC; add, save, load, wrap);
-* :mod:`sb3_smc.library.manifest` — the manifest: its schema (version 3), :class:`LibraryEntry`, validation, the
-  load order;
-* :mod:`sb3_smc.library.upgrade` — manifests of versions 1 and 2, converted on read;
+* :mod:`sb3_smc.library.manifest` — the manifest: its schema (version 4), the checksums of its content,
+  :class:`LibraryEntry`, validation, the load order;
+* :mod:`sb3_smc.library.upgrade` — manifests of versions 1 to 3, converted on read;
 * :mod:`sb3_smc.library.pretrained` — the shipped pretrained library: its index, names by curriculum;
 * :mod:`sb3_smc.library.storage` — the files: reading and writing the manifest, model files and checksums, adding
   and removing SMCs in place, the atomic save;

@@ -3,10 +3,11 @@
 
 Each manifest entry records how the SMC was trained and what came out (its :class:`~sb3_smc.records.TrainingSpec`,
 from which its kind, algorithm and children by name are read, :class:`~sb3_smc.records.TrainingRecord` and
-:class:`~sb3_smc.records.EvaluationRecord` list), plus its model file and that file's SHA-256. :meth:`SMCLibrary.load`
-validates all of it and rebuilds every :class:`~sb3_smc.smc.SMC` (children first, its policy by
-:func:`sb3_smc.policies.policy_from_model`); :meth:`SMCLibrary.save` writes a complete copy beside the target and swaps
-it in, so an interrupted save never leaves a half-written library. Libraries of earlier versions load through
+:class:`~sb3_smc.records.EvaluationRecord` list), plus its model file and that file's SHA-256, and the SHA-256 of the
+entry's own content (the manifest has one of its whole content too). :meth:`SMCLibrary.load` validates all of it and
+rebuilds every :class:`~sb3_smc.smc.SMC` (children first, its policy by :func:`sb3_smc.policies.policy_from_model`);
+:meth:`SMCLibrary.save` writes a complete copy beside the target and swaps it in, so an interrupted save never leaves
+a half-written library. Libraries of earlier versions load through
 :mod:`sb3_smc.library.upgrade`. See ``docs/library.md``.
 """
 
@@ -18,7 +19,7 @@ from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from sb3_smc.envs import make_smc_env, pixelworld_base, wrap_with_smcs
+from sb3_smc.envs import make_smc_env, task_base, wrap_with_smcs
 from sb3_smc.errors import SMCTypeError
 from sb3_smc.layout import SIGNALS
 from sb3_smc.library import storage
@@ -32,11 +33,11 @@ from sb3_smc.library.errors import (
 from sb3_smc.library.pretrained import pretrained_names, pretrained_root
 from sb3_smc.records import WrapperSettings
 from sb3_smc.smc import SMC, StepPolicy
+from sb3_smc.tasks import TaskEnv, layout_of
 
 if TYPE_CHECKING:
     import gymnasium as gym
 
-    from pixelworld_env.envs.env import PixelWorldEnv
     from sb3_smc.wrapper import HierarchicalSMCWrapper
 
 __all__ = ["SMCLibrary"]
@@ -231,11 +232,11 @@ class SMCLibrary(Mapping[str, SMC]):
         """Load and validate the library in directory ``path`` (only ``names`` and their descendants if given; such a
         partial library has no default save path, so ``save()`` cannot replace the whole library with it).
 
-        Checks the manifest (format, version, fields), that every child is in the library and no SMC calls itself
-        (through any chain), that action names and observation sizes agree with kind/children and with each
-        model's spaces, and that each model file is intact (readable zip, SHA-256 as recorded) and loads with
-        its algorithm's class (``device="cpu"``). Errors are :class:`LibraryError` subclasses naming the file
-        and SMC.
+        Checks the manifest (format, version, the checksums of its content, fields), that every child is in the
+        library and no SMC calls itself (through any chain), that action names and observation sizes agree with
+        kind/children and with each model's spaces, and that each model file is intact (readable zip, SHA-256 as
+        recorded) and loads with its algorithm's class (``device="cpu"``). Errors are :class:`LibraryError`
+        subclasses naming the file and SMC.
         """
         from sb3_smc.policies import FrameStackPolicy, policy_from_model
 
@@ -286,10 +287,13 @@ class SMCLibrary(Mapping[str, SMC]):
         """``env`` with the SMCs ``names`` as actions (:func:`sb3_smc.envs.wrap_with_smcs`), for training a new
         higher-level policy.
 
-        The SMCs become actions after ``env``'s signals and, unless ``include_primitives=False``, the four moves.
-        SMCs of either task kind may be used on either kind of environment (as in the paper's curricula): an SMC
-        only moves; its signal becomes its outcome. ``kwargs``: the other :class:`~sb3_smc.records.WrapperSettings`
-        (``count_primitive_steps``, ``call_step_cap``) and ``record_cells``.
+        ``env`` is a task (a PixelWorld environment or an :class:`~sb3_smc.tasks.SMCTask`, possibly under other
+        wrappers) whose layout (sensor size, primitive actions) is the SMCs' own: :class:`LayoutMismatchError`
+        otherwise. The SMCs become actions after ``env``'s signals and, unless ``include_primitives=False``, its
+        primitive actions (PixelWorld's four moves). SMCs of either task kind may be used on either kind of
+        environment (as in the paper's curricula): an SMC only acts; its signal becomes its outcome. ``kwargs``: the
+        other :class:`~sb3_smc.records.WrapperSettings` (``count_primitive_steps``, ``call_step_cap``) and
+        ``record_cells``.
         """
         if isinstance(names, str):
             names = [names]
@@ -298,7 +302,7 @@ class SMCLibrary(Mapping[str, SMC]):
             duplicates = sorted({n for n in names if names.count(n) > 1})
             raise LibraryError(f"SMC names given twice: {duplicates}")
         smcs = [self[n] for n in names]
-        _check_env(env)
+        _check_layout(smcs, _check_env(env), env)
         record_cells = bool(kwargs.pop("record_cells", False))
         settings = WrapperSettings(include_primitives=include_primitives, **kwargs)
         return wrap_with_smcs(env, smcs, settings, record_cells=record_cells)
@@ -307,10 +311,11 @@ class SMCLibrary(Mapping[str, SMC]):
         """``env`` as SMC ``name`` itself sees it (:func:`sb3_smc.envs.make_smc_env` with its spec and children).
 
         The result's action names and observation size are exactly the SMC's, so ``library[name].model`` or
-        ``.policy`` can act on it (evaluate it, or continue training with ``model.set_env``). Raises
-        :class:`LayoutMismatchError` when ``env`` is of the other task kind (its signals differ) or the layout
-        does not match. ``kwargs`` replace the wrapper settings of the SMC's spec (``count_primitive_steps``,
-        ``call_step_cap``); ``record_cells`` goes to the wrapper.
+        ``.policy`` can act on it (evaluate it, or continue training with ``model.set_env``). ``env`` is a task as
+        for :meth:`wrap`. Raises :class:`LayoutMismatchError` when ``env`` is of the other task kind (its signals
+        differ) or its layout (sensor size, primitive actions) is not the SMC's. ``kwargs`` replace the wrapper
+        settings of the SMC's spec (``count_primitive_steps``, ``call_step_cap``); ``record_cells`` goes to the
+        wrapper.
         """
         smc = self[name]
         base = _check_env(env)
@@ -319,6 +324,7 @@ class SMCLibrary(Mapping[str, SMC]):
                 f"SMC {name!r} acts on {smc.kind} tasks (actions {list(smc.action_names)}), but the environment "
                 f"{_env_label(env)} is a {base.kind} task (signals {list(SIGNALS[base.kind])}); its action layout "
                 "does not fit")
+        _check_layout([smc], base, env)
         record_cells = bool(kwargs.pop("record_cells", False))
         trained = (smc.spec.wrapper if smc.spec is not None
                    else WrapperSettings(include_primitives=smc.include_primitives))
@@ -349,11 +355,28 @@ def _descendants(entries: Mapping[str, storage.LibraryEntry], names: Sequence[st
     return seen
 
 
-def _check_env(env: gym.Env) -> PixelWorldEnv:
+def _check_env(env: gym.Env) -> TaskEnv:
+    """The task under ``env`` (:func:`sb3_smc.envs.task_base`); :class:`LayoutMismatchError` where there is none or
+    ``env`` has SMC actions already."""
     try:
-        return pixelworld_base(env)
+        return task_base(env)
     except (TypeError, ValueError) as err:
         raise LayoutMismatchError(str(err)) from None
+
+
+def _check_layout(smcs: Sequence[SMC], task: TaskEnv, env: gym.Env) -> None:
+    """:class:`LayoutMismatchError` naming the first of ``smcs`` that senses or acts otherwise than ``task`` allows."""
+    layout = layout_of(task)
+    for smc in smcs:
+        wrong = []
+        if smc.layout.sensor_size != layout.sensor_size:
+            wrong.append(f"it senses {smc.layout.sensor_size} values, the task gives {layout.sensor_size}")
+        if smc.layout.primitives != layout.primitives:
+            wrong.append(f"its primitive actions are {list(smc.layout.primitives)}, the task's "
+                         f"{list(layout.primitives)}")
+        if wrong:
+            raise LayoutMismatchError(f"SMC {smc.name!r} does not fit the environment {_env_label(env)}: "
+                                      f"{'; '.join(wrong)} (it was trained on another environment or observation)")
 
 
 def _env_label(env: gym.Env) -> str:

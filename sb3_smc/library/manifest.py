@@ -2,11 +2,12 @@
 in which SMCs that call each other load. Manifests of earlier versions are converted on read
 (:mod:`sb3_smc.library.upgrade`).
 
-An entry of version 3 stores each fact once: the model file and its checksum, the SMC's training ``spec``, its
+An entry stores each fact once (since version 3): the model file and its checksum, the SMC's training ``spec``, its
 training ``record`` and its ``evaluations``. What the SMC is (kind, algorithm, children, primitives, frame stacking,
 environment layout) is read from the spec; only an SMC without one (trained elsewhere, e.g. imported from rl_zoo3)
 says it in an ``smc`` field instead. Summaries (action names, observation size, seed, test score ...) are derived
-on read (:class:`LibraryEntry`).
+on read (:class:`LibraryEntry`). Version 4 adds checksums of the manifest's own content, written by :func:`seal`
+and verified on read by :func:`unseal`: ``entry_sha256`` in each entry, ``manifest_sha256`` for the whole.
 
 JSON data in, JSON data (and typed records) out: reading and writing the files is :mod:`sb3_smc.library.storage`'s.
 """
@@ -14,6 +15,8 @@ JSON data in, JSON data (and typed records) out: reading and writing the files i
 from __future__ import annotations
 
 import functools
+import hashlib
+import json
 import re
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
@@ -34,20 +37,26 @@ from sb3_smc.records import (
     test_score_of,
 )
 
-__all__ = ["ALGORITHMS", "FORMAT", "FORMAT_VERSION", "MANIFEST", "SUMMARY_FIELDS", "LibraryEntry", "check_entries",
-           "check_version", "entry_json", "layout_json", "new_manifest", "topological_order"]
+__all__ = ["ALGORITHMS", "ENTRY_CHECKSUM", "FORMAT", "FORMAT_VERSION", "MANIFEST", "MANIFEST_CHECKSUM",
+           "SUMMARY_FIELDS", "LibraryEntry", "check_entries", "check_version", "content_sha256", "entry_json",
+           "layout_json", "new_manifest", "seal", "topological_order", "unseal"]
 
 FORMAT = "sb3-smc-library"
 """Value of the manifest's ``format`` field."""
-FORMAT_VERSION = 3
-"""Manifest version written. Versions 1 (sb3-smc 0.1) and 2 (each entry repeating its spec's facts and summaries)
-are read through :mod:`sb3_smc.library.upgrade`."""
+FORMAT_VERSION = 4
+"""Manifest version written. Versions 1 (sb3-smc 0.1), 2 (each entry repeating its spec's facts and summaries) and 3
+(no checksums of the manifest's content) are read through :mod:`sb3_smc.library.upgrade`."""
 MANIFEST = "manifest.json"
 ALGORITHMS = TRAINED_ALGORITHMS
 """Algorithms whose models a library stores (those ``train_smc`` trains; loaded with their class, ``device="cpu"``)."""
 
+ENTRY_CHECKSUM = "entry_sha256"
+"""The field of a version-4 entry holding the SHA-256 of its name and content (:func:`seal`)."""
+MANIFEST_CHECKSUM = "manifest_sha256"
+"""The field of a version-4 manifest holding the SHA-256 of its whole content (:func:`seal`)."""
 ENTRY_FIELDS = ("model", "sha256", "spec", "record", "evaluations")
-"""The fields of every version-3 entry; an SMC without a spec has an ``smc`` field too (:data:`SMC_FIELDS`)."""
+"""The fields of every entry (its checksum aside); an SMC without a spec has an ``smc`` field too
+(:data:`SMC_FIELDS`)."""
 SMC_FIELDS: dict[str, tuple[type, ...]] = {"kind": (str,), "algo": (str,), "children": (list,),
                                            "include_primitives": (bool,), "frame_stack": (int,)}
 """What an entry without a spec says in its ``smc`` field (plus ``layout`` for another environment's SMC)."""
@@ -109,7 +118,8 @@ def entry_json(name: str, algo: str, frame_stack: int, spec: TrainingSpec | None
                evaluations: tuple[EvaluationRecord, ...] = (), *, kind: str | None = None,
                children: tuple[str, ...] = (), include_primitives: bool = True,
                layout: Layout = PIXELWORLD_LAYOUT) -> dict[str, Any]:
-    """A version-3 entry (without ``model`` and ``sha256``, which the save adds).
+    """An entry of the current version (without ``model`` and ``sha256``, which the save adds, and the checksum of its
+    content, which :func:`seal` adds).
 
     With a ``spec``, the model's ``algo`` and ``frame_stack`` must be the spec's (:class:`LibraryError` otherwise: a
     model the manifest would describe wrongly is never written); without one, ``kind``, ``children``,
@@ -135,6 +145,64 @@ def entry_json(name: str, algo: str, frame_stack: int, spec: TrainingSpec | None
 
 def new_manifest(smcs: dict[str, dict[str, Any]]) -> dict[str, Any]:
     return {"format": FORMAT, "version": FORMAT_VERSION, "created_with": package_versions(), "smcs": smcs}
+
+
+_SHA256 = re.compile(r"[0-9a-f]{64}")
+
+
+def content_sha256(value: Any) -> str:
+    """The SHA-256 of JSON data's content, whatever its layout in a file (its canonical form: keys sorted, no
+    spaces)."""
+    text = json.dumps(value, sort_keys=True, separators=(",", ":"), ensure_ascii=False)
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+def _without(data: dict[str, Any], field: str) -> dict[str, Any]:
+    return {key: value for key, value in data.items() if key != field}
+
+
+def _entry_sha256(name: str, entry: dict[str, Any]) -> str:
+    return content_sha256([name, _without(entry, ENTRY_CHECKSUM)])
+
+
+def seal(manifest: dict[str, Any]) -> dict[str, Any]:
+    """``manifest`` with the checksums of its own content, as it is written: in each entry ``entry_sha256`` (of the
+    SMC's name and every other field of its entry), and ``manifest_sha256`` (of everything else, the entries'
+    checksums included). Checksums ``manifest`` holds already are replaced."""
+    smcs = {name: {**_without(entry, ENTRY_CHECKSUM), ENTRY_CHECKSUM: _entry_sha256(name, entry)}
+            for name, entry in manifest["smcs"].items()}
+    content = {**_without(manifest, MANIFEST_CHECKSUM), "smcs": smcs}
+    return {**content, MANIFEST_CHECKSUM: content_sha256(content)}
+
+
+def unseal(manifest: dict[str, Any], where: Path) -> dict[str, Any]:
+    """A version-4 manifest without its checksums, after checking that its content is what :func:`seal` wrote
+    (:class:`ManifestError` naming the file and the SMC whose entry changed, or saying that something outside the
+    entries did)."""
+    fix = ("edited by hand or damaged since sb3_smc wrote it; restore it, or write an edit meant to be kept with "
+           "sb3_smc.library.storage.write_manifest")
+    smcs = manifest.get("smcs")
+    if not isinstance(smcs, dict):
+        raise ManifestError(f"{where}: 'smcs' must be an object name -> entry, got {type(smcs).__name__}")
+    entries = {}
+    for name, entry in smcs.items():
+        if not isinstance(entry, dict):
+            raise ManifestError(f"{where}: entry {name!r} must be an object, got {type(entry).__name__}")
+        recorded = entry.get(ENTRY_CHECKSUM)
+        if not isinstance(recorded, str) or not _SHA256.fullmatch(recorded):
+            raise ManifestError(f"{where}: entry {name!r}: {ENTRY_CHECKSUM!r} must be the 64 hex digits of the "
+                                f"SHA-256 of the entry's content (version {FORMAT_VERSION}), got {recorded!r}")
+        if recorded != _entry_sha256(name, entry):
+            raise ManifestError(f"{where}: the entry of SMC {name!r} does not match its {ENTRY_CHECKSUM!r}: {fix}")
+        entries[name] = _without(entry, ENTRY_CHECKSUM)
+    recorded = manifest.get(MANIFEST_CHECKSUM)
+    if not isinstance(recorded, str) or not _SHA256.fullmatch(recorded):
+        raise ManifestError(f"{where}: {MANIFEST_CHECKSUM!r} must be the 64 hex digits of the SHA-256 of the "
+                            f"manifest's content (version {FORMAT_VERSION}), got {recorded!r}")
+    if recorded != content_sha256(_without(manifest, MANIFEST_CHECKSUM)):
+        raise ManifestError(f"{where}: the manifest does not match its {MANIFEST_CHECKSUM!r} outside the SMC entries "
+                            f"(its created_with changed, or a whole entry was added or removed): {fix}")
+    return {**_without(manifest, MANIFEST_CHECKSUM), "smcs": entries}
 
 
 def check_version(manifest: Any, where: Path) -> int:
@@ -178,7 +246,8 @@ def check_entries(manifest: dict[str, Any], where: Path) -> dict[str, LibraryEnt
 
 
 def parse_entry(name: str, entry: Any, where: Path) -> LibraryEntry:
-    """One version-3 entry, checked (:class:`ManifestError` naming the entry and the field)."""
+    """One entry of the current version (its checksum verified and removed: :func:`unseal`), checked
+    (:class:`ManifestError` naming the entry and the field)."""
     if not isinstance(entry, dict):
         raise ManifestError(f"{where}: entry {name!r} must be an object, got {type(entry).__name__}")
     missing = [f for f in ENTRY_FIELDS if f not in entry]
@@ -186,10 +255,11 @@ def parse_entry(name: str, entry: Any, where: Path) -> LibraryEntry:
         raise ManifestError(f"{where}: entry {name!r} lacks the field(s) {missing}")
     unknown = sorted(set(entry) - {*ENTRY_FIELDS, "smc"})
     if unknown:
-        spec_says = " (a version-3 entry reads what the SMC is from its spec)" if entry["spec"] is not None else ""
+        spec_says = " (since version 3 an entry reads what the SMC is from its spec)" if entry["spec"] is not None \
+            else ""
         raise ManifestError(f"{where}: entry {name!r}: unknown field(s) {unknown}{spec_says}; an entry has "
                             f"{list(ENTRY_FIELDS)}, and 'smc' when it has no spec")
-    if not isinstance(entry["sha256"], str) or not re.fullmatch(r"[0-9a-f]{64}", entry["sha256"]):
+    if not isinstance(entry["sha256"], str) or not _SHA256.fullmatch(entry["sha256"]):
         raise ManifestError(f"{where}: entry {name!r}: 'sha256' must be the 64 hex digits of the model file's "
                             f"SHA-256, got {entry['sha256']!r}")
     model = entry["model"]

@@ -1,13 +1,14 @@
 """How an SMC library lies on disk: reading and writing the manifest file, model files and checksums, adding and
 removing SMCs in place, and the atomic save (:mod:`pixelworld_env.atomic`). The manifest's schema and validation
-(and the conversion of version-1 manifests) are :mod:`sb3_smc.library.manifest`'s; its names that callers use
+(and the checksums of its content) are :mod:`sb3_smc.library.manifest`'s; its names that callers use
 through this module (``topological_order``, ``FORMAT`` ...) are re-exported here; :func:`check_manifest` reads a
 manifest of any version (the conversions: :mod:`sb3_smc.library.upgrade`).
 
 Layout::
 
     my-library/
-        manifest.json        {"format": "sb3-smc-library", "version": 3, "created_with": {...}, "smcs": {...}}
+        manifest.json        {"format": "sb3-smc-library", "version": 4, "created_with": {...}, "smcs": {...},
+                              "manifest_sha256": ...}
         models/<name>.zip    one SB3 ``model.save`` archive per SMC
 
 Nothing here knows about :class:`~sb3_smc.library.SMCLibrary` beyond the SMCs it is given.
@@ -47,6 +48,7 @@ from sb3_smc.library.manifest import (
     check_version,
     entry_json,
     new_manifest,
+    seal,
     topological_order,
 )
 from sb3_smc.library.upgrade import dropped_fields, upgrade
@@ -60,7 +62,7 @@ if TYPE_CHECKING:
 __all__ = ["ALGORITHMS", "FORMAT", "FORMAT_VERSION", "MANIFEST", "MODELS", "SUMMARY_FIELDS", "LibraryEntry",
            "add_to_library", "check_manifest", "check_model_file", "entry_for", "entry_json", "interrupted_hint",
            "link_copy", "load_model", "model_files", "new_manifest", "read_manifest", "remove_from_library", "sha256",
-           "topological_order", "write_library"]
+           "topological_order", "write_library", "write_manifest"]
 
 MODELS = "models"
 SAVING_MARKER = ".saving-"
@@ -176,20 +178,28 @@ def write_library(target: Path, smcs: Mapping[str, SMC], manifest: dict[str, Any
             fsync_file(file)
             entry["sha256"] = sha256(file)
         fsync_dir(tmp / MODELS)
-        atomic_write(tmp / MANIFEST, json.dumps(manifest, indent=2, allow_nan=False) + "\n")
+        write_manifest(tmp / MANIFEST, manifest)
         replace_directory(tmp, target)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
 
 
-def _current_manifest(root: Path) -> tuple[dict[str, Any], dict[str, LibraryEntry], Path]:
-    """The manifest of the library in ``root`` as the current version, its checked entries, and its path; a new,
-    empty manifest where there is none.
+def write_manifest(path: Path, manifest: dict[str, Any]) -> None:
+    """Write ``manifest`` (JSON data of the current version) to ``path`` atomically, with the checksums of its content
+    (:func:`~sb3_smc.library.manifest.seal`; those it holds are replaced). Every manifest is written here; so is a
+    deliberate edit by hand that a library is to load."""
+    atomic_write(path, json.dumps(seal(manifest), indent=2, allow_nan=False) + "\n")
 
-    A version-2 library is converted (the next write stores it as version 3, ``created_with`` saying who converted
-    it), unless an entry holds fields of its own that the conversion would drop; a version-1 library is refused
-    (its conversion drops metadata): :class:`ManifestError` saying how to convert it.
+
+def _current_manifest(root: Path) -> tuple[dict[str, Any], dict[str, LibraryEntry], Path]:
+    """The manifest of the library in ``root`` as the current version (its checksums verified and removed), its
+    checked entries, and its path; a new, empty manifest where there is none.
+
+    A version-2 or -3 library is converted (the next write stores it as the current version; for version 2
+    ``created_with`` then says who converted it), unless a version-2 entry holds fields of its own that the
+    conversion would drop; a version-1 library is refused (its conversion drops metadata): :class:`ManifestError`
+    saying how to convert it.
     """
     manifest_path = root / MANIFEST
     if not manifest_path.is_file():
@@ -199,13 +209,14 @@ def _current_manifest(root: Path) -> tuple[dict[str, Any], dict[str, LibraryEntr
     if version == 1:
         raise ManifestError(f"{manifest_path}: version-1 library (sb3-smc 0.1); convert it first: "
                             "SMCLibrary.load(path).save() writes it in the current version")
-    if version < FORMAT_VERSION:
+    if version == 2:
         extra = dropped_fields(manifest)
         if extra:
             shown = "; ".join(f"entry {name!r}: {fields}" for name, fields in extra.items())
             raise ManifestError(f"{manifest_path}: version-{version} library whose entries hold fields that writing "
                                 f"it as version {FORMAT_VERSION} would drop ({shown}); move them elsewhere first")
-        manifest = {**upgrade(manifest, manifest_path), "created_with": package_versions()}
+        manifest = {**manifest, "created_with": package_versions()}
+    manifest = upgrade(manifest, manifest_path)
     return manifest, check_entries(manifest, manifest_path), manifest_path
 
 
@@ -213,8 +224,8 @@ def add_to_library(root: Path, name: str, entry: dict[str, Any], model: bytes, *
     """Add one SMC to the library directory ``root`` without touching what is already there.
 
     The model file is written atomically first, then the manifest (read, the entry added, written atomically), so
-    an interruption leaves the library as it was or with the SMC complete; a version-2 library is written as the
-    current version (:func:`_current_manifest`), and ``name`` must be new. Creates the library when ``root`` has no
+    an interruption leaves the library as it was or with the SMC complete; a version-2 or -3 library is written as
+    the current version (:func:`_current_manifest`), and ``name`` must be new. Creates the library when ``root`` has no
     manifest. ``replace=True``: ``name`` must be there already (an SMC whose model file was damaged, trained
     again); its model file and entry are replaced the same way.
     """
@@ -227,7 +238,7 @@ def add_to_library(root: Path, name: str, entry: dict[str, Any], model: bytes, *
     file = smcs[name]["model"] if replace else model_file_for(name, [e["model"] for e in smcs.values()])
     atomic_write(root / file, model)
     smcs[name] = {"model": file, **entry, "sha256": hashlib.sha256(model).hexdigest()}
-    atomic_write(manifest_path, json.dumps(manifest, indent=2, allow_nan=False) + "\n")
+    write_manifest(manifest_path, manifest)
 
 
 def remove_from_library(root: Path, names: Collection[str]) -> None:
@@ -242,7 +253,7 @@ def remove_from_library(root: Path, names: Collection[str]) -> None:
     if callers:
         raise LibraryError(f"{manifest_path}: cannot remove {sorted(names)}: {callers} call them")
     files = [smcs.pop(name)["model"] for name in names]
-    atomic_write(manifest_path, json.dumps(manifest, indent=2, allow_nan=False) + "\n")
+    write_manifest(manifest_path, manifest)
     for file in files:
         (root / file).unlink(missing_ok=True)
 
@@ -282,8 +293,8 @@ def interrupted_hint(root: Path) -> str:
 
 
 def check_manifest(manifest: Any, where: Path) -> dict[str, LibraryEntry]:
-    """The entries of a manifest of any version (an earlier one converted: :func:`sb3_smc.library.upgrade.upgrade`),
-    checked and with their records parsed."""
+    """The entries of a manifest of any version (one of the current version checked against its checksums, an
+    earlier one converted: :func:`sb3_smc.library.upgrade.upgrade`), checked and with their records parsed."""
     return check_entries(upgrade(manifest, where), where)
 
 

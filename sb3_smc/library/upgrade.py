@@ -6,6 +6,8 @@
   environment layout), its action names and observation layout, and seven summary fields, all cross-checked on read.
   :func:`upgrade_v2` runs those checks (a version-2 file that contradicts itself is still an error) and keeps what
   version 3 stores.
+- Version 3: the content of version 4 without its checksums (:func:`sb3_smc.library.manifest.seal`), which are
+  written with it the next time it is written.
 
 JSON in, JSON out; saving a loaded library (``SMCLibrary.load(path).save()``) writes the current version.
 """
@@ -28,6 +30,7 @@ from sb3_smc.library.manifest import (
     check_version,
     parse_entry,
     parse_layout,
+    unseal,
 )
 from sb3_smc.records import (
     Budget,
@@ -44,14 +47,17 @@ __all__ = ["dropped_fields", "upgrade", "upgrade_v1", "upgrade_v2"]
 
 
 def upgrade(manifest: Any, where: Path) -> dict[str, Any]:
-    """``manifest`` (JSON) as the current version: unchanged if it is, converted step by step if older."""
+    """``manifest`` (JSON) as the current version without its checksums: one of the current version checked against
+    them (:func:`~sb3_smc.library.manifest.unseal`), an older one converted step by step."""
     version = check_version(manifest, where)
+    if version == FORMAT_VERSION:
+        return unseal(manifest, where)
     if version == 1:
         manifest = upgrade_v1(manifest, where)
         version = 2
     if version == 2:
         manifest = upgrade_v2(manifest, where)
-    return manifest
+    return {**manifest, "version": FORMAT_VERSION}
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -95,7 +101,7 @@ def upgrade_v2(manifest: dict[str, Any], where: Path) -> dict[str, Any]:
         checked = parse_entry(name, new, where)
         _check_v2_agreement(name, entry, checked, where)
         upgraded[name] = new
-    return {**manifest, "version": FORMAT_VERSION, "smcs": upgraded}
+    return {**manifest, "version": 3, "smcs": upgraded}
 
 
 def _check_v2_fields(name: str, entry: Any, where: Path) -> None:
