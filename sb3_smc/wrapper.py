@@ -78,7 +78,7 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
     * Observation: the one-hot 3 x 3 window (81), the last outcome of each SMC (0 until called in this
       episode), the one-hot previous action (zeros after reset) — :func:`sb3_smc.smc.observation_size`.
     * Reward of a call: the sum of the environment rewards of its primitive moves (shaping included).
-    * Time: a call counts as one step of the episode's ``max_steps`` budget (the paper), or, with
+    * Time: a call counts as one step of the episode's ``max_steps`` budget (the default), or, with
       ``count_primitive_steps=True``, as the number of moves it made (at least 1); calls are then also cut
       at the remaining budget.
     * ``include_primitives=False`` removes the four moves (the paper's "noprim" ablation); signals stay.

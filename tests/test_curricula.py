@@ -215,6 +215,37 @@ def test_a_node_whose_calls_cost_their_moves(tmp_path):
                                       ("container",))])
 
 
+def test_a_node_with_its_own_episode_length_and_call_cap() -> None:
+    """``max_steps`` / ``call_step_cap`` go to the node's spec's wrapper settings, round-trip through the file
+    format, are part of a node's identity, and a node without them has the settings it had before they existed."""
+    from sb3_smc.curricula.jobs import node_spec
+
+    curriculum = parse_curriculum(TINY.replace("    uses: [left, above]",
+                                               "    uses: [left, above]\n    max_steps: 400\n    call_step_cap: 25"))
+    container, left = curriculum.node("container"), curriculum.node("left")
+    assert (container.max_steps, container.call_step_cap, left.max_steps, left.call_step_cap) == (400, 25, 100, 100)
+    wrapper = node_spec(container, 0, ("left@0", "above@0")).wrapper
+    assert (wrapper.max_steps, wrapper.call_step_cap) == (400, 25)
+    assert node_spec(left, 0, ()).wrapper == node_spec(Node("left", LEFT), 0, ()).wrapper
+    assert not {"max_steps", "call_step_cap"} & set(left.settings())
+    assert (container.settings()["max_steps"], container.settings()["call_step_cap"]) == (400, 25)
+    assert parse_curriculum(curriculum.to_yaml()).nodes == curriculum.nodes
+    assert "400 steps an episode, calls cut at 25 moves" in describe(curriculum)
+    with pytest.raises(CurriculumError, match="node 'container' is defined differently"):
+        merge([curriculum, Curriculum("other", (*curriculum.nodes[:2], dataclasses.replace(container, max_steps=100)),
+                                      ("container",))])
+
+
+@pytest.mark.parametrize("key, value", [("max_steps", 0), ("max_steps", True), ("call_step_cap", 2.5),
+                                        ("call_step_cap", "ten")])
+def test_a_bad_episode_length_or_call_cap_names_the_line(key: str, value: object) -> None:
+    text = TINY.replace("  - name: above\n", f"  - name: above\n    {key}: {value!r}\n".replace("'", ""))
+    with pytest.raises(CurriculumError, match=rf"tiny.yml:6: node 'above': '{key}' must be a positive integer"):
+        parse_curriculum(text, source="tiny.yml")
+    with pytest.raises(CurriculumError, match=rf"node 'x': {key} must be a positive integer"):
+        Curriculum("bad", (Node("x", LEFT, **{key: value}),), ("x",))  # type: ignore[arg-type]
+
+
 def test_bad_hyperparameters_stop_before_any_training(tmp_path):
     path = tmp_path / "tiny.yml"
     path.write_text(TINY.replace("    uses: [left, above]", "    uses: [left, above]\n    hyperparameters: "

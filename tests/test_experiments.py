@@ -24,6 +24,7 @@ from sb3_smc.curricula.trainer import RunSettingsError
 from sb3_smc.errors import SMCError
 from sb3_smc.experiments import CATEGORIES, level2_targets, plan
 from sb3_smc.experiments.cnn import CHANNELS, encode, train_cnn
+from sb3_smc.experiments.design import PAPER_CATEGORIES, SWEEP_METHODS, SWEEP_TARGETS
 from sb3_smc.experiments.report import write_report
 from sb3_smc.experiments.runner import RESULT_FIELDS, reported, run_experiment
 from sb3_smc.experiments.statistics import paired_ttest
@@ -469,6 +470,45 @@ def test_curr_with_calls_that_cost_their_moves():
             assert own == theirs
     order = design.curriculum.order(design.training_targets)
     assert len(order) == len(set(order))  # the lower nodes are shared
+
+
+def test_the_fair_methods_change_only_their_episode_length_or_call_cap():
+    """``base-400``: the flat SMC with 400 steps an episode, named ``base-400/<target>``; the sweep's methods: curr's
+    target nodes with their call cap or (calls costing their moves) episode length changed, calling curr's lower
+    levels; their jobs are base's and curr's but for their names and those wrapper settings."""
+    from sb3_smc.curricula.jobs import node_spec
+
+    design = plan([LEFT_OF, IN_CONTAINER], ["base", "curr", "base-400", *SWEEP_METHODS])
+    changed = {"base-400": {"max_steps": 400}, "curr-cap10": {"call_step_cap": 10}, "curr-cap25": {"call_step_cap": 25},
+               "curr-cap50": {"call_step_cap": 50},
+               "curr-moves-200": {"count_primitive_steps": True, "max_steps": 200},
+               "curr-moves-400": {"count_primitive_steps": True, "max_steps": 400}}
+    assert set(changed) == {"base-400", *SWEEP_METHODS}
+    for method, wrapper in changed.items():
+        for target in (LEFT_OF, IN_CONTAINER):
+            ours, theirs = design.nodes[(target, method)], design.nodes[(target, "base" if method == "base-400"
+                                                                                 else "curr")]
+            assert ours == tuple(f"{method}/{n}" for n in theirs)
+            for mine, base in zip(ours, theirs, strict=True):
+                node, copy = design.curriculum.node(base), design.curriculum.node(mine)
+                children = tuple(f"{u}@0" for u in node.uses)
+                own, other = (node_spec(n, 1, children, timesteps=2000).to_dict() for n in (copy, node))
+                assert own.pop("name") == f"{method}/{other.pop('name')}"
+                assert own.pop("wrapper") == {**other.pop("wrapper"), **wrapper}
+                assert own == other
+
+
+def test_the_sweep_targets_cover_both_kinds_and_every_category():
+    from pixelworld_env.datasets import catalog
+
+    assert len(SWEEP_TARGETS) == len(set(SWEEP_TARGETS)) >= 12 and set(SWEEP_TARGETS) <= set(level2_targets())
+    infos = [catalog.dataset(t) for t in SWEEP_TARGETS]
+    assert {i.kind for i in infos} == {"classification", "bring-about"}
+    assert {i.category for i in infos} == set(PAPER_CATEGORIES)
+    required = ("ba_self-left-of-two-objects_from_not-left-on-floor",
+                "ba_self-right-of-two-objects_from_not-right-on-floor", LEFT_OF,
+                "ba_self-in-container_from_between-potential-containers")
+    assert set(required) <= set(SWEEP_TARGETS)
 
 
 def test_a_run_reduced_to_its_records_resumes_without_model_files(tmp_path):

@@ -24,6 +24,7 @@ from sb3_smc.experiments.design import (
     METHOD_REGISTRY,
     METHODS,
     SMC_METHODS,
+    SWEEP_METHODS,
     plan,
 )
 from sb3_smc.hyperparameters import (
@@ -112,9 +113,10 @@ def test_each_method_trains_what_its_entry_says() -> None:
         elif method.flat:
             for target in (LEFT_OF, IN_CONTAINER):
                 (node,) = design.nodes[(target, name)]
-                assert node == (f"{name}/{target}" if method.own_learner else target)
+                assert node == (f"{name}/{target}" if method.own_learner or method.max_steps else target)
                 entry = design.curriculum.node(node)
                 assert (entry.task, entry.algo, entry.uses) == (target, method.algo, ())
+                assert entry.max_steps == (method.max_steps or 100)
                 policy = entry.hyperparameters.get("policy")
                 assert policy == (recurrent_policy(method.rnn, method.algo) if method.rnn else None)
         else:  # the shipped entries' target nodes, or (settings of its own) copies of them, changed
@@ -127,7 +129,11 @@ def test_each_method_trains_what_its_entry_says() -> None:
                     assert entry.budget_scale == method.budget_scale(entry) >= 1
                     assert (entry.budget_scale > 1) == (method.budget_actions is not None)
                     assert entry.count_primitive_steps == method.count_primitive_steps
+                    assert (entry.max_steps, entry.call_step_cap) == (method.max_steps or 100,
+                                                                      method.call_step_cap or 100)
                     assert not any(design.curriculum.node(u).count_primitive_steps for u in entry.uses)
+                    assert all((design.curriculum.node(u).max_steps, design.curriculum.node(u).call_step_cap)
+                               == (100, 100) for u in entry.uses)
     assert design.cnn_skipped == [IN_CONTAINER]
 
 
@@ -150,7 +156,7 @@ def test_the_command_line_takes_its_choices_and_defaults_from_the_registries(
     assert calls["experiment"]["methods"] == list(DEFAULT_METHODS) == [  # the paper's six
         "cnn", "base", "curr", "canon", "curr-noprim", "canon-noprim"]
     assert not any(METHOD_REGISTRY[m].own_learner or METHOD_REGISTRY[m].paper for m in DEFAULT_METHODS)
-    assert set(METHODS) - set(DEFAULT_METHODS) == {"base-gru", "canon-scaled", "curr-moves"}
+    assert set(METHODS) - set(DEFAULT_METHODS) == {"base-gru", "canon-scaled", "curr-moves", "base-400", *SWEEP_METHODS}
     assert calls["experiment"]["repeats"] == DEFAULT_REPEATS
     for command in ("experiment", "train"):
         assert calls[command]["seeds"] == DEFAULT_SEEDS and calls[command]["backend"] == BACKENDS[0]

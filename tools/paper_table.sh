@@ -5,7 +5,10 @@
 #                                                base-gru: the second flat baseline, method base-gru on all 51 targets;
 #                                                canon-scaled: canon with its budget x SMC actions / 8, all 51;
 #                                                curr-moves, curr-moves-cl: curr whose calls cost their moves,
-#                                                the 17 bring-about, the 34 classification targets)
+#                                                the 17 bring-about, the 34 classification targets;
+#                                                base-400: the flat SMC with 400 moves an episode, all 51;
+#                                                readings: the sweep of each reading's free parameter, SWEEP_METHODS
+#                                                on SWEEP_TARGETS of sb3_smc.experiments.design)
 #   tools/paper_table.sh continue                the queue (docs/results/paper/queue.txt), on this machine or a new one:
 #                                                waits for a running `run`, then for each category whose records are not
 #                                                complete sets up its commit's worktree and venv (once), restores its run
@@ -24,10 +27,13 @@ set -eu
 RUNS=${RUNS:-/work/runs}; RUN_ENV=${RUN_ENV:-/work/run-env}
 repo=$(cd "$(dirname "$0")/.." && pwd)
 
-selection() {  # the experiment options of a category (base-gru, canon-scaled: that method on all 51 targets;
-  # curr-moves: on the 17 bring-about targets; curr-moves-cl: on the 34 classification targets)
+selection() {  # the experiment options of a category (base-gru, canon-scaled, base-400: that method on all 51
+  # targets; curr-moves: on the 17 bring-about targets; curr-moves-cl: on the 34 classification targets; readings:
+  # the sweep's methods on its 12 targets)
   case $1 in
-    base-gru|canon-scaled) echo "--methods $1 --category all" ;;
+    base-gru|canon-scaled|base-400) echo "--methods $1 --category all" ;;
+    readings) "$RUN_ENV/bin/python" -I -c 'from sb3_smc.experiments.design import SWEEP_METHODS, SWEEP_TARGETS
+print("--methods", ",".join(SWEEP_METHODS), "--targets", ",".join(SWEEP_TARGETS))' ;;
     curr-moves|curr-moves-cl) echo "--methods curr-moves --targets $("$RUN_ENV/bin/python" -I -c 'import sys
 from pixelworld_env.datasets import catalog
 from sb3_smc.experiments import level2_targets

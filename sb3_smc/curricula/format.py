@@ -8,7 +8,7 @@ lower-level nodes as actions. Example::
     method: smc-curr                 # optional: smc-base | smc-curr | smc-canon | anything (reports group by it)
     description: corners, then containment
     defaults: {timesteps: 200000}    # optional: algo, timesteps, budget_scale, primitives, count_primitive_steps,
-                                     #           hyperparameters
+                                     #           max_steps, call_step_cap, hyperparameters
     nodes:
       - name: cl_self-in-left-corner_vs_on-hline
         task: cl_self-in-left-corner_vs_on-hline
@@ -41,6 +41,7 @@ import yaml
 from sb3_smc.dag import CycleError, children_first
 from sb3_smc.errors import SMCError
 from sb3_smc.hyperparameters import ALGORITHMS
+from sb3_smc.records import WrapperSettings
 
 __all__ = ["FORMAT_KEYS", "NODE_KEYS", "SEED_SEPARATOR", "Curriculum", "CurriculumError", "Node", "describe",
            "is_env_id", "load_curriculum", "merge", "parse_curriculum"]
@@ -48,8 +49,12 @@ __all__ = ["FORMAT_KEYS", "NODE_KEYS", "SEED_SEPARATOR", "Curriculum", "Curricul
 FORMAT_KEYS = ("curriculum", "method", "description", "defaults", "nodes", "targets")
 """Top-level keys of a curriculum file."""
 NODE_KEYS = ("name", "task", "uses", "primitives", "algo", "timesteps", "budget_scale", "count_primitive_steps",
-             "hyperparameters")
-"""Keys of a node (``defaults`` takes the last six)."""
+             "max_steps", "call_step_cap", "hyperparameters")
+"""Keys of a node (``defaults`` takes the last eight)."""
+DEFAULT_MAX_STEPS = WrapperSettings.max_steps
+"""An episode's steps (decisions, or moves where calls cost their moves): the paper's 100."""
+DEFAULT_CALL_STEP_CAP = WrapperSettings.call_step_cap
+"""The moves an SMC call may make (its nested calls' included) before it is cut off."""
 SEED_SEPARATOR = "@"
 """SMC names in a curriculum's library are ``<node>@<seed>``; node names may not contain it."""
 
@@ -65,8 +70,9 @@ class Node:
     ``algo`` / ``timesteps`` ``None``: the run's settings (``train_curriculum``'s ``algo`` and ``timesteps``).
     ``budget_scale`` multiplies the node's budget, whichever gives it (a node that calls many SMCs may need longer).
     ``count_primitive_steps``: a call of a used node costs the episode the moves it made instead of one step
-    (:class:`~sb3_smc.wrapper.HierarchicalSMCWrapper`). ``line`` is where the node was defined (not part of its
-    identity).
+    (:class:`~sb3_smc.wrapper.HierarchicalSMCWrapper`). ``max_steps``: the episode's length (decisions, or moves
+    where calls cost their moves); ``call_step_cap``: the moves a call of a used node may make (its nested calls'
+    included) before it is cut off. ``line`` is where the node was defined (not part of its identity).
     """
 
     name: str
@@ -78,6 +84,8 @@ class Node:
     hyperparameters: dict[str, Any] = field(default_factory=dict)
     budget_scale: float = 1.0
     count_primitive_steps: bool = False
+    max_steps: int = DEFAULT_MAX_STEPS
+    call_step_cap: int = DEFAULT_CALL_STEP_CAP
     line: int | None = field(default=None, compare=False)
 
     @property
@@ -87,13 +95,15 @@ class Node:
         return self.task if is_env_id(self.task) else f"PW-{self.task}-v0"
 
     def settings(self) -> dict[str, Any]:
-        """What decides the trained SMCs (two nodes of the same name must agree on it); ``budget_scale`` only where
-        it is not 1, ``count_primitive_steps`` only where true (so that the settings of runs from before them stay
-        the same)."""
+        """What decides the trained SMCs (two nodes of the same name must agree on it); ``budget_scale``,
+        ``count_primitive_steps``, ``max_steps`` and ``call_step_cap`` only where not their defaults (so that the
+        settings of runs from before them stay the same)."""
         scale = {"budget_scale": self.budget_scale} if self.budget_scale != 1 else {}
         count = {"count_primitive_steps": True} if self.count_primitive_steps else {}
+        steps = {"max_steps": self.max_steps} if self.max_steps != DEFAULT_MAX_STEPS else {}
+        cap = {"call_step_cap": self.call_step_cap} if self.call_step_cap != DEFAULT_CALL_STEP_CAP else {}
         return {"task": self.task, "uses": list(self.uses), "primitives": self.include_primitives,
-                "algo": self.algo, "timesteps": self.timesteps, **scale, **count,
+                "algo": self.algo, "timesteps": self.timesteps, **scale, **count, **steps, **cap,
                 "hyperparameters": self.hyperparameters}
 
 
@@ -189,6 +199,10 @@ class Curriculum:
                 item["budget_scale"] = node.budget_scale
             if node.count_primitive_steps:
                 item["count_primitive_steps"] = True
+            if node.max_steps != DEFAULT_MAX_STEPS:
+                item["max_steps"] = node.max_steps
+            if node.call_step_cap != DEFAULT_CALL_STEP_CAP:
+                item["call_step_cap"] = node.call_step_cap
             if node.hyperparameters:
                 item["hyperparameters"] = node.hyperparameters
             nodes.append(item)
@@ -326,13 +340,19 @@ def _node(item: Any, line: int, defaults: Mapping[str, Any], source: str) -> Nod
     scale = settings.get("budget_scale", 1.0)
     if isinstance(scale, bool) or not isinstance(scale, int | float) or not math.isfinite(scale) or scale <= 0:
         raise CurriculumError(f"{where}: {label}: 'budget_scale' must be a positive number, got {scale!r}")
+    steps = {key: settings.get(key, default) for key, default in (("max_steps", DEFAULT_MAX_STEPS),
+                                                                  ("call_step_cap", DEFAULT_CALL_STEP_CAP))}
+    for key, value in steps.items():
+        if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+            raise CurriculumError(f"{where}: {label}: {key!r} must be a positive integer, got {value!r}")
     hyper = settings.get("hyperparameters") or {}
     if not isinstance(hyper, dict):
         raise CurriculumError(f"{where}: {label}: 'hyperparameters' must be a mapping, got {hyper!r}")
     try:
         return Node(name=item["name"], task=item["task"], uses=tuple(uses), include_primitives=primitives,
                     algo=settings.get("algo"), timesteps=timesteps, hyperparameters=hyper, budget_scale=float(scale),
-                    count_primitive_steps=count, line=line)
+                    count_primitive_steps=count, max_steps=steps["max_steps"],
+                    call_step_cap=steps["call_step_cap"], line=line)
     except CurriculumError as err:
         raise CurriculumError(f"{where}: {label}: {err}") from None
 
@@ -403,6 +423,11 @@ def _validate(curriculum: Curriculum) -> None:
         if not isinstance(node.count_primitive_steps, bool):
             raise CurriculumError(f"{at(node)}: node {node.name!r}: count_primitive_steps must be true or false, got "
                                   f"{node.count_primitive_steps!r}")
+        for key in ("max_steps", "call_step_cap"):
+            value = getattr(node, key)
+            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+                raise CurriculumError(f"{at(node)}: node {node.name!r}: {key} must be a positive integer, got "
+                                      f"{value!r}")
         if node.name in node.uses:
             raise CurriculumError(f"{at(node)}: node {node.name!r} uses itself")
         if len(set(node.uses)) != len(node.uses):
@@ -476,6 +501,10 @@ def describe(curriculum: Curriculum) -> str:
                 extra.append(f"budget x{node.budget_scale:g}")
             if node.count_primitive_steps:
                 extra.append("calls cost their moves")
+            if node.max_steps != DEFAULT_MAX_STEPS:
+                extra.append(f"{node.max_steps} steps an episode")
+            if node.call_step_cap != DEFAULT_CALL_STEP_CAP:
+                extra.append(f"calls cut at {node.call_step_cap} moves")
             head = f"  {mark} {name}" + (f" ({', '.join(extra)})" if extra else "")
             lines.append(head + (f" uses {', '.join(node.uses)}" if node.uses else ""))
     lines.append("(* = target)")

@@ -122,7 +122,8 @@ def node_spec(node: Node, seed: int, children: tuple[str, ...], *, timesteps: in
     return TrainingSpec(name=job_name(node.name, seed), task=TaskSpec(node.env_id).resolved(), algo=algo,
                         hyperparameters=hyperparameters, seed=seed, budget=Budget(node_budget(node, timesteps)),
                         wrapper=WrapperSettings(include_primitives=node.include_primitives,
-                                                count_primitive_steps=node.count_primitive_steps),
+                                                count_primitive_steps=node.count_primitive_steps,
+                                                max_steps=node.max_steps, call_step_cap=node.call_step_cap),
                         children=children)
 
 

@@ -5,10 +5,14 @@ Methods (:data:`METHOD_REGISTRY`): ``cnn`` (the passive CNN baseline, classifica
 flat SMC on the target), ``curr`` (the hand-designed smc-curr entries, 1-3 per target), ``canon`` (the canonical
 smc-canon entry) and their ``-noprim`` variants (:data:`DEFAULT_METHODS`, the paper's); ``base-gru``, a flat SMC
 with the paper's learner (RecurrentTRPO with a GRU) whatever the run's learner, a second flat baseline;
-``canon-scaled``, canon with a budget that grows with the SMC actions of each target node; and ``curr-moves``, curr
-whose target nodes' SMC calls cost the episode their moves (at most 100 moves an episode, as a flat SMC). Every SMC
-method's jobs are nodes of curricula (shipped ones, or a flat method's); :func:`plan` merges them so that a
-lower-level node shared by several methods is trained once.
+``canon-scaled``, canon with a budget that grows with the SMC actions of each target node; ``curr-moves``, curr
+whose target nodes' SMC calls cost the episode their moves (at most 100 moves an episode, as a flat SMC). The fair
+comparisons (docs/experiments.md, "Equal budgets and the readings of a call"): ``base-400``, the flat SMC with 400
+moves an episode (as many as curr makes, median, on every target probed); the sweep of the one free parameter of each
+reading of a call, ``curr-cap10`` / ``-cap25`` / ``-cap50`` (a call one step, cut after 10 / 25 / 50 moves; ``curr``
+is the cap of 100) and ``curr-moves-200`` / ``-400`` (calls cost their moves, 200 / 400 moves an
+episode; ``curr-moves`` is 100). Every SMC method's jobs are nodes of curricula (shipped ones, or a flat method's);
+:func:`plan` merges them so that a lower-level node shared by several methods is trained once.
 """
 
 from __future__ import annotations
@@ -24,7 +28,8 @@ from sb3_smc.errors import SMCError
 from sb3_smc.hyperparameters import recurrent_policy
 
 __all__ = ["CATEGORIES", "DEFAULT_METHODS", "DEFAULT_REPEATS", "METHODS", "METHOD_REGISTRY", "PAPER_CATEGORIES",
-           "SMC_METHODS", "ExperimentMethod", "ExperimentPlan", "level2_targets", "plan"]
+           "SMC_METHODS", "SWEEP_METHODS", "SWEEP_TARGETS", "ExperimentMethod", "ExperimentPlan", "level2_targets",
+           "plan"]
 
 
 @dataclass(frozen=True)
@@ -58,6 +63,10 @@ class ExperimentMethod:
     count_primitive_steps: bool = False
     """Its target nodes' calls cost the episode the moves they made, not one step each (``curr-moves``): the
     episode's 100 steps bound the moves as a flat SMC's do."""
+    max_steps: int | None = None
+    """Its target nodes' episode length (decisions; moves where calls cost their moves); ``None``: the paper's 100."""
+    call_step_cap: int | None = None
+    """The moves a call of its target nodes may make before it is cut off; ``None``: the default 100."""
 
     @property
     def flat(self) -> bool:
@@ -74,6 +83,17 @@ class ExperimentMethod:
         """Whether it fixes its SMCs' learner (the run's ``algo`` / ``rnn`` must then be left unset)."""
         return self.algo is not None or self.rnn is not None
 
+    @property
+    def _changes_episodes(self) -> bool:
+        """Whether it changes how its target nodes' episodes count calls and moves."""
+        return self.count_primitive_steps or self.max_steps is not None or self.call_step_cap is not None
+
+    def _with_episodes(self, node: Node) -> Node:
+        """``node`` with this method's ``count_primitive_steps``, ``max_steps`` and ``call_step_cap``."""
+        return dataclasses.replace(node, count_primitive_steps=node.count_primitive_steps or self.count_primitive_steps,
+                                   max_steps=self.max_steps or node.max_steps,
+                                   call_step_cap=self.call_step_cap or node.call_step_cap)
+
     def budget_scale(self, node: Node) -> float:
         """The factor on the run's budget for target ``node``: its SMC actions over :attr:`budget_actions`, at least
         1 (the two best seeds of each node it uses are its SMC actions)."""
@@ -84,12 +104,16 @@ class ExperimentMethod:
     @property
     def changes_targets(self) -> bool:
         """Whether it trains the target nodes of its curricula with settings of its own (:meth:`targets_of`)."""
-        return self.budget_actions is not None or self.count_primitive_steps
+        return self.budget_actions is not None or self._changes_episodes
 
     @property
     def _change(self) -> str:
         changes = (["the budget of its targets scaled by their SMC actions"] if self.budget_actions is not None
                    else []) + (["the calls of its targets costing their moves"] if self.count_primitive_steps else [])
+        if self.max_steps is not None:
+            changes.append(f"{self.max_steps} steps an episode")
+        if self.call_step_cap is not None:
+            changes.append(f"calls cut after {self.call_step_cap} moves")
         return " and ".join(changes)
 
     def targets_of(self, curriculum: Curriculum, names: Sequence[str]) -> tuple[Curriculum, list[str]]:
@@ -102,9 +126,8 @@ class ExperimentMethod:
         if used & set(names):
             raise CurriculumError(f"{curriculum.name}: {sorted(used & set(names))[0]!r} is used by another node: "
                                   f"method {self.name} changes top nodes only")
-        copies = [dataclasses.replace(node, name=f"{self.name}/{node.name}", line=None,
-                                      budget_scale=node.budget_scale * self.budget_scale(node),
-                                      count_primitive_steps=node.count_primitive_steps or self.count_primitive_steps)
+        copies = [self._with_episodes(dataclasses.replace(node, name=f"{self.name}/{node.name}", line=None,
+                                                          budget_scale=node.budget_scale * self.budget_scale(node)))
                   for node in map(curriculum.node, names)]
         return Curriculum(f"{self.name}/{curriculum.name}", (*curriculum.nodes, *copies),
                           tuple(c.name for c in copies), method=f"smc-{self.name}",
@@ -113,13 +136,14 @@ class ExperimentMethod:
 
     def flat_node(self, target: str) -> Node:
         """The node of its flat SMC on ``target``: named as the target for ``base``, ``<method>/<target>`` for a
-        flat method of its own learner."""
+        flat method of its own learner or episode length."""
         if not self.flat:
             raise SMCError(f"method {self.name!r} trains no flat SMCs")
-        if not self.own_learner:
+        if not self.own_learner and not self._changes_episodes:
             return Node(target, target)
         hyperparameters = {"policy": recurrent_policy(self.rnn, self.algo)} if self.rnn is not None else {}
-        return Node(f"{self.name}/{target}", target, algo=self.algo, hyperparameters=hyperparameters)
+        return self._with_episodes(Node(f"{self.name}/{target}", target, algo=self.algo,
+                                        hyperparameters=hyperparameters))
 
 
 METHOD_REGISTRY: dict[str, ExperimentMethod] = {method.name: method for method in (
@@ -135,13 +159,40 @@ METHOD_REGISTRY: dict[str, ExperimentMethod] = {method.name: method for method i
                      curricula="smc-canon", paper="canon", budget_actions=8),
     ExperimentMethod("curr-moves", "curr-moves (curr, a call costs its moves)", "#a0522d", curricula="smc-curr",
                      paper="curr", count_primitive_steps=True),
+    ExperimentMethod("base-400", "base-400 (flat SMC, 400 moves an episode)", "#1f3d7a", paper="base",
+                     max_steps=400),
+    *(ExperimentMethod(f"curr-cap{cap}", f"curr-cap{cap} (curr, a call cut after {cap} moves)", colour,
+                       curricula="smc-curr", paper="curr", call_step_cap=cap)
+      for cap, colour in ((10, "#fde0c5"), (25, "#f9b97f"), (50, "#e8893f"))),
+    *(ExperimentMethod(f"curr-moves-{steps}", f"curr-moves-{steps} (curr, calls cost their moves, {steps} an episode)",
+                       colour, curricula="smc-curr", paper="curr", count_primitive_steps=True, max_steps=steps)
+      for steps, colour in ((200, "#c47a4a"), (400, "#6b3310"))),
 )}
 """Every method by name, in the order of the report's columns."""
 METHODS = tuple(METHOD_REGISTRY)
-"""Every method's name (the paper's six, ``base-gru``, ``canon-scaled`` and ``curr-moves``)."""
+"""Every method's name (the paper's six, then the checks of the method and the fair comparisons)."""
 DEFAULT_METHODS = METHODS[:6]
 """The paper's six methods: ``sb3-smc experiment``'s default ``--methods``."""
 SMC_METHODS = tuple(name for name, method in METHOD_REGISTRY.items() if method.smc)
+SWEEP_METHODS = ("curr-cap10", "curr-cap25", "curr-cap50", "curr-moves-200", "curr-moves-400")
+"""The sweep of the one free parameter of each reading of a call (with ``curr``, the cap of 100, and ``curr-moves``,
+100 moves an episode)."""
+SWEEP_TARGETS = (
+    "ba_self-in-container_from_between-potential-containers",  # headline; containment
+    "ba_self-in-container_from_on-floor",
+    "cl_self-in-container_vs_noncontainer",
+    "cl_container-on-floor_vs_corner",
+    "cl_self-left-of-two-objects-vs-one",  # headline; objcon
+    "cl_self-inside-container_vs_rest",
+    "cl_self-right-of-container_vs_object",
+    "ba_self-left-of-two-objects_from_not-left-on-floor",  # objects: the original flat SMCs 100, curr-moves 5.6
+    "ba_self-right-of-two-objects_from_not-right-on-floor",  # and 3.2
+    "cl_object-on-floor_vs_not",
+    "cl_self-between-two-objects_vs_not-between-on-floor",
+    "ba_self-in-target-container_from_nontarget-container",  # search
+)
+"""The sweep's fixed targets, chosen before its run: both kinds and every category, the two headline targets and the
+two where the original flat SMCs scored 100 and curr-moves 5.6 and 3.2."""
 CATEGORIES = ("containment", "objcon", "objects", "search", "pushable")
 PAPER_CATEGORIES = CATEGORIES[:4]
 """The categories of the released benchmark (``all``); ``pushable`` is the curriculum sb3-smc designed."""
