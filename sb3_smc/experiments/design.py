@@ -174,9 +174,10 @@ METHODS = tuple(METHOD_REGISTRY)
 DEFAULT_METHODS = METHODS[:6]
 """The paper's six methods: ``sb3-smc experiment``'s default ``--methods``."""
 SMC_METHODS = tuple(name for name, method in METHOD_REGISTRY.items() if method.smc)
-SWEEP_METHODS = ("curr-cap10", "curr-cap25", "curr-cap50", "curr-moves-200", "curr-moves-400")
-"""The sweep of the one free parameter of each reading of a call (with ``curr``, the cap of 100, and ``curr-moves``,
-100 moves an episode)."""
+SWEEP_METHODS = ("curr-cap10", "curr-cap25", "curr-cap50", "curr", "curr-moves", "curr-moves-200", "curr-moves-400")
+"""The sweep of the one free parameter of each reading of a call: a call one step, cut after 10, 25, 50 or 100 moves
+(``curr``); calls costing their moves, 100 (``curr-moves``), 200 or 400 moves an episode. Run together, so that every
+setting calls the same lower-level SMCs."""
 SWEEP_TARGETS = (
     "ba_self-in-container_from_between-potential-containers",  # headline; containment
     "ba_self-in-container_from_on-floor",
