@@ -8,6 +8,9 @@
   the policy itself was acting, and the outcome of every SMC call.
 * :func:`bar_panels`: Fig. 5-style grouped bars, one panel per kind or category, an error bar only where there is
   more than one value behind a bar.
+
+Legends, titles and captions are fitted to the figure's width (:func:`fitted_legend`, :func:`fit_text`), so that no
+text leaves the canvas whatever the methods and their labels (``tests/test_figures.py``).
 """
 
 from __future__ import annotations
@@ -31,12 +34,14 @@ from sb3_smc.experiments.design import METHOD_REGISTRY
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
+    from matplotlib.legend import Legend
+    from matplotlib.text import Text
 
     from pixelworld_env.envs.env import PixelWorldEnv
     from sb3_smc.smc import SMC
 
-__all__ = ["METHOD_COLORS", "METHOD_LABELS", "Panel", "bar_panels", "goal_cells", "pyplot", "save_figure",
-           "trajectory_figure", "timeline_figure"]
+__all__ = ["METHOD_COLORS", "METHOD_LABELS", "Panel", "bar_panels", "fit_text", "fitted_legend", "goal_cells", "pyplot",
+           "save_figure", "trajectory_figure", "timeline_figure"]
 
 METHOD_COLORS = {name: method.colour for name, method in METHOD_REGISTRY.items()}
 METHOD_LABELS = {name: method.label for name, method in METHOD_REGISTRY.items()}
@@ -53,6 +58,53 @@ def pyplot() -> Any:
     import matplotlib.pyplot as plt
 
     return plt
+
+
+FIT = 0.98
+"""The share of a figure's width that a legend, title or caption may take."""
+LEGEND_LABEL_WIDTH = 32
+"""Characters per line of a legend label wrapped to fit (:func:`fitted_legend`)."""
+
+
+def fit_text(text: Text, fig: Figure) -> None:
+    """Wrap ``text`` (a title or caption centred on the figure) onto lines short enough for the figure's width."""
+    lines = text.get_text().splitlines()
+    width = max(map(len, lines), default=0)
+    while text.get_window_extent().width > FIT * fig.bbox.width and width > 10:
+        width = min(width - 1, int(0.9 * width))
+        text.set_text("\n".join(textwrap.fill(line, width) for line in lines))
+
+
+def fitted_legend(fig: Figure, handles: Sequence[Any], labels: Sequence[str], *, columns: int,
+                  **kwargs: Any) -> Legend:
+    """A figure legend (``kwargs``: its placement and font) that fits the figure's width: its labels whole in the
+    most columns, up to ``columns``, that fit, if at least two do (or one where there is one label); else the labels
+    wrapped, in the most columns that fit; where not even one column of wrapped labels fits, the figure is widened to
+    the legend."""
+    most = min(columns, len(labels))
+    wrapped = [textwrap.fill(label, LEGEND_LABEL_WIDTH) for label in labels]
+    legend = None
+    for texts, ncol in [*((labels, n) for n in range(most, min(2, most) - 1, -1)),
+                        *((wrapped, n) for n in range(most, 0, -1))]:
+        if legend is not None:
+            legend.remove()
+        legend = fig.legend(handles, texts, ncol=ncol, **kwargs)
+        width = legend.get_window_extent().width
+        if width <= FIT * fig.bbox.width:
+            return legend
+    if legend is None:
+        raise ValueError("a legend needs at least one label")
+    fig.set_figwidth(width / FIT / fig.dpi)
+    return legend
+
+
+def _share(artist: Any, fig: Figure, *, grow: bool = False) -> float:
+    """The share of the figure's height that ``artist`` takes, plus a margin of 0.05 inch; ``grow``: the figure is
+    made taller by the artist's height first (the axes keep theirs)."""
+    height = artist.get_window_extent().height / fig.dpi
+    if grow:
+        fig.set_figheight(fig.get_figheight() + height)
+    return (height + 0.05) / fig.get_figheight()
 
 
 def save_figure(fig: Figure, path: Path) -> Path:
@@ -127,11 +179,10 @@ def trajectory_figure(smcs: Mapping[str, SMC], target: str, path: str | Path, *,
                 ax.set_title(method, fontsize=8)
             if j == 0:
                 ax.set_ylabel(f"env {i}", fontsize=7)
-    title = f"{target}: visited cells over {repeats} test episodes"
-    fig.suptitle(textwrap.fill(title, width=max(30, int(20 * len(smcs)))), fontsize=8)  # narrow figures: lines
-    key = textwrap.fill(TRAJECTORY_KEY, width=max(40, int(30 * len(smcs))))
-    fig.text(0.5, 0.005, key, ha="center", va="bottom", fontsize=5.5)
-    fig.tight_layout(rect=(0, 0.02 + 0.012 * key.count("\n") + 0.3 / (1.5 * count), 1, 1))
+    fit_text(fig.suptitle(f"{target}: visited cells over {repeats} test episodes", fontsize=8), fig)
+    key = fig.text(0.5, 0.005, TRAJECTORY_KEY, ha="center", va="bottom", fontsize=5.5)
+    fit_text(key, fig)
+    fig.tight_layout(rect=(0, _share(key, fig), 1, 1))
     return save_figure(fig, Path(path))
 
 
@@ -164,13 +215,16 @@ def timeline_figure(smc: SMC, target: str, path: str | Path, *, index: int = 0, 
         ax.text(end, 1.45, outcome, fontsize=5, ha="right")
     ax.set_yticks(range(depth + 1), ["policy", *[f"depth {d}" for d in range(1, depth + 1)]], fontsize=7)
     ax.set_xlabel("primitive move", fontsize=7)
-    handles = [plt.Rectangle((0, 0), 1, 1, color=colors[n]) for n in names]
-    if handles:
-        ax.legend(handles, names, fontsize=5, loc="upper left", bbox_to_anchor=(1.0, 1.0))
+    bottom = 0.0
+    if names:  # the legend below the axes
+        legend = fitted_legend(fig, [plt.Rectangle((0, 0), 1, 1, color=colors[n]) for n in names], names,
+                               columns=len(names), fontsize=5, loc="lower center", bbox_to_anchor=(0.5, 0.0),
+                               frameon=False)
+        bottom = _share(legend, fig, grow=True)
     result = "success" if episode.success else "failure"
-    ax.set_title(f"{smc.name}\non {target}, test environment {index}: {len(episode.moves)} moves, "
-                 f"{episode.length} decisions, {result}", fontsize=7)
-    fig.tight_layout()
+    fit_text(fig.suptitle(f"{smc.name}\non {target}, test environment {index}: {len(episode.moves)} moves, "
+                          f"{episode.length} decisions, {result}", fontsize=7), fig)
+    fig.tight_layout(rect=(0, bottom, 1, 1))
     return save_figure(fig, Path(path))
 
 
@@ -199,7 +253,8 @@ def bar_panels(panels: Sequence[Panel], methods: Sequence[str], title: str, path
                                  gridspec_kw={"height_ratios": heights})
     else:
         labels = sum(len(p.labels) for p in panels)
-        fig, axes = plt.subplots(1, len(panels), figsize=(min(11.0, 1.5 + (0.15 * len(methods) + 0.3) * labels), 3.8),
+        fig_width = min(11.0, max(4.0, 1.5 + (0.15 * len(methods) + 0.3) * labels))  # 4 inches for the legend
+        fig, axes = plt.subplots(1, len(panels), figsize=(fig_width, 3.8),
                                  squeeze=False, gridspec_kw={"width_ratios": [max(1, len(p.labels)) for p in panels]})
     for ax, panel in zip(axes.flat, panels, strict=True):
         positions = np.arange(len(panel.labels))
@@ -224,10 +279,9 @@ def bar_panels(panels: Sequence[Panel], methods: Sequence[str], title: str, path
         ax.tick_params(labelsize=6)
         ax.set_title(panel.title, fontsize=8)
     handles, names = axes.flat[0].get_legend_handles_labels()
-    legend = fig.legend(handles, names, loc="upper center", ncol=min(3, len(methods)), fontsize=6, frameon=False,
-                        bbox_to_anchor=(0.5, 1.0))
-    title = textwrap.fill(title, int(14 * fig.get_figwidth()))
-    fig.supxlabel(title, fontsize=8, y=0.005, va="bottom")  # a caption below: tight_layout keeps room for it there
-    legend_top = legend.get_window_extent(fig.canvas.get_renderer()).height / fig.bbox.height  # its share on top
-    fig.tight_layout(rect=(0, 0, 1, 1 - legend_top))
+    legend = fitted_legend(fig, handles, names, columns=3, loc="upper center", fontsize=6, frameon=False,
+                           bbox_to_anchor=(0.5, 1.0))
+    # a caption below: tight_layout keeps room for it there
+    fit_text(fig.supxlabel(title, fontsize=8, y=0.005, va="bottom"), fig)
+    fig.tight_layout(rect=(0, 0, 1, 1 - _share(legend, fig, grow=True)))
     return save_figure(fig, path)
