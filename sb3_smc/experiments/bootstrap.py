@@ -1,0 +1,114 @@
+"""Bootstrap confidence intervals for the report's numbers, over seeds and test worlds. Torch-free.
+
+A reported score is the best of a method's SMCs on a target (its seeds, and for curr its 1-3 curricula), each tested
+on the target's test worlds. One bootstrap replicate draws, for every target, its test worlds with replacement (the
+same draw for every SMC tested on them, as they were tested on the same worlds) and, for every node, its seeds with
+replacement, and takes the best SMC of the draw. Any number computed from reported scores (a mean over concepts, a
+difference of means, a count of concepts won) is then computed on every replicate, and its interval is the 2.5th to
+97.5th percentile of those values, moved by their bias (their mean minus the estimate) and kept within their range. A
+best-of statistic is biased under the bootstrap: a draw of worlds adds noise to every SMC's score, and the best of
+noisier scores is higher; a draw of seeds may leave out the best seed, and is then lower. Moving the interval by the
+net difference puts the estimate where the replicates' mean is. An SMC whose per-world scores are not recorded counts
+with its test score in every draw of worlds.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["LEVEL", "REPLICATES", "Candidate", "Interval", "Replicates"]
+
+REPLICATES = 2000
+"""Bootstrap replicates of a report."""
+LEVEL = 0.95
+"""The confidence level of the intervals."""
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """One SMC a method may report on a target: its node (curriculum entry), its test score and, where recorded, its
+    score on each test world (in the test split's order)."""
+
+    node: str
+    score: float
+    worlds: tuple[float, ...] = ()
+
+
+@dataclass(frozen=True)
+class Interval:
+    """A number (a fraction, or a count) with its bootstrap interval."""
+
+    estimate: float
+    low: float
+    high: float
+
+    def contains(self, value: float) -> bool:
+        return self.low <= value <= self.high
+
+
+
+class Replicates:
+    """Bootstrap replicates of every (target, method)'s reported score.
+
+    ``candidates``: (target, method) -> its SMCs. ``replicates`` draws from a generator seeded with ``seed``, in the
+    sorted order of targets and methods, so the same records give the same intervals.
+    """
+
+    def __init__(self, candidates: Mapping[tuple[str, str], Sequence[Candidate]], *, replicates: int = REPLICATES,
+                 seed: int = 0) -> None:
+        if replicates < 2:
+            raise ValueError(f"replicates must be at least 2, got {replicates}")
+        self.replicates = replicates
+        self.estimate = {key: max(c.score for c in found) for key, found in candidates.items() if found}
+        """The reported scores themselves (each pair's best SMC)."""
+        rng = np.random.default_rng(seed)
+        self.draws: dict[tuple[str, str], np.ndarray] = {}
+        """(target, method) -> its reported score in each replicate."""
+        for target in sorted({t for t, _ in self.estimate}):
+            methods = sorted(m for t, m in self.estimate if t == target)
+            lengths = [len(c.worlds) for m in methods for c in candidates[(target, m)] if c.worlds]
+            worlds = max(set(lengths), key=lengths.count) if lengths else 0
+            picks = rng.integers(0, worlds, size=(replicates, worlds)) if worlds else None
+            for method in methods:
+                self.draws[(target, method)] = self._best(candidates[(target, method)], picks, rng)
+
+    def _best(self, found: Sequence[Candidate], picks: np.ndarray | None, rng: np.random.Generator) -> np.ndarray:
+        """Each replicate's best SMC of ``found``: every node's seeds drawn with replacement, scored on the drawn
+        worlds ``picks`` (their test score where their per-world scores are not of those worlds)."""
+        best = np.full(self.replicates, -np.inf)
+        nodes = sorted({c.node for c in found})
+        for node in nodes:
+            seeds = [c for c in found if c.node == node]
+            scores = np.stack([np.asarray(c.worlds)[picks].mean(axis=1)
+                               if picks is not None and len(c.worlds) == picks.shape[1]
+                               else np.full(self.replicates, c.score) for c in seeds])  # seeds x replicates
+            drawn = rng.integers(0, len(seeds), size=(self.replicates, len(seeds)))
+            best = np.maximum(best, scores[drawn, np.arange(self.replicates)[:, None]].max(axis=1))
+        return best
+
+    def has(self, targets: Sequence[str], *methods: str) -> bool:
+        """Whether every one of ``methods`` has a score on every one of ``targets``."""
+        return bool(targets) and all((t, m) in self.estimate for t in targets for m in methods)
+
+    def interval(self, statistic: Callable[[Callable[[str, str], np.ndarray]], np.ndarray | float]) -> Interval:
+        """The estimate and interval of ``statistic``, a function of the scores (called with ``score(target,
+        method)``, an array over replicates or the reported score) that returns a number per replicate."""
+        estimate = float(statistic(lambda t, m: np.asarray(self.estimate[(t, m)])))
+        values = np.asarray(statistic(lambda t, m: self.draws[(t, m)]), dtype=float)
+        tail = 100 * (1 - LEVEL) / 2
+        bias = float(values.mean()) - estimate
+        low, high = np.percentile(values, [tail, 100 - tail]) - bias
+        # never beyond what the records can give (a share of concepts above 100 %)
+        low, high = max(low, min(values.min(), estimate)), min(high, max(values.max(), estimate))
+        return Interval(estimate, float(low), float(high))
+
+    def mean(self, targets: Sequence[str], method: str) -> Interval:
+        """``method``'s mean over ``targets``."""
+        return self.interval(lambda score: sum(score(t, method) for t in targets) / len(targets))
+
+    def gap(self, targets: Sequence[str], a: str, b: str) -> Interval:
+        """The mean of ``a`` minus the mean of ``b`` over ``targets``."""
+        return self.interval(lambda score: sum(score(t, a) - score(t, b) for t in targets) / len(targets))

@@ -1,0 +1,252 @@
+"""The paper's statements judged as a reviewer would: one row per statement, a verdict under each reading of an SMC
+call, bootstrap intervals (:mod:`sb3_smc.experiments.bootstrap`) instead of a fixed tolerance. Torch-free.
+
+The paper does not say how a hierarchical SMC's episode counted a call, so every statement about a hierarchical
+method is judged under each :data:`READINGS` entry: a call is one step (``curr``, ``canon``), a call costs its moves
+(``curr-moves``), and, where the statement compares with the flat SMC, the one-step reading against a flat SMC with
+as many moves (``base-400``). A verdict compares the paper's number with our interval:
+
+* ``reproduced``: the paper's number lies inside our interval;
+* ``exceeded``: our interval lies beyond it, in the direction the statement claims (a higher mean, a larger gap);
+* ``short``: our interval lies on the near side of it, not beyond zero;
+* ``opposite``: our interval lies entirely on the other side of zero (a comparison reversed).
+
+A statement without a number of the paper (the CNN by category, Fig. 5a) is reproduced where our interval has the
+claimed sign, opposite where it has the other, and short where it holds zero. Our own methods that no reading uses
+(``base-gru``, ``canon-scaled``, the sweep's settings) are judged in a table of their own (:func:`method_checks`).
+"""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Callable, Collection, Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from sb3_smc.experiments.bootstrap import Interval, Replicates
+from sb3_smc.experiments.design import METHOD_REGISTRY
+from sb3_smc.experiments.paper import PAPER_CONCEPTS, PAPER_COUNTS, PAPER_MEANS, PAPER_NOPRIM, PAPER_TTESTS
+from sb3_smc.experiments.statistics import method_test
+
+__all__ = ["NOT_COMPARABLE", "NOT_JUDGED", "NOT_RUN", "READINGS", "VERDICTS", "Judged", "Reading", "Statement",
+           "judge", "method_checks", "statements", "tally", "verdict"]
+
+VERDICTS = ("reproduced", "exceeded", "short", "opposite")
+NOT_RUN, NOT_JUDGED, NOT_COMPARABLE = "not run", "not judged: partial", "not comparable: a subset"
+WON = 14 / 16
+"""The paper's share of bring-about concepts on which a hierarchical SMC beats the flat one."""
+
+
+@dataclass(frozen=True)
+class Reading:
+    """One reading of an SMC call: which of our methods stands for each of the paper's."""
+
+    name: str
+    methods: Mapping[str, str]
+    compares_flat_only: bool = False
+    """It differs from the first reading only in the flat SMC: judged only on statements about the flat SMC."""
+
+
+_PAPERS = ("cnn", "base", "curr", "canon", "curr-noprim", "canon-noprim")
+READINGS = (
+    Reading("a call is one step", {m: m for m in _PAPERS}),
+    Reading("a call costs its moves", {"cnn": "cnn", "base": "base", "curr": "curr-moves"}),
+    Reading("one step, the flat SMC with 400 moves", {**{m: m for m in _PAPERS}, "base": "base-400"},
+            compares_flat_only=True),
+)
+"""The readings of a call the claims are judged under, in the table's column order."""
+
+Score = Callable[[str, str], np.ndarray]
+
+
+@dataclass(frozen=True)
+class Statement:
+    """One statement of the paper: its text, the paper's number (points; ``None``: qualitative), the concepts and
+    paper methods it is about, and how to compute ours from (replicated) scores."""
+
+    text: str
+    paper: float | None
+    paper_text: str
+    targets: tuple[str, ...]
+    methods: tuple[str, ...]
+    statistic: Callable[[Score, Mapping[str, str]], np.ndarray | float]
+    gap: bool = False
+    """A comparison (a difference of means): it can be reversed."""
+    test: tuple[str, str] | None = None
+    """The two paper methods of a paired t-test to show beside our interval."""
+
+    @property
+    def about_flat(self) -> bool:
+        return "base" in self.methods
+
+
+@dataclass(frozen=True)
+class Judged:
+    """A statement's cell under one reading: our number, its interval and the verdict."""
+
+    ours: str
+    verdict: str
+
+
+def statements(kind_of: Mapping[str, str], category_of: Mapping[str, str]) -> list[Statement | str]:
+    """The paper's statements over the concepts of ``kind_of``; a kind with fewer concepts than the paper's gives one
+    string (its statements are not comparable)."""
+    out: list[Statement | str] = []
+    for kind in ("classification", "bring-about"):
+        targets = tuple(sorted(t for t in kind_of if kind_of[t] == kind and category_of[t] != "pushable"))
+        if not targets:
+            continue
+        if len(targets) != PAPER_COUNTS[kind]:
+            out.append(f"{kind}: the statements over all {PAPER_COUNTS[kind]} concepts ({len(targets)} here)")
+            continue
+        means = PAPER_MEANS[kind]
+        out += [_mean(f"{kind}: mean of {m}", means[m], targets, m) for m in means]
+        for comparison, (df, t, p) in PAPER_TTESTS[kind].items():
+            a, _, b = comparison.split()
+            out.append(_gap(f"{kind}: {a} above {b} (paired t-test)", means[a] - means[b],
+                            f"{means[a] - means[b]:+.1f}; t({df}) = {t}, p = {p}", targets, a, b, test=(a, b)))
+        if kind == "classification":
+            out += [_gap(f"classification: {a} above {b}", means[a] - means[b], f"{means[a] - means[b]:+.1f}",
+                         targets, a, b) for a, b in (("cnn", "base"), ("curr", "cnn"))]
+            out += _cnn_statements(targets, category_of)
+        else:
+            out.append(Statement("bring-about: a hierarchical SMC (best of curr, canon) beats the flat one, % of "
+                                 "concepts", 100 * WON, "on 14 of 16 concepts", targets, ("curr", "canon", "base"),
+                                 functools.partial(_won, targets=targets)))
+        noprim = PAPER_NOPRIM[kind]
+        for method in ("curr", "canon"):
+            without = f"{method}-noprim"
+            out.append(_mean(f"{kind}: mean of {without}", noprim[without], targets, without))
+            out.append(_gap(f"{kind}: {without} against {method}", noprim[without] - noprim[method],
+                            f"{noprim[without] - noprim[method]:+.1f}", targets, without, method))
+    for target, numbers in PAPER_CONCEPTS.items():
+        if target in kind_of:
+            out += [_mean(f"{target}: {m}", value, (target,), m) for m, value in numbers.items()]
+    return out
+
+
+def _won(score: Score, ours: Mapping[str, str], *, targets: tuple[str, ...]) -> np.ndarray:
+    """The share (%) of ``targets`` on which the better of curr and canon scores above the flat SMC."""
+    best = [np.maximum(score(t, ours["curr"]), score(t, ours["canon"])) > score(t, ours["base"]) for t in targets]
+    return np.asarray(100 * sum(best) / len(targets), dtype=float)
+
+
+def _mean(text: str, paper: float, targets: tuple[str, ...], method: str) -> Statement:
+    return Statement(text, paper, f"{paper:.1f}", targets, (method,),
+                     lambda score, ours: 100 * sum(score(t, ours[method]) for t in targets) / len(targets))
+
+
+def _gap(text: str, paper: float, paper_text: str, targets: tuple[str, ...], a: str, b: str,
+         test: tuple[str, str] | None = None) -> Statement:
+    return Statement(text, paper, paper_text, targets, (a, b),
+                     lambda score, ours: 100 * sum(score(t, ours[a]) - score(t, ours[b]) for t in targets)
+                     / len(targets), gap=True, test=test)
+
+
+def _cnn_statements(targets: tuple[str, ...], category_of: Mapping[str, str]) -> list[Statement]:
+    """Fig. 5a: the best SMC method (of base, curr and canon, per concept) clearly above the CNN on containment;
+    the CNN relatively better on objects and objcon (the SMCs' lead smaller there)."""
+    members = {c: tuple(t for t in targets if category_of[t] == c) for c in ("containment", "objcon", "objects")}
+    if not all(members.values()):
+        return []
+    smcs = ("base", "curr", "canon")
+
+    def lead(score: Score, ours: Mapping[str, str], category: str) -> np.ndarray:
+        found = members[category]
+        return 100 * sum(np.maximum.reduce([score(t, ours[m]) for m in smcs]) - score(t, ours["cnn"])
+                         for t in found) / len(found)
+
+    out = [Statement("classification / containment: the best SMC method above the cnn", None, "qualitative (Fig. 5a)",
+                     members["containment"], ("cnn", *smcs), lambda s, o: lead(s, o, "containment"), gap=True)]
+    out += [Statement(f"classification / {c}: the cnn relatively better than on containment", None,
+                      "qualitative (Fig. 5a)", members[c] + members["containment"], ("cnn", *smcs),
+                      functools.partial(_lead_difference, lead=lead, category=c), gap=True)
+            for c in ("objects", "objcon")]
+    return out
+
+
+def _lead_difference(score: Score, ours: Mapping[str, str], *,
+                     lead: Callable[[Score, Mapping[str, str], str], np.ndarray], category: str) -> np.ndarray:
+    """How much larger the SMCs' lead over the CNN is on containment than on ``category``."""
+    return lead(score, ours, "containment") - lead(score, ours, category)
+
+
+def verdict(paper: float | None, interval: Interval, gap: bool) -> str:
+    """The verdict of our ``interval`` (points) against the paper's number (module docstring)."""
+    if paper is None:
+        return "reproduced" if interval.low > 0 else "opposite" if interval.high < 0 else "short"
+    if interval.contains(paper):
+        return "reproduced"
+    sign = 1.0 if paper >= 0 else -1.0
+    low, high = sorted((sign * interval.low, sign * interval.high))
+    if gap and high < 0:
+        return "opposite"
+    return "exceeded" if low > abs(paper) else "short"
+
+
+def judge(statement: Statement, reading: Reading, replicates: Replicates,
+          unfinished: Collection[tuple[str, str]] = ()) -> Judged:
+    """``statement`` under ``reading``: our number with its interval and the verdict, or why there is none."""
+    if reading.compares_flat_only and not statement.about_flat:
+        return Judged("as one step", "")
+    if not all(m in reading.methods for m in statement.methods):
+        return Judged("-", NOT_RUN)
+    ours = [reading.methods[m] for m in statement.methods]
+    if any((t, m) in unfinished for t in statement.targets for m in ours):
+        return Judged("-", NOT_JUDGED)
+    if not replicates.has(statement.targets, *ours):
+        return Judged("-", NOT_RUN)
+    interval = replicates.interval(lambda score: statement.statistic(score, reading.methods))
+    text = _points(interval, statement.gap)
+    if statement.test is not None:
+        a, b = (reading.methods[m] for m in statement.test)
+        _, test = method_test(replicates.estimate, statement.targets, a, b)
+        if test is not None:
+            text += f"; t({test[0]}) = {test[1]:.2f}, p = {test[2]:.2g}"
+    return Judged(text, verdict(statement.paper, interval, statement.gap))
+
+
+def _points(interval: Interval, signed: bool) -> str:
+    """``84.9 [80.1, 88.2]`` (points; ``signed``: ``+3.1 [-1.0, +7.2]``)."""
+    form = "+.1f" if signed else ".1f"
+    return f"{interval.estimate:{form}} [{interval.low:{form}}, {interval.high:{form}}]"
+
+
+def tally(cells: Sequence[str]) -> str:
+    """How many of the verdicts ``cells`` are each of :data:`VERDICTS`, not judged and not run (those present)."""
+    labels = (*VERDICTS, NOT_JUDGED, NOT_RUN)
+    counts = {label: sum(c == label for c in cells) for label in labels}
+    unknown = sorted({c for c in cells if c and c not in labels})
+    if unknown:
+        raise ValueError(f"verdict(s) of no known class: {unknown} (one of {labels})")
+    return ", ".join(f"{n} {label}" for label, n in counts.items() if n)
+
+
+def method_checks(replicates: Replicates, kind_of: Mapping[str, str], category_of: Mapping[str, str],
+                  methods: Sequence[str], unfinished: Collection[tuple[str, str]] = ()) -> list[tuple[str, str, str,
+                                                                                                    str]]:
+    """Our own methods that no reading uses, against the paper's numbers for the method they stand for: per kind,
+    their mean and their gap to the flat SMC (``base``). Rows of (statement, paper, ours, verdict)."""
+    used = {m for reading in READINGS for m in reading.methods.values()}
+    rows = []
+    for method in (m for m in methods if m not in used and METHOD_REGISTRY[m].smc):
+        paper_name = METHOD_REGISTRY[method].paper_name
+        for kind in ("classification", "bring-about"):
+            targets = tuple(sorted(t for t in kind_of if kind_of[t] == kind and category_of[t] != "pushable"))
+            ran = tuple(t for t in targets if (t, method) in replicates.estimate)
+            if not ran or paper_name not in PAPER_MEANS[kind]:
+                continue
+            whole = len(ran) == len(targets) == PAPER_COUNTS[kind]
+            label = f" ({len(ran)} concepts)" if not whole else ""
+            checks = [_mean(f"{kind}: mean of {method}{label}", PAPER_MEANS[kind][paper_name], ran, method)]
+            if paper_name != "base":
+                gap = PAPER_MEANS[kind][paper_name] - PAPER_MEANS[kind]["base"]
+                checks.append(_gap(f"{kind}: {method} above base{label}", gap, f"{gap:+.1f}", ran, method, "base"))
+            reading = Reading(method, {method: method, "base": "base"})
+            for check in checks:
+                cell = judge(check, reading, replicates, unfinished)
+                # the paper's number is over all the kind's concepts: ours on fewer is shown, not judged
+                rows.append((check.text, check.paper_text, cell.ours,
+                             cell.verdict if whole or cell.verdict not in VERDICTS else NOT_COMPARABLE))
+    return rows

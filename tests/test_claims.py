@@ -1,0 +1,140 @@
+"""The claims table's rules: bootstrap intervals over seeds and test worlds, the four verdicts, the readings of a
+call, our own methods' checks (sb3_smc.experiments.bootstrap, sb3_smc.experiments.claims)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from pixelworld_env.datasets import catalog
+from sb3_smc.experiments import level2_targets
+from sb3_smc.experiments.bootstrap import Candidate, Interval, Replicates
+from sb3_smc.experiments.claims import (
+    NOT_COMPARABLE,
+    NOT_JUDGED,
+    NOT_RUN,
+    READINGS,
+    VERDICTS,
+    judge,
+    method_checks,
+    statements,
+    tally,
+    verdict,
+)
+
+
+def _candidates(seed: int = 0, worlds: int = 25) -> dict[tuple[str, str], list[Candidate]]:
+    rng = np.random.default_rng(seed)
+    out = {}
+    for target in ("a", "b", "c"):
+        for method, level in (("base", 0.5), ("curr", 0.8)):
+            found = []
+            for node in ("n1", "n2"):
+                for _ in range(5):
+                    scores = tuple(float(x) for x in rng.random(worlds) < level)
+                    found.append(Candidate(node, float(np.mean(scores)), scores))
+            out[(target, method)] = found
+    return out
+
+
+def test_the_estimate_is_the_reported_best_and_the_interval_is_reproducible() -> None:
+    candidates = _candidates()
+    replicates = Replicates(candidates, replicates=500)
+    assert replicates.estimate[("a", "curr")] == max(c.score for c in candidates[("a", "curr")])
+    mean = replicates.mean(["a", "b", "c"], "curr")
+    assert mean.estimate == pytest.approx(np.mean([replicates.estimate[(t, "curr")] for t in "abc"]))
+    assert mean.low < mean.estimate < mean.high
+    again = Replicates(candidates, replicates=500).mean(["a", "b", "c"], "curr")
+    assert again == mean  # the same records, the same interval
+    other = Replicates(candidates, replicates=500, seed=1).mean(["a", "b", "c"], "curr")
+    assert other != mean and other.estimate == mean.estimate
+    gap = replicates.gap(["a", "b", "c"], "curr", "base")
+    assert gap.estimate == pytest.approx(mean.estimate - replicates.mean(["a", "b", "c"], "base").estimate)
+    assert 0 < gap.low < gap.estimate < gap.high
+
+
+def test_test_worlds_and_seeds_both_widen_the_interval() -> None:
+    """An SMC tested on more varied worlds has a wider interval; one without per-world scores counts with its test
+    score in every draw (only its seeds vary); one seed of one SMC with constant worlds has no spread at all."""
+    def interval(found: list[Candidate]) -> Interval:
+        return Replicates({("a", "m"): found}, replicates=1000).mean(["a"], "m")
+
+    varied = [Candidate("n", 0.5, tuple([0.0, 1.0] * 10))]
+    steady = [Candidate("n", 0.5, tuple([0.5] * 20))]
+    assert interval(varied).high - interval(varied).low > 0.2
+    assert interval(steady) == Interval(0.5, 0.5, 0.5)
+    seeds = [Candidate("n", s, ()) for s in (0.2, 0.4, 0.6)]
+    spread = interval(seeds)
+    assert spread.estimate == 0.6 and 0.2 <= spread.low < spread.high <= 0.6  # within what the records can give
+
+
+def test_the_verdicts() -> None:
+    inside, above, below = Interval(80, 75, 85), Interval(90, 88, 92), Interval(70, 68, 72)
+    assert [verdict(80.0, i, gap=False) for i in (inside, above, below)] == ["reproduced", "exceeded", "short"]
+    # a gap the paper gives as +10: reversed where our interval is wholly below zero
+    assert verdict(10.0, Interval(-5, -8, -2), gap=True) == "opposite"
+    assert verdict(10.0, Interval(2, -1, 5), gap=True) == "short"
+    assert verdict(10.0, Interval(20, 15, 25), gap=True) == "exceeded"
+    assert verdict(-2.2, Interval(1.6, 0.5, 2.9), gap=True) == "opposite"  # noprim: the paper's is negative
+    assert verdict(-2.2, Interval(-5.0, -6.0, -4.0), gap=True) == "exceeded"
+    assert verdict(0.0, Interval(-0.6, -2.3, 1.2), gap=True) == "reproduced"
+    # a qualitative statement: the sign of our interval
+    assert [verdict(None, i, gap=True) for i in (Interval(3, 1, 5), Interval(0, -1, 1), Interval(-3, -5, -1))] == [
+        "reproduced", "short", "opposite"]
+    assert tally(["reproduced", "short", "reproduced", NOT_RUN, NOT_JUDGED]) == \
+        "2 reproduced, 1 short, 1 not judged: partial, 1 not run"
+    with pytest.raises(ValueError, match=r"verdict\(s\) of no known class: \['yes'\]"):
+        tally(["yes"])
+
+
+def _table(methods: dict[str, float]) -> tuple[Replicates, dict[str, str], dict[str, str]]:
+    everything = level2_targets()
+    kind_of = {t: catalog.dataset(t).kind for t in everything}
+    category_of = {t: catalog.dataset(t).category for t in everything}
+    candidates = {}
+    for k, target in enumerate(everything):
+        for method, level in methods.items():
+            if method == "cnn" and kind_of[target] != "classification":
+                continue
+            scores = [level + 0.01 * (k % 5) + 0.004 * (k * sum(map(ord, method)) % 3) + 0.005 * s for s in range(5)]
+            candidates[(target, method)] = [Candidate(target, s) for s in scores]
+    return Replicates(candidates, replicates=200), kind_of, category_of
+
+
+def test_every_statement_of_the_paper_under_each_reading() -> None:
+    """31 statements (15 classification, 10 bring-about, 6 headline); a reading whose methods did not run says so, the
+    flat-with-400-moves reading judges only the statements about the flat SMC, a pair still training is not
+    judged, and a subset of a kind's concepts is not comparable."""
+    replicates, kind_of, category_of = _table({"cnn": 0.7, "base": 0.6, "curr": 0.9, "canon": 0.85,
+                                               "curr-noprim": 0.9, "canon-noprim": 0.85, "curr-moves": 0.55,
+                                               "base-400": 0.65})
+    found = statements(kind_of, category_of)
+    assert len(found) == 31 and not any(isinstance(s, str) for s in found)
+    one_step, moves, flat400 = READINGS
+    by_text = {s.text: s for s in found}
+    curr_mean = by_text["bring-about: mean of curr"]
+    cell = judge(curr_mean, one_step, replicates)
+    mean = 100 * np.mean([replicates.estimate[(t, "curr")] for t in curr_mean.targets])
+    assert cell.verdict == "exceeded" and cell.ours.startswith(f"{mean:.1f} [") and mean > 90  # against 74.5
+    assert judge(curr_mean, moves, replicates).verdict == "short"  # curr-moves 55-59 against 74.5
+    assert judge(curr_mean, flat400, replicates).ours == "as one step"
+    test = by_text["bring-about: curr above base (paired t-test)"]
+    assert judge(test, moves, replicates).verdict == "opposite" and "t(16) = " in judge(test, moves, replicates).ours
+    assert judge(test, flat400, replicates).verdict in VERDICTS  # curr against base-400
+    assert judge(by_text["bring-about: mean of canon"], moves, replicates).verdict == NOT_RUN
+    target = "ba_self-in-container_from_between-potential-containers"
+    assert judge(curr_mean, one_step, replicates, unfinished={(target, "curr")}).verdict == NOT_JUDGED
+    subset = {t: kind_of[t] for t in list(kind_of)[:5]}
+    assert all(isinstance(s, str) or s.targets[0] in subset for s in statements(subset, category_of))
+    assert any(isinstance(s, str) and "17 concepts" in s for s in statements(subset, category_of))
+    assert NOT_COMPARABLE == "not comparable: a subset"
+
+
+def test_our_own_methods_are_checked_apart() -> None:
+    replicates, kind_of, category_of = _table({"base": 0.6, "base-gru": 0.62, "canon-scaled": 0.9})
+    rows = method_checks(replicates, kind_of, category_of, ["base", "base-gru", "canon-scaled"])
+    texts = [r[0] for r in rows]
+    assert texts == ["classification: mean of base-gru", "bring-about: mean of base-gru",
+                     "classification: mean of canon-scaled", "classification: canon-scaled above base",
+                     "bring-about: mean of canon-scaled", "bring-about: canon-scaled above base"]
+    assert rows[0][1] == "74.5" and rows[3][1] == "+5.7" and all(r[3] in VERDICTS for r in rows)
