@@ -57,7 +57,7 @@ from sb3_smc.hyperparameters import (
     DEFAULT_TIMESTEPS,
     constructor_arguments,
 )
-from sb3_smc.layout import PIXELWORLD_LAYOUT
+from sb3_smc.layout import PIXELWORLD_LAYOUT, Layout
 from sb3_smc.policies import FrameStackPolicy, policy_from_model
 from sb3_smc.records import TrainingRecord, TrainingSpec, package_versions
 from sb3_smc.smc import SMC, StepPolicy
@@ -148,7 +148,7 @@ def make_vec_env(spec: TrainingSpec, children: Sequence[SMC] = (), *, native: bo
     native env cannot host."""
     from stable_baselines3.common.vec_env import VecFrameStack, VecMonitor
 
-    vector = _native_vector_env(spec, children) if native is not False else None
+    vector = native_vector_env(spec, children) if native is not False else None
     if native and vector is None:
         raise SMCError(f"SMC {spec.name!r}: the native vector env hosts flat SMCs on PixelWorld ids only")
     base: VecEnv
@@ -164,8 +164,10 @@ def make_vec_env(spec: TrainingSpec, children: Sequence[SMC] = (), *, native: bo
     return venv
 
 
-def _native_vector_env(spec: TrainingSpec, children: Sequence[SMC]) -> PixelWorldVectorEnv | None:
-    """PixelWorld's vector env of ``spec``'s task when the SMC is flat and the id has one, else None."""
+def native_vector_env(spec: TrainingSpec, children: Sequence[SMC] = (), num_envs: int | None = None
+                      ) -> PixelWorldVectorEnv | None:
+    """PixelWorld's vector env of ``spec``'s task (``num_envs`` environments, the spec's ``n_envs`` by default)
+    when the SMC is flat and the id has one, else None."""
     settings = spec.task.env_kwargs
     if (children or spec.children or not spec.task.env_id.startswith("PW-") or not is_pixelworld_id(spec.task.env_id)
             or settings.get("aaai18_reset_bug") or settings.get("render_mode") == "human"
@@ -173,8 +175,8 @@ def _native_vector_env(spec: TrainingSpec, children: Sequence[SMC]) -> PixelWorl
         return None
     kwargs = {"split": spec.task.split, "max_steps": spec.wrapper.max_steps,
               **check_env_kwargs(spec.task.env_id, dict(settings))}
-    vector = gym.make_vec(spec.task.env_id, num_envs=spec.budget.n_envs, vectorization_mode="vector_entry_point",
-                          **kwargs)
+    vector = gym.make_vec(spec.task.env_id, num_envs=num_envs or spec.budget.n_envs,
+                          vectorization_mode="vector_entry_point", **kwargs)
     return vector if isinstance(vector, PixelWorldVectorEnv) else None
 
 
@@ -289,12 +291,36 @@ _KEYWORD_DEFAULTS = {name: parameter.default for name, parameter in inspect.sign
 
 def _train(spec: TrainingSpec, children: tuple[SMC, ...], *, tensorboard_log: str | None, log_every: int | None,
            callback: Any, printer: Callable[[str], None], stop_at_max_return: bool) -> SMC:
-    from stable_baselines3.common.callbacks import BaseCallback, CallbackList
-
     if spec.task.kind is not None:
         check_model_settings(spec)  # a typo in a hyperparameter: a message before any environment is built
     venv = make_vec_env(spec, children)
-    under = venv.unwrapped  # the FlatSMCVecEnv or SMCVecEnv under the monitor
+    spec, task = task_of(spec, venv.unwrapped)  # the FlatSMCVecEnv or SMCVecEnv under the monitor
+    model, initial = build_model(spec, venv, task, tensorboard_log=tensorboard_log)
+    stats, callbacks = training_callbacks(spec, task, log_every=log_every, printer=printer,
+                                          stop_at_max_return=stop_at_max_return, callback=callback)
+    start = time.perf_counter()
+    model.learn(total_timesteps=spec.budget.total_timesteps, callback=callbacks, tb_log_name=spec.name,
+                progress_bar=False)
+    wall_time = time.perf_counter() - start
+    stats.on_training_end()  # no-op when SB3 already called it; makes the totals final either way
+    return finished_smc(spec, children, model, stats, task, initial, wall_time)
+
+
+@dataclasses.dataclass(frozen=True)
+class TaskFacts:
+    """What training reads from an SMC's environment: its task kind, action names, layout, and whether its
+    returns are bounded by :data:`~sb3_smc.tasks.MAX_RETURN` (the early stop applies)."""
+
+    kind: str
+    action_names: tuple[str, ...]
+    layout: Layout
+    bounded: bool
+
+
+def task_of(spec: TrainingSpec, under: VecEnv) -> tuple[TrainingSpec, TaskFacts]:
+    """The spec completed with what its environment says (kind and layout of a user's own task) and the
+    :class:`TaskFacts`; ``under`` is the :class:`FlatSMCVecEnv` or :class:`SMCVecEnv` the SMC trains in.
+    ``SMCError`` where the spec and the environment disagree."""
     if isinstance(under, FlatSMCVecEnv):  # PixelWorld's compiled vector env: its own rewards
         kind, action_names, layout, bounded = under.kind, under.action_names, PIXELWORLD_LAYOUT, True
     else:
@@ -312,7 +338,13 @@ def _train(spec: TrainingSpec, children: tuple[SMC, ...], *, tensorboard_log: st
     elif spec.task.kind != kind:
         raise SMCError(f"SMC {spec.name!r}: the spec says a {spec.task.kind} task, but {spec.task.env_id} is a "
                        f"{kind} task")
+    return spec, TaskFacts(kind, tuple(action_names), layout, bounded)
 
+
+def build_model(spec: TrainingSpec, venv: VecEnv, task: TaskFacts, *, tensorboard_log: str | None = None
+                ) -> tuple[Any, Any]:
+    """The SB3 model ``spec`` trains in ``venv`` (seeded, on the CPU, the compact buffer for ``RecurrentPPO``, the
+    signal bias set) and the initial action probabilities the bias gave (``None`` without it)."""
     policy_class, settings = constructor_arguments(spec.hyperparameters)
     algorithm_class = ALGORITHM_REGISTRY[spec.algo].load_class()
     model = algorithm_class(policy_class, venv, n_steps=spec.budget.env_steps, seed=spec.seed, device="cpu",
@@ -321,27 +353,35 @@ def _train(spec: TrainingSpec, children: tuple[SMC, ...], *, tensorboard_log: st
         model.set_logger(Logger(folder=None, output_formats=[]))
     if isinstance(model, RecurrentPPO):
         use_compact_buffer(model)
-    initial = (apply_signal_bias(model, action_names, layout.primitives, **spec.signal_bias.weights)
+    initial = (apply_signal_bias(model, task.action_names, task.layout.primitives, **spec.signal_bias.weights)
                if spec.signal_bias.enabled else None)
+    return model, initial
+
+
+def training_callbacks(spec: TrainingSpec, task: TaskFacts, *, log_every: int | None,
+                       printer: Callable[[str], None], stop_at_max_return: bool, callback: Any = None
+                       ) -> tuple[SMCTrainingCallback, Any]:
+    """The :class:`SMCTrainingCallback` of a training and the callback to give ``learn`` (it, the semi-MDP
+    discounting where the spec asks for it, and the caller's ``callback``)."""
+    from stable_baselines3.common.callbacks import BaseCallback, CallbackList
 
     total_updates = spec.budget.updates
     if log_every is None:
         log_every = 10 if total_updates >= 50 else 0
-    stats = SMCTrainingCallback(kind=kind, children=spec.children, total_updates=total_updates,
+    stats = SMCTrainingCallback(kind=task.kind, children=spec.children, total_updates=total_updates,
                                 log_every=log_every, name=spec.name, printer=printer,
-                                stop_at=MAX_RETURN if stop_at_max_return and bounded else None)
+                                stop_at=MAX_RETURN if stop_at_max_return and task.bounded else None)
     parts: list[BaseCallback] = [stats]
     if spec.wrapper.discount == "semi-mdp":
         parts.append(SemiMDPDiscount())
     if callback is not None:
         parts.append(callback)
-    callbacks = CallbackList(parts) if len(parts) > 1 else stats
-    start = time.perf_counter()
-    model.learn(total_timesteps=spec.budget.total_timesteps, callback=callbacks, tb_log_name=spec.name,
-                progress_bar=False)
-    wall_time = time.perf_counter() - start
-    stats.on_training_end()  # no-op when SB3 already called it; makes the totals final either way
+    return stats, CallbackList(parts) if len(parts) > 1 else stats
 
+
+def finished_smc(spec: TrainingSpec, children: tuple[SMC, ...], model: Any, stats: SMCTrainingCallback,
+                 task: TaskFacts, initial: Any, wall_time: float) -> SMC:
+    """The trained SMC: the selected snapshot loaded into ``model``, its step policy and its record."""
     best = stats.best
     if best.state is not None:
         model.policy.load_state_dict(best.state)
@@ -357,7 +397,7 @@ def _train(spec: TrainingSpec, children: tuple[SMC, ...], *, tensorboard_log: st
         total_timesteps=int(model.num_timesteps),
         primitive_steps=stats.total_primitive_steps,
         wall_time_s=wall_time,
-        action_names=action_names,
+        action_names=task.action_names,
         initial_action_probabilities=None if initial is None else tuple(float(p) for p in np.asarray(initial)),
         torch_threads=torch.get_num_threads(),
         versions=package_versions(),

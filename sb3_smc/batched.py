@@ -1,0 +1,359 @@
+"""Train many flat SMCs in one process: :func:`train_smcs`.
+
+Every experiment trains many small, independent SMCs (5 seeds of every node, many nodes of a level). Trained one
+after another, each pays the per-call costs of its environment and its learner alone. :func:`train_smcs` trains a
+group of SMCs together:
+
+* the environments of all SMCs on the same task (same env id and settings) are one PixelWorld vector env
+  (:class:`~sb3_smc.vec_env.FlatSMCVecEnv` over ``sum(n_envs)`` environments), stepped in **one compiled call** per
+  step for the whole group; each SMC's model sees its own environments through a :class:`SliceVecEnv` (with SB3's
+  ``VecMonitor`` on top, as in :func:`~sb3_smc.training.train_smc`);
+* each SMC keeps its own model (a real sb3-contrib ``RecurrentPPO`` / :class:`~sb3_smc.recurrent_trpo.RecurrentTRPO`
+  object, saved and loaded as today), optimizer state, rollout buffer,
+  :class:`~sb3_smc.callbacks.SMCTrainingCallback` (records, best-update selection, early stop) and its own random
+  streams: the global torch, numpy and Python generators are swapped to the SMC's own state around each of its
+  policy steps and updates, so each SMC draws what it would draw trained alone;
+* the rollout loop is sb3-contrib's ``RecurrentPPO.collect_rollouts`` and SB3's ``learn`` step for step, run for
+  all SMCs of the group in lockstep (an SMC that stops early or ends its budget leaves the group; its
+  environments are still stepped, with action 0, and their results ignored).
+
+So each SMC is the one :func:`~sb3_smc.training.train_smc` gives for its spec, bit for bit (tested for one SMC and
+for a group of five seeds). Its record's ``wall_time_s`` is its share of the group's time: its own policy steps,
+bookkeeping and updates, and the group's environment steps divided among the SMCs training at that step.
+
+Specs the group cannot host (an SMC with children, a non-PixelWorld task, a memoryless learner, frame stacking,
+RecurrentTRPO's linear feature baseline, semi-MDP discounting) are trained by ``train_smc``, one after another.
+"""
+
+from __future__ import annotations
+
+import random
+import time
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
+from copy import deepcopy
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import torch
+from sb3_contrib import RecurrentPPO
+from stable_baselines3.common.utils import obs_as_tensor
+from stable_baselines3.common.vec_env import VecEnv, VecMonitor
+from stable_baselines3.common.vec_env.base_vec_env import VecEnvIndices, VecEnvObs, VecEnvStepReturn
+
+from pixelworld_env.envs.vector import PixelWorldVectorEnv
+from sb3_smc.errors import SMCError
+from sb3_smc.hyperparameters import constructor_arguments
+from sb3_smc.records import TrainingSpec
+from sb3_smc.smc import SMC
+from sb3_smc.training import (
+    TaskFacts,
+    build_model,
+    check_model_settings,
+    finished_smc,
+    native_vector_env,
+    task_of,
+    train_smc,
+    training_callbacks,
+)
+from sb3_smc.vec_env import FlatSMCVecEnv
+
+__all__ = ["SliceVecEnv", "batchable", "train_smcs"]
+
+
+def batchable(spec: TrainingSpec) -> bool:
+    """Whether :func:`train_smcs` trains ``spec`` in a group (else it runs ``train_smc`` for it): a flat SMC on a
+    PixelWorld id with a native vector env, a recurrent learner (``RecurrentPPO`` or ``RecurrentTRPO`` with its
+    critic), no frame stacking, the paper's discounting."""
+    if spec.children or spec.frame_stack != 1 or spec.wrapper.discount != "decision":
+        return False
+    if spec.algo not in ("RecurrentPPO", "RecurrentTRPO"):
+        return False
+    _, settings = constructor_arguments(spec.hyperparameters)
+    return settings.get("baseline", "critic") == "critic"
+
+
+class SliceVecEnv(VecEnv):
+    """Environments ``[start, stop)`` of a group's shared :class:`~sb3_smc.vec_env.FlatSMCVecEnv`, as one model's
+    SB3 ``VecEnv``. The group steps them: :meth:`step_async` writes the actions into the group's action array,
+    :meth:`step_wait` returns this slice of the group's last step; :meth:`reset` returns this slice of the
+    group's reset (done once for all, with each slice's seeds)."""
+
+    def __init__(self, group: _EnvGroup, start: int, stop: int) -> None:
+        self.group, self.start, self.stop = group, start, stop  # before VecEnv's set-up: it reads render_mode
+        super().__init__(stop - start, group.env.observation_space, group.env.action_space)
+
+    def reset(self) -> VecEnvObs:
+        return self.group.reset_obs[self.start:self.stop]
+
+    def step_async(self, actions: np.ndarray) -> None:
+        self.group.actions[self.start:self.stop] = actions
+
+    def step_wait(self) -> VecEnvStepReturn:
+        obs, rewards, dones, infos = self.group.results
+        part = slice(self.start, self.stop)
+        return obs[part], rewards[part], dones[part], infos[part]
+
+    def close(self) -> None:
+        """Nothing: the group owns the environments."""
+
+    def _indices(self, indices: VecEnvIndices) -> list[int]:
+        return [self.start + i for i in self._get_indices(indices)]
+
+    def get_attr(self, attr_name: str, indices: VecEnvIndices = None) -> list[Any]:
+        return self.group.env.get_attr(attr_name, self._indices(indices))
+
+    def set_attr(self, attr_name: str, value: Any, indices: VecEnvIndices = None) -> None:
+        self.group.env.set_attr(attr_name, value, self._indices(indices))
+
+    def env_method(self, method_name: str, *method_args: Any, indices: VecEnvIndices = None,
+                   **method_kwargs: Any) -> list[Any]:
+        return self.group.env.env_method(method_name, *method_args, indices=self._indices(indices), **method_kwargs)
+
+    def env_is_wrapped(self, wrapper_class: type, indices: VecEnvIndices = None) -> list[bool]:
+        return self.group.env.env_is_wrapped(wrapper_class, self._indices(indices))
+
+
+class _EnvGroup:
+    """One vector env for the SMCs of a task: ``sizes[i]`` environments for SMC ``i``, stepped in one call."""
+
+    def __init__(self, vector: PixelWorldVectorEnv, sizes: Sequence[int]) -> None:
+        self.env = FlatSMCVecEnv(vector)
+        bounds = np.cumsum([0, *sizes])
+        self.slices = [SliceVecEnv(self, int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
+        self.actions = np.zeros(self.env.num_envs, dtype=np.int64)
+        self.reset_obs: np.ndarray = np.zeros(0)
+        self.results: tuple[np.ndarray, np.ndarray, np.ndarray, list[dict[str, Any]]] = (
+            np.zeros(0), np.zeros(0), np.zeros(0), [])
+
+    def reset(self) -> None:
+        """Reset every environment with the seeds its model set (``VecEnv.seed`` of each slice)."""
+        self.env._seeds = [seed for part in self.slices for seed in part._seeds]
+        self.reset_obs = np.asarray(self.env.reset())
+        for part in self.slices:
+            part._reset_seeds()
+
+    def step(self) -> None:
+        self.env.step_async(self.actions)
+        obs, rewards, dones, infos = self.env.step_wait()
+        self.results = (np.asarray(obs), rewards, dones, infos)
+        self.actions[:] = 0  # the actions of SMCs that left the group
+
+
+@dataclass
+class _RandomState:
+    """An SMC's own global random streams (torch, numpy, Python), swapped in while it draws."""
+
+    torch_state: torch.Tensor = field(default_factory=torch.get_rng_state)
+    numpy_state: Any = field(default_factory=np.random.get_state)
+    python_state: Any = field(default_factory=random.getstate)
+
+    @contextmanager
+    def torch_only(self) -> Iterator[None]:
+        """Its torch stream (the policy's draws during collection)."""
+        outside = torch.get_rng_state()
+        torch.set_rng_state(self.torch_state)
+        try:
+            yield
+        finally:
+            self.torch_state = torch.get_rng_state()
+            torch.set_rng_state(outside)
+
+    @contextmanager
+    def all_streams(self) -> Iterator[None]:
+        """All three streams (updates: the buffer's shuffling draws from numpy's)."""
+        outside = torch.get_rng_state(), np.random.get_state(), random.getstate()
+        torch.set_rng_state(self.torch_state)
+        np.random.set_state(self.numpy_state)
+        random.setstate(self.python_state)
+        try:
+            yield
+        finally:
+            self.torch_state, self.numpy_state, self.python_state = (
+                torch.get_rng_state(), np.random.get_state(), random.getstate())
+            torch.set_rng_state(outside[0])
+            np.random.set_state(outside[1])
+            random.setstate(outside[2])
+
+
+class _Job:
+    """One SMC of a group: its model and callbacks, and sb3-contrib's ``collect_rollouts`` / SB3's ``learn`` cut
+    at the environment step (:meth:`act` before it, :meth:`observe` after it)."""
+
+    def __init__(self, spec: TrainingSpec, task: TaskFacts, venv: VecEnv, *, log_every: int | None,
+                 printer: Callable[[str], None], stop_at_max_return: bool) -> None:
+        self.spec, self.task = spec, task
+        self.model, self.initial = build_model(spec, venv, task)
+        if not isinstance(self.model, RecurrentPPO):
+            raise SMCError(f"SMC {spec.name!r}: a group trains recurrent learners, got {spec.algo}")
+        self.random = _RandomState()  # the streams as the model's seeding left them
+        self.stats, self.callback = training_callbacks(spec, task, log_every=log_every, printer=printer,
+                                                       stop_at_max_return=stop_at_max_return)
+        self.seconds = 0.0
+        self.iteration = 0
+        self.total_timesteps = spec.budget.total_timesteps
+        self.lstm_states: Any = None
+        self._step: tuple[Any, ...] = ()
+
+    def start(self) -> None:
+        """``learn``'s set-up (the environments are reset already)."""
+        model = self.model
+        with self.random.all_streams():
+            self.total_timesteps, self.callback = model._setup_learn(
+                self.total_timesteps, self.callback, True, self.spec.name, False)
+            self.callback.on_training_start(locals(), globals())
+
+    @property
+    def running(self) -> bool:
+        return bool(self.model.num_timesteps < self.total_timesteps)
+
+    def start_rollout(self) -> None:
+        model = self.model
+        model.policy.set_training_mode(False)
+        model.rollout_buffer.reset()
+        self.callback.on_rollout_start()
+        self.lstm_states = deepcopy(model._last_lstm_states)
+
+    def act(self) -> None:
+        """The policy's step on the last observations; the actions go to the group's step."""
+        model = self.model
+        with self.random.torch_only(), torch.no_grad():
+            obs_tensor = obs_as_tensor(model._last_obs, model.device)
+            episode_starts = torch.tensor(model._last_episode_starts, dtype=torch.float32, device=model.device)
+            actions, values, log_probs, lstm_states = model.policy(obs_tensor, self.lstm_states, episode_starts)
+        actions = actions.cpu().numpy()
+        model.env.step_async(actions)
+        self._step = (actions, values, log_probs, lstm_states)
+
+    def observe(self) -> bool:
+        """The step's results into the callbacks and the rollout buffer; ``False`` when a callback stops training."""
+        model = self.model
+        env = model.env
+        actions, values, log_probs, lstm_states = self._step
+        new_obs, rewards, dones, infos = env.step_wait()
+        model.num_timesteps += env.num_envs
+        self.callback.update_locals({"new_obs": new_obs, "rewards": rewards, "dones": dones, "infos": infos,
+                                     "actions": actions, "values": values, "log_probs": log_probs})
+        if not self.callback.on_step():
+            return False
+        model._update_info_buffer(infos, dones)
+        actions = actions.reshape(-1, 1)
+        for idx in np.flatnonzero(dones):  # a time limit: bootstrap with the value of the terminal observation
+            if infos[idx].get("terminal_observation") is not None and infos[idx].get("TimeLimit.truncated", False):
+                terminal_obs = model.policy.obs_to_tensor(infos[idx]["terminal_observation"])[0]
+                with torch.no_grad():
+                    terminal_lstm_state = (lstm_states.vf[0][:, idx:idx + 1, :].contiguous(),
+                                           lstm_states.vf[1][:, idx:idx + 1, :].contiguous())
+                    starts = torch.tensor([False], dtype=torch.float32, device=model.device)
+                    terminal_value = model.policy.predict_values(terminal_obs, terminal_lstm_state, starts)[0]
+                rewards[idx] += model.gamma * terminal_value
+        model.rollout_buffer.add(model._last_obs, actions, rewards, model._last_episode_starts, values, log_probs,
+                                 lstm_states=model._last_lstm_states)
+        model._last_obs = new_obs
+        model._last_episode_starts = dones
+        model._last_lstm_states = self.lstm_states = lstm_states
+        return True
+
+    def end_rollout(self) -> None:
+        """The rollout's returns and advantages, the callbacks' rollout end, then ``learn``'s update step."""
+        model = self.model
+        with torch.no_grad():
+            episode_starts = torch.tensor(model._last_episode_starts, dtype=torch.float32, device=model.device)
+            values = model.policy.predict_values(obs_as_tensor(model._last_obs, model.device), self.lstm_states.vf,
+                                                 episode_starts)
+        model.rollout_buffer.compute_returns_and_advantage(last_values=values, dones=model._last_episode_starts)
+        self.callback.on_rollout_end()
+        self.iteration += 1
+        model._update_current_progress_remaining(model.num_timesteps, self.total_timesteps)
+        model.dump_logs(self.iteration)
+        with self.random.all_streams():
+            model.train()
+
+    def finish(self) -> SMC:
+        self.callback.on_training_end()
+        self.stats.on_training_end()
+        return finished_smc(self.spec, (), self.model, self.stats, self.task, self.initial, self.seconds)
+
+
+def _env_key(spec: TrainingSpec) -> tuple[Any, ...]:
+    """What the environments of SMCs trained in one vector env must share."""
+    return (spec.task.env_id, spec.task.split, repr(sorted(spec.task.env_kwargs.items())), spec.wrapper.max_steps,
+            spec.budget.env_steps)
+
+
+def train_smcs(specs: Sequence[TrainingSpec], *, log_every: int | None = 0, printer: Callable[[str], None] = print,
+               stop_at_max_return: bool = True) -> list[SMC]:
+    """Train the SMCs of ``specs`` together and return them in the same order, each the SMC
+    :func:`~sb3_smc.training.train_smc` gives for its spec (same weights, records and selection).
+
+    Batchable specs (:func:`batchable`) with the same task, environment settings and steps per rollout train as
+    one group, their environments stepped in one call; every other spec is trained by ``train_smc`` alone.
+    ``log_every``, ``printer`` and ``stop_at_max_return`` are ``train_smc``'s, for every SMC."""
+    results: list[SMC | None] = [None] * len(specs)
+    groups: dict[tuple[Any, ...], list[int]] = {}
+    for i, spec in enumerate(specs):
+        if not isinstance(spec, TrainingSpec):
+            raise SMCError(f"train_smcs takes TrainingSpecs, got {type(spec).__name__}")
+        if spec.budget.total_timesteps < 1:
+            raise SMCError(f"SMC {spec.name!r}: total_timesteps must be >= 1, got {spec.budget.total_timesteps}")
+        groups.setdefault(_env_key(spec) if batchable(spec) else (i,), []).append(i)
+    for members in groups.values():
+        chosen = [specs[i] for i in members]
+        for spec in chosen:
+            if spec.task.kind is not None:
+                check_model_settings(spec)  # a typo in a hyperparameter: a message before any environment is built
+        sizes = [spec.budget.n_envs for spec in chosen]
+        vector = native_vector_env(chosen[0], num_envs=sum(sizes)) if batchable(chosen[0]) else None
+        if vector is None:
+            trained = [train_smc(spec, log_every=log_every, printer=printer, stop_at_max_return=stop_at_max_return)
+                       for spec in chosen]
+        else:
+            trained = _train_group(chosen, _EnvGroup(vector, sizes), log_every=log_every, printer=printer,
+                                   stop_at_max_return=stop_at_max_return)
+        for i, smc in zip(members, trained, strict=True):
+            results[i] = smc
+    return [smc for smc in results if smc is not None]
+
+
+def _train_group(specs: Sequence[TrainingSpec], group: _EnvGroup, *, log_every: int | None,
+                 printer: Callable[[str], None], stop_at_max_return: bool) -> list[SMC]:
+    """Train SMCs on one task in one vector env (see the module's docstring)."""
+    jobs = []
+    for spec, part in zip(specs, group.slices, strict=True):
+        spec, task = task_of(spec, group.env)
+        venv = VecMonitor(part)
+        venv.seed(spec.seed)
+        jobs.append(_Job(spec, task, venv, log_every=log_every, printer=printer,
+                         stop_at_max_return=stop_at_max_return))
+    group.reset()
+    for job in jobs:
+        job.start()
+    running = [job for job in jobs if job.running]
+    n_steps = jobs[0].model.n_steps
+    while running:
+        for job in running:
+            job.start_rollout()
+        for _ in range(n_steps):
+            for job in running:
+                begin = time.perf_counter()
+                job.act()
+                job.seconds += time.perf_counter() - begin
+            begin = time.perf_counter()
+            group.step()
+            share = (time.perf_counter() - begin) / len(running)
+            still = []
+            for job in running:
+                begin = time.perf_counter()
+                if job.observe():
+                    still.append(job)
+                job.seconds += time.perf_counter() - begin + share
+            running = still
+            if not running:
+                break
+        for job in running:
+            begin = time.perf_counter()
+            job.end_rollout()
+            job.seconds += time.perf_counter() - begin
+        running = [job for job in running if job.running]
+    return [job.finish() for job in jobs]

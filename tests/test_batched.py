@@ -1,0 +1,89 @@
+"""Training many flat SMCs at once (:mod:`sb3_smc.batched`): each SMC is the one ``train_smc`` gives, bit for bit."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import torch
+from sb3_contrib import RecurrentPPO
+
+import pixelworld_env  # noqa: F401  (registers the PW-* ids)
+from sb3_smc.batched import batchable, train_smcs
+from sb3_smc.records import TrainingSpec
+from sb3_smc.smc import SMC
+from sb3_smc.training import train_smc
+
+CORNER_ID = "PW-cl_self-in-left-corner_vs_on-hline-v0"
+ABOVE_ID = "PW-ba_self-on-something_from_directly-above-v0"
+OUTSIDE_ID = "PW-cl_self-in-container_vs_outside-v0"
+
+
+def assert_same_smc(alone: SMC, batched: SMC) -> None:
+    """The same weights (the selected snapshot), records and selection."""
+    first, second = alone.model.policy.state_dict(), batched.model.policy.state_dict()
+    assert first.keys() == second.keys()
+    assert all(torch.equal(first[name], second[name]) for name in first)
+    a, b = alone.record, batched.record
+    assert a is not None and b is not None
+    assert a.training_returns == b.training_returns
+    assert a.success_rates == b.success_rates
+    assert (a.selected_update, a.selected_return) == (b.selected_update, b.selected_return)
+    assert (a.total_timesteps, a.primitive_steps) == (b.total_timesteps, b.primitive_steps)
+    assert a.initial_action_probabilities == b.initial_action_probabilities
+    assert alone.spec == batched.spec
+    assert b.wall_time_s > 0
+
+
+def test_one_smc_is_train_smcs_bit_for_bit() -> None:
+    spec = TrainingSpec.create(CORNER_ID, total_timesteps=8_000, seed=3)
+    (batched,) = train_smcs([spec])
+    assert_same_smc(train_smc(spec, log_every=0), batched)
+
+
+def test_seeds_trained_together_are_each_their_own_training() -> None:
+    """Five seeds in one vector env; seed 1 stops early at return 1 (update 18), the others run their budget
+    (a group goes on without the SMCs that left it)."""
+    specs = [TrainingSpec.create(OUTSIDE_ID, total_timesteps=40_000, seed=s, name=f"outside@{s}") for s in range(5)]
+    batched = train_smcs(specs)
+    assert [smc.name for smc in batched] == [spec.name for spec in specs]
+    stopped = batched[1].record
+    assert stopped is not None and stopped.selected_return == 1.0 and stopped.total_timesteps == 19 * 2000 + 16
+    for spec, smc in zip(specs, batched, strict=True):
+        assert_same_smc(train_smc(spec, log_every=0), smc)
+
+
+def test_recurrent_trpo_gru_and_mixed_groups() -> None:
+    """RecurrentTRPO-GRU SMCs and RecurrentPPO SMCs of another task and size train in their own groups; a spec
+    no group hosts (memoryless TRPO) is trained by train_smc, in its place in the list."""
+    specs = [TrainingSpec.create(ABOVE_ID, algo="RecurrentTRPO", rnn="gru", total_timesteps=4_000, seed=s)
+             for s in (0, 1)]
+    specs.append(TrainingSpec.create(CORNER_ID, total_timesteps=2_048, n_envs=8, seed=2))
+    specs.append(TrainingSpec.create(CORNER_ID, algo="TRPO", total_timesteps=1_024, n_envs=4, n_steps=64, seed=0))
+    assert [batchable(spec) for spec in specs] == [True, True, True, False]
+    batched = train_smcs(specs)
+    for spec, smc in zip(specs, batched, strict=True):
+        assert_same_smc(train_smc(spec, log_every=0), smc)
+
+
+def test_batched_smcs_save_load_and_go_into_a_library(tmp_path: Path) -> None:
+    from sb3_smc.evaluation import evaluate
+    from sb3_smc.library import SMCLibrary
+
+    specs = [TrainingSpec.create(CORNER_ID, total_timesteps=4_000, seed=s, name=f"corner@{s}") for s in (0, 1)]
+    smcs = train_smcs(specs)
+    smcs[0].model.save(tmp_path / "model.zip")
+    loaded = RecurrentPPO.load(tmp_path / "model.zip", device="cpu")  # plain sb3-contrib
+    weights, again = smcs[0].model.policy.state_dict(), loaded.policy.state_dict()
+    assert all(torch.equal(weights[name], again[name]) for name in weights)
+    obs = np.zeros((3, int(np.prod(loaded.observation_space.shape or ()))), dtype=np.float32)
+    obs[:, [0, 10, 20]] = 1.0
+    actions = [model.predict(obs, state=None, episode_start=np.ones(3), deterministic=True)
+               for model in (smcs[0].model, loaded)]
+    assert np.array_equal(actions[0][0], actions[1][0])
+    assert np.array_equal(np.asarray(actions[0][1]), np.asarray(actions[1][1]))
+    SMCLibrary(smcs).save(tmp_path / "lib")
+    library = SMCLibrary.load(tmp_path / "lib")
+    assert set(library) == {"corner@0", "corner@1"}
+    for smc in smcs:
+        assert evaluate(smc, repeats=1).to_dict() == evaluate(library[smc.name], repeats=1).to_dict()
