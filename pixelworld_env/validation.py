@@ -10,7 +10,8 @@ import numpy as np
 
 from pixelworld_env.errors import PixelWorldError, PixelWorldTypeError
 
-__all__ = ["MAX_SEED", "as_integer", "check_action", "check_bool", "check_int", "check_options", "check_seed"]
+__all__ = ["MAX_SEED", "as_integer", "check_action", "check_bool", "check_int", "check_options", "check_seed",
+           "no_episode"]
 
 MAX_SEED = 2**63 - 1
 """Seeds are integers in ``[0, 2**63 - 1]`` (they are stored in JSON records and numpy ``int64`` arrays)."""
@@ -64,6 +65,13 @@ def check_action(action: Any, action_names: Sequence[str]) -> int:
         raise PixelWorldError(f"invalid action {action!r}: expected an integer in [0, {len(action_names)}); the "
                               f"actions are {list(enumerate(action_names))}")
     return index
+
+
+def no_episode(started: bool, method: str) -> RuntimeError:
+    """The error of ``method`` called outside an episode: before the first ``reset`` (``started`` false) or after
+    the episode ended."""
+    return RuntimeError(f"the episode has ended: call reset() before {method}()" if started
+                        else f"no episode has started: call reset() before {method}()")
 
 
 def check_options(options: Any, known: Collection[str], takes: str) -> dict[str, Any]:

@@ -41,6 +41,7 @@ from pixelworld_env.envs.env import (
     GOAL_REWARD,
     PixelWorldEnv,
 )
+from pixelworld_env.validation import no_episode
 from sb3_smc.errors import SMCError, SMCTypeError
 from sb3_smc.layout import SIGNALS, Layout
 
@@ -220,8 +221,7 @@ class SMCTask(gym.Wrapper, gym.utils.RecordConstructorArgs):
     def _check_episode(self, method: str) -> None:
         """``RuntimeError`` unless an episode is running (``reset`` called, the episode not ended)."""
         if self._done:
-            raise RuntimeError(f"the episode has ended: call reset() before {method}()" if self._started
-                               else f"no episode has started: call reset() before {method}()")
+            raise no_episode(self._started, method)
 
     def _info(self, success: bool = False, signalled: bool = False) -> dict[str, Any]:
         info: dict[str, Any] = {"is_success": success, "signalled": signalled}

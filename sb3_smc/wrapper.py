@@ -14,7 +14,7 @@ from gymnasium.wrappers import OrderEnforcing, PassiveEnvChecker
 from pixelworld_env.core.constants import NUM_COLORS
 from pixelworld_env.core.world import MOVES as MOVE_OFFSETS
 from pixelworld_env.envs.env import BRING_ABOUT, GOAL_POTENTIAL, PixelWorldEnv
-from pixelworld_env.validation import check_action
+from pixelworld_env.validation import check_action, no_episode
 from sb3_smc.errors import SMCError, SMCTypeError
 from sb3_smc.layout import CALL_PREFIX, observation_size, smc_action_names
 from sb3_smc.policies import NumpyGRUPolicy, _kernels, sample_action
@@ -353,7 +353,7 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         """:meth:`step` as a coroutine that yields the policy decisions of SMC calls (see :meth:`call_coroutine`)
         and returns the step's ``(observation, reward, terminated, truncated, info)``."""
         if self._done:
-            raise RuntimeError("the episode has ended: call reset() before step()")
+            raise no_episode(self._rng is not None, "step")
         action = check_action(action, self.action_names)
         kind, value = self._plan[action]
         calls: list[dict[str, Any]] = []

@@ -299,6 +299,20 @@ def test_smc_tasks_say_what_their_functions_and_callers_got_wrong():
         numpy_bool.step(1)
 
 
+def test_stepping_a_pixelworld_env_or_an_smc_wrapper_before_reset_says_so() -> None:
+    env = make()
+    for call, method in ((lambda: env.step(0), "step"), (lambda: env.apply_move(0), "apply_move")):
+        with pytest.raises(RuntimeError, match=re.escape(f"no episode has started: call reset() before {method}()")):
+            call()
+    env.reset(seed=0)
+    env.step(env.action_names.index("SIG1"))
+    with pytest.raises(RuntimeError, match=re.escape("the episode has ended: call reset() before step()")):
+        env.step(0)
+    wrapper = HierarchicalSMCWrapper(make())
+    with pytest.raises(RuntimeError, match=re.escape("no episode has started: call reset() before step()")):
+        wrapper.step(0)
+
+
 def test_train_smc_says_that_a_registered_task_must_take_max_steps():
     from sb3_smc.tasks import SMCTask
     from sb3_smc.training import train_smc

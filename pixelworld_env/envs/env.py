@@ -23,7 +23,7 @@ from pixelworld_env.core.render import HUMAN_CELL_SIZE, Window, check_display, r
 from pixelworld_env.core.scene import Scene
 from pixelworld_env.core.world import MOVES, World
 from pixelworld_env.errors import PixelWorldError
-from pixelworld_env.validation import check_action, check_bool, check_int, check_options
+from pixelworld_env.validation import check_action, check_bool, check_int, check_options, no_episode
 
 CLASSIFICATION = "classification"
 BRING_ABOUT = "bring-about"
@@ -326,7 +326,7 @@ class PixelWorldEnv(gym.Env):
         observation (:class:`sb3_smc.HierarchicalSMCWrapper`).
         """
         if self._done:
-            raise RuntimeError("the episode has ended: call reset() before step()")
+            raise no_episode(self._world is not None, "step")
         effect = self._effects[action]
         self._steps += 1
         terminated = False
@@ -359,7 +359,7 @@ class PixelWorldEnv(gym.Env):
         (:class:`sb3_smc.HierarchicalSMCWrapper`); signals are not moves and raise ``ValueError``.
         """
         if self._done:
-            raise RuntimeError("the episode has ended: call reset() before apply_move()")
+            raise no_episode(self._world is not None, "apply_move")
         effect = self._effects[action]
         if effect.__class__ is not tuple:
             raise PixelWorldError(f"action {action} ({self.action_names[action]}) is not a move")
