@@ -102,8 +102,25 @@ class _Processes:
         self._pool.shutdown(wait=True, cancel_futures=True)
 
 
+def _lost(error: Exception, ray: Any) -> Exception:
+    """``error`` of a Ray task as the job's outcome: an error of Ray's for a task the cluster lost (its node or worker
+    process died, or its result with its node) as one saying so and what to do, with Ray's as its cause; any other
+    (the job's own exception) as it is."""
+    known = ray.exceptions
+    if not isinstance(error, (known.NodeDiedError, known.WorkerCrashedError, known.OutOfMemoryError,
+                              known.LocalRayletDiedError, known.ObjectLostError)):
+        return error
+    lost = SMCRuntimeError(
+        f"the Ray cluster lost this job before it finished ({type(error).__name__}: the node or worker process "
+        "training it died, e.g. a node removed, preempted or out of memory, or its result was lost with its node); "
+        "the other jobs go on, and running the same command again trains it anew, keeping every finished job")
+    lost.__cause__ = error
+    return lost
+
+
 class _Ray:
-    """Trains jobs as tasks of an existing Ray cluster (one CPU each, no retries)."""
+    """Trains jobs as tasks of an existing Ray cluster (one CPU each, no retries: a job the cluster loses fails, and
+    the next run trains it, as a job whose local worker died)."""
 
     def __init__(self, run: Callable[[Job], JobResult], address: str | None) -> None:
         try:
@@ -133,7 +150,7 @@ class _Ray:
             try:
                 out.append((ref, self._ray.get(ref)))
             except Exception as err:  # noqa: BLE001 - a task's error, reported as the job's failure
-                out.append((ref, err))
+                out.append((ref, _lost(err, self._ray)))
         return out
 
     def shutdown(self) -> None:
