@@ -156,8 +156,8 @@ def test_the_command_line_takes_its_choices_and_defaults_from_the_registries(
     assert calls["experiment"]["methods"] == list(DEFAULT_METHODS) == [  # the paper's six
         "cnn", "base", "curr", "canon", "curr-noprim", "canon-noprim"]
     assert not any(METHOD_REGISTRY[m].own_learner or METHOD_REGISTRY[m].paper for m in DEFAULT_METHODS)
-    assert set(METHODS) - set(DEFAULT_METHODS) == {"base-gru", "canon-scaled", "base-400",
-                                                      *SWEEP_METHODS} - {"curr"}
+    assert set(METHODS) - set(DEFAULT_METHODS) == {"base-gru", "canon-scaled", "curr-moves",
+                                                      "base-400", *SWEEP_METHODS}
     assert calls["experiment"]["repeats"] == DEFAULT_REPEATS
     for command in ("experiment", "train"):
         assert calls[command]["seeds"] == DEFAULT_SEEDS and calls[command]["backend"] == BACKENDS[0]

@@ -9,10 +9,11 @@ with the paper's learner (RecurrentTRPO with a GRU) whatever the run's learner, 
 whose target nodes' SMC calls cost the episode their moves (at most 100 moves an episode, as a flat SMC). The fair
 comparisons (docs/experiments.md, "Equal budgets and the readings of a call"): ``base-400``, the flat SMC with 400
 moves an episode (as many as curr makes, median, on every target probed); the sweep of the one free parameter of each
-reading of a call, ``curr-cap10`` / ``-cap25`` / ``-cap50`` (a call one step, cut after 10 / 25 / 50 moves; ``curr``
-is the cap of 100) and ``curr-moves-200`` / ``-400`` (calls cost their moves, 200 / 400 moves an
-episode; ``curr-moves`` is 100). Every SMC method's jobs are nodes of curricula (shipped ones, or a flat method's);
-:func:`plan` merges them so that a lower-level node shared by several methods is trained once.
+reading of a call, ``curr-cap10`` / ``-cap25`` / ``-cap50`` / ``-cap100`` (a call one step, cut after 10 / 25 / 50
+/ 100 moves; ``-cap100`` is curr's setting, trained again in the sweep's run) and ``curr-moves-100`` / ``-200`` /
+``-400`` (calls cost their moves, 100 / 200 / 400 moves an episode; ``-100`` is curr-moves' setting). Every SMC
+method's jobs are nodes of curricula (shipped ones, or a flat method's); :func:`plan` merges them so that a
+lower-level node shared by several methods is trained once.
 """
 
 from __future__ import annotations
@@ -163,10 +164,10 @@ METHOD_REGISTRY: dict[str, ExperimentMethod] = {method.name: method for method i
                      max_steps=400),
     *(ExperimentMethod(f"curr-cap{cap}", f"curr-cap{cap} (curr, a call cut after {cap} moves)", colour,
                        curricula="smc-curr", paper="curr", call_step_cap=cap)
-      for cap, colour in ((10, "#fde0c5"), (25, "#f9b97f"), (50, "#e8893f"))),
+      for cap, colour in ((10, "#fde0c5"), (25, "#f9b97f"), (50, "#e8893f"), (100, "#c0631c"))),
     *(ExperimentMethod(f"curr-moves-{steps}", f"curr-moves-{steps} (curr, calls cost their moves, {steps} an episode)",
                        colour, curricula="smc-curr", paper="curr", count_primitive_steps=True, max_steps=steps)
-      for steps, colour in ((200, "#c47a4a"), (400, "#6b3310"))),
+      for steps, colour in ((100, "#d2a07a"), (200, "#c47a4a"), (400, "#6b3310"))),
 )}
 """Every method by name, in the order of the report's columns."""
 METHODS = tuple(METHOD_REGISTRY)
@@ -174,10 +175,12 @@ METHODS = tuple(METHOD_REGISTRY)
 DEFAULT_METHODS = METHODS[:6]
 """The paper's six methods: ``sb3-smc experiment``'s default ``--methods``."""
 SMC_METHODS = tuple(name for name, method in METHOD_REGISTRY.items() if method.smc)
-SWEEP_METHODS = ("curr-cap10", "curr-cap25", "curr-cap50", "curr", "curr-moves", "curr-moves-200", "curr-moves-400")
-"""The sweep of the one free parameter of each reading of a call: a call one step, cut after 10, 25, 50 or 100 moves
-(``curr``); calls costing their moves, 100 (``curr-moves``), 200 or 400 moves an episode. Run together, so that every
-setting calls the same lower-level SMCs."""
+SWEEP_METHODS = ("curr-cap10", "curr-cap25", "curr-cap50", "curr-cap100", "curr-moves-100", "curr-moves-200",
+                 "curr-moves-400")
+"""The sweep of the one free parameter of each reading of a call: a call one step, cut after 10, 25, 50 or 100 moves;
+calls costing their moves, 100, 200 or 400 moves an episode. Run together, so that every setting calls the same
+lower-level SMCs; the settings of 100 are curr's and curr-moves', under names of their own so that the sweep's run
+reports beside the whole table's."""
 SWEEP_TARGETS = (
     "ba_self-in-container_from_between-potential-containers",  # headline; containment
     "ba_self-in-container_from_on-floor",
