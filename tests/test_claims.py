@@ -138,3 +138,53 @@ def test_our_own_methods_are_checked_apart() -> None:
                      "classification: mean of canon-scaled", "classification: canon-scaled above base",
                      "bring-about: mean of canon-scaled", "bring-about: canon-scaled above base"]
     assert rows[0][1] == "74.5" and rows[3][1] == "+5.7" and all(r[3] in VERDICTS for r in rows)
+
+
+def test_the_sweep_scores_each_setting_against_the_paper_and_names_the_best_fit(tmp_path) -> None:
+    """A setting's kind mean is the whole table's (curr or curr-moves) plus its difference from the sweep's setting of
+    100 on the sweep's targets; the setting whose numbers the paper's lie inside comes first; the report says so."""
+    import json
+
+    from sb3_smc.experiments.design import SWEEP_METHODS, SWEEP_TARGETS
+    from sb3_smc.experiments.report import write_report
+    from sb3_smc.experiments.runner import reported
+    from sb3_smc.experiments.sweep import sweep_fits
+
+    everything = level2_targets()
+    kind_of = {t: catalog.dataset(t).kind for t in everything}
+    # the whole table: base at the paper's level, curr 20 points above the paper, curr-moves 10 below it
+    level = {"base": {"classification": 0.745, "bring-about": 0.527}, "curr": {"classification": 0.949,
+             "bring-about": 0.945}, "curr-moves": {"classification": 0.749, "bring-about": 0.645}}
+    # the sweep: a cap of 25 brings curr down by 20 points, the cap of 100 is curr's, 400 moves bring curr-moves up 10
+    shift = {"curr-cap10": -0.4, "curr-cap25": -0.2, "curr-cap50": -0.1, "curr-cap100": 0.0, "curr-moves-100": 0.0,
+             "curr-moves-200": 0.05, "curr-moves-400": 0.1}
+    rows = []
+    for k, target in enumerate(everything):
+        kind = kind_of[target]
+        for method in [*level, *(shift if target in SWEEP_TARGETS else ())]:
+            reference = "curr-moves" if "moves" in method else "curr"
+            base_level = level[method][kind] if method in level else level[reference][kind] + shift[method]
+            for seed in range(3):
+                rows.append({"target": target, "kind": kind, "category": catalog.dataset(target).category,
+                             "method": method, "curriculum": f"{method}/{target}", "seed": seed,
+                             "test_score": base_level - 0.01 * seed + 0.002 * (k % 3)})
+    replicates = Replicates({key: [Candidate(r["curriculum"], r["test_score"]) for r in rows
+                                   if (r["target"], r["method"]) == key]
+                             for key in {(r["target"], r["method"]) for r in rows}}, replicates=200)
+    fits = sweep_fits(replicates, kind_of, [*level, *shift])
+    assert {f.method for f in fits} == set(SWEEP_METHODS)
+    by_method = {f.method: f for f in fits}
+    cap25 = {n.what: n for n in by_method["curr-cap25"].numbers}
+    assert cap25["classification: mean (estimated over all 34)"].ours.estimate == pytest.approx(
+        100 * (0.949 + 0.002 * np.mean([k % 3 for k in range(len(everything)) if kind_of[everything[k]]
+                                         == "classification"]) - 0.2), abs=0.05)
+    assert fits[0].method in ("curr-cap25", "curr-moves-400")  # both land on the paper's kind means
+    assert by_method["curr-cap10"].reproduced < fits[0].reproduced and by_method["curr-cap10"].distance > 10
+    (tmp_path / "results.json").write_text(json.dumps({
+        "rows": rows, "reported": reported(rows), "wall_time_s": 60.0, "command": None, "machine": {},
+        "settings": {"methods": [*level, *shift], "targets": everything, "seeds": 3, "timesteps": 400_000,
+                     "repeats": 10, "workers": 1, "backend": "local"}}))
+    [report] = write_report(tmp_path, behaviour=False)
+    section = report.read_text().split("## The readings of a call: the sweep")[1].split("\n## ")[0]
+    assert f"Best fit: **{fits[0].method}** ({fits[0].reproduced} of {len(fits[0].numbers)} " in section
+    assert "| **paper** | | | 84.9 | +10.4 | 74.5 | +21.8 | 87.5 |" in section

@@ -30,7 +30,7 @@ from sb3_smc.experiments.paper import PAPER_CONCEPTS, PAPER_COUNTS, PAPER_MEANS,
 from sb3_smc.experiments.statistics import method_test
 
 __all__ = ["NOT_COMPARABLE", "NOT_JUDGED", "NOT_RUN", "READINGS", "VERDICTS", "Judged", "Reading", "Statement",
-           "judge", "method_checks", "statements", "tally", "verdict"]
+           "judge", "method_checks", "points", "statements", "tally", "verdict"]
 
 VERDICTS = ("reproduced", "exceeded", "short", "opposite")
 NOT_RUN, NOT_JUDGED, NOT_COMPARABLE = "not run", "not judged: partial", "not comparable: a subset"
@@ -198,7 +198,7 @@ def judge(statement: Statement, reading: Reading, replicates: Replicates,
     if not replicates.has(statement.targets, *ours):
         return Judged("-", NOT_RUN)
     interval = replicates.interval(lambda score: statement.statistic(score, reading.methods))
-    text = _points(interval, statement.gap)
+    text = points(interval, statement.gap)
     if statement.test is not None:
         a, b = (reading.methods[m] for m in statement.test)
         _, test = method_test(replicates.estimate, statement.targets, a, b)
@@ -207,7 +207,7 @@ def judge(statement: Statement, reading: Reading, replicates: Replicates,
     return Judged(text, verdict(statement.paper, interval, statement.gap))
 
 
-def _points(interval: Interval, signed: bool) -> str:
+def points(interval: Interval, signed: bool) -> str:
     """``84.9 [80.1, 88.2]`` (points; ``signed``: ``+3.1 [-1.0, +7.2]``)."""
     form = "+.1f" if signed else ".1f"
     return f"{interval.estimate:{form}} [{interval.low:{form}}, {interval.high:{form}}]"
