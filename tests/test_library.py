@@ -460,7 +460,8 @@ def test_an_smc_without_a_spec_says_what_it_is(smcs, tmp_path):
     loaded = SMCLibrary.load(path)
     assert loaded["climber"].spec is None and loaded["climber"].record == smcs["climber"].record
     assert loaded["climber"].action_names == smcs["climber"].action_names
-    for field, value, message in (("kind", "pushing", "unknown kind 'pushing'"), ("algo", "A2C", "unknown algorithm"),
+    for field, value, message in (("kind", "pushing", "unknown kind 'pushing'"),
+                                  ("algo", "NoSuchAlgorithm", "unknown algorithm"),
                                   ("frame_stack", 0, "smc.frame_stack must be a positive integer"),
                                   ("children", ["corner", "corner"], "smc.children must be distinct names")):
         _edit(path, lambda m, f=field, v=value: m["smcs"]["climber"]["smc"].update({f: v}))
@@ -513,8 +514,8 @@ def test_manifest_observation_disagrees_with_the_model(copy):
 
 
 def test_unknown_algorithm(copy):
-    _edit(copy, lambda m: m["smcs"]["corner"]["spec"].update(algo="A2C"))
-    with pytest.raises(ManifestError, match="entry 'corner': .*algo.*'A2C'"):
+    _edit(copy, lambda m: m["smcs"]["corner"]["spec"].update(algo="NoSuchAlgorithm"))
+    with pytest.raises(ManifestError, match="entry 'corner': .*algo.*'NoSuchAlgorithm'"):
         SMCLibrary.load(copy)
 
 

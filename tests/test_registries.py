@@ -125,9 +125,10 @@ def test_each_method_trains_what_its_entry_says() -> None:
                     entry = design.curriculum.node(node)
                     shipped_name = node.removeprefix(f"{name}/") if method.changes_targets else node
                     assert node != shipped_name or not method.changes_targets
-                    assert any(c.method == method.curricula and shipped_name in c.targets for c in shipped), node
-                    assert entry.budget_scale == method.budget_scale(entry) >= 1
-                    assert (entry.budget_scale > 1) == (method.budget_actions is not None)
+                    original = next(c.node(shipped_name) for c in shipped
+                                    if c.method == method.curricula and shipped_name in c.targets)
+                    assert entry.budget_scale == pytest.approx(original.budget_scale * method.budget_scale(original))
+                    assert entry.uses == original.uses and entry.task == original.task
                     assert entry.count_primitive_steps == method.count_primitive_steps
                     assert (entry.max_steps, entry.call_step_cap) == (method.max_steps or 100,
                                                                       method.call_step_cap or 100)
@@ -156,8 +157,9 @@ def test_the_command_line_takes_its_choices_and_defaults_from_the_registries(
     assert calls["experiment"]["methods"] == list(DEFAULT_METHODS) == [  # the paper's six
         "cnn", "base", "curr", "canon", "curr-noprim", "canon-noprim"]
     assert not any(METHOD_REGISTRY[m].own_learner or METHOD_REGISTRY[m].paper for m in DEFAULT_METHODS)
-    assert set(METHODS) - set(DEFAULT_METHODS) == {"base-gru", "canon-scaled", "curr-moves",
-                                                      "base-400", *SWEEP_METHODS}
+    # every other method is ours, compared with the paper's method it stands for
+    assert all(METHOD_REGISTRY[m].paper in DEFAULT_METHODS for m in set(METHODS) - set(DEFAULT_METHODS))
+    assert set(SWEEP_METHODS) <= set(METHODS)
     assert calls["experiment"]["repeats"] == DEFAULT_REPEATS
     for command in ("experiment", "train"):
         assert calls[command]["seeds"] == DEFAULT_SEEDS and calls[command]["backend"] == BACKENDS[0]
