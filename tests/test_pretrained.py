@@ -181,3 +181,27 @@ def test_the_shipped_pretrained_library():
                for smc in library.values())
     with pytest.raises(LibraryError, match="did you mean 'search2-canon'"):
         SMCLibrary.pretrained("search2-canonn")
+
+
+def test_every_shipped_smc_loads_by_a_name():
+    """Every SMC the package ships loads by a ``SMCLibrary.pretrained`` name: a pretrained curriculum's, or its
+    node's (``cl_self-touches-container_vs_corner`` is called by ``con2-cl`` only); ``con2-cl``, of whose lower level
+    the library holds part, is refused with what is missing and the names that load."""
+    index = json.loads((pretrained_root() / INDEX).read_text())
+    shipped = json.loads((pretrained_root() / "manifest.json").read_text())["smcs"]
+    reached = {n for name in [*index["curricula"], *index["nodes"]] for n in pretrained_names(name)}
+    assert reached == set(shipped)
+    node = "cl_self-touches-container_vs_corner"
+    assert not any(node in nodes for nodes in index["curricula"].values())  # no pretrained curriculum calls it
+    library = SMCLibrary.pretrained(node)
+    assert sorted(library.names) == [f"{node}@1", f"{node}@2"] and all(s.test_score for s in library.values())
+    with pytest.raises(LibraryError) as refused:
+        SMCLibrary.pretrained("con2-cl")
+    message = str(refused.value)
+    assert message.startswith("no pretrained SMCs for curriculum 'con2-cl': the pretrained library holds 14 of its "
+                              "19 lower-level nodes, not all (missing: ba_self-on-hline_from_directly-above, ")
+    assert "held: cl_self-in-left-corner_vs_on-hline, " in message
+    assert f"{node}); pretrained curricula: con2-ba, " in message
+    with pytest.raises(LibraryError, match="no pretrained SMCs for curriculum 'nothing-like-it'; pretrained "
+                                           "curricula: con2-ba, .*; or one of the 45 nodes it holds by name"):
+        SMCLibrary.pretrained("nothing-like-it")

@@ -275,8 +275,10 @@ class SMCLibrary(Mapping[str, SMC]):
     @classmethod
     def pretrained(cls, curriculum: str, root: str | os.PathLike | None = None) -> SMCLibrary:
         """The pretrained lower-level SMCs of a curriculum, two best seeds of each node, shipped with the package
-        (:mod:`sb3_smc.library.pretrained`; ``docs/library.md``): ``SMCLibrary.pretrained("search2-canon")``.
-        ``root``: another pretrained library (built by :func:`sb3_smc.curricula.pretrained.build_pretrained`)."""
+        (:mod:`sb3_smc.library.pretrained`; ``docs/library.md``): ``SMCLibrary.pretrained("search2-canon")``; or
+        those of one node by its name (``SMCLibrary.pretrained("cl_self-touches-container_vs_corner")``: every
+        shipped SMC loads by a name). ``root``: another pretrained library (built by
+        :func:`sb3_smc.curricula.pretrained.build_pretrained`)."""
         path = pretrained_root() if root is None else Path(root)
         return cls.load(path, names=pretrained_names(curriculum, path))
 

@@ -75,18 +75,43 @@ def pretrained_curricula(root: str | Path | None = None) -> list[str]:
 
 
 def pretrained_names(curriculum: str, root: str | Path | None = None) -> list[str]:
-    """The SMC names (``<node>@<seed>``) the pretrained library holds for ``curriculum``'s lower-level nodes, in the
-    library's order."""
+    """The SMC names (``<node>@<seed>``) the pretrained library holds for ``curriculum``, in the library's order: a
+    curriculum's lower-level nodes (one the index lists: it holds every node the curriculum's targets call), or the
+    name of one node it holds (its best seeds; every shipped SMC is reachable so, also a node that no listed
+    curriculum calls, such as ``cl_self-touches-container_vs_corner``). A shipped curriculum whose lower level the
+    library holds in part (``con2-cl``) is refused with what is missing and the names that load."""
     root = pretrained_root() if root is None else Path(root)
     names = _names(root) if (root / storage.MANIFEST).is_file() else []
     index = pretrained_index(root, names)
-    if curriculum not in index["curricula"]:
-        available = list(index["curricula"])
-        raise LibraryError(f"no pretrained SMCs for curriculum {curriculum!r}"
-                           f"{suggest(curriculum, available, ' (none is shipped yet)')}; pretrained: "
-                           f"{', '.join(available) or 'none'}")
-    wanted = {name for node in index["curricula"][curriculum] for name in index["nodes"][node]}
+    if curriculum in index["curricula"]:
+        nodes = index["curricula"][curriculum]
+    elif curriculum in index["nodes"]:
+        nodes = [curriculum]
+    else:
+        raise LibraryError(_not_pretrained(curriculum, index))
+    wanted = {name for node in nodes for name in index["nodes"][node]}
     return [name for name in names if name in wanted]
+
+
+def _not_pretrained(name: str, index: dict[str, Any]) -> str:
+    """Why ``name`` loads nothing: a shipped curriculum's lower level held in part (what is missing, and its nodes
+    that load by name), or no curriculum or node of the library (close names); with the curricula that load."""
+    from sb3_smc.curricula.shipped import shipped_curricula  # only for this message: curricula import this module
+
+    available = list(index["curricula"])
+    loads = (f"pretrained curricula: {', '.join(available) or 'none'}; or one of the {len(index['nodes'])} nodes "
+             "it holds by name (pretrained_index()['nodes'])")
+    curriculum = shipped_curricula().get(name)
+    if curriculum is not None:
+        lower = list(dict.fromkeys(u for target in curriculum.targets for u in curriculum.node(target).uses))
+        held = [node for node in lower if node in index["nodes"]]
+        missing = [node for node in lower if node not in index["nodes"]]
+        return (f"no pretrained SMCs for curriculum {name!r}: the pretrained library holds {len(held)} of its "
+                f"{len(lower)} lower-level nodes, not all (missing: {', '.join(missing)}), so it is not a pretrained "
+                f"curriculum (a run of it with --reuse-from pretrained copies the nodes held and trains the rest); "
+                + (f"load a node it holds by the node's name (held: {', '.join(held)}); " if held else "") + loads)
+    hint = suggest(name, available, " (none is shipped yet)")
+    return f"no pretrained SMCs for curriculum {name!r}{'' if hint.startswith('; it has') else hint}; {loads}"
 
 
 def _names(root: Path) -> list[str]:
