@@ -33,16 +33,18 @@ from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from copy import deepcopy
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import torch
 from sb3_contrib import RecurrentPPO
+from sb3_contrib.common.recurrent.type_aliases import RNNStates
 from stable_baselines3.common.utils import obs_as_tensor
 from stable_baselines3.common.vec_env import VecEnv, VecMonitor
 from stable_baselines3.common.vec_env.base_vec_env import VecEnvIndices, VecEnvObs, VecEnvStepReturn
 
 from pixelworld_env.envs.vector import PixelWorldVectorEnv
+from sb3_smc.common.recurrent import SequenceLstmPolicy
 from sb3_smc.errors import SMCError
 from sb3_smc.hyperparameters import constructor_arguments
 from sb3_smc.records import TrainingSpec
@@ -57,7 +59,7 @@ from sb3_smc.training import (
     train_smc,
     training_callbacks,
 )
-from sb3_smc.vec_env import FlatSMCVecEnv
+from sb3_smc.vec_env import FlatSMCVecEnv, FlatStep
 
 __all__ = ["SliceVecEnv", "batchable", "train_smcs"]
 
@@ -124,8 +126,10 @@ class _EnvGroup:
         self.slices = [SliceVecEnv(self, int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
         self.actions = np.zeros(self.env.num_envs, dtype=np.int64)
         self.reset_obs: np.ndarray = np.zeros(0)
+        self.step_result: FlatStep | None = None
         self.results: tuple[np.ndarray, np.ndarray, np.ndarray, list[dict[str, Any]]] = (
             np.zeros(0), np.zeros(0), np.zeros(0), [])
+        self.with_infos = True  #: whether a step builds SB3's info dicts (for SMCs on the generic path)
 
     def reset(self) -> None:
         """Reset every environment with the seeds its model set (``VecEnv.seed`` of each slice)."""
@@ -135,9 +139,9 @@ class _EnvGroup:
             part._reset_seeds()
 
     def step(self) -> None:
-        self.env.step_async(self.actions)
-        obs, rewards, dones, infos = self.env.step_wait()
-        self.results = (np.asarray(obs), rewards, dones, infos)
+        step = self.step_result = self.env.step_arrays(self.actions)
+        if self.with_infos:
+            self.results = (step.obs, step.rewards, step.dones, self.env.step_infos(step, self.actions))
         self.actions[:] = 0  # the actions of SMCs that left the group
 
 
@@ -195,6 +199,11 @@ class _Job:
         self.total_timesteps = spec.budget.total_timesteps
         self.lstm_states: Any = None
         self._step: tuple[Any, ...] = ()
+        self.lean = False  # set by start: the compiled collection step and array bookkeeping apply
+        self._weights: tuple[Any, ...] = ()
+        self._uniforms = np.zeros((0, 0))
+        self._monitor = (np.zeros(0, dtype=np.float32), np.zeros(0, dtype=np.int32))
+        self._monitor_start = time.time()
 
     def start(self) -> None:
         """``learn``'s set-up (the environments are reset already)."""
@@ -203,6 +212,13 @@ class _Job:
             self.total_timesteps, self.callback = model._setup_learn(
                 self.total_timesteps, self.callback, True, self.spec.name, False)
             self.callback.on_training_start(locals(), globals())
+        policy, n = model.policy, model.n_envs
+        with torch.no_grad():
+            self.lean = (self.callback is self.stats and isinstance(policy, SequenceLstmPolicy)
+                         and policy.compiled_collection_weights(torch.as_tensor(model._last_obs))
+                         is not None)
+        self._monitor = (np.zeros(n, dtype=np.float32), np.zeros(n, dtype=np.int32))
+        self._monitor_start = time.time()
 
     @property
     def running(self) -> bool:
@@ -214,10 +230,27 @@ class _Job:
         model.rollout_buffer.reset()
         self.callback.on_rollout_start()
         self.lstm_states = deepcopy(model._last_lstm_states)
+        if self.lean:  # the rollout's draws at once: torch.rand in one call gives the per-step calls' numbers
+            policy = model.policy
+            with torch.no_grad():
+                self._weights = policy.compiled_collection_weights(torch.as_tensor(model._last_obs))
+            with self.random.torch_only():
+                self._uniforms = torch.rand(model.n_steps * model.n_envs, dtype=torch.float64).numpy().reshape(
+                    model.n_steps, model.n_envs)
+            self._h, self._c = (self.lstm_states.pi[0][0].numpy(), self.lstm_states.pi[1][0].numpy())
 
     def act(self) -> None:
         """The policy's step on the last observations; the actions go to the group's step."""
         model = self.model
+        if self.lean:
+            buffer = model.rollout_buffer
+            starts = model._last_episode_starts.astype(np.float64)
+            step = model.policy.compiled_step(self._weights, model._last_obs, self._h, self._c, starts,
+                                              self._uniforms[buffer.pos])
+            part = cast(SliceVecEnv, model.env.unwrapped)
+            part.group.actions[part.start:part.stop] = step[0]
+            self._step = step
+            return
         with self.random.torch_only(), torch.no_grad():
             obs_tensor = obs_as_tensor(model._last_obs, model.device)
             episode_starts = torch.tensor(model._last_episode_starts, dtype=torch.float32, device=model.device)
@@ -228,6 +261,8 @@ class _Job:
 
     def observe(self) -> bool:
         """The step's results into the callbacks and the rollout buffer; ``False`` when a callback stops training."""
+        if self.lean:
+            return self._observe_arrays()
         model = self.model
         env = model.env
         actions, values, log_probs, lstm_states = self._step
@@ -253,6 +288,62 @@ class _Job:
         model._last_obs = new_obs
         model._last_episode_starts = dones
         model._last_lstm_states = self.lstm_states = lstm_states
+        return True
+
+    def _observe_arrays(self) -> bool:
+        """:meth:`observe` on the group's arrays: ``VecMonitor``'s sums, the callback's statistics
+        (:meth:`~sb3_smc.callbacks.SMCTrainingCallback.on_flat_step`), the time-limit bootstrap and the buffer's
+        ``add`` written out, the same numbers without info dicts."""
+        model = self.model
+        part = cast(SliceVecEnv, model.env.unwrapped)
+        step = part.group.step_result
+        assert step is not None
+        a, b = part.start, part.stop
+        obs, rewards, dones = step.obs[a:b], step.rewards[a:b], step.dones[a:b]
+        mine = (step.ended >= a) & (step.ended < b)
+        ended, terminal = step.ended[mine] - a, step.terminal[mine]
+        model.num_timesteps += b - a
+        returns, lengths = self._monitor
+        returns += rewards
+        lengths += 1
+        episode_returns, episode_lengths = returns[ended], lengths[ended]
+        returns[ended] = 0
+        lengths[ended] = 0
+        if not self.stats.on_flat_step(rewards, dones, step.success[a:b], episode_returns, episode_lengths):
+            return False
+        actions, values, log_probs, h, c = self._step
+        if ended.size:
+            seconds = round(time.time() - self._monitor_start, 6)
+            model.ep_info_buffer.extend({"r": r, "l": n, "t": seconds}
+                                        for r, n in zip(episode_returns, episode_lengths, strict=True))
+            model.ep_success_buffer.extend(step.success[a:b][ended].tolist())
+            for row, idx in enumerate(ended.tolist()):  # a time limit: bootstrap with the terminal value
+                if step.time_limit[a + idx]:
+                    terminal_obs = model.policy.obs_to_tensor(terminal[row])[0]
+                    with torch.no_grad():
+                        state = (torch.from_numpy(h[idx:idx + 1])[None], torch.from_numpy(c[idx:idx + 1])[None])
+                        starts = torch.tensor([False], dtype=torch.float32, device=model.device)
+                        terminal_value = model.policy.predict_values(terminal_obs, state, starts)[0]
+                    rewards[idx] += model.gamma * terminal_value
+        buffer = model.rollout_buffer
+        pos = buffer.pos
+        for states in (buffer.hidden_states_pi, buffer.hidden_states_vf):
+            states[pos, 0] = self._h
+        for states in (buffer.cell_states_pi, buffer.cell_states_vf):
+            states[pos, 0] = self._c
+        buffer.observations[pos] = model._last_obs
+        buffer.actions[pos] = actions.reshape(-1, 1)
+        buffer.rewards[pos] = rewards
+        buffer.episode_starts[pos] = model._last_episode_starts
+        buffer.values[pos] = values.flatten()
+        buffer.log_probs[pos] = log_probs
+        buffer.pos += 1
+        buffer.full = buffer.pos == buffer.buffer_size
+        model._last_obs = obs
+        model._last_episode_starts = dones
+        self._h, self._c = h, c
+        states = (torch.from_numpy(h)[None], torch.from_numpy(c)[None])
+        model._last_lstm_states = self.lstm_states = RNNStates(states, states)
         return True
 
     def end_rollout(self) -> None:
@@ -329,6 +420,7 @@ def _train_group(specs: Sequence[TrainingSpec], group: _EnvGroup, *, log_every: 
     group.reset()
     for job in jobs:
         job.start()
+    group.with_infos = not all(job.lean for job in jobs)
     running = [job for job in jobs if job.running]
     n_steps = jobs[0].model.n_steps
     while running:

@@ -176,15 +176,38 @@ class SMCTrainingCallback(BaseCallback):
             info = infos[k]
             # VecMonitor's episode record when present (the same numbers), else the callback's own sums
             episode = info.get("episode")
-            stats.returns.append(float(episode["r"]) if episode else float(self._episode_return[k]))
-            stats.lengths.append(int(episode["l"]) if episode else int(self._episode_length[k]))
-            stats.primitive_lengths.append(int(primitive[k]))
-            stats.successes.append(bool(info.get("is_success", False)))
-            self._episode_return[k] = 0.0
-            self._episode_length[k] = 0
-            self.total_primitive_steps += int(primitive[k])
-            primitive[k] = 0
+            self._episode_ended(int(k), float(episode["r"]) if episode else float(self._episode_return[k]),
+                                int(episode["l"]) if episode else int(self._episode_length[k]),
+                                bool(info.get("is_success", False)))
         return not self.solved  # False: the first step after the solving rollout's update (its steps counted)
+
+    def on_flat_step(self, rewards: np.ndarray, dones: np.ndarray, success: np.ndarray,
+                     episode_returns: np.ndarray, episode_lengths: np.ndarray) -> bool:
+        """``on_step`` for a flat SMC's step given as arrays instead of info dicts (every decision one primitive
+        action, no SMC calls; :mod:`sb3_smc.batched`): the same statistics. ``episode_returns`` /
+        ``episode_lengths``: ``VecMonitor``'s records of the episodes ending at this step, in environment order."""
+        self.n_calls += 1
+        self.num_timesteps = self.model.num_timesteps
+        self._episode_return += rewards
+        self._episode_length += 1
+        self._stats.decisions += len(rewards)
+        self._episode_primitive += 1
+        for k, ret, length in zip(np.flatnonzero(dones).tolist(), episode_returns.tolist(), episode_lengths.tolist(),
+                                  strict=True):
+            self._episode_ended(k, ret, int(length), bool(success[k]))
+        return not self.solved
+
+    def _episode_ended(self, k: int, episode_return: float, length: int, success: bool) -> None:
+        """Environment ``k``'s episode ended: into the rollout's statistics, its sums back to zero."""
+        stats, primitive = self._stats, self._episode_primitive
+        stats.returns.append(episode_return)
+        stats.lengths.append(length)
+        stats.primitive_lengths.append(int(primitive[k]))
+        stats.successes.append(success)
+        self._episode_return[k] = 0.0
+        self._episode_length[k] = 0
+        self.total_primitive_steps += int(primitive[k])
+        primitive[k] = 0
 
     def _on_rollout_end(self) -> None:
         stats = self._stats

@@ -14,7 +14,7 @@ unbatched ones (see ``docs/benchmarks.md``).
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from typing import Any, cast
+from typing import Any, NamedTuple, cast
 
 import gymnasium as gym
 import numpy as np
@@ -28,7 +28,7 @@ from sb3_smc.gymnasium_vec_env import GymnasiumVecEnv
 from sb3_smc.layout import HAND_SIZE, MOVES, observation_size, smc_action_names
 from sb3_smc.wrapper import HierarchicalSMCWrapper
 
-__all__ = ["FlatSMCVecEnv", "SMCVecEnv", "answer_in_batches"]
+__all__ = ["FlatSMCVecEnv", "FlatStep", "SMCVecEnv", "answer_in_batches"]
 
 
 def answer_in_batches(requests: dict[int, tuple[Any, np.ndarray, Any]]) -> dict[int, tuple[np.ndarray, Any]]:
@@ -157,21 +157,43 @@ class FlatSMCVecEnv(GymnasiumVecEnv):
     def step_wait(self) -> VecEnvStepReturn:
         assert self._actions is not None, "step_async first"
         actions, self._actions = self._actions, None
+        step = self.step_arrays(actions)
+        return step.obs, step.rewards, step.dones, self.step_infos(step, actions)
+
+    def step_infos(self, step: FlatStep, actions: np.ndarray) -> list[dict[str, Any]]:
+        """SB3's info dicts of a step of :meth:`step_arrays` (``actions``: the step's)."""
+        moves = self._is_move[actions].astype(np.int64).tolist()
+        infos: list[dict[str, Any]] = [
+            {"is_success": s, "primitive_steps": m, "TimeLimit.truncated": t}
+            for s, m, t in zip(step.success.tolist(), moves, step.time_limit.tolist(), strict=True)]
+        for k, terminal in zip(step.ended.tolist(), step.terminal, strict=True):
+            infos[k]["terminal_observation"] = terminal
+        return infos
+
+    def step_arrays(self, actions: np.ndarray) -> FlatStep:
+        """:meth:`step_wait` for ``actions`` (int64, one per environment) without the info dicts (their content is
+        in the arrays: a flat SMC's step is one primitive action)."""
         hand, rewards, terminated, truncated, _ = self.env.step(self._to_base[actions])
         self._previous[:] = actions
         obs = self._observation(hand)
         dones = terminated | truncated
-        success = (dones & (rewards > 0)).tolist()
-        moves = self._is_move[actions].astype(np.int64).tolist()
-        limit = (truncated & ~terminated).tolist()
-        infos: list[dict[str, Any]] = [
-            {"is_success": s, "primitive_steps": m, "TimeLimit.truncated": t}
-            for s, m, t in zip(success, moves, limit, strict=True)]
         ended = np.flatnonzero(dones)
+        terminal = obs[ended]  # a copy (fancy indexing)
         if ended.size:
-            for k in ended.tolist():
-                infos[k]["terminal_observation"] = obs[k].copy()
             hand, _ = self.env.reset(options={"reset_mask": dones})
             self._previous[ended] = -1
             obs[ended] = self._observation(hand)[ended]
-        return obs, rewards.astype(np.float32), dones, infos
+        return FlatStep(obs, rewards.astype(np.float32), dones, dones & (rewards > 0), truncated & ~terminated,
+                        ended, terminal)
+
+
+class FlatStep(NamedTuple):
+    """One step of :class:`FlatSMCVecEnv` as arrays (:meth:`FlatSMCVecEnv.step_arrays`)."""
+
+    obs: np.ndarray  #: the observations after the step (after the reset where an episode ended)
+    rewards: np.ndarray  #: float32
+    dones: np.ndarray  #: the episode ended (terminated or truncated)
+    success: np.ndarray  #: it ended with a positive reward (``is_success``)
+    time_limit: np.ndarray  #: it was cut by the time limit (``TimeLimit.truncated``)
+    ended: np.ndarray  #: the indices of the environments whose episode ended
+    terminal: np.ndarray  #: their last observations (``terminal_observation``), one row each

@@ -54,13 +54,17 @@ def test_seeds_trained_together_are_each_their_own_training() -> None:
 
 
 def test_recurrent_trpo_gru_and_mixed_groups() -> None:
-    """RecurrentTRPO-GRU SMCs and RecurrentPPO SMCs of another task and size train in their own groups; a spec
-    no group hosts (memoryless TRPO) is trained by train_smc, in its place in the list."""
+    """RecurrentTRPO-GRU SMCs and RecurrentPPO SMCs of another task and size train in their own groups (one of
+    them on the generic path); a spec no group hosts (memoryless TRPO) is trained by train_smc, in its place in the
+    list."""
     specs = [TrainingSpec.create(ABOVE_ID, algo="RecurrentTRPO", rnn="gru", total_timesteps=4_000, seed=s)
              for s in (0, 1)]
     specs.append(TrainingSpec.create(CORNER_ID, total_timesteps=2_048, n_envs=8, seed=2))
+    # the same group: a critic LSTM takes SB3's own collection step and info dicts beside the compiled step
+    specs.append(TrainingSpec.create(CORNER_ID, total_timesteps=4_000, n_envs=8, seed=3,
+                                     policy_kwargs={"enable_critic_lstm": True}))
     specs.append(TrainingSpec.create(CORNER_ID, algo="TRPO", total_timesteps=1_024, n_envs=4, n_steps=64, seed=0))
-    assert [batchable(spec) for spec in specs] == [True, True, True, False]
+    assert [batchable(spec) for spec in specs] == [True, True, True, True, False]
     batched = train_smcs(specs)
     for spec, smc in zip(specs, batched, strict=True):
         assert_same_smc(train_smc(spec, log_every=0), smc)

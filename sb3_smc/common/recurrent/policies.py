@@ -106,9 +106,7 @@ class SequenceLstmPolicy(RecurrentActorCriticPolicy):
         the torch step up to float rounding); the action is then drawn by inverse CDF from ``torch.rand``, so
         seeding torch still seeds the collection. ``compiled_collection = False`` turns that off."""
         n_seq = lstm_states.pi[0].shape[1]
-        if (self.lstm_critic is not None or self.shared_lstm or not self.share_features_extractor
-                or not isinstance(self.action_dist, CategoricalDistribution) or obs.shape[0] != n_seq
-                or not _steppable(self.lstm_actor)):
+        if not self._lean_step() or obs.shape[0] != n_seq:
             return super().forward(obs, lstm_states, episode_starts, deterministic)
         weights = self._collection_weights(obs) if self.compiled_collection and not torch.is_grad_enabled() else None
         if weights is not None:
@@ -125,6 +123,30 @@ class SequenceLstmPolicy(RecurrentActorCriticPolicy):
         distribution = Categorical(logits=self.action_net(latent_pi), validate_args=False)
         actions = torch.argmax(distribution.probs, dim=1) if deterministic else distribution.sample()
         return actions, values, distribution.log_prob(actions), RNNStates(states_pi, states_pi)
+
+    def _lean_step(self) -> bool:
+        """Whether :meth:`forward` takes its lean one-step path (a categorical action, a feed-forward critic)."""
+        return (self.lstm_critic is None and not self.shared_lstm and self.share_features_extractor
+                and isinstance(self.action_dist, CategoricalDistribution) and _steppable(self.lstm_actor))
+
+    def compiled_collection_weights(self, obs: torch.Tensor) -> tuple[Any, ...] | None:
+        """The arrays of :meth:`compiled_step` when :meth:`forward` would compute a collection step on ``obs`` (one
+        row per sequence, no gradients) with it, else ``None``."""
+        if not (self._lean_step() and self.compiled_collection and not torch.is_grad_enabled()):
+            return None
+        return self._collection_weights(obs)
+
+    def compiled_step(self, weights: tuple[Any, ...], obs: np.ndarray, h: np.ndarray, c: np.ndarray,
+                      starts: np.ndarray, uniforms: np.ndarray, deterministic: bool = False
+                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`forward`'s compiled collection step on numpy arrays: ``obs`` ``(n, features)`` float32, the
+        actor's previous ``h`` / ``c`` ``(n, hidden)``, ``starts`` float64 (1.0 at an episode start), ``uniforms``
+        the draws; returns ``(actions, values (n, 1), log-probabilities, h', c')``."""
+        if hasattr(self.lstm_actor, "gru"):
+            actions, values, log_probs, h_next = kernels.gru_collection_step(
+                obs, h, starts, uniforms, deterministic, *weights)
+            return actions, values, log_probs, h_next, c * (1.0 - starts[:, None]).astype(np.float32)  # as torch
+        return kernels.lstm_collection_step(obs, h, c, starts, uniforms, deterministic, *weights)
 
     def _collection_parameters(self) -> tuple[torch.Tensor, ...] | None:
         """The tensors of the compiled collection step, or ``None`` where the architecture is not the default one:
@@ -181,16 +203,10 @@ class SequenceLstmPolicy(RecurrentActorCriticPolicy):
         n_seq = obs.shape[0]
         uniforms = np.zeros(n_seq) if deterministic else torch.rand(n_seq, dtype=torch.float64).numpy()
         starts = episode_starts.detach().numpy().astype(np.float64, copy=False).reshape(n_seq)
-        h, c = lstm_states.pi[0][0].numpy(), lstm_states.pi[1][0].numpy()
-        if hasattr(self.lstm_actor, "gru"):
-            actions, values, log_probs, h_next = kernels.gru_collection_step(
-                obs.numpy(), h, starts, uniforms, deterministic, *weights)
-            cells = lstm_states.pi[1][0].numpy() * (1.0 - starts[:, None]).astype(np.float32)  # as torch's step
-            states = (torch.from_numpy(h_next)[None], torch.from_numpy(cells)[None])
-        else:
-            actions, values, log_probs, h_next, c_next = kernels.lstm_collection_step(
-                obs.numpy(), h, c, starts, uniforms, deterministic, *weights)
-            states = (torch.from_numpy(h_next)[None], torch.from_numpy(c_next)[None])
+        actions, values, log_probs, h_next, c_next = self.compiled_step(
+            weights, obs.numpy(), lstm_states.pi[0][0].numpy(), lstm_states.pi[1][0].numpy(), starts, uniforms,
+            deterministic)
+        states = (torch.from_numpy(h_next)[None], torch.from_numpy(c_next)[None])
         return torch.from_numpy(actions), torch.from_numpy(values), torch.from_numpy(log_probs), \
             RNNStates(states, states)
 
