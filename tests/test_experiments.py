@@ -240,7 +240,7 @@ def test_the_wall_clock_keeps_a_stopped_runs_time(tmp_path):
     its time up to its last beat; a directory from before the ledger starts from its results' recorded total; runs
     at once keep their own entries; a damaged ledger is refused before any work."""
     from sb3_smc.curricula.run_directory import RunFileError
-    from sb3_smc.experiments.wall_clock import LEDGER, WallClock
+    from sb3_smc.experiments.wall_clock import LEDGER, WallClock, lower_bound
 
     run = tmp_path / "run"
     run.mkdir()
@@ -258,6 +258,7 @@ def test_the_wall_clock_keeps_a_stopped_runs_time(tmp_path):
     killed.wait()
     ledger = json.loads((run / LEDGER).read_text())
     assert ledger["before"] == 100.0 and len(ledger["runs"]) == 1
+    assert ledger["before_lower_bound"] is True and lower_bound(run)  # results from before the ledger: a bound
     [stopped] = ledger["runs"]
     assert stopped["ended"] is False and stopped["train"] is True and stopped["seconds"] >= 0.3
     with WallClock(run, train=False, interval=0.05) as first, WallClock(run, train=True, interval=0.05):
@@ -511,16 +512,28 @@ def test_the_sweep_targets_cover_both_kinds_and_every_category():
     assert set(required) <= set(SWEEP_TARGETS)
 
 
-def test_a_run_reduced_to_its_records_resumes_without_model_files(tmp_path):
-    """What docs/results/ commits (run.json + evaluations, no library) is a run that resumes where it stopped."""
+def test_a_run_reduced_to_its_records_resumes_without_model_files(tmp_path, monkeypatch):
+    """What docs/results/ commits (run.json + evaluations, no library) is a run that resumes where it stopped; its
+    results record the commit each SMC was trained at, over the resumed runs, and the SMCs copied from a
+    ``--reuse-from`` library apart."""
     from sb3_smc.curricula.trainer import file_stem
+    from sb3_smc.experiments import runner
     from sb3_smc.library import SMCLibrary
 
     settings = dict(methods=["base", "curr"], targets=[LEFT_OF], seeds=1, timesteps=2000, repeats=1, progress=False)
+    first, second = "1" * 40, "2" * 40
+    monkeypatch.setattr(runner, "code_commit", lambda: first)
     results = run_experiment(tmp_path / "full", **settings)
+    everything = sorted(SMCLibrary.load(tmp_path / "full" / "library").names)
+    assert results["commits"] == {first: everything} and results["copied"] == []
+    assert results["wall_time_lower_bound"] is False  # a ledger from the first run
+    copied = run_experiment(tmp_path / "copied", **settings, reuse_from=tmp_path / "full" / "library")
+    assert copied["commits"] == {} and copied["copied"] == everything  # nothing trained: every SMC copied
+    monkeypatch.setattr(runner, "code_commit", lambda: second)
     kept = tmp_path / "kept"
     kept.mkdir()
     shutil.copy(tmp_path / "full" / "run.json", kept)
+    shutil.copy(tmp_path / "full" / "results.json", kept)  # as tools/paper_table.sh keeps it (no ledger)
     shutil.copytree(tmp_path / "full" / "evaluations", kept / "evaluations")
     curr1 = f"obj-con2-cl/{LEFT_OF}-curr1@0"
     saved = json.loads((kept / "evaluations" / f"{file_stem(curr1)}.json").read_text())
@@ -541,6 +554,8 @@ def test_a_run_reduced_to_its_records_resumes_without_model_files(tmp_path):
     trained = set(SMCLibrary.load(kept / "library").names)
     assert curr1 in trained and f"{LEFT_OF}@0" not in trained and f"obj-con2-cl/{LEFT_OF}-curr@0" not in trained
     assert {c for c in saved["spec"]["children"]} <= trained  # its lower levels, retrained
+    assert completed["commits"] == {first: sorted(set(everything) - trained), second: sorted(trained)}
+    assert completed["wall_time_lower_bound"] is False  # its ledger began from a total that a ledger kept
     def timeless(rows: list[dict]) -> list[dict]:
         return [{k: v for k, v in row.items() if k != "wall_time_s"} for row in rows]
 
@@ -1075,12 +1090,95 @@ def test_the_whole_table_report_over_two_directories(tmp_path):
            "concepts here | not comparable: a subset |" in part and "mean of base" not in part
     row = next(line for line in part.splitlines() if line.startswith("| classification | curr vs base |"))
     assert [c.strip() for c in row.strip("|").split("|")][6:] == ["", ""]  # no paper test, no p at its df
-    assert "### ../containment" in text and "Wall time of all runs of the 2 directories: 4.00 h" in text
+    assert "### ../containment" in text and "Wall time of all runs of the 2 directories: ≥ 4.00 h" in text
     # a target x method in two directories is refused, before anything is written
     _synthetic_table(tmp_path / "again", containment[:1], ["base"], score)
     with pytest.raises(ValueError, match=f"{containment[0]} with base is in both"):
         write_report([tmp_path / "containment", tmp_path / "again"], out=tmp_path / "twice", behaviour=False)
     assert not (tmp_path / "twice").exists()
+
+
+def test_the_report_marks_wall_times_recorded_before_the_ledger_and_gives_every_commit(tmp_path):
+    """A directory whose wall time was recorded without the wall-time ledger (none, or one begun from such a total)
+    gives only a lower bound, marked ``≥``, and so does the total over directories when any part is one; a
+    directory's results that say so are believed. Every commit its SMCs were trained at is listed with its count of
+    jobs (a commit unknown last), the copies and a reconstruction's note; results from before say that they do not
+    record it."""
+    from sb3_smc.experiments.wall_clock import LEDGER, lower_bound
+
+    targets = level2_targets()
+    dirs = {name: tmp_path / name for name in ("old", "ledger", "resumed", "said")}
+    for k, directory in enumerate(dirs.values()):
+        _synthetic_table(directory, [targets[k]], ["base"], lambda t, m: 0.5)
+    ledger = {"format": "sb3-smc-wall-time", "version": 1, "before": 0.0,
+              "runs": [{"id": "a", "train": True, "commit": "c" * 40, "seconds": 7200.0, "ended": True}]}
+    (dirs["ledger"] / LEDGER).write_text(json.dumps(ledger))
+    (dirs["resumed"] / LEDGER).write_text(json.dumps({**ledger, "before": 100.0}))
+    said = json.loads((dirs["said"] / "results.json").read_text())
+    commits = {"a" * 40: ["x@0", "y@0"], "unknown": ["z@0"], "b" * 40 + "+changes": ["w@1", "w@2", "w@3"]}
+    (dirs["said"] / "results.json").write_text(json.dumps(
+        {**said, "wall_time_lower_bound": False, "code": {"versions": {}, "commit": "b" * 40}, "commits": commits,
+         "copied": ["v@0"], "commits_note": "from the notes"}))
+    old = json.loads((dirs["old"] / "results.json").read_text())
+    (dirs["old"] / "results.json").write_text(json.dumps({**old, "code": {"versions": {}, "commit": "d" * 40}}))
+    assert [lower_bound(d) for d in dirs.values()] == [True, False, True, True]  # "said": its results say otherwise
+    (tmp_path / "damaged").mkdir()
+    (tmp_path / "damaged" / LEDGER).write_text("{")
+    assert lower_bound(tmp_path / "damaged")
+
+    [path] = write_report(list(dirs.values()), out=tmp_path / "report", behaviour=False)
+    sections = {part.split("\n")[0]: part for part in path.read_text().split("### ../")[1:]}
+    bound = "; of all its runs recorded here: ≥ 2.00 h (a lower bound: recorded without the wall-time ledger"
+    assert bound in sections["old"] and bound in sections["resumed"]
+    for exact in ("ledger", "said"):
+        assert "; of all its runs recorded here: 2.00 h\n" in sections[exact]
+    assert ("- trained at: not recorded per SMC (results written before `commits`): the commit above is that of the "
+            "last run\n") in sections["old"]
+    assert "trained at" not in sections["ledger"]  # results without the code's record: nothing to say
+    assert ("- trained at: `bbbbbbb+changes` (3 SMC jobs), `aaaaaaa` (2 SMC jobs), a commit unknown (1 SMC job); 1 "
+            "SMC job copied from a `--reuse-from` library; from the notes\n") in sections["said"]
+    assert ("Wall time of all runs of the 4 directories: ≥ 8.00 h (a lower bound: 2 of them recorded without the "
+            "wall-time ledger") in path.read_text()
+    [exact] = write_report([dirs["ledger"], dirs["said"]], out=tmp_path / "exact", behaviour=False)
+    assert "Wall time of all runs of the 2 directories: 4.00 h.\n" in exact.read_text()
+
+
+def test_results_record_every_commit_their_smcs_were_trained_at():
+    """``results.json``'s ``commits``, accumulated over a directory's runs: what this run trained goes to its commit
+    (a job trained again moves there), what an earlier run recorded stays, and jobs nobody recorded (a run stopped
+    before it wrote its results) are the last earlier training run's, or of a commit unknown."""
+    from sb3_smc.experiments.runner import record_commits
+
+    previous = {"a" * 40: ["lower@0", "lower@1", "top@0"]}
+    jobs = {"lower@0", "lower@1", "lower@2", "top@0", "top@1"}
+    assert record_commits(previous, jobs, {"lower@1", "top@1"}, "b" * 40, "c" * 40) == {
+        "a" * 40: ["lower@0", "top@0"], "b" * 40: ["lower@1", "top@1"], "c" * 40: ["lower@2"]}
+    assert record_commits(previous, jobs, set(), None, None) == {
+        "a" * 40: ["lower@0", "lower@1", "top@0"], "unknown": ["lower@2", "top@1"]}
+    assert record_commits({}, set(), {"x@0"}, None, "c" * 40) == {"unknown": ["x@0"]}  # code outside git
+
+
+def test_the_wall_clock_names_the_commit_of_the_last_earlier_training_run(tmp_path):
+    """Each ledger entry names its run's commit; a run finds the last other training run's (a run stopped before
+    it wrote its results, or one training beside a ``--no-train`` tabulation), or none."""
+    from sb3_smc.experiments.wall_clock import LEDGER, WallClock
+
+    run = tmp_path / "run"
+    run.mkdir()
+    (run / "run.json").write_text("{}")
+    with WallClock(run, train=True, commit="a" * 40) as first:
+        assert first.earlier_commit() is None
+    entries = [{"id": "s", "train": True, "commit": "b" * 40, "seconds": 5.0, "ended": False},  # stopped
+               {"id": "t", "train": False, "commit": "c" * 40, "seconds": 1.0, "ended": True}]  # a tabulation
+    ledger = json.loads((run / LEDGER).read_text())
+    assert ledger["runs"][0]["commit"] == "a" * 40
+    (run / LEDGER).write_text(json.dumps({**ledger, "runs": ledger["runs"] + entries}))
+    with WallClock(run, train=False, commit="d" * 40) as tabulating:
+        assert tabulating.earlier_commit() == "b" * 40
+    (run / LEDGER).write_text(json.dumps({**ledger, "runs": [*ledger["runs"], {"id": "u", "train": True,
+                                                                              "seconds": 2.0}]}))
+    with WallClock(run, train=True) as after_an_old_run:  # the last training run recorded no commit
+        assert after_an_old_run.earlier_commit() is None
 
 
 def test_the_report_gives_means_and_tests_over_seeds_beside_the_best_seeds(tmp_path):

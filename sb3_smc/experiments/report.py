@@ -30,6 +30,7 @@ from sb3_smc.experiments.design import CATEGORIES, METHOD_REGISTRY, METHODS, SMC
 from sb3_smc.experiments.figures import Panel, bar_panels, timeline_figure, trajectory_figure
 from sb3_smc.experiments.runner import experiment_command, read_results
 from sb3_smc.experiments.tables import KINDS, ResultTable, number_sections
+from sb3_smc.experiments.wall_clock import UNKNOWN_COMMIT, lower_bound
 from sb3_smc.hyperparameters import ALGORITHM_REGISTRY
 from sb3_smc.library import SMCLibrary, storage
 from sb3_smc.smc import SMC
@@ -185,9 +186,11 @@ def _write(sources: Sequence[tuple[Path, dict[str, Any]]], out: Path, trajectori
 
 
 def _provenance(sources: Sequence[tuple[Path, dict[str, Any]]], out: Path) -> list[str]:
-    """How each directory was run: budget, learner, machine, code, wall time and command."""
+    """How each directory was run: budget, learner, machine, code and the commits its SMCs were trained at, wall time
+    (marked ``≥`` where it is a lower bound: :func:`_wall_time_is_lower_bound`) and command."""
     lines = ["", "## How this was run", ""]
     total = 0.0
+    bounded = 0
     for directory, results in sources:
         settings = results["settings"]
         machine = results.get("machine", {})
@@ -199,15 +202,55 @@ def _provenance(sources: Sequence[tuple[Path, dict[str, Any]]], out: Path) -> li
                   f"- learner: {_learners(settings)}",
                   f"- machine: {_machine_line(machine)}",
                   *_code_line(results),
-                  f"- wall time of the last `sb3-smc experiment` run: {results.get('wall_time_s', 0) / 3600:.2f} h"
-                  + (f"; of all its runs recorded here: {results['wall_time_total_s'] / 3600:.2f} h"
-                     if "wall_time_total_s" in results else ""),
+                  *_commits_lines(results),
+                  _wall_time_line(directory, results),
                   f"- command: `{results.get('command') or _command(directory, settings)}`",
                   "- rows: `results.csv` (one per target x method x curriculum x seed), `results.json`", ""]
         total += results.get("wall_time_total_s", results.get("wall_time_s", 0))
+        bounded += _wall_time_is_lower_bound(directory, results)
     if len(sources) > 1:
-        lines.append(f"Wall time of all runs of the {len(sources)} directories: {total / 3600:.2f} h.")
+        lines.append(f"Wall time of all runs of the {len(sources)} directories: "
+                     + (f"≥ {total / 3600:.2f} h (a lower bound: {bounded} of them recorded without the wall-time "
+                        "ledger `wall_time.json`, so without the runs that stopped before their end, at a working "
+                        "session's end say)." if bounded else f"{total / 3600:.2f} h."))
     return lines
+
+
+def _wall_time_is_lower_bound(directory: Path, results: dict[str, Any]) -> bool:
+    """Whether a directory's recorded wall time is only a lower bound: as its results say
+    (``wall_time_lower_bound``), or, for results from before they said so, as its ledger says
+    (:func:`sb3_smc.experiments.wall_clock.lower_bound`: none, or one begun from a total recorded without it)."""
+    said = results.get("wall_time_lower_bound")
+    return said if isinstance(said, bool) else lower_bound(directory)
+
+
+def _wall_time_line(directory: Path, results: dict[str, Any]) -> str:
+    """The report's line on a directory's wall time: its last run's and its total, ``≥`` where that is a lower
+    bound."""
+    line = f"- wall time of the last `sb3-smc experiment` run: {results.get('wall_time_s', 0) / 3600:.2f} h"
+    total = results.get("wall_time_total_s", results.get("wall_time_s", 0)) / 3600
+    if not _wall_time_is_lower_bound(directory, results):
+        return line + (f"; of all its runs recorded here: {total:.2f} h" if "wall_time_total_s" in results else "")
+    return (line + f"; of all its runs recorded here: ≥ {total:.2f} h (a lower bound: recorded without the "
+            "wall-time ledger, which alone counts a run stopped before its end)")
+
+
+def _commits_lines(results: dict[str, Any]) -> list[str]:
+    """The report's line on every commit the directory's SMCs were trained at (``results.json``'s ``commits``, with
+    the jobs copied from a ``--reuse-from`` library and the note of a record reconstructed by hand), or that its
+    results do not say (written before ``commits`` was recorded)."""
+    commits = results.get("commits")
+    if not isinstance(commits, dict):
+        return ["- trained at: not recorded per SMC (results written before `commits`): the commit above is that of "
+                "the last run"] if results.get("code") else []
+    parts = [f"{'a commit unknown' if key == UNKNOWN_COMMIT else f'`{key[:7]}{key[40:]}`'} ({len(jobs)} SMC job"
+             + "s" * (len(jobs) != 1) + ")"
+             for key, jobs in sorted(commits.items(), key=lambda item: (item[0] == UNKNOWN_COMMIT, -len(item[1])))]
+    copied = results.get("copied") or []
+    line = "- trained at: " + (", ".join(parts) or "nothing trained") + (
+        f"; {len(copied)} SMC job{'s' * (len(copied) != 1)} copied from a `--reuse-from` library" if copied else "")
+    note = results.get("commits_note")
+    return [line + (f"; {note}" if isinstance(note, str) and note else "")]
 
 
 def _target_rules(settings: dict[str, Any]) -> str:

@@ -14,7 +14,9 @@
    (``DIR/cnn/<target>@<seed>.json``).
 4. ``DIR/results.csv`` / ``results.json``: one row per target x method x curriculum x seed (training return,
    selected update, test score, wall time), and the reported score per target x method as the paper reports it:
-   the best seed (for ``curr`` and ``curr-noprim`` also the best curriculum).
+   the best seed (for ``curr`` and ``curr-noprim`` also the best curriculum), and ``commits``: every commit the
+   directory's SMCs were trained at, with the jobs trained at each, accumulated over its runs
+   (:func:`record_commits`; ``copied``: the jobs copied from a ``--reuse-from`` library instead).
 """
 
 from __future__ import annotations
@@ -26,7 +28,7 @@ import os
 import platform
 import shlex
 import subprocess
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Collection, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -48,12 +50,12 @@ from sb3_smc.experiments.design import (
     level2_targets,
     plan,
 )
-from sb3_smc.experiments.wall_clock import WallClock
+from sb3_smc.experiments.wall_clock import UNKNOWN_COMMIT, WallClock, lower_bound
 from sb3_smc.hyperparameters import DEFAULT_ALGORITHM, DEFAULT_TIMESTEPS
-from sb3_smc.library import SMCLibrary
+from sb3_smc.library import SMCLibrary, storage
 from sb3_smc.records import package_versions
 
-__all__ = ["RESULT_FIELDS", "evaluation_path", "read_evaluation", "read_results", "run_experiment"]
+__all__ = ["RESULT_FIELDS", "evaluation_path", "read_evaluation", "read_results", "record_commits", "run_experiment"]
 
 RESULT_FIELDS = ("target", "kind", "category", "method", "curriculum", "seed", "training_return", "selected_update",
                  "test_score", "wall_time_s")
@@ -107,7 +109,10 @@ def run_experiment(
     if progress and design.cnn_skipped:
         printer(f"cnn skipped for {len(design.cnn_skipped)} bring-about target(s) (it classifies only): "
                 f"{', '.join(design.cnn_skipped)}")
-    with WallClock(directory, train=train) as clock:  # this run's wall time, kept in the directory as it goes
+    _previous_results(directory)  # its commits record checked before any work (read again at the end)
+    commit = code_commit()
+    with WallClock(directory, train=train, commit=commit) as clock:  # this run's wall time, kept as it goes
+        held_before = _library_jobs(directory)
         kept = _kept_evaluations(directory, design.training_targets, seeds, repeats) \
             if design.curriculum is not None else {}
         finished: set[str] | None = None
@@ -124,6 +129,13 @@ def run_experiment(
                                       f"{', '.join(sorted(run.failed)[:5])}; tracebacks in {directory / 'failed'}): "
                                       "nothing evaluated; run the same command again to retry them")
         rows, missing = _tabulate(directory, design, seeds, repeats, kept, finished, progress, printer)
+        new = _library_jobs(directory) - held_before if train else set()
+        earlier = clock.earlier_commit()
+    previous = _previous_results(directory)
+    copied = (set(previous.get("copied") or ()) - new) | _copies(directory, new, reuse_from)
+    evaluated = {job_name(r["curriculum"], r["seed"]) for r in rows if METHOD_REGISTRY[r["method"]].smc}
+    commits = record_commits(previous.get("commits") or {}, (_library_jobs(directory) | evaluated) - copied,
+                             new - copied, commit, earlier)
     settings = {"methods": list(methods), "targets": chosen, "seeds": seeds,
                 "timesteps": timesteps or DEFAULT_TIMESTEPS, "repeats": repeats, "workers": workers, "backend": backend,
                 "algo": algo or DEFAULT_ALGORITHM, "rnn": rnn or "lstm"}
@@ -135,9 +147,13 @@ def run_experiment(
                                       timesteps=timesteps, repeats=repeats, workers=workers, backend=backend,
                                       algo=algo, rnn=rnn, train=train),
         "machine": machine(),
-        "code": {"versions": package_versions(), "commit": code_commit()},
+        "code": {"versions": package_versions(), "commit": commit},
+        "commits": commits,
+        "copied": sorted(copied),
+        **({"commits_note": previous["commits_note"]} if isinstance(previous.get("commits_note"), str) else {}),
         "wall_time_s": clock.entry["seconds"],
         "wall_time_total_s": clock.total(),
+        "wall_time_lower_bound": lower_bound(directory),
         "complete": not missing,
         "missing": missing,
         "rows": rows,
@@ -149,6 +165,61 @@ def run_experiment(
         printer(f"results: {directory / 'results.csv'} ({len(rows)} rows"
                 + (f"; partial: {len(missing)} SMC(s) not trained yet)" if missing else ")"))
     return results
+
+
+def record_commits(previous: Mapping[str, Sequence[str]], jobs: Collection[str], trained: Collection[str],
+                   commit: str | None, earlier: str | None) -> dict[str, list[str]]:
+    """``results.json``'s ``commits``: each commit the directory's SMC jobs were trained at -> those jobs (sorted;
+    :data:`UNKNOWN_COMMIT` for the jobs whose commit its records cannot tell). ``previous``: what it recorded before
+    (kept, so that the record accumulates over resumed runs); ``trained``: the jobs this run trained, at ``commit``
+    (a job trained again moves there); ``jobs``: every job the directory holds now (library and evaluations), those
+    not recorded yet being the last earlier training run's, at ``earlier`` (a run stopped before it wrote its
+    results, or one training beside a ``--no-train`` run; its wall-time ledger entry), or of a commit unknown."""
+    at = {job: key for key, names in previous.items() for job in names}
+    for job in jobs:
+        at.setdefault(job, earlier or UNKNOWN_COMMIT)
+    for job in trained:
+        at[job] = commit or UNKNOWN_COMMIT
+    out: dict[str, list[str]] = {}
+    for job, key in sorted(at.items()):
+        out.setdefault(key, []).append(job)
+    return out
+
+
+def _library_jobs(directory: Path) -> set[str]:
+    """The SMC jobs the directory's library holds (its manifest, checked; no model read)."""
+    library = directory / "library"
+    if not (library / storage.MANIFEST).is_file():
+        return set()
+    return set(storage.check_manifest(*storage.read_manifest(library)))
+
+
+def _copies(directory: Path, jobs: set[str], reuse_from: str | Path | None) -> set[str]:
+    """Of ``jobs``, new in the directory's library, those copied from the ``reuse_from`` library (the same model
+    file): trained elsewhere, not by this run."""
+    if reuse_from is None or not jobs:
+        return set()
+    source = storage.check_manifest(*storage.read_manifest(Path(reuse_from)))
+    held = storage.check_manifest(*storage.read_manifest(directory / "library"))
+    return {job for job in jobs if job in source and job in held and held[job].sha256 == source[job].sha256}
+
+
+def _previous_results(directory: Path) -> dict[str, Any]:
+    """The directory's ``results.json`` as an earlier run wrote it (empty without one, or a damaged one: it is
+    written again)."""
+    try:
+        previous = json.loads((directory / "results.json").read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    if not isinstance(previous, dict):
+        return {}
+    commits = previous.get("commits")
+    if commits is not None and not (isinstance(commits, dict) and all(
+            isinstance(names, list) and all(isinstance(n, str) for n in names) for names in commits.values())):
+        raise RunFileError(f"{directory / 'results.json'}: 'commits' must map each commit to the job names trained "
+                           f"at it, got {str(commits)[:200]}; restore it, or delete the key to count its jobs as of "
+                           "a commit unknown")
+    return previous
 
 
 def _tabulate(directory: Path, design: ExperimentPlan, seeds: int, repeats: int, kept: dict[str, dict[str, Any]],

@@ -4,8 +4,11 @@ Every ``sb3-smc experiment`` on a directory (training or ``--no-train``) adds on
 rewrites it every ``interval`` seconds while it runs, and once at its end: a run stopped without warning (a
 machine's or working session's end, a kill) loses at most its last interval, not all its time. ``results.json``'s
 ``wall_time_total_s`` is the ledger's total. A directory from before the ledger starts it from the total its
-``results.json`` recorded (``"before"``). Runs on the same directory at once (a ``--no-train`` tabulation beside
-training) each write their own entry under a lock. Only a directory that holds an experiment's records gets a
+``results.json`` recorded (``"before"``): its total is then a lower bound (:func:`lower_bound`), as is the total of a
+directory without a ledger, since a run stopped before it wrote ``results.json`` counted nothing there. Each entry
+also names the commit of the code that ran (``commit``), so that the next run can tell what trained the SMCs of a
+run that stopped (:meth:`WallClock.earlier_commit`). Runs on the same directory at once (a ``--no-train`` tabulation
+beside training) each write their own entry under a lock. Only a directory that holds an experiment's records gets a
 ledger: a run refused before it wrote any (a wrong ``--out``, a ``--no-train`` run of nothing) leaves none.
 """
 
@@ -26,10 +29,13 @@ from typing import Any
 from pixelworld_env.atomic import atomic_write
 from sb3_smc.curricula.run_directory import RunFileError
 
-__all__ = ["LEDGER", "WallClock"]
+__all__ = ["LEDGER", "UNKNOWN_COMMIT", "WallClock", "lower_bound"]
 
 LEDGER = "wall_time.json"
 FORMAT = "sb3-smc-wall-time"
+UNKNOWN_COMMIT = "unknown"
+"""The commit of a run whose code was outside a git checkout, and the key of ``results.json``'s ``commits`` for the SMC
+jobs whose commit the directory's records cannot tell (those of results written before ``commits`` was recorded)."""
 RECORDS = ("run.json", "results.json", "evaluations", "cnn")
 """What an experiment writes into its directory: where one of them is, the directory is the experiment's."""
 
@@ -41,6 +47,15 @@ def _recorded_total(directory: Path) -> float:
         return float(previous.get("wall_time_total_s", previous.get("wall_time_s", 0.0)))
     except (OSError, ValueError, AttributeError, TypeError):
         return 0.0
+
+
+def _recorded_bound(directory: Path) -> bool:
+    """Whether the total ``directory/results.json`` recorded is a lower bound: unless its results say it is not (a
+    total kept by a ledger)."""
+    try:
+        return json.loads((directory / "results.json").read_text()).get("wall_time_lower_bound") is not False
+    except (OSError, ValueError, AttributeError):
+        return True
 
 
 def _read(path: Path) -> dict[str, Any] | None:
@@ -62,18 +77,31 @@ def _read(path: Path) -> dict[str, Any] | None:
     return ledger
 
 
+def lower_bound(directory: Path) -> bool:
+    """Whether the wall time recorded for ``directory`` is only a lower bound: it has no ledger, so its total is what
+    its ``results.json`` recorded from runs that ended (a run stopped at a working session's end counted nothing), or
+    its ledger began from such a total (``before`` > 0, unless ``before_lower_bound`` says that total was kept by a
+    ledger too), or its ledger is damaged."""
+    try:
+        ledger = _read(Path(directory) / LEDGER)
+    except RunFileError:
+        return True
+    return ledger is None or (ledger["before"] > 0 and ledger.get("before_lower_bound") is not False)
+
+
 class WallClock:
     """This run's entry in ``directory``'s ledger, kept up to date by a background thread while the run lasts (use
-    it as a context manager); :attr:`seconds` is this run's wall time, :meth:`total` the directory's."""
+    it as a context manager); :attr:`seconds` is this run's wall time, :meth:`total` the directory's. ``commit``: the
+    commit of the code that runs, kept in the entry."""
 
-    def __init__(self, directory: Path, *, train: bool, interval: float = 60.0) -> None:
+    def __init__(self, directory: Path, *, train: bool, interval: float = 60.0, commit: str | None = None) -> None:
         self.directory, self.interval = Path(directory), interval
         self.path = self.directory / LEDGER
         _read(self.path)  # a damaged ledger is reported before any work
         self.start = time.time()
         started = datetime.fromtimestamp(self.start, UTC).isoformat(timespec="seconds")
         self.entry: dict[str, Any] = {"id": uuid.uuid4().hex[:12], "started": started, "pid": os.getpid(),
-                                      "train": train, "seconds": 0.0, "ended": False}
+                                      "train": train, "commit": commit, "seconds": 0.0, "ended": False}
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._beat, name="sb3-smc-wall-clock", daemon=True)
         self._total, self._written = 0.0, False
@@ -88,6 +116,18 @@ class WallClock:
         """The directory's wall time over all its runs as last written (this run's included; before the ledger is
         written, the recorded total and this run's time so far)."""
         return self._total if self._written else _recorded_total(self.directory) + self.seconds
+
+    def earlier_commit(self) -> str | None:
+        """The commit of the directory's last training run other than this one (its ledger's entry; ``None`` where
+        there is none or it recorded none): what trained the SMCs that no ``results.json`` recorded, those of a run
+        stopped at a working session's end, or of a run training beside this ``--no-train`` one."""
+        try:
+            ledger = _read(self.path)
+        except RunFileError:
+            return None
+        others = [r for r in (ledger or {}).get("runs", []) if r.get("train") and r.get("id") != self.entry["id"]]
+        commit = others[-1].get("commit") if others else None
+        return commit if isinstance(commit, str) else None
 
     def _holds_records(self) -> bool:
         return any((self.directory / name).exists() for name in RECORDS)
@@ -124,7 +164,7 @@ class WallClock:
         with open(self.directory / f".{LEDGER}.lock", "a+") as lock:
             fcntl.flock(lock.fileno(), fcntl.LOCK_EX)
             ledger = _read(self.path) or {"format": FORMAT, "version": 1, "before": _recorded_total(self.directory),
-                                          "runs": []}
+                                          "before_lower_bound": _recorded_bound(self.directory), "runs": []}
             self.entry.update(seconds=round(self.seconds, 3), ended=ended)
             ledger["runs"] = [r for r in ledger["runs"] if r.get("id") != self.entry["id"]] + [self.entry]
             atomic_write(self.path, json.dumps(ledger, indent=2) + "\n")
