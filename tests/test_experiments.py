@@ -228,6 +228,63 @@ def test_the_paired_seeds_tool_counts_what_a_longer_run_does_to_each_seed(tmp_pa
             in capsys.readouterr().err)
 
 
+def test_the_paired_seeds_tool_compares_across_targets_on_the_same_lower_level_only(tmp_path, capsys):
+    """``tools/paired_seeds.py --across-targets``: the second method's curricula on other lower-level SMCs than the
+    first's (their evaluations' children) are named and left out, a target with none left is left out, and on the
+    others each method's best seed over the curricula on the same lower level is compared, beside the flat methods'
+    best seeds: means per kind and paired t-tests (checked by hand)."""
+    from sb3_smc.curricula.jobs import file_stem, job_name
+
+    paired_seeds = import_tool("paired_seeds")
+
+    def run(name, method, table, other=()):
+        """A run directory of ``method``: (target, curriculum, scores by seed); the curricula in ``other`` call
+        ``c@2``, the others ``c@1``."""
+        rows = [{"target": t, "kind": "bring-about" if t.startswith("ba_") else "classification",
+                 "category": "objcon", "method": method, "curriculum": curriculum, "seed": seed, "test_score": v}
+                for t, curriculum, values in table for seed, v in enumerate(values)]
+        (tmp_path / name / "evaluations").mkdir(parents=True)
+        (tmp_path / name / "results.json").write_text(json.dumps({"rows": rows, "reported": reported(rows)}))
+        for row in rows:
+            (tmp_path / name / "evaluations" / f"{file_stem(job_name(row['curriculum'], row['seed']))}.json") \
+                .write_text(json.dumps({"test_score": row["test_score"],
+                                        "spec": {"children": ["c@2" if row["curriculum"] in other else "c@1"]}}))
+        return str(tmp_path / name)
+
+    curr = run("curr", "curr", [("cl_a", "n1", [0.9, 0.8]), ("cl_a", "n2", [0.95, 0.5]), ("cl_b", "nb", [0.7, 0.6]),
+                                ("cl_c", "nc", [0.8, 0.85]), ("ba_a", "ma", [1.0, 0.9]), ("ba_b", "mb", [0.9, 0.9])])
+    moves = run("moves", "curr-moves", [("cl_a", "curr-moves/n1", [0.6, 0.7]), ("cl_a", "curr-moves/n2", [0.99, 0.1]),
+                                        ("cl_b", "curr-moves/nb", [0.5, 0.4]), ("cl_c", "curr-moves/nc", [0.9, 0.3]),
+                                        ("ba_a", "curr-moves/ma", [0.3, 0.2]), ("ba_b", "curr-moves/mb", [0.5, 0.5])],
+                other={"curr-moves/n2", "curr-moves/mb"})
+    base = run("base", "base", [(t, t, [v]) for t, v in (("cl_a", 0.5), ("cl_b", 0.6), ("cl_c", 0.55), ("ba_a", 0.4),
+                                                         ("ba_b", 0.1))])
+    argv = [curr, moves, base, "--methods", "curr,curr-moves", "--across-targets", "base"]
+    assert paired_seeds.main(argv) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("curr-moves calls other lower-level SMCs than curr in 4 of its 12 SMCs, in 2 curricula of "
+                          "2 targets (seeds on other children / seeds):\n\n"
+                          "- `curr-moves/mb`: 2 / 2\n"
+                          "- `curr-moves/n2`: 2 / 2 (the target keeps 1 curriculum on the same ones)\n")
+    assert "On the 4 targets with a curriculum on the same lower level" in out
+    assert "| classification | 3 | 81.7 | 70.0 | 55.0 |" in out and "| bring-about | 1 | 100.0 | 30.0 | 40.0 |" in out
+    df, t, p = paired_ttest([70, 50, 90], [90, 70, 85])  # cl_a: n1's best seeds only; cl_b, cl_c
+    assert f"| classification | curr-moves vs curr | 3 | {t:.2f} | {df} | {p:.2g} | 1 / 2 |" in out
+    df, t, p = paired_ttest([90, 70, 85], [50, 60, 55])
+    assert f"| classification | curr vs base | 3 | {t:.2f} | {df} | {p:.2g} | 3 / 0 |" in out
+    assert "| bring-about | curr-moves vs base | 1 | - | - | - | 0 / 1 |" in out  # one target: no test
+    for bad, says in (([curr, moves, "--methods", "curr,curr-moves", "--across-targets", "base"],
+                       "no result of base on ba_a"),
+                      ([curr, moves, base, "--methods", "curr,curr-moves", "--across-targets", "flat"],
+                       "--across-targets: methods of"),
+                      ([curr, base, "--methods", "curr,curr-moves", "--across-targets", "base"],
+                       "no curriculum of curr-moves calls the same lower-level SMCs as curr's")):
+        with pytest.raises(SystemExit):
+            paired_seeds.main(bad)
+        captured = capsys.readouterr()
+        assert says in captured.err and captured.out == ""
+
+
 def test_reported_scores_are_the_best_seed_and_curriculum():
     rows = [{"target": "t", "kind": "classification", "category": "objcon", "method": "curr", "curriculum": c,
              "seed": s, "test_score": v} for c, s, v in (("a", 0, 0.5), ("a", 1, 0.7), ("b", 0, 0.9), ("b", 1, 0.1))]

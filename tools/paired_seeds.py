@@ -14,6 +14,16 @@ lower level: not a continuation), and over all; with ``--by-target``, every targ
 
     python tools/paired_seeds.py docs/results/paper/{search,objects,containment,objcon,canon-scaled} \\
         --methods canon,canon-scaled
+
+With ``--across-targets FLAT,...`` it compares the two methods across targets instead, on the same lower level only
+(docs/results/paper/README.md: does ``curr-moves`` collapse where it calls other children than ``curr``?): it
+names the second method's curricula whose seeds call other lower-level SMCs than the first's same curriculum and
+seed, and on the targets left (each with at least one curriculum on the same lower level) takes each method's best
+seed over those curricula, each flat method's best seed, their means per kind and the paired t-tests across the
+targets (scipy's, as the report's):
+
+    python tools/paired_seeds.py docs/results/paper/{search,objects,containment,objcon,curr-moves,curr-moves-cl} \\
+        docs/results/paper/base-gru --methods curr,curr-moves --across-targets base,base-gru
 """
 
 from __future__ import annotations
@@ -29,6 +39,7 @@ from sb3_smc.curricula.jobs import job_name
 from sb3_smc.errors import SMCError
 from sb3_smc.experiments.design import METHODS
 from sb3_smc.experiments.runner import evaluation_path, read_evaluation, read_results
+from sb3_smc.experiments.statistics import paired_ttest
 
 MOVED = 5.0  # a seed lifted or lowered: by 5 points or more
 WEAK = 15.0  # a weak seed: more than 15 points below its concept's best
@@ -90,6 +101,97 @@ def seed_scores(runs: list[tuple[Path, dict[str, Any]]], method: str) -> dict[st
     return {target: (reported[target], scores[target]) for target in reported}
 
 
+def curricula_seeds(runs: list[tuple[Path, dict[str, Any]]], method: str) -> dict[str, dict[str, Seeds]]:
+    """Every curriculum (node) of every target of ``method`` and its seeds, from the runs (directory, results); a
+    seed found twice with different scores is an error."""
+    found: dict[str, dict[str, Seeds]] = {}
+    for run, res in runs:
+        for row in res["rows"]:
+            if row["method"] != method:
+                continue
+            seeds = found.setdefault(row["target"], {}).setdefault(row["curriculum"], {})
+            score, seed = points(float(row["test_score"])), int(row["seed"])
+            if seeds.setdefault(seed, (score, children(run, row["curriculum"], seed)))[0] != score:
+                raise SMCError(f"{method} on {row['target']}, {row['curriculum']} seed {seed}: two results "
+                               f"({seeds[seed][0]} and {score})")
+    return found
+
+
+def same_lower_level_curricula(a: dict[str, dict[str, Seeds]], b: dict[str, dict[str, Seeds]], second: str
+                               ) -> tuple[dict[str, list[tuple[str, str]]], dict[str, list[tuple[str, int, int]]]]:
+    """Per target, the pairs (A's curriculum, B's) of the same node (B's named as A's or ``<second>/<A's>``) whose
+    every seed of both calls the same lower-level SMCs; and per target B's other curricula of such a pair, with
+    how many of their seeds call other ones and how many seeds they have."""
+    alike: dict[str, list[tuple[str, str]]] = {}
+    other: dict[str, list[tuple[str, int, int]]] = {}
+    for target, curricula in b.items():
+        for node, seeds in curricula.items():
+            theirs = a.get(target, {}).get(node.removeprefix(f"{second}/"))
+            if theirs is None or not set(seeds) & set(theirs):
+                continue
+            differ = sum(not same_lower_level(seeds[s][1], theirs[s][1]) for s in set(seeds) & set(theirs))
+            if differ:
+                other.setdefault(target, []).append((node, differ, len(seeds)))
+            else:
+                alike.setdefault(target, []).append((node.removeprefix(f"{second}/"), node))
+    return alike, other
+
+
+def across_targets(runs: list[tuple[Path, dict[str, Any]]], methods: list[str], flat: list[str]) -> None:
+    """Print the comparison of ``methods`` across targets on the same lower level only, beside the ``flat`` methods
+    (the module's docstring)."""
+    a, b = (curricula_seeds(runs, m) for m in methods)
+    alike, other = same_lower_level_curricula(a, b, methods[1])
+    if not alike:
+        raise SMCError(f"no curriculum of {methods[1]} calls the same lower-level SMCs as {methods[0]}'s")
+    best: dict[str, dict[str, float]] = {}  # target -> flat method -> its best seed
+    for _, res in runs:
+        for r in res["reported"]:
+            if r["method"] in flat:
+                best.setdefault(r["target"], {})[r["method"]] = points(r["test_score"])
+    kind_of = {r["target"]: r["kind"] for _, res in runs for r in res["reported"]}
+    missing = sorted({f"{m} on {t}" for t in alike for m in flat if m not in best.get(t, {})})
+    if missing:
+        raise SMCError(f"no result of {', '.join(missing[:5])}{', ...' if len(missing) > 5 else ''}: give the run "
+                       "directories of the flat methods too")
+    seeds_b = sum(len(seeds) for curricula in b.values() for seeds in curricula.values())
+    differing = [(t, node, n, of) for t in sorted(other) for node, n, of in other[t]]
+    print(f"{methods[1]} calls other lower-level SMCs than {methods[0]} in {sum(n for *_, n, _ in differing)} of its "
+          f"{seeds_b} SMCs, in {len(differing)} curricula of {len(other)} targets (seeds on other children / seeds):\n")
+    for target, node, n, of in differing:
+        kept = len(alike.get(target, ()))
+        print(f"- `{node}`: {n} / {of}" + (f" (the target keeps {kept} curricul{'a' if kept > 1 else 'um'} on the "
+                                          "same ones)" if kept else ""))
+    scores: dict[str, dict[str, float]] = {}  # target -> method -> its best seed (over the curricula alike)
+    for t, pairs in alike.items():
+        scores[t] = {**best[t],
+                     methods[0]: max(score for node, _ in pairs for score, _ in a[t][node].values()),
+                     methods[1]: max(score for _, node in pairs for score, _ in b[t][node].values())}
+    columns = [*methods, *flat]
+    print(f"\nOn the {len(scores)} targets with a curriculum on the same lower level (best seed over those curricula; "
+          "flat methods: best seed):\n")
+    print("| kind | targets | " + " | ".join(columns) + " |\n|---|---:|" + "---:|" * len(columns))
+    tests: list[str] = []
+    for kind in ("classification", "bring-about", None):
+        targets = sorted(t for t in scores if kind in (None, kind_of[t]))
+        if not targets:
+            continue
+        print(f"| {kind or 'all'} | {len(targets)} | "
+              + " | ".join(f"{np.mean([scores[t][m] for t in targets]):.1f}" for m in columns) + " |")
+        if kind is None:
+            continue
+        for x, y in [(methods[1], methods[0]), *((m, f) for f in flat for m in (methods[1], methods[0]))]:
+            test = paired_ttest([scores[t][x] for t in targets], [scores[t][y] for t in targets])
+            better = sum(scores[t][x] > scores[t][y] for t in targets)
+            worse = sum(scores[t][x] < scores[t][y] for t in targets)
+            tests.append(f"| {kind} | {x} vs {y} | {len(targets)} | "
+                         + ("- | - | - |" if test is None else f"{test[1]:.2f} | {test[0]} | {test[2]:.2g} |")
+                         + f" {better} / {worse} |")
+    print("\nPaired t-tests across those targets (two-sided):\n\n| kind | comparison | targets | t | df | p | "
+          "better / worse |\n|---|---|---:|---:|---:|---:|---:|")
+    print("\n".join(tests) + "\n")
+
+
 def summary(a: dict[str, dict[int, float]], b: dict[str, dict[int, float]], targets: list[str],
             best: dict[str, float]) -> dict[str, Any]:
     """The counts of one kind over ``targets``: seeds paired, lifted, lowered, A's weak seeds (against ``best``, the
@@ -128,10 +230,23 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("runs", nargs="+", type=Path, help="experiment directories or kept records (results.json)")
     parser.add_argument("--methods", required=True, help="the two methods, the shorter run first: canon,canon-scaled")
     parser.add_argument("--by-target", action="store_true", help="also every target's seeds side by side")
+    parser.add_argument("--across-targets", metavar="FLAT", default=None,
+                        help="instead: compare the two across targets, on the curricula where the second calls the "
+                             "same lower-level SMCs as the first, beside these flat methods (comma-separated)")
     args = parser.parse_args(argv)
     methods = args.methods.split(",")
     if len(methods) != 2 or any(m not in METHODS for m in methods):
         parser.error(f"--methods: two of {', '.join(METHODS)}, comma-separated (got {args.methods!r})")
+    if args.across_targets is not None:
+        flat = [m for m in args.across_targets.split(",") if m]
+        if not flat or any(m not in METHODS for m in flat):
+            parser.error(f"--across-targets: methods of {', '.join(METHODS)}, comma-separated "
+                         f"(got {args.across_targets!r})")
+        try:
+            across_targets([(run, read_results(run)) for run in args.runs], methods, flat)
+        except (OSError, SMCError) as error:
+            parser.error(str(error))
+        return 0
     try:  # every directory read, and every seed checked, before any counting
         runs = [(run, read_results(run)) for run in args.runs]
         found_a, found_b = (seed_scores(runs, m) for m in methods)
