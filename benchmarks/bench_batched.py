@@ -1,0 +1,112 @@
+"""Many SMCs per process (``sb3_smc.batched.train_smcs``) beside ``train_smc`` and stock sb3-contrib, in one run.
+
+Cases, each in its own subprocess (one torch thread), on ``cl_self-in-left-corner_vs_on-hline``, ``--timesteps``
+steps per SMC, the whole budget (no early stop), the defaults otherwise (16 environments x 125 steps, LSTM 32, one
+2,000-step minibatch, 4 epochs):
+
+* stock: sb3-contrib ``RecurrentPPO`` with ``MlpLstmPolicy`` and its own rollout buffer, the same hyperparameters
+  and environment (``train_smc``'s vector env); ``learn`` timed;
+* ``train_smc``: ``learn`` timed (the record's ``wall_time_s``) and the whole call (model set-up included);
+* ``train_smcs`` with K = 1 and K = 5 seeds: the whole call (vector env and models built inside).
+
+Reported: environment steps per second over all SMCs of a case (per core: one process, one thread), the ratio to
+stock, the peak resident memory of the process, and whether each batched SMC equals ``train_smc``'s of its seed
+(training returns; the tests compare the weights).
+
+Run: ``python benchmarks/bench_batched.py [--timesteps N] [--repeats R] [--k K ...]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parents[1]
+ENV_ID = "PW-cl_self-in-left-corner_vs_on-hline-v0"
+
+_JOB = """
+import json, resource, sys, time, torch
+torch.set_num_threads(1)
+from sb3_smc.records import TrainingSpec
+from sb3_smc.training import train_smc
+from sb3_smc.batched import train_smcs
+case, env_id, steps, k = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4])
+specs = [TrainingSpec.create(env_id, total_timesteps=steps, seed=s) for s in range(k)]
+returns = []
+if case == "stock":
+    from sb3_contrib import RecurrentPPO
+    from stable_baselines3.common.logger import Logger
+    from sb3_smc.hyperparameters import constructor_arguments
+    from sb3_smc.training import make_vec_env
+    _, settings = constructor_arguments(specs[0].hyperparameters)
+    model = RecurrentPPO("MlpLstmPolicy", make_vec_env(specs[0]), n_steps=specs[0].budget.env_steps, seed=0,
+                         device="cpu", verbose=0, **settings)
+    model.set_logger(Logger(folder=None, output_formats=[]))
+    start = time.perf_counter()
+    model.learn(steps)
+    seconds, total = time.perf_counter() - start, model.num_timesteps
+elif case == "train_smc":
+    start = time.perf_counter()
+    smc = train_smc(specs[0], log_every=0, stop_at_max_return=False)
+    seconds, total = time.perf_counter() - start, smc.record.total_timesteps
+    returns = [smc.record.training_returns]
+    print(json.dumps({"learn": smc.record.wall_time_s}), flush=True)
+else:
+    start = time.perf_counter()
+    smcs = train_smcs(specs, stop_at_max_return=False)
+    seconds, total = time.perf_counter() - start, sum(s.record.total_timesteps for s in smcs)
+    returns = [s.record.training_returns for s in smcs]
+peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+print(json.dumps({"seconds": seconds, "steps": total, "peak_mib": peak, "returns": returns}))
+"""
+
+
+def run(case: str, timesteps: int, k: int = 1) -> dict:
+    env = {**os.environ, "PYTHONPATH": str(HERE), "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+    out = subprocess.run([sys.executable, "-c", _JOB, case, ENV_ID, str(timesteps), str(k)], env=env,
+                         capture_output=True, text=True, check=True)
+    lines = [json.loads(line) for line in out.stdout.splitlines() if line.startswith("{")]
+    result = lines[-1]
+    for extra in lines[:-1]:
+        result.update(extra)
+    return result
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--timesteps", type=int, default=64_000, help="steps per SMC")
+    parser.add_argument("--repeats", type=int, default=1, help="runs per case, alternating (the best is kept)")
+    parser.add_argument("--k", type=int, nargs="+", default=[1, 5], help="group sizes of train_smcs")
+    args = parser.parse_args()
+    cases = [("stock", 1), ("train_smc", 1), *(("train_smcs", k) for k in args.k)]
+    best: dict[tuple[str, int], dict] = {}
+    for _ in range(args.repeats):
+        for case, k in cases:
+            result = run(case, args.timesteps, k)
+            if (case, k) not in best or result["seconds"] < best[case, k]["seconds"]:
+                best[case, k] = result
+    alone = best["train_smc", 1]["returns"][0]
+    stock = best["stock", 1]["steps"] / best["stock", 1]["seconds"]
+    print(f"{args.timesteps:,} steps per SMC, {ENV_ID}, one torch thread, best of {args.repeats}\n")
+    print("| case | SMCs | seconds | steps/s (per core) | x stock | peak memory (MiB) | same as train_smc |")
+    print("|---|---:|---:|---:|---:|---:|---|")
+    for case, k in cases:
+        row = best[case, k]
+        rate = row["steps"] / row["seconds"]
+        label = {"stock": "stock sb3-contrib RecurrentPPO (`learn`)", "train_smc": "`train_smc` (whole call)",
+                 "train_smcs": f"`train_smcs`, K = {k} (whole call)"}[case]
+        same = "" if case == "stock" else ("yes" if row["returns"][0] == alone else "NO")
+        print(f"| {label} | {k} | {row['seconds']:.2f} | {rate:,.0f} | {rate / stock:.2f} | {row['peak_mib']:.0f} | "
+              f"{same} |")
+        if case == "train_smc":
+            learn = best[case, k]["learn"]
+            print(f"| `train_smc` (`learn` only) | 1 | {learn:.2f} | {row['steps'] / learn:,.0f} | "
+                  f"{row['steps'] / learn / stock:.2f} | | |")
+
+
+if __name__ == "__main__":
+    main()
