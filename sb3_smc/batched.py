@@ -15,7 +15,12 @@ group of SMCs together:
   policy steps and updates, so each SMC draws what it would draw trained alone;
 * the rollout loop is sb3-contrib's ``RecurrentPPO.collect_rollouts`` and SB3's ``learn`` step for step, run for
   all SMCs of the group in lockstep (an SMC that stops early or ends its budget leaves the group; its
-  environments are still stepped, with action 0, and their results ignored).
+  environments are still stepped, with action 0, and their results ignored). Where the policy takes the compiled
+  collection step and the SMC's only callback is its :class:`~sb3_smc.callbacks.SMCTrainingCallback` (the
+  default), the step runs on numpy arrays: :meth:`~sb3_smc.common.recurrent.SequenceLstmPolicy.compiled_step`
+  with the rollout's draws made in one ``torch.rand`` call (the same numbers as one call per step), the group's
+  :meth:`~sb3_smc.vec_env.FlatSMCVecEnv.step_arrays` without info dicts, and the monitor's, the callback's and the
+  buffer's bookkeeping written out on arrays; any other SMC takes SB3's path with info dicts.
 
 So each SMC is the one :func:`~sb3_smc.training.train_smc` gives for its spec, bit for bit (tested for one SMC and
 for a group of five seeds). Its record's ``wall_time_s`` is its share of the group's time: its own policy steps,
