@@ -1,9 +1,11 @@
 """The structure docs/architecture.md describes: no module imports one that imports it back (imports inside
-functions and under TYPE_CHECKING included), and no module of either package over 600 lines."""
+functions and under TYPE_CHECKING included), no module of either package over 600 lines, and a predicate's facts
+in its own entry of ``PREDICATES`` (generation keeps no table keyed by predicate names)."""
 
 from __future__ import annotations
 
 import ast
+import importlib
 from pathlib import Path
 
 import pytest
@@ -60,3 +62,57 @@ def test_no_module_is_over_600_lines():
     long = {name: n for name, path in _modules().items()
             if (n := len(path.read_text(encoding="utf-8").splitlines())) > 600}
     assert long == {}
+
+
+def _predicate_names_in(path: Path) -> list[tuple[int, str]]:
+    """(line, name) of every string literal of the file that names a predicate (docstrings aside), but the shape
+    families: a family is a fact of the shape library (``sampling.FRAME_EXEMPT``: the families that may touch the
+    frame) before it is a predicate."""
+    from pixelworld_env.concepts.predicates import PREDICATES
+    from pixelworld_env.core.shapes import FAMILIES
+
+    names = set(PREDICATES) - set(FAMILIES)
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    docstrings = {id(node.body[0].value) for node in ast.walk(tree)
+                  if isinstance(node, ast.Module | ast.ClassDef | ast.FunctionDef | ast.AsyncFunctionDef)
+                  and node.body and isinstance(node.body[0], ast.Expr) and isinstance(node.body[0].value, ast.Constant)}
+    return [(node.lineno, node.value) for node in ast.walk(tree)
+            if isinstance(node, ast.Constant) and isinstance(node.value, str) and node.value in names
+            and id(node) not in docstrings]
+
+
+def test_generation_keeps_no_table_keyed_by_predicate_names():
+    """Everything generation knows of a predicate (its placement bound, its conjuncts, whether it is expensive,
+    whether it reads ``shape_idx``) is in the predicate's entry (``PredicateSpec.generation``): no module of
+    ``pixelworld_env/generation`` names a predicate in its code, so adding a predicate is one entry in
+    ``concepts/predicates.py``."""
+    found = {path.name: hits for path in sorted((ROOT / "pixelworld_env" / "generation").glob("*.py"))
+             if (hits := _predicate_names_in(path))}
+    assert found == {}, f"generation names predicates (their facts belong in the entry's GenerationFacts): {found}"
+    placement = importlib.import_module("pixelworld_env.generation.placement")
+    sampling = importlib.import_module("pixelworld_env.generation.sampling")
+    assert not {"BOUNDS", "CONJUNCTS"} & set(vars(placement)), "the old tables are back in generation/placement.py"
+    assert "_SHAPE_IDX_PREDICATES" not in vars(sampling)
+
+
+def test_the_scan_sees_a_table_keyed_by_predicate_names(tmp_path):
+    module = tmp_path / "table.py"
+    module.write_text('"""A docstring naming touches."""\n\nBOUNDS = {"touches": None}\n'
+                      'CHEAP = lambda c: c.name in ("near", "inside")\nEXEMPT = frozenset({"floor_shape", "wall"})\n')
+    assert _predicate_names_in(module) == [(3, "touches"), (4, "near"), (4, "inside")]
+
+
+def test_every_predicate_entry_has_its_generation_facts():
+    from pixelworld_env.concepts.predicates import PREDICATES, GenerationFacts
+
+    for name, spec in PREDICATES.items():
+        assert spec.name == name and isinstance(spec.generation, GenerationFacts), name
+        facts = spec.generation
+        assert facts.bound is None or callable(facts.bound), name
+        assert isinstance(facts.expensive, bool) and isinstance(facts.shape_idx, bool), name
+        for conjunct, positions in facts.conjuncts:  # a binary predicate at two of the clause's argument positions
+            assert PREDICATES[conjunct].arity == 2 and len(positions) == 2, (name, conjunct)
+            assert all(0 <= i < spec.arity for i in positions), (name, conjunct, positions)
+    with_bounds = {name for name, spec in PREDICATES.items() if spec.generation.bound is not None}
+    assert {"floor", "touches", "on_top", "inside_supported", "h_between"} <= with_bounds
+    assert {name for name, spec in PREDICATES.items() if spec.generation.conjuncts} == {"h_between", "v_between"}

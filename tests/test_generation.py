@@ -22,7 +22,6 @@ from pixelworld_env.datasets.loading import dataset_spec
 from pixelworld_env.generation.dataset import GeneratedDataset, generate, split
 from pixelworld_env.generation.dataset_spec import DatasetSpec
 from pixelworld_env.generation.definitions import DefinitionSet, load_definitions
-from pixelworld_env.generation.placement import BOUNDS as _BOUNDS
 from pixelworld_env.generation.placement import library_object
 from pixelworld_env.generation.sampling import GenerationError
 from tests.helpers import read_samples, require_reference, sample_files
@@ -294,9 +293,9 @@ def test_pruning_bounds_are_necessary_conditions() -> None:
         a = _random_object(rng)
         b = _random_object(rng, near=a.position)
         c = _random_object(rng, near=a.position)
-        for name, bound in _BOUNDS.items():
-            spec = PREDICATES[name]
-            if spec.arity == 1:
+        for name, spec in PREDICATES.items():
+            bound = spec.generation.bound
+            if spec.arity == 1 or bound is None:
                 continue
             args = (a, b) if spec.arity == 2 else (a, b, c)
             if not spec.fn(*args, ctx):
@@ -318,7 +317,7 @@ def test_pruning_bounds_are_necessary_conditions() -> None:
                         box = bound(single, role, probe, 15)
                         if box is not None:
                             assert box[0] <= x <= box[1] and box[2] <= y <= box[3], (name, role, keep, args)
-    assert all(hits[name] > 0 for name in _BOUNDS if PREDICATES[name].arity > 1), hits
+    assert all(hits[name] > 0 for name, spec in PREDICATES.items() if spec.generation.bound and spec.arity > 1), hits
 
 
 # ---------------------------------------------------------------------------------------------- whole catalog

@@ -40,7 +40,8 @@ __all__ = ["GENERATOR_VERSION", "GeneratedDataset", "GeneratorStats", "generate"
 
 GENERATOR_VERSION = 2  # 2: bring-about scenes whose goal cannot be reached are dropped
 """Bump whenever a change of this module, :mod:`~pixelworld_env.generation.sampling`,
-:mod:`~pixelworld_env.generation.placement` or :mod:`~pixelworld_env.generation.dataset_spec` can change generated
+:mod:`~pixelworld_env.generation.placement`, :mod:`~pixelworld_env.generation.dataset_spec` or of a predicate's
+entry (its function or its :class:`~pixelworld_env.concepts.predicates.GenerationFacts`) can change generated
 datasets (part of the cache key)."""
 DRAWS_PER_SAMPLE = 200
 """Default draw budget of :func:`generate`: this many draws per sample of the quota (``num_samples``)."""
@@ -98,12 +99,6 @@ class GeneratedDataset:
         return self.spec.kind
 
     __hash__ = None  # type: ignore[assignment]
-
-
-# Bounds: necessary conditions on the top-left (x, y) of the object being placed, from a clause and the
-# objects already placed. Each returns (xlo, xhi, ylo, yhi) (inclusive; may be empty) or None (no
-# information). ``args`` holds the clause's objects with None for unplaced ones, ``role`` the argument
-# position of the object being placed, ``probe`` that object at the origin (its template and size).
 
 
 def _stream_seed(seed: int, generator: str) -> int:

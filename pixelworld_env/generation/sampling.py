@@ -43,7 +43,9 @@ How the search works (``GeneratorSampler``):
    rectangle obtained by intersecting the frame / padding bounds with *necessary* bounding-box
    conditions of the clauses that link the term to placed terms (e.g. ``on_top(x,f)`` fixes
    ``x.y = f.y - h``; ``inside_supported(self,x)`` confines the self to the box of ``x``'s
-   inside-supported mask). A candidate is kept if it overlaps no placed object (an integer bit mask test)
+   inside-supported mask): each predicate's bound, conjuncts and cost are part of its entry in
+   :data:`~pixelworld_env.concepts.predicates.PREDICATES` (``generation``, a
+   :class:`~pixelworld_env.concepts.predicates.GenerationFacts`). A candidate is kept if it overlaps no placed object (an integer bit mask test)
    and every clause whose terms are now all placed holds, evaluated by the real predicate functions of
    :data:`pixelworld_env.concepts.predicates.PREDICATES` on :class:`WorldObject` s (``dir_above`` with the
    AAAI-18 quirk). ``h_between``/``v_between`` with two of three terms placed are pre-checked by their
@@ -69,13 +71,13 @@ from functools import cache
 
 from pixelworld_env.concepts import Concept, ConceptError, expand, parse
 from pixelworld_env.concepts.parser import SELF, Clause, Expression
-from pixelworld_env.concepts.predicates import PREDICATES, EvalContext
+from pixelworld_env.concepts.predicates import PREDICATES, BoundFn, EvalContext, GenerationFacts
 from pixelworld_env.core.constants import Color
 from pixelworld_env.core.objects import WorldObject
 from pixelworld_env.core.shapes import FAMILIES, shape_library
 from pixelworld_env.errors import PixelWorldError
 from pixelworld_env.generation.dataset_spec import DatasetSpec
-from pixelworld_env.generation.placement import BOUNDS, CONJUNCTS, BoundFn, make_object, template_data, template_mask
+from pixelworld_env.generation.placement import make_object, template_data, template_mask
 
 __all__ = ["COLORS", "FRAME_EXEMPT", "MAX_REJECTIONS", "MAX_SEARCH_STEPS", "NUM_SHAPE_IDX", "RESTART_STEPS",
            "GenerationError", "GeneratorSampler"]
@@ -92,11 +94,6 @@ MAX_SEARCH_STEPS = 200_000
 """Search steps for one sample before the generator is declared unsatisfiable."""
 MAX_REJECTIONS = 1000
 """Consecutive solutions rejected by negated groups before the generator is declared unsatisfiable."""
-
-
-# Predicates that read ``shape_idx`` itself (not only the template); with them, templates that failed
-# under one shape_idx are retried under another.
-_SHAPE_IDX_PREDICATES = frozenset({"same_shape"})
 
 
 class GenerationError(PixelWorldError):
@@ -169,8 +166,9 @@ class GeneratorSampler:
             else:
                 self.negations.append([_Check(PREDICATES[c.name].fn, tuple(slot[a] for a in c.args), c.name)
                                        for c in group])
-        self.shape_idx_matters = any(c.name in _SHAPE_IDX_PREDICATES for c in expression.positives) or any(
-            c.name in _SHAPE_IDX_PREDICATES for g in expression.negations for c in g)
+        # a predicate that reads shape_idx itself: templates that failed under one shape_idx are retried
+        self.shape_idx_matters = any(_facts(c.name).shape_idx for c in expression.positives) or any(
+            _facts(c.name).shape_idx for g in expression.negations for c in g)
         self.terms = [self._term(t, unary[i], forbidden[i]) for i, t in enumerate(self.term_names)]
 
         # placement order
@@ -196,24 +194,26 @@ class GeneratorSampler:
         for i, clauses in unary.items():
             for c in clauses:
                 self.terms[i].checks.append(_Check(PREDICATES[c.name].fn, (i,), c.name))
-                if self._position_dependent(c.name) and c.name in BOUNDS:
-                    self.terms[i].bounds.append(_Bound(BOUNDS[c.name], (i,), 0))
+                bound = _facts(c.name).bound
+                if self._position_dependent(c.name) and bound is not None:
+                    self.terms[i].bounds.append(_Bound(bound, (i,), 0))
         for clause, slots in links:
             last = max(slots, key=rank.__getitem__)
+            facts = _facts(clause.name)
             self.terms[last].checks.append(_Check(PREDICATES[clause.name].fn, slots, clause.name))
             for role, t in enumerate(slots):
                 # binary bounds need the other term placed; ternary ones use whichever terms are placed
                 others = [o for o in slots if o != t]
                 useful = others and (t == last or (len(slots) == 3 and any(rank[o] < rank[t] for o in others)))
-                if clause.name in BOUNDS and useful:
-                    self.terms[t].bounds.append(_Bound(BOUNDS[clause.name], slots, role))
-            for name, (i, j) in CONJUNCTS.get(clause.name, ()):
+                if facts.bound is not None and useful:
+                    self.terms[t].bounds.append(_Bound(facts.bound, slots, role))
+            for name, (i, j) in facts.conjuncts:
                 pair = (slots[i], slots[j])
                 closing = max(pair, key=rank.__getitem__)
                 if closing != last:
                     self.terms[closing].checks.insert(0, _Check(PREDICATES[name].fn, pair, name))
         for term in self.terms:  # cheap bbox relations first
-            term.checks.sort(key=lambda c: c.name in ("touches", "near", "adjacent", "inside", "inside_supported"))
+            term.checks.sort(key=lambda c: _facts(c.name).expensive)
 
     def _position_dependent(self, name: str) -> bool:
         return _position_dependent(name, self.ctx.floor_row)
@@ -356,6 +356,11 @@ class GeneratorSampler:
                 return True
             placed[t] = None
         return False
+
+
+def _facts(name: str) -> GenerationFacts:
+    """What the search knows of a predicate besides its function: its entry's :class:`GenerationFacts`."""
+    return PREDICATES[name].generation
 
 
 @cache
