@@ -3,13 +3,19 @@ sb3-smc's algorithms that rl_zoo3 lacks (``RecurrentTRPO`` as ``--algo recurrent
 imported.
 
 Every install of sb3-smc (a wheel, and ``pip install -e .``, as ``make`` does) puts ``sb3_smc_gym_hook.pth`` in
-site-packages; its one line imports this module at interpreter start. That costs a few microseconds: nothing is
-imported here except ``importlib`` and ``os``. When a program later imports ``gymnasium``, the ids are registered
-right after it (importing ``pixelworld_env``, no torch, no datasets), so ``rl_zoo3 train --env PW-...`` and
-``gymnasium.make("PW-...")`` work without ``--gym-packages pixelworld_env`` or ``import pixelworld_env``. When
-rl_zoo3 loads its algorithm table (``rl_zoo3.utils.ALGOS``), every rl_zoo3 name of sb3-smc's algorithm registry
+site-packages; its one line imports this module at interpreter start, in every Python process of that environment.
+So this module does nothing at start but put one small finder first on ``sys.meta_path``: it imports nothing (only
+``os`` and ``sys``, which the interpreter has loaded before any ``.pth`` line runs; not ``importlib.abc``, which
+alone pulls in ``importlib.resources``, ``tempfile``, ``shutil``, ``random`` and ``typing``), and the finder answers
+every other import with one set look-up. Measured in docs/architecture.md ("The start-up hook").
+
+When a program later imports ``gymnasium``, the ids are registered right after it (importing ``pixelworld_env``, no
+torch, no datasets), so ``rl_zoo3 train --env PW-...`` and ``gymnasium.make("PW-...")`` work without
+``--gym-packages pixelworld_env`` or ``import pixelworld_env``. When rl_zoo3 loads its algorithm table
+(``rl_zoo3.utils.ALGOS``), every rl_zoo3 name of sb3-smc's algorithm registry
 (``sb3_smc.hyperparameters.ALGORITHM_REGISTRY``) that the table lacks is added to it (``recurrent_trpo``: importing
-``sb3_smc.recurrent_trpo``; rl_zoo3 has already loaded torch and SB3 by then).
+``sb3_smc.recurrent_trpo``; rl_zoo3 has already loaded torch and SB3 by then). Once both have been imported, the
+finder leaves ``sys.meta_path``; a program that imports neither runs no code of sb3-smc beyond that look-up.
 
 When Gymnasium is first imported by ``pixelworld_env`` itself (``import pixelworld_env``, the ``pixelworld`` and
 ``sb3-smc`` commands), the hook does nothing: the package registers the ids at the end of its own import. Set
@@ -17,12 +23,7 @@ When Gymnasium is first imported by ``pixelworld_env`` itself (``import pixelwor
 import of Gymnasium.
 """
 
-from __future__ import annotations
-
-import importlib.abc
-import importlib.machinery
-import importlib.util
-import os
+import os  # no `from __future__ import annotations`: that imports the module __future__
 import sys
 
 ENVIRONMENT_SWITCH = "SB3_SMC_GYM_HOOK"
@@ -60,23 +61,29 @@ _TARGETS = {"gymnasium": _register, "rl_zoo3.utils": _add_zoo_algorithms}
 """Module -> what to run right after it is imported."""
 
 
-class _RunAfter(importlib.abc.Loader):
-    """Runs a module's own loader, then ``after(module)``."""
+class _RunAfter:
+    """A loader (``importlib.abc.Loader``'s protocol, not its class) that runs a module's own loader, then
+    ``after(module)``. The module is given back its own loader before it runs, so that ``__loader__`` and
+    ``__spec__.loader`` are the real one (``importlib.resources``, ``inspect`` and ``pkgutil`` read them)."""
 
-    def __init__(self, loader: importlib.abc.Loader, after) -> None:
+    def __init__(self, loader, after) -> None:
         self.loader, self.after = loader, after
 
-    def create_module(self, spec: importlib.machinery.ModuleSpec):
+    def create_module(self, spec):
         return self.loader.create_module(spec)
 
     def exec_module(self, module) -> None:
+        module.__loader__ = self.loader
+        if module.__spec__ is not None:
+            module.__spec__.loader = self.loader
         self.loader.exec_module(module)
         self.after(module)
 
 
-class _ImportWatcher(importlib.abc.MetaPathFinder):
-    """A meta-path finder that only answers for the modules of ``_TARGETS``, once each, by wrapping the real
-    spec's loader; it leaves ``sys.meta_path`` when none is left."""
+class _ImportWatcher:
+    """A meta-path finder (``importlib.abc.MetaPathFinder``'s protocol, not its class) that only answers for the
+    modules of ``_TARGETS``, once each, with the spec the finders after it give, its loader wrapped; every other
+    import gets ``None`` after one set look-up. It leaves ``sys.meta_path`` when none is left."""
 
     def __init__(self, pending: set[str]) -> None:
         self.pending = pending
@@ -84,13 +91,19 @@ class _ImportWatcher(importlib.abc.MetaPathFinder):
     def find_spec(self, name: str, path=None, target=None):
         if name not in self.pending:
             return None
-        self.pending.discard(name)  # also keeps the lookup below from coming back here
+        self.pending.discard(name)
         if not self.pending and self in sys.meta_path:
             sys.meta_path.remove(self)
-        spec = importlib.util.find_spec(name)
-        if spec is not None and spec.loader is not None:
-            spec.loader = _RunAfter(spec.loader, _TARGETS[name])
-        return spec
+        for finder in list(sys.meta_path):  # what the import system would ask next, as it would ask them
+            find = getattr(finder, "find_spec", None)
+            if finder is self or find is None:
+                continue
+            spec = find(name, path, target)
+            if spec is not None:
+                if spec.loader is not None and hasattr(spec.loader, "exec_module"):
+                    spec.loader = _RunAfter(spec.loader, _TARGETS[name])
+                return spec
+        return None
 
 
 def install() -> None:

@@ -158,6 +158,25 @@ def test_the_hook_registers_the_ids_when_gymnasium_is_imported_and_not_before(in
     assert off[1] == "False"
 
 
+def test_the_hook_imports_nothing_at_start_and_leaves_gymnasium_its_own_loader() -> None:
+    """What the ``.pth`` line runs at every interpreter start imports no module (``os`` and ``sys`` are loaded before
+    any ``.pth`` line runs) and puts one finder first on ``sys.meta_path``; importing Gymnasium then registers the
+    ids, and the module keeps its own loader (``__loader__``, ``__spec__.loader``)."""
+    code = ("import os, sys\n"
+            "before = set(sys.modules)\n"
+            "import _sb3_smc_gym_hook; _sb3_smc_gym_hook.install()\n"
+            "print(sorted(set(sys.modules) - before), type(sys.meta_path[0]).__name__)\n"
+            "import gymnasium\n"
+            f"print('{POOL}' in gymnasium.registry, type(gymnasium.__loader__).__name__,\n"
+            "      type(gymnasium.__spec__.loader).__name__, sorted(sys.meta_path[0].pending))\n")
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), *site.getsitepackages()])}
+    env.pop("SB3_SMC_GYM_HOOK", None)
+    result = subprocess.run([sys.executable, "-S", "-c", code], env=env, capture_output=True, text=True, timeout=300)
+    assert result.returncode == 0, result.stderr[-3000:]
+    assert result.stdout.split() == ["['_sb3_smc_gym_hook']", "_ImportWatcher", "True", "SourceFileLoader",
+                                     "SourceFileLoader", "['rl_zoo3.utils']"]
+
+
 @pytest.mark.parametrize("algo", ["trpo", "ppo"])
 def test_the_literal_train_command(installed: Installed, algo: str) -> None:
     installed.zoo("train", "--algo", algo, "--env", FLAT, "-n", "2000", "--num-threads", "1", "-f", f"literal-{algo}")
