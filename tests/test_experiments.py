@@ -23,6 +23,7 @@ from PIL import Image
 from sb3_smc.curricula.trainer import RunSettingsError
 from sb3_smc.errors import SMCError
 from sb3_smc.experiments import CATEGORIES, level2_targets, plan
+from sb3_smc.experiments.claims import tally
 from sb3_smc.experiments.cnn import CHANNELS, encode, train_cnn
 from sb3_smc.experiments.design import PAPER_CATEGORIES, SWEEP_METHODS, SWEEP_TARGETS
 from sb3_smc.experiments.report import write_report
@@ -536,12 +537,13 @@ def test_the_fair_methods_change_only_their_episode_length_or_call_cap():
     levels; their jobs are base's and curr's but for their names and those wrapper settings."""
     from sb3_smc.curricula.jobs import node_spec
 
-    design = plan([LEFT_OF, IN_CONTAINER], ["base", "base-400", *SWEEP_METHODS])
+    design = plan([LEFT_OF, IN_CONTAINER], ["base", "curr", "base-400", *SWEEP_METHODS])
     changed = {"base-400": {"max_steps": 400}, "curr-cap10": {"call_step_cap": 10}, "curr-cap25": {"call_step_cap": 25},
-               "curr-cap50": {"call_step_cap": 50},
+               "curr-cap50": {"call_step_cap": 50}, "curr-cap100": {},
+               "curr-moves-100": {"count_primitive_steps": True},
                "curr-moves-200": {"count_primitive_steps": True, "max_steps": 200},
                "curr-moves-400": {"count_primitive_steps": True, "max_steps": 400}}
-    assert set(changed) == {"base-400", *SWEEP_METHODS} - {"curr", "curr-moves"}  # curr-moves: tested above
+    assert set(changed) == {"base-400", *SWEEP_METHODS}
     for method, wrapper in changed.items():
         for target in (LEFT_OF, IN_CONTAINER):
             ours, theirs = design.nodes[(target, method)], design.nodes[(target, "base" if method == "base-400"
@@ -791,12 +793,11 @@ def test_the_whole_table_report_with_a_second_flat_baseline(tmp_path):
     assert f"| bring-about | curr | base-gru | {won} of 17 |" in text
     assert "| bring-about | curr | base | 17 of 17 |" in text
     claims = text.split("## The paper's claims")[1].split("\n## ")[0]
+    assert "base-gru" not in claims  # the paper's statements are judged on its methods; ours are checked apart
+    checks = text.split("## Our checks of the method")[1].split("\n## ")[0]
     gru_mean = 100 * np.mean([score(t, "base-gru") for t in ba])
-    assert f"| bring-about: mean of base-gru (17 concepts) | 52.7 | {gru_mean:.1f} ({gru_mean - 52.7:+.1f}) |" in claims
-    assert "| bring-about: curr > base-gru, paired t-test across concepts | t(16) = 4.1, p = 0.0008 |" in claims
-    assert "beats the flat one (base-gru) | on 14 of 16 concepts |" in claims
-    assert "| classification: cnn above base-gru (mean gap, points) |" in claims
-    assert "| cl_self-left-of-two-objects-vs-one: base-gru | 52.6 |" in claims  # the headline concepts too
+    assert f"| bring-about: mean of base-gru | 52.7 | {gru_mean:.1f} [" in checks
+    assert "| classification: mean of base-gru | 74.5 | " in checks
     assert "## The flat SMC (base-gru) beside the original runs'" in text
     # base-gru on 16 of the 17 bring-about concepts: its test is over 16, without the paper's (over all 17) beside it
     _synthetic_table(tmp_path / "gru-part", everything[1:], ["base-gru"], score)
@@ -804,42 +805,11 @@ def test_the_whole_table_report_with_a_second_flat_baseline(tmp_path):
     row = next(line for line in part.read_text().splitlines() if line.startswith("| bring-about | curr vs base-gru |"))
     cells = [c.strip() for c in row.strip("|").split("|")]
     assert everything[0] in ba and cells[2] == "16" and cells[6:] == ["", ""]
-    claims = part.read_text().split("## The paper's claims")[1].split("\n## ")[0]  # nor judged as a claim on all 17
-    assert ("| bring-about: curr > base-gru, paired t-test across concepts | t(16) = 4.1, p = 0.0008 | 16 of 17 "
-            "concepts finished | not judged: partial |") in claims
-    assert "beats the flat one (base-gru) | on 14 of 16 concepts | 16 of 17 concepts finished | not judged: partial |" \
-        in claims
-    assert "| bring-about: mean of base-gru (17 concepts) | 52.7 | 16 of 17 concepts finished | not judged: partial |" \
-        in claims
-    assert "| bring-about: curr > base, paired t-test across concepts | t(16) = 4.1, p = 0.0008 | t(16) = " in claims
-
-
-def test_every_claim_verdict_has_a_class_that_the_count_names():
-    """The claims' verdicts, whatever the scores (reproduced, in direction only, not, not judged while a method
-    trains, not comparable on a subset, not run), each have a class (``Claim.outcome``), and ``tally`` counts them
-    in ``OUTCOMES``' order; a verdict of no known class is refused, naming the claim."""
-    from pixelworld_env.datasets import catalog
-    from sb3_smc.experiments.statistics import OUTCOMES, Claim, claims, tally
-
-    everything = level2_targets()
-    kind_of = {t: catalog.dataset(t).kind for t in everything}
-    category_of = {t: catalog.dataset(t).category for t in everything}
-    gain = {"cnn": 0.45, "base": 0.3, "curr": 0.303, "canon": 0.5}
-
-    def score(t: str, m: str) -> float:  # curr a little above base, with noise: in direction only
-        i = everything.index(t)
-        return 0.2 + 0.01 * (i % 7) + gain[m] + 0.02 * (i % 3 - 1) * (m == "curr")
-
-    table = {(t, m): score(t, m) for t in everything for m in gain if m != "cnn" or kind_of[t] == "classification"}
-    found = claims(table, kind_of, category_of, unfinished={(everything[0], "canon")})
-    found += claims(table, {t: kind_of[t] for t in everything[:5]}, category_of)  # a subset: not comparable
-    classes = [c.outcome for c in found]
-    assert set(classes) == {label for _, label in OUTCOMES}
-    assert tally(found) == ", ".join(f"{classes.count(label)} {label}" for _, label in OUTCOMES)
-    assert tally([Claim("a", "", "", "yes"), Claim("b", "", "", "no: 6.0 points below"),
-                  Claim("c", "", "", "yes (about equal)")]) == "2 reproduced, 1 not"
-    with pytest.raises(ValueError, match="the claim 'x' has a verdict of no known class: 'no'"):
-        tally([Claim("x", "", "", "no")])
+    checks = part.read_text().split("## Our checks of the method")[1].split("\n## ")[0]  # nor judged on all 17
+    part_mean = 100 * np.mean([score(t, "base-gru") for t in ba[1:]])
+    row = next(line for line in checks.splitlines() if line.startswith("| bring-about: mean of base-gru (16 concepts)"))
+    assert row.startswith(f"| bring-about: mean of base-gru (16 concepts) | 52.7 | {part_mean:.1f} [")
+    assert row.endswith("| not comparable: a subset |")
 
 
 def test_a_run_still_training_is_marked_partial_and_not_judged(tmp_path, monkeypatch):
@@ -871,27 +841,16 @@ def test_a_run_still_training_is_marked_partial_and_not_judged(tmp_path, monkeyp
     [path] = write_report([tmp_path / "paper", tmp_path / "gru"], out=tmp_path / "report", behaviour=False)
     assert legends == [{"base-gru"}] * 3  # the figures' legends: "base-gru (...) (partial)"
     text = path.read_text()
-    claims = text.split("## The paper's claims")[1].split("\n## ")[0]
-    assert "| bring-about: mean of base-gru (17 concepts) | 52.7 | 0 of 17 concepts finished | not judged: partial |" \
-        in claims
-    assert ("| bring-about: curr > base-gru, paired t-test across concepts | t(16) = 4.1, p = 0.0008 | 0 of 17 "
-            "concepts finished | not judged: partial |") in claims
-    assert "beats the flat one (base-gru) | on 14 of 16 concepts | 0 of 17 concepts finished | not judged: partial |" \
-        in claims
-    target = "ba_self-in-container_from_between-potential-containers"
-    assert f"| {target}: base-gru | 48.4 | {100 * score(target, 'base-gru'):.1f} so far | not judged: partial |" \
-        in claims
+    checks = text.split("## Our checks of the method")[1].split("\n## ")[0]
+    assert "| bring-about: mean of base-gru | 52.7 | - | not judged: partial |" in checks
     cl_mean = 100 * np.mean([score(t, "base-gru") for t in everything if t not in ba])  # finished: judged
-    assert f"| classification: mean of base-gru (34 concepts) | 74.5 | {cl_mean:.1f} ({cl_mean - 74.5:+.1f}) |" \
-        in claims
+    assert f"| classification: mean of base-gru | 74.5 | {cl_mean:.1f} [" in checks
+    claims = text.split("## The paper's claims")[1].split("\n## ")[0]
     base = 100 * np.mean([score(t, "base") for t in ba])
-    assert f"| bring-about: mean of base (17 concepts) | 52.7 | {base:.1f} ({base - 52.7:+.1f}) |" in claims
-    verdicts = [row.rsplit("|", 2)[1].strip() for row in claims.splitlines()[6:] if row.startswith("| ")]
-    counts = {label: sum(v.startswith(start) for v in verdicts) for start, label in
-              (("yes", "reproduced"), ("no:", "not"), ("not judged", "not judged yet (partial)"))}
-    assert all(counts.values()) and sum(counts.values()) == len(verdicts)  # the report counts its own verdicts
-    assert f"**In all** ({len(verdicts)}): " + ", ".join(f"{n} {label}" for label, n in counts.items()) + "." \
-        in claims
+    assert f"| bring-about: mean of base | 52.7 | {base:.1f} [" in claims
+    rows = [line for line in claims.splitlines() if line.startswith("| ") and not line.startswith("| statement |")]
+    verdicts = [row.rsplit("|", 2)[1].split(": ")[-1].strip() for row in rows]  # the one reading that ran
+    assert len(rows) == 31 and f"**In all** (31 statements): a call is one step: {tally(verdicts)}." in claims
     cells = _row_cells(text, "| bring-about | curr vs base-gru (partial) |")  # ours, without the paper's beside it
     assert cells[2:5] == ["17", f"{_hand_t(score, ba, 'curr', 'base-gru'):.2f}", "16"] and cells[6:] == ["", ""]
     assert _row_cells(text, "| bring-about | curr vs base |")[6] == "t(16) = 4.1, p = 0.0008"
@@ -936,23 +895,25 @@ def test_the_whole_table_report_with_canon_scaled_and_curr_moves(tmp_path):
     assert cells[2:5] == ["17", f"{_hand_t(score, ba, 'curr-moves', 'base'):.2f}", "16"]
     assert cells[6] == "t(16) = 4.1, p = 0.0008"
     mean = 100 * np.mean([score(t, "curr-moves") for t in ba])
-    assert f"| bring-about: mean of curr-moves (17 concepts) | 74.5 | {mean:.1f} ({mean - 74.5:+.1f}) |" in text
+    assert _row_cells(text, "| bring-about: mean of curr |")[3].startswith(f"{mean:.1f} [")  # a call costs its moves
     assert "(curr-moves: an SMC call of its target nodes costs the episode's steps the moves it made)" in text
     assert "| classification | curr-moves vs base | 0 |" in text  # it ran on no classification concept
     cells = _row_cells(text, "| bring-about | canon-scaled vs base |")
     assert cells[2:5] == ["17", f"{_hand_t(score, ba, 'canon-scaled', 'base'):.2f}", "16"]
     assert cells[6] == "t(16) = 4.4, p = 0.0005"
     assert "| bring-about | canon-scaled | base | 17 of 17 |" in text
-    claims = text.split("## The paper's claims")[1].split("\n## ")[0]
+    checks = text.split("## Our checks of the method")[1].split("\n## ")[0]
     mean = 100 * np.mean([score(t, "canon-scaled") for t in ba])
-    assert f"| bring-about: mean of canon-scaled (17 concepts) | 75.0 | {mean:.1f} ({mean - 75.0:+.1f}) |" in claims
-    assert "| classification: canon-scaled > base, paired t-test across concepts | t(34) = 2.3, p = 0.025 |" in claims
-    assert "| cl_self-left-of-two-objects-vs-one: canon-scaled | 89.0 |" in claims
+    assert f"| bring-about: mean of canon-scaled | 75.0 | {mean:.1f} [" in checks
+    assert "| classification: canon-scaled above base | +5.7 | " in checks
+    claims = text.split("## The paper's claims")[1].split("\n## ")[0]
+    assert "canon-scaled" not in claims
+    assert "| statement | paper | a call is one step | a call costs its moves |" in claims
     assert "400,000 steps per SMC (canon-scaled's target nodes: that x their SMC actions / 8, at least 1)" in text
     # the claims that pool methods keep the paper's curr and canon (canon-scaled trains longer)
     assert "| bring-about | curr or canon | base | 17 of 17 | 14 of 16 |" in text
-    assert "a hierarchical SMC (best of curr, canon) beats the flat one (base) | on 14 of 16 concepts | on 17 of 17" \
-        in claims
+    assert ("| bring-about: a hierarchical SMC (best of curr, canon) beats the flat one, % of concepts | on 14 of 16 "
+            "concepts | 100.0 [") in claims
 
 
 def test_the_readme_gets_the_whole_tables_means_and_tests_from_the_report(tmp_path):
@@ -978,13 +939,10 @@ def test_the_readme_gets_the_whole_tables_means_and_tests_from_the_report(tmp_pa
         text = readme.read_text()
         assert text.startswith("# Title\n\nbefore\n<!-- paper-table:start -->\n") and text.endswith("-->\nafter\n")
         assert "old" not in text and "partial" not in text and "(docs/report.md)" in text
-        verdicts = [row.rsplit("|", 2)[1].strip() for row in report.read_text().split("## The paper's claims")[1]
-                    .split("\n## ")[0].splitlines() if row.startswith("| ") and not row.startswith("| claim |")]
-        counted = re.search(r"\*\*\[The paper's claims\]\(docs/report\.md#the-papers-claims\)\*\* \((\d+)\): "
-                            r"(\d+) reproduced, (\d+) not\.", text)  # all judged: none partial, no direction only
-        assert counted and [int(n) for n in counted.groups()] == [
-            len(verdicts), sum(v.startswith("yes") for v in verdicts), sum(v.startswith("no:") for v in verdicts)]
-        assert len(verdicts) > 5 and 0 < int(counted[2]) < len(verdicts)
+        counted = next(line for line in report.read_text().splitlines() if line.startswith("**In all**"))
+        assert counted.startswith("**In all** (31 statements): a call is one step: ")
+        assert ("**[The paper's claims](docs/report.md#the-papers-claims)**" + counted.removeprefix("**In all**")
+                in text)
         assert text.count("| bring-about | **paper** (all) | 17 | 52.7 | 74.5 |") == 1
         assert "| bring-about | curr vs base | 17 | " in text and "t(16) = 4.1, p = 0.0008" in text
         assert "| classification | all | 34 | " in text and "| bring-about | all | 17 | " in text
@@ -1131,11 +1089,12 @@ def test_the_whole_table_report_over_two_directories(tmp_path):
     # the claims table
     claims = text.split("## The paper's claims")[1].split("\n## ")[0]
     base_mean = 100 * np.mean([score(t, "base") for t in cl])
-    assert (f"| classification: mean of base (34 concepts) | 74.5 | {base_mean:.1f} ({base_mean - 74.5:+.1f}) |"
-            in claims)
-    assert "| classification: curr > base, paired t-test across concepts | t(34) = 4.9, p = 2e-05 |" in claims
-    assert ("hierarchical SMC (best of curr, canon) beats the flat one (base) | on 14 of 16 concepts | on 17 of 17 "
-            "concepts | yes |") in claims
+    assert f"| classification: mean of base | 74.5 | {base_mean:.1f} [" in claims
+    row = _row_cells(claims, "| classification: curr above base (paired t-test) |")
+    assert row[1] == "+10.4; t(34) = 4.9, p = 2e-05" and f"; t(33) = {t_hand:.2f}, p = " in row[2]
+    assert _row_cells(claims, "| bring-about: a hierarchical SMC (best of curr, canon) beats the flat one")[1:] == [
+        "on 14 of 16 concepts", "100.0 [100.0, 100.0]: exceeded"]
+    assert "a call costs its moves" not in claims  # no method of that reading ran
     # the figures: Fig. 5a/5d and one Fig. 5b/5e per kind, in the combined report's folder
     for name in ("categories", "concepts-classification", "concepts-bring-about"):
         image = np.asarray(Image.open(tmp_path / "paper" / "figures" / f"{name}.png").convert("L"))
@@ -1143,8 +1102,8 @@ def test_the_whole_table_report_over_two_directories(tmp_path):
     # a report of one category: the paper's whole-table claims and tests are not judged on a subset
     [subset] = write_report(tmp_path / "containment", behaviour=False)
     part = subset.read_text()
-    assert "| classification: the claims over all 34 concepts (means, t-tests, wins, noprim) | 34 concepts | 9 " \
-           "concepts here | not comparable: a subset |" in part and "mean of base" not in part
+    assert "| classification: the statements over all 34 concepts (9 here) | | not comparable: a subset |" in part
+    assert "mean of base" not in part
     row = next(line for line in part.splitlines() if line.startswith("| classification | curr vs base |"))
     assert [c.strip() for c in row.strip("|").split("|")][6:] == ["", ""]  # no paper test, no p at its df
     assert "### ../containment" in text and "Wall time of all runs of the 2 directories: ≥ 4.00 h" in text

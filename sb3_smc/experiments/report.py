@@ -28,7 +28,7 @@ from sb3_smc.curricula.jobs import job_name, node_of
 from sb3_smc.errors import SMCError
 from sb3_smc.experiments.design import CATEGORIES, METHOD_REGISTRY, METHODS, SMC_METHODS, plan
 from sb3_smc.experiments.figures import Panel, bar_panels, timeline_figure, trajectory_figure
-from sb3_smc.experiments.runner import experiment_command, read_results
+from sb3_smc.experiments.runner import evaluation_path, experiment_command, read_evaluation, read_results
 from sb3_smc.experiments.tables import KINDS, ResultTable, number_sections
 from sb3_smc.experiments.wall_clock import UNKNOWN_COMMIT, lower_bound
 from sb3_smc.hyperparameters import ALGORITHM_REGISTRY
@@ -124,9 +124,24 @@ def _behaviour(sources: Sequence[tuple[Path, dict[str, Any]]], figures: Path, ta
     return paths, None
 
 
+def _with_worlds(sources: Sequence[tuple[Path, dict[str, Any]]]) -> list[tuple[Path, dict[str, Any]]]:
+    """``sources`` with each row's per-world test scores (``worlds``) from its saved evaluation, where there is one
+    (the claims' bootstrap draws test worlds; a row without them counts with its test score)."""
+    out = []
+    for directory, results in sources:
+        rows = []
+        for row in results["rows"]:
+            path = evaluation_path(directory, job_name(row["curriculum"], row["seed"]))
+            saved = read_evaluation(path) if path.is_file() else {}
+            worlds = (saved.get("evaluation") or {}).get("environment_scores") or ()
+            rows.append({**row, "worlds": tuple(worlds)})
+        out.append((directory, {**results, "rows": rows}))
+    return out
+
+
 def _write(sources: Sequence[tuple[Path, dict[str, Any]]], out: Path, trajectories: str | None,
            behaviour: bool) -> Path:
-    rows, reported = _merge(sources)
+    rows, reported = _merge(_with_worlds(sources))
     table = ResultTable(rows, reported, _unfinished(sources))
     methods, targets = table.methods, table.targets
     figures_dir = out / "figures"
