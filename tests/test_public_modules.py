@@ -34,7 +34,7 @@ PUBLIC = (
     *_modules("pixelworld_env.envs", "env", "vector", "registration"),
     # sb3_smc: docs/architecture.md's table, docs/api/*.md
     *_modules("sb3_smc", "errors", "layout", "smc", "dag", "tasks", "hyperparameters", "envs", "wrapper", "bias",
-              "callbacks", "training", "policies", "numpy_actors", "evaluation", "features", "gymnasium_vec_env",
+              "callbacks", "training", "batched", "policies", "numpy_actors", "evaluation", "features", "gymnasium_vec_env",
               "vec_env", "cli", "demo"),
     *_modules("sb3_smc.records", "spec", "results", "base"),
     *_modules("sb3_smc.common", "kernels", "discounting", "threads"),
@@ -46,7 +46,7 @@ PUBLIC = (
     *_modules("sb3_smc.curricula", "format", "shipped", "designed", "trainer", "jobs", "run_directory", "executors",
               "pretrained", "reuse"),
     *_modules("sb3_smc.experiments", "design", "runner", "wall_clock", "cnn", "report", "figures", "tables",
-              "statistics", "paper"),
+              "statistics", "bootstrap", "claims", "sweep", "paper"),
 )
 
 
