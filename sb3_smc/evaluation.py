@@ -245,20 +245,28 @@ def start_seed(split: str, index: int) -> int:
 def evaluate(smc: SMC, env_id: str | None = None, *, split: str = "test", repeats: int = 10, seed: int = 0,
              max_steps: int | None = None, record_cells: bool = True, env_kwargs: Mapping[str, Any] | None = None,
              keep: bool = True, starts: int | None = None, wrapper: WrapperSettings | None = None) -> EvaluationResult:
-    """The paper's test: every environment of ``split`` run ``repeats`` times, stochastic policy.
+    """The paper's test: every environment of ``split`` run ``repeats`` times, stochastic policy; deterministic for a
+    given ``seed``. The SMC's children, primitive-action setting and wrapper settings are those of its spec.
 
-    On a task without datasets (an :class:`~sb3_smc.tasks.SMCTask` on any Gymnasium environment) the environments
-    are ``starts`` start states (default 100): the task reset with :func:`start_seed` (``split`` ``"test"``: seeds
-    from ``FOREIGN_TEST_SEED``, far from the ``seed + i`` training resets with; ``"train"``: from 0); each repeat
-    samples the policy and the SMC calls anew from the same start.
-
-    ``env_id`` defaults to the task the SMC was trained on. Returns an :class:`EvaluationResult` with the overall
-    ``score`` (mean of final-step reward > 0 over environments x repeats), one :class:`EnvironmentResult` per
-    environment (its score, label and episodes) and, per episode, the visited cells. Deterministic for a given
-    ``seed``. The SMC's children, primitive-action setting and wrapper settings are those of its spec (``wrapper``
-    replaces the latter, e.g. to count the moves of calls against the episode's steps). With
-    ``keep=True`` (default) the result's :class:`~sb3_smc.records.EvaluationRecord` is added to
-    ``smc.evaluations`` (replacing an earlier one of the same env id and split), so a library saves it.
+    :param smc: the SMC to test.
+    :param env_id: the task (default: the one the SMC was trained on).
+    :param split: ``"test"`` or ``"train"``. On a task without datasets (an :class:`~sb3_smc.tasks.SMCTask` on any
+        Gymnasium environment) the environments are ``starts`` start states: the task reset with
+        :func:`start_seed` (``"test"``: seeds from ``FOREIGN_TEST_SEED``, far from the ``seed + i`` training resets;
+        ``"train"``: from 0), each repeat sampling the policy and the SMC calls anew from the same start.
+    :param repeats: episodes per environment (the paper's 10).
+    :param seed: the evaluation seed (policy sampling and SMC calls), not the SMC's training seed.
+    :param max_steps: the episode's length (default: the spec's).
+    :param record_cells: keep the cells visited in each episode.
+    :param env_kwargs: extra keyword arguments for ``gym.make``.
+    :param keep: add the result's :class:`~sb3_smc.records.EvaluationRecord` to ``smc.evaluations`` (replacing an
+        earlier one of the same env id and split), so a library saves it.
+    :param starts: start states of a task without datasets (default 100).
+    :param wrapper: replaces the spec's wrapper settings (e.g. to count the moves of calls against the episode's
+        steps).
+    :return: the overall ``score`` (mean of final-step reward > 0 over environments x repeats), one
+        :class:`EnvironmentResult` per environment (its score, label and episodes) and, per episode, the visited
+        cells.
     """
     repeats = check_int(repeats, "repeats", 1)
     seed = check_seed(seed, "evaluation seed")

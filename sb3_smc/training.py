@@ -207,37 +207,48 @@ def train_smc(
 ) -> SMC:
     """Train an SMC and return the snapshot with the best mean training return.
 
-    ``task`` is a :class:`~sb3_smc.records.TrainingSpec`, or an env id whose spec is built from the keyword
-    arguments (:meth:`TrainingSpec.create <sb3_smc.records.TrainingSpec.create>`; passing a spec and any of them is
-    an error). ``total_timesteps`` must be >= 1 (:func:`untrained_smc` gives the SMC before training):
+    The spec's settings (``algo`` to ``discount`` and ``hyperparams``) build a :class:`~sb3_smc.records.TrainingSpec`
+    (:meth:`TrainingSpec.create <sb3_smc.records.TrainingSpec.create>`) when ``task`` is an env id; with a spec,
+    passing any of them is an error. The others are run options, not part of the spec.
 
-    * ``algo``: a name of :data:`~sb3_smc.hyperparameters.ALGORITHM_REGISTRY`: ``"RecurrentPPO"`` (LSTM 32),
-      ``"TRPO"`` (MLP 32), ``"PPO"`` (MLP 32) or ``"RecurrentTRPO"`` (:mod:`sb3_smc.recurrent_trpo`: TRPO's trust
-      region on the recurrent policy); ``rnn="gru"`` gives the recurrent algorithms a GRU
-      (:class:`~sb3_smc.common.recurrent.SequenceGruPolicy`, the paper's cell) instead of the default LSTM
-      (``rnn="lstm"``); ``hyperparams`` override the algorithm's defaults (``policy_kwargs`` key by key);
-      ``n_steps`` defaults to ``2000 // n_envs``.
-    * ``include_primitives=False`` drops the moves (the "noprim" ablation); ``count_primitive_steps`` /
-      ``call_step_cap`` / ``max_steps`` go to the wrapper; ``env_kwargs`` to ``gym.make``.
-    * ``signal_bias``: the paper's initial action distribution (on by default; without it episodes end after
-      a few random signals and little is learned).
-    * ``frame_stack``: stack the last k observations (meant for TRPO's memoryless MLP).
-    * ``discount="semi-mdp"`` discounts a decision by ``gamma ** k`` for its k primitive steps (an SMC call of 40
-      moves by ``gamma ** 40``) instead of the paper's ``gamma`` per decision (:mod:`sb3_smc.common.discounting`).
-
-    Run options (not part of the spec): ``children`` — the SMCs to use as actions: a sequence of SMCs,
-    ``(library, [names])``, or, with a spec, a library (any mapping name -> SMC) to look the spec's children up
-    in; ``tensorboard_log`` — a folder for SB3's curves and those of
-    :class:`~sb3_smc.callbacks.SMCTrainingCallback` (run name: the SMC's name); ``log_every`` — a progress line
-    through ``printer`` every that many updates (0: quiet; ``None``: every 10 updates when training runs 50
-    updates or more); ``callback`` — an extra SB3 callback; ``stop_at_max_return`` — end training once an update's
-    mean training return is :data:`~sb3_smc.tasks.MAX_RETURN` (every episode a clean success): no later update can
-    be selected then, so the SMC has the weights the whole budget would select, and its record ends there (``False``:
-    run the whole budget, for complete learning curves). A task whose rewards may exceed it (a subclass or a wrapper
-    that changes them: :func:`~sb3_smc.tasks.returns_bounded`) runs its whole budget.
-
-    The returned SMC's ``policy`` is a numpy copy of the selected snapshot's actor, ``model`` the SB3 model with the
-    selected weights loaded, ``spec`` the (resolved) spec and ``record`` the :class:`TrainingRecord`.
+    :param task: a :class:`~sb3_smc.records.TrainingSpec`, or the env id of the task (``PW-<dataset>-v0`` or any
+        registered :class:`~sb3_smc.tasks.SMCTask` id).
+    :param children: the SMCs to use as actions: a sequence of SMCs, ``(library, [names])``, or, with a spec, a
+        library (any mapping name -> SMC) to look the spec's children up in.
+    :param tensorboard_log: a folder for SB3's curves and those of :class:`~sb3_smc.callbacks.SMCTrainingCallback`
+        (run name: the SMC's name).
+    :param log_every: a progress line through ``printer`` every that many updates (0: quiet; ``None``: every 10
+        updates when training runs 50 updates or more).
+    :param callback: an extra SB3 callback.
+    :param printer: where progress lines go.
+    :param stop_at_max_return: end training once an update's mean training return is
+        :data:`~sb3_smc.tasks.MAX_RETURN` (every episode a clean success): no later update can be selected then, so
+        the SMC has the weights the whole budget would select, and its record ends there (``False``: run the whole
+        budget, for complete learning curves). A task whose rewards may exceed it
+        (:func:`~sb3_smc.tasks.returns_bounded`) runs its whole budget.
+    :param algo: a name of :data:`~sb3_smc.hyperparameters.ALGORITHM_REGISTRY`: ``"RecurrentPPO"`` (LSTM 32),
+        ``"TRPO"`` (MLP 32), ``"PPO"`` (MLP 32) or ``"RecurrentTRPO"`` (:mod:`sb3_smc.recurrent_trpo`).
+    :param total_timesteps: the budget in decisions, at least 1 (:func:`untrained_smc` gives the SMC before
+        training).
+    :param seed: the training seed (environments, network, sampling).
+    :param include_primitives: ``False`` drops the moves (the "noprim" ablation); signals and SMC calls stay.
+    :param name: the SMC's name (default: the task's).
+    :param n_envs: environments collected in parallel; ``n_steps`` defaults to ``2000 // n_envs``.
+    :param signal_bias: the paper's initial action distribution (on by default; without it episodes end after a few
+        random signals and little is learned).
+    :param frame_stack: stack the last k observations (meant for TRPO's memoryless MLP).
+    :param max_steps: the episode's length in decisions (moves where calls cost their moves).
+    :param count_primitive_steps: an SMC call costs the episode the moves it made instead of one step.
+    :param call_step_cap: the moves one SMC call may make, its nested calls' included, before it is cut off.
+    :param env_kwargs: extra keyword arguments for ``gym.make``.
+    :param rnn: ``"gru"`` gives the recurrent algorithms a GRU (:class:`~sb3_smc.common.recurrent.SequenceGruPolicy`,
+        the paper's cell) instead of the default LSTM (``"lstm"``).
+    :param discount: ``"semi-mdp"`` discounts a decision by ``gamma ** k`` for its k primitive steps (an SMC call of
+        40 moves by ``gamma ** 40``) instead of ``gamma`` per decision (``"decision"``;
+        :mod:`sb3_smc.common.discounting`).
+    :param hyperparams: override the algorithm's defaults (``policy_kwargs`` key by key).
+    :return: the SMC: its ``policy`` a numpy copy of the selected snapshot's actor, ``model`` the SB3 model with the
+        selected weights loaded, ``spec`` the (resolved) spec and ``record`` the :class:`TrainingRecord`.
     """
     given = locals()
     settings = {key: given[key] for key in _KEYWORD_DEFAULTS}  # the spec settings among the keyword arguments

@@ -80,16 +80,31 @@ def run_experiment(
     printer: Callable[[str], None] = print,
     reuse_from: str | Path | None = None,
 ) -> dict[str, Any]:
-    """Run the paper's protocol for ``methods`` on ``targets`` (dataset names) or a ``category`` of the level-2
-    targets (default: all 51) into ``out``; returns the ``results.json`` content. Resumable: re-run to continue.
-    ``algo`` / ``rnn`` choose the learner of every SMC (default: RecurrentPPO with an LSTM; the paper's is
-    ``algo="RecurrentTRPO", rnn="gru"``); a method with a learner of its own (``base-gru``) refuses them.
+    """Run the paper's protocol (train, test, tabulate) into ``out``; resumable: run it again to continue.
 
-    ``train=False`` trains nothing: it tabulates what the directory's run has finished so far (while it may still be
-    training): the finished SMCs are evaluated (and the CNN trained), the rest are listed in ``missing`` and the
-    results are marked ``"complete": false`` (the report says so). Running with ``train=True`` completes them.
-    ``reuse_from``: a library whose SMCs the run copies instead of training them (:func:`train_curriculum`), such as
-    the pretrained library: the results are the same."""
+    :param out: the experiment directory (new, or one of this experiment).
+    :param methods: names of :data:`~sb3_smc.experiments.design.METHOD_REGISTRY` (default: the paper's six).
+    :param targets: level-2 dataset names; give these or ``category``, not both.
+    :param category: ``containment``, ``objcon``, ``objects``, ``search``, ``pushable`` or ``all`` (the default: the
+        paper's 51 targets).
+    :param seeds: seeds per node (the paper's 5).
+    :param timesteps: the budget of every SMC (default: each node's own, else 400,000).
+    :param repeats: test episodes per test environment and SMC (the paper's 10).
+    :param workers: jobs trained at once.
+    :param backend: ``local`` (a process pool) or ``ray``.
+    :param ray_address: the Ray cluster to connect to (with ``backend="ray"``; default: a local instance).
+    :param algo: the learner of every SMC (default: RecurrentPPO; the paper's is RecurrentTRPO); a method with a
+        learner of its own (``base-gru``) refuses it.
+    :param rnn: the recurrent cell, ``lstm`` (default) or ``gru`` (the paper's); refused as ``algo`` is.
+    :param train: ``False`` trains nothing: it tabulates what the directory's run has finished so far (while it may
+        still be training): the finished SMCs are evaluated (and the CNN trained), the rest are listed in
+        ``missing`` and the results are marked ``"complete": false`` (the report says so).
+    :param progress: print progress lines through ``printer``.
+    :param printer: where progress lines go.
+    :param reuse_from: a library whose SMCs the run copies instead of training them (:func:`train_curriculum`), such
+        as the pretrained library: the results are the same.
+    :return: the ``results.json`` content.
+    """
     if targets is not None and category is not None:
         raise SMCError("give targets or a category, not both")
     if isinstance(repeats, bool) or not isinstance(repeats, int) or repeats < 1:
