@@ -23,9 +23,11 @@ from stable_baselines3.common.vec_env import DummyVecEnv
 from stable_baselines3.common.vec_env.base_vec_env import VecEnvObs, VecEnvStepReturn
 
 from pixelworld_env.envs.vector import PixelWorldVectorEnv
+from sb3_smc import smc_step
 from sb3_smc.errors import SMCError
 from sb3_smc.gymnasium_vec_env import GymnasiumVecEnv
-from sb3_smc.layout import HAND_SIZE, MOVES, observation_size, smc_action_names
+from sb3_smc.layout import HAND_SIZE, MOVES, smc_action_names
+from sb3_smc.smc_step import IS_SUCCESS, NO_ACTION, PRIMITIVE_STEPS, SMCObservation
 from sb3_smc.wrapper import HierarchicalSMCWrapper
 
 __all__ = ["FlatSMCVecEnv", "FlatStep", "SMCVecEnv", "answer_in_batches"]
@@ -115,6 +117,8 @@ class FlatSMCVecEnv(GymnasiumVecEnv):
     one-hot window and the one-hot previous action, zeros after a reset), rewards, SB3's same-step reset with
     ``terminal_observation`` and ``TimeLimit.truncated``, and the info keys of the wrapper that training reads
     (``is_success``: the episode ended with a positive reward; ``primitive_steps``: 1 for a move, 0 for a signal).
+    The observation and the step's rules (elapsed steps, truncation, success, ``primitive_steps``) are the
+    wrapper's own, :mod:`sb3_smc.smc_step`'s, applied here to the arrays of all environments at once.
     ``train_smc`` trains flat SMCs in it (:func:`sb3_smc.training.make_vec_env`). ``get_attr`` and the other
     per-environment calls are :class:`~sb3_smc.gymnasium_vec_env.GymnasiumVecEnv`'s.
     """
@@ -127,19 +131,21 @@ class FlatSMCVecEnv(GymnasiumVecEnv):
         self.kind: str = env.kind
         self.action_names = smc_action_names(env.kind)
         n_actions = len(self.action_names)
-        self.observation_space = spaces.Box(-1.0, 1.0, shape=(observation_size(0, n_actions),), dtype=np.float32)
+        self._parts = SMCObservation(HAND_SIZE, 0, n_actions)
+        self.observation_space = self._parts.space()
         self.action_space = spaces.Discrete(n_actions)
         self._to_base = np.array([env.action_names.index(name) for name in self.action_names], dtype=np.int64)
-        self._is_move = np.array([name in MOVES for name in self.action_names], dtype=np.bool_)
-        self._previous = np.full(env.num_envs, -1, dtype=np.int64)
-        self._rows = np.arange(env.num_envs)
+        self._primitive_steps = np.array(smc_step.primitive_steps(self.action_names, MOVES), dtype=np.int64)
+        self._step_cost = smc_step.step_cost(None, False)  # every action of a flat SMC is a signal or a move
+        self._previous = np.full(env.num_envs, NO_ACTION, dtype=np.int64)
+        self._elapsed = np.zeros(env.num_envs, dtype=np.int64)
+        self._max_steps: int = env.max_steps
 
     def _observation(self, hand: np.ndarray) -> np.ndarray:
-        obs = np.zeros((self.num_envs, HAND_SIZE + len(self.action_names)), dtype=np.float32)
-        obs[:, :HAND_SIZE] = hand
-        acted = self._previous >= 0
-        obs[self._rows[acted], HAND_SIZE + self._previous[acted]] = 1.0
-        return obs
+        parts = self._parts
+        obs = parts.blank(self.num_envs)
+        obs[:, parts.sensor] = hand
+        return parts.write(obs, None, self._previous)
 
     def reset(self) -> VecEnvObs:
         seeds = None if all(s is None for s in self._seeds) else list(self._seeds)
@@ -148,7 +154,8 @@ class FlatSMCVecEnv(GymnasiumVecEnv):
         hand, _ = self.env.reset(seed=cast("int | None", seeds))  # a list of seeds: one per environment
         self.reset_infos = [{} for _ in range(self.num_envs)]
         self._reset_seeds()
-        self._previous[:] = -1
+        self._previous[:] = NO_ACTION
+        self._elapsed[:] = 0
         return self._observation(hand)
 
     def step_async(self, actions: np.ndarray) -> None:
@@ -162,9 +169,9 @@ class FlatSMCVecEnv(GymnasiumVecEnv):
 
     def step_infos(self, step: FlatStep, actions: np.ndarray) -> list[dict[str, Any]]:
         """SB3's info dicts of a step of :meth:`step_arrays` (``actions``: the step's)."""
-        moves = self._is_move[actions].astype(np.int64).tolist()
+        moves = self._primitive_steps[actions].tolist()
         infos: list[dict[str, Any]] = [
-            {"is_success": s, "primitive_steps": m, "TimeLimit.truncated": t}
+            {IS_SUCCESS: s, PRIMITIVE_STEPS: m, "TimeLimit.truncated": t}
             for s, m, t in zip(step.success.tolist(), moves, step.time_limit.tolist(), strict=True)]
         for k, terminal in zip(step.ended.tolist(), step.terminal, strict=True):
             infos[k]["terminal_observation"] = terminal
@@ -173,17 +180,21 @@ class FlatSMCVecEnv(GymnasiumVecEnv):
     def step_arrays(self, actions: np.ndarray) -> FlatStep:
         """:meth:`step_wait` for ``actions`` (int64, one per environment) without the info dicts (their content is
         in the arrays: a flat SMC's step is one primitive action)."""
-        hand, rewards, terminated, truncated, _ = self.env.step(self._to_base[actions])
+        hand, rewards, terminated, env_truncated, _ = self.env.step(self._to_base[actions])
         self._previous[:] = actions
+        self._elapsed += self._step_cost
         obs = self._observation(hand)
+        # the wrapper's rules; truncated is never true where terminated is, so it is also TimeLimit.truncated
+        truncated = smc_step.truncated(terminated, env_truncated, self._elapsed, self._max_steps)
         dones = terminated | truncated
         ended = np.flatnonzero(dones)
         terminal = obs[ended]  # a copy (fancy indexing)
         if ended.size:
             hand, _ = self.env.reset(options={"reset_mask": dones})
-            self._previous[ended] = -1
+            self._previous[ended] = NO_ACTION
+            self._elapsed[ended] = 0
             obs[ended] = self._observation(hand)[ended]
-        return FlatStep(obs, rewards.astype(np.float32), dones, dones & (rewards > 0), truncated & ~terminated,
+        return FlatStep(obs, rewards.astype(np.float32), dones, smc_step.is_success(dones, rewards), truncated,
                         ended, terminal)
 
 

@@ -15,14 +15,22 @@ from pixelworld_env.core.constants import NUM_COLORS
 from pixelworld_env.core.world import MOVES as MOVE_OFFSETS
 from pixelworld_env.envs.env import BRING_ABOUT, GOAL_POTENTIAL, PixelWorldEnv
 from pixelworld_env.validation import check_action, no_episode
+from sb3_smc import smc_step
 from sb3_smc.errors import SMCError, SMCTypeError
-from sb3_smc.layout import CALL_PREFIX, observation_size, smc_action_names
+from sb3_smc.layout import CALL_PREFIX, smc_action_names
 from sb3_smc.policies import NumpyGRUPolicy, _kernels, sample_action
 from sb3_smc.smc import SMC, StepPolicy
+from sb3_smc.smc_step import (
+    ELAPSED_STEPS,
+    IS_SUCCESS,
+    NO_ACTION,
+    NO_OUTCOME,
+    PRIMITIVE_STEPS,
+    SIGNAL_OUTCOMES,
+    SMC_CALLS,
+    SMCObservation,
+)
 from sb3_smc.tasks import layout_of, returns_bounded, task_layer
-
-SIGNAL_OUTCOMES = {"SIG1": 1.0, "SIG0": -1.0}
-"""The outcome an SMC call records for each signal (0 = not called in this episode, or timed out)."""
 
 _SIGNAL, _MOVE, _CALL = 0, 1, 2
 
@@ -76,7 +84,9 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
     move budget of the top-level call it runs in, so a call of any depth makes at most ``call_step_cap`` moves.
 
     * Observation: the one-hot 3 x 3 window (81), the last outcome of each SMC (0 until called in this
-      episode), the one-hot previous action (zeros after reset) — :func:`sb3_smc.smc.observation_size`.
+      episode), the one-hot previous action (zeros after reset): :class:`sb3_smc.smc_step.SMCObservation`, which
+      :class:`~sb3_smc.vec_env.FlatSMCVecEnv` writes too, as it applies the same step rules
+      (:mod:`sb3_smc.smc_step`).
     * Reward of a call: the sum of the environment rewards of its primitive moves (shaping included).
     * Time: a call counts as one step of the episode's ``max_steps`` budget (the default), or, with
       ``count_primitive_steps=True``, as the number of moves it made (at least 1); calls are then also cut
@@ -120,18 +130,19 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
             smc.check_layout()
         self.include_primitives = include_primitives
         self.count_primitive_steps = count_primitive_steps
+        self._action_cost = smc_step.step_cost(None, count_primitive_steps)  # a signal's or a primitive's
         self.call_step_cap = int(call_step_cap)
         self.action_names = smc_action_names(base.kind, names, include_primitives, self.layout.primitives)
         self.action_space = spaces.Discrete(len(self.action_names))
-        self._sensor_size = self.layout.sensor_size
-        size = observation_size(len(self.smcs), len(self.action_names), self._sensor_size)
-        low = -1.0 if self.pixelworld else -np.inf
-        self.observation_space = spaces.Box(low, -low, shape=(size,), dtype=np.float32)
+        self._observations: dict[tuple[int, int], SMCObservation] = {}
+        self._observation_parts = self._observation_of(len(self.smcs), len(self.action_names))
+        self.observation_space = self._observation_parts.space(bounded=self.pixelworld)
         self._plan = self._action_plan(self.action_names, self.action_names.index)
+        self._primitive_steps = smc_step.primitive_steps(self.action_names, self.layout.primitives)
         self._child_plans: dict[int, list[tuple[int, Any]]] = {}
         self._leaf_plans: dict[int, tuple[SMC, Any, tuple[Any, ...] | None]] = {}
-        self._outcomes = np.zeros(len(self.smcs), dtype=np.float32)
-        self._previous_action = -1
+        self._outcomes = np.full(len(self.smcs), NO_OUTCOME, dtype=np.float32)
+        self._previous_action = NO_ACTION
         # Moves and signals may skip the layers between this wrapper and the base env when those only check the
         # call order (gym.make's OrderEnforcing / PassiveEnvChecker), which the wrapper checks itself.
         self._direct = _only_order_checks(env, cast(gym.Env, base))
@@ -148,6 +159,14 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         self._stack: list[str] = []
 
     # ------------------------------------------------------------------------------------------ helpers
+
+    def _observation_of(self, n_outcomes: int, n_actions: int) -> SMCObservation:
+        """The observation of an SMC with ``n_outcomes`` SMC actions and ``n_actions`` actions on this task."""
+        parts = self._observations.get((n_outcomes, n_actions))
+        if parts is None:
+            parts = self._observations[n_outcomes, n_actions] = SMCObservation(self.layout.sensor_size, n_outcomes,
+                                                                               n_actions)
+        return parts
 
     def _action_plan(self, names: Sequence[str], parent_index) -> list[tuple[int, Any]]:
         """For each action name: (_SIGNAL, base index or outcome), (_MOVE, base index) or (_CALL, child index)."""
@@ -181,7 +200,8 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
             n_actions = len(smc.action_names)
             plan = self._plan_of(smc)
             usable = (weights is not None and not smc.children and all(kind != _CALL for kind, _ in plan)
-                      and policy.observation_size == observation_size(0, n_actions) and policy.n_actions == n_actions)
+                      and policy.observation_size == self._observation_of(0, n_actions).size
+                      and policy.n_actions == n_actions)
             leaf = None
             if usable:
                 effects = [MOVE_OFFSETS.get(name, (0, 0)) for name in smc.action_names]
@@ -234,7 +254,7 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         return self._outcomes.copy()
 
     def _observation(self) -> np.ndarray:
-        return self._call_observation(self._outcomes, self._previous_action, len(self.action_names))
+        return self._call_observation(self._observation_parts, self._outcomes, self._previous_action)
 
     def call_coroutine(self, smc: SMC, depth: int, calls: list[dict[str, Any]], cap: int,
                        budget: list[int] | None = None
@@ -268,15 +288,16 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         n_actions = len(plan)
         policy = smc.policy
         inline = getattr(policy, "batch_from", 2) is None
-        outcomes = np.zeros(len(smc.children), dtype=np.float32)
-        previous = -1
+        parts = self._observation_of(len(smc.children), n_actions)
+        outcomes = np.full(len(smc.children), NO_OUTCOME, dtype=np.float32)
+        previous = NO_ACTION
         state = policy.initial_state()
-        reward, moves, outcome = 0.0, 0, 0.0
+        reward, moves, outcome = 0.0, 0, NO_OUTCOME
         self._stack.append(smc.name)
         for _ in range(cap):
             if budget[0] <= 0:  # the moves of the top-level call are used up (by a call this one made)
                 break
-            obs = self._call_observation(outcomes, previous, n_actions)
+            obs = self._call_observation(parts, outcomes, previous)
             if inline:
                 probabilities, state = policy.probabilities(obs, state)
             else:
@@ -314,14 +335,11 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
                       "reward": reward})
         return reward, moves, outcome
 
-    def _call_observation(self, outcomes: np.ndarray, previous: int, n_actions: int) -> np.ndarray:
-        size = self._sensor_size
-        obs = np.zeros(size + len(outcomes) + n_actions, dtype=np.float32)
+    def _call_observation(self, parts: SMCObservation, outcomes: np.ndarray, previous: int) -> np.ndarray:
+        """The observation of the SMC of ``parts`` (the top-level policy or a called SMC) in the current state."""
+        obs = parts.blank()
         self.base.sense(obs)
-        obs[size:size + len(outcomes)] = outcomes
-        if previous >= 0:
-            obs[size + len(outcomes) + previous] = 1.0
-        return obs
+        return parts.write(obs, outcomes, previous)
 
     # ------------------------------------------------------------------------------------------ gym API
 
@@ -338,12 +356,12 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
             self._rng = np.random.default_rng((seed, 0x5EED))
         elif self._rng is None:
             self._rng = np.random.default_rng()
-        self._outcomes[:] = 0.0
-        self._previous_action = -1
+        self._outcomes[:] = NO_OUTCOME
+        self._previous_action = NO_ACTION
         self._elapsed = 0
         self._done = False
         self._ended = (False, False)
-        info = dict(info, primitive_steps=0, elapsed_steps=0, smc_calls=[])
+        info = {**info, PRIMITIVE_STEPS: 0, ELAPSED_STEPS: 0, SMC_CALLS: []}
         return self._observation(), info
 
     def step(self, action):
@@ -368,25 +386,25 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
             self._outcomes[value] = outcome
             terminated, base_truncated = self._ended
             info = self.base.step_info()
-            cost = max(1, moves) if self.count_primitive_steps else 1
+            cost = smc_step.step_cost(moves, self.count_primitive_steps)
         else:
             if self._direct:  # the base env's step without the observation the wrapper would discard
                 reward, terminated, base_truncated, info = self.base.transition(value)
             else:
                 _, step_reward, terminated, base_truncated, info = self.env.step(value)
                 reward = cast(float, step_reward)  # PixelWorldEnv.step's float, behind Gymnasium's checking wrappers
-            moves = int(kind == _MOVE)
-            cost = 1
+            moves = self._primitive_steps[action]
+            cost = self._action_cost
             if moves and self.record_cells:
                 if self.pixelworld:
                     self._cells.append(cast(PixelWorldEnv, self.base).world.self_position)
                 self._moves.append(((), self.action_names[action]))
         self._elapsed += cost
-        truncated = not terminated and (base_truncated or self._elapsed >= self.base.max_steps)
+        truncated = smc_step.truncated(terminated, base_truncated, self._elapsed, self.base.max_steps)
         self._done = terminated or truncated
         self._previous_action = action
-        info = dict(info, is_success=(terminated or truncated) and reward > 0, primitive_steps=moves,
-                    elapsed_steps=self._elapsed, smc_calls=calls)
+        info = {**info, IS_SUCCESS: smc_step.is_success(self._done, reward), PRIMITIVE_STEPS: moves,
+                ELAPSED_STEPS: self._elapsed, SMC_CALLS: calls}
         if self.record_cells:
             info["cells"] = self._cells
             info["moves"] = self._moves

@@ -33,9 +33,9 @@ PUBLIC = (
     *_modules("pixelworld_env.datasets", "catalog", "cache", "loading"),
     *_modules("pixelworld_env.envs", "env", "vector", "registration"),
     # sb3_smc: docs/architecture.md's table, docs/api/*.md
-    *_modules("sb3_smc", "errors", "layout", "smc", "dag", "tasks", "hyperparameters", "envs", "wrapper", "bias",
-              "callbacks", "training", "batched", "policies", "numpy_actors", "evaluation", "features", "gymnasium_vec_env",
-              "vec_env", "cli", "demo"),
+    *_modules("sb3_smc", "errors", "layout", "smc", "smc_step", "dag", "tasks", "hyperparameters", "envs", "wrapper",
+              "bias", "callbacks", "training", "batched", "policies", "numpy_actors", "evaluation", "features",
+              "gymnasium_vec_env", "vec_env", "cli", "demo"),
     *_modules("sb3_smc.records", "spec", "results", "base"),
     *_modules("sb3_smc.common", "kernels", "discounting", "threads"),
     *_modules("sb3_smc.common.recurrent", "policies", "buffers", "type_aliases", "gru", "layers"),
