@@ -123,8 +123,9 @@ def is_success(done: bool, reward: float) -> bool: ...
 def is_success(done: np.ndarray, reward: np.ndarray) -> np.ndarray: ...
 def is_success(done: Any, reward: Any) -> Any:
     """Whether the episode succeeded (``info["is_success"]``, the test score): it ended on this step with a positive
-    reward."""
-    return done & (reward > 0)
+    reward (a Python ``bool`` for one episode, whatever number type the reward has)."""
+    success = done & (reward > 0)
+    return success if isinstance(success, np.ndarray) else bool(success)
 
 
 def primitive_steps(action_names: Sequence[str], primitives: Sequence[str]) -> tuple[int, ...]:
