@@ -26,6 +26,7 @@ episodes of at most 100 decisions.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import difflib
 import inspect
@@ -48,6 +49,7 @@ from sb3_smc.common.discounting import SemiMDPDiscount
 # SequenceLstmPolicy: models saved by sb3-smc 0.1 name sb3_smc.training.SequenceLstmPolicy (SB3 pickles the class by
 # reference); importing it here keeps them loadable.
 from sb3_smc.common.recurrent import SequenceLstmPolicy, use_compact_buffer  # noqa: F401
+from sb3_smc.common.recurrent.lean_update import lean_update_applies, use_lean_update
 from sb3_smc.envs import check_env_kwargs, is_pixelworld_id, make_smc_env
 from sb3_smc.errors import SMCError, SMCKeyError, SMCTypeError
 from sb3_smc.hyperparameters import (
@@ -189,6 +191,7 @@ def train_smc(
     callback: Any = None,
     printer: Callable[[str], None] = print,
     stop_at_max_return: bool = True,
+    lean_update: bool = False,
     algo: str = DEFAULT_ALGORITHM,
     total_timesteps: int = DEFAULT_TIMESTEPS,
     seed: int = 0,
@@ -226,6 +229,11 @@ def train_smc(
         the SMC has the weights the whole budget would select, and its record ends there (``False``: run the whole
         budget, for complete learning curves). A task whose rewards may exceed it
         (:func:`~sb3_smc.tasks.returns_bounded`) runs its whole budget.
+    :param lean_update: update ``RecurrentPPO``'s LSTM policy with
+        :func:`~sb3_smc.common.recurrent.lean_update.lean_train` (the compiled recurrence): the same update up to
+        float rounding, faster, shown statistically equal but not bit-identical (``docs/training.md``, "The lean
+        update"); ``SMCError`` for a model it does not apply to (another algorithm or cell, a critic LSTM, several
+        minibatches per epoch). Off by default: results stay bit-identical.
     :param algo: a name of :data:`~sb3_smc.hyperparameters.ALGORITHM_REGISTRY`: ``"RecurrentPPO"`` (LSTM 32),
         ``"TRPO"`` (MLP 32), ``"PPO"`` (MLP 32) or ``"RecurrentTRPO"`` (:mod:`sb3_smc.recurrent_trpo`).
     :param total_timesteps: the budget in decisions, at least 1 (:func:`untrained_smc` gives the SMC before
@@ -258,7 +266,7 @@ def train_smc(
                        "(nothing would be trained); untrained_smc(...) builds an SMC with its initial policy on "
                        "purpose")
     return _train(spec, kids, tensorboard_log=tensorboard_log, log_every=log_every, callback=callback,
-                  printer=printer, stop_at_max_return=stop_at_max_return)
+                  printer=printer, stop_at_max_return=stop_at_max_return, lean_update=lean_update)
 
 
 def untrained_smc(task: str | TrainingSpec, *, children: Children = None, **settings: Any) -> SMC:
@@ -294,24 +302,30 @@ def _spec_and_children(task: str | TrainingSpec, children: Children, settings: d
     raise SMCTypeError(f"train_smc needs an env id or a TrainingSpec, got {type(task).__name__}")
 
 
-_RUN_OPTIONS = ("children", "tensorboard_log", "log_every", "callback", "printer", "stop_at_max_return")
+_RUN_OPTIONS = ("children", "tensorboard_log", "log_every", "callback", "printer", "stop_at_max_return",
+                "lean_update")
 _KEYWORD_DEFAULTS = {name: parameter.default for name, parameter in inspect.signature(train_smc).parameters.items()
                      if parameter.kind is inspect.Parameter.KEYWORD_ONLY and name not in _RUN_OPTIONS}
 """The spec settings of :func:`train_smc` and their defaults (its keyword arguments but the run options)."""
 
 
 def _train(spec: TrainingSpec, children: tuple[SMC, ...], *, tensorboard_log: str | None, log_every: int | None,
-           callback: Any, printer: Callable[[str], None], stop_at_max_return: bool) -> SMC:
+           callback: Any, printer: Callable[[str], None], stop_at_max_return: bool, lean_update: bool = False
+           ) -> SMC:
     if spec.task.kind is not None:
         check_model_settings(spec)  # a typo in a hyperparameter: a message before any environment is built
     venv = make_vec_env(spec, children)
     spec, task = task_of(spec, venv.unwrapped)  # the FlatSMCVecEnv or SMCVecEnv under the monitor
     model, initial = build_model(spec, venv, task, tensorboard_log=tensorboard_log)
+    if lean_update and not lean_update_applies(model):
+        raise SMCError(f"SMC {spec.name!r}: lean_update needs RecurrentPPO with the LSTM policy's default recurrence "
+                       "(one LSTM layer, no critic LSTM) and one minibatch per epoch")
     stats, callbacks = training_callbacks(spec, task, log_every=log_every, printer=printer,
                                           stop_at_max_return=stop_at_max_return, callback=callback)
     start = time.perf_counter()
-    model.learn(total_timesteps=spec.budget.total_timesteps, callback=callbacks, tb_log_name=spec.name,
-                progress_bar=False)
+    with use_lean_update(model) if lean_update else contextlib.nullcontext():
+        model.learn(total_timesteps=spec.budget.total_timesteps, callback=callbacks, tb_log_name=spec.name,
+                    progress_bar=False)
     wall_time = time.perf_counter() - start
     stats.on_training_end()  # no-op when SB3 already called it; makes the totals final either way
     return finished_smc(spec, children, model, stats, task, initial, wall_time)

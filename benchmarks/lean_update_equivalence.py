@@ -1,0 +1,136 @@
+"""Is ``train_smc(..., lean_update=True)`` statistically the same learner as the default update? (issue 44)
+
+For each target (two classification tasks, one bring-about task) and each seed, one SMC is trained with the default
+update and one with the lean update (:mod:`sb3_smc.common.recurrent.lean_update`), the same spec otherwise
+(``--timesteps`` steps, the defaults, stopping at the largest return), and tested with
+:func:`sb3_smc.evaluation.evaluate` (the test split, the paper's 10 repeats, evaluation seed 0). Per target it
+compares the means of the selected training return and of the test score over seeds: a paired t-test (same seed,
+same start), Welch's t-test, and equivalence by two one-sided paired t-tests (TOST) within ``--margin`` (0.05: five
+points of a test score in percent, five hundredths of the return, whose largest value is 1).
+
+Run: ``python benchmarks/lean_update_equivalence.py [--timesteps N] [--seeds S] [--out runs.jsonl]``; each finished
+SMC is appended to ``--out`` as one JSON line, and a run skips the SMCs already there (so a stopped run resumes, and
+a second process with ``--last-seed-first`` on the same file shares the work).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import time
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from scipy import stats
+
+TARGETS = ("PW-cl_self-in-left-corner_vs_on-hline-v0", "PW-cl_self-in-container_vs_noncontainer-v0",
+           "PW-ba_self-in-container_from_on-floor-v0")
+MEASURES = ("selected_return", "test_score")
+
+
+def train_and_test(env_id: str, seed: int, lean: bool, timesteps: int) -> dict[str, Any]:
+    """One SMC trained and tested: its selected training return, test score, steps and wall time."""
+    import torch
+
+    from sb3_smc.evaluation import evaluate
+    from sb3_smc.training import train_smc
+
+    torch.set_num_threads(1)
+    start = time.perf_counter()
+    smc = train_smc(env_id, total_timesteps=timesteps, seed=seed, lean_update=lean, log_every=0)
+    record = smc.record
+    assert record is not None
+    score = evaluate(smc, record_cells=False, keep=False).score
+    return {"env_id": env_id, "seed": seed, "lean": lean, "timesteps": timesteps,
+            "selected_return": record.selected_return, "test_score": score, "steps": record.total_timesteps,
+            "train_s": record.wall_time_s, "seconds": time.perf_counter() - start}
+
+
+def tost_paired(differences: np.ndarray, margin: float) -> float:
+    """The p-value of two one-sided paired t-tests that the mean difference lies within ``(-margin, margin)``."""
+    n, mean = len(differences), float(differences.mean())
+    se = float(differences.std(ddof=1)) / math.sqrt(n)
+    if se == 0.0:
+        return 0.0 if abs(mean) < margin else 1.0
+    lower = stats.t.sf((mean + margin) / se, n - 1)
+    upper = stats.t.cdf((mean - margin) / se, n - 1)
+    return float(max(lower, upper))
+
+
+def compare(rows: Sequence[dict[str, Any]], margin: float) -> list[dict[str, Any]]:
+    """Per target and measure: the seeds both updates finished, their means, the paired and Welch p-values of a
+    difference, and the TOST p-value of equivalence within ``margin``."""
+    result = []
+    for env_id in TARGETS:
+        runs = {(r["seed"], r["lean"]): r for r in rows if r["env_id"] == env_id}
+        seeds = sorted(s for s, lean in runs if not lean and (s, True) in runs)
+        if len(seeds) < 2:
+            continue
+        for measure in MEASURES:
+            default = np.array([runs[s, False][measure] for s in seeds], dtype=float)
+            lean = np.array([runs[s, True][measure] for s in seeds], dtype=float)
+            diff = lean - default
+            same = bool(np.all(diff == 0.0))
+            result.append({
+                "env_id": env_id, "measure": measure, "n": len(seeds), "default": float(default.mean()),
+                "default_sd": float(default.std(ddof=1)), "lean": float(lean.mean()),
+                "lean_sd": float(lean.std(ddof=1)), "difference": float(diff.mean()),
+                "paired_p": 1.0 if same else float(stats.ttest_rel(lean, default).pvalue),
+                "welch_p": 1.0 if same else float(stats.ttest_ind(lean, default, equal_var=False).pvalue),
+                "tost_p": tost_paired(diff, margin)})
+    return result
+
+
+def table(comparisons: Sequence[dict[str, Any]], margin: float) -> str:
+    """The comparisons as a markdown table."""
+    lines = [f"| target | measure | seeds | default: mean (sd) | lean: mean (sd) | lean - default | paired p | "
+             f"Welch p | TOST p (+-{margin}) |", "|---|---|---:|---:|---:|---:|---:|---:|---:|"]
+    for c in comparisons:
+        name = c["env_id"].removeprefix("PW-").removesuffix("-v0")
+        lines.append(f"| `{name}` | {c['measure']} | {c['n']} | {c['default']:.3f} ({c['default_sd']:.3f}) | "
+                     f"{c['lean']:.3f} ({c['lean_sd']:.3f}) | {c['difference']:+.3f} | {c['paired_p']:.2f} | "
+                     f"{c['welch_p']:.2f} | {c['tost_p']:.3f} |")
+    return "\n".join(lines)
+
+
+def _rows(path: Path) -> list[dict[str, Any]]:
+    """The SMCs already in ``path``."""
+    return [json.loads(line) for line in path.read_text().splitlines()] if path.exists() else []
+
+
+def _key(row: dict[str, Any]) -> tuple[Any, ...]:
+    return row["env_id"], row["seed"], row["lean"], row["timesteps"]
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--timesteps", type=int, default=400_000, help="steps per SMC")
+    parser.add_argument("--seeds", type=int, default=10, help="seeds per target and update")
+    parser.add_argument("--margin", type=float, default=0.05, help="equivalence margin of the means")
+    parser.add_argument("--out", type=Path, default=Path("lean_update_equivalence.jsonl"), help="one JSON line per SMC")
+    parser.add_argument("--last-seed-first", action="store_true",
+                        help="take the seeds in reverse order (a second process on the same --out meets the first)")
+    args = parser.parse_args()
+    seeds = range(args.seeds)
+    for seed in reversed(seeds) if args.last_seed_first else seeds:
+        for env_id in TARGETS:
+            for lean in (False, True):
+                if (env_id, seed, lean, args.timesteps) in {_key(r) for r in _rows(args.out)}:
+                    continue  # finished here, or by another process on the same file
+                row = train_and_test(env_id, seed, lean, args.timesteps)
+                with args.out.open("a") as out:
+                    out.write(json.dumps(row) + "\n")
+                print(json.dumps(row), flush=True)
+    rows = list({_key(r): r for r in _rows(args.out)}.values())
+    rows = [r for r in rows if r["timesteps"] == args.timesteps]
+    seconds = {lean: sum(r["train_s"] for r in rows if r["lean"] == lean) for lean in (False, True)}
+    print(f"\n{args.timesteps:,} steps per SMC, stopping at the largest return; training time: default "
+          f"{seconds[False]:.0f} s, lean {seconds[True]:.0f} s\n")
+    print(table(compare(rows, args.margin), args.margin))
+
+
+if __name__ == "__main__":
+    main()

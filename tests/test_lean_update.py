@@ -1,0 +1,93 @@
+"""The lean PPO update (:mod:`sb3_smc.common.recurrent.lean_update`): the stock update's losses, gradients and
+logs up to float rounding, ``train_smc``'s ``lean_update`` option, and (``slow``) its statistical equivalence."""
+
+from __future__ import annotations
+
+import copy
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+import torch
+from sb3_contrib import RecurrentPPO
+
+import pixelworld_env  # noqa: F401  (registers the PW-* ids)
+from sb3_smc.common.recurrent.lean_update import lean_train, lean_update_applies, use_lean_update
+from sb3_smc.errors import SMCError
+from sb3_smc.training import train_smc
+from tests.helpers import import_benchmark
+
+CORNER_ID = "PW-cl_self-in-left-corner_vs_on-hline-v0"
+
+
+def _update(model: RecurrentPPO, train: Any, state: dict, optimizer_state: dict
+            ) -> tuple[list[list[torch.Tensor]], dict[str, Any], tuple]:
+    """One update by ``train`` from the given weights, optimizer state and numpy seed: the gradients at each
+    optimizer step (after clipping), the logged values and numpy's random state after."""
+    policy = model.policy
+    policy.load_state_dict(state)
+    policy.optimizer.load_state_dict(copy.deepcopy(optimizer_state))
+    model._n_updates = 0
+    grads: list[list[torch.Tensor]] = []
+    handle = policy.optimizer.register_step_pre_hook(
+        lambda *_: grads.append([p.grad.clone() for p in policy.parameters()]))
+    np.random.seed(7)
+    train()
+    handle.remove()
+    return grads, dict(model.logger.name_to_value), np.random.get_state()
+
+
+@pytest.mark.parametrize("settings", [{}, {"clip_range_vf": 0.1, "target_kl": 0.0001, "ent_coef": 0.01}])
+def test_lean_update_is_the_stock_update_up_to_rounding(settings: dict[str, Any]) -> None:
+    """On a real rollout (collected by the weights updated, after 4 updates), every epoch's gradients and every
+    logged value of ``lean_train`` equal ``model.train()``'s to 1e-5 relative, with the same random draws; the second
+    case clips the value loss, has an entropy term and stops early on the KL (after its third step)."""
+    smc = train_smc(CORNER_ID, total_timesteps=8_000, seed=1, log_every=0, stop_at_max_return=False)
+    model = smc.model
+    assert lean_update_applies(model)
+    _, callback = model._setup_learn(model.n_steps * model.n_envs, None, reset_num_timesteps=False)
+    model.collect_rollouts(model.env, callback, model.rollout_buffer, model.n_steps)  # a rollout of these weights
+    if settings:
+        model.clip_range_vf = lambda _: settings["clip_range_vf"]
+        model.target_kl, model.ent_coef = settings["target_kl"], settings["ent_coef"]
+    state = copy.deepcopy(model.policy.state_dict())
+    optimizer_state = copy.deepcopy(model.policy.optimizer.state_dict())
+    stock_grads, stock_logs, stock_random = _update(model, model.train, state, optimizer_state)
+    lean_grads, lean_logs, lean_random = _update(model, lambda: lean_train(model), state, optimizer_state)
+    assert len(stock_grads) == len(lean_grads) == (3 if settings else model.n_epochs)
+    for stock, lean in zip(stock_grads, lean_grads, strict=True):
+        for a, b in zip(stock, lean, strict=True):
+            assert float((a - b).norm()) <= 1e-5 * float(a.norm()) + 1e-9
+    assert stock_logs.keys() == lean_logs.keys()
+    for key, value in stock_logs.items():
+        assert lean_logs[key] == pytest.approx(value, rel=1e-5, abs=1e-7), key
+    assert all(np.array_equal(a, b) for a, b in zip(stock_random[1:3], lean_random[1:3], strict=True))
+
+
+def test_train_smc_lean_update_option() -> None:
+    """The option trains (the model is a plain RecurrentPPO afterwards: its train method is the class's), and is
+    refused where it does not apply."""
+    smc = train_smc(CORNER_ID, total_timesteps=6_000, seed=2, log_every=0, lean_update=True)
+    assert smc.record is not None and smc.record.total_timesteps == 6_000
+    assert "train" not in vars(smc.model)
+    with pytest.raises(SMCError, match="lean_update"):
+        train_smc(CORNER_ID, total_timesteps=2_000, rnn="gru", log_every=0, lean_update=True)
+    with pytest.raises(SMCError, match="lean_update"):
+        train_smc(CORNER_ID, total_timesteps=2_000, batch_size=500, log_every=0, lean_update=True)
+    with pytest.raises(ValueError, match="lean update"), use_lean_update(train_smc(
+            CORNER_ID, algo="TRPO", total_timesteps=2_000, log_every=0).model):
+        pass
+
+
+@pytest.mark.slow
+def test_lean_update_is_statistically_the_default_update(tmp_path: Path) -> None:
+    """10 seeds x 3 targets (two classification, one bring-about), 400,000 steps each, default vs lean update:
+    the means of the selected training return and the test score are equal within 0.05 (paired TOST, p < 0.05).
+    About an hour and a half on one core (``benchmarks/lean_update_equivalence.py``; numbers in docs/training.md)."""
+    bench = import_benchmark("lean_update_equivalence")
+    rows = [bench.train_and_test(env_id, seed, lean, 400_000)
+            for seed in range(10) for env_id in bench.TARGETS for lean in (False, True)]
+    comparisons = bench.compare(rows, 0.05)
+    assert len(comparisons) == 2 * len(bench.TARGETS)
+    assert all(c["tost_p"] < 0.05 for c in comparisons), bench.table(comparisons, 0.05)
