@@ -66,11 +66,15 @@ def test_lean_update_is_the_stock_update_up_to_rounding(settings: dict[str, Any]
 
 
 def test_train_smc_lean_update_option() -> None:
-    """The option trains (the model is a plain RecurrentPPO afterwards: its train method is the class's), and is
-    refused where it does not apply."""
+    """The option trains, deterministically (the model is a plain RecurrentPPO afterwards: its train method is the
+    class's), and is refused where it does not apply."""
     smc = train_smc(CORNER_ID, total_timesteps=6_000, seed=2, log_every=0, lean_update=True)
     assert smc.record is not None and smc.record.total_timesteps == 6_000
     assert "train" not in vars(smc.model)
+    again = train_smc(CORNER_ID, total_timesteps=6_000, seed=2, log_every=0, lean_update=True)
+    assert again.record is not None and again.record.training_returns == smc.record.training_returns  # deterministic
+    first, second = smc.model.policy.state_dict(), again.model.policy.state_dict()
+    assert all(torch.equal(first[name], second[name]) for name in first)
     with pytest.raises(SMCError, match="lean_update"):
         train_smc(CORNER_ID, total_timesteps=2_000, rnn="gru", log_every=0, lean_update=True)
     with pytest.raises(SMCError, match="lean_update"):
