@@ -53,8 +53,12 @@ def test_lean_update_is_the_stock_update_up_to_rounding(settings: dict[str, Any]
         model.target_kl, model.ent_coef = settings["target_kl"], settings["ent_coef"]
     state = copy.deepcopy(model.policy.state_dict())
     optimizer_state = copy.deepcopy(model.policy.optimizer.state_dict())
+    assert not model.rollout_buffer.generator_ready  # the lean update reads the buffer before and after stock's get
+    first_lean = _update(model, lambda: lean_train(model), state, optimizer_state)
     stock_grads, stock_logs, stock_random = _update(model, model.train, state, optimizer_state)
     lean_grads, lean_logs, lean_random = _update(model, lambda: lean_train(model), state, optimizer_state)
+    assert first_lean[1] == lean_logs  # the same update from either layout of the buffer
+    assert all(torch.equal(a, b) for a, b in zip(first_lean[0][-1], lean_grads[-1], strict=True))
     assert len(stock_grads) == len(lean_grads) == (3 if settings else model.n_epochs)
     for stock, lean in zip(stock_grads, lean_grads, strict=True):
         for a, b in zip(stock, lean, strict=True):
