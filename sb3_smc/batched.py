@@ -190,10 +190,10 @@ class _Job:
     """One SMC of a group: its model and callbacks, and sb3-contrib's ``collect_rollouts`` / SB3's ``learn`` cut
     at the environment step (:meth:`act` before it, :meth:`observe` after it)."""
 
-    def __init__(self, spec: TrainingSpec, task: TaskFacts, venv: VecEnv, *, log_every: int | None,
-                 printer: Callable[[str], None], stop_at_max_return: bool) -> None:
+    def __init__(self, spec: TrainingSpec, task: TaskFacts, venv: VecEnv, *, tensorboard_log: str | None,
+                 log_every: int | None, printer: Callable[[str], None], stop_at_max_return: bool) -> None:
         self.spec, self.task = spec, task
-        self.model, self.initial = build_model(spec, venv, task)
+        self.model, self.initial = build_model(spec, venv, task, tensorboard_log=tensorboard_log)
         if not isinstance(self.model, RecurrentPPO):
             raise SMCError(f"SMC {spec.name!r}: a group trains recurrent learners, got {spec.algo}")
         self.random = _RandomState()  # the streams as the model's seeding left them
@@ -378,14 +378,15 @@ def _env_key(spec: TrainingSpec) -> tuple[Any, ...]:
             spec.budget.env_steps)
 
 
-def train_smcs(specs: Sequence[TrainingSpec], *, log_every: int | None = 0, printer: Callable[[str], None] = print,
-               stop_at_max_return: bool = True) -> list[SMC]:
+def train_smcs(specs: Sequence[TrainingSpec], *, tensorboard_log: str | None = None, log_every: int | None = 0,
+               printer: Callable[[str], None] = print, stop_at_max_return: bool = True) -> list[SMC]:
     """Train the SMCs of ``specs`` together and return them in the same order, each the SMC
     :func:`~sb3_smc.training.train_smc` gives for its spec (same weights, records and selection).
 
     Batchable specs (:func:`batchable`) with the same task, environment settings and steps per rollout train as
     one group, their environments stepped in one call; every other spec is trained by ``train_smc`` alone.
-    ``log_every``, ``printer`` and ``stop_at_max_return`` are ``train_smc``'s, for every SMC."""
+    ``tensorboard_log``, ``log_every``, ``printer`` and ``stop_at_max_return`` are ``train_smc``'s, for every SMC
+    (with ``tensorboard_log``, each SMC's curves in ``<tensorboard_log>/<name>_<n>/``)."""
     results: list[SMC | None] = [None] * len(specs)
     groups: dict[tuple[Any, ...], list[int]] = {}
     for i, spec in enumerate(specs):
@@ -402,25 +403,25 @@ def train_smcs(specs: Sequence[TrainingSpec], *, log_every: int | None = 0, prin
         sizes = [spec.budget.n_envs for spec in chosen]
         vector = native_vector_env(chosen[0], num_envs=sum(sizes)) if batchable(chosen[0]) else None
         if vector is None:
-            trained = [train_smc(spec, log_every=log_every, printer=printer, stop_at_max_return=stop_at_max_return)
-                       for spec in chosen]
+            trained = [train_smc(spec, tensorboard_log=tensorboard_log, log_every=log_every, printer=printer,
+                                 stop_at_max_return=stop_at_max_return) for spec in chosen]
         else:
-            trained = _train_group(chosen, _EnvGroup(vector, sizes), log_every=log_every, printer=printer,
-                                   stop_at_max_return=stop_at_max_return)
+            trained = _train_group(chosen, _EnvGroup(vector, sizes), tensorboard_log=tensorboard_log,
+                                   log_every=log_every, printer=printer, stop_at_max_return=stop_at_max_return)
         for i, smc in zip(members, trained, strict=True):
             results[i] = smc
     return [smc for smc in results if smc is not None]
 
 
-def _train_group(specs: Sequence[TrainingSpec], group: _EnvGroup, *, log_every: int | None,
-                 printer: Callable[[str], None], stop_at_max_return: bool) -> list[SMC]:
+def _train_group(specs: Sequence[TrainingSpec], group: _EnvGroup, *, tensorboard_log: str | None,
+                 log_every: int | None, printer: Callable[[str], None], stop_at_max_return: bool) -> list[SMC]:
     """Train SMCs on one task in one vector env (see the module's docstring)."""
     jobs = []
     for spec, part in zip(specs, group.slices, strict=True):
         spec, task = task_of(spec, group.env)
         venv = VecMonitor(part)
         venv.seed(spec.seed)
-        jobs.append(_Job(spec, task, venv, log_every=log_every, printer=printer,
+        jobs.append(_Job(spec, task, venv, tensorboard_log=tensorboard_log, log_every=log_every, printer=printer,
                          stop_at_max_return=stop_at_max_return))
     group.reset()
     for job in jobs:
