@@ -58,7 +58,8 @@ def _train(args: argparse.Namespace) -> int:
     run = trainer.train_curriculum(args.curriculum, args.out, targets=targets, seeds=args.seeds,
                                    timesteps=args.timesteps, reuse=args.reuse, workers=args.workers,
                                    backend=args.backend, algo=args.algo, rnn=args.rnn, ray_address=args.ray_address,
-                                   tensorboard=not args.no_tensorboard, accept_changes=args.accept_changes,
+                                   group_size=args.group_size, tensorboard=not args.no_tensorboard,
+                                   accept_changes=args.accept_changes,
                                    reuse_from=_reuse_from(args.reuse_from))
     print(f"library: {run.library}")
     return 1 if run.failed else 0
@@ -224,6 +225,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--reuse", choices=list(REUSE), default=DEFAULT_REUSE,
                    help="seeds of each lower-level node a caller gets (default two_best)")
     p.add_argument("--workers", type=_positive, default=1, help="jobs in parallel (local processes or Ray tasks)")
+    p.add_argument("--group-size", type=_positive, default=trainer.DEFAULT_GROUP_SIZE,
+                   help="the most seeds of a flat node trained together by one worker (default "
+                        f"{trainer.DEFAULT_GROUP_SIZE}; 1: one job per worker); the SMCs are the same whatever it is")
     p.add_argument("--backend", choices=BACKENDS, default=BACKENDS[0])
     p.add_argument("--ray-address", default=None, help="Ray cluster address (default: $RAY_ADDRESS)")
     _learner_arguments(p)

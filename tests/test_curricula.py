@@ -13,6 +13,7 @@ import signal
 import subprocess
 import sys
 import time
+from itertools import pairwise
 from pathlib import Path
 
 import pytest
@@ -293,6 +294,38 @@ def test_the_longest_chain_starts_first_and_top_nodes_fill_in(tmp_path):
     assert scheduler.jobs()[:2] == [(order[0], 0), (order[0], 1)]  # tables keep the curriculum's order
 
 
+def test_flat_seeds_form_groups_of_up_to_group_size_spread_over_the_workers(tmp_path):
+    from sb3_smc.curricula.trainer import _Scheduler
+
+    curriculum = parse_curriculum(TINY + f"""\
+  - name: trpo
+    task: {RIGHT}
+    algo: TRPO
+""")
+    scheduler = _Scheduler(curriculum, curriculum.order(), 5, 1000, 2, None, tmp_path)
+    assert [scheduler.groupable(n) for n in ("left", "above", "container", "trpo")] == [True, True, False, False]
+    left, above = [("left", s) for s in range(5)], [("above", s) for s in range(5)]
+    container, trpo = [("container", s) for s in range(2)], [("trpo", 0)]
+
+    def sizes(ready, group_size, workers):
+        units = scheduler.units(ready, group_size, workers)
+        assert [job for unit in units for job in unit] == ready  # every ready job once, in its order
+        assert all(len({node for node, _ in unit}) == 1 for unit in units)  # a group is seeds of one node
+        return [len(unit) for unit in units]
+
+    assert sizes(left + above, 5, 2) == [5, 5]
+    assert sizes(left + above, 1, 2) == [1] * 10  # one job per worker, as before groups
+    assert sizes(left + above, 2, 1) == [2, 2, 1, 2, 2, 1]
+    assert sizes(left, 5, 1) == [5]
+    assert sizes(left, 5, 2) == [3, 2]  # a lone node's seeds spread over the workers
+    assert sizes(left, 5, 4) == [1, 1, 1, 2] and sizes(left[:2], 5, 8) == [1, 1]
+    assert sizes(left[:3] + trpo, 5, 2) == [3, 1]
+    assert sizes(trpo + container + left[3:], 5, 1) == [1, 1, 1, 2]  # jobs that gain nothing from a group: alone
+    assert scheduler.units([], 5, 2) == []
+    with pytest.raises(ValueError, match="group_size must be a positive integer, got 0"):
+        train_curriculum(str(_tiny(tmp_path)), tmp_path / "run", seeds=1, group_size=0, progress=False)
+
+
 # ------------------------------------------------------------------------------------------------ training
 
 def _tiny(tmp_path: Path) -> Path:
@@ -301,15 +334,26 @@ def _tiny(tmp_path: Path) -> Path:
     return path
 
 
-def _library_summary(path: Path) -> dict:
+def _library_state(path: Path) -> dict[str, tuple[dict, dict, dict[str, torch.Tensor]]]:
+    """Every SMC of a library: its manifest entry's spec and record (but the wall time) and its policy's weights."""
     library = SMCLibrary.load(path)
     out = {}
     for name in library:
         smc = library[name]
-        state = smc.model.policy.state_dict()
-        out[name] = (smc.spec.to_json(), smc.record.to_dict()["training_returns"], smc.record.selected_update,
-                     sorted((k, v.sum().item()) for k, v in state.items()))
+        assert smc.spec is not None and smc.record is not None
+        record = smc.record.to_dict()
+        record.pop("wall_time_s")
+        out[name] = (smc.spec.to_dict(), record, smc.model.policy.state_dict())
     return out
+
+
+def assert_same_library(got: dict, expected: dict) -> None:
+    """The same SMCs, bit for bit: specs, records (but wall times) and weights."""
+    assert got.keys() == expected.keys()
+    for name, (spec, record, weights) in expected.items():
+        assert got[name][:2] == (spec, record), name
+        assert got[name][2].keys() == weights.keys() and all(
+            torch.equal(got[name][2][key], value) for key, value in weights.items()), name
 
 
 def test_tiny_two_level_curriculum_end_to_end(tmp_path):
@@ -459,19 +503,30 @@ def test_a_partial_library_cannot_replace_the_whole(tmp_path):
     assert len(SMCLibrary.load(run.library)) == 3
 
 
-def test_workers_and_ray_give_the_same_library(tmp_path):
+def test_workers_groups_and_ray_give_the_same_library(tmp_path):
+    """One job at a time, flat seeds in groups in this process, and groups on 2 workers and on Ray: the same SMCs
+    (weights and records), and a progress line per round of finished jobs, counting SMCs."""
     import ray
 
     path = _tiny(tmp_path)
-    logs: dict[str, list[str]] = {"one": [], "two": []}
-    sequential = train_curriculum(str(path), tmp_path / "one", seeds=2, timesteps=2000, printer=logs["one"].append)
+    logs: dict[str, list[str]] = {"one": [], "grouped": [], "two": []}
+    sequential = train_curriculum(str(path), tmp_path / "one", seeds=2, timesteps=2000, group_size=1,
+                                  printer=logs["one"].append)
+    grouped = train_curriculum(str(path), tmp_path / "grouped", seeds=2, timesteps=2000,
+                               printer=logs["grouped"].append)
     parallel = train_curriculum(str(path), tmp_path / "two", seeds=2, timesteps=2000, workers=2,
                                 printer=logs["two"].append)
     # a log line per round of finished jobs, counting the jobs running once the finished ones' places are refilled
     progress = {key: [line.split(",")[:2] for line in lines if line.startswith("jobs ")] for key, lines in logs.items()}
     # one worker: the next job is running when a line is written (the last line: none)
     assert progress["one"] == [[f"jobs {k}/6", " running 1"] for k in range(1, 6)] + [["jobs 6/6", " running 0"]]
-    assert progress["two"][0] in (["jobs 1/6", " running 2"], ["jobs 2/6", " running 2"])
+    # groups: left@0-1 together, then above@0-1 (running 2: the group's SMCs), then container@0 and @1 alone
+    assert progress["grouped"] == [["jobs 2/6", " running 2"], ["jobs 4/6", " running 1"], ["jobs 5/6", " running 1"],
+                                   ["jobs 6/6", " running 0"]]
+    assert logs["grouped"][0].endswith("1 worker, flat seeds in groups of up to 5") and logs["one"][0].endswith(
+        "1 worker")
+    # two workers: left's and above's seeds, a group each, side by side
+    assert progress["two"][0] in (["jobs 2/6", " running 2"], ["jobs 4/6", " running 2"])
     assert progress["two"][-1] == ["jobs 6/6", " running 0"]
     ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False)
     try:
@@ -479,10 +534,68 @@ def test_workers_and_ray_give_the_same_library(tmp_path):
                                   progress=False)
     finally:
         ray.shutdown()
-    expected = _library_summary(sequential.library)
+    expected = _library_state(sequential.library)
     assert len(expected) == 6
-    assert _library_summary(parallel.library) == expected
-    assert _library_summary(on_ray.library) == expected
+    for run in (grouped, parallel, on_ray):
+        assert_same_library(_library_state(run.library), expected)
+        assert sorted(p.name for p in (run.directory / "tensorboard").iterdir()) == sorted(
+            p.name for p in (tmp_path / "one" / "tensorboard").iterdir())
+
+
+def test_resuming_a_half_done_group_trains_only_its_missing_smcs(tmp_path, monkeypatch):
+    """SMCs taken out of a finished run's library (as if the run had died while storing a group's results): the next
+    run trains only them, together, and they are the SMCs they were; the others' files are untouched."""
+    from sb3_smc.curricula import trainer
+    from sb3_smc.library import storage
+
+    path, out = str(_tiny(tmp_path)), tmp_path / "run"
+    settings = {"seeds": 3, "timesteps": 2000, "targets": ["left", "above"], "tensorboard": False}
+    train_curriculum(path, out, progress=False, **settings)
+    expected = _library_state(out / "library")
+    trained: list[tuple[str, ...]] = []
+
+    def counted(run):
+        def run_and_count(work):
+            trained.append(tuple(job.spec.name for job in ([work] if isinstance(work, trainer.Job) else work)))
+            return run(work)
+        return run_and_count
+
+    monkeypatch.setattr(trainer, "run_job", counted(trainer.run_job))
+    monkeypatch.setattr(trainer, "run_group", counted(trainer.run_group))
+    manifest = out / "library" / "manifest.json"
+    for missing, units in ((["left@1"], [("left@1",)]), (["left@0", "left@2", "above@1"],
+                                                          [("left@0", "left@2"), ("above@1",)])):
+        kept = {n: e for n, e in json.loads(manifest.read_text())["smcs"].items() if n not in missing}
+        stamps = {n: (out / "library" / e["model"]).stat().st_mtime_ns for n, e in kept.items()}
+        storage.remove_from_library(out / "library", missing)
+        trained.clear()
+        lines: list[str] = []
+        train_curriculum(path, out, printer=lines.append, **settings)
+        assert f"({6 - len(missing)} already done)" in lines[0]
+        assert trained == units
+        after = json.loads(manifest.read_text())["smcs"]
+        assert all(after[n] == e and (out / "library" / e["model"]).stat().st_mtime_ns == stamps[n]
+                   for n, e in kept.items())
+        assert_same_library(_library_state(out / "library"), expected)
+
+
+def test_a_failing_group_fails_each_of_its_jobs_and_stores_none(tmp_path, monkeypatch):
+    from sb3_smc.curricula import trainer
+
+    def broken(jobs):
+        raise RuntimeError(f"lost {len(jobs)} jobs")
+
+    monkeypatch.setattr(trainer, "run_group", broken)
+    path, out = str(_tiny(tmp_path)), tmp_path / "run"
+    run = train_curriculum(path, out, seeds=2, timesteps=2000, progress=False)
+    assert run.failed == dict.fromkeys(["left@0", "left@1", "above@0", "above@1"], "RuntimeError: lost 2 jobs")
+    assert all((out / "failed" / f"{name}.txt").is_file() for name in run.failed)
+    state = status(out)
+    assert state["done"] == [] and state["failed"] == sorted(run.failed) and state["left"] == ["container@0",
+                                                                                               "container@1"]
+    monkeypatch.undo()
+    again = train_curriculum(path, out, seeds=2, timesteps=2000, progress=False)
+    assert not again.failed and len(status(out)["done"]) == 6 and not list((out / "failed").iterdir())
 
 
 def test_ray_without_a_cluster_says_how_to_connect(tmp_path, monkeypatch):
@@ -493,7 +606,8 @@ def test_ray_without_a_cluster_says_how_to_connect(tmp_path, monkeypatch):
 
 
 def test_kill_and_resume_trains_no_job_twice(tmp_path):
-    """SIGKILL the CLI while it trains, run it again: finished jobs keep their files, the rest is trained once."""
+    """SIGKILL the CLI while it trains (flat seeds in groups: it may be killed between storing a group's SMCs), run it
+    again: finished jobs keep their files, the rest is trained once."""
     path = _tiny(tmp_path)
     out = tmp_path / "run"
     command = [sys.executable, "-m", "sb3_smc.cli", "train", str(path), "--out", str(out), "--seeds", "2",
@@ -516,14 +630,14 @@ def test_kill_and_resume_trains_no_job_twice(tmp_path):
     result = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, timeout=300)
     assert result.returncode == 0, result.stdout + result.stderr
     assert f"({len(finished)} already done)" in result.stdout
-    progress = [line for line in result.stdout.splitlines() if line.startswith("jobs ")]
-    assert len(progress) == 6 - len(finished)  # one progress line per job trained now
+    progress = [int(line.split()[1].split("/")[0]) for line in result.stdout.splitlines() if line.startswith("jobs ")]
+    assert progress[-1] == 6 and all(len(finished) < a < b for a, b in pairwise(progress))  # SMCs counted
     after = json.loads(manifest.read_text())["smcs"]
     assert len(after) == 6
     assert all(after[name]["record"] == finished[name]["record"] for name in finished)  # never trained again
     assert all((out / "library" / after[n]["model"]).stat().st_mtime_ns == files[n] for n in finished)
-    assert _library_summary(out / "library") == _library_summary(
-        train_curriculum(str(path), tmp_path / "fresh", seeds=2, timesteps=4000, progress=False).library)
+    assert_same_library(_library_state(out / "library"), _library_state(
+        train_curriculum(str(path), tmp_path / "fresh", seeds=2, timesteps=4000, progress=False).library))
 
 
 def _alive(pid: int) -> bool:
@@ -774,7 +888,7 @@ def test_run_directory_files_and_a_full_disk_are_explained(tmp_path, monkeypatch
     (out / "run.json").write_text("[]")
     code, _, err = sb3_smc_cli("status", str(out))
     assert code == 2 and "is not the settings of an sb3-smc run" in err
-    for option in ("--seeds", "--workers", "--timesteps"):
+    for option in ("--seeds", "--workers", "--timesteps", "--group-size"):
         code, _, err = sb3_smc_cli("train", path, "--out", str(tmp_path / "new"), option, "0")
         assert code == 2 and f"argument {option}: must be a positive integer, got 0" in err
     code, _, err = sb3_smc_cli("train", path, "--out", str(tmp_path / "new"), "--ray-address", "auto")

@@ -1,6 +1,7 @@
-"""A Ray node lost while it trains a curriculum job: on a local cluster of two nodes (loopback, one CPU each), the
-node running a job is removed mid-run; the run goes on without that job, which fails with an error saying what
-happened and what to do, and the same command run again trains it, once, keeping every finished job as it was."""
+"""A Ray node lost while it trains a curriculum job (or a group of a flat node's seeds): on a local cluster of two
+nodes (loopback, one CPU each), the node running a job is removed mid-run; the run goes on without that job, which
+fails with an error saying what happened and what to do, and the same command run again trains it, once, keeping
+every finished job as it was."""
 
 from __future__ import annotations
 
@@ -10,7 +11,7 @@ import shutil
 import tempfile
 import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from typing import Any
 
 import pytest
@@ -59,24 +60,29 @@ def two_nodes(monkeypatch: pytest.MonkeyPatch) -> Iterator[tuple[Cluster, Any]]:
         shutil.rmtree(folder, ignore_errors=True)
 
 
-def test_a_job_on_a_lost_node_fails_clearly_and_the_rerun_trains_it_once(tmp_path, monkeypatch, two_nodes):
+@pytest.mark.parametrize(("seeds", "group_size"), [(1, 1), (2, 5)], ids=["job", "group"])
+def test_a_job_on_a_lost_node_fails_clearly_and_the_rerun_trains_it_once(tmp_path, monkeypatch, two_nodes, seeds,
+                                                                        group_size):
+    """One job at a time, or the seeds of a flat node as one group (one Ray task; lost together)."""
     cluster, second = two_nodes
     path = tmp_path / "tiny.yml"
     path.write_text(TINY)
     out = tmp_path / "run"
     lost_flag, trainings = tmp_path / "lost", tmp_path / "trainings.txt"
-    doomed, train = second.node_id, jobs.run_job
+    doomed = second.node_id
 
-    def run_job(job: jobs.Job) -> jobs.JobResult:
-        """On the second node: say which job runs there and wait to be removed with it; elsewhere: train, counted.
-        (A closure: Ray pickles it by value, with what it names.)"""
-        if ray.get_runtime_context().get_node_id() == doomed:
-            lost_flag.write_text(job.spec.name)
-            time.sleep(WAIT_S)
-            raise RuntimeError("the test did not remove this node")
-        with trainings.open("a") as log:
-            log.write(job.spec.name + "\n")
-        return train(job)
+    def on_the_cluster(train: Any, names: Callable[[Any], list[str]]) -> Any:
+        """``train`` on the second node: say which jobs run there and wait to be removed with them; elsewhere:
+        train, counted. (A closure: Ray pickles it by value, with what it names.)"""
+        def run(work: Any) -> Any:
+            if ray.get_runtime_context().get_node_id() == doomed:
+                lost_flag.write_text(" ".join(names(work)))
+                time.sleep(WAIT_S)
+                raise RuntimeError("the test did not remove this node")
+            with trainings.open("a") as log:
+                log.write("".join(f"{name}\n" for name in names(work)))
+            return train(work)
+        return run
 
     def remove_the_second_node() -> None:
         deadline = time.monotonic() + WAIT_S
@@ -85,40 +91,48 @@ def test_a_job_on_a_lost_node_fails_clearly_and_the_rerun_trains_it_once(tmp_pat
         if lost_flag.is_file():
             cluster.remove_node(second)
 
-    monkeypatch.setattr(trainer, "run_job", run_job)
+    monkeypatch.setattr(trainer, "run_job", on_the_cluster(jobs.run_job, lambda job: [job.spec.name]))
+    monkeypatch.setattr(trainer, "run_group", on_the_cluster(jobs.run_group, lambda group: [j.spec.name
+                                                                                           for j in group]))
     remover = threading.Thread(target=remove_the_second_node, daemon=True)
     remover.start()
     lines: list[str] = []
-    settings = {"seeds": 1, "timesteps": 2000, "workers": 2, "backend": "ray", "ray_address": cluster.address,
-                "tensorboard": False}
+    settings = {"seeds": seeds, "timesteps": 2000, "workers": 2, "backend": "ray", "ray_address": cluster.address,
+                "tensorboard": False, "group_size": group_size}
     first = train_curriculum(str(path), out, printer=lines.append, **settings)
     remover.join()
     assert lost_flag.is_file(), "no job ran on the second node"
-    lost = lost_flag.read_text()
-    kept = ({"left@0", "above@0"} - {lost}).pop()  # the level-1 job trained on the head meanwhile
-    # the lost job fails with what happened and what to do (Ray's error kept in its file); the run goes on
-    assert set(first.failed) == {lost}
-    assert first.failed[lost].startswith("sb3_smc.errors.SMCRuntimeError: the Ray cluster lost this job before it "
-                                         "finished (")
-    assert "running the same command again trains it anew" in first.failed[lost]
-    text = (out / "failed" / f"{lost}.txt").read_text()
-    assert "ray.exceptions." in text and "The above exception was the direct cause" in text
-    assert "1 job(s) failed" in lines[-1] and "run the same command again to retry" in lines[-1]
+    lost = lost_flag.read_text().split()
+    level_1 = [f"{node}@{seed}" for node in ("left", "above") for seed in range(seeds)]
+    kept = [name for name in level_1 if name not in lost]  # the level-1 jobs trained on the head meanwhile
+    # the lost jobs (one, or a node's seeds) fail with what happened and what to do (Ray's error kept in their
+    # files); the run goes on
+    assert sorted(first.failed) == sorted(lost) and len(lost) == seeds
+    assert {name.partition("@")[0] for name in lost} in ({"left"}, {"above"})
+    for name in lost:
+        assert first.failed[name].startswith("sb3_smc.errors.SMCRuntimeError: the Ray cluster lost this job before "
+                                             "it finished (")
+        assert "running the same command again trains it anew" in first.failed[name]
+        text = (out / "failed" / f"{name}.txt").read_text()
+        assert "ray.exceptions." in text and "The above exception was the direct cause" in text
+    assert f"{seeds} job(s) failed" in lines[-1] and "run the same command again to retry" in lines[-1]
+    containers = [f"container@{seed}" for seed in range(seeds)]
     state = status(out)
-    assert (state["done"], state["failed"], state["left"], state["running"]) == ([kept], [lost], ["container@0"], [])
+    assert (state["done"], sorted(state["failed"]), state["left"], state["running"]) == (
+        kept, sorted(lost), containers, [])
     manifest = out / "library" / "manifest.json"
     before = json.loads(manifest.read_text())["smcs"]
-    model = out / "library" / before[kept]["model"]
-    stamp = model.stat().st_mtime_ns
+    models = {name: out / "library" / before[name]["model"] for name in kept}
+    stamps = {name: model.stat().st_mtime_ns for name, model in models.items()}
 
-    # the same command again, on the node left: the lost job and the one waiting for it are trained, nothing else
+    # the same command again, on the node left: the lost jobs and those waiting for them are trained, nothing else
     lines.clear()
     again = train_curriculum(str(path), out, printer=lines.append, **settings)
-    assert not again.failed and not (out / "failed" / f"{lost}.txt").exists()
-    assert "(1 already done)" in lines[0]
+    assert not again.failed and not any((out / "failed" / f"{name}.txt").exists() for name in lost)
+    assert f"({len(kept)} already done)" in lines[0]
     after = json.loads(manifest.read_text())["smcs"]
-    assert sorted(after) == ["above@0", "container@0", "left@0"]  # each job once
-    assert after[kept] == before[kept] and model.stat().st_mtime_ns == stamp  # the finished job untouched
-    assert collections.Counter(trainings.read_text().split()) == {"left@0": 1, "above@0": 1, "container@0": 1}
+    assert sorted(after) == sorted(level_1 + containers)  # each job once
+    assert all(after[n] == before[n] and models[n].stat().st_mtime_ns == stamps[n] for n in kept)  # untouched
+    assert collections.Counter(trainings.read_text().split()) == dict.fromkeys(level_1 + containers, 1)
     state = status(out)
-    assert state["done"] == ["left@0", "above@0", "container@0"] and state["failed"] == state["left"] == []
+    assert state["done"] == level_1 + containers and state["failed"] == state["left"] == []

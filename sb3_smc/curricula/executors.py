@@ -1,8 +1,11 @@
 """Where a curriculum run's jobs train: in this process, in local worker processes, or as Ray tasks.
 
-Each executor takes the function that trains a job (:func:`~sb3_smc.curricula.jobs.run_job`) and offers
-``submit(job) -> handle``, ``wait(handles) -> [(handle, result or exception)]`` (at least one) and ``shutdown()``;
-:func:`make_executor` picks one. A job's exception is its outcome, reported as the job's failure by the trainer.
+Each executor takes the functions that train a job (:func:`~sb3_smc.curricula.jobs.run_job`) and a group of jobs
+(:func:`~sb3_smc.curricula.jobs.run_group`) and offers ``submit(work) -> handle`` (``work``: a :class:`Job`, or a
+tuple of jobs trained as one unit, one worker process or one Ray task), ``wait(handles) -> [(handle, outcome)]``
+(at least one; the outcome is a job's :class:`JobResult`, a group's list of them, or the exception) and
+``shutdown()``; :func:`make_executor` picks one. An exception is the outcome of the whole unit, reported as the
+failure of each of its jobs by the trainer.
 """
 
 from __future__ import annotations
@@ -11,7 +14,7 @@ import multiprocessing
 import os
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 from typing import Any
@@ -19,36 +22,43 @@ from typing import Any
 from sb3_smc.curricula.jobs import Job, JobResult
 from sb3_smc.errors import SMCRuntimeError
 
-__all__ = ["BACKENDS", "make_executor"]
+__all__ = ["BACKENDS", "Outcome", "Work", "make_executor"]
 
 BACKENDS = ("local", "ray")
 """Where jobs run: local processes or Ray tasks."""
+
+Work = Job | tuple[Job, ...]
+"""What is submitted: one job, or a group of jobs trained together."""
+Outcome = JobResult | list[JobResult]
+RunJob = Callable[[Job], JobResult]
+RunGroup = Callable[[Sequence[Job]], list[JobResult]]
 
 
 class _InProcess:
     """Trains a job in this process when it is waited for (as a worker would meanwhile), so the state file and the
     progress line count it as running while it trains."""
 
-    def __init__(self, run: Callable[[Job], JobResult]) -> None:
-        self._run = run
-        self._jobs: dict[int, Job] = {}
+    def __init__(self, run: RunJob, run_group: RunGroup) -> None:
+        self._run, self._run_group = run, run_group
+        self._work: dict[int, Work] = {}
         self._next = 0
 
-    def submit(self, job: Job) -> int:
+    def submit(self, work: Work) -> int:
         handle = self._next
         self._next += 1
-        self._jobs[handle] = job
+        self._work[handle] = work
         return handle
 
-    def wait(self, handles: list[int]) -> list[tuple[int, JobResult | Exception]]:
+    def wait(self, handles: list[int]) -> list[tuple[int, Outcome | Exception]]:
         handle = handles[0]
+        work = self._work.pop(handle)
         try:
-            return [(handle, self._run(self._jobs.pop(handle)))]
+            return [(handle, self._run(work) if isinstance(work, Job) else self._run_group(work))]
         except Exception as err:  # noqa: BLE001 - reported as the job's failure
             return [(handle, err)]
 
     def shutdown(self) -> None:
-        self._jobs.clear()
+        self._work.clear()
 
 
 def _exit_with(parent: int) -> None:
@@ -66,21 +76,23 @@ class _Processes:
     """Trains jobs in ``workers`` spawned processes; a worker that dies fails its jobs, and the pool is made
     again. A worker ends when the run's process does, however it ended."""
 
-    def __init__(self, run: Callable[[Job], JobResult], workers: int) -> None:
+    def __init__(self, run: RunJob, run_group: RunGroup, workers: int) -> None:
         def make() -> ProcessPoolExecutor:
             return ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
                                        initializer=_exit_with, initargs=(os.getpid(),))
 
-        self._run = run
+        self._run, self._run_group = run, run_group
         self._make = make
         self._pool = make()
 
-    def submit(self, job: Job) -> Future[JobResult]:
-        return self._pool.submit(self._run, job)
+    def submit(self, work: Work) -> Future[Outcome]:
+        if isinstance(work, Job):
+            return self._pool.submit(self._run, work)
+        return self._pool.submit(self._run_group, work)
 
-    def wait(self, handles: list[Future[JobResult]]) -> list[tuple[Future[JobResult], JobResult | BaseException]]:
+    def wait(self, handles: list[Future[Outcome]]) -> list[tuple[Future[Outcome], Outcome | BaseException]]:
         done, _ = wait(handles, return_when=FIRST_COMPLETED)
-        out: list[tuple[Future[JobResult], JobResult | BaseException]] = []
+        out: list[tuple[Future[Outcome], Outcome | BaseException]] = []
         broken = False
         for future in done:
             error = future.exception()
@@ -93,7 +105,7 @@ class _Processes:
                 hint.__cause__ = error
                 error = hint
             out.append((future, error if error is not None else future.result()))
-        if broken:  # a worker died (e.g. killed for memory): its jobs count as failed, the run goes on
+        if broken:  # a worker died (e.g. killed for memory): its jobs (all of a group) fail, the run goes on
             self._pool.shutdown(wait=False, cancel_futures=True)
             self._pool = self._make()
         return out
@@ -119,10 +131,10 @@ def _lost(error: Exception, ray: Any) -> Exception:
 
 
 class _Ray:
-    """Trains jobs as tasks of an existing Ray cluster (one CPU each, no retries: a job the cluster loses fails, and
-    the next run trains it, as a job whose local worker died)."""
+    """Trains jobs as tasks of an existing Ray cluster (one CPU each, a group of jobs one task; no retries: a job the
+    cluster loses fails, and the next run trains it, as a job whose local worker died)."""
 
-    def __init__(self, run: Callable[[Job], JobResult], address: str | None) -> None:
+    def __init__(self, run: RunJob, run_group: RunGroup, address: str | None) -> None:
         try:
             import ray
         except ImportError:
@@ -135,10 +147,11 @@ class _Ray:
                                       "or set RAY_ADDRESS (e.g. 'auto' on a node of the cluster, or ray://host:10001)")
             ray.init(address=address, log_to_driver=False)
         self._remote = ray.remote(num_cpus=1, max_retries=0)(run)
+        self._remote_group = ray.remote(num_cpus=1, max_retries=0)(run_group)
         self._pending: set[Any] = set()
 
-    def submit(self, job: Job) -> Any:
-        ref = self._remote.remote(job)
+    def submit(self, work: Work) -> Any:
+        ref = self._remote.remote(work) if isinstance(work, Job) else self._remote_group.remote(work)
         self._pending.add(ref)
         return ref
 
@@ -159,10 +172,10 @@ class _Ray:
         self._pending.clear()
 
 
-def make_executor(backend: str, workers: int, address: str | None,
-                  run: Callable[[Job], JobResult]) -> _InProcess | _Processes | _Ray:
+def make_executor(backend: str, workers: int, address: str | None, run: RunJob,
+                  run_group: RunGroup) -> _InProcess | _Processes | _Ray:
     """The executor of a run's ``backend`` (``workers`` local processes, or this process for one worker; Ray tasks
-    on the cluster at ``address``), training each job with ``run``."""
+    on the cluster at ``address``), training each job with ``run`` and each group of jobs with ``run_group``."""
     if backend == "ray":
-        return _Ray(run, address)
-    return _Processes(run, workers) if workers > 1 else _InProcess(run)
+        return _Ray(run, run_group, address)
+    return _Processes(run, run_group, workers) if workers > 1 else _InProcess(run, run_group)

@@ -4,7 +4,8 @@ A job's :class:`~sb3_smc.records.TrainingSpec` calls, for every node its node us
 node (``reuse="two_best"``: k = 2; :func:`rank_seeds`) as distinct SMC actions. A :class:`Job` carries
 the picklable spec and the path of the run's library, where the worker loads the children by name (never torch
 objects); :func:`run_job` trains it and returns the model as bytes, the same in this process, a local worker process
-or a Ray task. :func:`check_curriculum` checks every node's spec before a run trains anything.
+or a Ray task. :func:`run_group` trains several flat jobs at once (:func:`~sb3_smc.batched.train_smcs`), each
+result the one :func:`run_job` gives. :func:`check_curriculum` checks every node's spec before a run trains anything.
 """
 
 from __future__ import annotations
@@ -19,9 +20,10 @@ from sb3_smc.curricula.format import SEED_SEPARATOR, Curriculum, CurriculumError
 from sb3_smc.hyperparameters import DEFAULT_ALGORITHM, DEFAULT_TIMESTEPS, recurrent_policy
 from sb3_smc.library import SMCLibrary, storage
 from sb3_smc.records import Budget, TaskSpec, TrainingRecord, TrainingSpec, WrapperSettings
+from sb3_smc.smc import SMC
 
 __all__ = ["DEFAULT_REUSE", "DEFAULT_SEEDS", "REUSE", "Job", "JobResult", "check_curriculum", "file_stem", "job_name",
-           "name_of_file", "node_budget", "node_of", "node_records", "node_spec", "rank_seeds", "run_job"]
+           "name_of_file", "node_budget", "node_of", "node_records", "node_spec", "rank_seeds", "run_group", "run_job"]
 
 REUSE = {"one_best": 1, "two_best": 2}
 """SMC filters of the paper: how many seeds of each lower-level node a caller gets."""
@@ -89,10 +91,25 @@ def run_job(job: Job) -> JobResult:
     children = SMCLibrary.load(job.library, names=spec.children) if spec.children else {}
     with torch_threads(1):
         smc = train_smc(spec, children=children, tensorboard_log=job.tensorboard_log, log_every=0)
-    assert smc.spec is not None and smc.record is not None  # train_smc records both
+    return _result(smc)
+
+
+def run_group(jobs: Sequence[Job]) -> list[JobResult]:
+    """Train flat ``jobs`` (no children; one TensorBoard folder for all) together with
+    :func:`~sb3_smc.batched.train_smcs` in one torch thread and return their results in order, each what
+    :func:`run_job` returns for its job (bit-identical SMCs)."""
+    from sb3_smc.batched import train_smcs  # torch and Stable-Baselines3: in the worker only
+
+    with torch_threads(1):
+        smcs = train_smcs([job.spec for job in jobs], tensorboard_log=jobs[0].tensorboard_log, log_every=0)
+    return [_result(smc) for smc in smcs]
+
+
+def _result(smc: SMC) -> JobResult:
+    assert smc.spec is not None and smc.record is not None  # train_smc and train_smcs record both
     buffer = io.BytesIO()
     smc.model.save(buffer)
-    return JobResult(spec=smc.spec, record=smc.record, algo=spec.algo, model=buffer.getvalue())
+    return JobResult(spec=smc.spec, record=smc.record, algo=smc.spec.algo, model=buffer.getvalue())
 
 
 def rank_seeds(records: dict[int, TrainingRecord]) -> list[int]:

@@ -4,21 +4,24 @@ The run schedules jobs (:mod:`sb3_smc.curricula.jobs`: one node with one seed, c
 node it uses) on an executor (:mod:`sb3_smc.curricula.executors`: this process, local processes or Ray) and keeps
 its state in the run directory (:mod:`sb3_smc.curricula.run_directory`: ``run.json``, the library, ``failed/``,
 ``state.json``, ``replaced/``, ``.lock``). A job becomes ready once every seed of every node it uses is trained;
-jobs with the longest chain of nodes above them start first.
+jobs with the longest chain of nodes above them start first. The ready seeds of a flat node train together, in
+groups of up to ``group_size`` (:func:`~sb3_smc.curricula.jobs.run_group`, :func:`~sb3_smc.batched.train_smcs`,
+also for a group of one): a group is a unit of execution only, each of its SMCs the one its job alone trains, stored
+as a job's is. ``group_size=1`` trains every job alone with :func:`~sb3_smc.curricula.jobs.run_job`.
 
 Jobs whose results are kept elsewhere can be skipped (``skip``: e.g. the evaluated SMCs of an experiment whose run
 directory lost its library); a skipped job is trained all the same when a job still to train needs its node as a
 child (the ranking of a node's seeds needs every seed), and nodes that only skipped jobs need are not trained.
 
 Crash safety: a finished job is one whose SMC is in the library manifest; the model file and then the manifest are
-written atomically by the coordinator (the only writer), so killing the process at any moment loses at most the
-jobs that were running, which the next run starts again from scratch. Finished jobs are never trained again and
-their files never rewritten, except that a job whose model file is missing or damaged (checked against the
-manifest's SHA-256 by every run and by :func:`~sb3_smc.curricula.run_directory.status`) is trained again, replacing
-its entry, and so are the jobs above it when that training differs from the recorded one (``DIR/retrain.json``
-names them from before the repaired job is stored until they are out, so a kill in between loses nothing); accepted
-node changes replace the jobs of the changed nodes and of the nodes above them. The working SMCs so replaced stay
-in ``DIR/replaced/``.
+written atomically by the coordinator (the only writer), so killing the process at any moment loses at most the jobs
+that were running (all of a running group), which the next run starts again from scratch. Finished jobs are never
+trained again and their files never rewritten, except that a job whose model file is missing or damaged (checked
+against the manifest's SHA-256 by every run and by :func:`~sb3_smc.curricula.run_directory.status`) is trained
+again, replacing its entry, and so are the jobs above it when that training differs from the recorded one
+(``DIR/retrain.json`` names them from before the repaired job is stored until they are out, so a kill in between
+loses nothing); accepted node changes replace the jobs of the changed nodes and of the nodes above them. The working
+SMCs so replaced stay in ``DIR/replaced/``.
 
 The names of the modules above that this one offered before it was split are imported from here as before.
 """
@@ -37,7 +40,7 @@ from pathlib import Path
 from typing import Any
 
 from pixelworld_env.atomic import atomic_write
-from sb3_smc.curricula.executors import BACKENDS, make_executor
+from sb3_smc.curricula.executors import BACKENDS, Outcome, make_executor
 from sb3_smc.curricula.format import SEED_SEPARATOR, Curriculum, Node, describe, merge
 from sb3_smc.curricula.jobs import (
     DEFAULT_REUSE,
@@ -53,6 +56,7 @@ from sb3_smc.curricula.jobs import (
     node_of,
     node_spec,
     rank_seeds,
+    run_group,
     run_job,
 )
 from sb3_smc.curricula.reuse import ReuseLibrary
@@ -76,10 +80,15 @@ from sb3_smc.hyperparameters import STEPS_PER_UPDATE, algorithm, recurrent_polic
 from sb3_smc.library import storage
 from sb3_smc.records import TrainingRecord
 
-__all__ = ["BACKENDS", "DEFAULT_REUSE", "DEFAULT_SEEDS", "REUSE", "Job", "JobResult", "RunFileError",
-           "RunSettingsError", "TrainingRun", "check_curriculum", "check_run_options", "describe", "file_stem",
-           "finished_jobs", "job_name", "name_of_file", "node_of", "node_spec", "rank_seeds", "read_json",
-           "read_settings", "run_job", "run_settings", "status", "train_curriculum"]
+__all__ = ["BACKENDS", "DEFAULT_GROUP_SIZE", "DEFAULT_REUSE", "DEFAULT_SEEDS", "REUSE", "Job", "JobResult",
+           "RunFileError", "RunSettingsError", "TrainingRun", "check_curriculum", "check_run_options",
+           "describe", "file_stem", "finished_jobs", "job_name", "name_of_file", "node_of", "node_spec",
+           "rank_seeds", "read_json", "read_settings", "run_group", "run_job", "run_settings", "status",
+           "train_curriculum"]
+
+DEFAULT_GROUP_SIZE = 5
+"""The most seeds of a flat node trained together in one worker (``group_size``; 1: one job per worker, as before
+issue 44). docs/benchmarks.md, "Grouped jobs in the curriculum trainer", has the measurement behind it."""
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -120,6 +129,7 @@ class _Scheduler:
         self.damaged: dict[str, TrainingRecord] = {}  # finished jobs whose model file is damaged: their old records
         self.height = _heights(curriculum, order)
         self.below = {name: curriculum.closure([name]) - {name} for name in order}
+        self._groupable: dict[str, bool] = {}
 
     def jobs(self) -> list[tuple[str, int]]:
         return [(node, seed) for node in self.order for seed in range(self.seeds)]
@@ -158,6 +168,42 @@ class _Scheduler:
                 out.append((node_name, seed))
         return out
 
+    def groupable(self, node_name: str) -> bool:
+        """Whether the jobs of ``node_name`` train in groups: a flat node whose SMCs
+        :func:`~sb3_smc.batched.train_smcs` trains in one vector env (for any other it would train them one after
+        another in one worker: no faster, and fewer jobs in parallel)."""
+        if node_name not in self._groupable:
+            from sb3_smc.batched import batchable  # torch: once grouping is asked for
+
+            node = self.curriculum.node(node_name)
+            spec = node_spec(node, 0, (), timesteps=self.timesteps, algo=self.algo, rnn=self.rnn)
+            self._groupable[node_name] = not node.uses and batchable(spec)
+        return self._groupable[node_name]
+
+    def units(self, ready: list[tuple[str, int]], group_size: int, workers: int) -> list[tuple[tuple[str, int], ...]]:
+        """The ``ready`` jobs as units of execution, in ``ready``'s order: the ready seeds of a groupable node in
+        groups of at most ``group_size``, as even as can be, any other job alone; while the units are fewer than
+        ``workers``, the largest group is halved, so that a lone node's seeds (or a run's last ones) spread over
+        the workers. What is trained does not depend on the units."""
+        if group_size == 1:
+            return [(job,) for job in ready]
+        by_node: dict[str, list[tuple[str, int]]] = {}
+        nodes: list[list[tuple[str, int]]] = []
+        for job in ready:
+            if not self.groupable(job[0]):
+                nodes.append([job])
+            elif job[0] in by_node:
+                by_node[job[0]].append(job)
+            else:
+                nodes.append(by_node.setdefault(job[0], [job]))
+        units = [part for jobs in nodes for part in _split(jobs, -(-len(jobs) // group_size))]
+        while 0 < len(units) < workers:
+            largest = max(range(len(units)), key=lambda i: len(units[i]))
+            if len(units[largest]) == 1:
+                break
+            units[largest:largest + 1] = _split(units[largest], 2)
+        return [tuple(unit) for unit in units]
+
     def blocked(self) -> list[str]:
         """Jobs that cannot run because a node they need has a failed job."""
         bad = {node_of(name) for name in self.failed}
@@ -179,6 +225,15 @@ class _Scheduler:
                 shutil.rmtree(stale, ignore_errors=True)
             log = str(folder)
         return Job(spec=spec, library=str(self.library.absolute()), tensorboard_log=log)
+
+
+def _split(jobs: list[tuple[str, int]], parts: int) -> list[list[tuple[str, int]]]:
+    """``jobs`` in ``parts`` consecutive runs as even as can be, the longer ones first."""
+    size, extra = divmod(len(jobs), parts)
+    bounds = [0]
+    for i in range(parts):
+        bounds.append(bounds[-1] + size + (i < extra))
+    return [jobs[a:b] for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
 
 
 def _heights(curriculum: Curriculum, order: list[str]) -> dict[str, int]:
@@ -205,6 +260,7 @@ def train_curriculum(
     algo: str | None = None,
     rnn: str | None = None,
     ray_address: str | None = None,
+    group_size: int = DEFAULT_GROUP_SIZE,
     tensorboard: bool = True,
     progress: bool = True,
     printer: Callable[[str], None] = print,
@@ -220,7 +276,9 @@ def train_curriculum(
     (``"lstm"`` or ``"gru"``) sets the recurrent cell of every node (recurrent algorithms only); ``reuse``:
     ``"two_best"`` or ``"one_best"``. ``workers`` > 1 runs independent jobs in that many local processes;
     ``backend="ray"`` submits them to a Ray cluster (``ray_address`` or ``RAY_ADDRESS``; ``workers`` caps the
-    jobs in flight). The trained SMCs are the same whatever the backend and worker count. Jobs that fail are
+    jobs in flight). ``group_size``: the most ready seeds of a flat node trained together as one unit (one worker
+    process or Ray task, :func:`~sb3_smc.curricula.jobs.run_group`; 1: every job alone; :meth:`_Scheduler.units`).
+    The trained SMCs are the same whatever the backend, worker count and group size. Jobs that fail are
     reported (``DIR/failed/``) and retried by the next run; jobs needing them wait. ``skip``: job names not to train
     (their results are kept elsewhere); one whose node a job still to train uses is trained all the same, and
     nodes that only skipped jobs use are not trained. A finished job whose model file is missing or damaged is
@@ -231,7 +289,7 @@ def train_curriculum(
     with the very spec the run would train (a pretrained library: a node's best seeds, its other seeds then not
     trained; :mod:`sb3_smc.curricula.reuse`). Returns a :class:`TrainingRun`.
     """
-    check_run_options(workers=workers, backend=backend, ray_address=ray_address)
+    check_run_options(workers=workers, backend=backend, ray_address=ray_address, group_size=group_size)
     source = ReuseLibrary(reuse_from) if reuse_from is not None else None
     merged, order, settings = _resolve_run(curriculum, targets, seeds, timesteps, reuse, algo, rnn)
     directory = Path(out)
@@ -251,17 +309,18 @@ def train_curriculum(
             if changes is not None:
                 changes.apply(directory, printer if progress else None)
             atomic_write(directory / "run.json", json.dumps(settings, indent=2) + "\n")
-        return _run(merged, scheduler, order, directory, seeds, backend, workers, ray_address, tensorboard, progress,
-                    printer, source, settings)
+        return _run(merged, scheduler, order, directory, seeds, backend, workers, group_size, ray_address,
+                    tensorboard, progress, printer, source, settings)
     finally:
         lock.close()
 
 
 def check_run_options(*, seeds: int = DEFAULT_SEEDS, timesteps: int | None = None, reuse: str = DEFAULT_REUSE,
                       workers: int = 1, backend: str = BACKENDS[0], ray_address: str | None = None,
-                      algo: str | None = None, rnn: str | None = None) -> None:
+                      algo: str | None = None, rnn: str | None = None, group_size: int = DEFAULT_GROUP_SIZE) -> None:
     """``ValueError`` naming the first option of a run that is out of range (before anything is done)."""
-    for name, value, optional in (("seeds", seeds, False), ("workers", workers, False), ("timesteps", timesteps, True)):
+    for name, value, optional in (("seeds", seeds, False), ("workers", workers, False), ("timesteps", timesteps, True),
+                                  ("group_size", group_size, False)):
         if not (optional and value is None) and (isinstance(value, bool) or not isinstance(value, int) or value < 1):
             raise SMCError(f"{name} must be a positive integer, got {value!r}")
     if reuse not in REUSE:
@@ -347,8 +406,8 @@ def _lock(directory: Path) -> Any:
 
 
 def _run(merged: Curriculum, scheduler: _Scheduler, order: list[str], directory: Path, seeds: int, backend: str,
-         workers: int, ray_address: str | None, tensorboard: bool, progress: bool, printer: Callable[[str], None],
-         source: ReuseLibrary | None, settings: dict[str, Any]) -> TrainingRun:
+         workers: int, group_size: int, ray_address: str | None, tensorboard: bool, progress: bool,
+         printer: Callable[[str], None], source: ReuseLibrary | None, settings: dict[str, Any]) -> TrainingRun:
     _finish_pending_retrain(directory, printer)
     damaged = _load_done(scheduler)
     if source is not None:
@@ -368,51 +427,35 @@ def _run(merged: Curriculum, scheduler: _Scheduler, order: list[str], directory:
     if progress:
         printer(f"{merged.name}: {len(order)} nodes x {seeds} seeds = {total} jobs ({done_before} already done"
                 f"{f', {skipped} of them skipped' if skipped else ''}) "
-                f"in {directory}, backend {backend}, {workers} worker{'s' * (workers > 1)}")
+                f"in {directory}, backend {backend}, {workers} worker{'s' * (workers > 1)}"
+                f"{f', flat seeds in groups of up to {group_size}' if group_size > 1 else ''}")
         for why in damaged.values():
             printer(f"{why}: it is trained again")
     started = time.time()
-    executor = make_executor(backend, workers, ray_address, run_job)  # run_job: this module's, at each run
+    # run_job, run_group: this module's, at each run
+    executor = make_executor(backend, workers, ray_address, run_job, run_group)
     bar = _Progress(total, done_before, steps_total, steps_done, printer if progress else None)
     try:
-        pending: dict[Any, str] = {}
+        pending: dict[Any, tuple[str, ...]] = {}
         while True:
-            for node_name, seed in scheduler.ready():
+            for unit in scheduler.units(scheduler.ready(), group_size, workers):
                 if len(pending) >= workers:
                     break
-                job = scheduler.job(node_name, seed, tensorboard)
-                name = job.spec.name
-                (failed_dir / f"{file_stem(name)}.txt").unlink(missing_ok=True)
-                scheduler.running.add(name)
-                pending[executor.submit(job)] = name
+                jobs = tuple(scheduler.job(node_name, seed, tensorboard) for node_name, seed in unit)
+                names = tuple(job.spec.name for job in jobs)
+                for name in names:
+                    (failed_dir / f"{file_stem(name)}.txt").unlink(missing_ok=True)
+                scheduler.running.update(names)
+                grouped = group_size > 1 and scheduler.groupable(unit[0][0])  # train_smcs, also for one SMC
+                pending[executor.submit(jobs if grouped else jobs[0])] = names
             write_state(directory, scheduler.running, started, scheduler.skip)
             bar.show(len(scheduler.running))
             if not pending:
                 break
             for handle, outcome in executor.wait(list(pending)):
-                name = pending.pop(handle)
-                scheduler.running.discard(name)
-                node_name, _, seed_text = name.rpartition(SEED_SEPARATOR)
-                if isinstance(outcome, BaseException):
-                    text = "".join(traceback.format_exception(outcome))
-                    scheduler.failed[name] = text.strip().splitlines()[-1]
-                    atomic_write(failed_dir / f"{file_stem(name)}.txt", text)
-                    bar.note(f"job {name} failed: {scheduler.failed[name]}")
-                    continue
-                earlier = scheduler.damaged.get(name)
-                differs = earlier is not None and not _trained_alike(earlier, outcome.record)
-                above = _above(scheduler, node_name) if differs else []
-                if differs:  # what was trained with the damaged copy goes, even if the run dies after storing
-                    atomic_write(directory / PENDING_RETRAIN, json.dumps(
-                        {"repaired": name, "jobs": [job_name(n, seed) for n, seed in above]}, indent=1))
-                _store(scheduler, outcome)
-                scheduler.records[node_name][int(seed_text)] = outcome.record
-                bar.running = len(scheduler.running)
-                bar.finished(_rounded(scheduler.budget(merged.node(node_name))))
-                if differs:
-                    for undone in _retrain_above(scheduler, above, name, bar.note):
-                        bar.undone(_rounded(scheduler.budget(merged.node(undone))))
-                    (directory / PENDING_RETRAIN).unlink()
+                names = pending.pop(handle)
+                scheduler.running.difference_update(names)
+                _finish(scheduler, merged, names, outcome, bar)
     finally:
         executor.shutdown()
         write_state(directory, [], started, scheduler.skip)
@@ -426,6 +469,37 @@ def _run(merged: Curriculum, scheduler: _Scheduler, order: list[str], directory:
             printer(f"{len(scheduler.failed)} job(s) failed (tracebacks in {failed_dir}); {len(blocked)} job(s) wait "
                     "for them; run the same command again to retry")
     return run
+
+
+def _finish(scheduler: _Scheduler, merged: Curriculum, names: tuple[str, ...], outcome: Outcome | BaseException,
+            bar: _Progress) -> None:
+    """Record the outcome of the unit that trained the jobs ``names``: each result stored as it comes (the model
+    file, then the manifest entry), or the unit's exception as the failure of each job."""
+    directory = scheduler.directory
+    if isinstance(outcome, BaseException):
+        text = "".join(traceback.format_exception(outcome))
+        for name in names:
+            scheduler.failed[name] = text.strip().splitlines()[-1]
+            atomic_write(directory / "failed" / f"{file_stem(name)}.txt", text)
+            bar.note(f"job {name} failed: {scheduler.failed[name]}")
+        return
+    for result in outcome if isinstance(outcome, list) else [outcome]:
+        name = result.spec.name
+        node_name, _, seed_text = name.rpartition(SEED_SEPARATOR)
+        earlier = scheduler.damaged.get(name)
+        differs = earlier is not None and not _trained_alike(earlier, result.record)
+        above = _above(scheduler, node_name) if differs else []
+        if differs:  # what was trained with the damaged copy goes, even if the run dies after storing
+            atomic_write(directory / PENDING_RETRAIN, json.dumps(
+                {"repaired": name, "jobs": [job_name(n, seed) for n, seed in above]}, indent=1))
+        _store(scheduler, result)
+        scheduler.records[node_name][int(seed_text)] = result.record
+        bar.running = len(scheduler.running)
+        bar.finished(_rounded(scheduler.budget(merged.node(node_name))))
+        if differs:
+            for undone in _retrain_above(scheduler, above, name, bar.note):
+                bar.undone(_rounded(scheduler.budget(merged.node(undone))))
+            (directory / PENDING_RETRAIN).unlink()
 
 
 def _rounded(timesteps: int) -> int:
