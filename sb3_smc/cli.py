@@ -105,12 +105,20 @@ def _resume_command(directory: Path, settings: dict[str, Any]) -> str:
                                                   if value is not None)
 
 
+def _group_size_option(p: argparse.ArgumentParser) -> None:
+    """``--group-size`` of ``sb3-smc train`` and ``sb3-smc experiment``."""
+    p.add_argument("--group-size", type=_positive, default=trainer.DEFAULT_GROUP_SIZE,
+                   help="the most seeds of a flat node trained together by one worker (default "
+                        f"{trainer.DEFAULT_GROUP_SIZE}; 1: one job per worker); the SMCs are the same whatever it is")
+
+
 def _experiment(args: argparse.Namespace) -> int:
     methods = [m for item in args.methods.split(",") if (m := item.strip())]
     targets = [t for item in args.targets for t in item.split(",") if t] if args.targets else None
     runner.run_experiment(args.out, methods=methods, targets=targets, category=args.category, seeds=args.seeds,
-                          timesteps=args.timesteps, repeats=args.repeats, workers=args.workers, backend=args.backend,
-                          ray_address=args.ray_address, algo=args.algo, rnn=args.rnn, train=not args.no_train,
+                          timesteps=args.timesteps, repeats=args.repeats, workers=args.workers,
+                          group_size=args.group_size, backend=args.backend, ray_address=args.ray_address,
+                          algo=args.algo, rnn=args.rnn, train=not args.no_train,
                           reuse_from=_reuse_from(args.reuse_from))
     print(f"next: sb3-smc report {shlex.quote(args.out)}")
     return 0
@@ -225,9 +233,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--reuse", choices=list(REUSE), default=DEFAULT_REUSE,
                    help="seeds of each lower-level node a caller gets (default two_best)")
     p.add_argument("--workers", type=_positive, default=1, help="jobs in parallel (local processes or Ray tasks)")
-    p.add_argument("--group-size", type=_positive, default=trainer.DEFAULT_GROUP_SIZE,
-                   help="the most seeds of a flat node trained together by one worker (default "
-                        f"{trainer.DEFAULT_GROUP_SIZE}; 1: one job per worker); the SMCs are the same whatever it is")
+    _group_size_option(p)
     p.add_argument("--backend", choices=BACKENDS, default=BACKENDS[0])
     p.add_argument("--ray-address", default=None, help="Ray cluster address (default: $RAY_ADDRESS)")
     _learner_arguments(p)
@@ -252,6 +258,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--repeats", type=_positive, default=DEFAULT_REPEATS,
                    help=f"test repeats per environment (default {DEFAULT_REPEATS})")
     p.add_argument("--workers", type=_positive, default=1)
+    _group_size_option(p)
     p.add_argument("--backend", choices=BACKENDS, default=BACKENDS[0])
     p.add_argument("--ray-address", default=None)
     p.add_argument("--no-train", action="store_true",

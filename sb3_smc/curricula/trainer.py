@@ -30,7 +30,6 @@ from __future__ import annotations
 
 import fcntl
 import json
-import shutil
 import sys
 import time
 import traceback
@@ -41,7 +40,7 @@ from typing import Any
 
 from pixelworld_env.atomic import atomic_write
 from sb3_smc.curricula.executors import BACKENDS, Outcome, make_executor
-from sb3_smc.curricula.format import SEED_SEPARATOR, Curriculum, Node, describe, merge
+from sb3_smc.curricula.format import SEED_SEPARATOR, Curriculum, describe, merge
 from sb3_smc.curricula.jobs import (
     DEFAULT_REUSE,
     DEFAULT_SEEDS,
@@ -52,7 +51,6 @@ from sb3_smc.curricula.jobs import (
     file_stem,
     job_name,
     name_of_file,
-    node_budget,
     node_of,
     node_spec,
     rank_seeds,
@@ -65,7 +63,6 @@ from sb3_smc.curricula.run_directory import (
     RunFileError,
     RunSettingsError,
     SettingsChanges,
-    glob_escape,
     library_jobs,
     read_json,
     read_settings,
@@ -74,6 +71,7 @@ from sb3_smc.curricula.run_directory import (
     status,
     write_state,
 )
+from sb3_smc.curricula.scheduler import Scheduler
 from sb3_smc.curricula.shipped import resolve_curriculum
 from sb3_smc.errors import SMCError, SMCTypeError
 from sb3_smc.hyperparameters import STEPS_PER_UPDATE, algorithm, recurrent_policy
@@ -114,139 +112,6 @@ class TrainingRun:
         return "\n".join(lines)
 
 
-class _Scheduler:
-    def __init__(self, curriculum: Curriculum, order: list[str], seeds: int, timesteps: int | None, k: int,
-                 algo: str | None, directory: Path, rnn: str | None = None, skip: frozenset[str] = frozenset()
-                 ) -> None:
-        self.curriculum, self.order, self.seeds, self.timesteps, self.k = curriculum, order, seeds, timesteps, k
-        self.algo, self.rnn, self.skip = algo, rnn, skip
-        self.directory = directory
-        self.library = directory / "library"
-        self.records: dict[str, dict[int, TrainingRecord]] = {name: {} for name in order}
-        self.best_of: dict[str, list[int]] = {}  # nodes reused with their best seeds only (curricula.reuse)
-        self.running: set[str] = set()
-        self.failed: dict[str, str] = {}
-        self.damaged: dict[str, TrainingRecord] = {}  # finished jobs whose model file is damaged: their old records
-        self.height = _heights(curriculum, order)
-        self.below = {name: curriculum.closure([name]) - {name} for name in order}
-        self._groupable: dict[str, bool] = {}
-
-    def jobs(self) -> list[tuple[str, int]]:
-        return [(node, seed) for node in self.order for seed in range(self.seeds)]
-
-    def done(self, node: str, seed: int) -> bool:
-        return seed in self.records[node] or job_name(node, seed) in self.skip
-
-    def budget(self, node: Node) -> int:
-        return node_budget(node, self.timesteps)
-
-    def children(self, node: Node) -> tuple[str, ...]:
-        names: list[str] = []
-        for used in node.uses:
-            best = self.best_of.get(used) or rank_seeds(self.records[used])[: min(self.k, self.seeds)]
-            names.extend(job_name(used, seed) for seed in best)
-        return tuple(names)
-
-    def complete(self, node: str) -> bool:
-        """Whether every job of ``node`` that others use is done: all its seeds, or its reused best seeds."""
-        held = self.records[node]
-        return len(held) == self.seeds or node in self.best_of and all(s in held for s in self.best_of[node])
-
-    def ready(self) -> list[tuple[str, int]]:
-        """The jobs that can start, those with the longest chain of nodes still above them first (then in
-        ``order``): a deep curriculum's critical path starts at once, and top-level nodes (a flat baseline, say)
-        fill idle workers. Which job runs when does not change what is trained. Nothing above a damaged job being
-        trained again starts before it is done (it may be trained again itself: :func:`_store`)."""
-        repairing = {node_of(name) for name in self.damaged}
-        out = []
-        for node_name, seed in sorted(self.jobs(), key=lambda job: -self.height[job[0]]):
-            name = job_name(node_name, seed)
-            if self.done(node_name, seed) or name in self.running or name in self.failed:
-                continue
-            node = self.curriculum.node(node_name)
-            if all(self.complete(u) for u in node.uses) and not self.below[node_name] & repairing:
-                out.append((node_name, seed))
-        return out
-
-    def groupable(self, node_name: str) -> bool:
-        """Whether the jobs of ``node_name`` train in groups: a flat node whose SMCs
-        :func:`~sb3_smc.batched.train_smcs` trains in one vector env (for any other it would train them one after
-        another in one worker: no faster, and fewer jobs in parallel)."""
-        if node_name not in self._groupable:
-            from sb3_smc.batched import batchable  # torch: once grouping is asked for
-
-            node = self.curriculum.node(node_name)
-            spec = node_spec(node, 0, (), timesteps=self.timesteps, algo=self.algo, rnn=self.rnn)
-            self._groupable[node_name] = not node.uses and batchable(spec)
-        return self._groupable[node_name]
-
-    def units(self, ready: list[tuple[str, int]], group_size: int, workers: int) -> list[tuple[tuple[str, int], ...]]:
-        """The ``ready`` jobs as units of execution, in ``ready``'s order: the ready seeds of a groupable node in
-        groups of at most ``group_size``, as even as can be, any other job alone; while the units are fewer than
-        ``workers``, the largest group is halved, so that a lone node's seeds (or a run's last ones) spread over
-        the workers. What is trained does not depend on the units."""
-        if group_size == 1:
-            return [(job,) for job in ready]
-        by_node: dict[str, list[tuple[str, int]]] = {}
-        nodes: list[list[tuple[str, int]]] = []
-        for job in ready:
-            if not self.groupable(job[0]):
-                nodes.append([job])
-            elif job[0] in by_node:
-                by_node[job[0]].append(job)
-            else:
-                nodes.append(by_node.setdefault(job[0], [job]))
-        units = [part for jobs in nodes for part in _split(jobs, -(-len(jobs) // group_size))]
-        while 0 < len(units) < workers:
-            largest = max(range(len(units)), key=lambda i: len(units[i]))
-            if len(units[largest]) == 1:
-                break
-            units[largest:largest + 1] = _split(units[largest], 2)
-        return [tuple(unit) for unit in units]
-
-    def blocked(self) -> list[str]:
-        """Jobs that cannot run because a node they need has a failed job."""
-        bad = {node_of(name) for name in self.failed}
-        out = []
-        for node_name, seed in self.jobs():
-            name = job_name(node_name, seed)
-            if not self.done(node_name, seed) and name not in self.failed and self.below[node_name] & bad:
-                out.append(name)
-        return out
-
-    def job(self, node_name: str, seed: int, tensorboard: bool) -> Job:
-        node = self.curriculum.node(node_name)
-        name = job_name(node_name, seed)
-        spec = node_spec(node, seed, self.children(node), timesteps=self.timesteps, algo=self.algo, rnn=self.rnn)
-        log = None
-        if tensorboard:
-            folder = self.directory / "tensorboard"
-            for stale in folder.glob(f"{glob_escape(name)}_*"):  # a half-finished earlier attempt
-                shutil.rmtree(stale, ignore_errors=True)
-            log = str(folder)
-        return Job(spec=spec, library=str(self.library.absolute()), tensorboard_log=log)
-
-
-def _split(jobs: list[tuple[str, int]], parts: int) -> list[list[tuple[str, int]]]:
-    """``jobs`` in ``parts`` consecutive runs as even as can be, the longer ones first."""
-    size, extra = divmod(len(jobs), parts)
-    bounds = [0]
-    for i in range(parts):
-        bounds.append(bounds[-1] + size + (i < extra))
-    return [jobs[a:b] for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
-
-
-def _heights(curriculum: Curriculum, order: list[str]) -> dict[str, int]:
-    """For each node of ``order`` (lower levels first), the length of the longest chain of nodes of ``order`` that
-    use it, directly or not (0 for a node nothing in the run uses)."""
-    height = dict.fromkeys(order, 0)
-    for name in reversed(order):
-        for used in curriculum.node(name).uses:
-            if used in height:
-                height[used] = max(height[used], height[name] + 1)
-    return height
-
-
 def train_curriculum(
     curriculum: str | Path | Curriculum | Sequence[str | Path | Curriculum],
     out: str | Path,
@@ -277,7 +142,7 @@ def train_curriculum(
     ``"two_best"`` or ``"one_best"``. ``workers`` > 1 runs independent jobs in that many local processes;
     ``backend="ray"`` submits them to a Ray cluster (``ray_address`` or ``RAY_ADDRESS``; ``workers`` caps the
     jobs in flight). ``group_size``: the most ready seeds of a flat node trained together as one unit (one worker
-    process or Ray task, :func:`~sb3_smc.curricula.jobs.run_group`; 1: every job alone; :meth:`_Scheduler.units`).
+    process or Ray task, :func:`~sb3_smc.curricula.jobs.run_group`; 1: every job alone; :meth:`Scheduler.units`).
     The trained SMCs are the same whatever the backend, worker count and group size. Jobs that fail are
     reported (``DIR/failed/``) and retried by the next run; jobs needing them wait. ``skip``: job names not to train
     (their results are kept elsewhere); one whose node a job still to train uses is trained all the same, and
@@ -296,7 +161,7 @@ def train_curriculum(
     order, skipped = _plan_skip(merged, order, settings["targets"], seeds, skip)
     # the jobs of nodes left out of the plan count as skipped too (sb3-smc status shows them so, not as "left")
     skipped |= {job_name(n, s) for n in settings["nodes"] if n not in order for s in range(seeds)}
-    scheduler = _Scheduler(merged, order, seeds, timesteps, REUSE[reuse], algo, directory, rnn, skipped)
+    scheduler = Scheduler(merged, order, seeds, timesteps, REUSE[reuse], algo, directory, rnn, skipped)
     check_curriculum(merged, order, timesteps=timesteps, algo=algo, rnn=rnn, reuse=reuse)
     old = read_settings(directory)
     changes = SettingsChanges.between(old, settings, merged) if old is not None else None
@@ -405,7 +270,7 @@ def _lock(directory: Path) -> Any:
     return handle
 
 
-def _run(merged: Curriculum, scheduler: _Scheduler, order: list[str], directory: Path, seeds: int, backend: str,
+def _run(merged: Curriculum, scheduler: Scheduler, order: list[str], directory: Path, seeds: int, backend: str,
          workers: int, group_size: int, ray_address: str | None, tensorboard: bool, progress: bool,
          printer: Callable[[str], None], source: ReuseLibrary | None, settings: dict[str, Any]) -> TrainingRun:
     _finish_pending_retrain(directory, printer)
@@ -471,7 +336,7 @@ def _run(merged: Curriculum, scheduler: _Scheduler, order: list[str], directory:
     return run
 
 
-def _finish(scheduler: _Scheduler, merged: Curriculum, names: tuple[str, ...], outcome: Outcome | BaseException,
+def _finish(scheduler: Scheduler, merged: Curriculum, names: tuple[str, ...], outcome: Outcome | BaseException,
             bar: _Progress) -> None:
     """Record the outcome of the unit that trained the jobs ``names``: each result stored as it comes (the model
     file, then the manifest entry), or the unit's exception as the failure of each job."""
@@ -506,7 +371,7 @@ def _rounded(timesteps: int) -> int:
     return -(-timesteps // STEPS_PER_UPDATE) * STEPS_PER_UPDATE
 
 
-def _load_done(scheduler: _Scheduler) -> dict[str, str]:
+def _load_done(scheduler: Scheduler) -> dict[str, str]:
     """Read the finished jobs from the library manifest (the only record of what is done), each checked against its
     model file: a job whose file is missing or damaged is not done (it is trained again and replaces its entry).
     Returns those jobs, with what is wrong with each."""
@@ -522,7 +387,7 @@ def _load_done(scheduler: _Scheduler) -> dict[str, str]:
     return damaged
 
 
-def _store(scheduler: _Scheduler, result: JobResult) -> None:
+def _store(scheduler: Scheduler, result: JobResult) -> None:
     """Add a finished job to the library (replacing the entry of a damaged one)."""
     spec = result.spec
     entry = storage.entry_json(spec.name, result.algo, spec.frame_stack, spec, result.record)
@@ -563,14 +428,14 @@ def _trained_alike(a: TrainingRecord, b: TrainingRecord) -> bool:
     return selection(a) == selection(b)
 
 
-def _above(scheduler: _Scheduler, node_name: str) -> list[tuple[str, int]]:
+def _above(scheduler: Scheduler, node_name: str) -> list[tuple[str, int]]:
     """The finished (or damaged) jobs of every node above ``node_name``."""
     above = [n for n in scheduler.order if node_name in scheduler.below[n]]
     return [(n, seed) for n in above for seed in range(scheduler.seeds)
             if seed in scheduler.records[n] or job_name(n, seed) in scheduler.damaged]
 
 
-def _retrain_above(scheduler: _Scheduler, jobs: list[tuple[str, int]], name: str, note: Callable[[str], None]
+def _retrain_above(scheduler: Scheduler, jobs: list[tuple[str, int]], name: str, note: Callable[[str], None]
                    ) -> list[str]:
     """A damaged job ``name`` trained again differs from its earlier record (another CPU or code): the finished jobs
     above its node (``jobs``, :func:`_above`) were trained with the earlier one and are taken out of the library to
@@ -586,7 +451,7 @@ def _retrain_above(scheduler: _Scheduler, jobs: list[tuple[str, int]], name: str
     return finished
 
 
-def _rows(scheduler: _Scheduler) -> list[dict[str, Any]]:
+def _rows(scheduler: Scheduler) -> list[dict[str, Any]]:
     rows = []
     for node_name, seed in scheduler.jobs():
         record = scheduler.records[node_name].get(seed)

@@ -38,7 +38,7 @@ from sb3_smc.common.threads import torch_threads
 from sb3_smc.curricula.executors import BACKENDS
 from sb3_smc.curricula.jobs import DEFAULT_SEEDS, file_stem, job_name, name_of_file
 from sb3_smc.curricula.run_directory import RunFileError, RunSettingsError, read_json
-from sb3_smc.curricula.trainer import check_run_options, finished_jobs, train_curriculum
+from sb3_smc.curricula.trainer import DEFAULT_GROUP_SIZE, check_run_options, finished_jobs, train_curriculum
 from sb3_smc.errors import SMCError, SMCRuntimeError
 from sb3_smc.evaluation import evaluate
 from sb3_smc.experiments.cnn import train_cnn
@@ -71,6 +71,7 @@ def run_experiment(
     timesteps: int | None = None,
     repeats: int = DEFAULT_REPEATS,
     workers: int = 1,
+    group_size: int = DEFAULT_GROUP_SIZE,
     backend: str = BACKENDS[0],
     ray_address: str | None = None,
     algo: str | None = None,
@@ -91,6 +92,8 @@ def run_experiment(
     :param timesteps: the budget of every SMC (default: each node's own, else 400,000).
     :param repeats: test episodes per test environment and SMC (the paper's 10).
     :param workers: jobs trained at once.
+    :param group_size: the most seeds of a flat node trained together in one worker (1: every SMC alone); the
+        results are the same whatever the grouping.
     :param backend: ``local`` (a process pool) or ``ray``.
     :param ray_address: the Ray cluster to connect to (with ``backend="ray"``; default: a local instance).
     :param algo: the learner of every SMC (default: RecurrentPPO; the paper's is RecurrentTRPO); a method with a
@@ -109,7 +112,8 @@ def run_experiment(
         raise SMCError("give targets or a category, not both")
     if isinstance(repeats, bool) or not isinstance(repeats, int) or repeats < 1:
         raise SMCError(f"repeats must be a positive integer, got {repeats!r}")
-    check_run_options(seeds=seeds, timesteps=timesteps, workers=workers, backend=backend, ray_address=ray_address,
+    check_run_options(seeds=seeds, timesteps=timesteps, workers=workers, group_size=group_size, backend=backend,
+                      ray_address=ray_address,
                       algo=algo, rnn=rnn)
     own = [m for m in methods if m in METHOD_REGISTRY and METHOD_REGISTRY[m].own_learner]
     if own and (algo is not None or rnn is not None):
@@ -136,8 +140,9 @@ def run_experiment(
                                                  seeds=seeds, timesteps=timesteps, algo=algo, rnn=rnn)
         elif design.curriculum is not None:
             run = train_curriculum(design.curriculum, directory, targets=design.training_targets, seeds=seeds,
-                                   timesteps=timesteps, workers=workers, backend=backend, ray_address=ray_address,
-                                   algo=algo, rnn=rnn, progress=progress, printer=printer, skip=set(kept),
+                                   timesteps=timesteps, workers=workers, group_size=group_size, backend=backend,
+                                   ray_address=ray_address, algo=algo, rnn=rnn, progress=progress, printer=printer,
+                                   skip=set(kept),
                                    reuse_from=reuse_from)
             if run.failed:
                 raise SMCRuntimeError(f"{len(run.failed)} training job(s) failed ("
