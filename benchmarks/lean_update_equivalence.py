@@ -62,7 +62,8 @@ def tost_paired(differences: np.ndarray, margin: float) -> float:
 
 def compare(rows: Sequence[dict[str, Any]], margin: float) -> list[dict[str, Any]]:
     """Per target and measure: the seeds both updates finished, their means, the paired and Welch p-values of a
-    difference, and the TOST p-value of equivalence within ``margin``."""
+    difference, the 90 % interval of the mean paired difference and the TOST p-value of equivalence within
+    ``margin`` (below 0.05 exactly when that interval lies within ``(-margin, margin)``)."""
     result = []
     for env_id in TARGETS:
         runs = {(r["seed"], r["lean"]): r for r in rows if r["env_id"] == env_id}
@@ -74,10 +75,12 @@ def compare(rows: Sequence[dict[str, Any]], margin: float) -> list[dict[str, Any
             lean = np.array([runs[s, True][measure] for s in seeds], dtype=float)
             diff = lean - default
             same = bool(np.all(diff == 0.0))
+            half = float(stats.t.ppf(0.95, len(seeds) - 1) * diff.std(ddof=1) / math.sqrt(len(seeds)))
             result.append({
                 "env_id": env_id, "measure": measure, "n": len(seeds), "default": float(default.mean()),
                 "default_sd": float(default.std(ddof=1)), "lean": float(lean.mean()),
                 "lean_sd": float(lean.std(ddof=1)), "difference": float(diff.mean()),
+                "interval": (float(diff.mean()) - half, float(diff.mean()) + half),
                 "paired_p": 1.0 if same else float(stats.ttest_rel(lean, default).pvalue),
                 "welch_p": 1.0 if same else float(stats.ttest_ind(lean, default, equal_var=False).pvalue),
                 "tost_p": tost_paired(diff, margin)})
@@ -86,12 +89,13 @@ def compare(rows: Sequence[dict[str, Any]], margin: float) -> list[dict[str, Any
 
 def table(comparisons: Sequence[dict[str, Any]], margin: float) -> str:
     """The comparisons as a markdown table."""
-    lines = [f"| target | measure | seeds | default: mean (sd) | lean: mean (sd) | lean - default | paired p | "
-             f"Welch p | TOST p (+-{margin}) |", "|---|---|---:|---:|---:|---:|---:|---:|---:|"]
+    lines = [f"| target | measure | seeds | default: mean (sd) | lean: mean (sd) | lean - default (90 % interval) | "
+             f"paired p | Welch p | TOST p (+-{margin}) |", "|---|---|---:|---:|---:|---:|---:|---:|---:|"]
     for c in comparisons:
         name = c["env_id"].removeprefix("PW-").removesuffix("-v0")
         lines.append(f"| `{name}` | {c['measure']} | {c['n']} | {c['default']:.3f} ({c['default_sd']:.3f}) | "
-                     f"{c['lean']:.3f} ({c['lean_sd']:.3f}) | {c['difference']:+.3f} | {c['paired_p']:.2f} | "
+                     f"{c['lean']:.3f} ({c['lean_sd']:.3f}) | {c['difference']:+.3f} ({c['interval'][0]:+.3f}, "
+                     f"{c['interval'][1]:+.3f}) | {c['paired_p']:.2f} | "
                      f"{c['welch_p']:.2f} | {c['tost_p']:.3f} |")
     return "\n".join(lines)
 
