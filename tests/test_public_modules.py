@@ -38,7 +38,7 @@ PUBLIC = (
               "gymnasium_vec_env", "vec_env", "cli", "demo"),
     *_modules("sb3_smc.records", "spec", "results", "base"),
     *_modules("sb3_smc.common", "kernels", "discounting", "threads"),
-    *_modules("sb3_smc.common.recurrent", "policies", "buffers", "type_aliases", "gru", "layers"),
+    *_modules("sb3_smc.common.recurrent", "policies", "buffers", "type_aliases", "gru", "layers", "lean_update"),
     *_modules("sb3_smc.recurrent_trpo"),
     *_modules("sb3_smc.library", "library", "manifest", "upgrade", "pretrained", "storage", "errors"),
     # sb3_smc.zoo.record_video is a launcher: it runs rl_zoo3's record_video on import

@@ -45,12 +45,12 @@ How the search works (``GeneratorSampler``):
    ``x.y = f.y - h``; ``inside_supported(self,x)`` confines the self to the box of ``x``'s
    inside-supported mask): each predicate's bound, conjuncts and cost are part of its entry in
    :data:`~pixelworld_env.concepts.predicates.PREDICATES` (``generation``, a
-   :class:`~pixelworld_env.concepts.predicates.GenerationFacts`). A candidate is kept if it overlaps no placed object (an integer bit mask test)
-   and every clause whose terms are now all placed holds, evaluated by the real predicate functions of
-   :data:`pixelworld_env.concepts.predicates.PREDICATES` on :class:`WorldObject` s (``dir_above`` with the
-   AAAI-18 quirk). ``h_between``/``v_between`` with two of three terms placed are pre-checked by their
-   defining conjuncts (``left_of`` and ``h_aligned``, resp. ``above`` and ``v_aligned``) and by the
-   implied ``left_of(a,b)`` (resp. ``above(a,b)``) of the outer terms.
+   :class:`~pixelworld_env.concepts.predicates.GenerationFacts`). A candidate is kept if it overlaps no placed
+   object (an integer bit mask test) and every clause whose terms are now all placed holds, evaluated by the real
+   predicate functions of :data:`pixelworld_env.concepts.predicates.PREDICATES` on :class:`WorldObject` s
+   (``dir_above`` with the AAAI-18 quirk). ``h_between``/``v_between`` with two of three terms placed are
+   pre-checked by their defining conjuncts (``left_of`` and ``h_aligned``, resp. ``above`` and ``v_aligned``) and
+   by the implied ``left_of(a,b)`` (resp. ``above(a,b)``) of the outer terms.
 4. Every template and every position tried counts as one search step. After
    ``RESTART_STEPS`` steps the search restarts (the cap doubles after every 10 restarts); after
    ``MAX_SEARCH_STEPS`` steps for one sample, or when a search exhausts the whole tree, the generator is
