@@ -133,26 +133,39 @@ def train_curriculum(
     accept_changes: bool = False,
     reuse_from: str | Path | None = None,
 ) -> TrainingRun:
-    """Train ``curriculum`` (a shipped name, a file, a :class:`Curriculum`, or several: their nodes are merged, a
-    node shared by several is trained once) into ``out``, resuming whatever ``out`` already holds.
+    """Train a curriculum into ``out``, resuming whatever ``out`` already holds. Every setting and node is checked
+    before anything is written or trained; the trained SMCs are the same whatever the backend, worker count and
+    group size.
 
-    ``targets``: node or dataset names (default: the curriculum's targets); they and every node they use are
-    trained, each with seeds ``0 .. seeds-1``. ``timesteps`` / ``algo`` replace every node's own, ``rnn``
-    (``"lstm"`` or ``"gru"``) sets the recurrent cell of every node (recurrent algorithms only); ``reuse``:
-    ``"two_best"`` or ``"one_best"``. ``workers`` > 1 runs independent jobs in that many local processes;
-    ``backend="ray"`` submits them to a Ray cluster (``ray_address`` or ``RAY_ADDRESS``; ``workers`` caps the
-    jobs in flight). ``group_size``: the most ready seeds of a flat node trained together as one unit (one worker
-    process or Ray task, :func:`~sb3_smc.curricula.jobs.run_group`; 1: every job alone; :meth:`Scheduler.units`).
-    The trained SMCs are the same whatever the backend, worker count and group size. Jobs that fail are
-    reported (``DIR/failed/``) and retried by the next run; jobs needing them wait. ``skip``: job names not to train
-    (their results are kept elsewhere); one whose node a job still to train uses is trained all the same, and
-    nodes that only skipped jobs use are not trained. A finished job whose model file is missing or damaged is
-    trained again. ``accept_changes``: ``out`` holds this run with other node settings (or other nodes); the jobs
-    of the changed nodes and of every node above them are trained again (the SMCs they replace are kept in
-    ``DIR/replaced/``), the other nodes keep theirs. Every setting and node is checked before anything is written
-    or trained. ``reuse_from``: a library whose SMCs this run copies instead of training them where it holds them
-    with the very spec the run would train (a pretrained library: a node's best seeds, its other seeds then not
-    trained; :mod:`sb3_smc.curricula.reuse`). Returns a :class:`TrainingRun`.
+    :param curriculum: a shipped name, a file, a :class:`Curriculum`, or several (their nodes are merged, a node
+        shared by several is trained once).
+    :param out: the run directory.
+    :param targets: node or dataset names (default: the curriculum's targets); they and every node they use are
+        trained.
+    :param seeds: seeds ``0 .. seeds-1`` of every node.
+    :param timesteps: replaces every node's own budget.
+    :param reuse: how many of a used node's best seeds a node calls: ``"two_best"`` or ``"one_best"``.
+    :param workers: jobs in parallel (local processes; with Ray, the jobs in flight).
+    :param backend: ``"local"`` or ``"ray"``.
+    :param algo: replaces every node's learner.
+    :param rnn: the recurrent cell of every node (``"lstm"`` or ``"gru"``; recurrent algorithms only).
+    :param ray_address: the Ray cluster (default: ``RAY_ADDRESS``, else a local instance).
+    :param group_size: the most ready seeds of a flat node trained together as one unit (one worker process or Ray
+        task, :func:`~sb3_smc.curricula.jobs.run_group`; 1: every job alone;
+        :meth:`~sb3_smc.curricula.scheduler.Scheduler.units`).
+    :param tensorboard: write each job's curves under ``DIR/tensorboard``.
+    :param progress: print progress lines through ``printer``.
+    :param printer: where progress lines go.
+    :param skip: job names not to train (their results are kept elsewhere); one whose node a job still to train
+        uses is trained all the same, and nodes that only skipped jobs use are not trained.
+    :param accept_changes: ``out`` holds this run with other node settings (or other nodes): the jobs of the changed
+        nodes and of every node above them are trained again (the SMCs they replace are kept in
+        ``DIR/replaced/``), the other nodes keep theirs.
+    :param reuse_from: a library whose SMCs this run copies instead of training them where it holds them with the
+        very spec the run would train (a pretrained library: a node's best seeds, its other seeds then not trained;
+        :mod:`sb3_smc.curricula.reuse`).
+    :return: the :class:`TrainingRun`. Jobs that fail are reported (``DIR/failed/``) and retried by the next run;
+        jobs needing them wait. A finished job whose model file is missing or damaged is trained again.
     """
     check_run_options(workers=workers, backend=backend, ray_address=ray_address, group_size=group_size)
     source = ReuseLibrary(reuse_from) if reuse_from is not None else None
