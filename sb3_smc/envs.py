@@ -55,13 +55,18 @@ def make_smc_env(spec: TrainingSpec, children: Sequence[SMC] = (), *, env: gym.E
                  env_kwargs: Mapping[str, Any] | None = None, record_cells: bool = False) -> HierarchicalSMCWrapper:
     """The environment SMC ``spec`` sees: its task inside :class:`HierarchicalSMCWrapper` with ``children``.
 
-    ``children`` must be the SMCs named by ``spec.children``, in that order. The task is
-    ``gym.make(env_id or spec.task.env_id, max_steps=wrapper.max_steps, **spec.task.env_kwargs, **env_kwargs)``,
-    with ``split=split or spec.task.split`` for a PixelWorld id (the id of any other task, an
-    :class:`~sb3_smc.tasks.SMCTask`, must take ``max_steps``), or ``env`` itself when given (a task without SMC
-    actions).
-    ``wrapper`` replaces ``spec.wrapper`` (e.g. another ``call_step_cap``); ``record_cells`` makes the wrapper
-    report the self's cells after every move (for trajectory pictures).
+    The task is ``gym.make(env_id or spec.task.env_id, max_steps=wrapper.max_steps, **spec.task.env_kwargs,
+    **env_kwargs)``, with ``split=split or spec.task.split`` for a PixelWorld id.
+
+    :param spec: the SMC's spec.
+    :param children: the SMCs named by ``spec.children``, in that order.
+    :param env: the task itself, instead of making it (a task without SMC actions).
+    :param env_id: another task than the spec's (the id of a non-PixelWorld task, an
+        :class:`~sb3_smc.tasks.SMCTask`, must take ``max_steps``).
+    :param split: another dataset split than the spec's (PixelWorld ids).
+    :param wrapper: replaces ``spec.wrapper`` (e.g. another ``call_step_cap``).
+    :param env_kwargs: extra keyword arguments for ``gym.make``.
+    :param record_cells: the wrapper reports the self's cells after every move (for trajectory pictures).
     """
     children = tuple(children)
     names = tuple(child.name for child in children)

@@ -40,11 +40,15 @@ __all__ = ["pushable_levels", "write_report"]
 
 def write_report(directories: str | Path | Sequence[str | Path], *, out: str | Path | None = None,
                  trajectories: str | None = None, behaviour: bool = True) -> list[Path]:
-    """Write ``report.md`` and ``figures/`` into each experiment directory, or (``out``) one report over all of them
-    into ``out``; returns the report paths.
+    """Write ``report.md`` and ``figures/`` for experiment directories (every directory is read and checked before
+    anything is written).
 
-    ``behaviour``: also draw the Fig. 4 trajectories of the best SMC of each method and the Fig. 1 timeline of the
-    best hierarchical SMC, on ``trajectories`` (a target; default: the first one).
+    :param directories: one experiment directory or several.
+    :param out: one report over all of them into this folder (default: a report in each directory).
+    :param trajectories: the target whose behaviour is drawn (default: the first one).
+    :param behaviour: also draw the Fig. 4 trajectories of the best SMC of each method and the Fig. 1 timeline of
+        the best hierarchical SMC (they need the directories' libraries).
+    :return: the report paths.
     """
     items = [Path(directories)] if isinstance(directories, str | Path) else [Path(d) for d in directories]
     if not items:
