@@ -48,6 +48,8 @@ def test_the_estimate_is_the_reported_best_and_the_interval_is_reproducible() ->
     assert again == mean  # the same records, the same interval
     other = Replicates(candidates, replicates=500, seed=1).mean(["a", "b", "c"], "curr")
     assert other != mean and other.estimate == mean.estimate
+    more = {**candidates, ("a", "another"): candidates[("a", "base")], ("d", "curr"): candidates[("a", "curr")]}
+    assert Replicates(more, replicates=500).mean(["a", "b", "c"], "curr") == mean  # others beside change nothing
     gap = replicates.gap(["a", "b", "c"], "curr", "base")
     assert gap.estimate == pytest.approx(mean.estimate - replicates.mean(["a", "b", "c"], "base").estimate)
     assert 0 < gap.low < gap.estimate < gap.high

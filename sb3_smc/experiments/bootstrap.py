@@ -14,6 +14,7 @@ with its test score in every draw of worlds.
 
 from __future__ import annotations
 
+import zlib
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
@@ -25,6 +26,11 @@ REPLICATES = 2000
 """Bootstrap replicates of a report."""
 LEVEL = 0.95
 """The confidence level of the intervals."""
+
+
+def _stream(seed: int, *names: str) -> np.random.Generator:
+    """A generator of its own for ``names`` (a target, or a target and a method) under ``seed``."""
+    return np.random.default_rng([seed, *(zlib.crc32(name.encode("utf-8")) for name in names)])
 
 
 @dataclass(frozen=True)
@@ -53,8 +59,9 @@ class Interval:
 class Replicates:
     """Bootstrap replicates of every (target, method)'s reported score.
 
-    ``candidates``: (target, method) -> its SMCs. ``replicates`` draws from a generator seeded with ``seed``, in the
-    sorted order of targets and methods, so the same records give the same intervals.
+    ``candidates``: (target, method) -> its SMCs. A target's draws of worlds come from a generator seeded with
+    ``seed`` and the target's name, and a method's draws of seeds from one seeded with ``seed`` and both names, so
+    the same records give the same intervals, whatever other targets and methods are reported beside them.
     """
 
     def __init__(self, candidates: Mapping[tuple[str, str], Sequence[Candidate]], *, replicates: int = REPLICATES,
@@ -64,16 +71,16 @@ class Replicates:
         self.replicates = replicates
         self.estimate = {key: max(c.score for c in found) for key, found in candidates.items() if found}
         """The reported scores themselves (each pair's best SMC)."""
-        rng = np.random.default_rng(seed)
         self.draws: dict[tuple[str, str], np.ndarray] = {}
         """(target, method) -> its reported score in each replicate."""
         for target in sorted({t for t, _ in self.estimate}):
             methods = sorted(m for t, m in self.estimate if t == target)
             lengths = [len(c.worlds) for m in methods for c in candidates[(target, m)] if c.worlds]
             worlds = max(set(lengths), key=lengths.count) if lengths else 0
-            picks = rng.integers(0, worlds, size=(replicates, worlds)) if worlds else None
+            picks = _stream(seed, target).integers(0, worlds, size=(replicates, worlds)) if worlds else None
             for method in methods:
-                self.draws[(target, method)] = self._best(candidates[(target, method)], picks, rng)
+                self.draws[(target, method)] = self._best(candidates[(target, method)], picks,
+                                                          _stream(seed, target, method))
 
     def _best(self, found: Sequence[Candidate], picks: np.ndarray | None, rng: np.random.Generator) -> np.ndarray:
         """Each replicate's best SMC of ``found``: every node's seeds drawn with replacement, scored on the drawn
