@@ -328,7 +328,7 @@ def _train(spec: TrainingSpec, children: tuple[SMC, ...], *, tensorboard_log: st
                     progress_bar=False)
     wall_time = time.perf_counter() - start
     stats.on_training_end()  # no-op when SB3 already called it; makes the totals final either way
-    return finished_smc(spec, children, model, stats, task, initial, wall_time)
+    return finished_smc(spec, children, model, stats, task, initial, wall_time, lean_update=lean_update)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -405,8 +405,9 @@ def training_callbacks(spec: TrainingSpec, task: TaskFacts, *, log_every: int | 
 
 
 def finished_smc(spec: TrainingSpec, children: tuple[SMC, ...], model: Any, stats: SMCTrainingCallback,
-                 task: TaskFacts, initial: Any, wall_time: float) -> SMC:
-    """The trained SMC: the selected snapshot loaded into ``model``, its step policy and its record."""
+                 task: TaskFacts, initial: Any, wall_time: float, *, lean_update: bool = False) -> SMC:
+    """The trained SMC: the selected snapshot loaded into ``model``, its step policy and its record (which says
+    whether the updates were the lean ones)."""
     best = stats.best
     if best.state is not None:
         model.policy.load_state_dict(best.state)
@@ -426,5 +427,6 @@ def finished_smc(spec: TrainingSpec, children: tuple[SMC, ...], model: Any, stat
         initial_action_probabilities=None if initial is None else tuple(float(p) for p in np.asarray(initial)),
         torch_threads=torch.get_num_threads(),
         versions=package_versions(),
+        lean_update=lean_update,
     )
     return SMC.from_spec(spec, policy, children, model=model, record=record)

@@ -73,11 +73,15 @@ def test_train_smc_lean_update_option() -> None:
     class's), and is refused where it does not apply."""
     smc = train_smc(CORNER_ID, total_timesteps=6_000, seed=2, log_every=0, lean_update=True)
     assert smc.record is not None and smc.record.total_timesteps == 6_000
+    assert smc.record.lean_update and smc.record.to_dict()["lean_update"] is True  # the record says so
+    assert type(smc.record).from_dict(smc.record.to_dict()).lean_update
     assert "train" not in vars(smc.model)
     again = train_smc(CORNER_ID, total_timesteps=6_000, seed=2, log_every=0, lean_update=True)
     assert again.record is not None and again.record.training_returns == smc.record.training_returns  # deterministic
     first, second = smc.model.policy.state_dict(), again.model.policy.state_dict()
     assert all(torch.equal(first[name], second[name]) for name in first)
+    default = train_smc(CORNER_ID, total_timesteps=2_000, seed=2, log_every=0)
+    assert default.record is not None and "lean_update" not in default.record.to_dict()  # records as before
     with pytest.raises(SMCError, match="lean_update"):
         train_smc(CORNER_ID, total_timesteps=2_000, rnn="gru", log_every=0, lean_update=True)
     with pytest.raises(SMCError, match="lean_update"):

@@ -11,6 +11,7 @@ from sb3_smc.layout import SIGNALS
 from sb3_smc.records.base import (
     Record,
     RecordError,
+    bool_field,
     float_field,
     int_field,
     mapping_field,
@@ -44,7 +45,9 @@ class TrainingRecord(Record):
 
     ``training_returns[k]`` is the mean undiscounted return of the episodes that ended in rollout ``k`` (NaN when
     none did; ``null`` in JSON), ``success_rates[k]`` the fraction of them with a final reward > 0. The selected
-    update is the earliest one with the highest return; its policy is the SMC's.
+    update is the earliest one with the highest return; its policy is the SMC's. ``lean_update``: the updates were
+    :func:`~sb3_smc.common.recurrent.lean_update.lean_train`'s (equal up to float rounding, not bit for bit); in
+    JSON only when true.
     """
 
     training_returns: tuple[float, ...]
@@ -58,6 +61,7 @@ class TrainingRecord(Record):
     initial_action_probabilities: tuple[float, ...] | None = None
     torch_threads: int = 1
     versions: dict[str, str] = field(default_factory=dict)
+    lean_update: bool = False
 
     def __post_init__(self) -> None:
         set_field(self, "training_returns", none_to_nan(self.training_returns, "training_returns"))
@@ -83,6 +87,7 @@ class TrainingRecord(Record):
                  none_to_nan(self.initial_action_probabilities, "initial_action_probabilities"))
         set_field(self, "torch_threads", int_field(self.torch_threads, "torch_threads", 1))
         set_field(self, "versions", {str(k): str(v) for k, v in mapping_field(self.versions, "versions").items()})
+        bool_field(self.lean_update, "lean_update")
 
     @property
     def updates(self) -> int:
@@ -98,6 +103,8 @@ class TrainingRecord(Record):
         out["success_rates"] = nan_to_none(self.success_rates)
         if self.initial_action_probabilities is not None:
             out["initial_action_probabilities"] = nan_to_none(self.initial_action_probabilities)
+        if not self.lean_update:  # records of the default update stay as they were
+            del out["lean_update"]
         return out
 
 
