@@ -27,14 +27,18 @@ import gzip
 import hashlib
 import io
 import json
-import os
 import shutil
 import sys
 import tempfile
 from pathlib import Path
 from typing import Any
 
-ROOT = Path(__file__).resolve().parents[1]
+TOOLS = Path(__file__).resolve().parent
+if str(TOOLS) not in sys.path:
+    sys.path.insert(0, str(TOOLS))
+
+from build_catalog import ROOT, default_reference  # noqa: E402  (the one place the reference's default is)
+
 FIXTURE = ROOT / "tests" / "data" / "reference"
 FORMAT = "pixelworld-reference-fixture"
 VERSION = 1
@@ -42,11 +46,6 @@ PER_LABEL = 4
 """Samples kept of each label of a dataset (bring-about datasets have one label)."""
 HEADER_KEYS = ("record", "dataset", "kind", "num_samples", "num_positive", "num_negative", "world", "definition")
 """What a fixture file's header keeps of the original's (the rest describes how the original was decoded)."""
-
-
-def default_reference() -> Path:
-    """``$PIXELWORLD_REFERENCE`` or ``../shared/reference`` beside the checkout."""
-    return Path(os.environ.get("PIXELWORLD_REFERENCE", ROOT.parent / "shared" / "reference"))
 
 
 def _gzip(text: str) -> bytes:
