@@ -994,6 +994,10 @@ def test_the_readme_gets_the_whole_tables_means_and_tests_from_the_report(tmp_pa
     readme_table.main(["--report", str(report), "--readme", str(readme)])
     assert ("report.md), **partial: `flat` and `more` are still being run**; the paper's methods have all their "
             "concepts; scores" in readme.read_text())
+    readme_table.main(["--report", str(report), "--readme", str(readme), "--brief"])  # the landing page's
+    brief = readme.read_text()
+    assert "**Means per kind and category (Fig. 5a/5d)**" in brief and "| bring-about | all | 17 | " in brief
+    assert "Paired t-tests" not in brief and "curr vs base" not in brief and "**[The paper's claims]" in brief
     readme.write_text("# no markers\n")
     with pytest.raises(SystemExit, match="needs exactly one <!-- paper-table:start -->"):
         readme_table.main(["--report", str(report), "--readme", str(readme)])

@@ -20,7 +20,8 @@
 #                                                (--no-train), keep it and make its partial report (nothing kept
 #                                                while it has no evaluated SMC)
 #   tools/paper_table.sh report                  one report over every kept directory: docs/results/paper/report.md,
-#                                                its means and t-tests copied into the README (tools/readme_table.py)
+#                                                its means (and, in the results' README, its t-tests) copied into
+#                                                both READMEs (tools/readme_table.py)
 # Environment: RUNS (default /work/runs), RUN_ENV (default /work/run-env: a venv with the worktree installed),
 # REUSE_FROM (optional: --reuse-from for the runs, e.g. "pretrained": lower-level SMCs copied, not trained again).
 set -eu
@@ -144,7 +145,7 @@ case ${1:-} in
       if [ -f "$repo/docs/results/paper/$cat/results.json" ]; then dirs+=("$repo/docs/results/paper/$cat"); fi
     done
     "$repo/.venv/bin/sb3-smc" report "${dirs[@]}" --out "$repo/docs/results/paper" --no-behaviour
-    "$repo/.venv/bin/python" "$repo/tools/readme_table.py"
+    "$repo/.venv/bin/python" "$repo/tools/readme_table.py" --brief
     "$repo/.venv/bin/python" "$repo/tools/readme_table.py" --readme "$repo/docs/results/paper/README.md" ;;
   *) echo "usage: $0 run [categories...] | continue | checkpoint | keep <category> [repo] | partial <category> | report" >&2
      exit 2 ;;

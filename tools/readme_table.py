@@ -5,11 +5,12 @@ report`` wrote), the rows over all concepts of a kind (means, the paper's, ours 
 counts the paper gives), and the report's count of its claims' verdicts, copied between the README's markers
 ``<!-- paper-table:start -->`` and ``<!-- paper-table:end -->``. The per-category rows stay in the report, and the
 numbers and counts where the report computes them; this only copies them. ``tools/paper_table.sh report``
-runs it on the project's README and on the results' own (``docs/results/paper/README.md``).
+runs it on the project's README with ``--brief`` (the claims count and the means only: the landing page stays short)
+and on the results' own (``docs/results/paper/README.md``: everything).
 
 Usage::
 
-    python tools/readme_table.py [--report docs/results/paper/report.md] [--readme README.md]
+    python tools/readme_table.py [--report docs/results/paper/report.md] [--readme README.md] [--brief]
 """
 
 from __future__ import annotations
@@ -125,15 +126,15 @@ def claims_line(report: str, source: str) -> str:
     return f"**[The paper's claims]({source}#the-papers-claims)**" + counted[0].removeprefix(CLAIMS_COUNT)
 
 
-def block(report: str, source: str) -> str:
+def block(report: str, source: str, sections: tuple[str, ...] = SECTIONS) -> str:
     """The README's block: a line on what it is (whole, or what is still being run), the count of the claims
-    reproduced, then the two sections' rows per kind, headed in bold."""
+    reproduced, then the rows per kind of ``sections`` (default: both), headed in bold."""
     lines = [START, "", f"From [the whole table's report]({source})" + partial_note(report)
              + "; scores in %, ours beside the paper's (Hay et al., AAAI-18).", ""]
     counted = claims_line(report, source)
     if counted:
         lines += [counted, ""]
-    for heading in SECTIONS:  # their tables only: the report explains them
+    for heading in sections:  # their tables only: the report explains them
         lines += [f"**{heading.removeprefix('## ')}**", ""]
         for table in tables_of(report, heading):
             lines += [*kind_rows(table), ""]
@@ -153,13 +154,17 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--report", type=Path, default=ROOT / "docs/results/paper/report.md")
     parser.add_argument("--readme", type=Path, default=ROOT / "README.md")
+    parser.add_argument("--brief", action="store_true",
+                        help="the means only, no t-tests (the landing page; the results' README has them all)")
     args = parser.parse_args(argv)
     for path, what in ((args.report, "the report (tools/paper_table.sh report makes it)"),
                        (args.readme, "the README to update")):
         if not path.is_file():
             raise SystemExit(f"{path} not found: {what}")
     source = Path(os.path.relpath(args.report.resolve(), args.readme.resolve().parent)).as_posix()
-    text = update(args.readme.read_text(encoding="utf-8"), block(args.report.read_text(encoding="utf-8"), source))
+    report = args.report.read_text(encoding="utf-8")
+    text = update(args.readme.read_text(encoding="utf-8"),
+                  block(report, source, SECTIONS[:1] if args.brief else SECTIONS))
     tmp = args.readme.with_suffix(".tmp")
     tmp.write_text(text, encoding="utf-8")
     tmp.replace(args.readme)
