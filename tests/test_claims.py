@@ -147,7 +147,7 @@ def test_the_sweep_scores_each_setting_against_the_paper_and_names_the_best_fit(
     100 on the sweep's targets; the setting whose numbers the paper's lie inside comes first; the report says so."""
     import json
 
-    from sb3_smc.experiments.design import SWEEP_METHODS, SWEEP_TARGETS
+    from sb3_smc.experiments.design import SWEEP_METHODS, SWEEP_TARGETS, plan
     from sb3_smc.experiments.report import write_report
     from sb3_smc.experiments.runner import reported
     from sb3_smc.experiments.sweep import sweep_fits
@@ -190,3 +190,14 @@ def test_the_sweep_scores_each_setting_against_the_paper_and_names_the_best_fit(
     section = report.read_text().split("## The readings of a call: the sweep")[1].split("\n## ")[0]
     assert f"Best fit: **{fits[0].method}** ({fits[0].reproduced} of {len(fits[0].numbers)} " in section
     assert "| **paper** | | | 84.9 | +10.4 | 74.5 | +21.8 | 87.5 |" in section
+    # a setting still training is shown, marked, and neither judged nor named the best fit
+    results = json.loads((tmp_path / "results.json").read_text())
+    unfinished = fits[0].method
+    node = plan([SWEEP_TARGETS[0]], [unfinished]).nodes[(SWEEP_TARGETS[0], unfinished)][0]
+    results.update(complete=False, missing=[f"{node}@4"])
+    (tmp_path / "results.json").write_text(json.dumps(results))
+    [report] = write_report(tmp_path, behaviour=False)
+    section = report.read_text().split("## The readings of a call: the sweep")[1].split("\n## ")[0]
+    row = next(line for line in section.splitlines() if line.startswith(f"| {unfinished} (partial) |"))
+    assert row.startswith(f"| {unfinished} (partial) | - | - | ") and ": reproduced" not in row
+    assert f"Best fit: **{fits[1].method}**" in section

@@ -26,7 +26,7 @@ from sb3_smc.experiments.claims import WON, verdict
 from sb3_smc.experiments.design import METHOD_REGISTRY, SWEEP_METHODS
 from sb3_smc.experiments.paper import PAPER_CONCEPTS, PAPER_MEANS
 
-__all__ = ["Fit", "Scored", "sweep_fits"]
+__all__ = ["Fit", "Scored", "sweep_fits", "sweep_reference"]
 
 Score = Callable[[str, str], np.ndarray]
 
@@ -60,7 +60,7 @@ class Fit:
         return float(np.mean([abs(n.ours.estimate - n.paper) for n in self.numbers]))
 
 
-def _reference(method: str) -> tuple[str, str]:
+def sweep_reference(method: str) -> tuple[str, str]:
     """The whole table's method of ``method``'s reading and the sweep's setting of 100 of that reading."""
     if METHOD_REGISTRY[method].count_primitive_steps:
         return "curr-moves", "curr-moves-100"
@@ -75,7 +75,7 @@ def sweep_fits(replicates: Replicates, kind_of: Mapping[str, str], methods: Sequ
 
 
 def _fit(replicates: Replicates, kind_of: Mapping[str, str], method: str) -> Fit:
-    whole, hundred = _reference(method)
+    whole, hundred = sweep_reference(method)
     numbers: list[Scored] = []
     for kind in ("classification", "bring-about"):
         everything = tuple(t for t in kind_of if kind_of[t] == kind)

@@ -49,7 +49,7 @@ from sb3_smc.experiments.statistics import (
     seed_summary,
     wins,
 )
-from sb3_smc.experiments.sweep import sweep_fits
+from sb3_smc.experiments.sweep import sweep_fits, sweep_reference
 
 __all__ = ["CHECKS_HEADING", "CLAIMS_COUNT", "CLAIMS_HEADING", "KINDS", "MEANS_HEADING", "ResultTable",
            "SWEEP_HEADING", "TESTS_HEADING", "number_sections"]
@@ -234,15 +234,24 @@ def _sweep_section(table: ResultTable) -> list[str]:
              "| setting | paper's numbers inside | mean distance (points) | " + " | ".join(columns) + " |",
              "|---|---:|---:|" + "---|" * len(columns),
              "| **paper** | | | " + " | ".join(paper[c] for c in columns) + " |"]
+    still = {m for _, m in table.unfinished}  # a setting (or its setting of 100) still training: shown, not judged
+    judged = []
     for fit in fits:
-        cells = {n.what: f"{points(n.ours, n.gap)}: {n.verdict}" for n in fit.numbers}
-        lines.append(f"| {fit.method} | {fit.reproduced} of {len(fit.numbers)} | {fit.distance:.1f} | "
+        partial = fit.method in still or sweep_reference(fit.method)[1] in still
+        cells = {n.what: f"{points(n.ours, n.gap)}" + (PARTIAL if partial else f": {n.verdict}")
+                 for n in fit.numbers}
+        lines.append(f"| {fit.method}{PARTIAL if partial else ''} | "
+                     + ("- | - | " if partial else f"{fit.reproduced} of {len(fit.numbers)} | {fit.distance:.1f} | ")
                      + " | ".join(cells.get(c, "-") for c in columns) + " |")
-    best = fits[0]
+        if not partial:
+            judged.append(fit)
+    if not judged:
+        return [*lines, "", "No setting has finished yet: no best fit.", ""]
+    best = judged[0]
     lines += ["", f"Best fit: **{best.method}** ({best.reproduced} of {len(best.numbers)} of the paper's numbers "
               f"inside its intervals, {best.distance:.1f} points from them on average)"
-              + (f"; next {fits[1].method} ({fits[1].reproduced} of {len(fits[1].numbers)}, {fits[1].distance:.1f} "
-                 "points)." if len(fits) > 1 else "."), ""]
+              + (f"; next {judged[1].method} ({judged[1].reproduced} of {len(judged[1].numbers)}, "
+                 f"{judged[1].distance:.1f} points)." if len(judged) > 1 else "."), ""]
     return lines
 
 
