@@ -1333,7 +1333,8 @@ def test_the_whole_tables_script_reports_the_queued_directories_it_has(tmp_path)
                    env={**os.environ, "RUNS": str(tmp_path / "runs")})
     assert (tmp_path / "calls").read_text().splitlines() == [
         f"sb3-smc report {paper}/objects {paper}/search --out {paper} --no-behaviour",
-        f"python {repo}/tools/readme_table.py", f"python {repo}/tools/readme_table.py --readme {paper}/README.md"]
+        f"python {repo}/tools/readme_table.py --brief",  # the landing page: the claims count and the means
+        f"python {repo}/tools/readme_table.py --readme {paper}/README.md"]
 
 
 def test_the_whole_tables_script_keeps_nothing_of_a_run_with_nothing_evaluated(tmp_path):
