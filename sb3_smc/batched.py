@@ -50,6 +50,7 @@ from stable_baselines3.common.vec_env.base_vec_env import VecEnvIndices, VecEnvO
 
 from pixelworld_env.envs.vector import PixelWorldVectorEnv
 from sb3_smc.common.recurrent import SequenceLstmPolicy
+from sb3_smc.common.recurrent.lean_update import lean_train
 from sb3_smc.errors import SMCError
 from sb3_smc.hyperparameters import constructor_arguments
 from sb3_smc.records import TrainingSpec
@@ -57,6 +58,7 @@ from sb3_smc.smc import SMC
 from sb3_smc.training import (
     TaskFacts,
     build_model,
+    check_lean_update,
     check_model_settings,
     finished_smc,
     native_vector_env,
@@ -191,11 +193,15 @@ class _Job:
     at the environment step (:meth:`act` before it, :meth:`observe` after it)."""
 
     def __init__(self, spec: TrainingSpec, task: TaskFacts, venv: VecEnv, *, tensorboard_log: str | None,
-                 log_every: int | None, printer: Callable[[str], None], stop_at_max_return: bool) -> None:
+                 log_every: int | None, printer: Callable[[str], None], stop_at_max_return: bool,
+                 lean_update: bool) -> None:
         self.spec, self.task = spec, task
         self.model, self.initial = build_model(spec, venv, task, tensorboard_log=tensorboard_log)
         if not isinstance(self.model, RecurrentPPO):
             raise SMCError(f"SMC {spec.name!r}: a group trains recurrent learners, got {spec.algo}")
+        if lean_update:
+            check_lean_update(spec, self.model)
+        self.lean_update = lean_update
         self.random = _RandomState()  # the streams as the model's seeding left them
         self.stats, self.callback = training_callbacks(spec, task, log_every=log_every, printer=printer,
                                                        stop_at_max_return=stop_at_max_return)
@@ -364,12 +370,16 @@ class _Job:
         model._update_current_progress_remaining(model.num_timesteps, self.total_timesteps)
         model.dump_logs(self.iteration)
         with self.random.all_streams():
-            model.train()
+            if self.lean_update:
+                lean_train(model)
+            else:
+                model.train()
 
     def finish(self) -> SMC:
         self.callback.on_training_end()
         self.stats.on_training_end()
-        return finished_smc(self.spec, (), self.model, self.stats, self.task, self.initial, self.seconds)
+        return finished_smc(self.spec, (), self.model, self.stats, self.task, self.initial, self.seconds,
+                            lean_update=self.lean_update)
 
 
 def _env_key(spec: TrainingSpec) -> tuple[Any, ...]:
@@ -379,14 +389,18 @@ def _env_key(spec: TrainingSpec) -> tuple[Any, ...]:
 
 
 def train_smcs(specs: Sequence[TrainingSpec], *, tensorboard_log: str | None = None, log_every: int | None = 0,
-               printer: Callable[[str], None] = print, stop_at_max_return: bool = True) -> list[SMC]:
+               printer: Callable[[str], None] = print, stop_at_max_return: bool = True,
+               lean_update: bool = False) -> list[SMC]:
     """Train the SMCs of ``specs`` together and return them in the same order, each the SMC
     :func:`~sb3_smc.training.train_smc` gives for its spec (same weights, records and selection).
 
     Batchable specs (:func:`batchable`) with the same task, environment settings and steps per rollout train as
     one group, their environments stepped in one call; every other spec is trained by ``train_smc`` alone.
-    ``tensorboard_log``, ``log_every``, ``printer`` and ``stop_at_max_return`` are ``train_smc``'s, for every SMC
-    (with ``tensorboard_log``, each SMC's curves in ``<tensorboard_log>/<name>_<n>/``)."""
+    ``tensorboard_log``, ``log_every``, ``printer``, ``stop_at_max_return`` and ``lean_update`` are
+    ``train_smc``'s, for every SMC (with ``tensorboard_log``, each SMC's curves in
+    ``<tensorboard_log>/<name>_<n>/``); with ``lean_update`` each SMC is the one ``train_smc(spec,
+    lean_update=True)`` gives, and a spec whose model the lean update does not fit is refused before its group
+    trains."""
     results: list[SMC | None] = [None] * len(specs)
     groups: dict[tuple[Any, ...], list[int]] = {}
     for i, spec in enumerate(specs):
@@ -404,17 +418,19 @@ def train_smcs(specs: Sequence[TrainingSpec], *, tensorboard_log: str | None = N
         vector = native_vector_env(chosen[0], num_envs=sum(sizes)) if batchable(chosen[0]) else None
         if vector is None:
             trained = [train_smc(spec, tensorboard_log=tensorboard_log, log_every=log_every, printer=printer,
-                                 stop_at_max_return=stop_at_max_return) for spec in chosen]
+                                 stop_at_max_return=stop_at_max_return, lean_update=lean_update) for spec in chosen]
         else:
             trained = _train_group(chosen, _EnvGroup(vector, sizes), tensorboard_log=tensorboard_log,
-                                   log_every=log_every, printer=printer, stop_at_max_return=stop_at_max_return)
+                                   log_every=log_every, printer=printer, stop_at_max_return=stop_at_max_return,
+                                   lean_update=lean_update)
         for i, smc in zip(members, trained, strict=True):
             results[i] = smc
     return [smc for smc in results if smc is not None]
 
 
 def _train_group(specs: Sequence[TrainingSpec], group: _EnvGroup, *, tensorboard_log: str | None,
-                 log_every: int | None, printer: Callable[[str], None], stop_at_max_return: bool) -> list[SMC]:
+                 log_every: int | None, printer: Callable[[str], None], stop_at_max_return: bool,
+                 lean_update: bool) -> list[SMC]:
     """Train SMCs on one task in one vector env (see the module's docstring)."""
     jobs = []
     for spec, part in zip(specs, group.slices, strict=True):
@@ -422,7 +438,7 @@ def _train_group(specs: Sequence[TrainingSpec], group: _EnvGroup, *, tensorboard
         venv = VecMonitor(part)
         venv.seed(spec.seed)
         jobs.append(_Job(spec, task, venv, tensorboard_log=tensorboard_log, log_every=log_every, printer=printer,
-                         stop_at_max_return=stop_at_max_return))
+                         stop_at_max_return=stop_at_max_return, lean_update=lean_update))
     group.reset()
     for job in jobs:
         job.start()

@@ -317,9 +317,8 @@ def _train(spec: TrainingSpec, children: tuple[SMC, ...], *, tensorboard_log: st
     venv = make_vec_env(spec, children)
     spec, task = task_of(spec, venv.unwrapped)  # the FlatSMCVecEnv or SMCVecEnv under the monitor
     model, initial = build_model(spec, venv, task, tensorboard_log=tensorboard_log)
-    if lean_update and not lean_update_applies(model):
-        raise SMCError(f"SMC {spec.name!r}: lean_update needs RecurrentPPO with the LSTM policy's default recurrence "
-                       "(one LSTM layer, no critic LSTM) and one minibatch per epoch")
+    if lean_update:
+        check_lean_update(spec, model)
     stats, callbacks = training_callbacks(spec, task, log_every=log_every, printer=printer,
                                           stop_at_max_return=stop_at_max_return, callback=callback)
     start = time.perf_counter()
@@ -329,6 +328,14 @@ def _train(spec: TrainingSpec, children: tuple[SMC, ...], *, tensorboard_log: st
     wall_time = time.perf_counter() - start
     stats.on_training_end()  # no-op when SB3 already called it; makes the totals final either way
     return finished_smc(spec, children, model, stats, task, initial, wall_time, lean_update=lean_update)
+
+
+def check_lean_update(spec: TrainingSpec, model: Any) -> None:
+    """``SMCError`` unless the lean update (:func:`~sb3_smc.common.recurrent.lean_update.lean_train`) computes
+    ``model``'s update."""
+    if not lean_update_applies(model):
+        raise SMCError(f"SMC {spec.name!r}: lean_update needs RecurrentPPO with the LSTM policy's default recurrence "
+                       "(one LSTM layer, no critic LSTM) and one minibatch per epoch")
 
 
 @dataclasses.dataclass(frozen=True)

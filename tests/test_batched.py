@@ -5,11 +5,13 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pytest
 import torch
 from sb3_contrib import RecurrentPPO
 
 import pixelworld_env  # noqa: F401  (registers the PW-* ids)
 from sb3_smc.batched import batchable, train_smcs
+from sb3_smc.errors import SMCError
 from sb3_smc.records import TrainingSpec
 from sb3_smc.smc import SMC
 from sb3_smc.training import train_smc
@@ -91,3 +93,21 @@ def test_batched_smcs_save_load_and_go_into_a_library(tmp_path: Path) -> None:
     assert set(library) == {"corner@0", "corner@1"}
     for smc in smcs:
         assert evaluate(smc, repeats=1).to_dict() == evaluate(library[smc.name], repeats=1).to_dict()
+
+
+def test_lean_update_in_a_group_is_train_smc_with_lean_update() -> None:
+    """With ``lean_update`` each SMC of a group is ``train_smc(spec, lean_update=True)``'s, bit for bit (the same
+    compiled update on the same rollouts), and differs from the stock update's; a spec the lean update does not fit
+    is refused, naming the SMC, before its group trains."""
+    specs = [TrainingSpec.create(CORNER_ID, total_timesteps=6_000, seed=s, name=f"corner@{s}") for s in (0, 1, 2)]
+    batched = train_smcs(specs, lean_update=True)
+    for spec, smc in zip(specs, batched, strict=True):
+        assert smc.record is not None and smc.record.lean_update
+        assert_same_smc(train_smc(spec, log_every=0, lean_update=True), smc)
+    stock = train_smcs(specs[:1])[0].model.policy.state_dict()
+    lean = batched[0].model.policy.state_dict()
+    assert not all(torch.equal(stock[name], lean[name]) for name in stock)
+    critic = TrainingSpec.create(CORNER_ID, total_timesteps=2_000, seed=0, name="with-critic",
+                                 policy_kwargs={"enable_critic_lstm": True})
+    with pytest.raises(SMCError, match="'with-critic': lean_update needs RecurrentPPO"):
+        train_smcs([specs[0], critic], lean_update=True)
