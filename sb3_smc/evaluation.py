@@ -134,7 +134,7 @@ class EvaluationResult:
     def record(self) -> EvaluationRecord:
         """The summary an SMC and its library keep (no episodes)."""
         return EvaluationRecord(smc=self.smc, env_id=self.env_id, split=self.split, kind=self.kind,
-                                repeats=self.repeats, seed=self.seed, score=self.score,
+                                repeats=self.repeats, evaluation_seed=self.seed, score=self.score,
                                 environment_scores=tuple(self.scores), mean_length=self.mean_length,
                                 call_counts=self.call_counts())
 

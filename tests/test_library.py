@@ -57,8 +57,9 @@ def _records(name: str, env_id: str, algo: str, seed: int, children: tuple[SMC, 
                             success_rates=(0.0, float("nan"), 0.5, 0.5),
                             selected_update=np.int64(3), selected_return=np.float32(0.25), total_timesteps=64,
                             primitive_steps=80, wall_time_s=1.5, versions=package_versions())
-    evaluation = EvaluationRecord(smc=name, env_id=env_id, split="test", kind=spec.task.kind, repeats=10, seed=0,
-                                  score=0.5, environment_scores=(0.5, 0.5), mean_length=3.5, call_counts={})
+    evaluation = EvaluationRecord(smc=name, env_id=env_id, split="test", kind=spec.task.kind, repeats=10,
+                                  evaluation_seed=0, score=0.5, environment_scores=(0.5, 0.5), mean_length=3.5,
+                                  call_counts={})
     return {"spec": spec, "record": record, "evaluations": (evaluation,)}
 
 
@@ -692,7 +693,8 @@ def test_version_1_libraries_load_through_the_conversion(tmp_path):
     top = library["cl_self-in-container_vs_noncontainer"]
     assert not top.include_primitives and top.spec.children == tuple(c.name for c in top.children)
     (evaluation,) = top.evaluations
-    assert (evaluation.split, evaluation.score, evaluation.repeats, evaluation.seed) == ("test", 0.25, None, None)
+    assert (evaluation.split, evaluation.score, evaluation.repeats, evaluation.evaluation_seed) == \
+        ("test", 0.25, None, None)
     # saved again, it is a library of the current version with the same records
     again = SMCLibrary.load(library.save(tmp_path / "v4"))
     assert json.loads((tmp_path / "v4" / "manifest.json").read_text())["version"] == FORMAT_VERSION

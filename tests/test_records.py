@@ -4,6 +4,7 @@ and the package boundary (pixelworld_env never imports sb3_smc)."""
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 import pickle
 import re
@@ -49,8 +50,9 @@ def _record() -> TrainingRecord:
 
 
 def _evaluation() -> EvaluationRecord:
-    return EvaluationRecord(smc="corner", env_id=CORNER_ID, split="test", kind="classification", repeats=10, seed=0,
-                            score=0.75, environment_scores=(0.5, 1.0), mean_length=3.0, call_counts={"a": 4})
+    return EvaluationRecord(smc="corner", env_id=CORNER_ID, split="test", kind="classification", repeats=10,
+                            evaluation_seed=0, score=0.75, environment_scores=(0.5, 1.0), mean_length=3.0,
+                            call_counts={"a": 4})
 
 
 RECORDS = {"spec": _spec, "record": _record, "evaluation": _evaluation, "task": lambda: TaskSpec(POOL_ID).resolved(),
@@ -181,6 +183,20 @@ def test_pixelworld_env_never_imports_sb3_smc():
     offenders = [str(path.relative_to(ROOT)) for path in (ROOT / "pixelworld_env").rglob("*.py")
                  if re.search(r"^\s*(import|from) sb3_smc", path.read_text(encoding="utf-8"), re.M)]
     assert offenders == []
+
+
+def test_an_evaluation_saved_with_the_old_seed_key_loads_and_is_written_with_the_new_one():
+    evaluation = _evaluation()
+    new = evaluation.to_dict()
+    assert "seed" not in new and new["evaluation_seed"] == 0
+    assert list(new)[:6] == ["smc", "env_id", "split", "kind", "repeats", "evaluation_seed"]  # in the old key's place
+    old = {("seed" if key == "evaluation_seed" else key): value for key, value in new.items()}  # as saved before
+    assert EvaluationRecord.from_dict(old) == evaluation and EvaluationRecord.from_json(json.dumps(old)) == evaluation
+    assert EvaluationRecord.from_dict({**old, "seed": None}).evaluation_seed is None  # a version-1 conversion's
+    with pytest.raises(RecordError, match="EvaluationRecord: both 'seed' \\(the old name\\) and 'evaluation_seed'"):
+        EvaluationRecord.from_dict({**new, "seed": 0})
+    with pytest.raises(RecordError, match="evaluation_seed must be an integer, got 'x'"):
+        EvaluationRecord.from_dict({**old, "seed": "x"})
 
 
 def test_every_nan_field_is_null_in_json():

@@ -109,7 +109,7 @@ def build_pretrained(runs: Sequence[str | Path], curricula: Sequence[str | Curri
         mine = {name for name in previous if node_of(name) == node}
         return mine == set(names) and all(
             previous[name].spec == entries[run][name].spec
-            and any((e.split, e.repeats, e.seed) == ("test", repeats, 0) for e in library[name].evaluations)
+            and any((e.split, e.repeats, e.evaluation_seed) == ("test", repeats, 0) for e in library[name].evaluations)
             for name in names)
 
     chosen = [(node, run, names) for node, run, names in chosen if not held_alike(node, run, names)]

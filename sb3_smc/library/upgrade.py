@@ -201,7 +201,7 @@ def upgrade_v1(manifest: dict[str, Any], where: Path) -> dict[str, Any]:
             if entry.get("test_score") is not None:
                 evaluations.append(EvaluationRecord(
                     smc=name, env_id=entry.get("env_id") or meta.get("env_id") or "unknown", split="test",
-                    kind=entry["kind"], repeats=None, seed=None, score=entry["test_score"]).to_dict())
+                    kind=entry["kind"], repeats=None, evaluation_seed=None, score=entry["test_score"]).to_dict())
         except (RecordError, KeyError, TypeError) as err:
             raise ManifestError(f"{where}: version-1 entry {name!r} cannot be converted ({type(err).__name__}: "
                                 f"{err})") from None

@@ -3,9 +3,9 @@ protocol)."""
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, ClassVar
 
 from sb3_smc.layout import SIGNALS
 from sb3_smc.records.base import (
@@ -113,8 +113,13 @@ class EvaluationRecord(Record):
     """One run of the paper's test of SMC ``smc`` on ``env_id``'s ``split`` (docs/design.md, "Selection and test").
 
     ``environment_scores[i]``: the success fraction over the repeats of environment ``i``; ``score``: the mean over
-    environments x repeats. ``repeats`` and ``seed`` are ``None`` only for a score converted from a version-1
-    library, which did not record them (its ``environment_scores`` are then empty).
+    environments x repeats. ``evaluation_seed`` is the seed of the test (:func:`~sb3_smc.evaluation.evaluate`'s
+    ``seed``, 0 in the paper's protocol), not the SMC's training seed (its spec's ``seed``). ``repeats`` and
+    ``evaluation_seed`` are ``None`` only for a score converted from a version-1 library, which did not record them
+    (its ``environment_scores`` are then empty).
+
+    Records saved before the field was renamed call it ``seed``; :meth:`from_dict` reads them (:data:`OLD_KEYS`), and
+    ``to_dict`` writes ``evaluation_seed``.
     """
 
     smc: str
@@ -122,7 +127,7 @@ class EvaluationRecord(Record):
     split: str
     kind: str
     repeats: int | None
-    seed: int | None
+    evaluation_seed: int | None
     score: float
     environment_scores: tuple[float, ...] = ()
     mean_length: float | None = None
@@ -135,8 +140,8 @@ class EvaluationRecord(Record):
         str_field(self.kind, "kind", tuple(SIGNALS))
         if self.repeats is not None:
             set_field(self, "repeats", int_field(self.repeats, "repeats", 1))
-        if self.seed is not None:
-            set_field(self, "seed", int_field(self.seed, "seed"))
+        if self.evaluation_seed is not None:
+            set_field(self, "evaluation_seed", int_field(self.evaluation_seed, "evaluation_seed"))
         set_field(self, "score", float_field(self.score, "score"))
         set_field(self, "environment_scores", none_to_nan(self.environment_scores, "environment_scores"))
         if self.mean_length is not None:
@@ -144,10 +149,24 @@ class EvaluationRecord(Record):
         counts = mapping_field(self.call_counts, "call_counts")
         set_field(self, "call_counts", {k: int_field(v, f"call_counts.{k}", 0) for k, v in counts.items()})
 
+    OLD_KEYS: ClassVar[dict[str, str]] = {"seed": "evaluation_seed"}
+    """Keys of records saved by earlier versions -> the fields they are now (``seed``: before issue 46)."""
+
     def to_dict(self) -> dict[str, Any]:
         out = super().to_dict()
         out["environment_scores"] = nan_to_none(self.environment_scores)
         return out
+
+    @classmethod
+    def from_dict(cls, data: Any, where: str | None = None) -> EvaluationRecord:
+        """The record of ``data``, one saved with an old key (:data:`OLD_KEYS`) included; a dict with both an old
+        key and its new one is refused."""
+        if isinstance(data, Mapping) and any(old in data for old in cls.OLD_KEYS):
+            for old, new in cls.OLD_KEYS.items():
+                if old in data and new in data:
+                    raise RecordError(f"{where or cls.__name__}: both {old!r} (the old name) and {new!r} are given")
+            data = {cls.OLD_KEYS.get(key, key): value for key, value in data.items()}
+        return super().from_dict(data, where)
 
     @property
     def key(self) -> tuple[str, str]:
