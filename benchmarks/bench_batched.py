@@ -7,13 +7,15 @@ steps per SMC, the whole budget (no early stop), the defaults otherwise (16 envi
 * stock: sb3-contrib ``RecurrentPPO`` with ``MlpLstmPolicy`` and its own rollout buffer, the same hyperparameters
   and environment (``train_smc``'s vector env); ``learn`` timed;
 * ``train_smc``: ``learn`` timed (the record's ``wall_time_s``) and the whole call (model set-up included);
-* ``train_smcs`` with K = 1 and K = 5 seeds: the whole call (vector env and models built inside).
+* ``train_smcs`` with K = 1 and K = 5 seeds: the whole call (vector env and models built inside);
+* with ``--lean``, also ``train_smc`` and ``train_smcs`` with ``lean_update=True`` (compared with ``train_smc``'s
+  lean SMC of the same seed).
 
 Reported: environment steps per second over all SMCs of a case (per core: one process, one thread), the ratio to
 stock, the peak resident memory of the process, and whether each batched SMC equals ``train_smc``'s of its seed
 (training returns; the tests compare the weights).
 
-Run: ``python benchmarks/bench_batched.py [--timesteps N] [--repeats R] [--k K ...]``.
+Run: ``python benchmarks/bench_batched.py [--timesteps N] [--repeats R] [--k K ...] [--lean]``.
 """
 
 from __future__ import annotations
@@ -35,6 +37,7 @@ from sb3_smc.records import TrainingSpec
 from sb3_smc.training import train_smc
 from sb3_smc.batched import train_smcs
 case, env_id, steps, k = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4])
+lean = case.endswith("-lean")
 specs = [TrainingSpec.create(env_id, total_timesteps=steps, seed=s) for s in range(k)]
 returns = []
 if case == "stock":
@@ -49,15 +52,15 @@ if case == "stock":
     start = time.perf_counter()
     model.learn(steps)
     seconds, total = time.perf_counter() - start, model.num_timesteps
-elif case == "train_smc":
+elif case.startswith("train_smc") and not case.startswith("train_smcs"):
     start = time.perf_counter()
-    smc = train_smc(specs[0], log_every=0, stop_at_max_return=False)
+    smc = train_smc(specs[0], log_every=0, stop_at_max_return=False, lean_update=lean)
     seconds, total = time.perf_counter() - start, smc.record.total_timesteps
     returns = [smc.record.training_returns]
     print(json.dumps({"learn": smc.record.wall_time_s}), flush=True)
 else:
     start = time.perf_counter()
-    smcs = train_smcs(specs, stop_at_max_return=False)
+    smcs = train_smcs(specs, stop_at_max_return=False, lean_update=lean)
     seconds, total = time.perf_counter() - start, sum(s.record.total_timesteps for s in smcs)
     returns = [s.record.training_returns for s in smcs]
 peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
@@ -81,15 +84,20 @@ def main() -> None:
     parser.add_argument("--timesteps", type=int, default=64_000, help="steps per SMC")
     parser.add_argument("--repeats", type=int, default=1, help="runs per case, alternating (the best is kept)")
     parser.add_argument("--k", type=int, nargs="+", default=[1, 5], help="group sizes of train_smcs")
+    parser.add_argument("--lean", action="store_true", help="also the cases with lean_update=True")
     args = parser.parse_args()
     cases = [("stock", 1), ("train_smc", 1), *(("train_smcs", k) for k in args.k)]
+    if args.lean:
+        cases += [("train_smc-lean", 1), *(("train_smcs-lean", k) for k in args.k)]
     best: dict[tuple[str, int], dict] = {}
     for _ in range(args.repeats):
         for case, k in cases:
             result = run(case, args.timesteps, k)
             if (case, k) not in best or result["seconds"] < best[case, k]["seconds"]:
                 best[case, k] = result
-    alone = best["train_smc", 1]["returns"][0]
+    alone = {"": best["train_smc", 1]["returns"][0]}
+    if args.lean:
+        alone["-lean"] = best["train_smc-lean", 1]["returns"][0]
     stock = best["stock", 1]["steps"] / best["stock", 1]["seconds"]
     print(f"{args.timesteps:,} steps per SMC, {ENV_ID}, one torch thread, best of {args.repeats}\n")
     print("| case | SMCs | seconds | steps/s (per core) | x stock | peak memory (MiB) | same as train_smc |")
@@ -97,14 +105,17 @@ def main() -> None:
     for case, k in cases:
         row = best[case, k]
         rate = row["steps"] / row["seconds"]
+        base, lean = case.removesuffix("-lean"), "-lean" if case.endswith("-lean") else ""
         label = {"stock": "stock sb3-contrib RecurrentPPO (`learn`)", "train_smc": "`train_smc` (whole call)",
-                 "train_smcs": f"`train_smcs`, K = {k} (whole call)"}[case]
-        same = "" if case == "stock" else ("yes" if row["returns"][0] == alone else "NO")
+                 "train_smcs": f"`train_smcs`, K = {k} (whole call)"}[base]
+        label += ", `lean_update=True`" if lean else ""
+        same = "" if case == "stock" else ("yes" if row["returns"][0] == alone[lean] else "NO")
         print(f"| {label} | {k} | {row['seconds']:.2f} | {rate:,.0f} | {rate / stock:.2f} | {row['peak_mib']:.0f} | "
               f"{same} |")
-        if case == "train_smc":
+        if base == "train_smc":
             learn = best[case, k]["learn"]
-            print(f"| `train_smc` (`learn` only) | 1 | {learn:.2f} | {row['steps'] / learn:,.0f} | "
+            print(f"| `train_smc` (`learn` only){', lean' if lean else ''} | 1 | {learn:.2f} | "
+                  f"{row['steps'] / learn:,.0f} | "
                   f"{row['steps'] / learn / stock:.2f} | | |")
 
 

@@ -12,7 +12,7 @@ import torch
 from sb3_contrib import RecurrentPPO
 
 import pixelworld_env  # noqa: F401  (registers the PW-* ids)
-from sb3_smc.common.recurrent.lean_update import lean_train, lean_update_applies, use_lean_update
+from sb3_smc.common.recurrent.lean_update import _plain_heads, lean_train, lean_update_applies, use_lean_update
 from sb3_smc.errors import SMCError
 from sb3_smc.training import train_smc
 from tests.helpers import import_benchmark
@@ -37,19 +37,26 @@ def _update(model: RecurrentPPO, train: Any, state: dict, optimizer_state: dict
     return grads, dict(model.logger.name_to_value), np.random.get_state()
 
 
-@pytest.mark.parametrize("settings", [{}, {"clip_range_vf": 0.1, "target_kl": 0.0001, "ent_coef": 0.01}])
-def test_lean_update_is_the_stock_update_up_to_rounding(settings: dict[str, Any]) -> None:
+@pytest.mark.parametrize(("settings", "policy_kwargs"), [
+    ({}, {}), ({"clip_range_vf": 0.1, "target_kl": 0.0001, "ent_coef": 0.01}, {}),
+    ({"ent_coef": 0.01}, {"net_arch": {"pi": [16], "vf": [8]}})], ids=["default", "clipped", "torch-heads"])
+def test_lean_update_is_the_stock_update_up_to_rounding(settings: dict[str, Any], policy_kwargs: dict[str, Any]
+                                                        ) -> None:
     """On a real rollout (collected by the weights updated, after 4 updates), every epoch's gradients and every
-    logged value of ``lean_train`` equal ``model.train()``'s to 1e-5 relative, with the same random draws; the second
-    case clips the value loss, has an entropy term and stops early on the KL (after its third step)."""
-    smc = train_smc(CORNER_ID, total_timesteps=8_000, seed=1, log_every=0, stop_at_max_return=False)
+    logged value of ``lean_train`` equal ``model.train()``'s to 1e-5 relative, with the same random draws. The
+    default heads take the update written out in numpy; the second case clips the value loss, has an entropy term
+    and stops early on the KL (after its third step); the third has layers after the LSTM (torch's heads)."""
+    smc = train_smc(CORNER_ID, total_timesteps=8_000, seed=1, log_every=0, stop_at_max_return=False,
+                    policy_kwargs=policy_kwargs or None)
     model = smc.model
     assert lean_update_applies(model)
+    assert _plain_heads(model.policy) == (not policy_kwargs)  # which path computes the heads
     _, callback = model._setup_learn(model.n_steps * model.n_envs, None, reset_num_timesteps=False)
     model.collect_rollouts(model.env, callback, model.rollout_buffer, model.n_steps)  # a rollout of these weights
-    if settings:
+    if "clip_range_vf" in settings:
         model.clip_range_vf = lambda _: settings["clip_range_vf"]
-        model.target_kl, model.ent_coef = settings["target_kl"], settings["ent_coef"]
+        model.target_kl = settings["target_kl"]
+    model.ent_coef = settings.get("ent_coef", model.ent_coef)
     state = copy.deepcopy(model.policy.state_dict())
     optimizer_state = copy.deepcopy(model.policy.optimizer.state_dict())
     assert not model.rollout_buffer.generator_ready  # the lean update reads the buffer before and after stock's get
@@ -58,7 +65,7 @@ def test_lean_update_is_the_stock_update_up_to_rounding(settings: dict[str, Any]
     lean_grads, lean_logs, lean_random = _update(model, lambda: lean_train(model), state, optimizer_state)
     assert first_lean[1] == lean_logs  # the same update from either layout of the buffer
     assert all(torch.equal(a, b) for a, b in zip(first_lean[0][-1], lean_grads[-1], strict=True))
-    assert len(stock_grads) == len(lean_grads) == (3 if settings else model.n_epochs)
+    assert len(stock_grads) == len(lean_grads) == (3 if "target_kl" in settings else model.n_epochs)
     for stock, lean in zip(stock_grads, lean_grads, strict=True):
         for a, b in zip(stock, lean, strict=True):
             assert float((a - b).norm()) <= 1e-5 * float(a.norm()) + 1e-9

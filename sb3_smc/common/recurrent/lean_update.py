@@ -11,7 +11,10 @@ forward and backward, runs over every sequence in one compiled (numba) loop in f
 per-step torch calls; the weight gradient of the recurrence is one matrix product over all rows. Sums are taken in
 another order and in float64, so the losses and gradients equal the stock ones to float rounding (tested to 1e-5
 relative on real rollouts); training on them is shown statistically equal, not bit-identical (``docs/training.md``,
-"The lean update").
+"The lean update"). With the package's default heads (:func:`_plain_heads`: no layers after the LSTM, a linear
+critic on the features, a categorical distribution, Adam) the whole epoch is written out in numpy, forward and
+backward (:func:`_numpy_epoch`), with no autograd graph; other heads run in torch around the compiled recurrence
+(:func:`_torch_epoch`).
 
 It applies to the default architecture's recurrence: one ``nn.LSTM`` layer for the actor, no critic LSTM, one
 minibatch per epoch (``batch_size`` at least the rollout, the default); :func:`lean_update_applies` says whether a
@@ -20,9 +23,9 @@ model qualifies. :func:`use_lean_update` swaps a model's ``train`` for it (``tra
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from typing import Any, cast
+from typing import Any, NamedTuple, cast
 
 import numpy as np
 import torch
@@ -30,7 +33,8 @@ from gymnasium import spaces
 from numba import njit
 from sb3_contrib import RecurrentPPO
 from sb3_contrib.common.recurrent.buffers import RecurrentRolloutBuffer
-from stable_baselines3.common.torch_layers import FlattenExtractor
+from stable_baselines3.common.distributions import CategoricalDistribution
+from stable_baselines3.common.torch_layers import FlattenExtractor, MlpExtractor
 from stable_baselines3.common.type_aliases import Schedule
 from stable_baselines3.common.utils import explained_variance
 from torch import nn
@@ -214,6 +218,164 @@ def _flat(buffer: RecurrentRolloutBuffer, name: str) -> np.ndarray:
     return array.swapaxes(0, 1).reshape(buffer.buffer_size * buffer.n_envs, *array.shape[2:])
 
 
+def _plain_heads(policy: SequenceLstmPolicy) -> bool:
+    """Whether the policy's heads are the package's default ones, which :func:`_numpy_epoch` computes: no layers
+    after the LSTM (``net_arch=[]``), a linear critic on the features, a categorical distribution, Adam."""
+    extractor = policy.mlp_extractor
+    return (type(extractor) is MlpExtractor and len(extractor.policy_net) == 0 and len(extractor.value_net) == 0
+            and type(policy.critic) is nn.Linear and isinstance(policy.action_dist, CategoricalDistribution)
+            and type(policy.optimizer) is torch.optim.Adam)
+
+
+class _Rollout:
+    """What every epoch of an update reads from the rollout buffer, laid out once (rows in ``buffer.get``'s order)."""
+
+    def __init__(self, model: RecurrentPPO, buffer: RecurrentRolloutBuffer) -> None:
+        rows = self.rows = buffer.buffer_size * buffer.n_envs
+        self.episode_starts = _flat(buffer, "episode_starts").reshape(rows)
+        env_first = np.zeros((buffer.n_envs, buffer.buffer_size), dtype=bool)
+        env_first[:, 0] = True
+        self.cut = np.logical_or(self.episode_starts != 0.0, env_first.reshape(rows))
+        self.h0, self.c0 = _flat(buffer, "hidden_states_pi")[:, 0], _flat(buffer, "cell_states_pi")[:, 0]
+        self.x = _flat(buffer, "observations").reshape(rows, -1).astype(np.float32)
+        self.actions = _flat(buffer, "actions")
+        self.old_values, self.old_log_prob, advantages, self.returns = (
+            _flat(buffer, name).reshape(rows).astype(np.float64)
+            for name in ("values", "log_probs", "advantages", "returns"))
+        if model.normalize_advantage:  # sb3-contrib normalizes over the minibatch: here the whole rollout
+            advantages = (advantages - advantages.mean()) / (advantages.std(ddof=1) + 1e-8)
+        self.advantages = advantages
+
+    def sequences(self) -> _Sequences:
+        """An epoch's sequences: the rollout's cut plus the rotation ``RecurrentRolloutBuffer.get`` draws."""
+        epoch_cut = self.cut.copy()
+        epoch_cut[np.random.randint(self.rows)] = True
+        return _Sequences(epoch_cut, self.h0, self.c0, self.episode_starts)
+
+
+class _Losses(NamedTuple):
+    """One epoch's logged values, and how to set the (clipped) gradients of its loss."""
+
+    policy: float
+    clip_fraction: float
+    value: float
+    entropy: float
+    total: float
+    approx_kl: float
+    set_gradients: Callable[[], None]
+
+
+def _numpy_epoch(model: RecurrentPPO, policy: SequenceLstmPolicy, data: _Rollout, clip_range: float,
+                 clip_range_vf: float | None) -> _Losses:
+    """An epoch of PPO on the default heads (:func:`_plain_heads`) in float64 numpy, forward and backward written
+    out: the LSTM by the compiled kernels, the action and value heads, the clipped surrogate, the value loss (clipped
+    if ``clip_range_vf``), the entropy term; the gradients (torch's at ``min`` ties and ``clamp`` bounds) clipped to
+    ``max_grad_norm`` as ``clip_grad_norm_`` does."""
+    w = {name: p.detach().numpy().astype(np.float64) for name, p in policy.named_parameters()}
+    seqs, n_rows = data.sequences(), data.rows
+    n = w["lstm_actor.weight_hh_l0"].shape[1]
+    out_h, tanh_c, cells, gates = (np.empty((n_rows, n)), np.empty((n_rows, n)), np.empty((n_rows, n)),
+                                   np.empty((n_rows, 4 * n)))
+    w_hh_t = np.ascontiguousarray(w["lstm_actor.weight_hh_l0"].T)
+    _forward(data.x, np.ascontiguousarray(w["lstm_actor.weight_ih_l0"].T), w_hh_t,
+             w["lstm_actor.bias_ih_l0"] + w["lstm_actor.bias_hh_l0"], seqs.starts, seqs.lengths, seqs.h0, seqs.c0,
+             out_h, gates, tanh_c, cells)
+    logits = out_h @ w["action_net.weight"].T + w["action_net.bias"]
+    logits -= logits.max(axis=1, keepdims=True)
+    log_p = logits - np.log(np.exp(logits).sum(axis=1, keepdims=True))
+    p = np.exp(log_p)
+    rows, actions = np.arange(n_rows), data.actions.reshape(n_rows).astype(np.int64)
+    log_prob = log_p[rows, actions]
+    entropy = -(p * log_p).sum(axis=1)
+    latent_vf = (data.x @ policy.critic.weight.detach().numpy().T).astype(np.float64) + w["critic.bias"]
+    values = latent_vf @ w["value_net.weight"][0] + w["value_net.bias"][0]
+
+    log_ratio = log_prob - data.old_log_prob
+    ratio = np.exp(log_ratio)
+    adv = data.advantages
+    inside = (ratio >= 1 - clip_range) & (ratio <= 1 + clip_range)
+    surrogate, clipped = adv * ratio, adv * np.clip(ratio, 1 - clip_range, 1 + clip_range)
+    policy_loss = -float(np.minimum(surrogate, clipped).mean())
+    values_pred, value_inside = values, np.ones(n_rows, dtype=bool)
+    if clip_range_vf is not None:
+        change = values - data.old_values
+        values_pred = data.old_values + np.clip(change, -clip_range_vf, clip_range_vf)
+        value_inside = (change >= -clip_range_vf) & (change <= clip_range_vf)
+    value_loss = float(((data.returns - values_pred) ** 2).mean())
+    entropy_loss = -float(entropy.mean())
+
+    def set_gradients() -> None:
+        first = np.where(surrogate < clipped, 1.0, np.where(surrogate == clipped, 0.5, 0.0))  # torch.min's split
+        grad_log_prob = -adv * ratio * (first + (1.0 - first) * inside) / n_rows
+        grad_logits = -grad_log_prob[:, None] * p
+        grad_logits[rows, actions] += grad_log_prob
+        grad_logits += (model.ent_coef / n_rows) * p * (log_p + entropy[:, None])
+        grad_values = model.vf_coef * -2.0 / n_rows * (data.returns - values_pred) * value_inside
+        grad_latent_vf = grad_values[:, None] * w["value_net.weight"]
+        grad_h = grad_logits @ w["action_net.weight"]
+        grad_z, grad_w_ih_t = np.empty_like(gates), np.zeros((data.x.shape[1], 4 * n))
+        _backward(grad_h, data.x, w_hh_t, seqs.starts, seqs.lengths, seqs.c0, gates, tanh_c, cells, grad_z,
+                  grad_w_ih_t)
+        h_prev = np.empty(out_h.shape, dtype=np.float32)  # each row's input state: the row before's output, or
+        h_prev[1:] = out_h[:-1]                             # its sequence's h0
+        h_prev[seqs.starts] = seqs.h0
+        grad_bias = grad_z.sum(axis=0)
+        grads = {"action_net.weight": grad_logits.T @ out_h, "action_net.bias": grad_logits.sum(axis=0),
+                 "value_net.weight": (grad_values @ latent_vf)[None], "value_net.bias": grad_values.sum(keepdims=True),
+                 "lstm_actor.weight_ih_l0": grad_w_ih_t.T,
+                 "lstm_actor.weight_hh_l0": grad_z.T.astype(np.float32) @ h_prev,
+                 "lstm_actor.bias_ih_l0": grad_bias, "lstm_actor.bias_hh_l0": grad_bias,
+                 "critic.weight": grad_latent_vf.T.astype(np.float32) @ data.x,
+                 "critic.bias": grad_latent_vf.sum(axis=0)}
+        norm = float(np.sqrt(sum(float(np.sum(g * g)) for g in grads.values())))
+        scale = min(1.0, model.max_grad_norm / (norm + 1e-6))
+        for name, param in policy.named_parameters():
+            param.grad = torch.from_numpy((grads[name] * scale).astype(np.float32)) if name in grads else None
+
+    return _Losses(policy_loss, float(np.mean(np.abs(ratio - 1) > clip_range)), value_loss, entropy_loss,
+                   policy_loss + model.ent_coef * entropy_loss + model.vf_coef * value_loss,
+                   float(np.mean((ratio - 1) - log_ratio)), set_gradients)
+
+
+def _torch_epoch(model: RecurrentPPO, policy: SequenceLstmPolicy, data: _Rollout, clip_range: float,
+                 clip_range_vf: float | None) -> _Losses:
+    """An epoch of PPO with the policy's own heads in torch (any ``net_arch``, distribution and optimizer), the
+    LSTM by the compiled kernels (:class:`_Recurrence`)."""
+    lstm, critic = policy.lstm_actor, cast(nn.Module, policy.critic)
+    obs = torch.from_numpy(data.x)
+    actions = torch.as_tensor(data.actions)
+    actions = actions.long().flatten() if isinstance(model.action_space, spaces.Discrete) else actions.float()
+    old_values, old_log_prob, advantages, returns = (
+        torch.as_tensor(a, dtype=torch.float32)
+        for a in (data.old_values, data.old_log_prob, data.advantages, data.returns))
+    features = policy.extract_features(obs)
+    hidden = _Recurrence.apply(data.x, data.sequences(), lstm.weight_ih_l0, lstm.weight_hh_l0, lstm.bias_ih_l0,
+                               lstm.bias_hh_l0)
+    latent_pi = policy.mlp_extractor.forward_actor(hidden)
+    latent_vf = policy.mlp_extractor.forward_critic(critic(features))
+    values = policy.value_net(latent_vf).flatten()
+    distribution = policy._get_action_dist_from_latent(latent_pi)
+    log_prob, entropy = distribution.log_prob(actions), distribution.entropy()
+    ratio = torch.exp(log_prob - old_log_prob)
+    policy_loss = -torch.mean(torch.min(advantages * ratio,
+                                        advantages * torch.clamp(ratio, 1 - clip_range, 1 + clip_range)))
+    values_pred = values if clip_range_vf is None else old_values + torch.clamp(
+        values - old_values, -clip_range_vf, clip_range_vf)
+    value_loss = torch.mean((returns - values_pred) ** 2)
+    entropy_loss = -torch.mean(-log_prob) if entropy is None else -torch.mean(entropy)
+    loss = policy_loss + model.ent_coef * entropy_loss + model.vf_coef * value_loss
+    with torch.no_grad():
+        log_ratio = log_prob - old_log_prob
+        approx_kl = float(torch.mean((torch.exp(log_ratio) - 1) - log_ratio))
+
+    def set_gradients() -> None:
+        loss.backward()
+        torch.nn.utils.clip_grad_norm_(policy.parameters(), model.max_grad_norm)
+
+    return _Losses(policy_loss.item(), torch.mean((torch.abs(ratio - 1) > clip_range).float()).item(),
+                   value_loss.item(), entropy_loss.item(), loss.item(), approx_kl, set_gradients)
+
+
 def lean_train(model: RecurrentPPO) -> None:
     """``model.train()`` (sb3-contrib's ``RecurrentPPO.train``) with the compiled recurrence: the same update up to
     float rounding, the same draws from numpy's global generator, the same logged values. ``ValueError`` where
@@ -223,91 +385,34 @@ def lean_train(model: RecurrentPPO) -> None:
                          "layer, no critic LSTM) and one minibatch per epoch")
     # the types lean_update_applies checked
     policy, buffer = cast(SequenceLstmPolicy, model.policy), cast(RecurrentRolloutBuffer, model.rollout_buffer)
-    lstm, critic = policy.lstm_actor, cast(nn.Module, policy.critic)
     schedule, schedule_vf = cast(Schedule, model.clip_range), cast("Schedule | None", model.clip_range_vf)
     assert buffer.full, "Rollout buffer must be full before sampling from it"
     policy.set_training_mode(True)
     model._update_learning_rate(policy.optimizer)
     clip_range = schedule(model._current_progress_remaining)
     clip_range_vf = schedule_vf(model._current_progress_remaining) if schedule_vf is not None else None
-
-    rows = buffer.buffer_size * buffer.n_envs
-    episode_starts = _flat(buffer, "episode_starts").reshape(rows)
-    env_first = np.zeros((buffer.n_envs, buffer.buffer_size), dtype=bool)
-    env_first[:, 0] = True
-    cut = np.logical_or(episode_starts != 0.0, env_first.reshape(rows))
-    h0, c0 = _flat(buffer, "hidden_states_pi")[:, 0], _flat(buffer, "cell_states_pi")[:, 0]
-    x = _flat(buffer, "observations").reshape(rows, -1).astype(np.float32)
-    obs = torch.from_numpy(x)
-    actions = torch.as_tensor(_flat(buffer, "actions"))
-    actions = actions.long().flatten() if isinstance(model.action_space, spaces.Discrete) else actions.float()
-    old_values, old_log_prob, advantages_raw, returns = (
-        torch.as_tensor(_flat(buffer, name).reshape(rows), dtype=torch.float32)
-        for name in ("values", "log_probs", "advantages", "returns"))
-
-    entropy_losses: list[float] = []
-    pg_losses, value_losses = [], []
-    clip_fractions = []
-    approx_kl_divs: list[Any] = []
-    continue_training = True
-    loss = torch.zeros(())
-    for epoch in range(model.n_epochs):
-        approx_kl_divs = []
-        split = np.random.randint(rows)  # the rotation RecurrentRolloutBuffer.get draws: a sequence is cut there
-        epoch_cut = cut.copy()
-        epoch_cut[split] = True
-        seqs = _Sequences(epoch_cut, h0, c0, episode_starts)
-
-        features = policy.extract_features(obs)
-        hidden = _Recurrence.apply(x, seqs, lstm.weight_ih_l0, lstm.weight_hh_l0, lstm.bias_ih_l0, lstm.bias_hh_l0)
-        latent_pi = policy.mlp_extractor.forward_actor(hidden)
-        latent_vf = policy.mlp_extractor.forward_critic(critic(features))
-        values = policy.value_net(latent_vf).flatten()
-        distribution = policy._get_action_dist_from_latent(latent_pi)
-        log_prob, entropy = distribution.log_prob(actions), distribution.entropy()
-
-        advantages = advantages_raw
-        if model.normalize_advantage:
-            advantages = (advantages - advantages.mean()) / (advantages.std() + 1e-8)
-        ratio = torch.exp(log_prob - old_log_prob)
-        policy_loss_1 = advantages * ratio
-        policy_loss_2 = advantages * torch.clamp(ratio, 1 - clip_range, 1 + clip_range)
-        policy_loss = -torch.mean(torch.min(policy_loss_1, policy_loss_2))
-        pg_losses.append(policy_loss.item())
-        clip_fractions.append(torch.mean((torch.abs(ratio - 1) > clip_range).float()).item())
-        values_pred = values if clip_range_vf is None else old_values + torch.clamp(
-            values - old_values, -clip_range_vf, clip_range_vf)
-        value_loss = torch.mean((returns - values_pred) ** 2)
-        value_losses.append(value_loss.item())
-        entropy_loss = -torch.mean(-log_prob) if entropy is None else -torch.mean(entropy)
-        entropy_losses.append(entropy_loss.item())
-        loss = policy_loss + model.ent_coef * entropy_loss + model.vf_coef * value_loss
-
-        with torch.no_grad():
-            log_ratio = log_prob - old_log_prob
-            approx_kl_div = torch.mean((torch.exp(log_ratio) - 1) - log_ratio).cpu().numpy()
-            approx_kl_divs.append(approx_kl_div)
-        if model.target_kl is not None and approx_kl_div > 1.5 * model.target_kl:
-            continue_training = False
-            if model.verbose >= 1:
-                print(f"Early stopping at step {epoch} due to reaching max kl: {approx_kl_div:.2f}")
-        else:
-            policy.optimizer.zero_grad()
-            loss.backward()
-            torch.nn.utils.clip_grad_norm_(policy.parameters(), model.max_grad_norm)
-            policy.optimizer.step()
+    data = _Rollout(model, buffer)
+    epoch = _numpy_epoch if _plain_heads(policy) else _torch_epoch
+    losses: list[_Losses] = []
+    for _ in range(model.n_epochs):
+        losses.append(epoch(model, policy, data, clip_range, clip_range_vf))
         model._n_updates += 1
-        if not continue_training:
+        if model.target_kl is not None and losses[-1].approx_kl > 1.5 * model.target_kl:
+            if model.verbose >= 1:
+                print(f"Early stopping at step {len(losses) - 1} due to reaching max kl: {losses[-1].approx_kl:.2f}")
             break
+        policy.optimizer.zero_grad()
+        losses[-1].set_gradients()
+        policy.optimizer.step()
 
     explained_var = explained_variance(_flat(buffer, "values").flatten(), _flat(buffer, "returns").flatten())
     logger = model.logger
-    logger.record("train/entropy_loss", np.mean(entropy_losses))
-    logger.record("train/policy_gradient_loss", np.mean(pg_losses))
-    logger.record("train/value_loss", np.mean(value_losses))
-    logger.record("train/approx_kl", np.mean(approx_kl_divs))
-    logger.record("train/clip_fraction", np.mean(clip_fractions))
-    logger.record("train/loss", loss.item())
+    logger.record("train/entropy_loss", np.mean([e.entropy for e in losses]))
+    logger.record("train/policy_gradient_loss", np.mean([e.policy for e in losses]))
+    logger.record("train/value_loss", np.mean([e.value for e in losses]))
+    logger.record("train/approx_kl", losses[-1].approx_kl)
+    logger.record("train/clip_fraction", np.mean([e.clip_fraction for e in losses]))
+    logger.record("train/loss", losses[-1].total)
     logger.record("train/explained_variance", explained_var)
     logger.record("train/n_updates", model._n_updates, exclude="tensorboard")
     logger.record("train/clip_range", clip_range)
