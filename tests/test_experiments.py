@@ -25,7 +25,7 @@ from sb3_smc.errors import SMCError
 from sb3_smc.experiments import CATEGORIES, level2_targets, plan
 from sb3_smc.experiments.claims import tally
 from sb3_smc.experiments.cnn import CHANNELS, encode, train_cnn
-from sb3_smc.experiments.design import PAPER_CATEGORIES, SWEEP_METHODS, SWEEP_TARGETS
+from sb3_smc.experiments.design import EXPERIENCE_METHODS, PAPER_CATEGORIES, SWEEP_METHODS, SWEEP_TARGETS
 from sb3_smc.experiments.report import write_report
 from sb3_smc.experiments.runner import RESULT_FIELDS, reported, run_experiment
 from sb3_smc.experiments.statistics import paired_ttest
@@ -556,6 +556,23 @@ def test_the_fair_methods_change_only_their_episode_length_or_call_cap():
                 assert own.pop("name") == f"{method}/{other.pop('name')}"
                 assert own.pop("wrapper") == {**other.pop("wrapper"), **wrapper}
                 assert own == other
+
+
+def test_the_equal_experience_methods_are_base_with_its_budget_scaled():
+    """``base-x4`` / ``base-x16``: base's flat SMC named ``<method>/<target>``, its budget 4 / 16 times the run's, all
+    else base's job."""
+    from sb3_smc.curricula.jobs import node_spec
+
+    design = plan([LEFT_OF, IN_CONTAINER], ["base", *EXPERIENCE_METHODS])
+    assert EXPERIENCE_METHODS == ("base-x4", "base-x16")
+    for method, factor in zip(EXPERIENCE_METHODS, (4, 16), strict=True):
+        for target in (LEFT_OF, IN_CONTAINER):
+            (name,) = design.nodes[(target, method)]
+            assert name == f"{method}/{target}" and design.nodes[(target, "base")] == (target,)
+            own, base = (node_spec(design.curriculum.node(n), 2, (), timesteps=2000).to_dict() for n in (name, target))
+            assert own.pop("name") == f"{method}/{base.pop('name')}"
+            assert own["budget"].pop("total_timesteps") == factor * base["budget"].pop("total_timesteps") == factor * 2000
+            assert own == base
 
 
 def test_the_sweep_targets_cover_both_kinds_and_every_category():

@@ -113,10 +113,11 @@ def test_each_method_trains_what_its_entry_says() -> None:
         elif method.flat:
             for target in (LEFT_OF, IN_CONTAINER):
                 (node,) = design.nodes[(target, name)]
-                assert node == (f"{name}/{target}" if method.own_learner or method.max_steps else target)
+                own = method.own_learner or method.max_steps or method.budget_factor != 1
+                assert node == (f"{name}/{target}" if own else target)
                 entry = design.curriculum.node(node)
                 assert (entry.task, entry.algo, entry.uses) == (target, method.algo, ())
-                assert entry.max_steps == (method.max_steps or 100)
+                assert (entry.max_steps, entry.budget_scale) == (method.max_steps or 100, method.budget_factor)
                 policy = entry.hyperparameters.get("policy")
                 assert policy == (recurrent_policy(method.rnn, method.algo) if method.rnn else None)
         else:  # the shipped entries' target nodes, or (settings of its own) copies of them, changed

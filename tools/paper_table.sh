@@ -8,7 +8,9 @@
 #                                                the 17 bring-about, the 34 classification targets;
 #                                                base-400: the flat SMC with 400 moves an episode, all 51;
 #                                                readings: the sweep of each reading's free parameter, SWEEP_METHODS
-#                                                on SWEEP_TARGETS of sb3_smc.experiments.design)
+#                                                on SWEEP_TARGETS of sb3_smc.experiments.design;
+#                                                experience: the flat SMC with 4 and 16 x the budget,
+#                                                EXPERIENCE_METHODS on SWEEP_TARGETS)
 #   tools/paper_table.sh continue                the queue (docs/results/paper/queue.txt), on this machine or a new one:
 #                                                waits for a running `run`, then for each category whose records are not
 #                                                complete sets up its commit's worktree and venv (once), restores its run
@@ -30,11 +32,13 @@ repo=$(cd "$(dirname "$0")/.." && pwd)
 
 selection() {  # the experiment options of a category (base-gru, canon-scaled, base-400: that method on all 51
   # targets; curr-moves: on the 17 bring-about targets; curr-moves-cl: on the 34 classification targets; readings:
-  # the sweep's methods on its 12 targets)
+  # the sweep's methods on its 12 targets; experience: base-x4 and base-x16 on the sweep's targets)
   case $1 in
     base-gru|canon-scaled|base-400) echo "--methods $1 --category all" ;;
     readings) "$RUN_ENV/bin/python" -I -c 'from sb3_smc.experiments.design import SWEEP_METHODS, SWEEP_TARGETS
 print("--methods", ",".join(SWEEP_METHODS), "--targets", ",".join(SWEEP_TARGETS))' ;;
+    experience) "$RUN_ENV/bin/python" -I -c 'from sb3_smc.experiments.design import EXPERIENCE_METHODS, SWEEP_TARGETS
+print("--methods", ",".join(EXPERIENCE_METHODS), "--targets", ",".join(SWEEP_TARGETS))' ;;
     curr-moves|curr-moves-cl) echo "--methods curr-moves --targets $("$RUN_ENV/bin/python" -I -c 'import sys
 from pixelworld_env.datasets import catalog
 from sb3_smc.experiments import level2_targets

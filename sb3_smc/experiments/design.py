@@ -11,7 +11,8 @@ comparisons (docs/experiments.md, "Equal budgets and the readings of a call"): `
 moves an episode (as many as curr makes, median, on every target probed); the sweep of the one free parameter of each
 reading of a call, ``curr-cap10`` / ``-cap25`` / ``-cap50`` / ``-cap100`` (a call one step, cut after 10 / 25 / 50
 / 100 moves; ``-cap100`` is curr's setting, trained again in the sweep's run) and ``curr-moves-100`` / ``-200`` /
-``-400`` (calls cost their moves, 100 / 200 / 400 moves an episode; ``-100`` is curr-moves' setting). Every SMC
+``-400`` (calls cost their moves, 100 / 200 / 400 moves an episode; ``-100`` is curr-moves' setting); ``base-x4`` and
+``base-x16``, the flat SMC with 4 and 16 times the budget (equal experience, :data:`EXPERIENCE_METHODS`). Every SMC
 method's jobs are nodes of curricula (shipped ones, or a flat method's); :func:`plan` merges them so that a
 lower-level node shared by several methods is trained once.
 """
@@ -28,9 +29,9 @@ from sb3_smc.curricula.jobs import DEFAULT_REUSE, REUSE
 from sb3_smc.errors import SMCError
 from sb3_smc.hyperparameters import recurrent_policy
 
-__all__ = ["CATEGORIES", "DEFAULT_METHODS", "DEFAULT_REPEATS", "METHODS", "METHOD_REGISTRY", "PAPER_CATEGORIES",
-           "SMC_METHODS", "SWEEP_METHODS", "SWEEP_TARGETS", "ExperimentMethod", "ExperimentPlan", "level2_targets",
-           "plan"]
+__all__ = ["CATEGORIES", "DEFAULT_METHODS", "DEFAULT_REPEATS", "EXPERIENCE_METHODS", "METHODS", "METHOD_REGISTRY",
+           "PAPER_CATEGORIES", "SMC_METHODS", "SWEEP_METHODS", "SWEEP_TARGETS", "ExperimentMethod", "ExperimentPlan",
+           "level2_targets", "plan"]
 
 
 @dataclass(frozen=True)
@@ -68,6 +69,9 @@ class ExperimentMethod:
     """Its target nodes' episode length (decisions; moves where calls cost their moves); ``None``: the paper's 100."""
     call_step_cap: int | None = None
     """The moves a call of its target nodes may make before it is cut off; ``None``: the default 100."""
+    budget_factor: float = 1.0
+    """A flat method's factor on the run's budget (``base-x4``: 4, so that flat SMCs get as much experience as a
+    curriculum's; see :data:`EXPERIENCE_METHODS`)."""
 
     @property
     def flat(self) -> bool:
@@ -140,11 +144,11 @@ class ExperimentMethod:
         flat method of its own learner or episode length."""
         if not self.flat:
             raise SMCError(f"method {self.name!r} trains no flat SMCs")
-        if not self.own_learner and not self._changes_episodes:
+        if not self.own_learner and not self._changes_episodes and self.budget_factor == 1:
             return Node(target, target)
         hyperparameters = {"policy": recurrent_policy(self.rnn, self.algo)} if self.rnn is not None else {}
         return self._with_episodes(Node(f"{self.name}/{target}", target, algo=self.algo,
-                                        hyperparameters=hyperparameters))
+                                        hyperparameters=hyperparameters, budget_scale=self.budget_factor))
 
 
 METHOD_REGISTRY: dict[str, ExperimentMethod] = {method.name: method for method in (
@@ -168,6 +172,9 @@ METHOD_REGISTRY: dict[str, ExperimentMethod] = {method.name: method for method i
     *(ExperimentMethod(f"curr-moves-{steps}", f"curr-moves-{steps} (curr, calls cost their moves, {steps} an episode)",
                        colour, curricula="smc-curr", paper="curr", count_primitive_steps=True, max_steps=steps)
       for steps, colour in ((100, "#d2a07a"), (200, "#c47a4a"), (400, "#6b3310"))),
+    *(ExperimentMethod(f"base-x{factor}", f"base-x{factor} (flat SMC, {factor} x the budget)", colour, paper="base",
+                       budget_factor=factor)
+      for factor, colour in ((4, "#7f9fd0"), (16, "#2b4f8c"))),
 )}
 """Every method by name, in the order of the report's columns."""
 METHODS = tuple(METHOD_REGISTRY)
@@ -197,6 +204,10 @@ SWEEP_TARGETS = (
 )
 """The sweep's fixed targets, chosen before its run: both kinds and every category, the two headline targets and the
 two where the original flat SMCs scored 100 and curr-moves 5.6 and 3.2."""
+EXPERIENCE_METHODS = ("base-x4", "base-x16")
+"""The flat SMC with 4 and 16 times the budget, on :data:`SWEEP_TARGETS`: beside ``base`` (1 x) a curve of the flat
+SMC's score against the primitive moves it trained on, to set curr's score against at curr's own experience (its
+target SMCs' moves and those of every lower-level SMC it was built on; about 10-25 x base's)."""
 CATEGORIES = ("containment", "objcon", "objects", "search", "pushable")
 PAPER_CATEGORIES = CATEGORIES[:4]
 """The categories of the released benchmark (``all``); ``pushable`` is the curriculum sb3-smc designed."""
