@@ -54,6 +54,7 @@ from sb3_smc.common.recurrent.lean_update import lean_train
 from sb3_smc.errors import SMCError
 from sb3_smc.hyperparameters import constructor_arguments
 from sb3_smc.records import TrainingSpec
+from sb3_smc.resolved_task import resolve_task
 from sb3_smc.smc import SMC
 from sb3_smc.training import (
     TaskFacts,
@@ -61,7 +62,7 @@ from sb3_smc.training import (
     check_lean_update,
     check_model_settings,
     finished_smc,
-    native_vector_env,
+    resolved_spec,
     task_of,
     train_smc,
     training_callbacks,
@@ -383,9 +384,11 @@ class _Job:
 
 
 def _env_key(spec: TrainingSpec) -> tuple[Any, ...]:
-    """What the environments of SMCs trained in one vector env must share."""
-    return (spec.task.env_id, spec.task.split, repr(sorted(spec.task.env_kwargs.items())), spec.wrapper.max_steps,
-            spec.budget.env_steps)
+    """What the SMCs trained in one vector env must share: their task (resolved once for all of them) and its
+    environments' settings."""
+    task = spec.task
+    return (task.env_id, task.split, task.kind, task.datasets, task.layout, repr(sorted(task.env_kwargs.items())),
+            spec.wrapper.max_steps, spec.budget.env_steps)
 
 
 def train_smcs(specs: Sequence[TrainingSpec], *, tensorboard_log: str | None = None, log_every: int | None = 0,
@@ -411,15 +414,18 @@ def train_smcs(specs: Sequence[TrainingSpec], *, tensorboard_log: str | None = N
         groups.setdefault(_env_key(spec) if batchable(spec) else (i,), []).append(i)
     for members in groups.values():
         chosen = [specs[i] for i in members]
+        task = resolve_task(chosen[0].task, smc=chosen[0].name) if batchable(chosen[0]) else None
+        if task is not None:  # the group's task, resolved once: its specs completed with it
+            chosen = [resolved_spec(spec, task) for spec in chosen]
         for spec in chosen:
             if spec.task.kind is not None:
                 check_model_settings(spec)  # a typo in a hyperparameter: a message before any environment is built
         sizes = [spec.budget.n_envs for spec in chosen]
-        vector = native_vector_env(chosen[0], num_envs=sum(sizes)) if batchable(chosen[0]) else None
-        if vector is None:
+        if task is None or not task.native_vector:
             trained = [train_smc(spec, tensorboard_log=tensorboard_log, log_every=log_every, printer=printer,
                                  stop_at_max_return=stop_at_max_return, lean_update=lean_update) for spec in chosen]
         else:
+            vector = task.make_vector_env(sum(sizes), chosen[0].wrapper.max_steps)
             trained = _train_group(chosen, _EnvGroup(vector, sizes), tensorboard_log=tensorboard_log,
                                    log_every=log_every, printer=printer, stop_at_max_return=stop_at_max_return,
                                    lean_update=lean_update)
@@ -434,7 +440,7 @@ def _train_group(specs: Sequence[TrainingSpec], group: _EnvGroup, *, tensorboard
     """Train SMCs on one task in one vector env (see the module's docstring)."""
     jobs = []
     for spec, part in zip(specs, group.slices, strict=True):
-        spec, task = task_of(spec, group.env)
+        task = task_of(spec, group.env)
         venv = VecMonitor(part)
         venv.seed(spec.seed)
         jobs.append(_Job(spec, task, venv, tensorboard_log=tensorboard_log, log_every=log_every, printer=printer,

@@ -2,24 +2,23 @@
 
 Training (:func:`sb3_smc.train_smc`), evaluation (:func:`sb3_smc.evaluate`), the library
 (:meth:`sb3_smc.SMCLibrary.env_for`) and the rl_zoo3 wrapper entry (:func:`sb3_smc.zoo.smc_env`) all build the
-SMC's environment here, so the observation layout, action list and wrapper settings cannot drift apart.
+SMC's environment here, so the observation layout, action list and wrapper settings cannot drift apart. The task
+under the wrapper is built by the spec's task resolved (:class:`~sb3_smc.resolved_task.ResolvedTask`, which also
+owns :func:`is_pixelworld_id` and :func:`check_env_kwargs`, kept importable from here).
 """
 
 from __future__ import annotations
 
 import dataclasses
-import difflib
-import inspect
 from collections.abc import Mapping, Sequence
 from typing import Any
 
 import gymnasium as gym
-from gymnasium.envs.registration import load_env_creator
 
 from pixelworld_env.envs.env import PixelWorldEnv  # pixelworld_env registers the PW-* ids on import
-from pixelworld_env.envs.registration import make_env
 from sb3_smc.errors import SMCError, SMCTypeError
 from sb3_smc.records import TaskSpec, TrainingSpec, WrapperSettings
+from sb3_smc.resolved_task import ResolvedTask, check_env_kwargs, is_pixelworld_id, resolve_task
 from sb3_smc.smc import SMC
 from sb3_smc.tasks import TaskEnv, task_layer
 from sb3_smc.wrapper import HierarchicalSMCWrapper
@@ -52,11 +51,13 @@ def pixelworld_base(env: gym.Env) -> PixelWorldEnv:
 
 def make_smc_env(spec: TrainingSpec, children: Sequence[SMC] = (), *, env: gym.Env | None = None,
                  env_id: str | None = None, split: str | None = None, wrapper: WrapperSettings | None = None,
-                 env_kwargs: Mapping[str, Any] | None = None, record_cells: bool = False) -> HierarchicalSMCWrapper:
+                 env_kwargs: Mapping[str, Any] | None = None, record_cells: bool = False,
+                 task: ResolvedTask | None = None) -> HierarchicalSMCWrapper:
     """The environment SMC ``spec`` sees: its task inside :class:`HierarchicalSMCWrapper` with ``children``.
 
     The task is ``gym.make(env_id or spec.task.env_id, max_steps=wrapper.max_steps, **spec.task.env_kwargs,
-    **env_kwargs)``, with ``split=split or spec.task.split`` for a PixelWorld id.
+    **env_kwargs)``, with ``split=split or spec.task.split`` for a PixelWorld id, built by the task resolved
+    (:meth:`ResolvedTask.make_env <sb3_smc.resolved_task.ResolvedTask.make_env>`).
 
     :param spec: the SMC's spec.
     :param children: the SMCs named by ``spec.children``, in that order.
@@ -67,6 +68,9 @@ def make_smc_env(spec: TrainingSpec, children: Sequence[SMC] = (), *, env: gym.E
     :param wrapper: replaces ``spec.wrapper`` (e.g. another ``call_step_cap``).
     :param env_kwargs: extra keyword arguments for ``gym.make``.
     :param record_cells: the wrapper reports the self's cells after every move (for trajectory pictures).
+    :param task: ``spec.task`` resolved (:func:`~sb3_smc.resolved_task.resolve_task`), as training passes it to
+        build its environments on one look-up of the id; resolved here when not given or when ``env_id`` names
+        another task.
     """
     children = tuple(children)
     names = tuple(child.name for child in children)
@@ -75,102 +79,16 @@ def make_smc_env(spec: TrainingSpec, children: Sequence[SMC] = (), *, env: gym.E
                        f"{list(names)}")
     settings = wrapper or spec.wrapper
     if env is None:
-        env_id = env_id or spec.task.env_id
-        kwargs = {"disable_env_checker": True, **check_env_kwargs(env_id, {**spec.task.env_kwargs,
-                                                                           **_mapping(env_kwargs)})}
-        if is_pixelworld_id(env_id):
-            kwargs["split"] = split or spec.task.split
-        env = _make(env_id, spec.name, max_steps=settings.max_steps, **kwargs)
-    elif env_id is not None or split is not None or env_kwargs:
-        raise SMCError("make_smc_env: give either env, or env_id / split / env_kwargs to build one, not both")
+        if task is None or env_id not in (None, task.env_id):
+            named = spec.task if env_id in (None, spec.task.env_id) else TaskSpec(
+                env_id, split=spec.task.split, env_kwargs=spec.task.env_kwargs)
+            task = resolve_task(named, smc=spec.name)
+        env = task.make_env(settings.max_steps, smc=spec.name, split=split, env_kwargs=env_kwargs)
+    elif env_id is not None or split is not None or env_kwargs or task is not None:
+        raise SMCError("make_smc_env: give either env, or env_id / split / env_kwargs / task to build one, not both")
     else:
         task_base(env)
     return wrap_with_smcs(env, children, settings, record_cells=record_cells)
-
-
-def _make(env_id: str, name: str, **kwargs: Any) -> gym.Env:
-    """``gym.make(env_id, **kwargs)``; an id Gymnasium does not know is an :class:`SMCError` naming the SMC, with
-    Gymnasium's suggestion, and the ``PW-<name>-v0`` id when ``env_id`` names a PixelWorld dataset or concept pool;
-    an entry point that takes no ``max_steps`` an :class:`SMCTypeError` saying that it must."""
-    try:
-        return gym.make(env_id, **kwargs)
-    except TypeError:
-        if _takes_max_steps(env_id):  # the error is its environment's own
-            raise
-        raise SMCTypeError(f"SMC {name!r}: sb3_smc makes its task with gym.make({env_id!r}, max_steps=...) (the "
-                           f"episode length, WrapperSettings.max_steps), and the entry point of {env_id!r} takes no "
-                           "max_steps: register an entry point that takes it and passes it on, e.g. "
-                           "entry_point=lambda max_steps=100: SMCTask(..., max_steps=max_steps)") from None
-    except gym.error.Error as err:
-        if _registered(env_id):  # the error is its environment's own
-            raise
-        from pixelworld_env.datasets import catalog
-
-        named = env_id in catalog.dataset_names() or env_id in catalog.concept_pools()
-        hint = f"; PixelWorld's {env_id!r} is the id 'PW-{env_id}-v0'" if named else ""
-        raise SMCError(f"SMC {name!r}: unknown environment id {env_id!r}: {err}{hint}") from None
-
-
-def _takes_max_steps(env_id: str) -> bool:
-    """Whether the entry point registered as ``env_id`` takes a ``max_steps`` keyword (``True`` where its signature
-    cannot be read)."""
-    entry = gym.spec(env_id.rsplit(":", 1)[-1]).entry_point
-    creator = load_env_creator(entry) if isinstance(entry, str) else entry
-    if not callable(creator):
-        return True
-    try:
-        parameters = inspect.signature(creator).parameters
-    except (TypeError, ValueError):
-        return True
-    taken = parameters.get("max_steps")
-    return (taken is not None and taken.kind is not inspect.Parameter.POSITIONAL_ONLY) or any(
-        p.kind is inspect.Parameter.VAR_KEYWORD for p in parameters.values())
-
-
-def _registered(env_id: str) -> bool:
-    """Whether Gymnasium knows ``env_id`` (after ``gym.make`` imported the module of a ``"module:Id-v0"`` id)."""
-    try:
-        gym.spec(env_id.rsplit(":", 1)[-1])
-    except gym.error.Error:
-        return False
-    return True
-
-
-def _mapping(env_kwargs: Any) -> dict[str, Any]:
-    if env_kwargs is None:
-        return {}
-    if not isinstance(env_kwargs, Mapping) or not all(isinstance(key, str) for key in env_kwargs):
-        raise SMCTypeError(f"env_kwargs must be a mapping of argument names to values, got {env_kwargs!r}")
-    return dict(env_kwargs)
-
-
-def is_pixelworld_id(env_id: str) -> bool:
-    """Whether ``env_id`` is registered with PixelWorld's entry point (a ``PW-*`` id or one made like them)."""
-    try:
-        entry = gym.spec(env_id).entry_point
-    except gym.error.Error:
-        return False
-    return entry == f"{make_env.__module__}:{make_env.__name__}"
-
-
-def check_env_kwargs(env_id: str, kwargs: dict[str, Any]) -> dict[str, Any]:
-    """``kwargs`` for ``gym.make(env_id, split=..., max_steps=..., **kwargs)``: :class:`SMCError` for ``split`` or
-    ``max_steps`` (set by the spec or make_smc_env's arguments) and, for a PixelWorld id, for a name its
-    environment does not take (the values are checked by the environment)."""
-    clash = sorted({"split", "max_steps"} & set(kwargs))
-    if clash:
-        raise SMCError(f"env_kwargs {clash}: the split is make_smc_env's split= (else the spec's task.split), "
-                       "max_steps the wrapper settings' (wrapper=WrapperSettings(max_steps=...)); give them there")
-    if not is_pixelworld_id(env_id):
-        return kwargs  # not registered (gym.make says so), or a user's own environment: its arguments are not known
-    names = {*inspect.signature(gym.make).parameters, *inspect.signature(make_env).parameters}
-    taken = sorted(names - {"id", "datasets", "kwargs", "split", "max_steps"})
-    for key in kwargs:
-        if key not in taken:
-            close = difflib.get_close_matches(key, taken, n=1)
-            raise SMCError(f"env_kwargs: {env_id} takes no argument {key!r} (it takes {taken})"
-                           + (f"; did you mean {close[0]!r}?" if close else ""))
-    return kwargs
 
 
 def wrap_with_smcs(env: gym.Env, smcs: Sequence[SMC], settings: WrapperSettings, *,

@@ -41,7 +41,6 @@ from sb3_contrib import RecurrentPPO
 from stable_baselines3.common.logger import Logger
 from stable_baselines3.common.vec_env import VecEnv
 
-from pixelworld_env.envs.vector import PixelWorldVectorEnv
 from sb3_smc.bias import apply_signal_bias
 from sb3_smc.callbacks import SMCTrainingCallback
 from sb3_smc.common.discounting import SemiMDPDiscount
@@ -50,7 +49,7 @@ from sb3_smc.common.discounting import SemiMDPDiscount
 # reference); importing it here keeps them loadable.
 from sb3_smc.common.recurrent import SequenceLstmPolicy, use_compact_buffer  # noqa: F401
 from sb3_smc.common.recurrent.lean_update import lean_update_applies, use_lean_update
-from sb3_smc.envs import check_env_kwargs, is_pixelworld_id, make_smc_env
+from sb3_smc.envs import make_smc_env
 from sb3_smc.errors import SMCError, SMCKeyError, SMCTypeError
 from sb3_smc.hyperparameters import (
     ALGORITHM_REGISTRY,
@@ -61,7 +60,8 @@ from sb3_smc.hyperparameters import (
 )
 from sb3_smc.layout import PIXELWORLD_LAYOUT, Layout
 from sb3_smc.policies import FrameStackPolicy, policy_from_model
-from sb3_smc.records import TrainingRecord, TrainingSpec, package_versions
+from sb3_smc.records import TaskSpec, TrainingRecord, TrainingSpec, package_versions
+from sb3_smc.resolved_task import ResolvedTask, resolve_task
 from sb3_smc.smc import SMC, StepPolicy
 from sb3_smc.tasks import MAX_RETURN
 from sb3_smc.vec_env import FlatSMCVecEnv, SMCVecEnv
@@ -139,25 +139,35 @@ def _returning(env: gym.Env) -> Callable[[], gym.Env]:
     return lambda: env
 
 
-def make_vec_env(spec: TrainingSpec, children: Sequence[SMC] = (), *, native: bool | None = None) -> VecEnv:
+def make_vec_env(spec: TrainingSpec, children: Sequence[SMC] = (), *, native: bool | None = None,
+                 task: ResolvedTask | None = None) -> VecEnv:
     """``n_envs`` copies of the SMC's environment in a seeded, monitored SB3 ``VecEnv`` (``VecFrameStack`` on top
     when ``spec.frame_stack > 1``).
 
-    A flat SMC (no children) on an id with PixelWorld's native vector env trains in :class:`FlatSMCVecEnv` over it
-    (one compiled call steps every environment); any other SMC in :class:`~sb3_smc.vec_env.SMCVecEnv` over
+    A flat SMC (no children) on a task PixelWorld's native vector env hosts
+    (:attr:`~sb3_smc.resolved_task.ResolvedTask.native_vector`) trains in :class:`FlatSMCVecEnv` over it (one
+    compiled call steps every environment); any other SMC in :class:`~sb3_smc.vec_env.SMCVecEnv` over
     :func:`~sb3_smc.envs.make_smc_env` (SMC calls in lockstep). Both give the same transitions with the same seeds
-    (tested). ``native``: ``None`` chooses as above, ``False`` forces ``SMCVecEnv``, ``True`` refuses an SMC the
-    native env cannot host."""
+    (tested).
+
+    :param spec: the SMC's spec.
+    :param children: the SMCs named by ``spec.children``, in that order.
+    :param native: ``None`` chooses as above, ``False`` forces ``SMCVecEnv``, ``True`` refuses an SMC the native env
+        cannot host.
+    :param task: ``spec.task`` resolved (:func:`~sb3_smc.resolved_task.resolve_task`; resolved here when not given).
+    """
     from stable_baselines3.common.vec_env import VecFrameStack, VecMonitor
 
-    vector = native_vector_env(spec, children) if native is not False else None
-    if native and vector is None:
+    if task is None:
+        task = resolve_task(spec.task, smc=spec.name)
+    hosted = task.native_vector and not children and not spec.children
+    if native and not hosted:
         raise SMCError(f"SMC {spec.name!r}: the native vector env hosts flat SMCs on PixelWorld ids only")
     base: VecEnv
-    if vector is not None:
-        base = FlatSMCVecEnv(vector)
+    if hosted and native is not False:
+        base = FlatSMCVecEnv(task.make_vector_env(spec.budget.n_envs, spec.wrapper.max_steps))
     else:
-        envs = [make_smc_env(spec, children) for _ in range(spec.budget.n_envs)]
+        envs = [make_smc_env(spec, children, task=task) for _ in range(spec.budget.n_envs)]
         base = SMCVecEnv([_returning(e) for e in envs])
     venv: VecEnv = VecMonitor(base)
     if spec.frame_stack > 1:
@@ -166,20 +176,9 @@ def make_vec_env(spec: TrainingSpec, children: Sequence[SMC] = (), *, native: bo
     return venv
 
 
-def native_vector_env(spec: TrainingSpec, children: Sequence[SMC] = (), num_envs: int | None = None
-                      ) -> PixelWorldVectorEnv | None:
-    """PixelWorld's vector env of ``spec``'s task (``num_envs`` environments, the spec's ``n_envs`` by default)
-    when the SMC is flat and the id has one, else None."""
-    settings = spec.task.env_kwargs
-    if (children or spec.children or not spec.task.env_id.startswith("PW-") or not is_pixelworld_id(spec.task.env_id)
-            or settings.get("aaai18_reset_bug") or settings.get("render_mode") == "human"
-            or gym.spec(spec.task.env_id).vector_entry_point is None):  # an unknown id: make_smc_env says so
-        return None
-    kwargs = {"split": spec.task.split, "max_steps": spec.wrapper.max_steps,
-              **check_env_kwargs(spec.task.env_id, dict(settings))}
-    vector = gym.make_vec(spec.task.env_id, num_envs=num_envs or spec.budget.n_envs,
-                          vectorization_mode="vector_entry_point", **kwargs)
-    return vector if isinstance(vector, PixelWorldVectorEnv) else None
+def resolved_spec(spec: TrainingSpec, task: ResolvedTask) -> TrainingSpec:
+    """``spec`` with the kind, datasets and layout of its task as ``task`` (``spec.task`` resolved) has them."""
+    return dataclasses.replace(spec, task=dataclasses.replace(spec.task, **task.spec_fields))
 
 
 def train_smc(
@@ -260,12 +259,12 @@ def train_smc(
     """
     given = locals()
     settings = {key: given[key] for key in _KEYWORD_DEFAULTS}  # the spec settings among the keyword arguments
-    spec, kids = _spec_and_children(task, children, settings, hyperparams)
+    spec, kids, resolved = _spec_and_children(task, children, settings, hyperparams)
     if spec.budget.total_timesteps < 1:
         raise SMCError(f"SMC {spec.name!r}: total_timesteps must be >= 1, got {spec.budget.total_timesteps} "
                        "(nothing would be trained); untrained_smc(...) builds an SMC with its initial policy on "
                        "purpose")
-    return _train(spec, kids, tensorboard_log=tensorboard_log, log_every=log_every, callback=callback,
+    return _train(spec, kids, resolved, tensorboard_log=tensorboard_log, log_every=log_every, callback=callback,
                   printer=printer, stop_at_max_return=stop_at_max_return, lean_update=lean_update)
 
 
@@ -281,25 +280,31 @@ def untrained_smc(task: str | TrainingSpec, *, children: Children = None, **sett
         task = dataclasses.replace(task, budget=dataclasses.replace(task.budget, total_timesteps=0))
     else:
         known["total_timesteps"] = 0
-    spec, kids = _spec_and_children(task, children, {**_KEYWORD_DEFAULTS, **known}, settings)
-    return _train(spec, kids, tensorboard_log=None, log_every=0, callback=None, printer=print,
+    spec, kids, resolved = _spec_and_children(task, children, {**_KEYWORD_DEFAULTS, **known}, settings)
+    return _train(spec, kids, resolved, tensorboard_log=None, log_every=0, callback=None, printer=print,
                   stop_at_max_return=False)
 
 
 def _spec_and_children(task: str | TrainingSpec, children: Children, settings: dict[str, Any],
-                       hyperparams: dict[str, Any]) -> tuple[TrainingSpec, tuple[SMC, ...]]:
-    """The spec of :func:`train_smc`'s arguments and the child SMCs it names."""
+                       hyperparams: dict[str, Any]) -> tuple[TrainingSpec, tuple[SMC, ...], ResolvedTask]:
+    """The spec of :func:`train_smc`'s arguments (its task resolved: kind, datasets and layout filled in), the child
+    SMCs it names, and its task resolved, once (:func:`~sb3_smc.resolved_task.resolve_task`: an unknown id or a
+    bad env kwarg is refused here, before any work)."""
     if isinstance(task, TrainingSpec):
         given = {k: v for k, v in settings.items() if v != _KEYWORD_DEFAULTS[k]}
         if given or hyperparams:
             raise SMCTypeError(f"train_smc got a TrainingSpec and the settings {sorted({*given, *hyperparams})}; "
                                "put them in the spec (dataclasses.replace) instead")
-        return task, resolve_children(children, task.children)
-    if isinstance(task, str):
+        spec, kids = task, resolve_children(children, task.children)
+    elif isinstance(task, str):
         kids = resolve_children(children)
-        spec = TrainingSpec.create(task, children=[c.name for c in kids], **settings, **hyperparams)
-        return spec, kids
-    raise SMCTypeError(f"train_smc needs an env id or a TrainingSpec, got {type(task).__name__}")
+        split, env_kwargs = hyperparams.pop("split", "train"), settings.pop("env_kwargs")  # split: create's keyword
+        spec = TrainingSpec.create(TaskSpec(task, split=split, env_kwargs=dict(env_kwargs or {})),
+                                   children=[c.name for c in kids], **settings, **hyperparams)
+    else:
+        raise SMCTypeError(f"train_smc needs an env id or a TrainingSpec, got {type(task).__name__}")
+    resolved = resolve_task(spec.task, smc=spec.name)
+    return resolved_spec(spec, resolved), kids, resolved
 
 
 _RUN_OPTIONS = ("children", "tensorboard_log", "log_every", "callback", "printer", "stop_at_max_return",
@@ -309,13 +314,13 @@ _KEYWORD_DEFAULTS = {name: parameter.default for name, parameter in inspect.sign
 """The spec settings of :func:`train_smc` and their defaults (its keyword arguments but the run options)."""
 
 
-def _train(spec: TrainingSpec, children: tuple[SMC, ...], *, tensorboard_log: str | None, log_every: int | None,
-           callback: Any, printer: Callable[[str], None], stop_at_max_return: bool, lean_update: bool = False
-           ) -> SMC:
+def _train(spec: TrainingSpec, children: tuple[SMC, ...], resolved: ResolvedTask, *, tensorboard_log: str | None,
+           log_every: int | None, callback: Any, printer: Callable[[str], None], stop_at_max_return: bool,
+           lean_update: bool = False) -> SMC:
     if spec.task.kind is not None:
         check_model_settings(spec)  # a typo in a hyperparameter: a message before any environment is built
-    venv = make_vec_env(spec, children)
-    spec, task = task_of(spec, venv.unwrapped)  # the FlatSMCVecEnv or SMCVecEnv under the monitor
+    venv = make_vec_env(spec, children, task=resolved)
+    task = task_of(spec, venv.unwrapped)  # the FlatSMCVecEnv or SMCVecEnv under the monitor
     model, initial = build_model(spec, venv, task, tensorboard_log=tensorboard_log)
     if lean_update:
         check_lean_update(spec, model)
@@ -349,10 +354,10 @@ class TaskFacts:
     bounded: bool
 
 
-def task_of(spec: TrainingSpec, under: VecEnv) -> tuple[TrainingSpec, TaskFacts]:
-    """The spec completed with what its environment says (kind and layout of a user's own task) and the
-    :class:`TaskFacts`; ``under`` is the :class:`FlatSMCVecEnv` or :class:`SMCVecEnv` the SMC trains in.
-    ``SMCError`` where the spec and the environment disagree."""
+def task_of(spec: TrainingSpec, under: VecEnv) -> TaskFacts:
+    """The :class:`TaskFacts` of the environments ``spec`` trains in (``under``: the :class:`FlatSMCVecEnv` or
+    :class:`SMCVecEnv` under the monitor), read from them; ``SMCError`` where they are not the task the spec (its
+    task resolved, :func:`resolved_spec`) says."""
     if isinstance(under, FlatSMCVecEnv):  # PixelWorld's compiled vector env: its own rewards
         kind, action_names, layout, bounded = under.kind, under.action_names, PIXELWORLD_LAYOUT, True
     else:
@@ -360,17 +365,13 @@ def task_of(spec: TrainingSpec, under: VecEnv) -> tuple[TrainingSpec, TaskFacts]
         wrapper = wrappers[0]
         kind, action_names, layout = wrapper.base.kind, wrapper.action_names, wrapper.layout
         bounded = all(w.returns_bounded for w in wrappers)
-    if spec.task.kind is None or spec.task.smc_layout != layout:  # a user's own task: known once the env exists
-        if spec.task.kind not in (None, kind) or spec.task.layout not in (None, layout):
-            raise SMCError(f"SMC {spec.name!r}: the spec says a {spec.task.kind} task on {spec.task.smc_layout}, but "
-                           f"{spec.task.env_id} is a {kind} task on {layout}")
-        spec = dataclasses.replace(spec, task=dataclasses.replace(
-            spec.task, kind=kind, layout=None if layout == PIXELWORLD_LAYOUT else layout))
-        check_model_settings(spec)
-    elif spec.task.kind != kind:
+    if spec.task.smc_layout != layout:
+        raise SMCError(f"SMC {spec.name!r}: the spec says a {spec.task.kind} task on {spec.task.smc_layout}, but "
+                       f"{spec.task.env_id} is a {kind} task on {layout}")
+    if spec.task.kind != kind:
         raise SMCError(f"SMC {spec.name!r}: the spec says a {spec.task.kind} task, but {spec.task.env_id} is a "
                        f"{kind} task")
-    return spec, TaskFacts(kind, tuple(action_names), layout, bounded)
+    return TaskFacts(kind, tuple(action_names), layout, bounded)
 
 
 def build_model(spec: TrainingSpec, venv: VecEnv, task: TaskFacts, *, tensorboard_log: str | None = None

@@ -120,36 +120,11 @@ class TaskSpec(Record):
     def resolved(self) -> TaskSpec:
         """This task with ``kind`` and ``datasets`` read from the Gymnasium registry and the catalog, where known;
         for another environment's SMC task (:class:`~sb3_smc.tasks.SMCTask`) its ``kind`` and ``layout``, read from
-        one instance of it."""
-        if self.kind is not None and (self.datasets or self.layout is not None):
-            return self
-        datasets = self.datasets or _registered_datasets(self.env_id)
-        kind, layout = self.kind, self.layout
-        if kind is None and datasets:
-            from pixelworld_env.datasets import catalog
+        one instance of it (:func:`sb3_smc.resolved_task.resolve_task`, imported here: the records load no
+        Gymnasium)."""
+        from sb3_smc.resolved_task import resolve_task
 
-            kinds = {catalog.dataset(name).kind for name in datasets}
-            kind = kinds.pop() if len(kinds) == 1 else None
-        elif not datasets and (kind is None or layout is None):
-            from sb3_smc.tasks import describe_task
-
-            found = describe_task(self.env_id, self.env_kwargs)
-            if found is not None:
-                kind, task_layout = found
-                layout = None if task_layout == PIXELWORLD_LAYOUT else task_layout
-        return dataclasses.replace(self, kind=kind, datasets=datasets, layout=layout)
-
-
-def _registered_datasets(env_id: str) -> tuple[str, ...]:
-    import gymnasium as gym
-
-    import pixelworld_env  # noqa: F401  (registers the PW-* ids)
-
-    try:
-        spec = gym.spec(env_id)
-    except gym.error.Error:
-        return ()
-    return tuple(spec.kwargs.get("datasets", ()))
+        return dataclasses.replace(self, **resolve_task(self).spec_fields)
 
 
 @dataclass(frozen=True, eq=False)
@@ -297,14 +272,18 @@ class TrainingSpec(Record):
         set_field(self, "hyperparameters", hyperparameters)
 
     @classmethod
-    def create(cls, env_id: str, *, name: str | None = None, algo: str = DEFAULT_ALGORITHM, seed: int = 0,
+    def create(cls, env_id: str | TaskSpec, *, name: str | None = None, algo: str = DEFAULT_ALGORITHM, seed: int = 0,
                total_timesteps: int = DEFAULT_TIMESTEPS, n_envs: int = DEFAULT_N_ENVS, children: Sequence[str] = (),
                include_primitives: bool = True, count_primitive_steps: bool = False, call_step_cap: int = 100,
                max_steps: int = 100, signal_bias: bool | SignalBias = True, frame_stack: int = 1,
                split: str = "train", env_kwargs: Mapping[str, Any] | None = None, rnn: str | None = None,
                discount: str = "decision", **hyperparameters: Any) -> TrainingSpec:
         """The spec of ``train_smc``'s keyword interface (``n_steps`` in ``hyperparameters`` goes to the budget;
-        ``rnn="lstm"`` or ``"gru"`` picks the recurrent policy of a recurrent algorithm)."""
+        ``rnn="lstm"`` or ``"gru"`` picks the recurrent policy of a recurrent algorithm).
+
+        ``env_id`` is the task's id (its :class:`TaskSpec` with ``split`` and ``env_kwargs``, :meth:`TaskSpec.resolved`)
+        or a :class:`TaskSpec`, taken as it is (``train_smc`` passes its task unresolved and resolves it once itself);
+        ``split`` and ``env_kwargs`` then belong in it."""
         n_steps = hyperparameters.pop("n_steps", None)
         if rnn is not None:
             from sb3_smc.hyperparameters import recurrent_policy
@@ -318,9 +297,14 @@ class TrainingSpec(Record):
             hyperparameters["policy"] = policy
         bias = signal_bias if isinstance(signal_bias, SignalBias) else SignalBias(enabled=bool_field(signal_bias,
                                                                                                  "signal_bias"))
+        if isinstance(env_id, TaskSpec):
+            if split != "train" or env_kwargs:
+                raise RecordError("TrainingSpec.create: give split and env_kwargs in the TaskSpec, not beside it")
+            task = env_id
+        else:
+            task = TaskSpec(env_id, split=split, env_kwargs=dict(env_kwargs or {})).resolved()
         return cls(
-            name=name or smc_name_from_env_id(env_id),
-            task=TaskSpec(env_id, split=split, env_kwargs=dict(env_kwargs or {})).resolved(),
+            name=name or smc_name_from_env_id(task.env_id), task=task,
             algo=algo, hyperparameters=hyperparameters, seed=seed,
             budget=Budget(total_timesteps, n_envs, n_steps),
             wrapper=WrapperSettings(include_primitives, count_primitive_steps, call_step_cap, max_steps, discount),
