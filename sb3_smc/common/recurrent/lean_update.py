@@ -287,7 +287,8 @@ def _numpy_epoch(model: RecurrentPPO, policy: SequenceLstmPolicy, data: _Rollout
     rows, actions = np.arange(n_rows), data.actions.reshape(n_rows).astype(np.int64)
     log_prob = log_p[rows, actions]
     entropy = -(p * log_p).sum(axis=1)
-    latent_vf = (data.x @ policy.critic.weight.detach().numpy().T).astype(np.float64) + w["critic.bias"]
+    critic = cast(nn.Linear, policy.critic)  # _plain_heads checked
+    latent_vf = (data.x @ critic.weight.detach().numpy().T).astype(np.float64) + w["critic.bias"]
     values = latent_vf @ w["value_net.weight"][0] + w["value_net.bias"][0]
 
     log_ratio = log_prob - data.old_log_prob
