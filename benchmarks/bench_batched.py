@@ -9,13 +9,15 @@ steps per SMC, the whole budget (no early stop), the defaults otherwise (16 envi
 * ``train_smc``: ``learn`` timed (the record's ``wall_time_s``) and the whole call (model set-up included);
 * ``train_smcs`` with K = 1 and K = 5 seeds: the whole call (vector env and models built inside);
 * with ``--lean``, also ``train_smc`` and ``train_smcs`` with ``lean_update=True`` (compared with ``train_smc``'s
-  lean SMC of the same seed).
+  lean SMC of the same seed);
+* with ``--algo RecurrentTRPO --rnn gru``, the ``train_smc`` / ``train_smcs`` cases with the paper's learner (stock
+  stays sb3-contrib's ``RecurrentPPO``, the issue's yardstick).
 
 Reported: environment steps per second over all SMCs of a case (per core: one process, one thread), the ratio to
 stock, the peak resident memory of the process, and whether each batched SMC equals ``train_smc``'s of its seed
 (training returns; the tests compare the weights).
 
-Run: ``python benchmarks/bench_batched.py [--timesteps N] [--repeats R] [--k K ...] [--lean]``.
+Run: ``python benchmarks/bench_batched.py [--timesteps N] [--repeats R] [--k K ...] [--lean] [--algo A --rnn R]``.
 """
 
 from __future__ import annotations
@@ -36,16 +38,16 @@ torch.set_num_threads(1)
 from sb3_smc.records import TrainingSpec
 from sb3_smc.training import train_smc
 from sb3_smc.batched import train_smcs
-case, env_id, steps, k = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4])
+case, env_id, steps, k, learner = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4]), json.loads(sys.argv[5])
 lean = case.endswith("-lean")
-specs = [TrainingSpec.create(env_id, total_timesteps=steps, seed=s) for s in range(k)]
+specs = [TrainingSpec.create(env_id, total_timesteps=steps, seed=s, **learner) for s in range(k)]
 returns = []
 if case == "stock":
     from sb3_contrib import RecurrentPPO
     from stable_baselines3.common.logger import Logger
     from sb3_smc.hyperparameters import constructor_arguments
     from sb3_smc.training import make_vec_env
-    _, settings = constructor_arguments(specs[0].hyperparameters)
+    _, settings = constructor_arguments(TrainingSpec.create(env_id).hyperparameters)  # stock: RecurrentPPO
     model = RecurrentPPO("MlpLstmPolicy", make_vec_env(specs[0]), n_steps=specs[0].budget.env_steps, seed=0,
                          device="cpu", verbose=0, **settings)
     model.set_logger(Logger(folder=None, output_formats=[]))
@@ -68,9 +70,10 @@ print(json.dumps({"seconds": seconds, "steps": total, "peak_mib": peak, "returns
 """
 
 
-def run(case: str, timesteps: int, k: int = 1) -> dict:
+def run(case: str, timesteps: int, k: int = 1, learner: dict | None = None) -> dict:
     env = {**os.environ, "PYTHONPATH": str(HERE), "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
-    out = subprocess.run([sys.executable, "-c", _JOB, case, ENV_ID, str(timesteps), str(k)], env=env,
+    out = subprocess.run([sys.executable, "-c", _JOB, case, ENV_ID, str(timesteps), str(k), json.dumps(learner or {})],
+                         env=env,
                          capture_output=True, text=True, check=True)
     lines = [json.loads(line) for line in out.stdout.splitlines() if line.startswith("{")]
     result = lines[-1]
@@ -85,21 +88,28 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=1, help="runs per case, alternating (the best is kept)")
     parser.add_argument("--k", type=int, nargs="+", default=[1, 5], help="group sizes of train_smcs")
     parser.add_argument("--lean", action="store_true", help="also the cases with lean_update=True")
+    parser.add_argument("--algo", default=None, help="the learner of the train_smc(s) cases (stock stays "
+                        "RecurrentPPO): RecurrentTRPO for the paper's")
+    parser.add_argument("--rnn", default=None, help="their recurrent cell: gru for the paper's")
     args = parser.parse_args()
+    learner = {key: value for key, value in (("algo", args.algo), ("rnn", args.rnn)) if value is not None}
+    if learner and args.lean:
+        parser.error("--lean is RecurrentPPO with an LSTM's (the default learner)")
     cases = [("stock", 1), ("train_smc", 1), *(("train_smcs", k) for k in args.k)]
     if args.lean:
         cases += [("train_smc-lean", 1), *(("train_smcs-lean", k) for k in args.k)]
     best: dict[tuple[str, int], dict] = {}
     for _ in range(args.repeats):
         for case, k in cases:
-            result = run(case, args.timesteps, k)
+            result = run(case, args.timesteps, k, None if case == "stock" else learner)
             if (case, k) not in best or result["seconds"] < best[case, k]["seconds"]:
                 best[case, k] = result
     alone = {"": best["train_smc", 1]["returns"][0]}
     if args.lean:
         alone["-lean"] = best["train_smc-lean", 1]["returns"][0]
     stock = best["stock", 1]["steps"] / best["stock", 1]["seconds"]
-    print(f"{args.timesteps:,} steps per SMC, {ENV_ID}, one torch thread, best of {args.repeats}\n")
+    print(f"{args.timesteps:,} steps per SMC, {ENV_ID}, one torch thread, best of {args.repeats}"
+          f"{', learner ' + json.dumps(learner) if learner else ''}\n")
     print("| case | SMCs | seconds | steps/s (per core) | x stock | peak memory (MiB) | same as train_smc |")
     print("|---|---:|---:|---:|---:|---:|---|")
     for case, k in cases:
