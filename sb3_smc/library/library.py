@@ -113,12 +113,16 @@ class SMCLibrary(Mapping[str, SMC]):
         """Add ``smc`` and, first, those of its children (recursively) that are not in the library yet.
 
         A child whose name is already in the library must be the same SMC (the same object, or the same kind,
-        children and model parameters, e.g. an SMC loaded from this library); otherwise ``LibraryError``.
-        ``replace=True`` replaces an SMC of the same name (its own entry only: parents keep calling the new one
-        by name). Adding an SMC that is already stored (same object or same content) changes nothing. Raises
-        ``LibraryError`` for an SMC without a model (scripted), a model of another algorithm, or a model whose
-        spaces do not fit the SMC's action names and observation size. Returns the stored SMC: ``smc`` itself,
-        or a copy calling the library's own child objects when ``smc``'s children are equal but other objects.
+        children and model parameters, e.g. an SMC loaded from this library). Adding an SMC that is already stored
+        (same object or same content) changes nothing; a failed add changes nothing either (all or nothing).
+
+        :param smc: a trained SMC (``RecurrentPPO``, ``RecurrentTRPO``, ``TRPO`` or ``PPO`` model).
+        :param replace: replace an SMC of the same name (its own entry only: parents keep calling the new one by
+            name); without it, a different SMC of that name is refused.
+        :return: the stored SMC: ``smc`` itself, or a copy calling the library's own child objects when ``smc``'s
+            children are equal but other objects.
+        :raises LibraryError: an SMC without a model (scripted), a model of another algorithm, a model whose spaces
+            do not fit the SMC's action names and observation size, or a child that differs from the stored one.
         """
         if not isinstance(smc, SMC):
             raise SMCTypeError(f"SMCLibrary.add expects an SMC, got {type(smc).__name__}")
@@ -198,13 +202,16 @@ class SMCLibrary(Mapping[str, SMC]):
     # ------------------------------------------------------------------------------------------ saving
 
     def save(self, path: str | os.PathLike | None = None) -> Path:
-        """Write the library to directory ``path`` (default: :attr:`path`), atomically; returns the path.
+        """Write the library to a directory, atomically.
 
         Everything is written into a temporary directory beside ``path`` (models first, then the manifest, each
         fsynced); only when it is complete is an existing library at ``path`` renamed aside, the new one renamed
         into place and the old one deleted. An error while writing deletes the temporary directory and leaves the
-        previous library untouched. ``path`` may be missing, an empty directory or an existing library; anything
-        else is refused.
+        previous library untouched.
+
+        :param path: the directory (default: :attr:`path`): missing, empty, or an existing library; anything else
+            is refused (``LibraryError``).
+        :return: the absolute path written.
         """
         if path is None:
             if self.path is None:
@@ -229,14 +236,17 @@ class SMCLibrary(Mapping[str, SMC]):
 
     @classmethod
     def load(cls, path: str | os.PathLike, names: Sequence[str] | None = None) -> SMCLibrary:
-        """Load and validate the library in directory ``path`` (only ``names`` and their descendants if given; such a
-        partial library has no default save path, so ``save()`` cannot replace the whole library with it).
+        """Load and validate a saved library.
 
         Checks the manifest (format, version, the checksums of its content, fields), that every child is in the
         library and no SMC calls itself (through any chain), that action names and observation sizes agree with
         kind/children and with each model's spaces, and that each model file is intact (readable zip, SHA-256 as
-        recorded) and loads with its algorithm's class (``device="cpu"``). Errors are :class:`LibraryError`
-        subclasses naming the file and SMC.
+        recorded) and loads with its algorithm's class (``device="cpu"``).
+
+        :param path: the library's directory (with its ``manifest.json``).
+        :param names: load only these SMCs and their descendants; such a partial library has no default save path,
+            so ``save()`` cannot replace the whole library with it.
+        :raises LibraryError: (its subclasses) naming the file and the SMC at fault.
         """
         from sb3_smc.policies import FrameStackPolicy, policy_from_model
 
@@ -274,11 +284,14 @@ class SMCLibrary(Mapping[str, SMC]):
 
     @classmethod
     def pretrained(cls, curriculum: str, root: str | os.PathLike | None = None) -> SMCLibrary:
-        """The pretrained lower-level SMCs of a curriculum, two best seeds of each node, shipped with the package
-        (:mod:`sb3_smc.library.pretrained`; ``docs/library.md``): ``SMCLibrary.pretrained("search2-canon")``; or
-        those of one node by its name (``SMCLibrary.pretrained("cl_self-touches-container_vs_corner")``: every
-        shipped SMC loads by a name). ``root``: another pretrained library (built by
-        :func:`sb3_smc.curricula.pretrained.build_pretrained`)."""
+        """The pretrained lower-level SMCs shipped with the package, two best seeds of each node
+        (:mod:`sb3_smc.library.pretrained`; ``docs/library.md``).
+
+        :param curriculum: a shipped curriculum (``SMCLibrary.pretrained("search2-canon")``), or one node by its
+            name (``SMCLibrary.pretrained("cl_self-touches-container_vs_corner")``: every shipped SMC loads by a
+            name).
+        :param root: another pretrained library (built by :func:`sb3_smc.curricula.pretrained.build_pretrained`).
+        """
         path = pretrained_root() if root is None else Path(root)
         return cls.load(path, names=pretrained_names(curriculum, path))
 
@@ -289,13 +302,17 @@ class SMCLibrary(Mapping[str, SMC]):
         """``env`` with the SMCs ``names`` as actions (:func:`sb3_smc.envs.wrap_with_smcs`), for training a new
         higher-level policy.
 
-        ``env`` is a task (a PixelWorld environment or an :class:`~sb3_smc.tasks.SMCTask`, possibly under other
-        wrappers) whose layout (sensor size, primitive actions) is the SMCs' own: :class:`LayoutMismatchError`
-        otherwise. The SMCs become actions after ``env``'s signals and, unless ``include_primitives=False``, its
-        primitive actions (PixelWorld's four moves). SMCs of either task kind may be used on either kind of
-        environment (as in the paper's curricula): an SMC only acts; its signal becomes its outcome. ``kwargs``: the
-        other :class:`~sb3_smc.records.WrapperSettings` (``count_primitive_steps``, ``call_step_cap``) and
-        ``record_cells``.
+        The SMCs become actions after ``env``'s signals and its primitive actions (PixelWorld's four moves). SMCs of
+        either task kind may be used on either kind of environment (as in the paper's curricula): an SMC only acts;
+        its signal becomes its outcome.
+
+        :param env: a task (a PixelWorld environment or an :class:`~sb3_smc.tasks.SMCTask`, possibly under other
+            wrappers) whose layout (sensor size, primitive actions) is the SMCs' own (else
+            :class:`LayoutMismatchError`).
+        :param names: the SMCs of the library to add as actions, in order (a name, or several).
+        :param include_primitives: keep ``env``'s primitive actions beside the SMCs.
+        :param kwargs: the other :class:`~sb3_smc.records.WrapperSettings` (``count_primitive_steps``,
+            ``call_step_cap``) and ``record_cells``.
         """
         if isinstance(names, str):
             names = [names]
@@ -313,11 +330,13 @@ class SMCLibrary(Mapping[str, SMC]):
         """``env`` as SMC ``name`` itself sees it (:func:`sb3_smc.envs.make_smc_env` with its spec and children).
 
         The result's action names and observation size are exactly the SMC's, so ``library[name].model`` or
-        ``.policy`` can act on it (evaluate it, or continue training with ``model.set_env``). ``env`` is a task as
-        for :meth:`wrap`. Raises :class:`LayoutMismatchError` when ``env`` is of the other task kind (its signals
-        differ) or its layout (sensor size, primitive actions) is not the SMC's. ``kwargs`` replace the wrapper
-        settings of the SMC's spec (``count_primitive_steps``, ``call_step_cap``); ``record_cells`` goes to the
-        wrapper.
+        ``.policy`` can act on it (evaluate it, or continue training with ``model.set_env``).
+
+        :param name: the SMC.
+        :param env: a task as for :meth:`wrap`, of the SMC's kind and layout (else :class:`LayoutMismatchError`:
+            the other kind's signals differ; another sensor size or primitive actions do not fit).
+        :param kwargs: replace the wrapper settings of the SMC's spec (``count_primitive_steps``,
+            ``call_step_cap``); ``record_cells`` goes to the wrapper.
         """
         smc = self[name]
         base = _check_env(env)
