@@ -559,13 +559,13 @@ def test_the_fair_methods_change_only_their_episode_length_or_call_cap():
 
 
 def test_the_equal_experience_methods_are_base_with_its_budget_scaled():
-    """``base-x4`` / ``base-x16``: base's flat SMC named ``<method>/<target>``, its budget 4 / 16 times the run's, all
-    else base's job."""
+    """``base-x1`` / ``base-x4`` / ``base-x16``: base's flat SMC named ``<method>/<target>``, its budget 1 / 4 / 16
+    times the run's, all else base's job."""
     from sb3_smc.curricula.jobs import node_spec
 
     design = plan([LEFT_OF, IN_CONTAINER], ["base", *EXPERIENCE_METHODS])
-    assert EXPERIENCE_METHODS == ("base-x4", "base-x16")
-    for method, factor in zip(EXPERIENCE_METHODS, (4, 16), strict=True):
+    assert EXPERIENCE_METHODS == ("base-x1", "base-x4", "base-x16")
+    for method, factor in zip(EXPERIENCE_METHODS, (1, 4, 16), strict=True):
         for target in (LEFT_OF, IN_CONTAINER):
             (name,) = design.nodes[(target, method)]
             assert name == f"{method}/{target}" and design.nodes[(target, "base")] == (target,)

@@ -113,8 +113,7 @@ def test_each_method_trains_what_its_entry_says() -> None:
         elif method.flat:
             for target in (LEFT_OF, IN_CONTAINER):
                 (node,) = design.nodes[(target, name)]
-                own = method.own_learner or method.max_steps or method.budget_factor != 1
-                assert node == (f"{name}/{target}" if own else target)
+                assert node == (target if name == "base" else f"{name}/{target}")
                 entry = design.curriculum.node(node)
                 assert (entry.task, entry.algo, entry.uses) == (target, method.algo, ())
                 assert (entry.max_steps, entry.budget_scale) == (method.max_steps or 100, method.budget_factor)

@@ -9,7 +9,7 @@
 #                                                base-400: the flat SMC with 400 moves an episode, all 51;
 #                                                readings: the sweep of each reading's free parameter, SWEEP_METHODS
 #                                                on SWEEP_TARGETS of sb3_smc.experiments.design;
-#                                                experience: the flat SMC with 4 and 16 x the budget,
+#                                                experience: the flat SMC with 1, 4 and 16 x the budget,
 #                                                EXPERIENCE_METHODS on SWEEP_TARGETS)
 #   tools/paper_table.sh continue                the queue (docs/results/paper/queue.txt), on this machine or a new one:
 #                                                waits for a running `run`, then for each category whose records are not
@@ -17,7 +17,8 @@
 #                                                directory from the kept records (once) and runs it
 #   tools/paper_table.sh checkpoint              at a session's end: keep every queued category this machine has run
 #                                                (partial while unfinished), then the report
-#   tools/paper_table.sh keep <category> [repo]   copy a run's records (no models) into docs/results/paper/<category>
+#   tools/paper_table.sh keep <category> [repo]   copy a run's records (no models) into docs/results/paper/<category>,
+#                                                with its SMCs' primitive moves (experience.json)
 #   tools/paper_table.sh partial <category>       at a session's end: tabulate what the running category has finished
 #                                                (--no-train), keep it and make its partial report (nothing kept
 #                                                while it has no evaluated SMC)
@@ -32,7 +33,7 @@ repo=$(cd "$(dirname "$0")/.." && pwd)
 
 selection() {  # the experiment options of a category (base-gru, canon-scaled, base-400: that method on all 51
   # targets; curr-moves: on the 17 bring-about targets; curr-moves-cl: on the 34 classification targets; readings:
-  # the sweep's methods on its 12 targets; experience: base-x4 and base-x16 on the sweep's targets)
+  # the sweep's methods on its 12 targets; experience: base-x1, base-x4 and base-x16 on the sweep's targets)
   case $1 in
     base-gru|canon-scaled|base-400) echo "--methods $1 --category all" ;;
     readings) "$RUN_ENV/bin/python" -I -c 'from sb3_smc.experiments.design import SWEEP_METHODS, SWEEP_TARGETS
@@ -133,6 +134,9 @@ case ${1:-} in
     cp "$src/run.json" "$dst/"
     for f in results.csv results.json wall_time.json; do if [ -f "$src/$f" ]; then cp "$src/$f" "$dst/"; fi; done
     for d in evaluations cnn; do if [ -d "$src/$d" ]; then rm -rf "${dst:?}/$d"; cp -r "$src/$d" "$dst/$d"; fi; done
+    if [ -f "$src/library/manifest.json" ]; then  # every trained SMC's primitive moves (the equal-experience section)
+      "$(dirname "$0")/../.venv/bin/python" -m sb3_smc.experiments.experience "$src" --out "$dst/experience.json"
+    fi
     du -sh "$dst" ;;
   partial)
     cat=$2

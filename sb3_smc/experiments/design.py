@@ -11,8 +11,9 @@ comparisons (docs/experiments.md, "Equal budgets and the readings of a call"): `
 moves an episode (as many as curr makes, median, on every target probed); the sweep of the one free parameter of each
 reading of a call, ``curr-cap10`` / ``-cap25`` / ``-cap50`` / ``-cap100`` (a call one step, cut after 10 / 25 / 50
 / 100 moves; ``-cap100`` is curr's setting, trained again in the sweep's run) and ``curr-moves-100`` / ``-200`` /
-``-400`` (calls cost their moves, 100 / 200 / 400 moves an episode; ``-100`` is curr-moves' setting); ``base-x4`` and
-``base-x16``, the flat SMC with 4 and 16 times the budget (equal experience, :data:`EXPERIENCE_METHODS`). Every SMC
+``-400`` (calls cost their moves, 100 / 200 / 400 moves an episode; ``-100`` is curr-moves' setting); ``base-x1``,
+``base-x4`` and ``base-x16``, the flat SMC with 1, 4 and 16 times the budget (equal experience,
+:data:`EXPERIENCE_METHODS`). Every SMC
 method's jobs are nodes of curricula (shipped ones, or a flat method's); :func:`plan` merges them so that a
 lower-level node shared by several methods is trained once.
 """
@@ -140,11 +141,11 @@ class ExperimentMethod:
             [c.name for c in copies]
 
     def flat_node(self, target: str) -> Node:
-        """The node of its flat SMC on ``target``: named as the target for ``base``, ``<method>/<target>`` for a
-        flat method of its own learner or episode length."""
+        """The node of its flat SMC on ``target``: named as the target for ``base``, ``<method>/<target>`` for any
+        other flat method (its own learner, episode length or budget, or base's retrained in a run of its own)."""
         if not self.flat:
             raise SMCError(f"method {self.name!r} trains no flat SMCs")
-        if not self.own_learner and not self._changes_episodes and self.budget_factor == 1:
+        if self.name == "base":
             return Node(target, target)
         hyperparameters = {"policy": recurrent_policy(self.rnn, self.algo)} if self.rnn is not None else {}
         return self._with_episodes(Node(f"{self.name}/{target}", target, algo=self.algo,
@@ -174,7 +175,7 @@ METHOD_REGISTRY: dict[str, ExperimentMethod] = {method.name: method for method i
       for steps, colour in ((100, "#d2a07a"), (200, "#c47a4a"), (400, "#6b3310"))),
     *(ExperimentMethod(f"base-x{factor}", f"base-x{factor} (flat SMC, {factor} x the budget)", colour, paper="base",
                        budget_factor=factor)
-      for factor, colour in ((4, "#7f9fd0"), (16, "#2b4f8c"))),
+      for factor, colour in ((1, "#a9bfe0"), (4, "#7f9fd0"), (16, "#2b4f8c"))),
 )}
 """Every method by name, in the order of the report's columns."""
 METHODS = tuple(METHOD_REGISTRY)
@@ -204,10 +205,11 @@ SWEEP_TARGETS = (
 )
 """The sweep's fixed targets, chosen before its run: both kinds and every category, the two headline targets and the
 two where the original flat SMCs scored 100 and curr-moves 5.6 and 3.2."""
-EXPERIENCE_METHODS = ("base-x4", "base-x16")
-"""The flat SMC with 4 and 16 times the budget, on :data:`SWEEP_TARGETS`: beside ``base`` (1 x) a curve of the flat
-SMC's score against the primitive moves it trained on, to set curr's score against at curr's own experience (its
-target SMCs' moves and those of every lower-level SMC it was built on; about 10-25 x base's)."""
+EXPERIENCE_METHODS = ("base-x1", "base-x4", "base-x16")
+"""The flat SMC with 1, 4 and 16 times the budget, on :data:`SWEEP_TARGETS`, in one run whose records keep every SMC's
+primitive moves (``base-x1`` is ``base`` retrained there, so that its moves are recorded too): a curve of the flat
+SMC's score against the primitive moves it trained on, to set a curriculum's score against at the curriculum's own
+experience (its target SMCs' moves and those of every lower-level SMC it was built on; about 10-25 x base's)."""
 CATEGORIES = ("containment", "objcon", "objects", "search", "pushable")
 PAPER_CATEGORIES = CATEGORIES[:4]
 """The categories of the released benchmark (``all``); ``pushable`` is the curriculum sb3-smc designed."""

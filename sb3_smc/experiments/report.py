@@ -27,6 +27,7 @@ from sb3_smc.curricula.designed import designed_curricula
 from sb3_smc.curricula.jobs import job_name, node_of
 from sb3_smc.errors import SMCError
 from sb3_smc.experiments.design import CATEGORIES, METHOD_REGISTRY, METHODS, SMC_METHODS, plan
+from sb3_smc.experiments.experience import EXPERIENCE_FILE, Experience
 from sb3_smc.experiments.figures import Panel, bar_panels, timeline_figure, trajectory_figure
 from sb3_smc.experiments.runner import evaluation_path, experiment_command, read_evaluation, read_results
 from sb3_smc.experiments.tables import KINDS, ResultTable, number_sections
@@ -147,6 +148,8 @@ def _write(sources: Sequence[tuple[Path, dict[str, Any]]], out: Path, trajectori
            behaviour: bool) -> Path:
     rows, reported = _merge(_with_worlds(sources))
     table = ResultTable(rows, reported, _unfinished(sources))
+    experience = Experience.merged([Experience.load(d / EXPERIENCE_FILE) for d, _ in sources
+                                    if (d / EXPERIENCE_FILE).is_file()])  # a bad file: refused before any figure
     methods, targets = table.methods, table.targets
     figures_dir = out / "figures"
     figures_dir.mkdir(parents=True, exist_ok=True)
@@ -180,7 +183,7 @@ def _write(sources: Sequence[tuple[Path, dict[str, Any]]], out: Path, trajectori
                       "number over a target x method with SMCs not trained yet is marked (partial), and no claim is "
                       "judged on it. Not yet trained: " + ", ".join(f"`{name}`" for name in missing[:12])
                       + (", ..." if len(missing) > 12 else "") + ".", ""]
-    lines += number_sections(table)
+    lines += number_sections(table, experience)
     pushable = [t for t in targets if table.category_of[t] == "pushable"]
     if pushable:
         level = pushable_levels()

@@ -30,6 +30,7 @@ from sb3_smc.experiments.claims import (
     tally,
 )
 from sb3_smc.experiments.design import CATEGORIES, METHOD_REGISTRY, METHODS, PAPER_CATEGORIES
+from sb3_smc.experiments.experience import Experience, experience_section
 from sb3_smc.experiments.paper import (
     ORIGINAL_FLAT_RUNS,
     PAPER_CONCEPTS,
@@ -118,6 +119,10 @@ class ResultTable:
     def replicates(self) -> Replicates:
         """Bootstrap replicates of every reported score, over seeds and test worlds (the claims' intervals)."""
         return Replicates(self._candidates)
+
+    def candidate_nodes(self, target: str, method: str) -> set[str]:
+        """The nodes (curriculum entries) of the SMCs that ``method``'s score on ``target`` was chosen from."""
+        return {c.node for c in self._candidates.get((target, method), ())}
 
     def like(self, paper: str) -> list[str]:
         """Our methods that ran compared with the paper's method ``paper`` (``base``: ``base`` and ``base-gru``;
@@ -465,8 +470,10 @@ def _ttest_row(label: str, comparison: str, members: Sequence[str], a: str, b: s
     return f"| {label} | {comparison} | {compared} | {t:.2f} | {df} | {p:.2g} | {paper_text} | {at_paper} |"
 
 
-def number_sections(table: ResultTable) -> list[str]:
-    """The report's Markdown sections of numbers, in the report's order."""
-    return [*_claims_section(table), *_sweep_section(table), *_concept_section(table),
+def number_sections(table: ResultTable, experience: Experience | None = None) -> list[str]:
+    """The report's Markdown sections of numbers, in the report's order (the equal-experience section where the
+    runs' ``experience`` was kept)."""
+    return [*_claims_section(table), *_sweep_section(table), *experience_section(table, experience),
+            *_concept_section(table),
             *_original_flat_section(table),
             *_means_section(table), *_ttest_section(table), *_seed_means_section(table), *_noprim_section(table)]

@@ -1,0 +1,85 @@
+"""Equal experience (:mod:`sb3_smc.experiments.experience`): the primitive moves behind a score, from a run's
+records, and the report's section setting a curriculum's score beside the flat SMC's at the same experience."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from sb3_smc.errors import SMCError
+from sb3_smc.experiments.experience import EXPERIENCE_HEADING, Experience, experience_section, main
+from sb3_smc.experiments.tables import ResultTable
+
+TARGET = "ba_self-in-container_from_on-floor"
+CURR = f"con2-ba/{TARGET}_curr-in"
+
+
+def _run(directory: Path, nodes: dict[str, list[str]], steps: dict[str, int], seeds: int = 5) -> Path:
+    """A run directory's run.json (nodes and their uses) and library manifest (a record per job)."""
+    (directory / "library").mkdir(parents=True)
+    (directory / "run.json").write_text(json.dumps(
+        {"format": "sb3-smc-run", "version": 1, "seeds": seeds, "nodes": {n: {"uses": u} for n, u in nodes.items()}}))
+    smcs = {job: {"record": {"primitive_steps": n}} for job, n in steps.items()}
+    smcs["scripted@0"] = {"record": None}  # a job without a record counts for nothing
+    (directory / "library" / "manifest.json").write_text(json.dumps({"smcs": smcs}))
+    return directory
+
+
+def test_experience_counts_every_seed_of_every_node_below_once(tmp_path: Path) -> None:
+    """Two entries share a lower node (counted once); a node with two of five seeds recorded (pretrained) counts as
+    their mean times five; a node without records makes the total unknown. The file round-trips; the command
+    writes it."""
+    nodes = {"a": [], "b": [], "c": ["a"], CURR: ["a", "b"], f"{CURR}2": ["c"], "untrained": ["a"]}
+    steps = {**{f"a@{s}": 100 for s in range(5)}, "b@0": 10, "b@3": 30, **{f"c@{s}": 7 for s in range(5)},
+             **{f"{CURR}@{s}": 1000 + s for s in range(5)}, **{f"{CURR}2@{s}": 1 for s in range(5)}}
+    run = _run(tmp_path / "run", nodes, steps)
+    experience = Experience.from_run(run)
+    assert experience.node_total("b") == (10 + 30) / 2 * 5 and experience.node_total("a") == 500
+    assert experience.total([CURR]) == 5010 + 500 + 100
+    assert experience.total([CURR, f"{CURR}2"]) == 5010 + 500 + 100 + 35 + 5  # "a" once
+    assert experience.total(["untrained"]) is None and experience.node_total("scripted") is None
+    main([str(run)])
+    assert Experience.load(run / "experience.json") == experience
+    with pytest.raises(SMCError, match="does not exist"):
+        Experience.from_run(tmp_path / "nowhere")
+    (run / "experience.json").write_text('{"format": "sb3-smc-experience", "version": 2}')
+    with pytest.raises(SMCError, match="experience.json: not an sb3-smc-experience file of version 1"):
+        Experience.load(run / "experience.json")
+    other = Experience(5, {"a": ("b",)}, {})
+    with pytest.raises(SMCError, match="node 'a' uses"):
+        Experience.merged([experience, other])
+
+
+def _row(method: str, node: str, seed: int, score: float) -> dict[str, Any]:
+    return {"target": TARGET, "kind": "bring-about", "category": "containment", "method": method,
+            "curriculum": node, "seed": seed, "test_score": score}
+
+
+def test_the_section_reads_the_flat_curve_at_the_curriculum_experience(tmp_path: Path) -> None:
+    """The flat SMC at 1, 4 and 16 x (2M, 8M, 32M moves; 10, 30, 50 %); curr at 4M moves (its target's and its
+    lower nodes') is set against the flat SMC's score interpolated in log experience: 10 + (log 4M - log 2M) /
+    (log 8M - log 2M) x 20 = 20 %."""
+    flat = {f"base-x{k}/{TARGET}": k * 400_000 for k in (1, 4, 16)}
+    nodes = {**{n: [] for n in flat}, "lower": [], CURR: ["lower"]}
+    steps = {**{f"{n}@{s}": per for n, per in flat.items() for s in range(5)},
+             **{f"lower@{s}": 100_000 for s in range(5)}, **{f"{CURR}@{s}": 700_000 for s in range(5)}}
+    experience = Experience.from_run(_run(tmp_path / "run", nodes, steps))
+    rows = [_row(f"base-x{k}", f"base-x{k}/{TARGET}", s, score - 0.01 * s)
+            for k, score in ((1, 0.1), (4, 0.3), (16, 0.5)) for s in range(5)]
+    rows += [_row("curr", CURR, s, 0.4 - 0.01 * s) for s in range(5)]
+    reported = [r for r in rows if r["seed"] == 0]
+    lines = experience_section(ResultTable(rows, reported), experience)
+    assert lines[0] == EXPERIENCE_HEADING
+    (row,) = [line for line in lines if line.startswith(f"| {TARGET}")]
+    assert "10.0 @ 2.0M / 30.0 @ 8.0M / 50.0 @ 32.0M" in row and "| curr | 40.0 @ 4.0M (2 x) |" in row
+    assert math.isclose(10 + (math.log(4) - math.log(2)) / (math.log(8) - math.log(2)) * 20, 20.0)
+    assert row.endswith("| 20.0 | +20.0 |")
+    assert "curr: ahead on 1 of 1 targets, mean lead +20.0 points" in lines[-2]
+    beyond = Experience(5, experience.uses, {**experience.steps, CURR: {s: 20_000_000 for s in range(5)}})
+    (row,) = [line for line in experience_section(ResultTable(rows, reported), beyond) if line.startswith("| ba")]
+    assert row.endswith("| 50.0 (its most: less experience) | -10.0 |")
+    assert experience_section(ResultTable(rows, reported), None) == []
