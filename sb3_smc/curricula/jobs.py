@@ -1,4 +1,4 @@
-"""The jobs of a curriculum run: one node with one seed, named ``<node>@<seed>``.
+"""The jobs of a curriculum run: one node with one seed (:class:`JobId`), named ``<node>@<seed>`` where it is stored.
 
 A job's :class:`~sb3_smc.records.TrainingSpec` calls, for every node its node uses, the ``k`` best seeds of that
 node (``reuse="two_best"``: k = 2; :func:`rank_seeds`) as distinct SMC actions. A :class:`Job` carries
@@ -14,16 +14,19 @@ import io
 import json
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import NamedTuple
 
 from sb3_smc.common.threads import torch_threads
 from sb3_smc.curricula.format import SEED_SEPARATOR, Curriculum, CurriculumError, Node
+from sb3_smc.errors import SMCError
 from sb3_smc.hyperparameters import DEFAULT_ALGORITHM, DEFAULT_TIMESTEPS, recurrent_policy
 from sb3_smc.library import SMCLibrary, storage
 from sb3_smc.records import Budget, TaskSpec, TrainingRecord, TrainingSpec, WrapperSettings
 from sb3_smc.smc import SMC
 
-__all__ = ["DEFAULT_REUSE", "DEFAULT_SEEDS", "REUSE", "Job", "JobResult", "check_curriculum", "file_stem", "job_name",
-           "name_of_file", "node_budget", "node_of", "node_records", "node_spec", "rank_seeds", "run_group", "run_job"]
+__all__ = ["DEFAULT_REUSE", "DEFAULT_SEEDS", "REUSE", "Job", "JobId", "JobResult", "check_curriculum", "file_stem",
+           "job_name", "name_of_file", "node_budget", "node_of", "node_records", "node_spec", "rank_seeds", "run_group",
+           "run_job"]
 
 REUSE = {"one_best": 1, "two_best": 2}
 """SMC filters of the paper: how many seeds of each lower-level node a caller gets."""
@@ -32,9 +35,38 @@ DEFAULT_SEEDS = 5
 """Seeds per node (the paper's)."""
 
 
+class JobId(NamedTuple):
+    """Which job: node ``node`` trained with ``seed``. The scheduler and the trainer know jobs by these; the job's
+    name ``<node>@<seed>`` (``str(job)``, read back with :meth:`parse`) is made only where it is stored: the
+    library's manifest, file names, ``state.json``, ``retrain.json``, the progress lines."""
+
+    node: str
+    seed: int
+
+    def __str__(self) -> str:
+        return f"{self.node}{SEED_SEPARATOR}{self.seed}"
+
+    @classmethod
+    def parse(cls, name: str) -> JobId:
+        """The job named ``name`` (``str(job)``'s inverse); ``SMCError`` for a name that is not a job's."""
+        job = cls.of(name)
+        if job is None:
+            raise SMCError(f"{name!r} is not a job name: <node>{SEED_SEPARATOR}<seed>, a node name and a seed 0, 1, "
+                           "... (no sign or leading zero)")
+        return job
+
+    @classmethod
+    def of(cls, name: str) -> JobId | None:
+        """The job named ``name``, or ``None`` for any other name (a library may hold SMCs that are no job's)."""
+        node, sep, seed = name.rpartition(SEED_SEPARATOR)
+        if sep and node and seed.isascii() and seed.isdigit() and str(int(seed)) == seed:
+            return cls(node, int(seed))
+        return None
+
+
 def job_name(node: str, seed: int) -> str:
-    """The library name of node ``node`` trained with ``seed``."""
-    return f"{node}{SEED_SEPARATOR}{seed}"
+    """The library name of node ``node`` trained with ``seed``: ``str(JobId(node, seed))``."""
+    return str(JobId(node, seed))
 
 
 def node_of(name: str) -> str:
@@ -47,9 +79,9 @@ def node_records(entries: Mapping[str, storage.LibraryEntry], node: str) -> dict
     seed."""
     out: dict[int, TrainingRecord | None] = {}
     for name, entry in entries.items():
-        head, sep, seed = name.rpartition(SEED_SEPARATOR)
-        if sep and head == node and seed.isdigit():
-            out[int(seed)] = entry.record
+        job = JobId.of(name)
+        if job is not None and job.node == node:
+            out[job.seed] = entry.record
     return out
 
 
