@@ -24,9 +24,9 @@ from typing import Any
 from pixelworld_env.errors import PixelWorldError
 from sb3_smc import curricula
 from sb3_smc.curricula import trainer
-from sb3_smc.curricula.executors import BACKENDS
 from sb3_smc.curricula.format import describe
 from sb3_smc.curricula.jobs import DEFAULT_REUSE, DEFAULT_SEEDS, REUSE, check_curriculum
+from sb3_smc.curricula.options import BACKENDS, DEFAULT_GROUP_SIZE, RunOptions
 from sb3_smc.curricula.run_directory import status
 from sb3_smc.errors import SMCError
 from sb3_smc.experiments import report, runner
@@ -53,14 +53,18 @@ def _curricula(args: argparse.Namespace) -> int:
     return 0
 
 
+def _run_options(args: argparse.Namespace, **more: Any) -> RunOptions:
+    """The run options of ``sb3-smc train`` and ``sb3-smc experiment`` (``more``: a command's own), checked."""
+    return RunOptions(seeds=args.seeds, timesteps=args.timesteps, workers=args.workers, group_size=args.group_size,
+                      backend=args.backend, ray_address=args.ray_address, algo=args.algo, rnn=args.rnn,
+                      reuse_from=_reuse_from(args.reuse_from), **more)
+
+
 def _train(args: argparse.Namespace) -> int:
     targets = [t for item in args.targets for t in item.split(",") if t] if args.targets else None
-    run = trainer.train_curriculum(args.curriculum, args.out, targets=targets, seeds=args.seeds,
-                                   timesteps=args.timesteps, reuse=args.reuse, workers=args.workers,
-                                   backend=args.backend, algo=args.algo, rnn=args.rnn, ray_address=args.ray_address,
-                                   group_size=args.group_size, tensorboard=not args.no_tensorboard,
-                                   accept_changes=args.accept_changes,
-                                   reuse_from=_reuse_from(args.reuse_from))
+    options = _run_options(args, reuse=args.reuse, tensorboard=not args.no_tensorboard)
+    run = trainer.train_curriculum(args.curriculum, args.out, targets=targets, options=options,
+                                   accept_changes=args.accept_changes)
     print(f"library: {run.library}")
     return 1 if run.failed else 0
 
@@ -107,19 +111,16 @@ def _resume_command(directory: Path, settings: dict[str, Any]) -> str:
 
 def _group_size_option(p: argparse.ArgumentParser) -> None:
     """``--group-size`` of ``sb3-smc train`` and ``sb3-smc experiment``."""
-    p.add_argument("--group-size", type=_positive, default=trainer.DEFAULT_GROUP_SIZE,
+    p.add_argument("--group-size", type=_positive, default=DEFAULT_GROUP_SIZE,
                    help="the most seeds of a flat node trained together by one worker (default "
-                        f"{trainer.DEFAULT_GROUP_SIZE}; 1: one job per worker); the SMCs are the same whatever it is")
+                        f"{DEFAULT_GROUP_SIZE}; 1: one job per worker); the SMCs are the same whatever it is")
 
 
 def _experiment(args: argparse.Namespace) -> int:
     methods = [m for item in args.methods.split(",") if (m := item.strip())]
     targets = [t for item in args.targets for t in item.split(",") if t] if args.targets else None
-    runner.run_experiment(args.out, methods=methods, targets=targets, category=args.category, seeds=args.seeds,
-                          timesteps=args.timesteps, repeats=args.repeats, workers=args.workers,
-                          group_size=args.group_size, backend=args.backend, ray_address=args.ray_address,
-                          algo=args.algo, rnn=args.rnn, train=not args.no_train,
-                          reuse_from=_reuse_from(args.reuse_from))
+    runner.run_experiment(args.out, methods=methods, targets=targets, category=args.category, repeats=args.repeats,
+                          train=not args.no_train, options=_run_options(args))
     print(f"next: sb3-smc report {shlex.quote(args.out)}")
     return 0
 

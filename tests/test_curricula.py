@@ -273,6 +273,7 @@ def test_seeds_rank_by_selected_training_return():
 
 
 def test_the_longest_chain_starts_first_and_top_nodes_fill_in(tmp_path):
+    from sb3_smc.curricula.options import RunOptions
     from sb3_smc.curricula.scheduler import Scheduler
 
     deep = parse_curriculum(TINY.replace("curriculum: tiny", "curriculum: deep") + f"""\
@@ -284,7 +285,7 @@ def test_the_longest_chain_starts_first_and_top_nodes_fill_in(tmp_path):
 """)
     order = deep.order()
     assert order.index("flat") < order.index("container")  # lower levels first: the flat node comes early
-    scheduler = Scheduler(deep, order, 2, 1000, 2, None, tmp_path)
+    scheduler = Scheduler(deep, order, RunOptions(seeds=2, timesteps=1000), tmp_path)
     assert scheduler.height == {"left": 2, "above": 2, "container": 1, "top": 0, "flat": 0}
     first = [job for job in scheduler.ready()]
     assert first == [("left", 0), ("left", 1), ("above", 0), ("above", 1), ("flat", 0), ("flat", 1)]
@@ -295,6 +296,8 @@ def test_the_longest_chain_starts_first_and_top_nodes_fill_in(tmp_path):
 
 
 def test_flat_seeds_form_groups_of_up_to_group_size_spread_over_the_workers(tmp_path):
+    from sb3_smc.curricula.jobs import JobId
+    from sb3_smc.curricula.options import RunOptions
     from sb3_smc.curricula.scheduler import Scheduler
 
     curriculum = parse_curriculum(TINY + f"""\
@@ -302,10 +305,10 @@ def test_flat_seeds_form_groups_of_up_to_group_size_spread_over_the_workers(tmp_
     task: {RIGHT}
     algo: TRPO
 """)
-    scheduler = Scheduler(curriculum, curriculum.order(), 5, 1000, 2, None, tmp_path)
+    scheduler = Scheduler(curriculum, curriculum.order(), RunOptions(seeds=5, timesteps=1000), tmp_path)
     assert [scheduler.groupable(n) for n in ("left", "above", "container", "trpo")] == [True, True, False, False]
-    left, above = [("left", s) for s in range(5)], [("above", s) for s in range(5)]
-    container, trpo = [("container", s) for s in range(2)], [("trpo", 0)]
+    left, above = [JobId("left", s) for s in range(5)], [JobId("above", s) for s in range(5)]
+    container, trpo = [JobId("container", s) for s in range(2)], [JobId("trpo", 0)]
 
     def sizes(ready, group_size, workers):
         units = scheduler.units(ready, group_size, workers)

@@ -43,8 +43,8 @@ PUBLIC = (
     *_modules("sb3_smc.library", "library", "manifest", "upgrade", "pretrained", "storage", "errors"),
     # sb3_smc.zoo.record_video is a launcher: it runs rl_zoo3's record_video on import
     *_modules("sb3_smc.zoo", "configs", "trpo", "ppo", "ppo_lstm", "recurrent_trpo", "entries", "importing"),
-    *_modules("sb3_smc.curricula", "format", "shipped", "designed", "trainer", "scheduler", "jobs", "run_directory",
-              "executors", "pretrained", "reuse"),
+    *_modules("sb3_smc.curricula", "format", "shipped", "designed", "trainer", "options", "scheduler", "jobs",
+              "run_directory", "executors", "pretrained", "reuse"),
     *_modules("sb3_smc.experiments", "design", "runner", "wall_clock", "cnn", "report", "figures", "tables",
               "statistics", "bootstrap", "claims", "sweep", "paper"),
 )

@@ -4,8 +4,8 @@ Each executor takes the functions that train a job (:func:`~sb3_smc.curricula.jo
 (:func:`~sb3_smc.curricula.jobs.run_group`) and offers ``submit(work) -> handle`` (``work``: a :class:`Job`, or a
 tuple of jobs trained as one unit, one worker process or one Ray task), ``wait(handles) -> [(handle, outcome)]``
 (at least one; the outcome is a job's :class:`JobResult`, a group's list of them, or the exception) and
-``shutdown()``; :func:`make_executor` picks one. An exception is the outcome of the whole unit, reported as the
-failure of each of its jobs by the trainer.
+``shutdown()``; :func:`make_executor` picks the one of a run's options. An exception is the outcome of the whole
+unit, reported as the failure of each of its jobs by the trainer.
 """
 
 from __future__ import annotations
@@ -20,12 +20,10 @@ from concurrent.futures.process import BrokenProcessPool
 from typing import Any
 
 from sb3_smc.curricula.jobs import Job, JobResult
+from sb3_smc.curricula.options import BACKENDS, RunOptions
 from sb3_smc.errors import SMCRuntimeError
 
 __all__ = ["BACKENDS", "Outcome", "Work", "make_executor"]
-
-BACKENDS = ("local", "ray")
-"""Where jobs run: local processes or Ray tasks."""
 
 Work = Job | tuple[Job, ...]
 """What is submitted: one job, or a group of jobs trained together."""
@@ -172,10 +170,10 @@ class _Ray:
         self._pending.clear()
 
 
-def make_executor(backend: str, workers: int, address: str | None, run: RunJob,
-                  run_group: RunGroup) -> _InProcess | _Processes | _Ray:
-    """The executor of a run's ``backend`` (``workers`` local processes, or this process for one worker; Ray tasks
-    on the cluster at ``address``), training each job with ``run`` and each group of jobs with ``run_group``."""
-    if backend == "ray":
-        return _Ray(run, run_group, address)
-    return _Processes(run, run_group, workers) if workers > 1 else _InProcess(run, run_group)
+def make_executor(options: RunOptions, run: RunJob, run_group: RunGroup) -> _InProcess | _Processes | _Ray:
+    """The executor of a run's ``options.backend`` (``options.workers`` local processes, or this process for one
+    worker; Ray tasks on the cluster at ``options.ray_address``), training each job with ``run`` and each group of
+    jobs with ``run_group``."""
+    if options.backend == "ray":
+        return _Ray(run, run_group, options.ray_address)
+    return _Processes(run, run_group, options.workers) if options.workers > 1 else _InProcess(run, run_group)

@@ -10,14 +10,18 @@ skipped).
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from sb3_smc.curricula.format import Curriculum
-from sb3_smc.curricula.jobs import job_name, node_of, node_records, node_spec, rank_seeds
+from sb3_smc.curricula.jobs import JobId, node_records, rank_seeds
+from sb3_smc.curricula.options import RunOptions
 from sb3_smc.library import storage
 from sb3_smc.library.pretrained import INDEX, pretrained_index
 from sb3_smc.records import TrainingRecord
+
+if TYPE_CHECKING:
+    from sb3_smc.curricula.scheduler import Scheduler
 
 __all__ = ["ReuseLibrary"]
 
@@ -40,14 +44,15 @@ class ReuseLibrary:
         held = {seed: record for seed, record in node_records(self.entries, node).items() if record is not None}
         return rank_seeds(held)[:k] if len(held) >= k else None
 
-    def copy(self, curriculum: Curriculum, name: str, seed: int, children: tuple[str, ...], library: Path, *,
-             timesteps: int | None, algo: str | None, rnn: str | None) -> TrainingRecord | None:
-        """Copy job ``name`` (``<node>@<seed>``) into the run's ``library`` if this library holds it with the spec
-        the run would train it with; its training record, or ``None`` (nothing copied)."""
+    def copy(self, curriculum: Curriculum, job: JobId, children: tuple[str, ...], library: Path, options: RunOptions
+             ) -> TrainingRecord | None:
+        """Copy ``job`` into the run's ``library`` if this library holds it with the spec the run (``options``) would
+        train it with, calling ``children``; its training record, or ``None`` (nothing copied)."""
+        name = str(job)
         entry = self.entries.get(name)
         if entry is None or entry.spec is None or entry.record is None:
             return None
-        wanted = node_spec(curriculum.node(node_of(name)), seed, children, timesteps=timesteps, algo=algo, rnn=rnn)
+        wanted = options.spec(curriculum.node(job.node), job.seed, children)
         if entry.spec != wanted:
             return None
         storage.check_model_file(self.root, name, entry)
@@ -56,28 +61,25 @@ class ReuseLibrary:
                                                                  entry.record), model)
         return entry.record
 
-
-    def reuse(self, curriculum: Curriculum, order: list[str], targets: set[str], seeds: int, k: int,
-              records: dict[str, dict[int, TrainingRecord]], best_of: dict[str, list[int]],
-              complete: Callable[[str], bool], children: Callable[[str], tuple[str, ...]], library: Path, *,
-              timesteps: int | None, algo: str | None, rnn: str | None) -> set[str]:
-        """Copy what the run can reuse into its ``library`` and ``records`` (node -> seed -> record, those of the
-        jobs done already included), nodes lower levels first (``order``; ``complete`` and ``children`` are the
-        scheduler's: whether a node's jobs that others use are done, the children of a node's jobs). Nodes whose
-        best seeds are known without their other seeds (not ``targets``, whose every seed is evaluated) go into
+    def reuse(self, scheduler: Scheduler, order: list[str], targets: set[str]) -> set[JobId]:
+        """Copy what the run of ``scheduler`` can reuse into its library and its ``records`` (node -> seed -> record,
+        those of the jobs done already included), nodes lower levels first (``order``). Nodes whose best seeds are
+        known without their other seeds (not ``targets``, whose every seed is evaluated) go into the scheduler's
         ``best_of``; returns their other jobs, which are not to be trained."""
-        skipped: set[str] = set()
-        for node in order:
-            if not all(complete(u) for u in curriculum.node(node).uses):
+        options, records = scheduler.options, scheduler.records
+        skipped: set[JobId] = set()
+        for name in order:
+            node = scheduler.curriculum.node(name)
+            if not all(scheduler.complete(u) for u in node.uses):
                 continue  # its children are not known before training: nothing to compare with
-            best = None if node in targets else self.best_seeds(node, seeds, min(k, seeds))
-            for seed in best if best is not None else range(seeds):
-                if seed not in records[node]:
-                    record = self.copy(curriculum, job_name(node, seed), seed, children(node), library,
-                                       timesteps=timesteps, algo=algo, rnn=rnn)
+            best = None if name in targets else self.best_seeds(name, options.seeds, min(options.k, options.seeds))
+            for seed in best if best is not None else range(options.seeds):
+                if seed not in records[name]:
+                    record = self.copy(scheduler.curriculum, JobId(name, seed), scheduler.children(node),
+                                       scheduler.library, options)
                     if record is not None:
-                        records[node][seed] = record
-            if best is not None and all(seed in records[node] for seed in best):
-                best_of[node] = best
-                skipped |= {job_name(node, seed) for seed in range(seeds) if seed not in records[node]}
+                        records[name][seed] = record
+            if best is not None and all(seed in records[name] for seed in best):
+                scheduler.best_of[name] = best
+                skipped |= {JobId(name, seed) for seed in range(options.seeds) if seed not in records[name]}
         return skipped

@@ -27,7 +27,8 @@ from typing import Any
 
 from pixelworld_env.atomic import atomic_write, make_temporary_directory
 from sb3_smc.curricula.format import Curriculum
-from sb3_smc.curricula.jobs import job_name, name_of_file, node_of
+from sb3_smc.curricula.jobs import JobId, job_name, name_of_file, node_of
+from sb3_smc.curricula.options import RunOptions
 from sb3_smc.errors import SMCError
 from sb3_smc.library import storage
 from sb3_smc.library.errors import CorruptModelError
@@ -63,15 +64,17 @@ def read_json(path: Path, holds: str) -> Any:
             from None
 
 
-def run_settings(curriculum: Curriculum, nodes: Sequence[str], targets: Sequence[str], seeds: int,
-                 timesteps: int | None, reuse: str, algo: str | None, rnn: str | None = None) -> dict[str, Any]:
-    """What decides a run's SMCs (``DIR/run.json``): backend and worker count do not (``rnn`` is written only when
-    given, so run directories from before the option resume)."""
+def run_settings(curriculum: Curriculum, nodes: Sequence[str], targets: Sequence[str], options: RunOptions
+                 ) -> dict[str, Any]:
+    """What decides a run's SMCs (``DIR/run.json``): the ``nodes``, ``targets`` and the options that decide every
+    job; backend and worker count do not (``rnn`` is written only when given, so run directories from before the
+    option resume)."""
     settings = {"format": RUN_FORMAT, "version": RUN_VERSION, "curriculum": curriculum.name,
-                "targets": list(targets), "seeds": seeds, "timesteps": timesteps, "reuse": reuse, "algo": algo,
+                "targets": list(targets), "seeds": options.seeds, "timesteps": options.timesteps,
+                "reuse": options.reuse, "algo": options.algo,
                 "nodes": {name: curriculum.node(name).settings() for name in nodes}}
-    if rnn is not None:
-        settings["rnn"] = rnn
+    if options.rnn is not None:
+        settings["rnn"] = options.rnn
     return settings
 
 
@@ -217,9 +220,10 @@ def glob_escape(text: str) -> str:
     return "".join(f"[{c}]" if c in "*?[" else c for c in text)
 
 
-def write_state(directory: Path, running: Collection[str], started: float, skipped: Collection[str]) -> None:
-    atomic_write(directory / "state.json", json.dumps({"pid": os.getpid(), "running": sorted(running),
-                                                      "skipped": sorted(skipped), "started": started,
+def write_state(directory: Path, running: Collection[JobId], started: float, skipped: Collection[JobId]) -> None:
+    """``DIR/state.json``: the coordinator's pid, the jobs ``running`` and ``skipped`` (by name, sorted)."""
+    atomic_write(directory / "state.json", json.dumps({"pid": os.getpid(), "running": sorted(map(str, running)),
+                                                      "skipped": sorted(map(str, skipped)), "started": started,
                                                       "updated": time.time()}) + "\n")
 
 

@@ -1,6 +1,7 @@
 """The run's scheduler (:class:`Scheduler`): which jobs of a curriculum run are done, ready, running, failed or
 blocked, the units they run in (one job, or a group of a flat node's ready seeds), and each job's spec. Used by
-:func:`~sb3_smc.curricula.trainer.train_curriculum`, which owns the run directory; nothing here writes."""
+:func:`~sb3_smc.curricula.trainer.train_curriculum`, which owns the run directory; nothing here writes. Jobs are
+:class:`~sb3_smc.curricula.jobs.JobId` s; their names are made only for the specs (and the TensorBoard folders)."""
 
 from __future__ import annotations
 
@@ -8,7 +9,8 @@ import shutil
 from pathlib import Path
 
 from sb3_smc.curricula.format import Curriculum, Node
-from sb3_smc.curricula.jobs import Job, job_name, node_budget, node_of, node_spec, rank_seeds
+from sb3_smc.curricula.jobs import Job, JobId, rank_seeds
+from sb3_smc.curricula.options import RunOptions
 from sb3_smc.curricula.run_directory import glob_escape
 from sb3_smc.records import TrainingRecord
 
@@ -17,60 +19,64 @@ __all__ = ["Scheduler"]
 
 class Scheduler:
     """Which jobs of a run are done, ready, running, failed or blocked, and the units they run in (a job, or a
-    group of a flat node's seeds); the run's ``order`` of nodes, ``seeds`` per node, ``timesteps`` and the ``k`` best
-    seeds of a used node that a job calls."""
+    group of a flat node's seeds).
 
-    def __init__(self, curriculum: Curriculum, order: list[str], seeds: int, timesteps: int | None, k: int,
-                 algo: str | None, directory: Path, rnn: str | None = None, skip: frozenset[str] = frozenset()
-                 ) -> None:
-        self.curriculum, self.order, self.seeds, self.timesteps, self.k = curriculum, order, seeds, timesteps, k
-        self.algo, self.rnn, self.skip = algo, rnn, skip
+    :param curriculum: the run's (merged) curriculum.
+    :param order: the nodes to train, lower levels first.
+    :param options: the run's options: ``seeds`` per node, each job's spec (``timesteps``, ``algo``, ``rnn``), the
+        ``k`` best seeds of a used node that a job calls (``reuse``), TensorBoard logs.
+    :param directory: the run directory (nothing here writes to it).
+    :param skip: jobs not to train (done as far as the scheduler is concerned).
+    """
+
+    def __init__(self, curriculum: Curriculum, order: list[str], options: RunOptions, directory: Path,
+                 skip: frozenset[JobId] = frozenset()) -> None:
+        self.curriculum, self.order, self.options, self.skip = curriculum, order, options, skip
         self.directory = directory
         self.library = directory / "library"
         self.records: dict[str, dict[int, TrainingRecord]] = {name: {} for name in order}
         self.best_of: dict[str, list[int]] = {}  # nodes reused with their best seeds only (curricula.reuse)
-        self.running: set[str] = set()
-        self.failed: dict[str, str] = {}
-        self.damaged: dict[str, TrainingRecord] = {}  # finished jobs whose model file is damaged: their old records
+        self.running: set[JobId] = set()
+        self.failed: dict[JobId, str] = {}
+        self.damaged: dict[JobId, TrainingRecord] = {}  # finished jobs whose model file is damaged: their old records
         self.height = _heights(curriculum, order)
         self.below = {name: curriculum.closure([name]) - {name} for name in order}
         self._groupable: dict[str, bool] = {}
 
-    def jobs(self) -> list[tuple[str, int]]:
-        return [(node, seed) for node in self.order for seed in range(self.seeds)]
+    def jobs(self) -> list[JobId]:
+        """Every job of the run: its nodes in order, each with every seed."""
+        return self.options.jobs(self.order)
 
-    def done(self, node: str, seed: int) -> bool:
-        return seed in self.records[node] or job_name(node, seed) in self.skip
-
-    def budget(self, node: Node) -> int:
-        return node_budget(node, self.timesteps)
+    def done(self, job: JobId) -> bool:
+        """Whether ``job`` is trained (its record is known) or skipped."""
+        return job.seed in self.records[job.node] or job in self.skip
 
     def children(self, node: Node) -> tuple[str, ...]:
+        """The library names of the SMCs that a job of ``node`` calls: the ``k`` best seeds of each node it uses."""
         names: list[str] = []
         for used in node.uses:
-            best = self.best_of.get(used) or rank_seeds(self.records[used])[: min(self.k, self.seeds)]
-            names.extend(job_name(used, seed) for seed in best)
+            best = self.best_of.get(used) or rank_seeds(self.records[used])[: min(self.options.k, self.options.seeds)]
+            names.extend(str(JobId(used, seed)) for seed in best)
         return tuple(names)
 
     def complete(self, node: str) -> bool:
         """Whether every job of ``node`` that others use is done: all its seeds, or its reused best seeds."""
         held = self.records[node]
-        return len(held) == self.seeds or node in self.best_of and all(s in held for s in self.best_of[node])
+        return len(held) == self.options.seeds or node in self.best_of and all(s in held for s in self.best_of[node])
 
-    def ready(self) -> list[tuple[str, int]]:
+    def ready(self) -> list[JobId]:
         """The jobs that can start, those with the longest chain of nodes still above them first (then in
         ``order``): a deep curriculum's critical path starts at once, and top-level nodes (a flat baseline, say)
         fill idle workers. Which job runs when does not change what is trained. Nothing above a damaged job being
         trained again starts before it is done (it may be trained again itself when it is stored)."""
-        repairing = {node_of(name) for name in self.damaged}
+        repairing = {job.node for job in self.damaged}
         out = []
-        for node_name, seed in sorted(self.jobs(), key=lambda job: -self.height[job[0]]):
-            name = job_name(node_name, seed)
-            if self.done(node_name, seed) or name in self.running or name in self.failed:
+        for job in sorted(self.jobs(), key=lambda job: -self.height[job.node]):
+            if self.done(job) or job in self.running or job in self.failed:
                 continue
-            node = self.curriculum.node(node_name)
-            if all(self.complete(u) for u in node.uses) and not self.below[node_name] & repairing:
-                out.append((node_name, seed))
+            node = self.curriculum.node(job.node)
+            if all(self.complete(u) for u in node.uses) and not self.below[job.node] & repairing:
+                out.append(job)
         return out
 
     def groupable(self, node_name: str) -> bool:
@@ -81,26 +87,25 @@ class Scheduler:
             from sb3_smc.batched import batchable  # torch: once grouping is asked for
 
             node = self.curriculum.node(node_name)
-            spec = node_spec(node, 0, (), timesteps=self.timesteps, algo=self.algo, rnn=self.rnn)
-            self._groupable[node_name] = not node.uses and batchable(spec)
+            self._groupable[node_name] = not node.uses and batchable(self.options.spec(node, 0, ()))
         return self._groupable[node_name]
 
-    def units(self, ready: list[tuple[str, int]], group_size: int, workers: int) -> list[tuple[tuple[str, int], ...]]:
+    def units(self, ready: list[JobId], group_size: int, workers: int) -> list[tuple[JobId, ...]]:
         """The ``ready`` jobs as units of execution, in ``ready``'s order: the ready seeds of a groupable node in
         groups of at most ``group_size``, as even as can be, any other job alone; while the units are fewer than
         ``workers``, the largest group is halved, so that a lone node's seeds (or a run's last ones) spread over
         the workers. What is trained does not depend on the units."""
         if group_size == 1:
             return [(job,) for job in ready]
-        by_node: dict[str, list[tuple[str, int]]] = {}
-        nodes: list[list[tuple[str, int]]] = []
+        by_node: dict[str, list[JobId]] = {}
+        nodes: list[list[JobId]] = []
         for job in ready:
-            if not self.groupable(job[0]):
+            if not self.groupable(job.node):
                 nodes.append([job])
-            elif job[0] in by_node:
-                by_node[job[0]].append(job)
+            elif job.node in by_node:
+                by_node[job.node].append(job)
             else:
-                nodes.append(by_node.setdefault(job[0], [job]))
+                nodes.append(by_node.setdefault(job.node, [job]))
         units = [part for jobs in nodes for part in _split(jobs, -(-len(jobs) // group_size))]
         while 0 < len(units) < workers:
             largest = max(range(len(units)), key=lambda i: len(units[i]))
@@ -109,22 +114,20 @@ class Scheduler:
             units[largest:largest + 1] = _split(units[largest], 2)
         return [tuple(unit) for unit in units]
 
-    def blocked(self) -> list[str]:
+    def blocked(self) -> list[JobId]:
         """Jobs that cannot run because a node they need has a failed job."""
-        bad = {node_of(name) for name in self.failed}
-        out = []
-        for node_name, seed in self.jobs():
-            name = job_name(node_name, seed)
-            if not self.done(node_name, seed) and name not in self.failed and self.below[node_name] & bad:
-                out.append(name)
-        return out
+        bad = {job.node for job in self.failed}
+        return [job for job in self.jobs()
+                if not self.done(job) and job not in self.failed and self.below[job.node] & bad]
 
-    def job(self, node_name: str, seed: int, tensorboard: bool) -> Job:
-        node = self.curriculum.node(node_name)
-        name = job_name(node_name, seed)
-        spec = node_spec(node, seed, self.children(node), timesteps=self.timesteps, algo=self.algo, rnn=self.rnn)
+    def job(self, job: JobId) -> Job:
+        """What a worker trains for ``job``: its spec (calling the best seeds of the nodes it uses) and where its
+        TensorBoard curves go (an earlier attempt's removed)."""
+        node = self.curriculum.node(job.node)
+        spec = self.options.spec(node, job.seed, self.children(node))
+        name = spec.name
         log = None
-        if tensorboard:
+        if self.options.tensorboard:
             folder = self.directory / "tensorboard"
             for stale in folder.glob(f"{glob_escape(name)}_*"):  # a half-finished earlier attempt
                 shutil.rmtree(stale, ignore_errors=True)
@@ -132,7 +135,7 @@ class Scheduler:
         return Job(spec=spec, library=str(self.library.absolute()), tensorboard_log=log)
 
 
-def _split(jobs: list[tuple[str, int]], parts: int) -> list[list[tuple[str, int]]]:
+def _split(jobs: list[JobId], parts: int) -> list[list[JobId]]:
     """``jobs`` in ``parts`` consecutive runs as even as can be, the longer ones first."""
     size, extra = divmod(len(jobs), parts)
     bounds = [0]

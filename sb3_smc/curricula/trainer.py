@@ -1,7 +1,9 @@
 """``train_curriculum``: every node x seed of a curriculum trained level by level into one SMC library.
 
-The run schedules jobs (:mod:`sb3_smc.curricula.jobs`: one node with one seed, calling the ``k`` best seeds of every
-node it uses) on an executor (:mod:`sb3_smc.curricula.executors`: this process, local processes or Ray) and keeps
+The run's options are one checked record (:class:`~sb3_smc.curricula.options.RunOptions`, given whole or as
+keywords), made here and passed whole to the layers below. The run schedules jobs (:mod:`sb3_smc.curricula.jobs`:
+one node with one seed, a :class:`~sb3_smc.curricula.jobs.JobId`, calling the ``k`` best seeds of every node it
+uses) on an executor (:mod:`sb3_smc.curricula.executors`: this process, local processes or Ray) and keeps
 its state in the run directory (:mod:`sb3_smc.curricula.run_directory`: ``run.json``, the library, ``failed/``,
 ``state.json``, ``replaced/``, ``.lock``). A job becomes ready once every seed of every node it uses is trained;
 jobs with the longest chain of nodes above them start first. The ready seeds of a flat node train together, in
@@ -39,13 +41,14 @@ from pathlib import Path
 from typing import Any
 
 from pixelworld_env.atomic import atomic_write
-from sb3_smc.curricula.executors import BACKENDS, Outcome, make_executor
+from sb3_smc.curricula.executors import Outcome, make_executor
 from sb3_smc.curricula.format import SEED_SEPARATOR, Curriculum, describe, merge
 from sb3_smc.curricula.jobs import (
     DEFAULT_REUSE,
     DEFAULT_SEEDS,
     REUSE,
     Job,
+    JobId,
     JobResult,
     check_curriculum,
     file_stem,
@@ -57,6 +60,7 @@ from sb3_smc.curricula.jobs import (
     run_group,
     run_job,
 )
+from sb3_smc.curricula.options import BACKENDS, DEFAULT_GROUP_SIZE, RunOptions
 from sb3_smc.curricula.reuse import ReuseLibrary
 from sb3_smc.curricula.run_directory import (
     PENDING_RETRAIN,
@@ -73,20 +77,16 @@ from sb3_smc.curricula.run_directory import (
 )
 from sb3_smc.curricula.scheduler import Scheduler
 from sb3_smc.curricula.shipped import resolve_curriculum
-from sb3_smc.errors import SMCError, SMCTypeError
-from sb3_smc.hyperparameters import STEPS_PER_UPDATE, algorithm, recurrent_policy
+from sb3_smc.errors import SMCError, SMCRuntimeError, SMCTypeError
+from sb3_smc.hyperparameters import STEPS_PER_UPDATE
 from sb3_smc.library import storage
 from sb3_smc.records import TrainingRecord
 
-__all__ = ["BACKENDS", "DEFAULT_GROUP_SIZE", "DEFAULT_REUSE", "DEFAULT_SEEDS", "REUSE", "Job", "JobResult",
-           "RunFileError", "RunSettingsError", "TrainingRun", "check_curriculum", "check_run_options",
+__all__ = ["BACKENDS", "DEFAULT_GROUP_SIZE", "DEFAULT_REUSE", "DEFAULT_SEEDS", "REUSE", "Job", "JobId", "JobResult",
+           "RunFileError", "RunOptions", "RunSettingsError", "TrainingRun", "check_curriculum", "check_run_options",
            "describe", "file_stem", "finished_jobs", "job_name", "name_of_file", "node_of", "node_spec",
            "rank_seeds", "read_json", "read_settings", "run_group", "run_job", "run_settings", "status",
            "train_curriculum"]
-
-DEFAULT_GROUP_SIZE = 5
-"""The most seeds of a flat node trained together in one worker (``group_size``; 1: one job per worker, as before
-issue 44). docs/benchmarks.md, "Grouped jobs in the curriculum trainer", has the measurement behind it."""
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -132,6 +132,7 @@ def train_curriculum(
     skip: Collection[str] = (),
     accept_changes: bool = False,
     reuse_from: str | Path | None = None,
+    options: RunOptions | None = None,
 ) -> TrainingRun:
     """Train a curriculum into ``out``, resuming whatever ``out`` already holds. Every setting and node is checked
     before anything is written or trained; the trained SMCs are the same whatever the backend, worker count and
@@ -164,18 +165,23 @@ def train_curriculum(
     :param reuse_from: a library whose SMCs this run copies instead of training them where it holds them with the
         very spec the run would train (a pretrained library: a node's best seeds, its other seeds then not trained;
         :mod:`sb3_smc.curricula.reuse`).
+    :param options: the run's options whole (:class:`~sb3_smc.curricula.options.RunOptions`), instead of the
+        keywords ``seeds`` to ``group_size``, ``tensorboard`` and ``reuse_from`` (which must then be left out).
     :return: the :class:`TrainingRun`. Jobs that fail are reported (``DIR/failed/``) and retried by the next run;
         jobs needing them wait. A finished job whose model file is missing or damaged is trained again.
     """
-    check_run_options(workers=workers, backend=backend, ray_address=ray_address, group_size=group_size)
-    source = ReuseLibrary(reuse_from) if reuse_from is not None else None
-    merged, order, settings = _resolve_run(curriculum, targets, seeds, timesteps, reuse, algo, rnn)
+    options = RunOptions.of(options, seeds=seeds, timesteps=timesteps, reuse=reuse, workers=workers, backend=backend,
+                            algo=algo, rnn=rnn, ray_address=ray_address, group_size=group_size,
+                            tensorboard=tensorboard, reuse_from=reuse_from)
+    source = ReuseLibrary(options.reuse_from) if options.reuse_from is not None else None
+    merged, order, settings = _resolve_run(curriculum, targets, options)
     directory = Path(out)
-    order, skipped = _plan_skip(merged, order, settings["targets"], seeds, skip)
+    order, skipped = _plan_skip(merged, order, settings["targets"], options, skip)
     # the jobs of nodes left out of the plan count as skipped too (sb3-smc status shows them so, not as "left")
-    skipped |= {job_name(n, s) for n in settings["nodes"] if n not in order for s in range(seeds)}
-    scheduler = Scheduler(merged, order, seeds, timesteps, REUSE[reuse], algo, directory, rnn, skipped)
-    check_curriculum(merged, order, timesteps=timesteps, algo=algo, rnn=rnn, reuse=reuse)
+    skipped |= {job for job in options.jobs(settings["nodes"]) if job.node not in order}
+    scheduler = Scheduler(merged, order, options, directory, skipped)
+    check_curriculum(merged, order, timesteps=options.timesteps, algo=options.algo, rnn=options.rnn,
+                     reuse=options.reuse)
     old = read_settings(directory)
     changes = SettingsChanges.between(old, settings, merged) if old is not None else None
     if changes is not None and changes.differences:
@@ -187,30 +193,19 @@ def train_curriculum(
             if changes is not None:
                 changes.apply(directory, printer if progress else None)
             atomic_write(directory / "run.json", json.dumps(settings, indent=2) + "\n")
-        return _run(merged, scheduler, order, directory, seeds, backend, workers, group_size, ray_address,
-                    tensorboard, progress, printer, source, settings)
+        return _run(scheduler, progress, printer, source, settings)
     finally:
         lock.close()
 
 
 def check_run_options(*, seeds: int = DEFAULT_SEEDS, timesteps: int | None = None, reuse: str = DEFAULT_REUSE,
                       workers: int = 1, backend: str = BACKENDS[0], ray_address: str | None = None,
-                      algo: str | None = None, rnn: str | None = None, group_size: int = DEFAULT_GROUP_SIZE) -> None:
-    """``ValueError`` naming the first option of a run that is out of range (before anything is done)."""
-    for name, value, optional in (("seeds", seeds, False), ("workers", workers, False), ("timesteps", timesteps, True),
-                                  ("group_size", group_size, False)):
-        if not (optional and value is None) and (isinstance(value, bool) or not isinstance(value, int) or value < 1):
-            raise SMCError(f"{name} must be a positive integer, got {value!r}")
-    if reuse not in REUSE:
-        raise SMCError(f"reuse must be one of {list(REUSE)}, got {reuse!r}")
-    if backend not in BACKENDS:
-        raise SMCError(f"backend must be {' or '.join(map(repr, BACKENDS))}, got {backend!r}")
-    if ray_address is not None and backend != "ray":
-        raise SMCError(f"a Ray address ({ray_address!r}) is for backend 'ray', not {backend!r}")
-    if algo is not None:
-        algorithm(algo)  # a known algorithm
-    if rnn is not None:
-        recurrent_policy(rnn)  # a known cell (each node's algorithm is checked with its spec)
+                      algo: str | None = None, rnn: str | None = None, group_size: int = DEFAULT_GROUP_SIZE
+                      ) -> RunOptions:
+    """The :class:`~sb3_smc.curricula.options.RunOptions` of these keywords: ``ValueError`` naming the first option
+    of a run that is out of range (before anything is done). The check is the record's own."""
+    return RunOptions(seeds=seeds, timesteps=timesteps, reuse=reuse, workers=workers, backend=backend,
+                      ray_address=ray_address, algo=algo, rnn=rnn, group_size=group_size)
 
 
 def finished_jobs(
@@ -223,11 +218,14 @@ def finished_jobs(
     reuse: str = DEFAULT_REUSE,
     algo: str | None = None,
     rnn: str | None = None,
+    options: RunOptions | None = None,
 ) -> set[str]:
     """The job names (``<node>@<seed>``) that the run :func:`train_curriculum` would resume in ``out`` has finished,
     without training or writing anything (the run may be training meanwhile). ``RunSettingsError`` when ``out``
-    holds no run or a run with other settings."""
-    merged, _, settings = _resolve_run(curriculum, targets, seeds, timesteps, reuse, algo, rnn)
+    holds no run or a run with other settings. The arguments are :func:`train_curriculum`'s (``options``: those
+    that decide the SMCs, whole; the others are not used)."""
+    options = RunOptions.of(options, seeds=seeds, timesteps=timesteps, reuse=reuse, algo=algo, rnn=rnn)
+    merged, _, settings = _resolve_run(curriculum, targets, options)
     directory = Path(out)
     old = read_settings(directory)
     if old is None:
@@ -236,38 +234,38 @@ def finished_jobs(
     return set(status(directory)["done"])
 
 
-def _plan_skip(curriculum: Curriculum, order: list[str], targets: Sequence[str], seeds: int,
-               skip: Collection[str]) -> tuple[list[str], frozenset[str]]:
-    """The nodes to schedule and the jobs to skip. A target job not in ``skip`` is wanted; every node that a wanted
-    job's node uses (at any depth) is trained with every seed, skipped or not; the other skipped jobs are skipped,
-    and nodes that no wanted job needs are left out."""
+def _plan_skip(curriculum: Curriculum, order: list[str], targets: Sequence[str], options: RunOptions,
+               skip: Collection[str]) -> tuple[list[str], frozenset[JobId]]:
+    """The nodes to schedule and the jobs to skip (``skip``: names, read here). A target job not in ``skip`` is
+    wanted; every node that a wanted job's node uses (at any depth) is trained with every seed, skipped or not; the
+    other skipped jobs are skipped, and nodes that no wanted job needs are left out."""
     if isinstance(skip, str):
         raise SMCTypeError(f"skip must be a collection of job names, got the string {skip!r}")
-    names = frozenset(skip)
     known = set(order)
-    for name in names:
-        node, sep, seed = name.rpartition(SEED_SEPARATOR)
-        if not sep or node not in known or not seed.isdigit() or str(int(seed)) != seed or int(seed) >= seeds:
+    jobs = set()
+    for name in frozenset(skip):
+        job = JobId.of(name) if isinstance(name, str) else None
+        if job is None or job.node not in known or job.seed >= options.seeds:
             raise SMCError(f"skip: {name!r} is not a job of this run (<node>{SEED_SEPARATOR}<seed> with one of its "
-                           f"{len(order)} nodes and a seed below {seeds})")
-    wanted = [n for n in targets if any(job_name(n, s) not in names for s in range(seeds))]
+                           f"{len(order)} nodes and a seed below {options.seeds})")
+        jobs.add(job)
+    wanted = [n for n in targets if any(JobId(n, s) not in jobs for s in range(options.seeds))]
     required: set[str] = set()
     for name in wanted:
         required |= curriculum.closure([name]) - {name}
-    skipped = frozenset(j for j in names if node_of(j) not in required)
-    every_seed_skipped = {n for n in order if all(job_name(n, s) in skipped for s in range(seeds))}
+    skipped = frozenset(job for job in jobs if job.node not in required)
+    every_seed_skipped = {n for n in order if all(JobId(n, s) in skipped for s in range(options.seeds))}
     return [n for n in order if n in required or n in wanted or n in every_seed_skipped], skipped
 
 
-def _resolve_run(curriculum: Any, targets: Sequence[str] | None, seeds: int, timesteps: int | None, reuse: str,
-                 algo: str | None, rnn: str | None) -> tuple[Curriculum, list[str], dict[str, Any]]:
+def _resolve_run(curriculum: Any, targets: Sequence[str] | None, options: RunOptions
+                 ) -> tuple[Curriculum, list[str], dict[str, Any]]:
     """The merged curriculum, the nodes to train (lower levels first) and the settings of a run (checked)."""
-    check_run_options(seeds=seeds, timesteps=timesteps, reuse=reuse, algo=algo, rnn=rnn)
     items = curriculum if isinstance(curriculum, list | tuple) else [curriculum]
     merged = merge([resolve_curriculum(item) for item in items])
     selected = merged.select(targets)
     order = merged.order(selected)
-    return merged, order, run_settings(merged, order, selected, seeds, timesteps, reuse, algo, rnn)
+    return merged, order, run_settings(merged, order, selected, options)
 
 
 def _lock(directory: Path) -> Any:
@@ -283,63 +281,61 @@ def _lock(directory: Path) -> Any:
     return handle
 
 
-def _run(merged: Curriculum, scheduler: Scheduler, order: list[str], directory: Path, seeds: int, backend: str,
-         workers: int, group_size: int, ray_address: str | None, tensorboard: bool, progress: bool,
-         printer: Callable[[str], None], source: ReuseLibrary | None, settings: dict[str, Any]) -> TrainingRun:
+def _run(scheduler: Scheduler, progress: bool, printer: Callable[[str], None], source: ReuseLibrary | None,
+         settings: dict[str, Any]) -> TrainingRun:
+    """Train the jobs of ``scheduler`` that are not done (copying from ``source`` what it holds), as
+    :func:`train_curriculum` describes."""
+    merged, options, directory = scheduler.curriculum, scheduler.options, scheduler.directory
     _finish_pending_retrain(directory, printer)
     damaged = _load_done(scheduler)
+    jobs = scheduler.jobs()
     if source is not None:
-        to_train = [n for n in order if not all(scheduler.done(n, s) for s in range(seeds))]
+        to_train = [n for n in scheduler.order if not all(scheduler.done(JobId(n, s)) for s in range(options.seeds))]
         # a node whose jobs are all done or skipped needs nothing, and its children may be out of the plan
-        reused = source.reuse(merged, to_train, set(settings["targets"]), seeds, scheduler.k, scheduler.records,
-                              scheduler.best_of, scheduler.complete, lambda n: scheduler.children(merged.node(n)),
-                              scheduler.library, timesteps=scheduler.timesteps, algo=scheduler.algo,
-                              rnn=scheduler.rnn)
-        scheduler.skip = scheduler.skip | reused
+        scheduler.skip = scheduler.skip | source.reuse(scheduler, to_train, set(settings["targets"]))
     failed_dir = directory / "failed"
-    total = len(scheduler.jobs())
-    done_before = sum(scheduler.done(n, s) for n, s in scheduler.jobs())
-    skipped = sum(scheduler.done(n, s) and s not in scheduler.records[n] for n, s in scheduler.jobs())
-    steps_total = sum(_rounded(scheduler.budget(merged.node(n))) for n, _ in scheduler.jobs())
-    steps_done = sum(_rounded(scheduler.budget(merged.node(n))) for n, s in scheduler.jobs() if scheduler.done(n, s))
+    done_before = sum(scheduler.done(job) for job in jobs)
+    skipped = sum(scheduler.done(job) and job.seed not in scheduler.records[job.node] for job in jobs)
+    steps_total = sum(_rounded(options.budget(merged.node(job.node))) for job in jobs)
+    steps_done = sum(_rounded(options.budget(merged.node(job.node))) for job in jobs if scheduler.done(job))
     if progress:
-        printer(f"{merged.name}: {len(order)} nodes x {seeds} seeds = {total} jobs ({done_before} already done"
-                f"{f', {skipped} of them skipped' if skipped else ''}) "
-                f"in {directory}, backend {backend}, {workers} worker{'s' * (workers > 1)}"
+        workers, group_size = options.workers, options.group_size
+        printer(f"{merged.name}: {len(scheduler.order)} nodes x {options.seeds} seeds = {len(jobs)} jobs "
+                f"({done_before} already done{f', {skipped} of them skipped' if skipped else ''}) "
+                f"in {directory}, backend {options.backend}, {workers} worker{'s' * (workers > 1)}"
                 f"{f', flat seeds in groups of up to {group_size}' if group_size > 1 else ''}")
         for why in damaged.values():
             printer(f"{why}: it is trained again")
     started = time.time()
     # run_job, run_group: this module's, at each run
-    executor = make_executor(backend, workers, ray_address, run_job, run_group)
-    bar = _Progress(total, done_before, steps_total, steps_done, printer if progress else None)
+    executor = make_executor(options, run_job, run_group)
+    bar = _Progress(len(jobs), done_before, steps_total, steps_done, printer if progress else None)
     try:
-        pending: dict[Any, tuple[str, ...]] = {}
+        pending: dict[Any, tuple[JobId, ...]] = {}
         while True:
-            for unit in scheduler.units(scheduler.ready(), group_size, workers):
-                if len(pending) >= workers:
+            for unit in scheduler.units(scheduler.ready(), options.group_size, options.workers):
+                if len(pending) >= options.workers:
                     break
-                jobs = tuple(scheduler.job(node_name, seed, tensorboard) for node_name, seed in unit)
-                names = tuple(job.spec.name for job in jobs)
-                for name in names:
-                    (failed_dir / f"{file_stem(name)}.txt").unlink(missing_ok=True)
-                scheduler.running.update(names)
-                grouped = group_size > 1 and scheduler.groupable(unit[0][0])  # train_smcs, also for one SMC
-                pending[executor.submit(jobs if grouped else jobs[0])] = names
+                work = tuple(scheduler.job(job) for job in unit)
+                for job in unit:
+                    (failed_dir / f"{file_stem(str(job))}.txt").unlink(missing_ok=True)
+                scheduler.running.update(unit)
+                grouped = options.group_size > 1 and scheduler.groupable(unit[0].node)  # train_smcs, also for one
+                pending[executor.submit(work if grouped else work[0])] = unit
             write_state(directory, scheduler.running, started, scheduler.skip)
             bar.show(len(scheduler.running))
             if not pending:
                 break
             for handle, outcome in executor.wait(list(pending)):
-                names = pending.pop(handle)
-                scheduler.running.difference_update(names)
-                _finish(scheduler, merged, names, outcome, bar)
+                unit = pending.pop(handle)
+                scheduler.running.difference_update(unit)
+                _finish(scheduler, unit, outcome, bar)
     finally:
         executor.shutdown()
         write_state(directory, [], started, scheduler.skip)
         bar.close()
     run = TrainingRun(directory=directory, library=scheduler.library, rows=_rows(scheduler),
-                      failed=dict(scheduler.failed))
+                      failed={str(job): why for job, why in scheduler.failed.items()})
     blocked = scheduler.blocked()
     if progress:
         printer(run.table())
@@ -349,34 +345,34 @@ def _run(merged: Curriculum, scheduler: Scheduler, order: list[str], directory: 
     return run
 
 
-def _finish(scheduler: Scheduler, merged: Curriculum, names: tuple[str, ...], outcome: Outcome | BaseException,
-            bar: _Progress) -> None:
-    """Record the outcome of the unit that trained the jobs ``names``: each result stored as it comes (the model
+def _finish(scheduler: Scheduler, unit: tuple[JobId, ...], outcome: Outcome | BaseException, bar: _Progress) -> None:
+    """Record the outcome of the unit that trained the jobs ``unit``: each result stored as it comes (the model
     file, then the manifest entry), or the unit's exception as the failure of each job."""
     directory = scheduler.directory
     if isinstance(outcome, BaseException):
         text = "".join(traceback.format_exception(outcome))
-        for name in names:
-            scheduler.failed[name] = text.strip().splitlines()[-1]
-            atomic_write(directory / "failed" / f"{file_stem(name)}.txt", text)
-            bar.note(f"job {name} failed: {scheduler.failed[name]}")
+        for job in unit:
+            scheduler.failed[job] = text.strip().splitlines()[-1]
+            atomic_write(directory / "failed" / f"{file_stem(str(job))}.txt", text)
+            bar.note(f"job {job} failed: {scheduler.failed[job]}")
         return
-    for result in outcome if isinstance(outcome, list) else [outcome]:
-        name = result.spec.name
-        node_name, _, seed_text = name.rpartition(SEED_SEPARATOR)
-        earlier = scheduler.damaged.get(name)
+    results = outcome if isinstance(outcome, list) else [outcome]
+    if [result.spec.name for result in results] != [str(job) for job in unit]:  # run_group keeps the order
+        raise SMCRuntimeError(f"a unit trained {[r.spec.name for r in results]} for the jobs {list(map(str, unit))}")
+    for job, result in zip(unit, results, strict=True):
+        earlier = scheduler.damaged.get(job)
         differs = earlier is not None and not _trained_alike(earlier, result.record)
-        above = _above(scheduler, node_name) if differs else []
+        above = _above(scheduler, job.node) if differs else []
         if differs:  # what was trained with the damaged copy goes, even if the run dies after storing
             atomic_write(directory / PENDING_RETRAIN, json.dumps(
-                {"repaired": name, "jobs": [job_name(n, seed) for n, seed in above]}, indent=1))
-        _store(scheduler, result)
-        scheduler.records[node_name][int(seed_text)] = result.record
+                {"repaired": str(job), "jobs": [str(j) for j in above]}, indent=1))
+        _store(scheduler, job, result)
+        scheduler.records[job.node][job.seed] = result.record
         bar.running = len(scheduler.running)
-        bar.finished(_rounded(scheduler.budget(merged.node(node_name))))
+        bar.finished(_rounded(scheduler.options.budget(scheduler.curriculum.node(job.node))))
         if differs:
-            for undone in _retrain_above(scheduler, above, name, bar.note):
-                bar.undone(_rounded(scheduler.budget(merged.node(undone))))
+            for undone in _retrain_above(scheduler, above, job, bar.note):
+                bar.undone(_rounded(scheduler.options.budget(scheduler.curriculum.node(undone))))
             (directory / PENDING_RETRAIN).unlink()
 
 
@@ -384,27 +380,27 @@ def _rounded(timesteps: int) -> int:
     return -(-timesteps // STEPS_PER_UPDATE) * STEPS_PER_UPDATE
 
 
-def _load_done(scheduler: Scheduler) -> dict[str, str]:
+def _load_done(scheduler: Scheduler) -> dict[JobId, str]:
     """Read the finished jobs from the library manifest (the only record of what is done), each checked against its
     model file: a job whose file is missing or damaged is not done (it is trained again and replaces its entry).
     Returns those jobs, with what is wrong with each."""
-    damaged: dict[str, str] = {}
+    damaged: dict[JobId, str] = {}
     for name, (entry, problem) in library_jobs(scheduler.library).items():
-        node_name, sep, seed_text = name.rpartition(SEED_SEPARATOR)
-        if sep and node_name in scheduler.records and seed_text.isdigit() and entry.record is not None:
+        job = JobId.of(name)
+        if job is not None and job.node in scheduler.records and entry.record is not None:
             if problem is None:
-                scheduler.records[node_name][int(seed_text)] = entry.record
-            elif name not in scheduler.skip:
-                scheduler.damaged[name] = entry.record
-                damaged[name] = problem
+                scheduler.records[job.node][job.seed] = entry.record
+            elif job not in scheduler.skip:
+                scheduler.damaged[job] = entry.record
+                damaged[job] = problem
     return damaged
 
 
-def _store(scheduler: Scheduler, result: JobResult) -> None:
-    """Add a finished job to the library (replacing the entry of a damaged one)."""
+def _store(scheduler: Scheduler, job: JobId, result: JobResult) -> None:
+    """Add finished ``job`` to the library (replacing the entry of a damaged one)."""
     spec = result.spec
     entry = storage.entry_json(spec.name, result.algo, spec.frame_stack, spec, result.record)
-    earlier = scheduler.damaged.pop(spec.name, None)
+    earlier = scheduler.damaged.pop(job, None)
     storage.add_to_library(scheduler.library, spec.name, entry, result.model, replace=earlier is not None)
 
 
@@ -441,35 +437,35 @@ def _trained_alike(a: TrainingRecord, b: TrainingRecord) -> bool:
     return selection(a) == selection(b)
 
 
-def _above(scheduler: Scheduler, node_name: str) -> list[tuple[str, int]]:
+def _above(scheduler: Scheduler, node_name: str) -> list[JobId]:
     """The finished (or damaged) jobs of every node above ``node_name``."""
     above = [n for n in scheduler.order if node_name in scheduler.below[n]]
-    return [(n, seed) for n in above for seed in range(scheduler.seeds)
-            if seed in scheduler.records[n] or job_name(n, seed) in scheduler.damaged]
+    return [job for job in scheduler.options.jobs(above)
+            if job.seed in scheduler.records[job.node] or job in scheduler.damaged]
 
 
-def _retrain_above(scheduler: Scheduler, jobs: list[tuple[str, int]], name: str, note: Callable[[str], None]
+def _retrain_above(scheduler: Scheduler, jobs: list[JobId], repaired: JobId, note: Callable[[str], None]
                    ) -> list[str]:
-    """A damaged job ``name`` trained again differs from its earlier record (another CPU or code): the finished jobs
-    above its node (``jobs``, :func:`_above`) were trained with the earlier one and are taken out of the library to
-    be trained again (:func:`replace_jobs`). Returns the node of each such job that counted as done."""
+    """A damaged job ``repaired`` trained again differs from its earlier record (another CPU or code): the finished
+    jobs above its node (``jobs``, :func:`_above`) were trained with the earlier one and are taken out of the
+    library to be trained again (:func:`replace_jobs`). Returns the node of each such job that counted as done."""
     if not jobs:
         return []
-    line = replace_jobs(scheduler.directory, [job_name(n, seed) for n, seed in jobs])
-    finished = [n for n, seed in jobs if scheduler.records[n].pop(seed, None) is not None]
-    for n, seed in jobs:  # a damaged one is trained afresh too: its entry is gone
-        scheduler.damaged.pop(job_name(n, seed), None)
-    note(f"{name} trained again differs from its damaged copy's training (another CPU or code?); the SMCs above it "
+    line = replace_jobs(scheduler.directory, [str(job) for job in jobs])
+    finished = [job.node for job in jobs if scheduler.records[job.node].pop(job.seed, None) is not None]
+    for job in jobs:  # a damaged one is trained afresh too: its entry is gone
+        scheduler.damaged.pop(job, None)
+    note(f"{repaired} trained again differs from its damaged copy's training (another CPU or code?); the SMCs above it "
          f"were trained with that copy:\n{line}")
     return finished
 
 
 def _rows(scheduler: Scheduler) -> list[dict[str, Any]]:
     rows = []
-    for node_name, seed in scheduler.jobs():
-        record = scheduler.records[node_name].get(seed)
+    for job in scheduler.jobs():
+        record = scheduler.records[job.node].get(job.seed)
         if record is not None:
-            rows.append({"node": node_name, "seed": seed, "selected_update": record.selected_update,
+            rows.append({"node": job.node, "seed": job.seed, "selected_update": record.selected_update,
                          "training_return": record.selected_return, "wall_time_s": record.wall_time_s})
     return rows
 

@@ -35,10 +35,10 @@ from typing import Any
 from pixelworld_env.atomic import atomic_write
 from pixelworld_env.datasets import catalog
 from sb3_smc.common.threads import torch_threads
-from sb3_smc.curricula.executors import BACKENDS
-from sb3_smc.curricula.jobs import DEFAULT_SEEDS, file_stem, job_name, name_of_file
+from sb3_smc.curricula.jobs import DEFAULT_REUSE, DEFAULT_SEEDS, file_stem, job_name, name_of_file
+from sb3_smc.curricula.options import BACKENDS, DEFAULT_GROUP_SIZE, RunOptions
 from sb3_smc.curricula.run_directory import RunFileError, RunSettingsError, read_json
-from sb3_smc.curricula.trainer import DEFAULT_GROUP_SIZE, check_run_options, finished_jobs, train_curriculum
+from sb3_smc.curricula.trainer import finished_jobs, train_curriculum
 from sb3_smc.errors import SMCError, SMCRuntimeError
 from sb3_smc.evaluation import evaluate
 from sb3_smc.experiments.cnn import train_cnn
@@ -80,6 +80,7 @@ def run_experiment(
     progress: bool = True,
     printer: Callable[[str], None] = print,
     reuse_from: str | Path | None = None,
+    options: RunOptions | None = None,
 ) -> dict[str, Any]:
     """Run the paper's protocol (train, test, tabulate) into ``out``; resumable: run it again to continue.
 
@@ -106,17 +107,23 @@ def run_experiment(
     :param printer: where progress lines go.
     :param reuse_from: a library whose SMCs the run copies instead of training them (:func:`train_curriculum`), such
         as the pretrained library: the results are the same.
+    :param options: the run's options whole (:class:`~sb3_smc.curricula.options.RunOptions`), instead of the
+        keywords ``seeds``, ``timesteps``, ``workers``, ``group_size``, ``backend``, ``ray_address``, ``algo``,
+        ``rnn`` and ``reuse_from`` (which must then be left out); an experiment calls the two best seeds (its
+        ``reuse`` is the default).
     :return: the ``results.json`` content.
     """
     if targets is not None and category is not None:
         raise SMCError("give targets or a category, not both")
     if isinstance(repeats, bool) or not isinstance(repeats, int) or repeats < 1:
         raise SMCError(f"repeats must be a positive integer, got {repeats!r}")
-    check_run_options(seeds=seeds, timesteps=timesteps, workers=workers, group_size=group_size, backend=backend,
-                      ray_address=ray_address,
-                      algo=algo, rnn=rnn)
+    options = RunOptions.of(options, seeds=seeds, timesteps=timesteps, workers=workers, group_size=group_size,
+                            backend=backend, ray_address=ray_address, algo=algo, rnn=rnn, reuse_from=reuse_from)
+    if options.reuse != DEFAULT_REUSE:
+        raise SMCError(f"an experiment's SMCs call the nodes they use with reuse {DEFAULT_REUSE!r} (the paper's), got "
+                       f"{options.reuse!r}: train such a run with train_curriculum")
     own = [m for m in methods if m in METHOD_REGISTRY and METHOD_REGISTRY[m].own_learner]
-    if own and (algo is not None or rnn is not None):
+    if own and (options.algo is not None or options.rnn is not None):
         raise SMCError(f"method {own[0]} has a learner of its own, which --algo / --rnn would replace: run it without "
                        "them (in a directory of its own), or run base with them")
     chosen = list(targets) if targets is not None else level2_targets(category or "all")
@@ -132,40 +139,37 @@ def run_experiment(
     commit = code_commit()
     with WallClock(directory, train=train, commit=commit) as clock:  # this run's wall time, kept as it goes
         held_before = _library_jobs(directory)
-        kept = _kept_evaluations(directory, design.training_targets, seeds, repeats) \
+        kept = _kept_evaluations(directory, design.training_targets, options, repeats) \
             if design.curriculum is not None else {}
         finished: set[str] | None = None
         if design.curriculum is not None and not train:
             finished = set(kept) | finished_jobs(design.curriculum, directory, targets=design.training_targets,
-                                                 seeds=seeds, timesteps=timesteps, algo=algo, rnn=rnn)
+                                                 options=options)
         elif design.curriculum is not None:
-            run = train_curriculum(design.curriculum, directory, targets=design.training_targets, seeds=seeds,
-                                   timesteps=timesteps, workers=workers, group_size=group_size, backend=backend,
-                                   ray_address=ray_address, algo=algo, rnn=rnn, progress=progress, printer=printer,
-                                   skip=set(kept),
-                                   reuse_from=reuse_from)
+            run = train_curriculum(design.curriculum, directory, targets=design.training_targets, options=options,
+                                   progress=progress, printer=printer, skip=set(kept))
             if run.failed:
                 raise SMCRuntimeError(f"{len(run.failed)} training job(s) failed ("
                                       f"{', '.join(sorted(run.failed)[:5])}; tracebacks in {directory / 'failed'}): "
                                       "nothing evaluated; run the same command again to retry them")
-        rows, missing = _tabulate(directory, design, seeds, repeats, kept, finished, progress, printer)
+        rows, missing = _tabulate(directory, design, options, repeats, kept, finished, progress, printer)
         new = _library_jobs(directory) - held_before if train else set()
         earlier = clock.earlier_commit()
     previous = _previous_results(directory)
-    copied = (set(previous.get("copied") or ()) - new) | _copies(directory, new, reuse_from)
+    copied = (set(previous.get("copied") or ()) - new) | _copies(directory, new, options.reuse_from)
     evaluated = {job_name(r["curriculum"], r["seed"]) for r in rows if METHOD_REGISTRY[r["method"]].smc}
     commits = record_commits(previous.get("commits") or {}, (_library_jobs(directory) | evaluated) - copied,
                              new - copied, commit, earlier)
-    settings = {"methods": list(methods), "targets": chosen, "seeds": seeds,
-                "timesteps": timesteps or DEFAULT_TIMESTEPS, "repeats": repeats, "workers": workers, "backend": backend,
-                "algo": algo or DEFAULT_ALGORITHM, "rnn": rnn or "lstm"}
+    settings = {"methods": list(methods), "targets": chosen, "seeds": options.seeds,
+                "timesteps": options.timesteps or DEFAULT_TIMESTEPS, "repeats": repeats, "workers": options.workers,
+                "backend": options.backend, "algo": options.algo or DEFAULT_ALGORITHM, "rnn": options.rnn or "lstm"}
     results = {
         "format": "sb3-smc-results", "version": 1,
         "settings": settings,
         "command": experiment_command(out, methods=methods, targets=targets,
-                                      category=category or ("all" if targets is None else None), seeds=seeds,
-                                      timesteps=timesteps, repeats=repeats, workers=workers, backend=backend,
-                                      algo=algo, rnn=rnn, train=train),
+                                      category=category or ("all" if targets is None else None), seeds=options.seeds,
+                                      timesteps=options.timesteps, repeats=repeats, workers=options.workers,
+                                      backend=options.backend, algo=options.algo, rnn=options.rnn, train=train),
         "machine": machine(),
         "code": {"versions": package_versions(), "commit": commit},
         "commits": commits,
@@ -214,7 +218,7 @@ def _library_jobs(directory: Path) -> set[str]:
     return set(storage.check_manifest(*storage.read_manifest(library)))
 
 
-def _copies(directory: Path, jobs: set[str], reuse_from: str | Path | None) -> set[str]:
+def _copies(directory: Path, jobs: set[str], reuse_from: Path | None) -> set[str]:
     """Of ``jobs``, new in the directory's library, those copied from the ``reuse_from`` library (the same model
     file): trained elsewhere, not by this run."""
     if reuse_from is None or not jobs:
@@ -242,8 +246,8 @@ def _previous_results(directory: Path) -> dict[str, Any]:
     return previous
 
 
-def _tabulate(directory: Path, design: ExperimentPlan, seeds: int, repeats: int, kept: dict[str, dict[str, Any]],
-              finished: set[str] | None, progress: bool, printer: Callable[[str], None]
+def _tabulate(directory: Path, design: ExperimentPlan, options: RunOptions, repeats: int,
+              kept: dict[str, dict[str, Any]], finished: set[str] | None, progress: bool, printer: Callable[[str], None]
               ) -> tuple[list[dict[str, Any]], list[str]]:
     """Every target x method x curriculum x seed's row (evaluated where not ``kept``; the CNN trained where it has no
     result) and the jobs still missing (those not ``finished``, when tabulating without training)."""
@@ -252,19 +256,19 @@ def _tabulate(directory: Path, design: ExperimentPlan, seeds: int, repeats: int,
     for (target, method), nodes in sorted(design.nodes.items()):
         info = catalog.dataset(target)
         if not METHOD_REGISTRY[method].smc:
-            for seed in range(seeds):
+            for seed in range(options.seeds):
                 result = _cnn(directory, target, seed)
                 rows.append(_row(target, info, method, "cnn", seed, None, None, result["test_score"],
                                  result["wall_time_s"]))
             continue
-        for node in nodes:
-            for seed in range(seeds):
-                if finished is not None and job_name(node, seed) not in finished:
-                    missing.append(job_name(node, seed))
-                    continue
-                evaluation = kept.get(job_name(node, seed)) or _evaluation(directory, job_name(node, seed), repeats)
-                rows.append(_row(target, info, method, node, seed, evaluation["training_return"],
-                                 evaluation["selected_update"], evaluation["test_score"], evaluation["wall_time_s"]))
+        for job in options.jobs(nodes):
+            name = str(job)
+            if finished is not None and name not in finished:
+                missing.append(name)
+                continue
+            evaluation = kept.get(name) or _evaluation(directory, name, repeats)
+            rows.append(_row(target, info, method, job.node, job.seed, evaluation["training_return"],
+                             evaluation["selected_update"], evaluation["test_score"], evaluation["wall_time_s"]))
         if progress:
             printer(f"evaluated {target} / {method}")
     return rows, missing
@@ -369,14 +373,14 @@ def _saved_evaluation(path: Path, repeats: int) -> dict[str, Any] | None:
     return saved if saved.get("repeats") == repeats else None
 
 
-def _kept_evaluations(directory: Path, training_targets: Sequence[str], seeds: int, repeats: int
+def _kept_evaluations(directory: Path, training_targets: Sequence[str], options: RunOptions, repeats: int
                       ) -> dict[str, dict[str, Any]]:
     """The saved evaluations with ``repeats`` of the results table's jobs, by job name: those jobs need no training
     (unless a job still to train uses their node)."""
     folder = directory / "evaluations"
     if not folder.is_dir():
         return {}
-    wanted = {job_name(node, seed) for node in training_targets for seed in range(seeds)}
+    wanted = {str(job) for job in options.jobs(training_targets)}
     saved = {name_of_file(p.stem): _saved_evaluation(p, repeats) for p in sorted(folder.glob("*.json"))
              if name_of_file(p.stem) in wanted}
     return {name: evaluation for name, evaluation in saved.items() if evaluation is not None}
