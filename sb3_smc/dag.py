@@ -3,11 +3,11 @@ before parents, and the cycle that prevents it."""
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 
 from sb3_smc.errors import SMCError
 
-__all__ = ["CycleError", "children_first"]
+__all__ = ["CycleError", "children_first", "reachable"]
 
 
 class CycleError(SMCError):
@@ -39,3 +39,15 @@ def children_first(graph: Mapping[str, Sequence[str]]) -> list[str]:
     for name in graph:
         visit(name, [])
     return order
+
+
+def reachable(names: Iterable[str], calls: Callable[[str], Iterable[str]]) -> set[str]:
+    """``names`` and every name they call (``calls(name)``), directly or not."""
+    seen: set[str] = set()
+    stack = list(names)
+    while stack:
+        name = stack.pop()
+        if name not in seen:
+            seen.add(name)
+            stack.extend(calls(name))
+    return seen

@@ -38,7 +38,7 @@ from typing import Any
 
 import yaml
 
-from sb3_smc.dag import CycleError, children_first
+from sb3_smc.dag import CycleError, children_first, reachable
 from sb3_smc.errors import SMCError
 from sb3_smc.hyperparameters import ALGORITHMS
 from sb3_smc.records import WrapperSettings
@@ -150,14 +150,7 @@ class Curriculum:
 
     def closure(self, names: Iterable[str]) -> set[str]:
         """``names`` and every node they use, directly or not."""
-        seen: set[str] = set()
-        stack = list(names)
-        while stack:
-            name = stack.pop()
-            if name not in seen:
-                seen.add(name)
-                stack.extend(self.node(name).uses)
-        return seen
+        return reachable(names, lambda name: self.node(name).uses)
 
     def select(self, targets: Sequence[str] | None) -> list[str]:
         """Node names for ``targets``: target or node names, or dataset names (every target training that dataset;

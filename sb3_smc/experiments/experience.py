@@ -27,6 +27,7 @@ from typing import Any, Protocol
 
 from pixelworld_env.atomic import atomic_write
 from sb3_smc.curricula.format import SEED_SEPARATOR
+from sb3_smc.dag import reachable
 from sb3_smc.errors import SMCError
 from sb3_smc.experiments.design import EXPERIENCE_METHODS, METHOD_REGISTRY
 
@@ -113,14 +114,7 @@ class Experience:
 
     def closure(self, nodes: Iterable[str]) -> set[str]:
         """``nodes`` and every node they use, at any depth."""
-        found: set[str] = set()
-        todo = list(nodes)
-        while todo:
-            name = todo.pop()
-            if name not in found:
-                found.add(name)
-                todo.extend(self.uses.get(name, ()))
-        return found
+        return reachable(nodes, lambda name: self.uses.get(name, ()))
 
     def node_total(self, name: str) -> float | None:
         """The moves of all of a node's seeds (their mean times :attr:`seeds` where only some were recorded);
