@@ -155,6 +155,11 @@ def _json(path: Path, holds: str) -> Any:
         raise SMCError(f"{path} is not valid JSON (corrupt or truncated?): {err}; it should hold {holds}") from None
 
 
+def _moves(count: float) -> str:
+    """A count of moves: millions to one decimal (thousands below 100,000)."""
+    return f"{count / 1e6:.1f}M" if count >= 100_000 else f"{count / 1e3:.1f}k"
+
+
 def _at(curve: Sequence[tuple[float, float]], experience: float) -> tuple[float, str]:
     """The flat SMC's score at ``experience`` read off its curve (points sorted by experience), and where: inside
     the measured range (interpolated in log experience), or at its nearest end."""
@@ -193,8 +198,8 @@ def experience_section(table: ScoreTable, experience: Experience | None) -> list
             flat, where = _at(curve, spent)
             mark = {"inside": "", "below": " (its least)", "beyond": " (its most: less experience)"}[where]
             rows.append(f"| {target} | {table.kind_of[target]} | "
-                        + " / ".join(f"{100 * s:.1f} @ {e / 1e6:.1f}M" for e, s in curve)
-                        + f" | {method} | {100 * ours:.1f} @ {spent / 1e6:.1f}M ({spent / curve[0][0]:.0f} x) | "
+                        + " / ".join(f"{100 * s:.1f} @ {_moves(e)}" for e, s in curve)
+                        + f" | {method} | {100 * ours:.1f} @ {_moves(spent)} ({spent / curve[0][0]:.0f} x) | "
                         f"{100 * flat:.1f}{mark} | {100 * (ours - flat):+.1f} |")
             leads.setdefault(method, []).append(ours - flat)
     if not rows:
