@@ -161,9 +161,10 @@ def test_the_command_line_takes_its_choices_and_defaults_from_the_registries(
     assert all(METHOD_REGISTRY[m].paper in DEFAULT_METHODS for m in set(METHODS) - set(DEFAULT_METHODS))
     assert set(SWEEP_METHODS) <= set(METHODS)
     assert calls["experiment"]["repeats"] == DEFAULT_REPEATS
-    for command in ("experiment", "train"):
-        assert calls[command]["seeds"] == DEFAULT_SEEDS and calls[command]["backend"] == BACKENDS[0]
-    assert calls["train"]["reuse"] == DEFAULT_REUSE
+    for command in ("experiment", "train"):  # the command line passes its options whole (RunOptions)
+        options = calls[command]["options"]
+        assert options.seeds == DEFAULT_SEEDS and options.backend == BACKENDS[0]
+    assert calls["train"]["options"].reuse == DEFAULT_REUSE
     code, _, err = sb3_smc_cli("experiment", "--out", str(tmp_path / "e"), "--category", "shapes")
     assert code == 2 and all(repr(c) in err for c in (*CATEGORIES, "all"))
     code, _, err = sb3_smc_cli("train", "con2-cl", "--out", str(tmp_path / "t"), "--algo", "DQN")
