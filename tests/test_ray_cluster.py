@@ -1,12 +1,18 @@
 """A Ray node lost while it trains a curriculum job (or a group of a flat node's seeds): on a local cluster of two
 nodes (loopback, one CPU each), the node running a job is removed mid-run; the run goes on without that job, which
 fails with an error saying what happened and what to do, and the same command run again trains it, once, keeping
-every finished job as it was."""
+every finished job as it was.
+
+The order of events is forced, not timed, so that a loaded machine (slow workers, slow node start and removal)
+changes only how long the test takes: the job on the head waits (on a file) until the second node is gone, so the
+other level-1 job can only run on the second node (the head's one CPU stays busy), the node is removed while it runs
+and the head's job goes on after the loss; the flag files are written whole (renamed into place)."""
 
 from __future__ import annotations
 
 import collections
 import json
+import os
 import shutil
 import tempfile
 import threading
@@ -68,28 +74,48 @@ def test_a_job_on_a_lost_node_fails_clearly_and_the_rerun_trains_it_once(tmp_pat
     path = tmp_path / "tiny.yml"
     path.write_text(TINY)
     out = tmp_path / "run"
-    lost_flag, trainings = tmp_path / "lost", tmp_path / "trainings.txt"
+    lost_flag, gone_flag, trainings = tmp_path / "lost", tmp_path / "gone", tmp_path / "trainings.txt"
     doomed = second.node_id
 
+    def write_whole(flag: Any, text: str) -> None:
+        """``text`` into ``flag`` in one step (renamed into place): whoever sees the file sees all of it."""
+        part = flag.with_name(flag.name + ".part")
+        part.write_text(text)
+        os.replace(part, flag)
+
     def on_the_cluster(train: Any, names: Callable[[Any], list[str]]) -> Any:
-        """``train`` on the second node: say which jobs run there and wait to be removed with them; elsewhere:
-        train, counted. (A closure: Ray pickles it by value, with what it names.)"""
+        """``train`` on the second node: say which jobs run there and wait to be removed with them; elsewhere: wait
+        until the second node is gone (at once in the rerun), then train, counted. (A closure: Ray pickles it by value,
+        with what it names.)"""
         def run(work: Any) -> Any:
             if ray.get_runtime_context().get_node_id() == doomed:
-                lost_flag.write_text(" ".join(names(work)))
+                write_whole(lost_flag, " ".join(names(work)))
                 time.sleep(WAIT_S)
                 raise RuntimeError("the test did not remove this node")
+            deadline = time.monotonic() + 2 * WAIT_S
+            while not gone_flag.is_file() and time.monotonic() < deadline:
+                time.sleep(0.05)
             with trainings.open("a") as log:
                 log.write("".join(f"{name}\n" for name in names(work)))
             return train(work)
         return run
 
+    remover_errors: list[BaseException] = []
+
     def remove_the_second_node() -> None:
-        deadline = time.monotonic() + WAIT_S
-        while not lost_flag.is_file() and time.monotonic() < deadline:
-            time.sleep(0.05)
-        if lost_flag.is_file():
-            cluster.remove_node(second)
+        """Once a job runs on the second node: remove the node and wait until the cluster no longer lists it (so that
+        nothing is sent to it any more); then (or on giving up, or on an error) let the head's jobs go on."""
+        try:
+            deadline = time.monotonic() + WAIT_S
+            while not lost_flag.is_file() and time.monotonic() < deadline:
+                time.sleep(0.05)
+            if lost_flag.is_file():
+                cluster.remove_node(second)
+                cluster.wait_for_nodes(timeout=WAIT_S)
+        except BaseException as err:  # noqa: BLE001 - reported by the test
+            remover_errors.append(err)
+        finally:
+            write_whole(gone_flag, "")
 
     monkeypatch.setattr(trainer, "run_job", on_the_cluster(jobs.run_job, lambda job: [job.spec.name]))
     monkeypatch.setattr(trainer, "run_group", on_the_cluster(jobs.run_group, lambda group: [j.spec.name
@@ -99,15 +125,18 @@ def test_a_job_on_a_lost_node_fails_clearly_and_the_rerun_trains_it_once(tmp_pat
     lines: list[str] = []
     settings = {"seeds": seeds, "timesteps": 2000, "workers": 2, "backend": "ray", "ray_address": cluster.address,
                 "tensorboard": False, "group_size": group_size}
-    first = train_curriculum(str(path), out, printer=lines.append, **settings)
-    remover.join()
+    try:
+        first = train_curriculum(str(path), out, printer=lines.append, **settings)
+    finally:
+        remover.join(timeout=3 * WAIT_S)
+    assert not remover_errors, f"removing the second node failed: {remover_errors[0]!r}"
     assert lost_flag.is_file(), "no job ran on the second node"
     lost = lost_flag.read_text().split()
     level_1 = [f"{node}@{seed}" for node in ("left", "above") for seed in range(seeds)]
     kept = [name for name in level_1 if name not in lost]  # the level-1 jobs trained on the head meanwhile
     # the lost jobs (one, or a node's seeds) fail with what happened and what to do (Ray's error kept in their
     # files); the run goes on
-    assert sorted(first.failed) == sorted(lost) and len(lost) == seeds
+    assert sorted(first.failed) == sorted(lost) and len(lost) == seeds, (lost, first.failed, lines)
     assert {name.partition("@")[0] for name in lost} in ({"left"}, {"above"})
     for name in lost:
         assert first.failed[name].startswith("sb3_smc.errors.SMCRuntimeError: the Ray cluster lost this job before "
