@@ -13,7 +13,7 @@ When a program later imports ``gymnasium``, the ids are registered right after i
 torch, no datasets), so ``rl_zoo3 train --env PW-...`` and ``gymnasium.make("PW-...")`` work without
 ``--gym-packages pixelworld_env`` or ``import pixelworld_env``. When rl_zoo3 loads its algorithm table
 (``rl_zoo3.utils.ALGOS``), every rl_zoo3 name of sb3-smc's algorithm registry
-(``sb3_smc.hyperparameters.ALGORITHM_REGISTRY``) that the table lacks is added to it (``recurrent_trpo``: importing
+(``sb3_smc.core.hyperparameters.ALGORITHM_REGISTRY``) that the table lacks is added to it (``recurrent_trpo``: importing
 ``sb3_smc.recurrent_trpo``; rl_zoo3 has already loaded torch and SB3 by then). Once both have been imported, the
 finder leaves ``sys.meta_path``; a program that imports neither runs no code of sb3-smc beyond that look-up.
 
@@ -45,7 +45,7 @@ def _register(module) -> None:
 
 def _add_zoo_algorithms(module) -> None:
     try:
-        from sb3_smc.hyperparameters import ALGORITHM_REGISTRY
+        from sb3_smc.core.hyperparameters import ALGORITHM_REGISTRY
 
         for algorithm in ALGORITHM_REGISTRY.values():
             if algorithm.zoo_name is not None and algorithm.zoo_name not in module.ALGOS:

@@ -1,4 +1,5 @@
-"""Many SMCs per process (``sb3_smc.batched.train_smcs``) beside ``train_smc`` and stock sb3-contrib, in one run.
+"""Many SMCs per process (``sb3_smc.learning.batched.train_smcs``) beside ``train_smc`` and stock sb3-contrib, in one
+run.
 
 Cases, each in its own subprocess (one torch thread), on ``cl_self-in-left-corner_vs_on-hline``, ``--timesteps``
 steps per SMC, the whole budget (no early stop), the defaults otherwise (16 environments x 125 steps, LSTM 32, one
@@ -36,8 +37,8 @@ _JOB = """
 import json, resource, sys, time, torch
 torch.set_num_threads(1)
 from sb3_smc.records import TrainingSpec
-from sb3_smc.training import train_smc
-from sb3_smc.batched import train_smcs
+from sb3_smc.learning.training import train_smc
+from sb3_smc.learning.batched import train_smcs
 case, env_id, steps, k, learner = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4]), json.loads(sys.argv[5])
 lean = case.endswith("-lean")
 specs = [TrainingSpec.create(env_id, total_timesteps=steps, seed=s, **learner) for s in range(k)]
@@ -45,8 +46,8 @@ returns = []
 if case == "stock":
     from sb3_contrib import RecurrentPPO
     from stable_baselines3.common.logger import Logger
-    from sb3_smc.hyperparameters import constructor_arguments
-    from sb3_smc.training import make_vec_env
+    from sb3_smc.core.hyperparameters import constructor_arguments
+    from sb3_smc.learning.training import make_vec_env
     _, settings = constructor_arguments(TrainingSpec.create(env_id).hyperparameters)  # stock: RecurrentPPO
     model = RecurrentPPO("MlpLstmPolicy", make_vec_env(specs[0]), n_steps=specs[0].budget.env_steps, seed=0,
                          device="cpu", verbose=0, **settings)

@@ -33,9 +33,9 @@ from sb3_smc.curricula import shipped_curricula
 from sb3_smc.curricula.designed import designed_curricula
 from sb3_smc.curricula.format import Curriculum
 from sb3_smc.curricula.jobs import Job, job_name, run_job
+from sb3_smc.learning.training import untrained_smc
 from sb3_smc.library import SMCLibrary
 from sb3_smc.records import Budget, TaskSpec, TrainingSpec
-from sb3_smc.training import untrained_smc
 
 TARGET = "cl_self-in-container_vs_noncontainer"
 SEEDS = 5

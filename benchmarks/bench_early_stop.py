@@ -1,6 +1,6 @@
 """What stopping at the largest return saves: the same jobs with and without the stop, side by side.
 
-``train_smc`` ends training once an update's mean training return is 1 (``sb3_smc.tasks.MAX_RETURN``): no later
+``train_smc`` ends training once an update's mean training return is 1 (``sb3_smc.tasks.task.MAX_RETURN``): no later
 update can be selected then, so the SMC is the one the whole budget gives, bit for bit. This measures, in one run,
 400,000-step jobs trained both ways (one torch thread):
 
@@ -27,11 +27,11 @@ import torch
 
 from sb3_smc.curricula import shipped_curricula
 from sb3_smc.curricula.jobs import node_spec
+from sb3_smc.learning.training import train_smc
 from sb3_smc.library import SMCLibrary
 from sb3_smc.records import TrainingSpec
-from sb3_smc.smc import SMC
-from sb3_smc.tasks import MAX_RETURN
-from sb3_smc.training import train_smc
+from sb3_smc.smc.smc import SMC
+from sb3_smc.tasks.task import MAX_RETURN
 
 ROOT = Path(__file__).resolve().parents[1]
 FLAT = "PW-cl_self-in-container_vs_outside-v0"

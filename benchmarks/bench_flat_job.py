@@ -26,7 +26,7 @@ IDS = ("PW-cl_self-in-container_vs_noncontainer-v0", "PW-ba_self-in-container-v0
 _JOB = """
 import functools, json, sys, torch
 torch.set_num_threads(1)
-import sb3_smc.training as training
+import sb3_smc.learning.training as training
 env_id, algo, timesteps, native = sys.argv[1], sys.argv[2], int(sys.argv[3]), sys.argv[4] == "1"
 if not native:
     training.make_vec_env = functools.partial(training.make_vec_env, native=False)

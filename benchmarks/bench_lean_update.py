@@ -35,14 +35,14 @@ import copy, json, sys, time
 import numpy as np, torch
 torch.set_num_threads(1)
 from sb3_smc.records import TrainingSpec
-from sb3_smc.training import train_smc
+from sb3_smc.learning.training import train_smc
 case, env_id, steps, calls = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4])
 spec = TrainingSpec.create(env_id, total_timesteps=steps, seed=0)
 if case == "stock":
     from sb3_contrib import RecurrentPPO
     from stable_baselines3.common.logger import Logger
-    from sb3_smc.hyperparameters import constructor_arguments
-    from sb3_smc.training import make_vec_env
+    from sb3_smc.core.hyperparameters import constructor_arguments
+    from sb3_smc.learning.training import make_vec_env
     _, settings = constructor_arguments(spec.hyperparameters)
     model = RecurrentPPO("MlpLstmPolicy", make_vec_env(spec), n_steps=spec.budget.env_steps, seed=0, device="cpu",
                          verbose=0, **settings)

@@ -73,7 +73,7 @@ def train_children(cache: Path, trained: bool, tasks: tuple[str, ...] = CHILDREN
     torch.set_num_threads(1)
     import pixelworld_env  # noqa: F401
     from sb3_smc import SMCLibrary, train_smc
-    from sb3_smc.training import untrained_smc
+    from sb3_smc.learning.training import untrained_smc
 
     smcs = []
     for task in tasks:

@@ -1,4 +1,4 @@
-"""Step-policy micro-benchmark: µs per call of the numpy actors of ``sb3_smc.policies`` next to ``model.predict``.
+"""Step-policy micro-benchmark: µs per call of the numpy actors of ``sb3_smc.smc.policies`` next to ``model.predict``.
 
 An SMC called as a child runs one observation at a time, so this per-call cost bounds a level-2 SMC's speed. Cases
 (models from ``untrained_smc(...)`` on a real PixelWorld task; the weights do not change the cost):
@@ -29,9 +29,9 @@ import torch
 from sb3_contrib.common.recurrent.type_aliases import RNNStates
 from stable_baselines3.common.utils import obs_as_tensor
 
-from sb3_smc.envs import make_smc_env
-from sb3_smc.policies import policy_from_model, sample_action
-from sb3_smc.training import untrained_smc
+from sb3_smc.envs.factory import make_smc_env
+from sb3_smc.learning.training import untrained_smc
+from sb3_smc.smc.policies import policy_from_model, sample_action
 
 ENV_ID = "PW-cl_self-in-left-corner_vs_on-hline-v0"
 

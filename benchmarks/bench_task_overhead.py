@@ -2,7 +2,7 @@
 
 On ``MiniGrid-DoorKey-8x8-v0`` with random primitive actions drawn in advance (no signals, so episodes end by the
 environment's own limit or ``max_steps``), one process: the bare environment (``gym.make``), the same in an
-:class:`~sb3_smc.tasks.SMCTask` (goal test and flat sensor after every step), in a
+:class:`~sb3_smc.tasks.task.SMCTask` (goal test and flat sensor after every step), in a
 :class:`~sb3_smc.HierarchicalSMCWrapper` over it (SMC observation: sensor, outcomes, previous action), and the
 primitive steps made inside SMC calls (a scripted child that takes random primitives for its whole call of 100 moves).
 Prints steps per second and microseconds per step over the bare environment. Needs ``pip install minigrid``.
@@ -20,8 +20,8 @@ import numpy as np
 
 from sb3_smc import SMC, HierarchicalSMCWrapper
 from sb3_smc.examples.minigrid_doorkey import OBSERVATION, at_goal
-from sb3_smc.policies import ScriptedPolicy
-from sb3_smc.tasks import SMCTask, layout_of
+from sb3_smc.smc.policies import ScriptedPolicy
+from sb3_smc.tasks.task import SMCTask, layout_of
 
 ENV = "MiniGrid-DoorKey-8x8-v0"
 

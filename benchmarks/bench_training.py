@@ -26,7 +26,7 @@ import torch
 
 import pixelworld_env  # noqa: F401  (registers the PW-* ids)
 from pixelworld_env.datasets import catalog
-from sb3_smc.training import train_smc, untrained_smc
+from sb3_smc.learning.training import train_smc, untrained_smc
 
 FLAT = "PW-cl_self-in-left-corner_vs_on-hline-v0"
 LEVEL2 = "PW-cl_self-in-container_vs_noncontainer-v0"

@@ -59,9 +59,9 @@ def run_one(headlines: list[str], out: str, learner: str, node: str, seed: int, 
 
     from pixelworld_env.atomic import atomic_write
     from sb3_smc.curricula.jobs import job_name
-    from sb3_smc.evaluation import evaluate
+    from sb3_smc.learning.evaluation import evaluate
+    from sb3_smc.learning.training import train_smc
     from sb3_smc.library import SMCLibrary
-    from sb3_smc.training import train_smc
 
     torch.set_num_threads(1)
     path = result_path(out, learner, node, seed)

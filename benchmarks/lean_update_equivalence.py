@@ -3,7 +3,7 @@
 For each target (two classification tasks, one bring-about task) and each seed, one SMC is trained with the default
 update and one with the lean update (:mod:`sb3_smc.common.recurrent.lean_update`), the same spec otherwise
 (``--timesteps`` steps, the defaults, stopping at the largest return), and tested with
-:func:`sb3_smc.evaluation.evaluate` (the test split, the paper's 10 repeats, evaluation seed 0). Per target it
+:func:`sb3_smc.learning.evaluation.evaluate` (the test split, the paper's 10 repeats, evaluation seed 0). Per target it
 compares the means of the selected training return and of the test score over seeds: a paired t-test (same seed,
 same start), Welch's t-test, and equivalence by two one-sided paired t-tests (TOST) within ``--margin`` (0.05: five
 points of a test score in percent, five hundredths of the return, whose largest value is 1).
@@ -35,8 +35,8 @@ def train_and_test(env_id: str, seed: int, lean: bool, timesteps: int) -> dict[s
     """One SMC trained and tested: its selected training return, test score, steps and wall time."""
     import torch
 
-    from sb3_smc.evaluation import evaluate
-    from sb3_smc.training import train_smc
+    from sb3_smc.learning.evaluation import evaluate
+    from sb3_smc.learning.training import train_smc
 
     torch.set_num_threads(1)
     start = time.perf_counter()

@@ -11,10 +11,10 @@ from typing import TYPE_CHECKING, Any
 
 _EXPORTS = {
     "SMCError": "sb3_smc.errors",
-    "SMC": "sb3_smc.smc",
-    "StepPolicy": "sb3_smc.smc",
-    "observation_size": "sb3_smc.smc",
-    "smc_action_names": "sb3_smc.smc",
+    "SMC": "sb3_smc.smc.smc",
+    "StepPolicy": "sb3_smc.smc.smc",
+    "observation_size": "sb3_smc.core.layout",
+    "smc_action_names": "sb3_smc.core.layout",
     "Budget": "sb3_smc.records",
     "EvaluationRecord": "sb3_smc.records",
     "RecordError": "sb3_smc.records",
@@ -23,21 +23,21 @@ _EXPORTS = {
     "TrainingRecord": "sb3_smc.records",
     "TrainingSpec": "sb3_smc.records",
     "WrapperSettings": "sb3_smc.records",
-    "DEFAULT_HYPERPARAMETERS": "sb3_smc.hyperparameters",
-    "initial_action_probabilities": "sb3_smc.bias",
-    "apply_signal_bias": "sb3_smc.bias",
-    "HierarchicalSMCWrapper": "sb3_smc.wrapper",
-    "make_smc_env": "sb3_smc.envs",
-    "FrameStackPolicy": "sb3_smc.policies",
-    "ScriptedPolicy": "sb3_smc.policies",
-    "SequencePolicy": "sb3_smc.policies",
-    "policy_from_model": "sb3_smc.policies",
-    "sample_action": "sb3_smc.policies",
-    "train_smc": "sb3_smc.training",
-    "untrained_smc": "sb3_smc.training",
+    "DEFAULT_HYPERPARAMETERS": "sb3_smc.core.hyperparameters",
+    "initial_action_probabilities": "sb3_smc.learning.bias",
+    "apply_signal_bias": "sb3_smc.learning.bias",
+    "HierarchicalSMCWrapper": "sb3_smc.envs.wrapper",
+    "make_smc_env": "sb3_smc.envs.factory",
+    "FrameStackPolicy": "sb3_smc.smc.policies",
+    "ScriptedPolicy": "sb3_smc.smc.policies",
+    "SequencePolicy": "sb3_smc.smc.policies",
+    "policy_from_model": "sb3_smc.smc.policies",
+    "sample_action": "sb3_smc.smc.policies",
+    "train_smc": "sb3_smc.learning.training",
+    "untrained_smc": "sb3_smc.learning.training",
     "RecurrentTRPO": "sb3_smc.recurrent_trpo",
-    "EvaluationResult": "sb3_smc.evaluation",
-    "evaluate": "sb3_smc.evaluation",
+    "EvaluationResult": "sb3_smc.learning.evaluation",
+    "evaluate": "sb3_smc.learning.evaluation",
     "SMCLibrary": "sb3_smc.library",
     "CorruptModelError": "sb3_smc.library",
     "LayoutMismatchError": "sb3_smc.library",
@@ -101,12 +101,14 @@ def __dir__() -> list[str]:
 
 
 if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs
-    from sb3_smc.bias import apply_signal_bias, initial_action_probabilities
-    from sb3_smc.envs import make_smc_env
+    from sb3_smc.core.hyperparameters import DEFAULT_HYPERPARAMETERS
+    from sb3_smc.core.layout import observation_size, smc_action_names
+    from sb3_smc.envs.factory import make_smc_env
+    from sb3_smc.envs.wrapper import HierarchicalSMCWrapper
     from sb3_smc.errors import SMCError
-    from sb3_smc.evaluation import EvaluationResult, evaluate
-    from sb3_smc.hyperparameters import DEFAULT_HYPERPARAMETERS
-    from sb3_smc.layout import observation_size, smc_action_names
+    from sb3_smc.learning.bias import apply_signal_bias, initial_action_probabilities
+    from sb3_smc.learning.evaluation import EvaluationResult, evaluate
+    from sb3_smc.learning.training import train_smc, untrained_smc
     from sb3_smc.library import (
         CorruptModelError,
         LayoutMismatchError,
@@ -116,7 +118,6 @@ if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs
         SMCLibrary,
         UnknownSMCError,
     )
-    from sb3_smc.policies import FrameStackPolicy, ScriptedPolicy, SequencePolicy, policy_from_model, sample_action
     from sb3_smc.records import (
         Budget,
         EvaluationRecord,
@@ -128,6 +129,5 @@ if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs
         WrapperSettings,
     )
     from sb3_smc.recurrent_trpo import RecurrentTRPO
-    from sb3_smc.smc import SMC, StepPolicy
-    from sb3_smc.training import train_smc, untrained_smc
-    from sb3_smc.wrapper import HierarchicalSMCWrapper
+    from sb3_smc.smc.policies import FrameStackPolicy, ScriptedPolicy, SequencePolicy, policy_from_model, sample_action
+    from sb3_smc.smc.smc import SMC, StepPolicy

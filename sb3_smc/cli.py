@@ -23,6 +23,7 @@ from typing import Any
 
 from pixelworld_env.errors import PixelWorldError
 from sb3_smc import curricula
+from sb3_smc.core.hyperparameters import ALGORITHMS, DEFAULT_ALGORITHM, DEFAULT_TIMESTEPS, RECURRENT_POLICIES
 from sb3_smc.curricula import trainer
 from sb3_smc.curricula.format import describe
 from sb3_smc.curricula.jobs import DEFAULT_REUSE, DEFAULT_SEEDS, REUSE, check_curriculum
@@ -31,7 +32,6 @@ from sb3_smc.curricula.run_directory import status
 from sb3_smc.errors import SMCError
 from sb3_smc.experiments import report, runner
 from sb3_smc.experiments.design import CATEGORIES, DEFAULT_METHODS, DEFAULT_REPEATS, METHOD_REGISTRY, METHODS
-from sb3_smc.hyperparameters import ALGORITHMS, DEFAULT_ALGORITHM, DEFAULT_TIMESTEPS, RECURRENT_POLICIES
 from sb3_smc.library import SMCLibrary, storage
 from sb3_smc.library.pretrained import pretrained_root
 

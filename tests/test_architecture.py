@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from sb3_smc.dag import CycleError, children_first
+from sb3_smc.core.dag import CycleError, children_first
 
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("pixelworld_env", "sb3_smc")
@@ -51,7 +51,7 @@ def test_the_import_graph_has_no_cycle():
 
 def test_the_cycle_check_sees_imports_inside_functions():
     graph = import_graph()
-    assert "sb3_smc.policies" in graph["sb3_smc.library.library"]  # imported in SMCLibrary.load (it loads torch)
+    assert "sb3_smc.smc.policies" in graph["sb3_smc.library.library"]  # imported in SMCLibrary.load (it loads torch)
     graph["sb3_smc.library.storage"].append("sb3_smc.library.library")  # what an import back inside a function adds
     with pytest.raises(CycleError, match=r"sb3_smc\.library\.library -> .*sb3_smc\.library\.storage -> "
                                          r"sb3_smc\.library\.library"):

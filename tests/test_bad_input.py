@@ -16,9 +16,9 @@ import pixelworld_env  # noqa: F401  (registers the PW-* ids)
 from pixelworld_env import PixelWorldEnv, Scene
 from pixelworld_env.datasets.loading import load_dataset
 from pixelworld_env.validation import MAX_SEED, check_action, check_seed
-from sb3_smc.policies import SequencePolicy
-from sb3_smc.smc import SMC
-from sb3_smc.wrapper import HierarchicalSMCWrapper
+from sb3_smc.envs.wrapper import HierarchicalSMCWrapper
+from sb3_smc.smc.policies import SequencePolicy
+from sb3_smc.smc.smc import SMC
 from tests.helpers import CONTAINER, IN_CONTAINER, classification_env, make, sb3_smc_cli
 
 DATASET = "cl_self-in-left-corner_vs_on-hline"
@@ -75,7 +75,7 @@ def test_numpy_integer_seeds_are_seeds():
 
 
 def test_training_and_evaluation_seeds_are_checked():
-    from sb3_smc.evaluation import evaluate
+    from sb3_smc.learning.evaluation import evaluate
     from sb3_smc.records import RecordError, TrainingSpec
 
     with pytest.raises(RecordError, match="seed must be >= 0, got -2"):
@@ -91,7 +91,7 @@ def test_training_and_evaluation_seeds_are_checked():
 
 @pytest.mark.parametrize("observation", ["hand_raw", "full"])
 def test_smcs_refuse_observations_they_cannot_use(observation):
-    from sb3_smc.training import untrained_smc
+    from sb3_smc.learning.training import untrained_smc
 
     with pytest.raises(ValueError, match=f"needs observation='hand', got '{observation}'"):
         untrained_smc(ENV_ID, n_envs=1, env_kwargs={"observation": observation})
@@ -224,9 +224,9 @@ def test_report_errors_name_the_file_and_what_to_do(tmp_path, monkeypatch):
 # ------------------------------------------------------------------------------------------------ sb3_smc's API
 
 def test_train_smc_trains_or_says_why_not():
-    from sb3_smc.envs import make_smc_env
+    from sb3_smc.envs.factory import make_smc_env
+    from sb3_smc.learning.training import train_smc, untrained_smc
     from sb3_smc.records import TaskSpec, TrainingSpec
-    from sb3_smc.training import train_smc, untrained_smc
 
     with pytest.raises(ValueError, match=r"total_timesteps must be >= 1, got 0 \(nothing would be trained\); "
                                          r"untrained_smc\(...\)"):
@@ -278,7 +278,7 @@ def test_train_smc_trains_or_says_why_not():
 
 
 def test_smc_tasks_say_what_their_functions_and_callers_got_wrong():
-    from sb3_smc.tasks import SMCTask
+    from sb3_smc.tasks.task import SMCTask
 
     def answers_no(env: gym.Env) -> str:
         return "no"
@@ -314,8 +314,8 @@ def test_stepping_a_pixelworld_env_or_an_smc_wrapper_before_reset_says_so() -> N
 
 
 def test_train_smc_says_that_a_registered_task_must_take_max_steps():
-    from sb3_smc.tasks import SMCTask
-    from sb3_smc.training import train_smc
+    from sb3_smc.learning.training import train_smc
+    from sb3_smc.tasks.task import SMCTask
 
     gym.register("BadInputNoMaxSteps-v0", entry_point=lambda: SMCTask(gym.make("CartPole-v1"), "bring-about",
                                                                       goal=lambda env: False))

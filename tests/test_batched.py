@@ -1,4 +1,5 @@
-"""Training many flat SMCs at once (:mod:`sb3_smc.batched`): each SMC is the one ``train_smc`` gives, bit for bit."""
+"""Training many flat SMCs at once (:mod:`sb3_smc.learning.batched`): each SMC is the one ``train_smc`` gives, bit for
+bit."""
 
 from __future__ import annotations
 
@@ -10,11 +11,11 @@ import torch
 from sb3_contrib import RecurrentPPO
 
 import pixelworld_env  # noqa: F401  (registers the PW-* ids)
-from sb3_smc.batched import batchable, train_smcs
 from sb3_smc.errors import SMCError
+from sb3_smc.learning.batched import batchable, train_smcs
+from sb3_smc.learning.training import train_smc
 from sb3_smc.records import TrainingSpec
-from sb3_smc.smc import SMC
-from sb3_smc.training import train_smc
+from sb3_smc.smc.smc import SMC
 
 CORNER_ID = "PW-cl_self-in-left-corner_vs_on-hline-v0"
 ABOVE_ID = "PW-ba_self-on-something_from_directly-above-v0"
@@ -73,7 +74,7 @@ def test_recurrent_trpo_gru_and_mixed_groups() -> None:
 
 
 def test_batched_smcs_save_load_and_go_into_a_library(tmp_path: Path) -> None:
-    from sb3_smc.evaluation import evaluate
+    from sb3_smc.learning.evaluation import evaluate
     from sb3_smc.library import SMCLibrary
 
     specs = [TrainingSpec.create(CORNER_ID, total_timesteps=4_000, seed=s, name=f"corner@{s}") for s in (0, 1)]

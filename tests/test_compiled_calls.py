@@ -15,10 +15,10 @@ import pixelworld_env  # noqa: F401  (the PW-* ids)
 from pixelworld_env import PixelWorldEnv, Scene
 from pixelworld_env.core.world import World
 from sb3_smc import SMC
-from sb3_smc.layout import observation_size, smc_action_names
-from sb3_smc.numpy_actors import NumpyGRUPolicy, NumpyLSTMPolicy
-from sb3_smc.policies import ScriptedPolicy
-from sb3_smc.wrapper import HierarchicalSMCWrapper
+from sb3_smc.core.layout import observation_size, smc_action_names
+from sb3_smc.envs.wrapper import HierarchicalSMCWrapper
+from sb3_smc.smc.numpy_actors import NumpyGRUPolicy, NumpyLSTMPolicy
+from sb3_smc.smc.policies import ScriptedPolicy
 from tests.helpers import CONTAINER, IN_CONTAINER, classification_env, make
 
 

@@ -13,11 +13,11 @@ import torch
 from sb3_contrib import RecurrentPPO
 
 from sb3_smc import SMC, SMCLibrary, evaluate
-from sb3_smc.hyperparameters import constructor_arguments
-from sb3_smc.policies import policy_from_model
+from sb3_smc.core.hyperparameters import constructor_arguments
+from sb3_smc.learning.training import make_vec_env
 from sb3_smc.records import TrainingSpec
 from sb3_smc.recurrent_trpo import RecurrentTRPO
-from sb3_smc.training import make_vec_env
+from sb3_smc.smc.policies import policy_from_model
 from tests.test_recurrent_trpo import CORNER_ID, _recall_rate, _recurrent
 
 DEVICE = "cuda"

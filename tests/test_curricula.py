@@ -168,8 +168,8 @@ def test_a_valid_file_round_trips_and_resolves(tmp_path):
 def test_a_budget_scale_multiplies_whichever_budget_a_node_has(tmp_path):
     """``budget_scale`` multiplies the run's budget, the node's own or the default; it round-trips through the file
     format, and a node without one has the settings it had before the key existed (runs of then resume)."""
+    from sb3_smc.core.hyperparameters import DEFAULT_TIMESTEPS
     from sb3_smc.curricula.jobs import node_budget, node_spec
-    from sb3_smc.hyperparameters import DEFAULT_TIMESTEPS
 
     text = TINY.replace("    uses: [left, above]", "    uses: [left, above]\n    budget_scale: 2.5")
     curriculum = parse_curriculum(text.replace("  - name: above\n", "  - name: above\n    timesteps: 3000\n"))

@@ -10,8 +10,8 @@ from stable_baselines3.common.buffers import RolloutBuffer
 
 from sb3_smc import SMC, train_smc
 from sb3_smc.common.discounting import gae
-from sb3_smc.policies import ScriptedPolicy
 from sb3_smc.records import TrainingSpec, WrapperSettings
+from sb3_smc.smc.policies import ScriptedPolicy
 
 CORNER_ID = "PW-cl_self-in-left-corner_vs_on-hline-v0"
 CONTAINER_ID = "PW-cl_self-in-container_vs_noncontainer-v0"

@@ -1,4 +1,4 @@
-"""The one environment factory (sb3_smc.envs.make_smc_env): what training, evaluation, the library and the
+"""The one environment factory (sb3_smc.envs.factory.make_smc_env): what training, evaluation, the library and the
 rl_zoo3 entry build is the same environment, with the spec's settings."""
 
 from __future__ import annotations
@@ -8,13 +8,13 @@ import numpy as np
 import pytest
 
 import pixelworld_env  # noqa: F401  (registers the PW-* ids)
-from sb3_smc.envs import make_smc_env, pixelworld_base, spec_for_smc
-from sb3_smc.evaluation import make_evaluation_env
-from sb3_smc.policies import ScriptedPolicy
+from sb3_smc.envs.factory import make_smc_env, pixelworld_base, spec_for_smc
+from sb3_smc.envs.wrapper import HierarchicalSMCWrapper
+from sb3_smc.learning.evaluation import make_evaluation_env
+from sb3_smc.learning.training import make_vec_env
 from sb3_smc.records import TrainingSpec, WrapperSettings
-from sb3_smc.smc import SMC
-from sb3_smc.training import make_vec_env
-from sb3_smc.wrapper import HierarchicalSMCWrapper
+from sb3_smc.smc.policies import ScriptedPolicy
+from sb3_smc.smc.smc import SMC
 from sb3_smc.zoo import smc_env
 
 CONTAINER_ID = "PW-cl_self-in-container_vs_noncontainer-v0"
@@ -58,8 +58,8 @@ def test_the_spec_decides_the_environment():
 
 def test_training_evaluation_library_and_zoo_build_the_same_environment(tmp_path):
     """Same seed, same actions: the same observations, rewards and call lengths from every builder."""
+    from sb3_smc.learning.training import untrained_smc
     from sb3_smc.library import SMCLibrary
-    from sb3_smc.training import untrained_smc
 
     children = [untrained_smc("PW-ba_self-on-something_from_directly-above-v0", n_envs=1, seed=1),
                 untrained_smc("PW-cl_self-in-left-corner_vs_on-hline-v0", n_envs=1, seed=2)]

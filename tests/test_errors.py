@@ -114,7 +114,7 @@ def test_training_and_vector_env_input_errors_are_package_errors() -> None:
     import gymnasium as gym
 
     from sb3_smc import train_smc
-    from sb3_smc.wrapper import HierarchicalSMCWrapper
+    from sb3_smc.envs.wrapper import HierarchicalSMCWrapper
 
     with pytest.raises(SMCError, match="takes no argument 'spilt'"):
         train_smc(ID, total_timesteps=64, n_envs=2, n_steps=32, env_kwargs={"spilt": "test"})

@@ -1,4 +1,4 @@
-"""The paper's test protocol (``sb3_smc.evaluation.evaluate``) with scripted SMCs on a real PixelWorld env."""
+"""The paper's test protocol (``sb3_smc.learning.evaluation.evaluate``) with scripted SMCs on a real PixelWorld env."""
 
 from __future__ import annotations
 
@@ -7,11 +7,11 @@ import pytest
 
 import pixelworld_env  # noqa: F401  (registers the PW-* ids)
 from pixelworld_env.datasets.loading import load_dataset
-from sb3_smc.evaluation import evaluate
-from sb3_smc.layout import smc_action_names
-from sb3_smc.policies import ScriptedPolicy
+from sb3_smc.core.layout import smc_action_names
+from sb3_smc.learning.evaluation import evaluate
 from sb3_smc.records import WrapperSettings
-from sb3_smc.smc import SMC
+from sb3_smc.smc.policies import ScriptedPolicy
+from sb3_smc.smc.smc import SMC
 from tests.helpers import UniformPolicy
 
 CORNER = "cl_self-in-left-corner_vs_on-hline"

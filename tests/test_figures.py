@@ -13,8 +13,8 @@ import pytest
 from sb3_smc.experiments import figures
 from sb3_smc.experiments.design import METHOD_REGISTRY, level2_targets
 from sb3_smc.experiments.report import write_report
-from sb3_smc.policies import ScriptedPolicy
-from sb3_smc.smc import SMC
+from sb3_smc.smc.policies import ScriptedPolicy
+from sb3_smc.smc.smc import SMC
 from tests.test_experiments import _synthetic_table
 
 DEMO_TARGET = "cl_self-in-container_vs_noncontainer"

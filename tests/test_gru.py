@@ -10,9 +10,9 @@ from sb3_contrib import RecurrentPPO
 
 from sb3_smc import SMCLibrary, evaluate, train_smc, untrained_smc
 from sb3_smc.common.recurrent import GRUAsLSTM, SequenceGruPolicy, SequenceLstmPolicy
-from sb3_smc.numpy_actors import NumpyGRUPolicy
+from sb3_smc.envs.vec_env import answer_in_batches
 from sb3_smc.records import RecordError, TrainingSpec
-from sb3_smc.vec_env import answer_in_batches
+from sb3_smc.smc.numpy_actors import NumpyGRUPolicy
 
 CORNER_ID = "PW-cl_self-in-left-corner_vs_on-hline-v0"
 ABOVE_ID = "PW-ba_self-on-something_from_directly-above-v0"

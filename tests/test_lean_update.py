@@ -14,7 +14,7 @@ from sb3_contrib import RecurrentPPO
 import pixelworld_env  # noqa: F401  (registers the PW-* ids)
 from sb3_smc.common.recurrent.lean_update import _plain_heads, lean_train, lean_update_applies, use_lean_update
 from sb3_smc.errors import SMCError
-from sb3_smc.training import train_smc
+from sb3_smc.learning.training import train_smc
 from tests.helpers import import_benchmark
 
 CORNER_ID = "PW-cl_self-in-left-corner_vs_on-hline-v0"

@@ -21,7 +21,9 @@ from sb3_contrib import TRPO, RecurrentPPO
 from stable_baselines3 import PPO
 
 import pixelworld_env  # noqa: F401  (registers the PW-* ids)
-from sb3_smc.evaluation import evaluate
+from sb3_smc.envs.wrapper import HierarchicalSMCWrapper
+from sb3_smc.learning.evaluation import evaluate
+from sb3_smc.learning.training import train_smc
 from sb3_smc.library import (
     FORMAT,
     FORMAT_VERSION,
@@ -35,12 +37,10 @@ from sb3_smc.library import (
     storage,
 )
 from sb3_smc.library.manifest import ENTRY_CHECKSUM, MANIFEST_CHECKSUM, content_sha256, seal
-from sb3_smc.policies import ScriptedPolicy, policy_from_model
 from sb3_smc.records import Budget, EvaluationRecord, TaskSpec, TrainingRecord, TrainingSpec, package_versions
-from sb3_smc.smc import SMC
-from sb3_smc.tasks import SMCTask
-from sb3_smc.training import train_smc
-from sb3_smc.wrapper import HierarchicalSMCWrapper
+from sb3_smc.smc.policies import ScriptedPolicy, policy_from_model
+from sb3_smc.smc.smc import SMC
+from sb3_smc.tasks.task import SMCTask
 from tests.helpers import sb3_smc_cli
 
 CL_ID = "PW-cl_self-in-left-corner_vs_on-hline-v0"
@@ -821,7 +821,7 @@ def test_a_version_2_entry_without_a_spec_loads(smcs, tmp_path):
 def test_version_0_1_models_name_a_policy_class_that_still_imports():
     """sb3-smc 0.1 pickled its LSTM policy class as sb3_smc.training.SequenceLstmPolicy."""
     from sb3_smc.common.recurrent import SequenceLstmPolicy
-    from sb3_smc.training import SequenceLstmPolicy as legacy
+    from sb3_smc.learning.training import SequenceLstmPolicy as legacy
 
     assert legacy is SequenceLstmPolicy
 

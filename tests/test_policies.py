@@ -1,4 +1,4 @@
-"""sb3_smc.policies: numpy actors match SB3's distributions, scripted policies, sampling, pickling.
+"""sb3_smc.smc.policies: numpy actors match SB3's distributions, scripted policies, sampling, pickling.
 
 The speed of the numpy actors is measured by ``benchmarks/bench_policies.py``.
 """
@@ -17,7 +17,7 @@ from stable_baselines3 import DQN, PPO
 from stable_baselines3.common.vec_env import DummyVecEnv
 from torch import nn
 
-from sb3_smc.numpy_actors import (
+from sb3_smc.smc.numpy_actors import (
     COMPILED_BATCH_FROM,
     NumpyGRUPolicy,
     NumpyLSTMPolicy,
@@ -25,7 +25,7 @@ from sb3_smc.numpy_actors import (
     _activate,
     _compilable,
 )
-from sb3_smc.policies import (
+from sb3_smc.smc.policies import (
     ScriptedPolicy,
     SequencePolicy,
     _activation_spec,
@@ -33,7 +33,7 @@ from sb3_smc.policies import (
     sample_action,
     sample_actions,
 )
-from sb3_smc.smc import StepPolicy
+from sb3_smc.smc.smc import StepPolicy
 
 N_ACTIONS = 6
 SIDE = 9

@@ -16,8 +16,7 @@ import numpy as np
 import pytest
 from torch import nn
 
-from sb3_smc.hyperparameters import DEFAULT_HYPERPARAMETERS, constructor_arguments
-from sb3_smc.policies import ScriptedPolicy
+from sb3_smc.core.hyperparameters import DEFAULT_HYPERPARAMETERS, constructor_arguments
 from sb3_smc.records import (
     Budget,
     EvaluationRecord,
@@ -28,7 +27,8 @@ from sb3_smc.records import (
     TrainingSpec,
     WrapperSettings,
 )
-from sb3_smc.smc import SMC
+from sb3_smc.smc.policies import ScriptedPolicy
+from sb3_smc.smc.smc import SMC
 
 ROOT = Path(__file__).resolve().parents[1]
 CORNER_ID = "PW-cl_self-in-left-corner_vs_on-hline-v0"
@@ -169,7 +169,7 @@ def _fresh_import(code: str) -> str:
 def test_records_and_pixelworld_import_no_torch():
     loaded = _fresh_import(
         "import sys\n"
-        "import sb3_smc.records, sb3_smc.hyperparameters, sb3_smc\n"
+        "import sb3_smc.records, sb3_smc.core.hyperparameters, sb3_smc\n"
         "spec = sb3_smc.TrainingSpec.create('PW-cl_self-in-left-corner_vs_on-hline-v0')\n"
         "import pixelworld_env\n"
         "print(sorted(m for m in ('torch', 'stable_baselines3', 'sb3_contrib') if m in sys.modules))")

@@ -1,4 +1,4 @@
-"""The two registries: the algorithms (:data:`sb3_smc.hyperparameters.ALGORITHM_REGISTRY`) and the experiment's
+"""The two registries: the algorithms (:data:`sb3_smc.core.hyperparameters.ALGORITHM_REGISTRY`) and the experiment's
 methods (:data:`sb3_smc.experiments.design.METHOD_REGISTRY`), and that what trains, stores, plans and parses reads
 them: each entry builds its model, the library and rl_zoo3 take their names and classes from it, the ``sb3-smc``
 options' choices and defaults are the registries' and the run defaults'."""
@@ -15,6 +15,16 @@ from typing import Any
 import pytest
 from sb3_contrib.common.recurrent.policies import RecurrentActorCriticPolicy
 
+from sb3_smc.core.hyperparameters import (
+    ALGORITHM_REGISTRY,
+    ALGORITHMS,
+    DEFAULT_ALGORITHM,
+    DEFAULT_HYPERPARAMETERS,
+    DEFAULT_TIMESTEPS,
+    RECURRENT_POLICIES,
+    algorithm,
+    recurrent_policy,
+)
 from sb3_smc.curricula import shipped_curricula
 from sb3_smc.curricula.trainer import BACKENDS, DEFAULT_REUSE, DEFAULT_SEEDS
 from sb3_smc.experiments.design import (
@@ -27,19 +37,9 @@ from sb3_smc.experiments.design import (
     SWEEP_METHODS,
     plan,
 )
-from sb3_smc.hyperparameters import (
-    ALGORITHM_REGISTRY,
-    ALGORITHMS,
-    DEFAULT_ALGORITHM,
-    DEFAULT_HYPERPARAMETERS,
-    DEFAULT_TIMESTEPS,
-    RECURRENT_POLICIES,
-    algorithm,
-    recurrent_policy,
-)
+from sb3_smc.learning.training import train_smc, untrained_smc
 from sb3_smc.library import storage
 from sb3_smc.records import Budget, TaskSpec, TrainingSpec
-from sb3_smc.training import train_smc, untrained_smc
 from sb3_smc.zoo import ZOO_ALGOS, hyperparams_for, render_config
 from tests.helpers import sb3_smc_cli
 

@@ -1,5 +1,5 @@
-"""A task resolved once (sb3_smc.resolved_task): what an env id names, its environments, and the one look-up of the
-id on the way from train_smc / train_smcs / make_smc_env to a step; the records stay free of Gymnasium."""
+"""A task resolved once (sb3_smc.tasks.resolved_task): what an env id names, its environments, and the one look-up of
+the id on the way from train_smc / train_smcs / make_smc_env to a step; the records stay free of Gymnasium."""
 
 from __future__ import annotations
 
@@ -12,18 +12,18 @@ import numpy as np
 import pytest
 
 import pixelworld_env  # noqa: F401  (registers the PW-* ids)
-import sb3_smc.resolved_task as resolver
+import sb3_smc.tasks.resolved_task as resolver
 from pixelworld_env.envs.env import PixelWorldEnv
 from pixelworld_env.envs.vector import PixelWorldVectorEnv
-from sb3_smc.batched import train_smcs
-from sb3_smc.envs import make_smc_env
+from sb3_smc.core.layout import PIXELWORLD_LAYOUT, Layout
+from sb3_smc.envs.factory import make_smc_env
+from sb3_smc.envs.vec_env import FlatSMCVecEnv, SMCVecEnv
 from sb3_smc.errors import SMCError
-from sb3_smc.layout import PIXELWORLD_LAYOUT, Layout
+from sb3_smc.learning.batched import train_smcs
+from sb3_smc.learning.training import untrained_smc
 from sb3_smc.records import TaskSpec, TrainingSpec
-from sb3_smc.resolved_task import TaskSource, resolve_task
-from sb3_smc.tasks import SMCTask
-from sb3_smc.training import untrained_smc
-from sb3_smc.vec_env import FlatSMCVecEnv, SMCVecEnv
+from sb3_smc.tasks.resolved_task import TaskSource, resolve_task
+from sb3_smc.tasks.task import SMCTask
 
 ROOT = Path(__file__).resolve().parents[1]
 ID = "PW-ba_self-in-container-v0"
@@ -132,7 +132,7 @@ def test_bad_ids_and_kwargs_are_refused_with_their_messages() -> None:
 
 
 def test_train_smc_refuses_a_bad_id_or_kwarg_before_any_work(monkeypatch: pytest.MonkeyPatch) -> None:
-    import sb3_smc.training as training
+    import sb3_smc.learning.training as training
 
     def no_work(*args, **kwargs):
         raise AssertionError("work started")
@@ -185,7 +185,7 @@ def test_the_records_import_no_gymnasium_and_resolve_through_the_resolver() -> N
     """No module of sb3_smc.records imports Gymnasium, numba, torch or a module that builds environments, at any
     level; ``TaskSpec.resolved`` imports only the resolver, inside the function."""
     heavy = ("gymnasium", "numba", "torch", "stable_baselines3", "sb3_contrib", "pixelworld_env.envs",
-             "pixelworld_env.datasets", "sb3_smc.tasks", "sb3_smc.envs", "sb3_smc.training")
+             "pixelworld_env.datasets", "sb3_smc.tasks.task", "sb3_smc.envs.factory", "sb3_smc.learning.training")
     found = {}
     for path in sorted((ROOT / "sb3_smc" / "records").glob("*.py")):
         for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
@@ -196,7 +196,7 @@ def test_the_records_import_no_gymnasium_and_resolve_through_the_resolver() -> N
                 found.setdefault(path.name, []).extend(bad)
     assert found == {}
     resolved = TaskSpec.resolved
-    assert "sb3_smc.resolved_task" in ast.dump(ast.parse(_source(resolved)))
+    assert "sb3_smc.tasks.resolved_task" in ast.dump(ast.parse(_source(resolved)))
 
 
 def _source(function) -> str:

@@ -103,7 +103,7 @@ INSTALLS = ["installed", "editable"]
 IMPORTS = {
     "import pixelworld_env": "import pixelworld_env",
     "import gymnasium": f"import gymnasium; assert '{POOL}' in gymnasium.registry",
-    "import sb3_smc": "import sb3_smc, sb3_smc.training",
+    "import sb3_smc": "import sb3_smc, sb3_smc.learning.training",
     "pixelworld list": "import sys; from pixelworld_env.cli import main; sys.exit(main(['list']))",
     "sb3-smc curricula": "import sys; from sb3_smc.cli import main; sys.exit(main(['curricula']))",
 }

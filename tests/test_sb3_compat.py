@@ -1,5 +1,5 @@
 """PPO, TRPO and RecurrentPPO construct and train on every observation of PixelWorldEnv; PPO's CnnPolicy on the image
-observation with :class:`sb3_smc.features.PixelWorldCNN`."""
+observation with :class:`sb3_smc.learning.features.PixelWorldCNN`."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ from stable_baselines3.common.preprocessing import preprocess_obs
 from stable_baselines3.common.vec_env import VecTransposeImage, is_vecenv_wrapped
 
 import pixelworld_env  # noqa: F401  (registers the PW-* ids)
-from sb3_smc.features import PixelWorldCNN
+from sb3_smc.learning.features import PixelWorldCNN
 from tests.helpers import classification_env, make
 
 ALGOS = {"PPO": (PPO, "MlpPolicy"), "TRPO": (TRPO, "MlpPolicy"), "RecurrentPPO": (RecurrentPPO, "MlpLstmPolicy")}

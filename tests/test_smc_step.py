@@ -1,4 +1,4 @@
-"""The SMC observation and the step's rules are defined once (``sb3_smc.smc_step``) and both step paths use them:
+"""The SMC observation and the step's rules are defined once (``sb3_smc.envs.smc_step``) and both step paths use them:
 ``HierarchicalSMCWrapper`` (one environment) and ``FlatSMCVecEnv`` (arrays of environments). The equality of the
 two paths' transitions is tested in ``tests/test_vec_env.py``; here, that the shared definitions are the ones each
 path calls: changed here, both paths change."""
@@ -11,12 +11,13 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-from sb3_smc import SMC, smc_step
-from sb3_smc.layout import observation_size, smc_action_names
-from sb3_smc.policies import ScriptedPolicy
-from sb3_smc.smc_step import NO_ACTION, SMCObservation
-from sb3_smc.vec_env import FlatSMCVecEnv
-from sb3_smc.wrapper import HierarchicalSMCWrapper
+from sb3_smc import SMC
+from sb3_smc.core.layout import observation_size, smc_action_names
+from sb3_smc.envs import smc_step
+from sb3_smc.envs.smc_step import NO_ACTION, SMCObservation
+from sb3_smc.envs.vec_env import FlatSMCVecEnv
+from sb3_smc.envs.wrapper import HierarchicalSMCWrapper
+from sb3_smc.smc.policies import ScriptedPolicy
 
 ENV_ID = "PW-cl_self-in-container_vs_noncontainer-v0"
 MOVES = ("DOWN", "RIGHT", "UP", "LEFT")

@@ -11,10 +11,10 @@ import pytest
 from gymnasium import spaces
 
 from sb3_smc import SMC, HierarchicalSMCWrapper, train_smc
+from sb3_smc.core.layout import Layout
 from sb3_smc.errors import SMCError, SMCTypeError
-from sb3_smc.layout import Layout
-from sb3_smc.policies import ScriptedPolicy
-from sb3_smc.tasks import SMCTask, TaskEnv, layout_of, task_layer
+from sb3_smc.smc.policies import ScriptedPolicy
+from sb3_smc.tasks.task import SMCTask, TaskEnv, layout_of, task_layer
 
 LEFT, RIGHT, STAY = 0, 1, 2
 
@@ -214,7 +214,7 @@ def test_minigrid_doorkey_as_an_smc_task() -> None:
 
 def test_evaluate_on_a_task_without_datasets_uses_start_seeds() -> None:
     from sb3_smc import evaluate
-    from sb3_smc.evaluation import FOREIGN_TEST_SEED, start_seed
+    from sb3_smc.learning.evaluation import FOREIGN_TEST_SEED, start_seed
     from sb3_smc.records import TaskSpec, TrainingSpec
 
     env_id = _register_corridor()

@@ -22,17 +22,17 @@ from stable_baselines3.common.callbacks import BaseCallback, CallbackList
 from stable_baselines3.common.vec_env import DummyVecEnv, VecFrameStack
 
 import pixelworld_env  # noqa: F401  (registers the PW-* ids)
-from sb3_smc.bias import initial_action_probabilities
-from sb3_smc.callbacks import BestSnapshot, SMCTrainingCallback
 from sb3_smc.common.recurrent import CompactRecurrentRolloutBuffer, SequenceLstmPolicy
-from sb3_smc.envs import make_smc_env
-from sb3_smc.evaluation import evaluate
+from sb3_smc.core.layout import smc_action_names
+from sb3_smc.envs.factory import make_smc_env
 from sb3_smc.experiments.runner import cpu_model
-from sb3_smc.layout import smc_action_names
-from sb3_smc.policies import FrameStackPolicy, ScriptedPolicy, policy_from_model
+from sb3_smc.learning.bias import initial_action_probabilities
+from sb3_smc.learning.callbacks import BestSnapshot, SMCTrainingCallback
+from sb3_smc.learning.evaluation import evaluate
+from sb3_smc.learning.training import resolve_children, train_smc, untrained_smc
 from sb3_smc.records import TrainingSpec, smc_name_from_env_id
-from sb3_smc.smc import SMC
-from sb3_smc.training import resolve_children, train_smc, untrained_smc
+from sb3_smc.smc.policies import FrameStackPolicy, ScriptedPolicy, policy_from_model
+from sb3_smc.smc.smc import SMC
 
 CORNER_ID = "PW-cl_self-in-left-corner_vs_on-hline-v0"
 RIGHT_CORNER_ID = "PW-cl_self-in-right-corner_vs_on-hline-v0"
@@ -193,7 +193,7 @@ def test_training_stops_at_the_largest_return_with_the_snapshot_the_whole_budget
     """Once an update's mean training return is MAX_RETURN no later one can be selected (ties keep the earliest):
     training stops there with the weights the whole budget selects; its record ends at the selected update. A task
     whose rewards a wrapper changes may return more: it runs its whole budget."""
-    from sb3_smc.tasks import MAX_RETURN
+    from sb3_smc.tasks.task import MAX_RETURN
 
     lines: list[str] = []
     budget = dict(seed=1, total_timesteps=60_000)  # 30 updates; this seed first reaches return 1 at update 18
@@ -211,9 +211,9 @@ def test_training_stops_at_the_largest_return_with_the_snapshot_the_whole_budget
     assert all(torch.equal(first[name], second[name]) for name in first)
     assert "the largest there is: stopped there" in lines[-1]
 
-    from sb3_smc.envs import make_smc_env
-    from sb3_smc.tasks import returns_bounded, task_layer
-    from sb3_smc.wrapper import HierarchicalSMCWrapper
+    from sb3_smc.envs.factory import make_smc_env
+    from sb3_smc.envs.wrapper import HierarchicalSMCWrapper
+    from sb3_smc.tasks.task import returns_bounded, task_layer
 
     plain = make_smc_env(stopped.spec)
     assert plain.returns_bounded and returns_bounded(task_layer(plain))

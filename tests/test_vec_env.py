@@ -13,13 +13,13 @@ from stable_baselines3.common.vec_env import DummyVecEnv
 
 from sb3_smc import SMC
 from sb3_smc.common.recurrent import SequenceLstmPolicy
-from sb3_smc.layout import observation_size, smc_action_names
-from sb3_smc.numpy_actors import NumpyLSTMPolicy
-from sb3_smc.policies import ScriptedPolicy
+from sb3_smc.core.layout import observation_size, smc_action_names
+from sb3_smc.envs.vec_env import FlatSMCVecEnv, SMCVecEnv, answer_in_batches
+from sb3_smc.envs.wrapper import HierarchicalSMCWrapper
+from sb3_smc.learning.training import make_vec_env, train_smc, untrained_smc
 from sb3_smc.records import TrainingSpec
-from sb3_smc.training import make_vec_env, train_smc, untrained_smc
-from sb3_smc.vec_env import FlatSMCVecEnv, SMCVecEnv, answer_in_batches
-from sb3_smc.wrapper import HierarchicalSMCWrapper
+from sb3_smc.smc.numpy_actors import NumpyLSTMPolicy
+from sb3_smc.smc.policies import ScriptedPolicy
 from tests.helpers import classification_env
 
 
@@ -197,7 +197,7 @@ def test_train_smc_on_the_native_env_is_bit_identical(algo: str, frame_stack: in
                                                       monkeypatch: pytest.MonkeyPatch) -> None:
     """A flat SMC trained in FlatSMCVecEnv (train_smc's choice) is the one trained in SMCVecEnv: the same returns,
     selected update and weights."""
-    import sb3_smc.training as training
+    import sb3_smc.learning.training as training
 
     settings = dict(algo=algo, total_timesteps=768, n_envs=4, n_steps=64, seed=5, frame_stack=frame_stack,
                     **({"batch_size": 128} if algo == "PPO" else {}))

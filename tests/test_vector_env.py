@@ -217,7 +217,7 @@ def test_render_first_or_all(mode: str) -> None:
 def sb3_pair(env_id: str, n: int, **kwargs):
     from stable_baselines3.common.vec_env import DummyVecEnv
 
-    from sb3_smc.gymnasium_vec_env import GymnasiumVecEnv
+    from sb3_smc.envs.gymnasium_vec_env import GymnasiumVecEnv
 
     return (GymnasiumVecEnv(native(env_id, n, **kwargs)),
             DummyVecEnv([lambda: gym.make(env_id, **kwargs) for _ in range(n)]))

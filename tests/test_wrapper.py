@@ -10,9 +10,9 @@ import pytest
 
 from pixelworld_env import PixelWorldEnv, Scene
 from sb3_smc import SMC
-from sb3_smc.layout import smc_action_names
-from sb3_smc.policies import ScriptedPolicy, SequencePolicy
-from sb3_smc.wrapper import HierarchicalSMCWrapper
+from sb3_smc.core.layout import smc_action_names
+from sb3_smc.envs.wrapper import HierarchicalSMCWrapper
+from sb3_smc.smc.policies import ScriptedPolicy, SequencePolicy
 from tests.helpers import UniformPolicy
 
 CONTAINER = """
@@ -215,7 +215,7 @@ def test_policy_with_the_wrong_number_of_actions_is_reported() -> None:
 
 def test_children_with_the_wrong_observation_layout_are_refused_at_construction() -> None:
     """A child (at any depth) whose policy was built for other children is named with what it expects and gets."""
-    from sb3_smc.policies import FrameStackPolicy
+    from sb3_smc.smc.policies import FrameStackPolicy
 
     walker = SMC("walker", "bring-about", SequencePolicy(5, [1]))
     mlp = SimpleNamespace(observation_size=90, n_actions=6, initial_state=lambda: None)
@@ -260,7 +260,7 @@ def test_wrapping_a_trained_smc_shares_it() -> None:
 
     from sb3_contrib import RecurrentPPO
 
-    from sb3_smc.policies import policy_from_model
+    from sb3_smc.smc.policies import policy_from_model
 
     env = HierarchicalSMCWrapper(base_env())
     model = RecurrentPPO("MlpLstmPolicy", env, n_steps=32, batch_size=32, seed=0, device="cpu",

@@ -17,11 +17,11 @@ from stable_baselines3.common.env_util import make_vec_env
 from torch import nn
 
 import pixelworld_env  # noqa: F401  (registers the PW-* ids, what --gym-packages pixelworld_env does)
-from sb3_smc.hyperparameters import DEFAULT_HYPERPARAMETERS
+from sb3_smc.core.hyperparameters import DEFAULT_HYPERPARAMETERS
+from sb3_smc.envs.wrapper import HierarchicalSMCWrapper
 from sb3_smc.library import SMCLibrary
-from sb3_smc.policies import policy_from_model
-from sb3_smc.smc import SMC
-from sb3_smc.wrapper import HierarchicalSMCWrapper
+from sb3_smc.smc.policies import policy_from_model
+from sb3_smc.smc.smc import SMC
 from sb3_smc.zoo import ZOO_ALGOS, render_config, smc_env
 
 CONFIGS = Path(__file__).resolve().parents[1] / "zoo_configs"

@@ -34,14 +34,14 @@ import numpy as np
 import torch
 
 from pixelworld_env.atomic import atomic_write
-from sb3_smc.envs import spec_for_smc
+from sb3_smc.envs.factory import spec_for_smc
 from sb3_smc.errors import SMCError
-from sb3_smc.evaluation import evaluate
 from sb3_smc.experiments.design import METHODS
 from sb3_smc.experiments.runner import read_results
+from sb3_smc.learning.evaluation import evaluate
 from sb3_smc.library import SMCLibrary
 from sb3_smc.library.errors import UnknownSMCError
-from sb3_smc.smc import SMC
+from sb3_smc.smc.smc import SMC
 
 FIELDS = ("target", "category", "method", "smc", "recorded", "score", "moves_mean", "moves_median", "moves_p90",
           "over_100", "score_within_100", "score_counting_moves", "wrong_signal", "no_signal")

@@ -27,10 +27,10 @@ import torch
 from pixelworld_env.atomic import atomic_write
 from sb3_smc.curricula import resolve_curriculum
 from sb3_smc.curricula.jobs import DEFAULT_REUSE, REUSE, file_stem, node_records, node_spec, rank_seeds
-from sb3_smc.evaluation import evaluate
+from sb3_smc.learning.evaluation import evaluate
+from sb3_smc.learning.training import train_smc
 from sb3_smc.library import SMCLibrary, storage
 from sb3_smc.records import TrainingRecord
-from sb3_smc.training import train_smc
 
 
 def chosen_seeds(records: dict[int, TrainingRecord], which: str) -> list[int]:

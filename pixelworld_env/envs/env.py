@@ -91,7 +91,7 @@ class PixelWorldEnv(gym.Env):
     window's 9 raw colour codes row-major (the paper's input); ``"full"`` the whole state array; ``"image"`` the
     whole state as a channel-first uint8 image, one channel per colour code, 255 where the cell has that code
     (``(9, height, width)``; SB3's ``CnnPolicy`` divides by 255, so the network sees the one-hot grid;
-    :class:`sb3_smc.features.PixelWorldCNN` is a features extractor for it).
+    :class:`sb3_smc.learning.features.PixelWorldCNN` is a features extractor for it).
 
     Render modes: ``"rgb_array"`` (10 px per cell, the window outlined), ``"ansi"`` (the text format), ``"human"``
     (the same picture at 20 px per cell in a pygame window, drawn on every ``reset`` and ``step``; pygame is the
@@ -365,7 +365,7 @@ class PixelWorldEnv(gym.Env):
             raise PixelWorldError(f"action {action} ({self.action_names[action]}) is not a move")
         return self._move(effect)  # type: ignore[arg-type]
 
-    # the task protocol that sb3_smc's HierarchicalSMCWrapper drives (sb3_smc.tasks.TaskEnv), implemented natively
+    # the task protocol that sb3_smc's HierarchicalSMCWrapper drives (sb3_smc.tasks.task.TaskEnv), implemented natively
     sensor_size = 9 * NUM_COLORS
     """Length of :meth:`sense`'s sensor: the one-hot 3 x 3 window."""
 

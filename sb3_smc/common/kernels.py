@@ -3,12 +3,12 @@
 A child SMC's decision is one step of a small recurrent network on a mostly one-hot observation (the 3 x 3
 window, the outcome vector, the previous action). In numpy that is about a dozen array operations, each paying
 numpy's call overhead on vectors of 32-128 numbers; here it is one compiled function that also skips the zero
-inputs. :class:`~sb3_smc.numpy_actors.NumpyLSTMPolicy` and :class:`~sb3_smc.numpy_actors.NumpyGRUPolicy` use these for
-float64 policies with one recurrent layer and ``net_arch=[]`` (the defaults: every SMC sb3-smc trains) and keep
-their numpy code for every other architecture. The arithmetic is the numpy code's, summed in another order: the
+inputs. :class:`~sb3_smc.smc.numpy_actors.NumpyLSTMPolicy` and :class:`~sb3_smc.smc.numpy_actors.NumpyGRUPolicy` use
+these for float64 policies with one recurrent layer and ``net_arch=[]`` (the defaults: every SMC sb3-smc trains) and
+keep their numpy code for every other architecture. The arithmetic is the numpy code's, summed in another order: the
 probabilities agree to 1e-14 (tested; in practice to a few units of the last place), so a sampled action differs
 only when the uniform draw falls within that distance of a boundary. The module also holds the inverse-CDF draw of
-:func:`~sb3_smc.policies.sample_action`. Imported lazily (numba's import and the first compilation cost about a
+:func:`~sb3_smc.smc.policies.sample_action`. Imported lazily (numba's import and the first compilation cost about a
 second; the compiled code is cached next to this file).
 
 The ``*_collection_step`` functions are the training side's counterpart: one data-collection step of
@@ -69,7 +69,7 @@ def lstm_cell(x: np.ndarray, h: np.ndarray, c: np.ndarray, w_ih: np.ndarray, w_h
     ``x`` the layer's input, ``h`` / ``c`` the previous state; the weights transposed (``(inputs, 4 n)``), gates i,
     f, g, o in torch's order, ``bias`` the sum of torch's two biases. ``sigmoid(z) = 0.5 * tanh(z / 2) + 0.5`` with
     ``z / 2 = gate_scale * (preactivation)``: 0.5 for torch's weights, 1.0 for weights whose i, f, o columns are
-    halved already (:class:`~sb3_smc.numpy_actors.NumpyLSTMPolicy`'s). Writes ``h'`` / ``c'`` into ``h_next`` /
+    halved already (:class:`~sb3_smc.smc.numpy_actors.NumpyLSTMPolicy`'s). Writes ``h'`` / ``c'`` into ``h_next`` /
     ``c_next``. The zero entries of ``x`` and ``h`` are skipped (mostly one-hot observations)."""
     n = h.shape[0]
     t = bias.astype(np.float64)
@@ -90,8 +90,8 @@ def lstm_linear_step(x: np.ndarray, h: np.ndarray, c: np.ndarray, w_ih: np.ndarr
                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # pragma: no cover
     """One LSTM step and the action probabilities: ``(probabilities, h', c')``, ``h'`` / ``c'`` of shape ``(1, n)``.
 
-    ``w_ih`` / ``w_hh`` / ``bias`` are :class:`~sb3_smc.numpy_actors.NumpyLSTMPolicy`'s (transposed, gates i, f, g, o
-    with the i, f, o rows halved so that ``sigmoid(z) = 0.5 * tanh(z / 2) + 0.5`` uses one tanh); ``h`` / ``c``
+    ``w_ih`` / ``w_hh`` / ``bias`` are :class:`~sb3_smc.smc.numpy_actors.NumpyLSTMPolicy`'s (transposed, gates i, f, g,
+    o with the i, f, o rows halved so that ``sigmoid(z) = 0.5 * tanh(z / 2) + 0.5`` uses one tanh); ``h`` / ``c``
     are the previous state's rows."""
     if h.shape[0] != w_hh.shape[0] or c.shape[0] != w_hh.shape[0] or x.shape[0] != w_ih.shape[0]:
         raise ValueError("LSTM state or observation of the wrong size for this policy")
@@ -127,7 +127,7 @@ def gru_linear_step(x: np.ndarray, h: np.ndarray, w_ih: np.ndarray, w_hh: np.nda
                     b_hh: np.ndarray, w_out: np.ndarray, b_out: np.ndarray
                     ) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover
     """One GRU step (torch's equations, gates r, z, n) and the action probabilities: ``(probabilities, h')``,
-    ``h'`` of shape ``(1, n)``; the weights are :class:`~sb3_smc.numpy_actors.NumpyGRUPolicy`'s (transposed)."""
+    ``h'`` of shape ``(1, n)``; the weights are :class:`~sb3_smc.smc.numpy_actors.NumpyGRUPolicy`'s (transposed)."""
     if h.shape[0] != w_hh.shape[0] or x.shape[0] != w_ih.shape[0]:
         raise ValueError("GRU state or observation of the wrong size for this policy")
     probabilities = np.empty(b_out.shape[0])
@@ -139,7 +139,7 @@ def gru_linear_step(x: np.ndarray, h: np.ndarray, w_ih: np.ndarray, w_hh: np.nda
 
 @njit(cache=True)
 def sample_index(probabilities: np.ndarray, u: float) -> int:  # pragma: no cover
-    """The inverse-CDF draw of :func:`sb3_smc.policies.sample_action` for a uniform ``u`` in [0, 1): the first index
+    """The inverse-CDF draw of :func:`sb3_smc.smc.policies.sample_action` for a uniform ``u`` in [0, 1): the first index
     whose running sum exceeds ``u`` times the total (numpy's ``cumsum`` adds in the same order, so the index is the
     same as ``searchsorted(..., side="right")``); the last positive entry if rounding passes the end; -1 if the total
     is not positive and finite."""

@@ -1,7 +1,7 @@
 """Curricula as data: a DAG of SMCs to train, read from the project's YAML format (``docs/curricula.md``).
 
 A curriculum names **nodes**; each node is an SMC to train on a PixelWorld task (a catalog dataset or concept pool)
-or on another environment's SMC task (a Gymnasium id, ``module:Name-v0``: :mod:`sb3_smc.tasks`), and may **use**
+or on another environment's SMC task (a Gymnasium id, ``module:Name-v0``: :mod:`sb3_smc.tasks.task`), and may **use**
 lower-level nodes as actions. Example::
 
     curriculum: my-containment
@@ -38,9 +38,9 @@ from typing import Any
 
 import yaml
 
-from sb3_smc.dag import CycleError, children_first, reachable
+from sb3_smc.core.dag import CycleError, children_first, reachable
+from sb3_smc.core.hyperparameters import ALGORITHMS
 from sb3_smc.errors import SMCError
-from sb3_smc.hyperparameters import ALGORITHMS
 from sb3_smc.records import WrapperSettings
 
 __all__ = ["FORMAT_KEYS", "NODE_KEYS", "SEED_SEPARATOR", "Curriculum", "CurriculumError", "Node", "describe",
@@ -70,7 +70,7 @@ class Node:
     ``algo`` / ``timesteps`` ``None``: the run's settings (``train_curriculum``'s ``algo`` and ``timesteps``).
     ``budget_scale`` multiplies the node's budget, whichever gives it (a node that calls many SMCs may need longer).
     ``count_primitive_steps``: a call of a used node costs the episode the moves it made instead of one step
-    (:class:`~sb3_smc.wrapper.HierarchicalSMCWrapper`). ``max_steps``: the episode's length (decisions, or moves
+    (:class:`~sb3_smc.envs.wrapper.HierarchicalSMCWrapper`). ``max_steps``: the episode's length (decisions, or moves
     where calls cost their moves); ``call_step_cap``: the moves a call of a used node may make (its nested calls'
     included) before it is cut off. ``line`` is where the node was defined (not part of its identity).
     """
@@ -355,8 +355,8 @@ def _node(item: Any, line: int, defaults: Mapping[str, Any], source: str) -> Nod
 # ---------------------------------------------------------------------------------------------------------------
 
 def is_env_id(task: str) -> bool:
-    """Whether a node's ``task`` is a Gymnasium id (of an :class:`~sb3_smc.tasks.SMCTask` on any environment) rather
-    than a PixelWorld dataset or concept pool, whose names never end in a version."""
+    """Whether a node's ``task`` is a Gymnasium id (of an :class:`~sb3_smc.tasks.task.SMCTask` on any environment)
+    rather than a PixelWorld dataset or concept pool, whose names never end in a version."""
     return re.search(r"-v\d+$", task) is not None
 
 

@@ -4,7 +4,7 @@ A job's :class:`~sb3_smc.records.TrainingSpec` calls, for every node its node us
 node (``reuse="two_best"``: k = 2; :func:`rank_seeds`) as distinct SMC actions. A :class:`Job` carries
 the picklable spec and the path of the run's library, where the worker loads the children by name (never torch
 objects); :func:`run_job` trains it and returns the model as bytes, the same in this process, a local worker process
-or a Ray task. :func:`run_group` trains several flat jobs at once (:func:`~sb3_smc.batched.train_smcs`), each
+or a Ray task. :func:`run_group` trains several flat jobs at once (:func:`~sb3_smc.learning.batched.train_smcs`), each
 result the one :func:`run_job` gives. :func:`check_curriculum` checks every node's spec before a run trains anything.
 """
 
@@ -17,12 +17,12 @@ from dataclasses import dataclass
 from typing import NamedTuple
 
 from sb3_smc.common.threads import torch_threads
+from sb3_smc.core.hyperparameters import DEFAULT_ALGORITHM, DEFAULT_TIMESTEPS, recurrent_policy
 from sb3_smc.curricula.format import SEED_SEPARATOR, Curriculum, CurriculumError, Node
 from sb3_smc.errors import SMCError
-from sb3_smc.hyperparameters import DEFAULT_ALGORITHM, DEFAULT_TIMESTEPS, recurrent_policy
 from sb3_smc.library import SMCLibrary, storage
 from sb3_smc.records import Budget, TaskSpec, TrainingRecord, TrainingSpec, WrapperSettings
-from sb3_smc.smc import SMC
+from sb3_smc.smc.smc import SMC
 
 __all__ = ["DEFAULT_REUSE", "DEFAULT_SEEDS", "REUSE", "Job", "JobId", "JobResult", "check_curriculum", "file_stem",
            "job_name", "name_of_file", "node_budget", "node_of", "node_records", "node_spec", "rank_seeds", "run_group",
@@ -117,7 +117,7 @@ class JobResult:
 def run_job(job: Job) -> JobResult:
     """Train ``job`` (one torch thread; the caller's count is restored) and return its result; the same in any
     process or Ray worker."""
-    from sb3_smc.training import train_smc  # torch and Stable-Baselines3: in the worker only
+    from sb3_smc.learning.training import train_smc  # torch and Stable-Baselines3: in the worker only
 
     spec = job.spec
     children = SMCLibrary.load(job.library, names=spec.children) if spec.children else {}
@@ -128,9 +128,9 @@ def run_job(job: Job) -> JobResult:
 
 def run_group(jobs: Sequence[Job]) -> list[JobResult]:
     """Train flat ``jobs`` (no children; one TensorBoard folder for all) together with
-    :func:`~sb3_smc.batched.train_smcs` in one torch thread and return their results in order, each what
+    :func:`~sb3_smc.learning.batched.train_smcs` in one torch thread and return their results in order, each what
     :func:`run_job` returns for its job (bit-identical SMCs)."""
-    from sb3_smc.batched import train_smcs  # torch and Stable-Baselines3: in the worker only
+    from sb3_smc.learning.batched import train_smcs  # torch and Stable-Baselines3: in the worker only
 
     with torch_threads(1):
         smcs = train_smcs([job.spec for job in jobs], tensorboard_log=jobs[0].tensorboard_log, log_every=0)
@@ -180,9 +180,9 @@ def check_curriculum(curriculum: Curriculum, names: Sequence[str] | None = None,
                      algo: str | None = None, rnn: str | None = None, reuse: str = DEFAULT_REUSE) -> None:
     """Check every node of ``names`` (default: all) as a run with these settings would train it, before anything is
     trained: its settings make a valid spec, and the algorithm takes its hyperparameters (the model is built on an
-    environment with the SMC's spaces, :func:`sb3_smc.training.check_model_settings`). ``CurriculumError`` naming
-    the file, the line and the node. ``sb3-smc curricula FILE`` and :func:`train_curriculum` both check so."""
-    from sb3_smc.training import check_model_settings
+    environment with the SMC's spaces, :func:`sb3_smc.learning.training.check_model_settings`). ``CurriculumError``
+    naming the file, the line and the node. ``sb3-smc curricula FILE`` and :func:`train_curriculum` both check so."""
+    from sb3_smc.learning.training import check_model_settings
 
     checked: set[str] = set()  # nodes alike in what builds their model are built once
     for name in curriculum.order() if names is None else names:

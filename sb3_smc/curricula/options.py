@@ -17,10 +17,10 @@ from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any
 
+from sb3_smc.core.hyperparameters import algorithm, recurrent_policy
 from sb3_smc.curricula.format import Node
 from sb3_smc.curricula.jobs import DEFAULT_REUSE, DEFAULT_SEEDS, REUSE, JobId, node_budget, node_spec
 from sb3_smc.errors import SMCError, SMCTypeError
-from sb3_smc.hyperparameters import algorithm, recurrent_policy
 from sb3_smc.records import TrainingSpec
 
 __all__ = ["BACKENDS", "DEFAULT_GROUP_SIZE", "RunOptions"]

@@ -69,7 +69,7 @@ def build_pretrained(runs: Sequence[str | Path], curricula: Sequence[str | Curri
     (:data:`~sb3_smc.library.pretrained.INDEX`) then lists ``curricula``, the curricula it listed before and every
     shipped curriculum whose lower-level nodes are all held.
     """
-    from sb3_smc.evaluation import evaluate  # loads torch and SB3: only when a library is built
+    from sb3_smc.learning.evaluation import evaluate  # loads torch and SB3: only when a library is built
 
     resolved = [resolve_curriculum(c) for c in curricula]
     target = Path(out) if out is not None else pretrained_root()

@@ -81,10 +81,10 @@ class Scheduler:
 
     def groupable(self, node_name: str) -> bool:
         """Whether the jobs of ``node_name`` train in groups: a flat node whose SMCs
-        :func:`~sb3_smc.batched.train_smcs` trains in one vector env (for any other it would train them one after
-        another in one worker: no faster, and fewer jobs in parallel)."""
+        :func:`~sb3_smc.learning.batched.train_smcs` trains in one vector env (for any other it would train them one
+        after another in one worker: no faster, and fewer jobs in parallel)."""
         if node_name not in self._groupable:
-            from sb3_smc.batched import batchable  # torch: once grouping is asked for
+            from sb3_smc.learning.batched import batchable  # torch: once grouping is asked for
 
             node = self.curriculum.node(node_name)
             self._groupable[node_name] = not node.uses and batchable(self.options.spec(node, 0, ()))

@@ -7,7 +7,7 @@ uses) on an executor (:mod:`sb3_smc.curricula.executors`: this process, local pr
 its state in the run directory (:mod:`sb3_smc.curricula.run_directory`: ``run.json``, the library, ``failed/``,
 ``state.json``, ``replaced/``, ``.lock``). A job becomes ready once every seed of every node it uses is trained;
 jobs with the longest chain of nodes above them start first. The ready seeds of a flat node train together, in
-groups of up to ``group_size`` (:func:`~sb3_smc.curricula.jobs.run_group`, :func:`~sb3_smc.batched.train_smcs`,
+groups of up to ``group_size`` (:func:`~sb3_smc.curricula.jobs.run_group`, :func:`~sb3_smc.learning.batched.train_smcs`,
 also for a group of one): a group is a unit of execution only, each of its SMCs the one its job alone trains, stored
 as a job's is. ``group_size=1`` trains every job alone with :func:`~sb3_smc.curricula.jobs.run_job`.
 
@@ -41,6 +41,7 @@ from pathlib import Path
 from typing import Any
 
 from pixelworld_env.atomic import atomic_write
+from sb3_smc.core.hyperparameters import STEPS_PER_UPDATE
 from sb3_smc.curricula.executors import Outcome, make_executor
 from sb3_smc.curricula.format import SEED_SEPARATOR, Curriculum, describe, merge
 from sb3_smc.curricula.jobs import (
@@ -78,7 +79,6 @@ from sb3_smc.curricula.run_directory import (
 from sb3_smc.curricula.scheduler import Scheduler
 from sb3_smc.curricula.shipped import resolve_curriculum
 from sb3_smc.errors import SMCError, SMCRuntimeError, SMCTypeError
-from sb3_smc.hyperparameters import STEPS_PER_UPDATE
 from sb3_smc.library import storage
 from sb3_smc.records import TrainingRecord
 

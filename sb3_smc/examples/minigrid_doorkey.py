@@ -1,7 +1,7 @@
 """SMC tasks on Minigrid's DoorKey: the example of SMCs on an environment nobody here wrote.
 
 ``MiniGrid-DoorKey-<n>x<n>-v0``: a key, a locked door in a wall, a goal square behind it. The tasks
-(:class:`~sb3_smc.tasks.SMCTask`, bring-about, observation the agent's 7 x 7 view and direction, the seven Minigrid
+(:class:`~sb3_smc.tasks.task.SMCTask`, bring-about, observation the agent's 7 x 7 view and direction, the seven Minigrid
 actions as primitives):
 
 * ``get-key``: the agent carries the key (from DoorKey's own start states);
@@ -22,7 +22,7 @@ from typing import Any
 
 import gymnasium as gym
 
-from sb3_smc.tasks import SMCTask
+from sb3_smc.tasks.task import SMCTask
 
 __all__ = ["OBSERVATION", "SIZES", "TASKS", "at_goal", "door_open", "has_key", "register", "task_id"]
 

@@ -24,11 +24,11 @@ import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+from sb3_smc.core.hyperparameters import recurrent_policy
 from sb3_smc.curricula import shipped_curricula
 from sb3_smc.curricula.format import Curriculum, CurriculumError, Node, merge
 from sb3_smc.curricula.jobs import DEFAULT_REUSE, REUSE
 from sb3_smc.errors import SMCError
-from sb3_smc.hyperparameters import recurrent_policy
 
 __all__ = ["CATEGORIES", "DEFAULT_METHODS", "DEFAULT_REPEATS", "EXPERIENCE_METHODS", "METHODS", "METHOD_REGISTRY",
            "PAPER_CATEGORIES", "SMC_METHODS", "SWEEP_METHODS", "SWEEP_TARGETS", "ExperimentMethod", "ExperimentPlan",

@@ -26,8 +26,8 @@ from pathlib import Path
 from typing import Any, Protocol
 
 from pixelworld_env.atomic import atomic_write
+from sb3_smc.core.dag import reachable
 from sb3_smc.curricula.format import SEED_SEPARATOR
-from sb3_smc.dag import reachable
 from sb3_smc.errors import SMCError
 from sb3_smc.experiments.design import EXPERIENCE_METHODS, METHOD_REGISTRY
 

@@ -29,8 +29,8 @@ import numpy as np
 
 from pixelworld_env.atomic import atomic_write  # pixelworld_env registers the PW-* ids on import
 from pixelworld_env.core.render import rgb_image
-from sb3_smc.evaluation import episode_seed, make_evaluation_env, run_episode, start_seed
 from sb3_smc.experiments.design import METHOD_REGISTRY
+from sb3_smc.learning.evaluation import episode_seed, make_evaluation_env, run_episode, start_seed
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -38,7 +38,7 @@ if TYPE_CHECKING:
     from matplotlib.text import Text
 
     from pixelworld_env.envs.env import PixelWorldEnv
-    from sb3_smc.smc import SMC
+    from sb3_smc.smc.smc import SMC
 
 __all__ = ["METHOD_COLORS", "METHOD_LABELS", "Panel", "bar_panels", "fit_text", "fitted_legend", "goal_cells", "pyplot",
            "save_figure", "trajectory_figure", "timeline_figure"]

@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from pixelworld_env.atomic import atomic_write
+from sb3_smc.core.hyperparameters import ALGORITHM_REGISTRY
 from sb3_smc.curricula.designed import designed_curricula
 from sb3_smc.curricula.jobs import job_name, node_of
 from sb3_smc.errors import SMCError
@@ -32,9 +33,8 @@ from sb3_smc.experiments.figures import Panel, bar_panels, timeline_figure, traj
 from sb3_smc.experiments.runner import evaluation_path, experiment_command, read_evaluation, read_results
 from sb3_smc.experiments.tables import KINDS, ResultTable, number_sections
 from sb3_smc.experiments.wall_clock import UNKNOWN_COMMIT, lower_bound
-from sb3_smc.hyperparameters import ALGORITHM_REGISTRY
 from sb3_smc.library import SMCLibrary, storage
-from sb3_smc.smc import SMC
+from sb3_smc.smc.smc import SMC
 
 __all__ = ["pushable_levels", "write_report"]
 

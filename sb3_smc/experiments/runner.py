@@ -35,12 +35,12 @@ from typing import Any
 from pixelworld_env.atomic import atomic_write
 from pixelworld_env.datasets import catalog
 from sb3_smc.common.threads import torch_threads
+from sb3_smc.core.hyperparameters import DEFAULT_ALGORITHM, DEFAULT_TIMESTEPS
 from sb3_smc.curricula.jobs import DEFAULT_REUSE, DEFAULT_SEEDS, file_stem, job_name, name_of_file
 from sb3_smc.curricula.options import BACKENDS, DEFAULT_GROUP_SIZE, RunOptions
 from sb3_smc.curricula.run_directory import RunFileError, RunSettingsError, read_json
 from sb3_smc.curricula.trainer import finished_jobs, train_curriculum
 from sb3_smc.errors import SMCError, SMCRuntimeError
-from sb3_smc.evaluation import evaluate
 from sb3_smc.experiments.cnn import train_cnn
 from sb3_smc.experiments.design import (
     DEFAULT_METHODS,
@@ -51,7 +51,7 @@ from sb3_smc.experiments.design import (
     plan,
 )
 from sb3_smc.experiments.wall_clock import UNKNOWN_COMMIT, WallClock, lower_bound
-from sb3_smc.hyperparameters import DEFAULT_ALGORITHM, DEFAULT_TIMESTEPS
+from sb3_smc.learning.evaluation import evaluate
 from sb3_smc.library import SMCLibrary, storage
 from sb3_smc.records import package_versions
 

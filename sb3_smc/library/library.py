@@ -5,9 +5,9 @@ Each manifest entry records how the SMC was trained and what came out (its :clas
 from which its kind, algorithm and children by name are read, :class:`~sb3_smc.records.TrainingRecord` and
 :class:`~sb3_smc.records.EvaluationRecord` list), plus its model file and that file's SHA-256, and the SHA-256 of the
 entry's own content (the manifest has one of its whole content too). :meth:`SMCLibrary.load` validates all of it and
-rebuilds every :class:`~sb3_smc.smc.SMC` (children first, its policy by :func:`sb3_smc.policies.policy_from_model`);
-:meth:`SMCLibrary.save` writes a complete copy beside the target and swaps it in, so an interrupted save never leaves
-a half-written library. Libraries of earlier versions load through
+rebuilds every :class:`~sb3_smc.smc.smc.SMC` (children first, its policy by
+:func:`sb3_smc.smc.policies.policy_from_model`); :meth:`SMCLibrary.save` writes a complete copy beside the target and
+swaps it in, so an interrupted save never leaves a half-written library. Libraries of earlier versions load through
 :mod:`sb3_smc.library.upgrade`. See ``docs/library.md``.
 """
 
@@ -19,9 +19,9 @@ from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from sb3_smc.envs import make_smc_env, task_base, wrap_with_smcs
+from sb3_smc.core.layout import SIGNALS
+from sb3_smc.envs.factory import make_smc_env, task_base, wrap_with_smcs
 from sb3_smc.errors import SMCTypeError
-from sb3_smc.layout import SIGNALS
 from sb3_smc.library import storage
 from sb3_smc.library.errors import (
     CorruptModelError,
@@ -32,13 +32,13 @@ from sb3_smc.library.errors import (
 )
 from sb3_smc.library.pretrained import pretrained_names, pretrained_root
 from sb3_smc.records import WrapperSettings
-from sb3_smc.smc import SMC, StepPolicy
-from sb3_smc.tasks import TaskEnv, layout_of
+from sb3_smc.smc.smc import SMC, StepPolicy
+from sb3_smc.tasks.task import TaskEnv, layout_of
 
 if TYPE_CHECKING:
     import gymnasium as gym
 
-    from sb3_smc.wrapper import HierarchicalSMCWrapper
+    from sb3_smc.envs.wrapper import HierarchicalSMCWrapper
 
 __all__ = ["SMCLibrary"]
 
@@ -248,7 +248,7 @@ class SMCLibrary(Mapping[str, SMC]):
             so ``save()`` cannot replace the whole library with it.
         :raises LibraryError: (its subclasses) naming the file and the SMC at fault.
         """
-        from sb3_smc.policies import FrameStackPolicy, policy_from_model
+        from sb3_smc.smc.policies import FrameStackPolicy, policy_from_model
 
         root = Path(path)
         manifest, manifest_path = storage.read_manifest(root)
@@ -299,14 +299,14 @@ class SMCLibrary(Mapping[str, SMC]):
 
     def wrap(self, env: gym.Env, names: Sequence[str] | str, *, include_primitives: bool = True,
              **kwargs: Any) -> HierarchicalSMCWrapper:
-        """``env`` with the SMCs ``names`` as actions (:func:`sb3_smc.envs.wrap_with_smcs`), for training a new
+        """``env`` with the SMCs ``names`` as actions (:func:`sb3_smc.envs.factory.wrap_with_smcs`), for training a new
         higher-level policy.
 
         The SMCs become actions after ``env``'s signals and its primitive actions (PixelWorld's four moves). SMCs of
         either task kind may be used on either kind of environment (as in the paper's curricula): an SMC only acts;
         its signal becomes its outcome.
 
-        :param env: a task (a PixelWorld environment or an :class:`~sb3_smc.tasks.SMCTask`, possibly under other
+        :param env: a task (a PixelWorld environment or an :class:`~sb3_smc.tasks.task.SMCTask`, possibly under other
             wrappers) whose layout (sensor size, primitive actions) is the SMCs' own (else
             :class:`LayoutMismatchError`).
         :param names: the SMCs of the library to add as actions, in order (a name, or several).
@@ -327,7 +327,8 @@ class SMCLibrary(Mapping[str, SMC]):
         return wrap_with_smcs(env, smcs, settings, record_cells=record_cells)
 
     def env_for(self, name: str, env: gym.Env, **kwargs: Any) -> HierarchicalSMCWrapper:
-        """``env`` as SMC ``name`` itself sees it (:func:`sb3_smc.envs.make_smc_env` with its spec and children).
+        """``env`` as SMC ``name`` itself sees it (:func:`sb3_smc.envs.factory.make_smc_env` with its spec and
+        children).
 
         The result's action names and observation size are exactly the SMC's, so ``library[name].model`` or
         ``.policy`` can act on it (evaluate it, or continue training with ``model.set_env``).
@@ -377,8 +378,8 @@ def _descendants(entries: Mapping[str, storage.LibraryEntry], names: Sequence[st
 
 
 def _check_env(env: gym.Env) -> TaskEnv:
-    """The task under ``env`` (:func:`sb3_smc.envs.task_base`); :class:`LayoutMismatchError` where there is none or
-    ``env`` has SMC actions already."""
+    """The task under ``env`` (:func:`sb3_smc.envs.factory.task_base`); :class:`LayoutMismatchError` where there is none
+    or ``env`` has SMC actions already."""
     try:
         return task_base(env)
     except (TypeError, ValueError) as err:

@@ -23,10 +23,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from sb3_smc.dag import CycleError, children_first
+from sb3_smc.core.dag import CycleError, children_first
+from sb3_smc.core.hyperparameters import ALGORITHMS as TRAINED_ALGORITHMS
+from sb3_smc.core.layout import PIXELWORLD_LAYOUT, SIGNALS, Layout, observation_size, smc_action_names
 from sb3_smc.errors import SMCError
-from sb3_smc.hyperparameters import ALGORITHMS as TRAINED_ALGORITHMS
-from sb3_smc.layout import PIXELWORLD_LAYOUT, SIGNALS, Layout, observation_size, smc_action_names
 from sb3_smc.library.errors import LayoutMismatchError, LibraryError, ManifestError, MissingChildError, suggest
 from sb3_smc.records import (
     EvaluationRecord,
@@ -313,7 +313,7 @@ def _parse_smc(name: str, smc: Any, where: Path) -> tuple[str, str, tuple[str, .
 
 
 def parse_layout(name: str, layout: Any, where: Path) -> Layout:
-    """An entry's ``layout`` JSON (``None``: PixelWorld's) as a :class:`~sb3_smc.layout.Layout`."""
+    """An entry's ``layout`` JSON (``None``: PixelWorld's) as a :class:`~sb3_smc.core.layout.Layout`."""
     if layout is None:
         return PIXELWORLD_LAYOUT
     if not isinstance(layout, dict) or set(layout) != {"sensor_size", "primitives"} or not isinstance(

@@ -34,8 +34,8 @@ from pixelworld_env.atomic import (
     make_temporary_directory,
     replace_directory,
 )
-from sb3_smc.hyperparameters import ALGORITHM_REGISTRY
-from sb3_smc.layout import HAND_SIZE, PIXELWORLD_LAYOUT, Layout
+from sb3_smc.core.hyperparameters import ALGORITHM_REGISTRY
+from sb3_smc.core.layout import HAND_SIZE, PIXELWORLD_LAYOUT, Layout
 from sb3_smc.library.errors import CorruptModelError, LayoutMismatchError, LibraryError, ManifestError, suggest
 from sb3_smc.library.manifest import (
     ALGORITHMS,
@@ -53,7 +53,7 @@ from sb3_smc.library.manifest import (
 )
 from sb3_smc.library.upgrade import dropped_fields, upgrade
 from sb3_smc.records import package_versions
-from sb3_smc.smc import SMC
+from sb3_smc.smc.smc import SMC
 
 if TYPE_CHECKING:
     from stable_baselines3.common.base_class import BaseAlgorithm
@@ -70,7 +70,7 @@ SAVING_MARKER = ".saving-"
 
 def algorithm_classes() -> dict[str, type[OnPolicyAlgorithm]]:
     """Algorithm name (as in the manifest's ``algo``) -> SB3 class (from
-    :data:`~sb3_smc.hyperparameters.ALGORITHM_REGISTRY`)."""
+    :data:`~sb3_smc.core.hyperparameters.ALGORITHM_REGISTRY`)."""
     return {name: algo.load_class() for name, algo in ALGORITHM_REGISTRY.items()}
 
 
@@ -121,7 +121,7 @@ def model_layout(model: Any) -> tuple[int | None, tuple[int, ...] | None]:
 
 def frame_stack_of(smc: SMC) -> int:
     """How many observations the SMC's model sees at once (``FrameStackPolicy``, else 1)."""
-    from sb3_smc.policies import FrameStackPolicy
+    from sb3_smc.smc.policies import FrameStackPolicy
 
     return smc.policy.n_stack if isinstance(smc.policy, FrameStackPolicy) else 1
 

@@ -12,8 +12,8 @@ from importlib import metadata as importlib_metadata
 from typing import Any, ClassVar, TypeVar
 
 from pixelworld_env.validation import as_integer
+from sb3_smc.core.hyperparameters import encode_value
 from sb3_smc.errors import SMCError
-from sb3_smc.hyperparameters import encode_value
 
 __all__ = ["Record", "RecordError", "package_versions"]
 

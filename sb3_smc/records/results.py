@@ -7,7 +7,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
-from sb3_smc.layout import SIGNALS
+from sb3_smc.core.layout import SIGNALS
 from sb3_smc.records.base import (
     Record,
     RecordError,
@@ -113,7 +113,7 @@ class EvaluationRecord(Record):
     """One run of the paper's test of SMC ``smc`` on ``env_id``'s ``split`` (docs/design.md, "Selection and test").
 
     ``environment_scores[i]``: the success fraction over the repeats of environment ``i``; ``score``: the mean over
-    environments x repeats. ``evaluation_seed`` is the seed of the test (:func:`~sb3_smc.evaluation.evaluate`'s
+    environments x repeats. ``evaluation_seed`` is the seed of the test (:func:`~sb3_smc.learning.evaluation.evaluate`'s
     ``seed``, 0 in the paper's protocol), not the SMC's training seed (its spec's ``seed``). ``repeats`` and
     ``evaluation_seed`` are ``None`` only for a score converted from a version-1 library, which did not record them
     (its ``environment_scores`` are then empty).

@@ -9,8 +9,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
-from sb3_smc.errors import SMCError
-from sb3_smc.hyperparameters import (
+from sb3_smc.core.hyperparameters import (
     ALGORITHM_REGISTRY,
     ALGORITHMS,
     DEFAULT_ALGORITHM,
@@ -19,7 +18,8 @@ from sb3_smc.hyperparameters import (
     STEPS_PER_UPDATE,
     resolve_hyperparameters,
 )
-from sb3_smc.layout import PIXELWORLD_LAYOUT, SIGNALS, Layout, observation_size, smc_action_names
+from sb3_smc.core.layout import PIXELWORLD_LAYOUT, SIGNALS, Layout, observation_size, smc_action_names
+from sb3_smc.errors import SMCError
 from sb3_smc.records.base import (
     Record,
     RecordError,
@@ -64,8 +64,8 @@ class TaskSpec(Record):
 
     ``kind`` and ``datasets`` are filled from the PixelWorld catalog for ``PW-*`` ids (:meth:`resolved`);
     ``None`` / empty means "not known yet" (e.g. a user's own registered id before its env is built). ``layout``
-    is the environment's sensor size and primitive actions (:class:`~sb3_smc.smc.Layout`): ``None`` for
-    PixelWorld's, set from the environment for any other (an :class:`~sb3_smc.tasks.SMCTask`); in JSON only when
+    is the environment's sensor size and primitive actions (:class:`~sb3_smc.smc.smc.Layout`): ``None`` for
+    PixelWorld's, set from the environment for any other (an :class:`~sb3_smc.tasks.task.SMCTask`); in JSON only when
     set.
     """
 
@@ -119,17 +119,17 @@ class TaskSpec(Record):
 
     def resolved(self) -> TaskSpec:
         """This task with ``kind`` and ``datasets`` read from the Gymnasium registry and the catalog, where known;
-        for another environment's SMC task (:class:`~sb3_smc.tasks.SMCTask`) its ``kind`` and ``layout``, read from
-        one instance of it (:func:`sb3_smc.resolved_task.resolve_task`, imported here: the records load no
+        for another environment's SMC task (:class:`~sb3_smc.tasks.task.SMCTask`) its ``kind`` and ``layout``, read from
+        one instance of it (:func:`sb3_smc.tasks.resolved_task.resolve_task`, imported here: the records load no
         Gymnasium)."""
-        from sb3_smc.resolved_task import resolve_task
+        from sb3_smc.tasks.resolved_task import resolve_task
 
         return dataclasses.replace(self, **resolve_task(self).spec_fields)
 
 
 @dataclass(frozen=True, eq=False)
 class WrapperSettings(Record):
-    """How :class:`~sb3_smc.wrapper.HierarchicalSMCWrapper` presents the task (docs/design.md, "Hierarchy: SMC
+    """How :class:`~sb3_smc.envs.wrapper.HierarchicalSMCWrapper` presents the task (docs/design.md, "Hierarchy: SMC
     calls")."""
 
     include_primitives: bool = True
@@ -194,7 +194,7 @@ class Budget(Record):
 
 @dataclass(frozen=True, eq=False)
 class SignalBias(Record):
-    """The initial action distribution, the signal bias (:func:`sb3_smc.bias.initial_action_probabilities`)."""
+    """The initial action distribution, the signal bias (:func:`sb3_smc.learning.bias.initial_action_probabilities`)."""
 
     enabled: bool = True
     signal_weight: float = 1.0
@@ -220,7 +220,7 @@ class TrainingSpec(Record):
     """Everything that decides how one SMC is trained (not where logs go or how progress is shown).
 
     ``hyperparameters`` are the algorithm's complete constructor arguments (the defaults of
-    :data:`~sb3_smc.hyperparameters.DEFAULT_HYPERPARAMETERS` merged with the given ones, ``policy_kwargs`` key by
+    :data:`~sb3_smc.core.hyperparameters.DEFAULT_HYPERPARAMETERS` merged with the given ones, ``policy_kwargs`` key by
     key; ``batch_size`` is capped at the budget's steps per update). ``children`` are the names of the SMCs the
     SMC may call, in action order. Build one with :meth:`create` (keyword interface of ``train_smc``) or directly.
     """
@@ -286,7 +286,7 @@ class TrainingSpec(Record):
         ``split`` and ``env_kwargs`` then belong in it."""
         n_steps = hyperparameters.pop("n_steps", None)
         if rnn is not None:
-            from sb3_smc.hyperparameters import recurrent_policy
+            from sb3_smc.core.hyperparameters import recurrent_policy
 
             try:
                 policy = recurrent_policy(rnn, algo)

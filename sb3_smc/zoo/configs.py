@@ -1,5 +1,5 @@
 """The rl_zoo3 hyperparameters of PW-* environments, generated from the algorithm registry
-(:data:`~sb3_smc.hyperparameters.ALGORITHM_REGISTRY`): the files of ``zoo_configs/`` and the conf modules
+(:data:`~sb3_smc.core.hyperparameters.ALGORITHM_REGISTRY`): the files of ``zoo_configs/`` and the conf modules
 ``sb3_smc.zoo.<zoo name>`` (``trpo``, ``ppo``, ``ppo_lstm``, ``recurrent_trpo``).
 
 Regenerate the files after changing the defaults: ``python -m sb3_smc.zoo zoo_configs`` (a test checks that the
@@ -15,14 +15,14 @@ from typing import Any
 import yaml
 
 from pixelworld_env.atomic import atomic_write
+from sb3_smc.core.hyperparameters import ALGORITHM_REGISTRY, DEFAULT_N_ENVS, DEFAULT_TIMESTEPS, STEPS_PER_UPDATE
 from sb3_smc.errors import SMCError
-from sb3_smc.hyperparameters import ALGORITHM_REGISTRY, DEFAULT_N_ENVS, DEFAULT_TIMESTEPS, STEPS_PER_UPDATE
 
 __all__ = ["CALLBACK", "ENV_WRAPPER", "ZOO_ALGOS", "ZOO_POLICY_NAMES", "hyperparams_for", "render_config",
            "write_configs"]
 
 ZOO_ALGOS = {algo.zoo_name: name for name, algo in ALGORITHM_REGISTRY.items() if algo.zoo_name is not None}
-"""rl_zoo3's ``--algo`` name -> the algorithm (:attr:`~sb3_smc.hyperparameters.Algorithm.zoo_name`)."""
+"""rl_zoo3's ``--algo`` name -> the algorithm (:attr:`~sb3_smc.core.hyperparameters.Algorithm.zoo_name`)."""
 ZOO_POLICY_NAMES = {"SequenceLstmPolicy": "MlpLstmPolicy"}
 """Policies rl_zoo3 cannot name (it passes the string to SB3) -> the stock policy computing the same numbers."""
 ENV_WRAPPER = "sb3_smc.zoo.smc_env"
@@ -60,7 +60,7 @@ def render_config(zoo_algo: str) -> str:
     policy = ZOO_POLICY_NAMES.get(hyper.pop("policy"), algorithm.hyperparameters["policy"])
     lines = [
         f"# rl_zoo3 hyperparameters for {algorithm.name} on PixelWorld (PW-*) environments.",
-        "# Generated from sb3_smc.hyperparameters.DEFAULT_HYPERPARAMETERS by `python -m sb3_smc.zoo zoo_configs`;",
+        "# Generated from sb3_smc.core.hyperparameters.DEFAULT_HYPERPARAMETERS by `python -m sb3_smc.zoo zoo_configs`;",
         "# do not edit by hand (tests/test_zoo.py checks the file equals what the generator writes).",
         "#",
         f"#   rl_zoo3 train --algo {zoo_algo} --env PW-cl_self-in-left-corner_vs_on-hline-v0 \\",

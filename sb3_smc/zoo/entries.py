@@ -9,16 +9,16 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 from pixelworld_env.envs.env import PixelWorldEnv
-from sb3_smc.callbacks import SMCTrainingCallback
-from sb3_smc.envs import task_base, wrap_with_smcs
+from sb3_smc.envs.factory import task_base, wrap_with_smcs
 from sb3_smc.errors import SMCError, SMCTypeError
+from sb3_smc.learning.callbacks import SMCTrainingCallback
 from sb3_smc.library import SMCLibrary
 from sb3_smc.records import WrapperSettings
 
 if TYPE_CHECKING:
     import gymnasium as gym
 
-    from sb3_smc.wrapper import HierarchicalSMCWrapper
+    from sb3_smc.envs.wrapper import HierarchicalSMCWrapper
 
 __all__ = ["SMCZooCallback", "smc_env"]
 
@@ -34,7 +34,7 @@ def smc_env(env: gym.Env, library: str | None = None, names: Sequence[str] = (),
             count_primitive_steps: bool = False, call_step_cap: int = 100) -> HierarchicalSMCWrapper:
     """rl_zoo3 ``env_wrapper`` entry: ``env`` with the SMCs ``names`` of the library at ``library`` as actions.
 
-    ``env`` is a PixelWorld environment or an SMC task on any environment (:class:`~sb3_smc.tasks.SMCTask`, its
+    ``env`` is a PixelWorld environment or an SMC task on any environment (:class:`~sb3_smc.tasks.task.SMCTask`, its
     module given to rl_zoo3 as ``--gym-packages``). Without ``library`` the env gets no SMC actions: a flat SMC's
     layout (sensor, previous action). The library is
     loaded once per process and path. The first env of each id and split in a process prints one line naming the
@@ -63,8 +63,8 @@ def smc_env(env: gym.Env, library: str | None = None, names: Sequence[str] = (),
 
 
 class SMCZooCallback(SMCTrainingCallback):
-    """rl_zoo3 ``callback`` entry: :class:`~sb3_smc.callbacks.SMCTrainingCallback`'s ``smc/`` and ``smc_calls/``
-    TensorBoard curves (accuracy or success rate, training return, calls per child, ...) in a zoo run.
+    """rl_zoo3 ``callback`` entry: :class:`~sb3_smc.learning.callbacks.SMCTrainingCallback`'s ``smc/`` and
+    ``smc_calls/`` TensorBoard curves (accuracy or success rate, training return, calls per child, ...) in a zoo run.
 
     It takes no arguments: the task kind and the child SMCs are read from the training environments (built by
     :func:`smc_env`) when training starts. Name it in the hyperparameters as ``callback:

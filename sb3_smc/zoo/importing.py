@@ -9,8 +9,8 @@ from typing import Any
 
 import yaml
 
+from sb3_smc.core.hyperparameters import ALGORITHM_REGISTRY
 from sb3_smc.errors import SMCError
-from sb3_smc.hyperparameters import ALGORITHM_REGISTRY
 from sb3_smc.zoo.configs import ENV_WRAPPER, ZOO_ALGOS
 
 __all__ = ["ZooRunError", "import_zoo_model", "read_zoo_run"]
@@ -77,9 +77,9 @@ def import_zoo_model(run_dir: str | os.PathLike, library: str | os.PathLike, *, 
     imported SMC has no training spec (the zoo's run is its record): evaluate it with an explicit env id.
     """
     from sb3_smc.library import SMCLibrary
-    from sb3_smc.policies import FrameStackPolicy, policy_from_model
     from sb3_smc.records import TaskSpec, smc_name_from_env_id
-    from sb3_smc.smc import SMC
+    from sb3_smc.smc.policies import FrameStackPolicy, policy_from_model
+    from sb3_smc.smc.smc import SMC
 
     run = Path(run_dir)
     args, config = read_zoo_run(run)
@@ -107,7 +107,7 @@ def import_zoo_model(run_dir: str | os.PathLike, library: str | os.PathLike, *, 
         importlib.import_module(package)
     task = TaskSpec(str(env_id)).resolved()
     if task.kind is None:
-        raise ZooRunError(f"{run}: {env_id!r} is not an SMC task (a PW-* environment, or an sb3_smc.tasks.SMCTask "
+        raise ZooRunError(f"{run}: {env_id!r} is not an SMC task (a PW-* environment, or an sb3_smc.tasks.task.SMCTask "
                           "registered by one of the run's --gym-packages)")
     children = tuple(SMCLibrary.load(kwargs["library"], names=names)[n] for n in names) if names else ()
     policy = policy_from_model(model)

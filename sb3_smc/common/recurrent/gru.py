@@ -23,8 +23,8 @@ class SequenceGruPolicy(SequenceLstmPolicy):
     ``lstm_hidden_size`` units instead of LSTMs, for the actor and, with ``enable_critic_lstm``, the critic.
 
     Select it with ``train_smc(..., rnn="gru")``; it saves and loads through ``RecurrentPPO.load`` like any SB3
-    policy, and :func:`sb3_smc.policies.policy_from_model` turns it into a
-    :class:`~sb3_smc.numpy_actors.NumpyGRUPolicy`.
+    policy, and :func:`sb3_smc.smc.policies.policy_from_model` turns it into a
+    :class:`~sb3_smc.smc.numpy_actors.NumpyGRUPolicy`.
     """
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:

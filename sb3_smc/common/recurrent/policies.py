@@ -87,7 +87,7 @@ class SequenceLstmPolicy(RecurrentActorCriticPolicy):
     (plain ``RecurrentPPO``; the sequence lengths are then read from the padding, whose observations are all
     zeros, which a one-hot SMC observation never is): the same numbers on every real step. Data collection takes a
     lean one-step path (:meth:`forward`; equal up to float rounding), compiled for the default architecture.
-    :func:`sb3_smc.policies.policy_from_model` reads it like ``MlpLstmPolicy``.
+    :func:`sb3_smc.smc.policies.policy_from_model` reads it like ``MlpLstmPolicy``.
     """
 
     #: Whether data collection may use the compiled step of :mod:`sb3_smc.common.kernels` (see :meth:`forward`).

@@ -3,7 +3,7 @@
 Training (:func:`sb3_smc.train_smc`), evaluation (:func:`sb3_smc.evaluate`), the library
 (:meth:`sb3_smc.SMCLibrary.env_for`) and the rl_zoo3 wrapper entry (:func:`sb3_smc.zoo.smc_env`) all build the
 SMC's environment here, so the observation layout, action list and wrapper settings cannot drift apart. The task
-under the wrapper is built by the spec's task resolved (:class:`~sb3_smc.resolved_task.ResolvedTask`, which also
+under the wrapper is built by the spec's task resolved (:class:`~sb3_smc.tasks.resolved_task.ResolvedTask`, which also
 owns :func:`is_pixelworld_id` and :func:`check_env_kwargs`, kept importable from here).
 """
 
@@ -16,12 +16,12 @@ from typing import Any
 import gymnasium as gym
 
 from pixelworld_env.envs.env import PixelWorldEnv  # pixelworld_env registers the PW-* ids on import
+from sb3_smc.envs.wrapper import HierarchicalSMCWrapper
 from sb3_smc.errors import SMCError, SMCTypeError
 from sb3_smc.records import TaskSpec, TrainingSpec, WrapperSettings
-from sb3_smc.resolved_task import ResolvedTask, check_env_kwargs, is_pixelworld_id, resolve_task
-from sb3_smc.smc import SMC
-from sb3_smc.tasks import TaskEnv, task_layer
-from sb3_smc.wrapper import HierarchicalSMCWrapper
+from sb3_smc.smc.smc import SMC
+from sb3_smc.tasks.resolved_task import ResolvedTask, check_env_kwargs, is_pixelworld_id, resolve_task
+from sb3_smc.tasks.task import TaskEnv, task_layer
 
 __all__ = ["check_env_kwargs", "is_pixelworld_id", "make_smc_env", "pixelworld_base", "spec_for_smc", "task_base",
            "wrap_with_smcs"]
@@ -29,8 +29,8 @@ __all__ = ["check_env_kwargs", "is_pixelworld_id", "make_smc_env", "pixelworld_b
 
 def task_base(env: gym.Env) -> TaskEnv:
     """The task under ``env`` that SMCs act on (a :class:`~pixelworld_env.envs.env.PixelWorldEnv` or an
-    :class:`~sb3_smc.tasks.SMCTask`, :func:`~sb3_smc.tasks.task_layer`); ``TypeError`` if there is none, ``ValueError``
-    if ``env`` already has SMC actions (a :class:`HierarchicalSMCWrapper` layer)."""
+    :class:`~sb3_smc.tasks.task.SMCTask`, :func:`~sb3_smc.tasks.task.task_layer`); ``TypeError`` if there is none,
+    ``ValueError`` if ``env`` already has SMC actions (a :class:`HierarchicalSMCWrapper` layer)."""
     base = task_layer(env)
     layer: Any = env
     while layer is not base:
@@ -57,18 +57,18 @@ def make_smc_env(spec: TrainingSpec, children: Sequence[SMC] = (), *, env: gym.E
 
     The task is ``gym.make(env_id or spec.task.env_id, max_steps=wrapper.max_steps, **spec.task.env_kwargs,
     **env_kwargs)``, with ``split=split or spec.task.split`` for a PixelWorld id, built by the task resolved
-    (:meth:`ResolvedTask.make_env <sb3_smc.resolved_task.ResolvedTask.make_env>`).
+    (:meth:`ResolvedTask.make_env <sb3_smc.tasks.resolved_task.ResolvedTask.make_env>`).
 
     :param spec: the SMC's spec.
     :param children: the SMCs named by ``spec.children``, in that order.
     :param env: the task itself, instead of making it (a task without SMC actions).
     :param env_id: another task than the spec's (the id of a non-PixelWorld task, an
-        :class:`~sb3_smc.tasks.SMCTask`, must take ``max_steps``).
+        :class:`~sb3_smc.tasks.task.SMCTask`, must take ``max_steps``).
     :param split: another dataset split than the spec's (PixelWorld ids).
     :param wrapper: replaces ``spec.wrapper`` (e.g. another ``call_step_cap``).
     :param env_kwargs: extra keyword arguments for ``gym.make``.
     :param record_cells: the wrapper reports the self's cells after every move (for trajectory pictures).
-    :param task: ``spec.task`` resolved (:func:`~sb3_smc.resolved_task.resolve_task`), as training passes it to
+    :param task: ``spec.task`` resolved (:func:`~sb3_smc.tasks.resolved_task.resolve_task`), as training passes it to
         build its environments on one look-up of the id; resolved here when not given or when ``env_id`` names
         another task.
     """

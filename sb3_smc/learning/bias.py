@@ -8,8 +8,8 @@ from typing import Any
 
 import numpy as np
 
+from sb3_smc.core.layout import CALL_PREFIX, MOVES
 from sb3_smc.errors import SMCError
-from sb3_smc.layout import CALL_PREFIX, MOVES
 
 __all__ = ["NONSIGNAL_WEIGHT", "SIGNAL_WEIGHT", "SMC_WEIGHT", "apply_signal_bias", "initial_action_probabilities"]
 

@@ -5,15 +5,15 @@ The flow is *spec -> resolved task -> environments*: :func:`resolve_task` looks 
 once (importing the module of a ``"module:Id-v0"`` id first, and taking the latest version of an id without one, as
 ``gym.make`` does) and checks the env kwargs; the :class:`ResolvedTask` knows where the task comes from
 (:class:`TaskSource`: PixelWorld's entry point, another registered environment such as an
-:class:`~sb3_smc.tasks.SMCTask`, or an id Gymnasium does not know), its kind, datasets and
-:class:`~sb3_smc.layout.Layout`, whether PixelWorld's native vector env can host it, and builds its environments
-(:meth:`ResolvedTask.make_env`, :meth:`ResolvedTask.make_vector_env`). :func:`~sb3_smc.training.train_smc`,
-:func:`~sb3_smc.batched.train_smcs` and :func:`~sb3_smc.envs.make_smc_env` resolve a task here and pass the result
-down; :meth:`TaskSpec.resolved() <sb3_smc.records.TaskSpec.resolved>` fills a record's ``kind``, ``datasets`` and
-``layout`` from it (the records themselves import no Gymnasium).
+:class:`~sb3_smc.tasks.task.SMCTask`, or an id Gymnasium does not know), its kind, datasets and
+:class:`~sb3_smc.core.layout.Layout`, whether PixelWorld's native vector env can host it, and builds its environments
+(:meth:`ResolvedTask.make_env`, :meth:`ResolvedTask.make_vector_env`). :func:`~sb3_smc.learning.training.train_smc`,
+:func:`~sb3_smc.learning.batched.train_smcs` and :func:`~sb3_smc.envs.factory.make_smc_env` resolve a task here and pass
+the result down; :meth:`TaskSpec.resolved() <sb3_smc.records.TaskSpec.resolved>` fills a record's ``kind``, ``datasets``
+and ``layout`` from it (the records themselves import no Gymnasium).
 
 The kind and layout of a task that is not PixelWorld's are read from one instance of it
-(:func:`~sb3_smc.tasks.describe_task`), and only when asked for: building the task's environments never needs them.
+(:func:`~sb3_smc.tasks.task.describe_task`), and only when asked for: building the task's environments never needs them.
 """
 
 from __future__ import annotations
@@ -32,9 +32,9 @@ from gymnasium.envs.registration import EnvSpec, find_highest_version, get_env_i
 
 from pixelworld_env.envs.registration import ENTRY_POINT, make_env
 from pixelworld_env.envs.vector import PixelWorldVectorEnv
+from sb3_smc.core.layout import PIXELWORLD_LAYOUT, Layout
 from sb3_smc.errors import SMCError, SMCTypeError
-from sb3_smc.layout import PIXELWORLD_LAYOUT, Layout
-from sb3_smc.tasks import describe_task
+from sb3_smc.tasks.task import describe_task
 
 __all__ = ["ResolvedTask", "TaskFields", "TaskSource", "check_env_kwargs", "is_pixelworld_id", "resolve_task"]
 
@@ -68,7 +68,7 @@ class TaskSource(enum.Enum):
     """Registered with PixelWorld's entry point (a ``PW-*`` id, or one made like them): a split, datasets, the kind
     from the catalog, the layout PixelWorld's."""
     REGISTERED = "registered"
-    """Another registered environment: an :class:`~sb3_smc.tasks.SMCTask` (kind and layout read from one instance),
+    """Another registered environment: an :class:`~sb3_smc.tasks.task.SMCTask` (kind and layout read from one instance),
     or a bare environment (no kind: the wrapper refuses it)."""
     UNREGISTERED = "unregistered"
     """An id Gymnasium does not know: refused where an environment is to be built."""

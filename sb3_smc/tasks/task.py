@@ -1,5 +1,5 @@
 """SMC tasks on any Gymnasium environment with discrete actions: :class:`SMCTask`, and the protocol :class:`TaskEnv`
-that :class:`~sb3_smc.wrapper.HierarchicalSMCWrapper` drives.
+that :class:`~sb3_smc.envs.wrapper.HierarchicalSMCWrapper` drives.
 
 An SMC task is what the paper trains an SMC on (its rules, in the package's words in ``docs/smcs.md``):
 
@@ -42,8 +42,8 @@ from pixelworld_env.envs.env import (
     PixelWorldEnv,
 )
 from pixelworld_env.validation import no_episode
+from sb3_smc.core.layout import SIGNALS, Layout
 from sb3_smc.errors import SMCError, SMCTypeError
-from sb3_smc.layout import SIGNALS, Layout
 
 __all__ = ["MAX_RETURN", "SMCTask", "TaskEnv", "describe_task", "layout_of", "returns_bounded", "task_layer"]
 
@@ -60,7 +60,7 @@ Observation = Callable[[Any], np.ndarray]
 
 @runtime_checkable
 class TaskEnv(Protocol):
-    """What :class:`~sb3_smc.wrapper.HierarchicalSMCWrapper` needs of the environment under it (beside Gymnasium's
+    """What :class:`~sb3_smc.envs.wrapper.HierarchicalSMCWrapper` needs of the environment under it (beside Gymnasium's
     ``reset``): :class:`pixelworld_env.PixelWorldEnv` implements it natively, :class:`SMCTask` for any environment.
 
     ``action_names`` are the task's signals then its ``primitive_names``; :meth:`sense` writes the current sensor
@@ -95,7 +95,7 @@ class TaskEnv(Protocol):
 
 
 def layout_of(task: TaskEnv) -> Layout:
-    """The :class:`~sb3_smc.smc.Layout` of the SMCs that act on ``task``."""
+    """The :class:`~sb3_smc.smc.smc.Layout` of the SMCs that act on ``task``."""
     return Layout(task.sensor_size, task.primitive_names)
 
 
@@ -168,7 +168,7 @@ class SMCTask(gym.Wrapper, gym.utils.RecordConstructorArgs):
     ``grid``). ``primitive_names`` names the environment's actions (default: its
     ``actions`` enum, as Minigrid has, else ``A0``...). It is a Gymnasium environment of its own (``reset`` /
     ``step``, observation the sensor values) and the :class:`TaskEnv` a
-    :class:`~sb3_smc.wrapper.HierarchicalSMCWrapper` builds SMC calls on.
+    :class:`~sb3_smc.envs.wrapper.HierarchicalSMCWrapper` builds SMC calls on.
     """
 
     def __init__(self, env: gym.Env, kind: str, *, goal: Goal | None = None, label: Label | None = None,
@@ -321,7 +321,7 @@ def task_layer(env: gym.Env) -> TaskEnv:
         if isinstance(layer, PixelWorldEnv | SMCTask):
             return layer
         if not isinstance(layer, gym.Wrapper):
-            raise SMCTypeError(f"SMCs act on a PixelWorld environment or an SMCTask (sb3_smc.tasks: any Gymnasium "
+            raise SMCTypeError(f"SMCs act on a PixelWorld environment or an SMCTask (sb3_smc.tasks.task: any Gymnasium "
                                f"environment with a goal or a label); got {type(env.unwrapped).__name__} without one")
         layer = layer.env
 

@@ -5,11 +5,11 @@ learner").
 ``n_envs`` copies of the SMC's environment (:func:`make_vec_env`: every SMC sees the same observation layout, the
 one-hot window, the outcome vector of its children and its previous action; a flat SMC on a ``PW-*`` id steps them
 in PixelWorld's native vector env, the same transitions), trains a paper-sized policy with the signal-bias
-initialisation (:mod:`sb3_smc.bias`), keeps the snapshot of the update with the highest mean training return (ties
--> earliest; docs/design.md, "Selection and test") and returns it as an :class:`~sb3_smc.smc.SMC` whose policy is a
-numpy copy of the selected actor, with its ``spec`` and :class:`~sb3_smc.records.TrainingRecord`.
+initialisation (:mod:`sb3_smc.learning.bias`), keeps the snapshot of the update with the highest mean training return
+(ties -> earliest; docs/design.md, "Selection and test") and returns it as an :class:`~sb3_smc.smc.smc.SMC` whose policy
+is a numpy copy of the selected actor, with its ``spec`` and :class:`~sb3_smc.records.TrainingRecord`.
 
-Defaults (:data:`sb3_smc.hyperparameters.ALGORITHM_REGISTRY`, measured, see ``docs/training.md``): 16
+Defaults (:data:`sb3_smc.core.hyperparameters.ALGORITHM_REGISTRY`, measured, see ``docs/training.md``): 16
 environments x 125 steps = 2,000 steps per update, 200 updates (``DEFAULT_TIMESTEPS``), gamma 0.99, GAE lambda 1,
 episodes of at most 100 decisions.
 
@@ -21,7 +21,7 @@ episodes of at most 100 decisions.
 * ``TRPO``: ``MlpPolicy`` with one hidden layer of 32 tanh units (actor and critic), KL step 0.01 (the paper's
   NPO step size). An MLP has no memory of its own; its memory is what the observation carries — the previous
   action and the outcome vector of the children — plus, optionally, the last ``frame_stack`` observations
-  (:class:`~sb3_smc.policies.FrameStackPolicy` replays the stacking when the SMC is called as a child).
+  (:class:`~sb3_smc.smc.policies.FrameStackPolicy` replays the stacking when the SMC is called as a child).
 """
 
 from __future__ import annotations
@@ -41,31 +41,31 @@ from sb3_contrib import RecurrentPPO
 from stable_baselines3.common.logger import Logger
 from stable_baselines3.common.vec_env import VecEnv
 
-from sb3_smc.bias import apply_signal_bias
-from sb3_smc.callbacks import SMCTrainingCallback
 from sb3_smc.common.discounting import SemiMDPDiscount
 
 # SequenceLstmPolicy: models saved by sb3-smc 0.1 name sb3_smc.training.SequenceLstmPolicy (SB3 pickles the class by
 # reference); importing it here keeps them loadable.
 from sb3_smc.common.recurrent import SequenceLstmPolicy, use_compact_buffer  # noqa: F401
 from sb3_smc.common.recurrent.lean_update import lean_update_applies, use_lean_update
-from sb3_smc.envs import make_smc_env
-from sb3_smc.errors import SMCError, SMCKeyError, SMCTypeError
-from sb3_smc.hyperparameters import (
+from sb3_smc.core.hyperparameters import (
     ALGORITHM_REGISTRY,
     DEFAULT_ALGORITHM,
     DEFAULT_N_ENVS,
     DEFAULT_TIMESTEPS,
     constructor_arguments,
 )
-from sb3_smc.layout import PIXELWORLD_LAYOUT, Layout
-from sb3_smc.policies import FrameStackPolicy, policy_from_model
+from sb3_smc.core.layout import PIXELWORLD_LAYOUT, Layout
+from sb3_smc.envs.factory import make_smc_env
+from sb3_smc.envs.vec_env import FlatSMCVecEnv, SMCVecEnv
+from sb3_smc.envs.wrapper import HierarchicalSMCWrapper
+from sb3_smc.errors import SMCError, SMCKeyError, SMCTypeError
+from sb3_smc.learning.bias import apply_signal_bias
+from sb3_smc.learning.callbacks import SMCTrainingCallback
 from sb3_smc.records import TaskSpec, TrainingRecord, TrainingSpec, package_versions
-from sb3_smc.resolved_task import ResolvedTask, resolve_task
-from sb3_smc.smc import SMC, StepPolicy
-from sb3_smc.tasks import MAX_RETURN
-from sb3_smc.vec_env import FlatSMCVecEnv, SMCVecEnv
-from sb3_smc.wrapper import HierarchicalSMCWrapper
+from sb3_smc.smc.policies import FrameStackPolicy, policy_from_model
+from sb3_smc.smc.smc import SMC, StepPolicy
+from sb3_smc.tasks.resolved_task import ResolvedTask, resolve_task
+from sb3_smc.tasks.task import MAX_RETURN
 
 __all__ = ["check_model_settings", "make_vec_env", "resolve_children", "train_smc", "untrained_smc"]
 
@@ -145,16 +145,17 @@ def make_vec_env(spec: TrainingSpec, children: Sequence[SMC] = (), *, native: bo
     when ``spec.frame_stack > 1``).
 
     A flat SMC (no children) on a task PixelWorld's native vector env hosts
-    (:attr:`~sb3_smc.resolved_task.ResolvedTask.native_vector`) trains in :class:`FlatSMCVecEnv` over it (one
-    compiled call steps every environment); any other SMC in :class:`~sb3_smc.vec_env.SMCVecEnv` over
-    :func:`~sb3_smc.envs.make_smc_env` (SMC calls in lockstep). Both give the same transitions with the same seeds
-    (tested).
+    (:attr:`~sb3_smc.tasks.resolved_task.ResolvedTask.native_vector`) trains in :class:`FlatSMCVecEnv` over it (one
+    compiled call steps every environment); any other SMC in :class:`~sb3_smc.envs.vec_env.SMCVecEnv` over
+    :func:`~sb3_smc.envs.factory.make_smc_env` (SMC calls in lockstep). Both give the same transitions with the same
+    seeds (tested).
 
     :param spec: the SMC's spec.
     :param children: the SMCs named by ``spec.children``, in that order.
     :param native: ``None`` chooses as above, ``False`` forces ``SMCVecEnv``, ``True`` refuses an SMC the native env
         cannot host.
-    :param task: ``spec.task`` resolved (:func:`~sb3_smc.resolved_task.resolve_task`; resolved here when not given).
+    :param task: ``spec.task`` resolved (:func:`~sb3_smc.tasks.resolved_task.resolve_task`; resolved here when not
+    given).
     """
     from stable_baselines3.common.vec_env import VecFrameStack, VecMonitor
 
@@ -214,26 +215,27 @@ def train_smc(
     passing any of them is an error. The others are run options, not part of the spec.
 
     :param task: a :class:`~sb3_smc.records.TrainingSpec`, or the env id of the task (``PW-<dataset>-v0`` or any
-        registered :class:`~sb3_smc.tasks.SMCTask` id).
+        registered :class:`~sb3_smc.tasks.task.SMCTask` id).
     :param children: the SMCs to use as actions: a sequence of SMCs, ``(library, [names])``, or, with a spec, a
         library (any mapping name -> SMC) to look the spec's children up in.
-    :param tensorboard_log: a folder for SB3's curves and those of :class:`~sb3_smc.callbacks.SMCTrainingCallback`
+    :param tensorboard_log: a folder for SB3's curves and those of
+    :class:`~sb3_smc.learning.callbacks.SMCTrainingCallback`
         (run name: the SMC's name).
     :param log_every: a progress line through ``printer`` every that many updates (0: quiet; ``None``: every 10
         updates when training runs 50 updates or more).
     :param callback: an extra SB3 callback.
     :param printer: where progress lines go.
     :param stop_at_max_return: end training once an update's mean training return is
-        :data:`~sb3_smc.tasks.MAX_RETURN` (every episode a clean success): no later update can be selected then, so
+        :data:`~sb3_smc.tasks.task.MAX_RETURN` (every episode a clean success): no later update can be selected then, so
         the SMC has the weights the whole budget would select, and its record ends there (``False``: run the whole
         budget, for complete learning curves). A task whose rewards may exceed it
-        (:func:`~sb3_smc.tasks.returns_bounded`) runs its whole budget.
+        (:func:`~sb3_smc.tasks.task.returns_bounded`) runs its whole budget.
     :param lean_update: update ``RecurrentPPO``'s LSTM policy with
         :func:`~sb3_smc.common.recurrent.lean_update.lean_train` (the compiled recurrence): the same update up to
         float rounding, faster, shown statistically equal but not bit-identical (``docs/training.md``, "The lean
         update"); ``SMCError`` for a model it does not apply to (another algorithm or cell, a critic LSTM, several
         minibatches per epoch). Off by default: results stay bit-identical.
-    :param algo: a name of :data:`~sb3_smc.hyperparameters.ALGORITHM_REGISTRY`: ``"RecurrentPPO"`` (LSTM 32),
+    :param algo: a name of :data:`~sb3_smc.core.hyperparameters.ALGORITHM_REGISTRY`: ``"RecurrentPPO"`` (LSTM 32),
         ``"TRPO"`` (MLP 32), ``"PPO"`` (MLP 32) or ``"RecurrentTRPO"`` (:mod:`sb3_smc.recurrent_trpo`).
     :param total_timesteps: the budget in decisions, at least 1 (:func:`untrained_smc` gives the SMC before
         training).
@@ -288,7 +290,7 @@ def untrained_smc(task: str | TrainingSpec, *, children: Children = None, **sett
 def _spec_and_children(task: str | TrainingSpec, children: Children, settings: dict[str, Any],
                        hyperparams: dict[str, Any]) -> tuple[TrainingSpec, tuple[SMC, ...], ResolvedTask]:
     """The spec of :func:`train_smc`'s arguments (its task resolved: kind, datasets and layout filled in), the child
-    SMCs it names, and its task resolved, once (:func:`~sb3_smc.resolved_task.resolve_task`: an unknown id or a
+    SMCs it names, and its task resolved, once (:func:`~sb3_smc.tasks.resolved_task.resolve_task`: an unknown id or a
     bad env kwarg is refused here, before any work)."""
     if isinstance(task, TrainingSpec):
         given = {k: v for k, v in settings.items() if v != _KEYWORD_DEFAULTS[k]}
@@ -346,7 +348,7 @@ def check_lean_update(spec: TrainingSpec, model: Any) -> None:
 @dataclasses.dataclass(frozen=True)
 class TaskFacts:
     """What training reads from an SMC's environment: its task kind, action names, layout, and whether its
-    returns are bounded by :data:`~sb3_smc.tasks.MAX_RETURN` (the early stop applies)."""
+    returns are bounded by :data:`~sb3_smc.tasks.task.MAX_RETURN` (the early stop applies)."""
 
     kind: str
     action_names: tuple[str, ...]

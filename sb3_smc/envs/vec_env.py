@@ -23,12 +23,12 @@ from stable_baselines3.common.vec_env import DummyVecEnv
 from stable_baselines3.common.vec_env.base_vec_env import VecEnvObs, VecEnvStepReturn
 
 from pixelworld_env.envs.vector import PixelWorldVectorEnv
-from sb3_smc import smc_step
+from sb3_smc.core.layout import HAND_SIZE, MOVES, smc_action_names
+from sb3_smc.envs import smc_step
+from sb3_smc.envs.gymnasium_vec_env import GymnasiumVecEnv
+from sb3_smc.envs.smc_step import IS_SUCCESS, NO_ACTION, PRIMITIVE_STEPS, SMCObservation
+from sb3_smc.envs.wrapper import HierarchicalSMCWrapper
 from sb3_smc.errors import SMCError
-from sb3_smc.gymnasium_vec_env import GymnasiumVecEnv
-from sb3_smc.layout import HAND_SIZE, MOVES, smc_action_names
-from sb3_smc.smc_step import IS_SUCCESS, NO_ACTION, PRIMITIVE_STEPS, SMCObservation
-from sb3_smc.wrapper import HierarchicalSMCWrapper
 
 __all__ = ["FlatSMCVecEnv", "FlatStep", "SMCVecEnv", "answer_in_batches"]
 
@@ -60,7 +60,7 @@ def answer_in_batches(requests: dict[int, tuple[Any, np.ndarray, Any]]) -> dict[
 
 
 class SMCVecEnv(DummyVecEnv):
-    """``DummyVecEnv`` whose :class:`~sb3_smc.wrapper.HierarchicalSMCWrapper` environments run their SMC calls in
+    """``DummyVecEnv`` whose :class:`~sb3_smc.envs.wrapper.HierarchicalSMCWrapper` environments run their SMC calls in
     lockstep (one batched policy evaluation per child and decision round, :func:`answer_in_batches`).
 
     Other environments step as in ``DummyVecEnv``. Step infos are copied shallowly instead of deep-copied: the
@@ -113,14 +113,14 @@ class FlatSMCVecEnv(GymnasiumVecEnv):
     compiled call.
 
     It gives what :class:`SMCVecEnv` over ``HierarchicalSMCWrapper`` environments without children gives, step for
-    step with the same seeds: the SMC's actions (:func:`~sb3_smc.smc.smc_action_names`), its observation (the
+    step with the same seeds: the SMC's actions (:func:`~sb3_smc.smc.smc.smc_action_names`), its observation (the
     one-hot window and the one-hot previous action, zeros after a reset), rewards, SB3's same-step reset with
     ``terminal_observation`` and ``TimeLimit.truncated``, and the info keys of the wrapper that training reads
     (``is_success``: the episode ended with a positive reward; ``primitive_steps``: 1 for a move, 0 for a signal).
     The observation and the step's rules (elapsed steps, truncation, success, ``primitive_steps``) are the
-    wrapper's own, :mod:`sb3_smc.smc_step`'s, applied here to the arrays of all environments at once.
-    ``train_smc`` trains flat SMCs in it (:func:`sb3_smc.training.make_vec_env`). ``get_attr`` and the other
-    per-environment calls are :class:`~sb3_smc.gymnasium_vec_env.GymnasiumVecEnv`'s.
+    wrapper's own, :mod:`sb3_smc.envs.smc_step`'s, applied here to the arrays of all environments at once.
+    ``train_smc`` trains flat SMCs in it (:func:`sb3_smc.learning.training.make_vec_env`). ``get_attr`` and the other
+    per-environment calls are :class:`~sb3_smc.envs.gymnasium_vec_env.GymnasiumVecEnv`'s.
     """
 
     def __init__(self, env: PixelWorldVectorEnv) -> None:

@@ -1,12 +1,12 @@
 """Sensorimotor contingencies (SMCs): frozen policies with their action names and child SMCs.
 
-An SMC acts on an environment through the action list of :func:`~sb3_smc.layout.smc_action_names`: the task's
+An SMC acts on an environment through the action list of :func:`~sb3_smc.core.layout.smc_action_names`: the task's
 signals, then (unless ``include_primitives`` is off) the environment's primitive actions, then one action per child
-SMC. Its observation (:func:`~sb3_smc.layout.observation_size`) is the environment's sensor values, then one outcome
-entry per child (+1 SIG1, -1 SIG0, 0 not called yet or timed out), then the one-hot of its previous action (all
-zeros at the first step), as the paper's policy input. On PixelWorld (:data:`~sb3_smc.layout.PIXELWORLD_LAYOUT`) the
-sensor is the one-hot 3 x 3 window (81 values) and the primitives are the four moves; on another environment they
-are what its task gives (:mod:`sb3_smc.tasks`), recorded as the SMC's :class:`~sb3_smc.layout.Layout`.
+SMC. Its observation (:func:`~sb3_smc.core.layout.observation_size`) is the environment's sensor values, then one
+outcome entry per child (+1 SIG1, -1 SIG0, 0 not called yet or timed out), then the one-hot of its previous action (all
+zeros at the first step), as the paper's policy input. On PixelWorld (:data:`~sb3_smc.core.layout.PIXELWORLD_LAYOUT`)
+the sensor is the one-hot 3 x 3 window (81 values) and the primitives are the four moves; on another environment they
+are what its task gives (:mod:`sb3_smc.tasks.task`), recorded as the SMC's :class:`~sb3_smc.core.layout.Layout`.
 """
 
 from __future__ import annotations
@@ -18,8 +18,8 @@ from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 import numpy as np
 
+from sb3_smc.core.layout import PIXELWORLD_LAYOUT, SIGNALS, Layout, observation_size, smc_action_names
 from sb3_smc.errors import SMCError, SMCTypeError
-from sb3_smc.layout import PIXELWORLD_LAYOUT, SIGNALS, Layout, observation_size, smc_action_names
 
 if TYPE_CHECKING:
     from sb3_smc.records import EvaluationRecord, TrainingRecord, TrainingSpec
@@ -32,7 +32,7 @@ class StepPolicy(Protocol):
     ``initial_state()`` returns the recurrent state of a fresh call (``None`` for a memoryless policy);
     ``probabilities(obs, state)`` returns the action probabilities (1-D, summing to 1, one per action name)
     and the next state. Scripted policies (one-hot probabilities) and trained SB3 models (see
-    :mod:`sb3_smc.policies`) both follow it.
+    :mod:`sb3_smc.smc.policies`) both follow it.
     """
 
     def initial_state(self) -> Any: ...

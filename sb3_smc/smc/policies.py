@@ -1,7 +1,7 @@
 """Step policies: trained SB3 actors re-implemented in numpy, scripted policies, and fast action sampling.
 
 :func:`policy_from_model` copies the actor of a trained Stable-Baselines3 model out of torch once and returns a
-:class:`~sb3_smc.smc.StepPolicy` that evaluates it in numpy, one observation at a time (about 20 times faster than
+:class:`~sb3_smc.smc.smc.StepPolicy` that evaluates it in numpy, one observation at a time (about 20 times faster than
 ``model.predict`` at batch 1, see ``python -m tests.test_policies``):
 
 * ``RecurrentPPO`` with ``MlpLstmPolicy`` -> :class:`NumpyLSTMPolicy` (any hidden size, any number of LSTM layers,
@@ -9,7 +9,7 @@
 * ``PPO`` / ``TRPO`` (or any other ``ActorCriticPolicy``) with ``MlpPolicy`` -> :class:`NumpyMLPPolicy`.
 
 Only ``Discrete`` action spaces and non-image ``Box`` observations through a ``FlattenExtractor`` are supported.
-The numpy actors themselves are :mod:`sb3_smc.numpy_actors`' (re-exported here); they hold numpy arrays only (no
+The numpy actors themselves are :mod:`sb3_smc.smc.numpy_actors`' (re-exported here); they hold numpy arrays only (no
 torch modules), so they pickle small and load without torch.
 
 :class:`FrameStackPolicy` replays ``VecFrameStack`` for a policy trained on stacked observations;
@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from sb3_smc.errors import SMCError, SMCTypeError
-from sb3_smc.numpy_actors import (
+from sb3_smc.smc.numpy_actors import (
     ACTIVATIONS,
     COMPILED_BATCH_FROM,
     Layer,
@@ -40,7 +40,7 @@ if TYPE_CHECKING:
     from stable_baselines3.common.base_class import BaseAlgorithm
     from stable_baselines3.common.policies import BasePolicy
 
-    from sb3_smc.smc import StepPolicy
+    from sb3_smc.smc.smc import StepPolicy
 
 __all__ = [
     "ACTIVATIONS",
@@ -284,7 +284,7 @@ def _one_hot(action: int, n: int) -> np.ndarray:
 # ---------------------------------------------------------------------------------------------------------------
 
 class FrameStackPolicy:
-    """A :class:`~sb3_smc.smc.StepPolicy` for a policy trained under ``VecFrameStack(n_stack)``.
+    """A :class:`~sb3_smc.smc.smc.StepPolicy` for a policy trained under ``VecFrameStack(n_stack)``.
 
     The inner policy sees the last ``n_stack`` observations concatenated, oldest first, zeros before the start
     of the call (what ``VecFrameStack`` does for 1-D observations after a reset). Picklable when ``inner`` is.

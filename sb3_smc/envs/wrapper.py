@@ -1,5 +1,5 @@
 """``HierarchicalSMCWrapper``: SMCs as extra actions of a task: a PixelWorld environment or an SMC task on any
-Gymnasium environment (:mod:`sb3_smc.tasks`) (docs/design.md, "Hierarchy: SMC calls")."""
+Gymnasium environment (:mod:`sb3_smc.tasks.task`) (docs/design.md, "Hierarchy: SMC calls")."""
 
 from __future__ import annotations
 
@@ -15,12 +15,9 @@ from pixelworld_env.core.constants import NUM_COLORS
 from pixelworld_env.core.world import MOVES as MOVE_OFFSETS
 from pixelworld_env.envs.env import BRING_ABOUT, GOAL_POTENTIAL, PixelWorldEnv
 from pixelworld_env.validation import check_action, no_episode
-from sb3_smc import smc_step
-from sb3_smc.errors import SMCError, SMCTypeError
-from sb3_smc.layout import CALL_PREFIX, smc_action_names
-from sb3_smc.policies import NumpyGRUPolicy, _kernels, sample_action
-from sb3_smc.smc import SMC, StepPolicy
-from sb3_smc.smc_step import (
+from sb3_smc.core.layout import CALL_PREFIX, smc_action_names
+from sb3_smc.envs import smc_step
+from sb3_smc.envs.smc_step import (
     ELAPSED_STEPS,
     IS_SUCCESS,
     NO_ACTION,
@@ -30,7 +27,10 @@ from sb3_smc.smc_step import (
     SMC_CALLS,
     SMCObservation,
 )
-from sb3_smc.tasks import layout_of, returns_bounded, task_layer
+from sb3_smc.errors import SMCError, SMCTypeError
+from sb3_smc.smc.policies import NumpyGRUPolicy, _kernels, sample_action
+from sb3_smc.smc.smc import SMC, StepPolicy
+from sb3_smc.tasks.task import layout_of, returns_bounded, task_layer
 
 _SIGNAL, _MOVE, _CALL = 0, 1, 2
 
@@ -71,8 +71,8 @@ def _smc_actions(smcs: Any) -> tuple[SMC, ...]:
 
 class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
     """A task whose actions are its signals, its primitive actions (PixelWorld: the four moves) and one action per
-    SMC. The task is the :class:`~sb3_smc.tasks.TaskEnv` under ``env``: a PixelWorld environment, or an
-    :class:`~sb3_smc.tasks.SMCTask` on any Gymnasium environment (stepped through its own ``step``; the compiled
+    SMC. The task is the :class:`~sb3_smc.tasks.task.TaskEnv` under ``env``: a PixelWorld environment, or an
+    :class:`~sb3_smc.tasks.task.SMCTask` on any Gymnasium environment (stepped through its own ``step``; the compiled
     calls below are PixelWorld's).
 
     Choosing an SMC runs its frozen policy on the same world, from a fresh recurrent state and stochastically
@@ -84,9 +84,9 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
     move budget of the top-level call it runs in, so a call of any depth makes at most ``call_step_cap`` moves.
 
     * Observation: the one-hot 3 x 3 window (81), the last outcome of each SMC (0 until called in this
-      episode), the one-hot previous action (zeros after reset): :class:`sb3_smc.smc_step.SMCObservation`, which
-      :class:`~sb3_smc.vec_env.FlatSMCVecEnv` writes too, as it applies the same step rules
-      (:mod:`sb3_smc.smc_step`).
+      episode), the one-hot previous action (zeros after reset): :class:`sb3_smc.envs.smc_step.SMCObservation`, which
+      :class:`~sb3_smc.envs.vec_env.FlatSMCVecEnv` writes too, as it applies the same step rules
+      (:mod:`sb3_smc.envs.smc_step`).
     * Reward of a call: the sum of the environment rewards of its primitive moves (shaping included).
     * Time: a call counts as one step of the episode's ``max_steps`` budget (the default), or, with
       ``count_primitive_steps=True``, as the number of moves it made (at least 1); calls are then also cut
@@ -99,7 +99,7 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
       that made it (outermost first; empty for a move of the policy itself) and the action's name; and ``cells``:
       on PixelWorld the self's cell after each of those moves (empty elsewhere).
 
-    Any policy following :class:`sb3_smc.smc.StepPolicy` can stand behind an SMC (scripted ones included).
+    Any policy following :class:`sb3_smc.smc.smc.StepPolicy` can stand behind an SMC (scripted ones included).
     """
 
     def __init__(self, env: gym.Env, smcs: Sequence[SMC] = (), *, include_primitives: bool = True,
@@ -147,8 +147,8 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         # call order (gym.make's OrderEnforcing / PassiveEnvChecker), which the wrapper checks itself.
         self._direct = _only_order_checks(env, cast(gym.Env, base))
         self.returns_bounded = self._direct and returns_bounded(base)
-        """Whether no episode returns more than :data:`~sb3_smc.tasks.MAX_RETURN`: the task's own rewards reach the
-        wrapper unchanged (:func:`~sb3_smc.tasks.returns_bounded`; between them only Gymnasium's order checks)."""
+        """Whether no episode returns more than :data:`~sb3_smc.tasks.task.MAX_RETURN`: the task's own rewards reach the
+        wrapper unchanged (:func:`~sb3_smc.tasks.task.returns_bounded`; between them only Gymnasium's order checks)."""
         self._ended = (False, False)  # (terminated, truncated) when the environment ended the episode in a call
         self._rng: np.random.Generator | None = None
         self._elapsed = 0
@@ -194,7 +194,7 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         key = id(smc)
         cached = self._leaf_plans.get(key)
         if cached is None or cached[0] is not smc or cached[1] is not smc.policy:  # new, or its policy replaced
-            # a policy with compiled weights (sb3_smc.policies' recurrent actors) has the sizes read below
+            # a policy with compiled weights (sb3_smc.smc.policies' recurrent actors) has the sizes read below
             policy = cast(_CompiledPolicy, smc.policy)
             weights = getattr(policy, "compiled_weights", None)
             n_actions = len(smc.action_names)
@@ -267,11 +267,11 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
 
         It yields ``(policy, observation, state)`` whenever a policy must decide (``smc``'s or, inside a child's call,
         the child's) and expects ``policy.probabilities(observation, state)`` back: :func:`run_coroutine` (what
-        :meth:`step` uses) answers at once; :class:`sb3_smc.vec_env.SMCVecEnv` answers the requests of many environments
-        with one batched evaluation per policy. A policy that is never batched (``batch_from = None``: the compiled
-        numpy actors, whose single steps cost less than stacking a group) is asked here directly instead, without the
-        round trip. The draws from this env's generator are the same either way. A call of a leaf SMC (no children, a
-        compiled actor) in a world where only the self moves is made whole by one compiled loop
+        :meth:`step` uses) answers at once; :class:`sb3_smc.envs.vec_env.SMCVecEnv` answers the requests of many
+        environments with one batched evaluation per policy. A policy that is never batched (``batch_from = None``: the
+        compiled numpy actors, whose single steps cost less than stacking a group) is asked here directly instead,
+        without the round trip. The draws from this env's generator are the same either way. A call of a leaf SMC (no
+        children, a compiled actor) in a world where only the self moves is made whole by one compiled loop
         (:func:`sb3_smc.common.kernels.leaf_call`), with the same moves, draws and result, and yields nothing.
         """
         assert self._rng is not None

@@ -8,7 +8,7 @@ PixelWorld grid is 18 x 35. :class:`PixelWorldCNN` uses the layers of the paper'
     from stable_baselines3 import PPO
 
     import pixelworld_env  # noqa: F401
-    from sb3_smc.features import PixelWorldCNN
+    from sb3_smc.learning.features import PixelWorldCNN
 
     env = gym.make("PW-cl_self-in-container_vs_noncontainer-v0", observation="image")
     model = PPO("CnnPolicy", env, policy_kwargs=dict(features_extractor_class=PixelWorldCNN))

@@ -5,25 +5,25 @@ after another, each pays the per-call costs of its environment and its learner a
 group of SMCs together:
 
 * the environments of all SMCs on the same task (same env id and settings) are one PixelWorld vector env
-  (:class:`~sb3_smc.vec_env.FlatSMCVecEnv` over ``sum(n_envs)`` environments), stepped in **one compiled call** per
+  (:class:`~sb3_smc.envs.vec_env.FlatSMCVecEnv` over ``sum(n_envs)`` environments), stepped in **one compiled call** per
   step for the whole group; each SMC's model sees its own environments through a :class:`SliceVecEnv` (with SB3's
-  ``VecMonitor`` on top, as in :func:`~sb3_smc.training.train_smc`);
+  ``VecMonitor`` on top, as in :func:`~sb3_smc.learning.training.train_smc`);
 * each SMC keeps its own model (a real sb3-contrib ``RecurrentPPO`` / :class:`~sb3_smc.recurrent_trpo.RecurrentTRPO`
   object, saved and loaded as today), optimizer state, rollout buffer,
-  :class:`~sb3_smc.callbacks.SMCTrainingCallback` (records, best-update selection, early stop) and its own random
-  streams: the global torch, numpy and Python generators are swapped to the SMC's own state around each of its
+  :class:`~sb3_smc.learning.callbacks.SMCTrainingCallback` (records, best-update selection, early stop) and its own
+  random streams: the global torch, numpy and Python generators are swapped to the SMC's own state around each of its
   policy steps and updates, so each SMC draws what it would draw trained alone;
 * the rollout loop is sb3-contrib's ``RecurrentPPO.collect_rollouts`` and SB3's ``learn`` step for step, run for
   all SMCs of the group in lockstep (an SMC that stops early or ends its budget leaves the group; its
   environments are still stepped, with action 0, and their results ignored). Where the policy takes the compiled
-  collection step and the SMC's only callback is its :class:`~sb3_smc.callbacks.SMCTrainingCallback` (the
+  collection step and the SMC's only callback is its :class:`~sb3_smc.learning.callbacks.SMCTrainingCallback` (the
   default), the step runs on numpy arrays: :meth:`~sb3_smc.common.recurrent.SequenceLstmPolicy.compiled_step`
   with the rollout's draws made in one ``torch.rand`` call (the same numbers as one call per step), the group's
-  :meth:`~sb3_smc.vec_env.FlatSMCVecEnv.step_arrays` without info dicts, and the monitor's, the callback's and the
+  :meth:`~sb3_smc.envs.vec_env.FlatSMCVecEnv.step_arrays` without info dicts, and the monitor's, the callback's and the
   buffer's bookkeeping written out on arrays; any other SMC takes SB3's path with info dicts.
 
-So each SMC is the one :func:`~sb3_smc.training.train_smc` gives for its spec, bit for bit (tested for one SMC and
-for a group of five seeds). Its record's ``wall_time_s`` is its share of the group's time: its own policy steps,
+So each SMC is the one :func:`~sb3_smc.learning.training.train_smc` gives for its spec, bit for bit (tested for one SMC
+and for a group of five seeds). Its record's ``wall_time_s`` is its share of the group's time: its own policy steps,
 bookkeeping and updates, and the group's environment steps divided among the SMCs training at that step.
 
 Specs the group cannot host (an SMC with children, a non-PixelWorld task, a memoryless learner, frame stacking,
@@ -51,12 +51,10 @@ from stable_baselines3.common.vec_env.base_vec_env import VecEnvIndices, VecEnvO
 from pixelworld_env.envs.vector import PixelWorldVectorEnv
 from sb3_smc.common.recurrent import SequenceLstmPolicy
 from sb3_smc.common.recurrent.lean_update import lean_train
+from sb3_smc.core.hyperparameters import constructor_arguments
+from sb3_smc.envs.vec_env import FlatSMCVecEnv, FlatStep
 from sb3_smc.errors import SMCError
-from sb3_smc.hyperparameters import constructor_arguments
-from sb3_smc.records import TrainingSpec
-from sb3_smc.resolved_task import resolve_task
-from sb3_smc.smc import SMC
-from sb3_smc.training import (
+from sb3_smc.learning.training import (
     TaskFacts,
     build_model,
     check_lean_update,
@@ -67,7 +65,9 @@ from sb3_smc.training import (
     train_smc,
     training_callbacks,
 )
-from sb3_smc.vec_env import FlatSMCVecEnv, FlatStep
+from sb3_smc.records import TrainingSpec
+from sb3_smc.smc.smc import SMC
+from sb3_smc.tasks.resolved_task import resolve_task
 
 __all__ = ["SliceVecEnv", "batchable", "train_smcs"]
 
@@ -85,7 +85,7 @@ def batchable(spec: TrainingSpec) -> bool:
 
 
 class SliceVecEnv(VecEnv):
-    """Environments ``[start, stop)`` of a group's shared :class:`~sb3_smc.vec_env.FlatSMCVecEnv`, as one model's
+    """Environments ``[start, stop)`` of a group's shared :class:`~sb3_smc.envs.vec_env.FlatSMCVecEnv`, as one model's
     SB3 ``VecEnv``. The group steps them: :meth:`step_async` writes the actions into the group's action array,
     :meth:`step_wait` returns this slice of the group's last step; :meth:`reset` returns this slice of the
     group's reset (done once for all, with each slice's seeds)."""
@@ -304,8 +304,8 @@ class _Job:
 
     def _observe_arrays(self) -> bool:
         """:meth:`observe` on the group's arrays: ``VecMonitor``'s sums, the callback's statistics
-        (:meth:`~sb3_smc.callbacks.SMCTrainingCallback.on_flat_step`), the time-limit bootstrap and the buffer's
-        ``add`` written out, the same numbers without info dicts."""
+        (:meth:`~sb3_smc.learning.callbacks.SMCTrainingCallback.on_flat_step`), the time-limit bootstrap and the
+        buffer's ``add`` written out, the same numbers without info dicts."""
         model = self.model
         part = cast(SliceVecEnv, model.env.unwrapped)
         step = part.group.step_result
@@ -395,7 +395,7 @@ def train_smcs(specs: Sequence[TrainingSpec], *, tensorboard_log: str | None = N
                printer: Callable[[str], None] = print, stop_at_max_return: bool = True,
                lean_update: bool = False) -> list[SMC]:
     """Train the SMCs of ``specs`` together and return them in the same order, each the SMC
-    :func:`~sb3_smc.training.train_smc` gives for its spec (same weights, records and selection).
+    :func:`~sb3_smc.learning.training.train_smc` gives for its spec (same weights, records and selection).
 
     Batchable specs (:func:`batchable`) with the same task, environment settings and steps per rollout train as
     one group, their environments stepped in one call; every other spec is trained by ``train_smc`` alone.

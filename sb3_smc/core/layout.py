@@ -67,5 +67,5 @@ def smc_action_names(kind: str, children: Sequence[str] = (), include_primitives
 
 def observation_size(n_children: int, n_actions: int, sensor_size: int = HAND_SIZE) -> int:
     """Length of an SMC's observation: sensor (PixelWorld's window by default), outcome vector, previous action (the
-    parts' offsets and how they are written: :class:`sb3_smc.smc_step.SMCObservation`)."""
+    parts' offsets and how they are written: :class:`sb3_smc.envs.smc_step.SMCObservation`)."""
     return sensor_size + n_children + n_actions

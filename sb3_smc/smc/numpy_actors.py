@@ -4,7 +4,8 @@
 actors), their feed-forward layers and activations. The default recurrent architecture (float64, one recurrent
 layer, a linear head) steps through the compiled kernels of :mod:`sb3_smc.common.kernels`; every other one through
 the numpy code here. They hold numpy arrays only (no torch modules), so they pickle small and load without torch.
-:func:`sb3_smc.policies.policy_from_model` builds them from a trained model; ``sb3_smc.policies`` re-exports them.
+:func:`sb3_smc.smc.policies.policy_from_model` builds them from a trained model; ``sb3_smc.smc.policies`` re-exports
+them.
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """One step of an SMC's environment, defined once for both step paths (docs/design.md, "Hierarchy: SMC calls"):
-:class:`~sb3_smc.wrapper.HierarchicalSMCWrapper` (one environment, SMC calls among the actions) and
-:class:`~sb3_smc.vec_env.FlatSMCVecEnv` (a flat SMC's environments as arrays over PixelWorld's native vector env).
+:class:`~sb3_smc.envs.wrapper.HierarchicalSMCWrapper` (one environment, SMC calls among the actions) and
+:class:`~sb3_smc.envs.vec_env.FlatSMCVecEnv` (a flat SMC's environments as arrays over PixelWorld's native vector env).
 
 * The **observation** (:class:`SMCObservation`): the sensor (PixelWorld's one-hot 3 x 3 window), the last outcome of
   each SMC (:data:`SIGNAL_OUTCOMES`; :data:`NO_OUTCOME` until called in the episode or when a call timed out), the
@@ -25,7 +25,7 @@ from typing import Any, overload
 import numpy as np
 from gymnasium import spaces
 
-from sb3_smc.layout import observation_size
+from sb3_smc.core.layout import observation_size
 
 __all__ = ["ELAPSED_STEPS", "IS_SUCCESS", "NO_ACTION", "NO_OUTCOME", "PRIMITIVE_STEPS", "SIGNAL_OUTCOMES",
            "SMC_CALLS", "SMCObservation", "is_success", "primitive_steps", "step_cost", "truncated"]
@@ -51,7 +51,7 @@ SMC_CALLS = "smc_calls"
 class SMCObservation:
     """The observation of an SMC with ``n_outcomes`` SMC actions and ``n_actions`` actions in all, on an environment
     with ``sensor_size`` sensor values: ``[sensor | outcomes | previous action]``
-    (:func:`~sb3_smc.layout.observation_size` values, float32)."""
+    (:func:`~sb3_smc.core.layout.observation_size` values, float32)."""
 
     sensor_size: int
     n_outcomes: int

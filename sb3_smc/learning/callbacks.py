@@ -107,7 +107,7 @@ class SMCTrainingCallback(BaseCallback):
     ``children`` are the names of the SMCs the trained policy can call (their curves are written even when a
     child is never called, as zeros); ``kind`` is the task kind ("classification" adds ``smc/accuracy``).
     ``total_updates`` is only used for the progress line. ``stop_at``: the largest mean training return there is
-    (:data:`sb3_smc.tasks.MAX_RETURN`); training stops once the selection reaches it (:attr:`solved`). After
+    (:data:`sb3_smc.tasks.task.MAX_RETURN`); training stops once the selection reaches it (:attr:`solved`). After
     training, :attr:`best` holds the selection (``best.state``: a deep copy of the policy's ``state_dict`` of the
     selected update) and :attr:`history` one dict of statistics per update.
     """
@@ -184,7 +184,7 @@ class SMCTrainingCallback(BaseCallback):
     def on_flat_step(self, rewards: np.ndarray, dones: np.ndarray, success: np.ndarray,
                      episode_returns: np.ndarray, episode_lengths: np.ndarray) -> bool:
         """``on_step`` for a flat SMC's step given as arrays instead of info dicts (every decision one primitive
-        action, no SMC calls; :mod:`sb3_smc.batched`): the same statistics. ``episode_returns`` /
+        action, no SMC calls; :mod:`sb3_smc.learning.batched`): the same statistics. ``episode_returns`` /
         ``episode_lengths``: ``VecMonitor``'s records of the episodes ending at this step, in environment order."""
         self.n_calls += 1
         self.num_timesteps = self.model.num_timesteps

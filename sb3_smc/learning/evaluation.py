@@ -23,15 +23,15 @@ from typing import TYPE_CHECKING, Any, cast
 import numpy as np
 
 from pixelworld_env.validation import check_int, check_seed
-from sb3_smc.envs import make_smc_env, spec_for_smc
+from sb3_smc.envs.factory import make_smc_env, spec_for_smc
 from sb3_smc.errors import SMCError
-from sb3_smc.policies import sample_action
 from sb3_smc.records import EvaluationRecord, WrapperSettings
-from sb3_smc.smc import SMC
+from sb3_smc.smc.policies import sample_action
+from sb3_smc.smc.smc import SMC
 
 if TYPE_CHECKING:
     from pixelworld_env.envs.env import PixelWorldEnv
-    from sb3_smc.wrapper import HierarchicalSMCWrapper
+    from sb3_smc.envs.wrapper import HierarchicalSMCWrapper
 
 __all__ = ["FOREIGN_TEST_SEED", "EnvironmentResult", "EpisodeResult", "EvaluationResult", "REPEAT_SEED_OFFSET",
            "evaluate", "episode_seed", "make_evaluation_env", "run_episode", "start_seed"]
@@ -155,10 +155,10 @@ def episode_seed(seed: int, repeat: int, index: int) -> int:
 
 def run_episode(smc: SMC, env: HierarchicalSMCWrapper, *, index: int | None = None, seed: int,
                 record_cells: bool = True, start_seed: int | None = None) -> EpisodeResult:
-    """Run one episode of ``smc`` on ``env`` (a :class:`~sb3_smc.wrapper.HierarchicalSMCWrapper` built for it).
+    """Run one episode of ``smc`` on ``env`` (a :class:`~sb3_smc.envs.wrapper.HierarchicalSMCWrapper` built for it).
 
     On PixelWorld ``index`` picks the scene (``None``: the env's own draw) and the env is reset with ``seed``. On
-    another task (:class:`~sb3_smc.tasks.SMCTask`) the task is reset with ``start_seed`` (its start state) and the
+    another task (:class:`~sb3_smc.tasks.task.SMCTask`) the task is reset with ``start_seed`` (its start state) and the
     SMC calls' sampling with ``seed``. Actions are sampled from the SMC's policy with
     ``numpy.random.default_rng((seed, 1))``. Moves and calls are recorded with ``record_cells``, cells on PixelWorld
     only.
@@ -211,7 +211,7 @@ def run_episode(smc: SMC, env: HierarchicalSMCWrapper, *, index: int | None = No
 def make_evaluation_env(smc: SMC, env_id: str | None = None, *, split: str = "test", max_steps: int | None = None,
                         env_kwargs: Mapping[str, Any] | None = None,
                         wrapper: WrapperSettings | None = None) -> HierarchicalSMCWrapper:
-    """The environment ``smc`` was trained in (:func:`sb3_smc.envs.make_smc_env` with its spec), on ``split``.
+    """The environment ``smc`` was trained in (:func:`sb3_smc.envs.factory.make_smc_env` with its spec), on ``split``.
 
     ``env_id`` defaults to the SMC's own task; ``wrapper`` replaces the wrapper settings it was trained with (e.g.
     ``count_primitive_steps``), ``max_steps`` the episode length. The wrapper reports the cells of every move (those
@@ -236,7 +236,7 @@ def _env_id(smc: SMC, env_id: str | None) -> str:
 
 def start_seed(split: str, index: int) -> int:
     """The reset seed of start state ``index`` of ``split`` on a task without datasets (an
-    :class:`~sb3_smc.tasks.SMCTask`): ``index`` for ``"train"``, ``FOREIGN_TEST_SEED + index`` for ``"test"``."""
+    :class:`~sb3_smc.tasks.task.SMCTask`): ``index`` for ``"train"``, ``FOREIGN_TEST_SEED + index`` for ``"test"``."""
     if split not in FOREIGN_SPLITS:
         raise SMCError(f"a task without datasets has the splits {tuple(FOREIGN_SPLITS)} (start seeds), got {split!r}")
     return FOREIGN_SPLITS[split] + index
@@ -250,7 +250,7 @@ def evaluate(smc: SMC, env_id: str | None = None, *, split: str = "test", repeat
 
     :param smc: the SMC to test.
     :param env_id: the task (default: the one the SMC was trained on).
-    :param split: ``"test"`` or ``"train"``. On a task without datasets (an :class:`~sb3_smc.tasks.SMCTask` on any
+    :param split: ``"test"`` or ``"train"``. On a task without datasets (an :class:`~sb3_smc.tasks.task.SMCTask` on any
         Gymnasium environment) the environments are ``starts`` start states: the task reset with
         :func:`start_seed` (``"test"``: seeds from ``FOREIGN_TEST_SEED``, far from the ``seed + i`` training resets;
         ``"train"``: from 0), each repeat sampling the policy and the SMC calls anew from the same start.

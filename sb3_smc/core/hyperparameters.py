@@ -142,7 +142,7 @@ file) is offered for comparison, untuned. RecurrentTRPO (:mod:`sb3_smc.recurrent
 ``baseline="linear_feature"`` gives the paper's linear feature baseline instead of the critic."""
 
 ALGORITHMS = tuple(ALGORITHM_REGISTRY)
-"""Algorithms :func:`~sb3_smc.training.train_smc` trains."""
+"""Algorithms :func:`~sb3_smc.learning.training.train_smc` trains."""
 DEFAULT_ALGORITHM = ALGORITHMS[0]
 """The algorithm of a spec, a curriculum node or a run that names none."""
 DEFAULT_HYPERPARAMETERS: dict[str, dict[str, Any]] = {name: algo.hyperparameters
