@@ -11,6 +11,7 @@ import subprocess
 import sys
 import textwrap
 import unicodedata
+import warnings
 from pathlib import Path
 
 import gymnasium as gym
@@ -819,10 +820,15 @@ def test_a_version_2_entry_without_a_spec_loads(smcs, tmp_path):
 
 
 def test_version_0_1_models_name_a_policy_class_that_still_imports():
-    """sb3-smc 0.1 pickled its LSTM policy class as sb3_smc.training.SequenceLstmPolicy."""
-    from sb3_smc.common.recurrent import SequenceLstmPolicy
-    from sb3_smc.learning.training import SequenceLstmPolicy as legacy
+    """sb3-smc 0.1 pickled its LSTM policy class as sb3_smc.training.SequenceLstmPolicy (that module is a deprecated
+    path of sb3_smc.learning.training now, which keeps the class)."""
+    import pickle
 
+    from sb3_smc.common.recurrent import SequenceLstmPolicy
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", DeprecationWarning)
+        legacy = pickle.loads(b"csb3_smc.training\nSequenceLstmPolicy\n.")  # the class by reference, as SB3 saves it
     assert legacy is SequenceLstmPolicy
 
 

@@ -1,6 +1,7 @@
 """The public module paths: every documented module imports (the API reference's and the architecture map's), and
-every path the move into sub-packages took away (2026-11-25) still imports for a release, with a
-``DeprecationWarning`` that names the new path (``pixelworld_env._moved``)."""
+every path the moves into sub-packages took away (``pixelworld_env`` 2026-11-25, ``sb3_smc`` 2026-11-27) still imports
+for a release, with a ``DeprecationWarning`` that names the new path (``pixelworld_env._moved``, ``sb3_smc._moved``),
+but the old ``sb3_smc`` modules whose paths are packages now: those re-export the old names without a warning."""
 
 from __future__ import annotations
 
@@ -13,9 +14,16 @@ from pathlib import Path
 
 import pytest
 
-from pixelworld_env._moved import MODULES, NAMES
+from pixelworld_env._moved import MODULES as PIXELWORLD_MODULES
+from pixelworld_env._moved import NAMES
+from sb3_smc._moved import MODULES as SB3_SMC_MODULES
+from sb3_smc._moved import PACKAGES
 
 ROOT = Path(__file__).resolve().parents[1]
+MODULES = {**PIXELWORLD_MODULES, **SB3_SMC_MODULES}
+"""Every old module path -> its new module."""
+SHIMS = {old: new for old, new in MODULES.items() if old not in PACKAGES}
+"""The old module paths that are deprecated shims."""
 
 
 def _modules(package: str, *names: str) -> list[str]:
@@ -62,18 +70,19 @@ def api_reference_modules() -> set[str]:
 def test_the_api_reference_documents_public_modules_and_no_old_path():
     documented = api_reference_modules()
     assert documented and documented <= set(PUBLIC)
-    assert not documented & (set(MODULES) | set(NAMES))
+    assert not documented & (set(MODULES) | set(NAMES))  # an old path that is a package now is not documented either
 
 
 def test_every_documented_module_imports_and_none_uses_an_old_path():
     """In a fresh interpreter, with the old paths' deprecation warnings made errors."""
     code = "import importlib, sys\nfor m in sys.argv[1:]: importlib.import_module(m)"
-    done = subprocess.run([sys.executable, "-W", "error:pixelworld_env:DeprecationWarning", "-c", code, *PUBLIC],
+    done = subprocess.run([sys.executable, "-W", "error:pixelworld_env:DeprecationWarning",
+                           "-W", "error:sb3_smc:DeprecationWarning", "-c", code, *PUBLIC],
                           capture_output=True, text=True, cwd=ROOT, timeout=300)
     assert done.returncode == 0, done.stderr[-3000:]
 
 
-@pytest.mark.parametrize(("old", "new"), sorted(MODULES.items()))
+@pytest.mark.parametrize(("old", "new"), sorted(SHIMS.items()))
 def test_an_old_module_path_warns_naming_its_new_path_and_gives_its_names(old, new):
     fresh = importlib.import_module(new)
     sys.modules.pop(old, None)
@@ -83,7 +92,21 @@ def test_an_old_module_path_warns_naming_its_new_path_and_gives_its_names(old, n
     assert len(caught) == 1 and Path(caught[0].filename) == Path(__file__)  # the importing line is blamed
     names = getattr(fresh, "__all__", [n for n in vars(fresh) if not n.startswith("_")])
     assert names and all(getattr(shim, name) is getattr(fresh, name) for name in names)
-    assert (ROOT / "pixelworld_env" / f"{old.rsplit('.', 1)[1]}.py").is_file()
+    assert (ROOT / f"{old.replace('.', '/')}.py").is_file()
+
+
+@pytest.mark.parametrize("old", sorted(PACKAGES))
+def test_an_old_module_path_that_is_a_package_now_gives_its_names_without_a_warning(old):
+    new = importlib.import_module(SB3_SMC_MODULES[old])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", DeprecationWarning)
+        package = importlib.import_module(old)
+        names = getattr(new, "__all__", [n for n in vars(new) if not n.startswith("_")])
+        assert names and all(getattr(package, name) is getattr(new, name) for name in names)
+        namespace: dict = {}
+        exec(f"from {old} import *", namespace)
+        assert all(namespace[name] is getattr(new, name) for name in names)
+    assert (ROOT / old.replace(".", "/") / "__init__.py").is_file()
 
 
 @pytest.mark.parametrize("package", sorted(NAMES))
@@ -102,8 +125,15 @@ def test_the_names_of_an_old_module_now_a_package_resolve_with_the_warning(packa
 
 
 def test_the_old_paths_are_the_modules_the_move_took_away():
-    """``git show fc6e2e9 --stat``: 22 modules at the package's root moved into sub-packages."""
-    old = {m.rsplit(".", 1)[1] for m in [*MODULES, *NAMES]}
+    """``git show fc6e2e9 --stat``: 22 modules at ``pixelworld_env``'s root moved into sub-packages; then 19 of
+    ``sb3_smc``'s (all but ``__init__``, ``cli``, ``demo`` and ``errors``)."""
+    old = {m.rsplit(".", 1)[1] for m in [*PIXELWORLD_MODULES, *NAMES]}
     assert old == {"catalog", "constants", "csp", "dataset_spec", "datasets", "definitions", "env", "experiment_files",
                    "generation", "kernels", "loading", "objects", "oracle", "placement", "regions", "registration",
                    "render", "sampling", "scene", "shapes", "vector", "world"}
+    old = {m.rsplit(".", 1)[1] for m in SB3_SMC_MODULES}
+    assert old == {"batched", "bias", "callbacks", "dag", "envs", "evaluation", "features", "gymnasium_vec_env",
+                   "hyperparameters", "layout", "numpy_actors", "policies", "resolved_task", "smc", "smc_step", "tasks",
+                   "training", "vec_env", "wrapper"}
+    assert {path.stem for path in (ROOT / "sb3_smc").glob("*.py")} == {*old - {"envs", "smc", "tasks"}, "__init__",
+                                                                      "_moved", "cli", "demo", "errors"}

@@ -42,10 +42,7 @@ from stable_baselines3.common.logger import Logger
 from stable_baselines3.common.vec_env import VecEnv
 
 from sb3_smc.common.discounting import SemiMDPDiscount
-
-# SequenceLstmPolicy: models saved by sb3-smc 0.1 name sb3_smc.training.SequenceLstmPolicy (SB3 pickles the class by
-# reference); importing it here keeps them loadable.
-from sb3_smc.common.recurrent import SequenceLstmPolicy, use_compact_buffer  # noqa: F401
+from sb3_smc.common.recurrent import use_compact_buffer
 from sb3_smc.common.recurrent.lean_update import lean_update_applies, use_lean_update
 from sb3_smc.core.hyperparameters import (
     ALGORITHM_REGISTRY,
