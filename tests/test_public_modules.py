@@ -57,7 +57,7 @@ PUBLIC = (
     *_modules("sb3_smc.curricula", "format", "shipped", "designed", "trainer", "options", "scheduler", "jobs",
               "run_directory", "executors", "pretrained", "reuse"),
     *_modules("sb3_smc.experiments", "design", "runner", "wall_clock", "cnn", "report", "figures", "tables",
-              "statistics", "bootstrap", "claims", "sweep", "paper"),
+              "statistics", "bootstrap", "claims", "sweep", "experience", "paper"),
 )
 
 
