@@ -576,6 +576,35 @@ def test_the_equal_experience_methods_are_base_with_its_budget_scaled():
             assert own == base
 
 
+def test_curr_whose_lower_levels_train_with_twice_the_budget():
+    """``curr-lower-x2``: curr's target nodes as copies named ``curr-lower-x2/<node>`` calling copies of every lower
+    node (``curr-lower-x2/<node>``, one per node however many targets use it) whose budget is twice the run's; its
+    jobs are curr's but for their names, their children's names and the lower nodes' budgets."""
+    from sb3_smc.curricula.jobs import node_spec
+
+    method = "curr-lower-x2"
+    design = plan([LEFT_OF, IN_CONTAINER], ["curr", method])
+    curriculum = design.curriculum
+    for target in (LEFT_OF, IN_CONTAINER):
+        curr, ours = design.nodes[(target, "curr")], design.nodes[(target, method)]
+        assert ours == tuple(f"{method}/{n}" for n in curr)
+        lower = curriculum.closure(curr) - set(curr)
+        assert lower and curriculum.closure(ours) - set(ours) == {f"{method}/{n}" for n in lower}
+        for name in (*curr, *lower):
+            node, copy = curriculum.node(name), curriculum.node(f"{method}/{name}")
+            assert copy.uses == tuple(f"{method}/{u}" for u in node.uses) and copy.task == node.task
+            own, theirs = (node_spec(n, 1, tuple(f"{u}@0" for u in n.uses), timesteps=2000).to_dict()
+                           for n in (copy, node))
+            assert own.pop("name") == f"{method}/{theirs.pop('name')}"
+            assert own.pop("children") == [f"{method}/{c}" for c in theirs.pop("children")]
+            factor = 1 if name in curr else 2
+            assert own.pop("budget") == {**theirs.pop("budget"), "total_timesteps": 2000 * factor}
+            assert own == theirs
+    curr_nodes = [n for t in (LEFT_OF, IN_CONTAINER) for n in design.nodes[(t, "curr")]]
+    order = curriculum.order(design.training_targets)
+    assert len(order) == len(set(order)) == 2 * len(curriculum.closure(curr_nodes))  # a shared lower node: one copy
+
+
 def test_the_sweep_targets_cover_both_kinds_and_every_category():
     from pixelworld_env.datasets import catalog
 

@@ -125,10 +125,15 @@ def test_each_method_trains_what_its_entry_says() -> None:
                     entry = design.curriculum.node(node)
                     shipped_name = node.removeprefix(f"{name}/") if method.changes_targets else node
                     assert node != shipped_name or not method.changes_targets
-                    original = next(c.node(shipped_name) for c in shipped
-                                    if c.method == method.curricula and shipped_name in c.targets)
+                    home = next(c for c in shipped if c.method == method.curricula and shipped_name in c.targets)
+                    original = home.node(shipped_name)
                     assert entry.budget_scale == pytest.approx(original.budget_scale * method.budget_scale(original))
-                    assert entry.uses == original.uses and entry.task == original.task
+                    assert entry.uses == tuple(map(method.lower_name, original.uses)) and entry.task == original.task
+                    for below in home.closure([shipped_name]) - {shipped_name}:  # the lower levels: scaled copies
+                        assert design.curriculum.node(method.lower_name(below)) == dataclasses.replace(
+                            home.node(below), name=method.lower_name(below),
+                            uses=tuple(map(method.lower_name, home.node(below).uses)),
+                            budget_scale=home.node(below).budget_scale * method.lower_budget_factor)
                     assert entry.count_primitive_steps == method.count_primitive_steps
                     assert (entry.max_steps, entry.call_step_cap) == (method.max_steps or 100,
                                                                       method.call_step_cap or 100)

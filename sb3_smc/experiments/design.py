@@ -13,9 +13,10 @@ reading of a call, ``curr-cap10`` / ``-cap25`` / ``-cap50`` / ``-cap100`` (a cal
 / 100 moves; ``-cap100`` is curr's setting, trained again in the sweep's run) and ``curr-moves-100`` / ``-200`` /
 ``-400`` (calls cost their moves, 100 / 200 / 400 moves an episode; ``-100`` is curr-moves' setting); ``base-x1``,
 ``base-x4`` and ``base-x16``, the flat SMC with 1, 4 and 16 times the budget (equal experience,
-:data:`EXPERIENCE_METHODS`). Every SMC
-method's jobs are nodes of curricula (shipped ones, or a flat method's); :func:`plan` merges them so that a
-lower-level node shared by several methods is trained once.
+:data:`EXPERIENCE_METHODS`); ``curr-lower-x2``, curr whose lower-level nodes (every node below its target nodes)
+train with twice the run's budget, under names of their own. Every SMC method's jobs are nodes of curricula
+(shipped ones, or a flat method's); :func:`plan` merges them so that a lower-level node shared by several methods
+is trained once.
 """
 
 from __future__ import annotations
@@ -73,6 +74,11 @@ class ExperimentMethod:
     budget_factor: float = 1.0
     """A flat method's factor on the run's budget (``base-x4``: 4, so that flat SMCs get as much experience as a
     curriculum's; see :data:`EXPERIENCE_METHODS`)."""
+    lower_budget_factor: float = 1.0
+    """A curriculum method's factor on the budget of every lower-level node (each node its target nodes use, directly
+    or not; ``curr-lower-x2``: 2). A node's budget is part of what it trains, so the lower nodes are copied as
+    :meth:`lower_name` and its target nodes are copies calling them; ``1``: the lower nodes are the shipped ones,
+    shared with the other methods."""
 
     @property
     def flat(self) -> bool:
@@ -100,6 +106,11 @@ class ExperimentMethod:
                                    max_steps=self.max_steps or node.max_steps,
                                    call_step_cap=self.call_step_cap or node.call_step_cap)
 
+    def lower_name(self, name: str) -> str:
+        """The name of lower-level node ``name`` as this method trains it: ``<method>/<node>`` where it changes the
+        lower levels' budget (:attr:`lower_budget_factor`), else ``name`` (the shipped node)."""
+        return name if self.lower_budget_factor == 1 else f"{self.name}/{name}"
+
     def budget_scale(self, node: Node) -> float:
         """The factor on the run's budget for target ``node``: its SMC actions over :attr:`budget_actions`, at least
         1 (the two best seeds of each node it uses are its SMC actions)."""
@@ -110,7 +121,7 @@ class ExperimentMethod:
     @property
     def changes_targets(self) -> bool:
         """Whether it trains the target nodes of its curricula with settings of its own (:meth:`targets_of`)."""
-        return self.budget_actions is not None or self._changes_episodes
+        return self.budget_actions is not None or self._changes_episodes or self.lower_budget_factor != 1
 
     @property
     def _change(self) -> str:
@@ -120,22 +131,31 @@ class ExperimentMethod:
             changes.append(f"{self.max_steps} steps an episode")
         if self.call_step_cap is not None:
             changes.append(f"calls cut after {self.call_step_cap} moves")
+        if self.lower_budget_factor != 1:
+            changes.append(f"the budget of its lower levels x{self.lower_budget_factor:g}")
         return " and ".join(changes)
 
     def targets_of(self, curriculum: Curriculum, names: Sequence[str]) -> tuple[Curriculum, list[str]]:
         """``curriculum`` and its target nodes ``names`` as this method trains them: as they are, or (a method that
         :attr:`changes_targets`) with copies of them named ``<method>/<node>`` with their budget scaled and / or
-        their calls costing their moves, beside the nodes they use (shared with the other methods)."""
+        their calls costing their moves, beside the nodes they use (shared with the other methods), or (a
+        :attr:`lower_budget_factor`) calling copies of those (:meth:`lower_name`, one per node however many targets
+        use it) with their budget scaled."""
         if not self.changes_targets:
             return curriculum, list(names)
         used = {u for node in curriculum.nodes for u in node.uses}
         if used & set(names):
             raise CurriculumError(f"{curriculum.name}: {sorted(used & set(names))[0]!r} is used by another node: "
                                   f"method {self.name} changes top nodes only")
+        lower = [] if self.lower_budget_factor == 1 else [
+            dataclasses.replace(node, name=self.lower_name(node.name), uses=tuple(map(self.lower_name, node.uses)),
+                                line=None, budget_scale=node.budget_scale * self.lower_budget_factor)
+            for node in map(curriculum.node, curriculum.order(names)) if node.name not in names]
         copies = [self._with_episodes(dataclasses.replace(node, name=f"{self.name}/{node.name}", line=None,
+                                                          uses=tuple(map(self.lower_name, node.uses)),
                                                           budget_scale=node.budget_scale * self.budget_scale(node)))
                   for node in map(curriculum.node, names)]
-        return Curriculum(f"{self.name}/{curriculum.name}", (*curriculum.nodes, *copies),
+        return Curriculum(f"{self.name}/{curriculum.name}", (*curriculum.nodes, *lower, *copies),
                           tuple(c.name for c in copies), method=f"smc-{self.name}",
                           description=f"{curriculum.name}, {self._change}"), \
             [c.name for c in copies]
@@ -176,6 +196,8 @@ METHOD_REGISTRY: dict[str, ExperimentMethod] = {method.name: method for method i
     *(ExperimentMethod(f"base-x{factor}", f"base-x{factor} (flat SMC, {factor} x the budget)", colour, paper="base",
                        budget_factor=factor)
       for factor, colour in ((1, "#a9bfe0"), (4, "#7f9fd0"), (16, "#2b4f8c"))),
+    ExperimentMethod("curr-lower-x2", "curr-lower-x2 (curr, 2 x the budget of its lower levels)", "#e07b91",
+                     curricula="smc-curr", paper="curr", lower_budget_factor=2),
 )}
 """Every method by name, in the order of the report's columns."""
 METHODS = tuple(METHOD_REGISTRY)
