@@ -198,8 +198,6 @@ METHOD_REGISTRY: dict[str, ExperimentMethod] = {method.name: method for method i
       for factor, colour in ((1, "#a9bfe0"), (4, "#7f9fd0"), (16, "#2b4f8c"))),
     ExperimentMethod("curr-lower-x2", "curr-lower-x2 (curr, 2 x the budget of its lower levels)", "#e07b91",
                      curricula="smc-curr", paper="curr", lower_budget_factor=2),
-    ExperimentMethod("canon-lower-x4", "canon-lower-x4 (canon, 4 x the budget of its lower levels)", "#7b1fa2",
-                     curricula="smc-canon", paper="canon", lower_budget_factor=4),
 )}
 """Every method by name, in the order of the report's columns."""
 METHODS = tuple(METHOD_REGISTRY)
