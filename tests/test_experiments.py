@@ -1045,6 +1045,16 @@ def test_the_readme_gets_the_whole_tables_means_and_tests_from_the_report(tmp_pa
     brief = readme.read_text()
     assert "**Means per kind and category (Fig. 5a/5d)**" in brief and "| bring-about | all | 17 | " in brief
     assert "Paired t-tests" not in brief and "curr vs base" not in brief and "**[The paper's claims]" in brief
+    # a method run on a few targets only (a sweep's setting): in the full block's means, not in the brief's
+    _synthetic_table(tmp_path / "sweep", everything[:3], ["curr-cap10"], score)
+    [report] = write_report([tmp_path / "flat", tmp_path / "more", tmp_path / "rest", tmp_path / "sweep"],
+                            out=tmp_path / "docs", behaviour=False)
+    readme_table.main(["--report", str(report), "--readme", str(readme)])
+    assert "| curr-cap10 |" in readme.read_text()
+    readme_table.main(["--report", str(report), "--readme", str(readme), "--brief"])
+    brief = readme.read_text()
+    assert "curr-cap10" not in brief and "| kind | category | concepts | cnn | base | curr |" in brief
+    assert "|---|---|---:|" in brief and "| bring-about | all | 17 | " in brief
     readme.write_text("# no markers\n")
     with pytest.raises(SystemExit, match="needs exactly one <!-- paper-table:start -->"):
         readme_table.main(["--report", str(report), "--readme", str(readme)])

@@ -78,6 +78,21 @@ def kind_rows(table: list[str]) -> list[str]:
                         if (cells(row)[1] != "all" if cells(row)[0] in partial else keep(cells(row)))]
 
 
+def without_subset_methods(table: list[str]) -> list[str]:
+    """The means table without the columns of our methods that ran on a subset of the concepts only (no mean over
+    all of a kind's concepts: the sweep's settings, equal experience); the paper's methods keep theirs."""
+    header = cells(table[0])
+    rows = [cells(row) for row in table[2:]]
+    over_all = [row for row in rows if row[1] == "all"]
+    drop = {i for i in range(3, len(header)) if over_all and header[i] not in DEFAULT_METHODS
+            and all(row[i] in ("", "-") for row in over_all)}
+    if not drop:
+        return table
+    kept = [[c for i, c in enumerate(cells(line)) if i not in drop] for line in table]
+    return ["|" + "|".join(row if k == 1 else [f" {c} " if c else " " for c in row]) + "|"
+            for k, row in enumerate(kept)]
+
+
 def tables_of(report: str, heading: str) -> list[list[str]]:
     """The Markdown tables (their lines) of the report's section ``heading``."""
     tables: list[list[str]] = []
@@ -128,16 +143,21 @@ def claims_line(report: str, source: str) -> str:
 
 def block(report: str, source: str, sections: tuple[str, ...] = SECTIONS) -> str:
     """The README's block: a line on what it is (whole, or what is still being run), the count of the claims
-    reproduced, then the rows per kind of ``sections`` (default: both), headed in bold."""
+    reproduced, then the rows per kind of ``sections`` (default: both), headed in bold; the brief block (the means
+    only) leaves out the methods run on a subset of the concepts (:func:`without_subset_methods`)."""
     lines = [START, "", f"From [the whole table's report]({source})" + partial_note(report)
              + "; scores in %, ours beside the paper's (Hay et al., AAAI-18).", ""]
     counted = claims_line(report, source)
     if counted:
         lines += [counted, ""]
+    brief = tuple(sections) == SECTIONS[:1]
     for heading in sections:  # their tables only: the report explains them
         lines += [f"**{heading.removeprefix('## ')}**", ""]
         for table in tables_of(report, heading):
-            lines += [*kind_rows(table), ""]
+            rows = kind_rows(table)
+            if brief and table[0].startswith("| kind | category |"):
+                rows = without_subset_methods(rows)
+            lines += [*rows, ""]
     return "\n".join([*lines, END])
 
 
