@@ -956,7 +956,7 @@ def test_the_whole_table_report_with_canon_scaled_and_curr_moves(tmp_path):
     claims = text.split("## The paper's claims")[1].split("\n## ")[0]
     assert "canon-scaled" not in claims
     assert "| statement | paper | a call is one step | a call costs its moves |" in claims
-    assert "400,000 steps per SMC (canon-scaled's target nodes: that x their SMC actions / 8, at least 1)" in text
+    assert "400,000 steps per SMC (canon-scaled: its target nodes' budget x their SMC actions / 8, at least 1)" in text
     # the claims that pool methods keep the paper's curr and canon (canon-scaled trains longer)
     assert "| bring-about | curr or canon | base | 17 of 17 | 14 of 16 |" in text
     assert ("| bring-about: a hierarchical SMC (best of curr, canon) beats the flat one, % of concepts | on 14 of 16 "

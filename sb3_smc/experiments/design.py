@@ -124,16 +124,22 @@ class ExperimentMethod:
         return self.budget_actions is not None or self._changes_episodes or self.lower_budget_factor != 1
 
     @property
-    def _change(self) -> str:
-        changes = (["the budget of its targets scaled by their SMC actions"] if self.budget_actions is not None
-                   else []) + (["the calls of its targets costing their moves"] if self.count_primitive_steps else [])
+    def change(self) -> str:
+        """How it trains otherwise than the run says, in words (``""``: as the run says): the report's line on the
+        run and the description of its curricula."""
+        changes = ([f"its target nodes' budget x their SMC actions / {self.budget_actions}, at least 1"]
+                   if self.budget_actions is not None else [])
+        if self.count_primitive_steps:
+            changes.append("an SMC call of its target nodes costs the episode's steps the moves it made")
         if self.max_steps is not None:
             changes.append(f"{self.max_steps} steps an episode")
         if self.call_step_cap is not None:
-            changes.append(f"calls cut after {self.call_step_cap} moves")
+            changes.append(f"a call of its target nodes cut after {self.call_step_cap} moves")
+        if self.budget_factor != 1:
+            changes.append(f"{self.budget_factor:g} x the budget")
         if self.lower_budget_factor != 1:
-            changes.append(f"the budget of its lower levels x{self.lower_budget_factor:g}")
-        return " and ".join(changes)
+            changes.append(f"its lower levels' budget x {self.lower_budget_factor:g}")
+        return "; ".join(changes)
 
     def targets_of(self, curriculum: Curriculum, names: Sequence[str]) -> tuple[Curriculum, list[str]]:
         """``curriculum`` and its target nodes ``names`` as this method trains them: as they are, or (a method that
@@ -157,7 +163,7 @@ class ExperimentMethod:
                   for node in map(curriculum.node, names)]
         return Curriculum(f"{self.name}/{curriculum.name}", (*curriculum.nodes, *lower, *copies),
                           tuple(c.name for c in copies), method=f"smc-{self.name}",
-                          description=f"{curriculum.name}, {self._change}"), \
+                          description=f"{curriculum.name}, {self.change}"), \
             [c.name for c in copies]
 
     def flat_node(self, target: str) -> Node:

@@ -276,14 +276,10 @@ def _commits_lines(results: dict[str, Any]) -> list[str]:
 
 
 def _target_rules(settings: dict[str, Any]) -> str:
-    """The methods of the run whose target nodes train otherwise than the run says (``canon-scaled``: longer,
-    ``curr-moves``: calls costing their moves), and how."""
+    """The methods of the run that train otherwise than the run says (``canon-scaled``: longer, ``curr-moves``:
+    calls costing their moves, ...), and how (:attr:`~sb3_smc.experiments.design.ExperimentMethod.change`)."""
     methods = [METHOD_REGISTRY[m] for m in settings["methods"] if m in METHOD_REGISTRY]
-    return "".join(
-        [f" ({m.name}'s target nodes: that x their SMC actions / {m.budget_actions}, at least 1)"
-         for m in methods if m.budget_actions is not None]
-        + [f" ({m.name}: an SMC call of its target nodes costs the episode's steps the moves it made)"
-           for m in methods if m.count_primitive_steps])
+    return "".join(f" ({m.name}: {m.change})" for m in methods if m.change)
 
 
 def _code_line(results: dict[str, Any]) -> list[str]:
