@@ -54,9 +54,14 @@ NAMES: dict[str, dict[str, str]] = {
 
 def warn_moved(old: str) -> None:
     """The warning of the shim module ``old``, attributed to the import that loads it."""
-    new = MODULES[old]
+    warn_module_moved(old, MODULES[old])
+
+
+def warn_module_moved(old: str, new: str) -> None:
+    """The warning of a shim module at ``old`` whose content moved to ``new``, attributed to the import that loads
+    the shim (called by a package's ``warn_moved``, itself called by the shim; ``sb3_smc._moved`` uses it too)."""
     warnings.warn(f"{old} moved to {new}: import {new} instead ({old} is deprecated and goes in the next release)",
-                  DeprecationWarning, stacklevel=3)
+                  DeprecationWarning, stacklevel=4)
 
 
 def moved_name(package: str, name: str) -> Any:

@@ -10,7 +10,7 @@ sb3-smc 0.1 pickled.
 
 from __future__ import annotations
 
-import warnings
+from pixelworld_env._moved import warn_module_moved
 
 MODULES: dict[str, str] = {f"sb3_smc.{old}": f"sb3_smc.{new}" for old, new in (
     ("batched", "learning.batched"),
@@ -40,7 +40,5 @@ PACKAGES = frozenset({"sb3_smc.envs", "sb3_smc.smc", "sb3_smc.tasks"})
 
 
 def warn_moved(old: str) -> None:
-    """The warning of the shim module ``old``, attributed to the import that loads it."""
-    new = MODULES[old]
-    warnings.warn(f"{old} moved to {new}: import {new} instead ({old} is deprecated and goes in the next release)",
-                  DeprecationWarning, stacklevel=3)
+    """The warning of the shim module ``old``, attributed to the import that loads it (pixelworld_env's message)."""
+    warn_module_moved(old, MODULES[old])
