@@ -27,7 +27,8 @@ from typing import Any, Protocol
 
 from pixelworld_env.atomic import atomic_write
 from sb3_smc.core.dag import reachable
-from sb3_smc.curricula.format import SEED_SEPARATOR
+from sb3_smc.curricula.jobs import JobId
+from sb3_smc.curricula.run_directory import read_json
 from sb3_smc.errors import SMCError
 from sb3_smc.experiments.design import EXPERIENCE_METHODS, METHOD_REGISTRY
 
@@ -60,11 +61,10 @@ class Experience:
             uses = {name: tuple(node["uses"]) for name, node in settings["nodes"].items()}
             seeds = int(settings["seeds"])
             steps: dict[str, dict[int, int]] = {}
-            for job, entry in manifest["smcs"].items():
-                node, _, seed = job.rpartition(SEED_SEPARATOR)
-                record = entry.get("record") or {}
-                if node and seed.isdigit() and record.get("primitive_steps") is not None:
-                    steps.setdefault(node, {})[int(seed)] = int(record["primitive_steps"])
+            for name, entry in manifest["smcs"].items():
+                job, record = JobId.of(name), entry.get("record") or {}
+                if job is not None and record.get("primitive_steps") is not None:
+                    steps.setdefault(job.node, {})[job.seed] = int(record["primitive_steps"])
         except (KeyError, TypeError, ValueError, AttributeError) as err:
             raise SMCError(f"{root}: run.json or library/manifest.json lacks what experience needs "
                            f"({type(err).__name__}: {err})") from None
@@ -147,12 +147,10 @@ class ScoreTable(Protocol):
 
 
 def _json(path: Path, holds: str) -> Any:
-    try:
-        return json.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise SMCError(f"{path} does not exist; it should hold {holds}") from None
-    except (UnicodeDecodeError, json.JSONDecodeError) as err:
-        raise SMCError(f"{path} is not valid JSON (corrupt or truncated?): {err}; it should hold {holds}") from None
+    """:func:`~sb3_smc.curricula.run_directory.read_json`, and a clear error for a missing file."""
+    if not path.is_file():
+        raise SMCError(f"{path} does not exist; it should hold {holds}")
+    return read_json(path, holds)
 
 
 def _moves(count: float) -> str:
