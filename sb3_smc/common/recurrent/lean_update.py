@@ -25,6 +25,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from functools import cached_property
 from typing import Any, NamedTuple, cast
 
 import numpy as np
@@ -232,6 +233,7 @@ class _Rollout:
 
     def __init__(self, model: RecurrentPPO, buffer: RecurrentRolloutBuffer) -> None:
         rows = self.rows = buffer.buffer_size * buffer.n_envs
+        self.action_space = model.action_space
         self.episode_starts = _flat(buffer, "episode_starts").reshape(rows)
         env_first = np.zeros((buffer.n_envs, buffer.buffer_size), dtype=bool)
         env_first[:, 0] = True
@@ -251,6 +253,16 @@ class _Rollout:
         epoch_cut = self.cut.copy()
         epoch_cut[np.random.randint(self.rows)] = True
         return _Sequences(epoch_cut, self.h0, self.c0, self.episode_starts)
+
+    @cached_property
+    def tensors(self) -> tuple[torch.Tensor, ...]:
+        """Observations, actions (``Discrete``: long, else float), old values, old log-probabilities, advantages and
+        returns as torch tensors (float32), for the torch heads; made once per update."""
+        actions = torch.as_tensor(self.actions)
+        discrete = isinstance(self.action_space, spaces.Discrete)
+        return (torch.from_numpy(self.x), actions.long().flatten() if discrete else actions.float(),
+                *(torch.as_tensor(a, dtype=torch.float32)
+                  for a in (self.old_values, self.old_log_prob, self.advantages, self.returns)))
 
 
 class _Losses(NamedTuple):
@@ -343,12 +355,7 @@ def _torch_epoch(model: RecurrentPPO, policy: SequenceLstmPolicy, data: _Rollout
     """An epoch of PPO with the policy's own heads in torch (any ``net_arch``, distribution and optimizer), the
     LSTM by the compiled kernels (:class:`_Recurrence`)."""
     lstm, critic = policy.lstm_actor, cast(nn.Module, policy.critic)
-    obs = torch.from_numpy(data.x)
-    actions = torch.as_tensor(data.actions)
-    actions = actions.long().flatten() if isinstance(model.action_space, spaces.Discrete) else actions.float()
-    old_values, old_log_prob, advantages, returns = (
-        torch.as_tensor(a, dtype=torch.float32)
-        for a in (data.old_values, data.old_log_prob, data.advantages, data.returns))
+    obs, actions, old_values, old_log_prob, advantages, returns = data.tensors
     features = policy.extract_features(obs)
     hidden = _Recurrence.apply(data.x, data.sequences(), lstm.weight_ih_l0, lstm.weight_hh_l0, lstm.bias_ih_l0,
                                lstm.bias_hh_l0)
