@@ -8,9 +8,11 @@ compares the means of the selected training return and of the test score over se
 same start), Welch's t-test, and equivalence by two one-sided paired t-tests (TOST) within ``--margin`` (0.05: five
 points of a test score in percent, five hundredths of the return, whose largest value is 1).
 
-Run: ``python benchmarks/lean_update_equivalence.py [--timesteps N] [--seeds S] [--out runs.jsonl]``; each finished
-SMC is appended to ``--out`` as one JSON line, and a run skips the SMCs already there (so a stopped run resumes, and
-a second process with ``--last-seed-first`` on the same file shares the work).
+Run: ``python benchmarks/lean_update_equivalence.py [--timesteps N] [--seeds S] [--targets ENV_IDS]
+[--out runs.jsonl]``; each finished SMC is appended to ``--out`` as one JSON line (with the commit that trained it),
+and a run skips the SMCs already there (so a stopped run resumes, a run with more seeds adds only the new ones, and a
+second process with ``--last-seed-first`` on the same file shares the work). The table covers every target and seed
+in the file.
 """
 
 from __future__ import annotations
@@ -35,6 +37,7 @@ def train_and_test(env_id: str, seed: int, lean: bool, timesteps: int) -> dict[s
     """One SMC trained and tested: its selected training return, test score, steps and wall time."""
     import torch
 
+    from sb3_smc.experiments.runner import code_commit
     from sb3_smc.learning.evaluation import evaluate
     from sb3_smc.learning.training import train_smc
 
@@ -46,7 +49,7 @@ def train_and_test(env_id: str, seed: int, lean: bool, timesteps: int) -> dict[s
     score = evaluate(smc, record_cells=False, keep=False).score
     return {"env_id": env_id, "seed": seed, "lean": lean, "timesteps": timesteps,
             "selected_return": record.selected_return, "test_score": score, "steps": record.total_timesteps,
-            "train_s": record.wall_time_s, "seconds": time.perf_counter() - start}
+            "train_s": record.wall_time_s, "seconds": time.perf_counter() - start, "commit": code_commit()}
 
 
 def tost_paired(differences: np.ndarray, margin: float) -> float:
@@ -113,14 +116,20 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--timesteps", type=int, default=400_000, help="steps per SMC")
     parser.add_argument("--seeds", type=int, default=10, help="seeds per target and update")
+    parser.add_argument("--targets", default=",".join(TARGETS),
+                        help=f"comma-separated env ids to train, of {', '.join(TARGETS)} (default: all)")
     parser.add_argument("--margin", type=float, default=0.05, help="equivalence margin of the means")
     parser.add_argument("--out", type=Path, default=Path("lean_update_equivalence.jsonl"), help="one JSON line per SMC")
     parser.add_argument("--last-seed-first", action="store_true",
                         help="take the seeds in reverse order (a second process on the same --out meets the first)")
     args = parser.parse_args()
+    targets = [t for t in args.targets.split(",") if t]
+    unknown = sorted(set(targets) - set(TARGETS))
+    if unknown:
+        parser.error(f"--targets: {', '.join(unknown)} not among {', '.join(TARGETS)}")
     seeds = range(args.seeds)
     for seed in reversed(seeds) if args.last_seed_first else seeds:
-        for env_id in TARGETS:
+        for env_id in targets:
             for lean in (False, True):
                 if (env_id, seed, lean, args.timesteps) in {_key(r) for r in _rows(args.out)}:
                     continue  # finished here, or by another process on the same file

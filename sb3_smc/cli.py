@@ -57,6 +57,7 @@ def _run_options(args: argparse.Namespace, **more: Any) -> RunOptions:
     """The run options of ``sb3-smc train`` and ``sb3-smc experiment`` (``more``: a command's own), checked."""
     return RunOptions(seeds=args.seeds, timesteps=args.timesteps, workers=args.workers, group_size=args.group_size,
                       backend=args.backend, ray_address=args.ray_address, algo=args.algo, rnn=args.rnn,
+                      lean_update=args.lean_update,
                       reuse_from=_reuse_from(args.reuse_from), **more)
 
 
@@ -105,8 +106,9 @@ def _resume_command(directory: Path, settings: dict[str, Any]) -> str:
     options = [("--out", str(directory)), ("--targets", ",".join(settings["targets"])), ("--seeds", settings["seeds"]),
                ("--timesteps", settings.get("timesteps")), ("--reuse", settings.get("reuse")),
                ("--algo", settings.get("algo")), ("--rnn", settings.get("rnn"))]
-    return f"sb3-smc train {curriculum}" + "".join(f" {flag} {shlex.quote(str(value))}" for flag, value in options
-                                                  if value is not None)
+    return (f"sb3-smc train {curriculum}" + "".join(f" {flag} {shlex.quote(str(value))}" for flag, value in options
+                                                   if value is not None)
+            + (" --lean-update" if settings.get("lean_update") else ""))
 
 
 def _group_size_option(p: argparse.ArgumentParser) -> None:
@@ -210,6 +212,9 @@ def _learner_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--rnn", default=None, choices=sorted(RECURRENT_POLICIES),
                         help="recurrent cell of every SMC (recurrent algorithms; default lstm); the paper's learner "
                              "is --algo RecurrentTRPO --rnn gru")
+    parser.add_argument("--lean-update", action="store_true",
+                        help="update every SMC with the lean update (RecurrentPPO with an LSTM only; the same update "
+                             "up to float rounding, faster, not bit-identical; recorded in run.json)")
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -102,6 +102,8 @@ class Job:
     spec: TrainingSpec
     library: str
     tensorboard_log: str | None = None
+    lean_update: bool = False
+    """Train with the lean update (:class:`~sb3_smc.curricula.options.RunOptions`' ``lean_update``)."""
 
 
 @dataclass(frozen=True)
@@ -122,18 +124,20 @@ def run_job(job: Job) -> JobResult:
     spec = job.spec
     children = SMCLibrary.load(job.library, names=spec.children) if spec.children else {}
     with torch_threads(1):
-        smc = train_smc(spec, children=children, tensorboard_log=job.tensorboard_log, log_every=0)
+        smc = train_smc(spec, children=children, tensorboard_log=job.tensorboard_log, log_every=0,
+                        lean_update=job.lean_update)
     return _result(smc)
 
 
 def run_group(jobs: Sequence[Job]) -> list[JobResult]:
-    """Train flat ``jobs`` (no children; one TensorBoard folder for all) together with
+    """Train flat ``jobs`` (no children; one TensorBoard folder and one ``lean_update`` for all) together with
     :func:`~sb3_smc.learning.batched.train_smcs` in one torch thread and return their results in order, each what
     :func:`run_job` returns for its job (bit-identical SMCs)."""
     from sb3_smc.learning.batched import train_smcs  # torch and Stable-Baselines3: in the worker only
 
     with torch_threads(1):
-        smcs = train_smcs([job.spec for job in jobs], tensorboard_log=jobs[0].tensorboard_log, log_every=0)
+        smcs = train_smcs([job.spec for job in jobs], tensorboard_log=jobs[0].tensorboard_log, log_every=0,
+                          lean_update=jobs[0].lean_update)
     return [_result(smc) for smc in smcs]
 
 
@@ -177,10 +181,12 @@ def node_spec(node: Node, seed: int, children: tuple[str, ...], *, timesteps: in
 
 
 def check_curriculum(curriculum: Curriculum, names: Sequence[str] | None = None, *, timesteps: int | None = None,
-                     algo: str | None = None, rnn: str | None = None, reuse: str = DEFAULT_REUSE) -> None:
+                     algo: str | None = None, rnn: str | None = None, reuse: str = DEFAULT_REUSE,
+                     lean_update: bool = False) -> None:
     """Check every node of ``names`` (default: all) as a run with these settings would train it, before anything is
     trained: its settings make a valid spec, and the algorithm takes its hyperparameters (the model is built on an
-    environment with the SMC's spaces, :func:`sb3_smc.learning.training.check_model_settings`). ``CurriculumError``
+    environment with the SMC's spaces, :func:`sb3_smc.learning.training.check_model_settings`), and with
+    ``lean_update`` the lean update computes its update. ``CurriculumError``
     naming the file, the line and the node. ``sb3-smc curricula FILE`` and :func:`train_curriculum` both check so."""
     from sb3_smc.learning.training import check_model_settings
 
@@ -193,7 +199,7 @@ def check_curriculum(curriculum: Curriculum, names: Sequence[str] | None = None,
             key = json.dumps([spec.algo, spec.hyperparameters, spec.budget.to_dict(), spec.frame_stack,
                               spec.observation_size, len(spec.action_names)], sort_keys=True)
             if key not in checked:
-                check_model_settings(spec)
+                check_model_settings(spec, lean_update=lean_update)
                 checked.add(key)
         except ValueError as err:
             where = f"{curriculum.source}:{node.line}: " if node.line is not None and curriculum.source else ""

@@ -12,14 +12,14 @@ where the run starts (:meth:`RunOptions.of`), and every layer below gets it whol
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any
 
 from sb3_smc.core.hyperparameters import algorithm, recurrent_policy
-from sb3_smc.curricula.format import Node
-from sb3_smc.curricula.jobs import DEFAULT_REUSE, DEFAULT_SEEDS, REUSE, JobId, node_budget, node_spec
+from sb3_smc.curricula.format import Curriculum, Node
+from sb3_smc.curricula.jobs import DEFAULT_REUSE, DEFAULT_SEEDS, REUSE, JobId, check_curriculum, node_budget, node_spec
 from sb3_smc.errors import SMCError, SMCTypeError
 from sb3_smc.records import TrainingSpec
 
@@ -35,14 +35,17 @@ issue 44). docs/benchmarks.md, "Grouped jobs in the curriculum trainer", has the
 @dataclass(frozen=True)
 class RunOptions:
     """The options of a curriculum run, checked when the record is made (``ValueError`` naming the first option out of
-    range; nothing is done before). ``seeds``, ``timesteps``, ``reuse``, ``algo`` and ``rnn`` decide the trained SMCs
-    (``run.json`` records them); the others decide where and how the jobs train, never what they train.
+    range; nothing is done before). ``seeds``, ``timesteps``, ``reuse``, ``algo``, ``rnn`` and ``lean_update`` decide
+    the trained SMCs (``run.json`` records them); the others decide where and how the jobs train, never what they train.
 
     :param seeds: seeds ``0 .. seeds-1`` of every node.
     :param timesteps: replaces every node's own budget (``None``: the node's, else the default).
     :param reuse: how many of a used node's best seeds a node calls: ``"two_best"`` or ``"one_best"``.
     :param algo: replaces every node's learner.
     :param rnn: the recurrent cell of every node (``"lstm"`` or ``"gru"``; recurrent algorithms only).
+    :param lean_update: train every SMC with the lean update (``train_smc(..., lean_update=True)``: the same update
+        up to float rounding, not bit for bit; every node's learner must be ``RecurrentPPO`` with the LSTM policy's
+        default recurrence, checked before anything is trained); recorded in ``run.json`` when set.
     :param workers: jobs in parallel (local processes; with Ray, the jobs in flight).
     :param backend: ``"local"`` or ``"ray"``.
     :param ray_address: the Ray cluster (``backend="ray"`` only; default: ``RAY_ADDRESS``).
@@ -57,6 +60,7 @@ class RunOptions:
     reuse: str = DEFAULT_REUSE
     algo: str | None = None
     rnn: str | None = None
+    lean_update: bool = False
     workers: int = 1
     backend: str = BACKENDS[0]
     ray_address: str | None = None
@@ -70,6 +74,9 @@ class RunOptions:
             if not (optional and value is None) and (isinstance(value, bool) or not isinstance(value, int)
                                                      or value < 1):
                 raise SMCError(f"{name} must be a positive integer, got {value!r}")
+        for name, flag in (("lean_update", self.lean_update), ("tensorboard", self.tensorboard)):
+            if not isinstance(flag, bool):
+                raise SMCTypeError(f"{name} must be True or False, got {flag!r}")
         if self.reuse not in REUSE:
             raise SMCError(f"reuse must be one of {list(REUSE)}, got {self.reuse!r}")
         if self.backend not in BACKENDS:
@@ -115,3 +122,9 @@ class RunOptions:
         """The spec of job ``(node, seed)`` calling ``children``, with this run's ``timesteps``, ``algo`` and ``rnn``
         (:func:`~sb3_smc.curricula.jobs.node_spec`)."""
         return node_spec(node, seed, children, timesteps=self.timesteps, algo=self.algo, rnn=self.rnn)
+
+    def check(self, curriculum: Curriculum, names: Sequence[str]) -> None:
+        """Check every node of ``names`` as this run trains it (:func:`~sb3_smc.curricula.jobs.check_curriculum`),
+        before anything is trained."""
+        check_curriculum(curriculum, names, timesteps=self.timesteps, algo=self.algo, rnn=self.rnn, reuse=self.reuse,
+                         lean_update=self.lean_update)

@@ -47,13 +47,14 @@ class ReuseLibrary:
     def copy(self, curriculum: Curriculum, job: JobId, children: tuple[str, ...], library: Path, options: RunOptions
              ) -> TrainingRecord | None:
         """Copy ``job`` into the run's ``library`` if this library holds it with the spec the run (``options``) would
-        train it with, calling ``children``; its training record, or ``None`` (nothing copied)."""
+        train it with, calling ``children``, and trained with the run's update (lean or not); its training record, or
+        ``None`` (nothing copied)."""
         name = str(job)
         entry = self.entries.get(name)
         if entry is None or entry.spec is None or entry.record is None:
             return None
         wanted = options.spec(curriculum.node(job.node), job.seed, children)
-        if entry.spec != wanted:
+        if entry.spec != wanted or entry.record.lean_update != options.lean_update:
             return None
         storage.check_model_file(self.root, name, entry)
         model = (self.root / entry.model).read_bytes()

@@ -67,14 +67,16 @@ def read_json(path: Path, holds: str) -> Any:
 def run_settings(curriculum: Curriculum, nodes: Sequence[str], targets: Sequence[str], options: RunOptions
                  ) -> dict[str, Any]:
     """What decides a run's SMCs (``DIR/run.json``): the ``nodes``, ``targets`` and the options that decide every
-    job; backend and worker count do not (``rnn`` is written only when given, so run directories from before the
-    option resume)."""
+    job; backend and worker count do not (``rnn`` and ``lean_update`` are written only when given, so run directories
+    from before these options resume)."""
     settings = {"format": RUN_FORMAT, "version": RUN_VERSION, "curriculum": curriculum.name,
                 "targets": list(targets), "seeds": options.seeds, "timesteps": options.timesteps,
                 "reuse": options.reuse, "algo": options.algo,
                 "nodes": {name: curriculum.node(name).settings() for name in nodes}}
     if options.rnn is not None:
         settings["rnn"] = options.rnn
+    if options.lean_update:
+        settings["lean_update"] = True
     return settings
 
 
@@ -122,8 +124,8 @@ def read_settings(directory: Path) -> dict[str, Any] | None:
 
 
 _NODE_KEYS = ("targets", "nodes")
-"""Settings that ``accept_changes`` takes; the others (the curriculum's name, seeds, timesteps, reuse, algo, rnn)
-decide every job, or which run the directory holds."""
+"""Settings that ``accept_changes`` takes; the others (the curriculum's name, seeds, timesteps, reuse, algo, rnn,
+lean_update) decide every job, or which run the directory holds."""
 
 
 @dataclass(frozen=True)

@@ -132,7 +132,8 @@ class Scheduler:
             for stale in folder.glob(f"{glob_escape(name)}_*"):  # a half-finished earlier attempt
                 shutil.rmtree(stale, ignore_errors=True)
             log = str(folder)
-        return Job(spec=spec, library=str(self.library.absolute()), tensorboard_log=log)
+        return Job(spec=spec, library=str(self.library.absolute()), tensorboard_log=log,
+                   lean_update=self.options.lean_update)
 
 
 def _split(jobs: list[JobId], parts: int) -> list[list[JobId]]:

@@ -124,6 +124,7 @@ def train_curriculum(
     backend: str = BACKENDS[0],
     algo: str | None = None,
     rnn: str | None = None,
+    lean_update: bool = False,
     ray_address: str | None = None,
     group_size: int = DEFAULT_GROUP_SIZE,
     tensorboard: bool = True,
@@ -150,6 +151,9 @@ def train_curriculum(
     :param backend: ``"local"`` or ``"ray"``.
     :param algo: replaces every node's learner.
     :param rnn: the recurrent cell of every node (``"lstm"`` or ``"gru"``; recurrent algorithms only).
+    :param lean_update: train every SMC with the lean update (equal up to float rounding, not bit for bit;
+        RecurrentPPO with the LSTM policy's default recurrence only, checked for every node first); ``run.json``
+        records it, and a library's SMCs are reused only when trained with the same update.
     :param ray_address: the Ray cluster (default: ``RAY_ADDRESS``, else a local instance).
     :param group_size: the most ready seeds of a flat node trained together as one unit (one worker process or Ray
         task, :func:`~sb3_smc.curricula.jobs.run_group`; 1: every job alone;
@@ -171,7 +175,8 @@ def train_curriculum(
         jobs needing them wait. A finished job whose model file is missing or damaged is trained again.
     """
     options = RunOptions.of(options, seeds=seeds, timesteps=timesteps, reuse=reuse, workers=workers, backend=backend,
-                            algo=algo, rnn=rnn, ray_address=ray_address, group_size=group_size,
+                            algo=algo, rnn=rnn, lean_update=lean_update, ray_address=ray_address,
+                            group_size=group_size,
                             tensorboard=tensorboard, reuse_from=reuse_from)
     source = ReuseLibrary(options.reuse_from) if options.reuse_from is not None else None
     merged, order, settings = _resolve_run(curriculum, targets, options)
@@ -180,8 +185,7 @@ def train_curriculum(
     # the jobs of nodes left out of the plan count as skipped too (sb3-smc status shows them so, not as "left")
     skipped |= {job for job in options.jobs(settings["nodes"]) if job.node not in order}
     scheduler = Scheduler(merged, order, options, directory, skipped)
-    check_curriculum(merged, order, timesteps=options.timesteps, algo=options.algo, rnn=options.rnn,
-                     reuse=options.reuse)
+    options.check(merged, order)
     old = read_settings(directory)
     changes = SettingsChanges.between(old, settings, merged) if old is not None else None
     if changes is not None and changes.differences:
@@ -200,12 +204,12 @@ def train_curriculum(
 
 def check_run_options(*, seeds: int = DEFAULT_SEEDS, timesteps: int | None = None, reuse: str = DEFAULT_REUSE,
                       workers: int = 1, backend: str = BACKENDS[0], ray_address: str | None = None,
-                      algo: str | None = None, rnn: str | None = None, group_size: int = DEFAULT_GROUP_SIZE
-                      ) -> RunOptions:
+                      algo: str | None = None, rnn: str | None = None, group_size: int = DEFAULT_GROUP_SIZE,
+                      lean_update: bool = False) -> RunOptions:
     """The :class:`~sb3_smc.curricula.options.RunOptions` of these keywords: ``ValueError`` naming the first option
     of a run that is out of range (before anything is done). The check is the record's own."""
     return RunOptions(seeds=seeds, timesteps=timesteps, reuse=reuse, workers=workers, backend=backend,
-                      ray_address=ray_address, algo=algo, rnn=rnn, group_size=group_size)
+                      ray_address=ray_address, algo=algo, rnn=rnn, group_size=group_size, lean_update=lean_update)
 
 
 def finished_jobs(
@@ -218,13 +222,15 @@ def finished_jobs(
     reuse: str = DEFAULT_REUSE,
     algo: str | None = None,
     rnn: str | None = None,
+    lean_update: bool = False,
     options: RunOptions | None = None,
 ) -> set[str]:
     """The job names (``<node>@<seed>``) that the run :func:`train_curriculum` would resume in ``out`` has finished,
     without training or writing anything (the run may be training meanwhile). ``RunSettingsError`` when ``out``
     holds no run or a run with other settings. The arguments are :func:`train_curriculum`'s (``options``: those
     that decide the SMCs, whole; the others are not used)."""
-    options = RunOptions.of(options, seeds=seeds, timesteps=timesteps, reuse=reuse, algo=algo, rnn=rnn)
+    options = RunOptions.of(options, seeds=seeds, timesteps=timesteps, reuse=reuse, algo=algo, rnn=rnn,
+                            lean_update=lean_update)
     merged, _, settings = _resolve_run(curriculum, targets, options)
     directory = Path(out)
     old = read_settings(directory)

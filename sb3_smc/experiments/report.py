@@ -315,10 +315,11 @@ def _pushable_figure(folder: Path, table: ResultTable, targets: Sequence[str], l
 
 def _learner(settings: dict[str, Any]) -> str:
     """The algorithm and cell of the run's SMCs (runs from before the ``--algo`` / ``--rnn`` options: the
-    defaults, RecurrentPPO with an LSTM)."""
+    defaults, RecurrentPPO with an LSTM), and whether they were updated with the lean update."""
     algo = settings.get("algo", "RecurrentPPO")
     recurrent = algo in ALGORITHM_REGISTRY and ALGORITHM_REGISTRY[algo].recurrent
-    return f"{algo} ({settings.get('rnn', 'lstm').upper() if recurrent else 'MLP'})"
+    lean = ", the lean update" if settings.get("lean_update") else ""
+    return f"{algo} ({settings.get('rnn', 'lstm').upper() if recurrent else 'MLP'}{lean})"
 
 
 def _learners(settings: dict[str, Any]) -> str:

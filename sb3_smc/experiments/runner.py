@@ -76,6 +76,7 @@ def run_experiment(
     ray_address: str | None = None,
     algo: str | None = None,
     rnn: str | None = None,
+    lean_update: bool = False,
     train: bool = True,
     progress: bool = True,
     printer: Callable[[str], None] = print,
@@ -100,6 +101,8 @@ def run_experiment(
     :param algo: the learner of every SMC (default: RecurrentPPO; the paper's is RecurrentTRPO); a method with a
         learner of its own (``base-gru``) refuses it.
     :param rnn: the recurrent cell, ``lstm`` (default) or ``gru`` (the paper's); refused as ``algo`` is.
+    :param lean_update: train every SMC with the lean update (:func:`train_curriculum`'s; equal up to float rounding,
+        not bit for bit); every method's learner must be RecurrentPPO with an LSTM (checked before training).
     :param train: ``False`` trains nothing: it tabulates what the directory's run has finished so far (while it may
         still be training): the finished SMCs are evaluated (and the CNN trained), the rest are listed in
         ``missing`` and the results are marked ``"complete": false`` (the report says so).
@@ -109,8 +112,8 @@ def run_experiment(
         as the pretrained library: the results are the same.
     :param options: the run's options whole (:class:`~sb3_smc.curricula.options.RunOptions`), instead of the
         keywords ``seeds``, ``timesteps``, ``workers``, ``group_size``, ``backend``, ``ray_address``, ``algo``,
-        ``rnn`` and ``reuse_from`` (which must then be left out); an experiment calls the two best seeds (its
-        ``reuse`` is the default).
+        ``rnn``, ``lean_update`` and ``reuse_from`` (which must then be left out); an experiment calls the two best
+        seeds (its ``reuse`` is the default).
     :return: the ``results.json`` content.
     """
     if targets is not None and category is not None:
@@ -118,7 +121,8 @@ def run_experiment(
     if isinstance(repeats, bool) or not isinstance(repeats, int) or repeats < 1:
         raise SMCError(f"repeats must be a positive integer, got {repeats!r}")
     options = RunOptions.of(options, seeds=seeds, timesteps=timesteps, workers=workers, group_size=group_size,
-                            backend=backend, ray_address=ray_address, algo=algo, rnn=rnn, reuse_from=reuse_from)
+                            backend=backend, ray_address=ray_address, algo=algo, rnn=rnn, lean_update=lean_update,
+                            reuse_from=reuse_from)
     if options.reuse != DEFAULT_REUSE:
         raise SMCError(f"an experiment's SMCs call the nodes they use with reuse {DEFAULT_REUSE!r} (the paper's), got "
                        f"{options.reuse!r}: train such a run with train_curriculum")
@@ -162,14 +166,16 @@ def run_experiment(
                              new - copied, commit, earlier)
     settings = {"methods": list(methods), "targets": chosen, "seeds": options.seeds,
                 "timesteps": options.timesteps or DEFAULT_TIMESTEPS, "repeats": repeats, "workers": options.workers,
-                "backend": options.backend, "algo": options.algo or DEFAULT_ALGORITHM, "rnn": options.rnn or "lstm"}
+                "backend": options.backend, "algo": options.algo or DEFAULT_ALGORITHM, "rnn": options.rnn or "lstm",
+                **({"lean_update": True} if options.lean_update else {})}
     results = {
         "format": "sb3-smc-results", "version": 1,
         "settings": settings,
         "command": experiment_command(out, methods=methods, targets=targets,
                                       category=category or ("all" if targets is None else None), seeds=options.seeds,
                                       timesteps=options.timesteps, repeats=repeats, workers=options.workers,
-                                      backend=options.backend, algo=options.algo, rnn=options.rnn, train=train),
+                                      backend=options.backend, algo=options.algo, rnn=options.rnn,
+                                      lean_update=options.lean_update, train=train),
         "machine": machine(),
         "code": {"versions": package_versions(), "commit": commit},
         "commits": commits,
@@ -277,7 +283,8 @@ def _tabulate(directory: Path, design: ExperimentPlan, options: RunOptions, repe
 def experiment_command(out: str | Path, *, methods: Sequence[str], targets: Sequence[str] | None = None,
                        category: str | None = None, seeds: int, timesteps: int | None = None,
                        repeats: int = DEFAULT_REPEATS, workers: int = 1, backend: str = BACKENDS[0],
-                       algo: str | None = None, rnn: str | None = None, train: bool = True) -> str:
+                       algo: str | None = None, rnn: str | None = None, lean_update: bool = False,
+                       train: bool = True) -> str:
     """The ``sb3-smc experiment`` command line of a run with these options (as given: ``None`` options are left
     out, as ``run.json`` records them), which runs it again or resumes it."""
     chosen = f"--category {category}" if category else f"--targets {','.join(targets or ())}"
@@ -285,7 +292,7 @@ def experiment_command(out: str | Path, *, methods: Sequence[str], targets: Sequ
                                                                   ("rnn", rnn)) if value is not None)
     return (f"sb3-smc experiment --out {shlex.quote(str(out))} --methods {','.join(methods)} {chosen} "
             f"--seeds {seeds}{optional} --repeats {repeats} --workers {workers} --backend {backend}"
-            + ("" if train else " --no-train"))
+            + (" --lean-update" if lean_update else "") + ("" if train else " --no-train"))
 
 
 def cpu_model() -> str | None:

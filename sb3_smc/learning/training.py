@@ -107,11 +107,12 @@ class _SpacesOnly(gym.Env):
         self.action_space = gym.spaces.Discrete(n_actions)
 
 
-def check_model_settings(spec: TrainingSpec) -> None:
+def check_model_settings(spec: TrainingSpec, *, lean_update: bool = False) -> None:
     """Build the model ``spec`` trains, on an environment with the spaces of the SMC's (its task's kind must be
     known), without training it: ``ValueError`` naming a hyperparameter the algorithm does not take or what the
-    algorithm or its policy refuses (a value out of range), so a run can refuse it before anything is trained.
-    The caller's torch random state is left as it was."""
+    algorithm or its policy refuses (a value out of range), or, with ``lean_update``, a model the lean update does
+    not apply to (:func:`check_lean_update`), so a run can refuse it before anything is trained. The caller's torch
+    random state is left as it was."""
     from stable_baselines3.common.vec_env import DummyVecEnv
 
     cls = ALGORITHM_REGISTRY[spec.algo].load_class()
@@ -126,9 +127,11 @@ def check_model_settings(spec: TrainingSpec) -> None:
     venv = DummyVecEnv([lambda: _SpacesOnly(size, n_actions)] * spec.budget.n_envs)
     with torch.random.fork_rng(devices=[]):
         try:
-            cls(policy, venv, n_steps=spec.budget.env_steps, device="cpu", verbose=0, **settings)
+            model = cls(policy, venv, n_steps=spec.budget.env_steps, device="cpu", verbose=0, **settings)
         except Exception as err:  # noqa: BLE001 - whatever the constructor refuses is the message
             raise SMCError(f"{spec.algo} refuses its hyperparameters: {type(err).__name__}: {err}") from None
+    if lean_update:
+        check_lean_update(spec, model)
 
 
 def _returning(env: gym.Env) -> Callable[[], gym.Env]:
