@@ -11,8 +11,8 @@ points of a test score in percent, five hundredths of the return, whose largest 
 Run: ``python benchmarks/lean_update_equivalence.py [--timesteps N] [--seeds S] [--targets ENV_IDS]
 [--out runs.jsonl]``; each finished SMC is appended to ``--out`` as one JSON line (with the commit that trained it),
 and a run skips the SMCs already there (so a stopped run resumes, a run with more seeds adds only the new ones, and a
-second process with ``--last-seed-first`` on the same file shares the work). The table covers every target and seed
-in the file.
+second process with ``--last-seed-first`` on the same file shares the work). ``--updates default`` or ``lean`` trains
+one update's SMCs only. The table covers every target and seed in the file that both updates trained.
 """
 
 from __future__ import annotations
@@ -116,6 +116,8 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--timesteps", type=int, default=400_000, help="steps per SMC")
     parser.add_argument("--seeds", type=int, default=10, help="seeds per target and update")
+    parser.add_argument("--updates", choices=("both", "default", "lean"), default="both",
+                        help="train the SMCs of both updates, or of one (the other's rows may come from another run)")
     parser.add_argument("--targets", default=",".join(TARGETS),
                         help=f"comma-separated env ids to train, of {', '.join(TARGETS)} (default: all)")
     parser.add_argument("--margin", type=float, default=0.05, help="equivalence margin of the means")
@@ -130,7 +132,7 @@ def main() -> None:
     seeds = range(args.seeds)
     for seed in reversed(seeds) if args.last_seed_first else seeds:
         for env_id in targets:
-            for lean in (False, True):
+            for lean in {"both": (False, True), "default": (False,), "lean": (True,)}[args.updates]:
                 if (env_id, seed, lean, args.timesteps) in {_key(r) for r in _rows(args.out)}:
                     continue  # finished here, or by another process on the same file
                 row = train_and_test(env_id, seed, lean, args.timesteps)
