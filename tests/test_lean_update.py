@@ -12,6 +12,7 @@ import torch
 from sb3_contrib import RecurrentPPO
 
 import pixelworld_env  # noqa: F401  (registers the PW-* ids)
+from sb3_smc.common.kernels import fast_tanh
 from sb3_smc.common.recurrent.lean_update import _plain_heads, lean_train, lean_update_applies, use_lean_update
 from sb3_smc.errors import SMCError
 from sb3_smc.learning.training import train_smc
@@ -82,7 +83,7 @@ def test_train_smc_lean_update_option() -> None:
     assert smc.record is not None and smc.record.total_timesteps == 6_000
     assert smc.record.lean_update and smc.record.to_dict()["lean_update"] is True  # the record says so
     assert type(smc.record).from_dict(smc.record.to_dict()).lean_update
-    assert "train" not in vars(smc.model)
+    assert "train" not in vars(smc.model) and "lean_collection" not in vars(smc.model.policy)
     again = train_smc(CORNER_ID, total_timesteps=6_000, seed=2, log_every=0, lean_update=True)
     assert again.record is not None and again.record.training_returns == smc.record.training_returns  # deterministic
     first, second = smc.model.policy.state_dict(), again.model.policy.state_dict()
@@ -96,6 +97,36 @@ def test_train_smc_lean_update_option() -> None:
     with pytest.raises(ValueError, match="lean update"), use_lean_update(train_smc(
             CORNER_ID, algo="TRPO", total_timesteps=2_000, log_every=0).model):
         pass
+
+
+def test_fast_tanh_is_tanh_to_float32_accuracy() -> None:
+    x = np.concatenate([np.linspace(-12.0, 12.0, 24_001), [0.0, 1e-9, -1e-9, 7.9053, 40.0, -40.0]])
+    got = np.array([fast_tanh(v) for v in x])
+    assert np.abs(got - np.tanh(x)).max() < 3e-7
+    assert fast_tanh(0.0) == 0.0 and fast_tanh(40.0) == pytest.approx(1.0, abs=3e-7)
+
+
+def test_the_lean_update_collects_with_its_tanh() -> None:
+    """Within ``use_lean_update`` the compiled collection step takes ``fast_tanh``: the same step to float32
+    accuracy, not the same bits; outside it, ``np.tanh`` again."""
+    model = train_smc(CORNER_ID, total_timesteps=2_000, seed=1, log_every=0).model
+    policy = model.policy
+    rng = np.random.default_rng(0)
+    obs = model._last_obs.astype(np.float32)
+    n, hidden = obs.shape[0], policy.lstm_actor.hidden_size
+    h, c = (rng.standard_normal((n, hidden)).astype(np.float32) for _ in range(2))
+    starts, uniforms = np.zeros(n), rng.random(n)
+    with torch.no_grad():
+        weights = policy.compiled_collection_weights(torch.as_tensor(obs))
+    exact = policy.compiled_step(weights, obs, h, c, starts, uniforms)
+    with use_lean_update(model):
+        assert policy.lean_collection
+        lean = policy.compiled_step(weights, obs, h, c, starts, uniforms)
+    assert not policy.lean_collection and "lean_collection" not in vars(policy)
+    assert np.array_equal(policy.compiled_step(weights, obs, h, c, starts, uniforms)[3], exact[3])
+    assert not np.array_equal(lean[3], exact[3])  # another tanh ...
+    for a, b in zip(lean[1:], exact[1:], strict=True):  # ... equal to float32 accuracy
+        np.testing.assert_allclose(a, b, rtol=0, atol=2e-6)
 
 
 @pytest.mark.slow

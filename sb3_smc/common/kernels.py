@@ -28,8 +28,8 @@ from numba import njit
 
 from pixelworld_env.core.kernels import self_target_free
 
-__all__ = ["gru_cell", "gru_collection_step", "gru_linear_step", "leaf_call", "lstm_cell", "lstm_collection_step",
-           "lstm_linear_step", "sample_index"]
+__all__ = ["fast_tanh", "gru_cell", "gru_collection_step", "gru_linear_step", "leaf_call", "lstm_cell",
+           "lstm_collection_step", "lstm_linear_step", "sample_index"]
 
 
 @njit(cache=True)
@@ -61,27 +61,48 @@ def _add_rows(t: np.ndarray, x: np.ndarray, w: np.ndarray) -> None:  # pragma: n
                 t[j] += xi * w[i, j]
 
 
+@njit(cache=True, inline="always", error_model="numpy")
+def fast_tanh(x: float) -> float:  # pragma: no cover
+    """``tanh(x)`` to float32 accuracy (absolute error below 3e-7) without a library call, so the loops around it
+    vectorize: Eigen's rational approximation (``ptanh_float``), clamped to +-7.905. The lean update's arithmetic
+    (:mod:`sb3_smc.common.recurrent.lean_update`); every other path uses ``np.tanh``."""
+    x = 7.90531110763549805 if x > 7.90531110763549805 else (-7.90531110763549805 if x < -7.90531110763549805 else x)
+    x2 = x * x
+    p = x2 * -2.76076847742355e-16 + 2.00018790482477e-13
+    p = p * x2 + -8.60467152213735e-11
+    p = p * x2 + 5.12229709037114e-08
+    p = p * x2 + 1.48572235717979e-05
+    p = p * x2 + 6.37261928875436e-04
+    p = p * x2 + 4.89352455891786e-03
+    q = x2 * 1.19825839466702e-06 + 1.18534705686654e-04
+    q = q * x2 + 2.26843463243900e-03
+    q = q * x2 + 4.89352518554385e-03
+    return x * p / q
+
+
 @njit(cache=True, inline="always")
 def lstm_cell(x: np.ndarray, h: np.ndarray, c: np.ndarray, w_ih: np.ndarray, w_hh: np.ndarray, bias: np.ndarray,
-              gate_scale: float, h_next: np.ndarray, c_next: np.ndarray) -> None:  # pragma: no cover
+              gate_scale: float, h_next: np.ndarray, c_next: np.ndarray, exact: bool = True
+              ) -> None:  # pragma: no cover
     """The LSTM cell, the one place its arithmetic is written: one step of one layer for one row, in float64.
 
     ``x`` the layer's input, ``h`` / ``c`` the previous state; the weights transposed (``(inputs, 4 n)``), gates i,
     f, g, o in torch's order, ``bias`` the sum of torch's two biases. ``sigmoid(z) = 0.5 * tanh(z / 2) + 0.5`` with
     ``z / 2 = gate_scale * (preactivation)``: 0.5 for torch's weights, 1.0 for weights whose i, f, o columns are
     halved already (:class:`~sb3_smc.smc.numpy_actors.NumpyLSTMPolicy`'s). Writes ``h'`` / ``c'`` into ``h_next`` /
-    ``c_next``. The zero entries of ``x`` and ``h`` are skipped (mostly one-hot observations)."""
+    ``c_next``. The zero entries of ``x`` and ``h`` are skipped (mostly one-hot observations). ``exact=False``
+    takes :func:`fast_tanh` for ``np.tanh`` (the lean update's collection: its loops vectorize)."""
     n = h.shape[0]
     t = bias.astype(np.float64)
     _add_rows(t, x, w_ih)
     _add_rows(t, h, w_hh)
+    for j in range(4 * n):  # the gates' tanh: of gate_scale * t on i, f, o (sigmoids), of t on g
+        z = t[j] if 2 * n <= j < 3 * n else gate_scale * t[j]
+        t[j] = np.tanh(z) if exact else fast_tanh(z)
     for j in range(n):
-        gate_i = 0.5 * np.tanh(gate_scale * t[j]) + 0.5
-        gate_f = 0.5 * np.tanh(gate_scale * t[n + j]) + 0.5
-        gate_o = 0.5 * np.tanh(gate_scale * t[3 * n + j]) + 0.5
-        cell = gate_f * c[j] + gate_i * np.tanh(t[2 * n + j])
+        cell = (0.5 * t[n + j] + 0.5) * c[j] + (0.5 * t[j] + 0.5) * t[2 * n + j]
         c_next[j] = cell
-        h_next[j] = gate_o * np.tanh(cell)
+        h_next[j] = (0.5 * t[3 * n + j] + 0.5) * (np.tanh(cell) if exact else fast_tanh(cell))
 
 
 @njit(cache=True)
@@ -202,16 +223,17 @@ def _heads(x: np.ndarray, latent: np.ndarray, uniform: float, deterministic: boo
 
 @njit(cache=True)
 def lstm_collection_step(x: np.ndarray, h: np.ndarray, c: np.ndarray, starts: np.ndarray, uniforms: np.ndarray,
-                         deterministic: bool, w_ih: np.ndarray, w_hh: np.ndarray, bias: np.ndarray,
+                         deterministic: bool, exact: bool, w_ih: np.ndarray, w_hh: np.ndarray, bias: np.ndarray,
                          w_critic: np.ndarray, b_critic: np.ndarray, w_value: np.ndarray, b_value: float,
                          w_action: np.ndarray, b_action: np.ndarray
                          ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:  # pragma: no cover
     """One collection step of a one-layer LSTM actor with linear heads for ``n`` environments.
 
     ``x`` ``(n, features)``, ``h`` / ``c`` ``(n, hidden)`` the previous states (zeroed where ``starts`` is 1, as
-    sb3-contrib does at an episode start), ``uniforms`` ``(n,)`` the draws. The weights are transposed
-    (``(inputs, outputs)``), ``bias`` the sum of torch's two LSTM biases, gates i, f, g, o. Returns ``(actions,
-    values (n, 1), log-probabilities, h', c')`` in float32 (int64 actions), computed in float64."""
+    sb3-contrib does at an episode start), ``uniforms`` ``(n,)`` the draws, ``exact`` ``np.tanh`` in the cell (else
+    :func:`fast_tanh`, the lean update's). The weights are transposed (``(inputs, outputs)``), ``bias`` the sum of
+    torch's two LSTM biases, gates i, f, g, o. Returns ``(actions, values (n, 1), log-probabilities, h', c')`` in
+    float32 (int64 actions), computed in float64."""
     n, hidden = h.shape
     if x.shape[0] != n or c.shape != h.shape or w_ih.shape[0] != x.shape[1] or w_hh.shape[0] != hidden:
         raise ValueError("observations or LSTM states of the wrong shape for this policy")
@@ -229,7 +251,7 @@ def lstm_collection_step(x: np.ndarray, h: np.ndarray, c: np.ndarray, starts: np
         for i in range(hidden):
             previous_h[i] = keep * h[k, i]
             previous_c[i] = keep * c[k, i]
-        lstm_cell(x[k], previous_h, previous_c, w_ih, w_hh, bias, 0.5, latent, cell)
+        lstm_cell(x[k], previous_h, previous_c, w_ih, w_hh, bias, 0.5, latent, cell, exact)
         for j in range(hidden):
             c_next[k, j] = cell[j]
             h_next[k, j] = latent[j]

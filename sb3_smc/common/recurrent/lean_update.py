@@ -19,6 +19,9 @@ backward (:func:`_numpy_epoch`), with no autograd graph; other heads run in torc
 It applies to the default architecture's recurrence: one ``nn.LSTM`` layer for the actor, no critic LSTM, one
 minibatch per epoch (``batch_size`` at least the rollout, the default); :func:`lean_update_applies` says whether a
 model qualifies. :func:`use_lean_update` swaps a model's ``train`` for it (``train_smc(..., lean_update=True)``).
+The recurrence's tanh is :func:`~sb3_smc.common.kernels.fast_tanh` (float32 accuracy, no library call, so the loops
+vectorize), and while the lean update trains a model its compiled collection step takes the same tanh
+(``SequenceLstmPolicy.lean_collection``).
 """
 
 from __future__ import annotations
@@ -40,27 +43,10 @@ from stable_baselines3.common.type_aliases import Schedule
 from stable_baselines3.common.utils import explained_variance
 from torch import nn
 
+from sb3_smc.common.kernels import fast_tanh
 from sb3_smc.common.recurrent.policies import SequenceLstmPolicy
 
 __all__ = ["lean_train", "lean_update_applies", "use_lean_update"]
-
-
-@njit(cache=True, inline="always", error_model="numpy")
-def _tanh(x: float) -> float:  # pragma: no cover
-    """``tanh(x)`` to float32 accuracy (absolute error below 3e-7) without a library call, so the loops around it
-    vectorize: Eigen's rational approximation (``ptanh_float``), clamped to +-7.905."""
-    x = 7.90531110763549805 if x > 7.90531110763549805 else (-7.90531110763549805 if x < -7.90531110763549805 else x)
-    x2 = x * x
-    p = x2 * -2.76076847742355e-16 + 2.00018790482477e-13
-    p = p * x2 + -8.60467152213735e-11
-    p = p * x2 + 5.12229709037114e-08
-    p = p * x2 + 1.48572235717979e-05
-    p = p * x2 + 6.37261928875436e-04
-    p = p * x2 + 4.89352455891786e-03
-    q = x2 * 1.19825839466702e-06 + 1.18534705686654e-04
-    q = q * x2 + 2.26843463243900e-03
-    q = q * x2 + 4.89352518554385e-03
-    return x * p / q
 
 
 @njit(cache=True, fastmath=True, inline="always")
@@ -95,14 +81,14 @@ def _forward(x: np.ndarray, w_ih_t: np.ndarray, w_hh_t: np.ndarray, bias: np.nda
                 _axpy(z, h[k], w_hh_t[k])
             gate = gates[t]
             for j in range(4 * n):  # sigmoid(z) = 0.5 tanh(z / 2) + 0.5 on i, f, o; tanh on g (overwritten)
-                gate[j] = 0.5 * _tanh(0.5 * z[j]) + 0.5
+                gate[j] = 0.5 * fast_tanh(0.5 * z[j]) + 0.5
             for j in range(2 * n, 3 * n):
-                gate[j] = _tanh(z[j])
+                gate[j] = fast_tanh(z[j])
             tc, out = tanh_c[t], out_h[t]
             for j in range(n):
                 c[j] = gate[n + j] * c[j] + gate[j] * gate[2 * n + j]
             for j in range(n):
-                tc[j] = _tanh(c[j])
+                tc[j] = fast_tanh(c[j])
             for j in range(n):
                 h[j] = gate[3 * n + j] * tc[j]
                 out[j] = h[j]
@@ -430,14 +416,16 @@ def lean_train(model: RecurrentPPO) -> None:
 
 @contextmanager
 def use_lean_update(model: RecurrentPPO) -> Iterator[None]:
-    """Within the block, ``model.train()`` is :func:`lean_train` (an instance attribute, removed on leaving, so
-    the model saves and loads as a plain ``RecurrentPPO``). ``ValueError`` where :func:`lean_update_applies` is
-    false."""
+    """Within the block, ``model.train()`` is :func:`lean_train` and the policy's compiled collection step takes the
+    lean update's tanh (``policy.lean_collection``); both are instance attributes, removed on leaving, so the model
+    saves and loads as a plain ``RecurrentPPO``. ``ValueError`` where :func:`lean_update_applies` is false."""
     if not lean_update_applies(model):
         raise ValueError("the lean update needs a RecurrentPPO with SequenceLstmPolicy's default recurrence (one "
                          "LSTM layer, no critic LSTM) and one minibatch per epoch")
     model.train = lambda: lean_train(model)  # type: ignore[method-assign]
+    model.policy.lean_collection = True
     try:
         yield
     finally:
         del model.train
+        del model.policy.lean_collection

@@ -92,6 +92,10 @@ class SequenceLstmPolicy(RecurrentActorCriticPolicy):
 
     #: Whether data collection may use the compiled step of :mod:`sb3_smc.common.kernels` (see :meth:`forward`).
     compiled_collection: bool = True
+    #: Whether the compiled step takes the lean update's tanh (:func:`~sb3_smc.common.kernels.fast_tanh`) for
+    #: ``np.tanh``; set while the lean update trains the model
+    #: (:func:`~sb3_smc.common.recurrent.lean_update.use_lean_update`).
+    lean_collection: bool = False
     _collection_cache: tuple[Any, tuple[torch.Tensor, ...] | None, tuple[Any, ...] | None] | None = None
 
     def forward(self, obs, lstm_states, episode_starts, deterministic=False):
@@ -141,12 +145,14 @@ class SequenceLstmPolicy(RecurrentActorCriticPolicy):
                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """:meth:`forward`'s compiled collection step on numpy arrays: ``obs`` ``(n, features)`` float32, the
         actor's previous ``h`` / ``c`` ``(n, hidden)``, ``starts`` float64 (1.0 at an episode start), ``uniforms``
-        the draws; returns ``(actions, values (n, 1), log-probabilities, h', c')``."""
+        the draws; returns ``(actions, values (n, 1), log-probabilities, h', c')``. With :attr:`lean_collection`
+        the LSTM's tanh is :func:`~sb3_smc.common.kernels.fast_tanh`."""
         if hasattr(self.lstm_actor, "gru"):
             actions, values, log_probs, h_next = kernels.gru_collection_step(
                 obs, h, starts, uniforms, deterministic, *weights)
             return actions, values, log_probs, h_next, c * (1.0 - starts[:, None]).astype(np.float32)  # as torch
-        return kernels.lstm_collection_step(obs, h, c, starts, uniforms, deterministic, *weights)
+        return kernels.lstm_collection_step(obs, h, c, starts, uniforms, deterministic, not self.lean_collection,
+                                            *weights)
 
     def _collection_parameters(self) -> tuple[torch.Tensor, ...] | None:
         """The tensors of the compiled collection step, or ``None`` where the architecture is not the default one:
