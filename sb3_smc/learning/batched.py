@@ -202,7 +202,7 @@ class _Job:
             raise SMCError(f"SMC {spec.name!r}: a group trains recurrent learners, got {spec.algo}")
         if lean_update:
             check_lean_update(spec, self.model)
-            self.model.policy.lean_collection = True  # as use_lean_update does (removed in finish)
+            cast(SequenceLstmPolicy, self.model.policy).lean_collection = True  # as use_lean_update (finish removes it)
         self.lean_update = lean_update
         self.random = _RandomState()  # the streams as the model's seeding left them
         self.stats, self.callback = training_callbacks(spec, task, log_every=log_every, printer=printer,

@@ -423,7 +423,7 @@ def use_lean_update(model: RecurrentPPO) -> Iterator[None]:
         raise ValueError("the lean update needs a RecurrentPPO with SequenceLstmPolicy's default recurrence (one "
                          "LSTM layer, no critic LSTM) and one minibatch per epoch")
     model.train = lambda: lean_train(model)  # type: ignore[method-assign]
-    model.policy.lean_collection = True
+    cast(SequenceLstmPolicy, model.policy).lean_collection = True  # lean_update_applies checked the type
     try:
         yield
     finally:
