@@ -44,11 +44,18 @@ def test_one_smc_is_train_smcs_bit_for_bit() -> None:
     assert_same_smc(train_smc(spec, log_every=0), batched)
 
 
-def test_seeds_trained_together_are_each_their_own_training() -> None:
-    """Five seeds in one vector env; seed 1 stops early at return 1 (update 18), the others run their budget
-    (a group goes on without the SMCs that left it)."""
+def test_seeds_trained_together_are_each_their_own_training(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Five seeds in one vector env, their policies' steps in one compiled call per step; seed 1 stops early at
+    return 1 (update 18), the others run their budget (a group goes on without the SMCs that left it)."""
+    from sb3_smc.common import kernels
+
+    calls: list[int] = []
+    group_step = kernels.lstm_collection_steps
+    monkeypatch.setattr(kernels, "lstm_collection_steps", lambda *args: calls.append(len(args[6])) or group_step(*args))
     specs = [TrainingSpec.create(OUTSIDE_ID, total_timesteps=40_000, seed=s, name=f"outside@{s}") for s in range(5)]
     batched = train_smcs(specs)
+    monkeypatch.undo()
+    assert len(calls) == 20 * 125 and calls[0] == 5 and calls[-1] == 4  # every step one call, seed 1 gone
     assert [smc.name for smc in batched] == [spec.name for spec in specs]
     stopped = batched[1].record
     assert stopped is not None and stopped.selected_return == 1.0 and stopped.total_timesteps == 19 * 2000 + 16

@@ -29,7 +29,7 @@ from numba import njit
 from pixelworld_env.core.kernels import self_target_free
 
 __all__ = ["fast_tanh", "gru_cell", "gru_collection_step", "gru_linear_step", "leaf_call", "lstm_cell",
-           "lstm_collection_step", "lstm_linear_step", "sample_index"]
+           "lstm_collection_step", "lstm_collection_steps", "lstm_linear_step", "sample_index"]
 
 
 @njit(cache=True)
@@ -221,6 +221,26 @@ def _heads(x: np.ndarray, latent: np.ndarray, uniform: float, deterministic: boo
     return action, value, logits[action] - top - np.log(total)
 
 
+@njit(cache=True, inline="always")
+def _lstm_collection_row(x: np.ndarray, h: np.ndarray, c: np.ndarray, start: float, uniform: float,
+                         deterministic: bool, exact: bool, w_ih: np.ndarray, w_hh: np.ndarray, bias: np.ndarray,
+                         w_critic: np.ndarray, b_critic: np.ndarray, w_value: np.ndarray, b_value: float,
+                         w_action: np.ndarray, b_action: np.ndarray, h_out: np.ndarray, c_out: np.ndarray,
+                         scratch: np.ndarray) -> tuple[int, float, float]:  # pragma: no cover
+    """One row of :func:`lstm_collection_step`: the state reset at an episode start, the cell (new state into
+    ``h_out`` / ``c_out``) and the heads; ``scratch`` ``(4, hidden)`` float64."""
+    previous_h, previous_c, latent, cell = scratch[0], scratch[1], scratch[2], scratch[3]
+    keep = 1.0 - start
+    for i in range(h.shape[0]):
+        previous_h[i] = keep * h[i]
+        previous_c[i] = keep * c[i]
+    lstm_cell(x, previous_h, previous_c, w_ih, w_hh, bias, 0.5, latent, cell, exact)
+    for j in range(h.shape[0]):
+        c_out[j] = cell[j]
+        h_out[j] = latent[j]
+    return _heads(x, latent, uniform, deterministic, w_critic, b_critic, w_value, b_value, w_action, b_action)
+
+
 @njit(cache=True)
 def lstm_collection_step(x: np.ndarray, h: np.ndarray, c: np.ndarray, starts: np.ndarray, uniforms: np.ndarray,
                          deterministic: bool, exact: bool, w_ih: np.ndarray, w_hh: np.ndarray, bias: np.ndarray,
@@ -242,22 +262,41 @@ def lstm_collection_step(x: np.ndarray, h: np.ndarray, c: np.ndarray, starts: np
     log_probs = np.empty(n, dtype=np.float32)
     h_next = np.empty((n, hidden), dtype=np.float32)
     c_next = np.empty((n, hidden), dtype=np.float32)
-    latent = np.empty(hidden)
-    cell = np.empty(hidden)
-    previous_h = np.empty(hidden)
-    previous_c = np.empty(hidden)
+    scratch = np.empty((4, hidden))
     for k in range(n):
-        keep = 1.0 - starts[k]
-        for i in range(hidden):
-            previous_h[i] = keep * h[k, i]
-            previous_c[i] = keep * c[k, i]
-        lstm_cell(x[k], previous_h, previous_c, w_ih, w_hh, bias, 0.5, latent, cell, exact)
-        for j in range(hidden):
-            c_next[k, j] = cell[j]
-            h_next[k, j] = latent[j]
-        actions[k], value, log_probs[k] = _heads(x[k], latent, uniforms[k], deterministic, w_critic, b_critic,
-                                                 w_value, b_value, w_action, b_action)
+        actions[k], value, log_probs[k] = _lstm_collection_row(
+            x[k], h[k], c[k], starts[k], uniforms[k], deterministic, exact, w_ih, w_hh, bias, w_critic, b_critic,
+            w_value, b_value, w_action, b_action, h_next[k], c_next[k], scratch)
         values[k, 0] = value
+    return actions, values, log_probs, h_next, c_next
+
+
+@njit(cache=True)
+def lstm_collection_steps(x: np.ndarray, h: np.ndarray, c: np.ndarray, starts: np.ndarray, uniforms: np.ndarray,
+                          bounds: np.ndarray, members: np.ndarray, exact: bool, w_ih: np.ndarray, w_hh: np.ndarray,
+                          bias: np.ndarray, w_critic: np.ndarray, b_critic: np.ndarray, w_value: np.ndarray,
+                          b_value: np.ndarray, w_action: np.ndarray, b_action: np.ndarray
+                          ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:  # pragma: no cover
+    """:func:`lstm_collection_step` (sampling) for several policies of the same shapes in one call: policy ``m``
+    acts in rows ``bounds[m]:bounds[m + 1]`` with weights ``w_ih[m]``, ``w_hh[m]`` ... (each stacked on a first
+    axis), for the policies ``members`` only (the other rows: action 0, zeros). Each row is what
+    :func:`lstm_collection_step` computes for it, bit for bit."""
+    n, hidden = h.shape
+    if x.shape[0] != n or c.shape != h.shape or w_ih.shape[1] != x.shape[1] or w_hh.shape[1] != hidden \
+            or bounds[-1] != n:
+        raise ValueError("observations, LSTM states or bounds of the wrong shape for these policies")
+    actions = np.zeros(n, dtype=np.int64)
+    values = np.zeros((n, 1), dtype=np.float32)
+    log_probs = np.zeros(n, dtype=np.float32)
+    h_next = np.zeros((n, hidden), dtype=np.float32)
+    c_next = np.zeros((n, hidden), dtype=np.float32)
+    scratch = np.empty((4, hidden))
+    for m in members:
+        for k in range(bounds[m], bounds[m + 1]):
+            actions[k], value, log_probs[k] = _lstm_collection_row(
+                x[k], h[k], c[k], starts[k], uniforms[k], False, exact, w_ih[m], w_hh[m], bias[m], w_critic[m],
+                b_critic[m], w_value[m], b_value[m], w_action[m], b_action[m], h_next[k], c_next[k], scratch)
+            values[k, 0] = value
     return actions, values, log_probs, h_next, c_next
 
 

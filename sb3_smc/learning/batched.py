@@ -20,11 +20,14 @@ group of SMCs together:
   default), the step runs on numpy arrays: :meth:`~sb3_smc.common.recurrent.SequenceLstmPolicy.compiled_step`
   with the rollout's draws made in one ``torch.rand`` call (the same numbers as one call per step), the group's
   :meth:`~sb3_smc.envs.vec_env.FlatSMCVecEnv.step_arrays` without info dicts, and the monitor's, the callback's and the
-  buffer's bookkeeping written out on arrays; any other SMC takes SB3's path with info dicts.
+  buffer's bookkeeping written out on arrays; any other SMC takes SB3's path with info dicts. Where every SMC of
+  the group takes the compiled LSTM step with networks of the same shapes, their steps are one compiled call for
+  the whole group (:func:`~sb3_smc.common.kernels.lstm_collection_steps`, each SMC's weights and draws stacked once
+  per rollout).
 
 So each SMC is the one :func:`~sb3_smc.learning.training.train_smc` gives for its spec, bit for bit (tested for one SMC
-and for a group of five seeds). Its record's ``wall_time_s`` is its share of the group's time: its own policy steps,
-bookkeeping and updates, and the group's environment steps divided among the SMCs training at that step.
+and for a group of five seeds). Its record's ``wall_time_s`` is its share of the group's time: its own bookkeeping
+and updates, and the group's policy and environment steps divided among the SMCs training at that step.
 
 Specs the group cannot host (an SMC with children, a non-PixelWorld task, a memoryless learner, frame stacking,
 RecurrentTRPO's linear feature baseline, semi-MDP discounting) are trained by ``train_smc``, one after another.
@@ -49,6 +52,7 @@ from stable_baselines3.common.vec_env import VecEnv, VecMonitor
 from stable_baselines3.common.vec_env.base_vec_env import VecEnvIndices, VecEnvObs, VecEnvStepReturn
 
 from pixelworld_env.envs.vector import PixelWorldVectorEnv
+from sb3_smc.common import kernels
 from sb3_smc.common.recurrent import SequenceLstmPolicy
 from sb3_smc.common.recurrent.lean_update import lean_train
 from sb3_smc.core.hyperparameters import constructor_arguments
@@ -386,6 +390,67 @@ class _Job:
                             lean_update=self.lean_update)
 
 
+class _GroupCollection:
+    """The compiled collection steps of a group's SMCs in one call
+    (:func:`~sb3_smc.common.kernels.lstm_collection_steps`) where every SMC takes the compiled LSTM step with the same
+    shapes: the group's observations, episode starts and states are whole arrays, each SMC's weights and draws are
+    stacked once per rollout; each SMC's step is the one :meth:`_Job.act` computes, bit for bit."""
+
+    def __init__(self, group: _EnvGroup, jobs: Sequence[_Job]) -> None:
+        self.group, self.jobs = group, list(jobs)
+        self.bounds = np.array([0, *(part.stop for part in group.slices)], dtype=np.int64)
+        n, hidden = group.env.num_envs, jobs[0].model.policy.lstm_actor.hidden_size
+        self.obs = np.asarray(group.reset_obs)
+        self.starts = np.ones(n)  # learn's first step starts every episode
+        self.h, self.c = np.zeros((n, hidden), dtype=np.float32), np.zeros((n, hidden), dtype=np.float32)
+        self.exact = not jobs[0].lean_update
+        self.weights: tuple[np.ndarray, ...] = ()
+        self.uniforms = np.zeros((0, n))
+        self.members = np.zeros(0, dtype=np.int64)
+
+    @classmethod
+    def of(cls, group: _EnvGroup, jobs: Sequence[_Job]) -> _GroupCollection | None:
+        """The group's collection in one call, or ``None`` where an SMC takes another step (a GRU, SB3's path) or
+        the SMCs' networks differ in shape."""
+        if not all(job.lean and not hasattr(job.model.policy.lstm_actor, "gru") for job in jobs):
+            return None
+        shapes = {tuple(tuple(p.shape) for p in job.model.policy.parameters()) for job in jobs}
+        return cls(group, jobs) if len(shapes) == 1 else None
+
+    def _members(self, running: Sequence[_Job]) -> np.ndarray:
+        return np.array([m for m, job in enumerate(self.jobs) if job in running], dtype=np.int64)
+
+    def start_rollout(self, running: Sequence[_Job]) -> None:
+        """Stack the running SMCs' weights and draws (each :meth:`_Job.start_rollout`'s)."""
+        self.members = self._members(running)
+        first = running[0]._weights
+        self.weights = tuple(np.stack([np.asarray(job._weights[i]) if job in running else np.zeros_like(first[i])
+                                       for job in self.jobs]) for i in range(len(first)))
+        self.uniforms = np.zeros((running[0].model.n_steps, self.group.env.num_envs))
+        for job in running:
+            part = cast(SliceVecEnv, job.model.env.unwrapped)
+            self.uniforms[:, part.start:part.stop] = job._uniforms
+
+    def act(self, running: Sequence[_Job]) -> None:
+        """Every running SMC's step at once; the actions go to the group's step, each SMC keeps its slice."""
+        if len(running) != len(self.members):  # an SMC left the group: its environments get action 0
+            self.members = self._members(running)
+        pos = running[0].model.rollout_buffer.pos
+        step = kernels.lstm_collection_steps(self.obs, self.h, self.c, self.starts, self.uniforms[pos], self.bounds,
+                                             self.members, self.exact, *self.weights)
+        self.group.actions[:] = step[0]
+        for job in running:
+            part = cast(SliceVecEnv, job.model.env.unwrapped)
+            job._step = tuple(array[part.start:part.stop] for array in step)
+        self.h, self.c = step[3], step[4]
+
+    def observed(self) -> None:
+        """After the group's step: its observations and episode starts are the next step's inputs."""
+        result = self.group.step_result
+        assert result is not None
+        self.obs, self.starts = result.obs, result.dones.astype(np.float64)
+
+
 def _env_key(spec: TrainingSpec) -> tuple[Any, ...]:
     """What the SMCs trained in one vector env must share: their task (resolved once for all of them) and its
     environments' settings."""
@@ -452,18 +517,24 @@ def _train_group(specs: Sequence[TrainingSpec], group: _EnvGroup, *, tensorboard
     for job in jobs:
         job.start()
     group.with_infos = not all(job.lean for job in jobs)
+    collection = _GroupCollection.of(group, jobs)
     running = [job for job in jobs if job.running]
     n_steps = jobs[0].model.n_steps
     while running:
         for job in running:
             job.start_rollout()
+        if collection is not None:
+            collection.start_rollout(running)
         for _ in range(n_steps):
-            for job in running:
-                begin = time.perf_counter()
-                job.act()
-                job.seconds += time.perf_counter() - begin
             begin = time.perf_counter()
+            if collection is not None:
+                collection.act(running)
+            else:
+                for job in running:
+                    job.act()
             group.step()
+            if collection is not None:
+                collection.observed()
             share = (time.perf_counter() - begin) / len(running)
             still = []
             for job in running:
