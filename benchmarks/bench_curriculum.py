@@ -16,7 +16,11 @@ lower-level nodes and the flat baseline of every target (smc-base), smc-curr, sm
 5 seeds; 400,000 steps per job) and prints the estimated wall time with 1 and 2 workers (jobs packed perfectly, a
 second worker on the second core).
 
-Run: ``python benchmarks/bench_curriculum.py [--updates N]``.
+With ``--lean`` every job trains with the lean update (``lean_update=True``, the run option ``--lean-update``) and
+the flat jobs are measured as the trainer runs them, five seeds in one group (``run_group``; decisions per second
+over the five).
+
+Run: ``python benchmarks/bench_curriculum.py [--updates N] [--lean]``.
 """
 
 from __future__ import annotations
@@ -32,7 +36,7 @@ from pixelworld_env.datasets import catalog
 from sb3_smc.curricula import shipped_curricula
 from sb3_smc.curricula.designed import designed_curricula
 from sb3_smc.curricula.format import Curriculum
-from sb3_smc.curricula.jobs import Job, job_name, run_job
+from sb3_smc.curricula.jobs import Job, job_name, run_group, run_job
 from sb3_smc.learning.training import untrained_smc
 from sb3_smc.library import SMCLibrary
 from sb3_smc.records import Budget, TaskSpec, TrainingSpec
@@ -42,12 +46,14 @@ SEEDS = 5
 TIMESTEPS = 400_000
 
 
-def measure(library: Path, children: tuple[str, ...], updates: int) -> float:
-    """Decisions per second of one job with ``children`` (names in ``library``)."""
-    spec = TrainingSpec(name="bench", task=TaskSpec(f"PW-{TARGET}-v0").resolved(), children=children,
-                        budget=Budget(2000 * updates))
-    result = run_job(Job(spec=spec, library=str(library)))
-    return result.record.total_timesteps / result.record.wall_time_s
+def measure(library: Path, children: tuple[str, ...], updates: int, lean: bool = False, group: int = 1) -> float:
+    """Decisions per second of one job with ``children`` (names in ``library``); ``group`` seeds of a flat job
+    trained together (``run_group``: the decisions of all over the group's time)."""
+    jobs = [Job(spec=TrainingSpec(name=f"bench@{seed}", task=TaskSpec(f"PW-{TARGET}-v0").resolved(), seed=seed,
+                                  children=children, budget=Budget(2000 * updates)),
+                library=str(library), lean_update=lean) for seed in range(group)]
+    results = run_group(jobs) if group > 1 else [run_job(jobs[0])]
+    return sum(r.record.total_timesteps for r in results) / sum(r.record.wall_time_s for r in results)
 
 
 def paper_curricula() -> dict[str, Curriculum]:
@@ -70,6 +76,7 @@ def protocol_jobs() -> dict[str, int]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--updates", type=int, default=10, help="updates (2,000 steps) per measured job")
+    parser.add_argument("--lean", action="store_true", help="the lean update, and the flat jobs in groups of five")
     args = parser.parse_args()
     torch.set_num_threads(1)
     canonical = [dataset for _, dataset in catalog.canonical_smc_lists()["canonical_containment_curriculum"]]
@@ -85,12 +92,13 @@ def main() -> None:
         path = library.save(Path(tmp) / "library")
         curr_children = tuple(job_name(n, s) for n in canonical[:4] for s in (0, 1))
         canon_children = tuple(job_name(n, s) for n in canonical for s in (0, 1))
-        rates = {"flat": measure(path, (), args.updates),
-                 "curr": measure(path, curr_children, args.updates),
-                 "canon": measure(path, canon_children, args.updates)}
+        rates = {"flat": measure(path, (), args.updates, args.lean, SEEDS if args.lean else 1),
+                 "curr": measure(path, curr_children, args.updates, args.lean),
+                 "canon": measure(path, canon_children, args.updates, args.lean)}
     jobs = protocol_jobs()
     seconds = {kind: TIMESTEPS / rates[kind] for kind in rates}
-    print(f"\nmeasured: {args.updates} updates of 2,000 steps per job, 1 torch thread, torch {torch.__version__}; "
+    print(f"\nmeasured: {args.updates} updates of 2,000 steps per job, 1 torch thread, torch {torch.__version__}"
+          f"{', the lean update, flat jobs in groups of 5' if args.lean else ''}; "
           f"smc-curr entries use {statistics.median(curr_sizes):.0f} nodes (median; {min(curr_sizes)}-"
           f"{max(curr_sizes)})\n")
     print("| job | decisions/s | s per 400k-step job | jobs in the protocol (x 5 seeds) | CPU hours |")

@@ -16,7 +16,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import NamedTuple
 
-from sb3_smc.common.threads import torch_threads
+from sb3_smc.common.threads import compute_threads
 from sb3_smc.core.hyperparameters import DEFAULT_ALGORITHM, DEFAULT_TIMESTEPS, recurrent_policy
 from sb3_smc.curricula.format import SEED_SEPARATOR, Curriculum, CurriculumError, Node
 from sb3_smc.errors import SMCError
@@ -123,7 +123,7 @@ def run_job(job: Job) -> JobResult:
 
     spec = job.spec
     children = SMCLibrary.load(job.library, names=spec.children) if spec.children else {}
-    with torch_threads(1):
+    with compute_threads(1):
         smc = train_smc(spec, children=children, tensorboard_log=job.tensorboard_log, log_every=0,
                         lean_update=job.lean_update)
     return _result(smc)
@@ -135,7 +135,7 @@ def run_group(jobs: Sequence[Job]) -> list[JobResult]:
     :func:`run_job` returns for its job (bit-identical SMCs)."""
     from sb3_smc.learning.batched import train_smcs  # torch and Stable-Baselines3: in the worker only
 
-    with torch_threads(1):
+    with compute_threads(1):
         smcs = train_smcs([job.spec for job in jobs], tensorboard_log=jobs[0].tensorboard_log, log_every=0,
                           lean_update=jobs[0].lean_update)
     return [_result(smc) for smc in smcs]

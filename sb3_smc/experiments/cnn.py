@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from sb3_smc.common.threads import torch_threads
+from sb3_smc.common.threads import compute_threads
 from sb3_smc.errors import SMCError
 
 if TYPE_CHECKING:
@@ -74,7 +74,7 @@ def train_cnn(target: str, seed: int, *, dataset_seed: int = 0) -> CNNResult:
 
     if catalog.dataset(target).kind != "classification":
         raise SMCError(f"the CNN baseline classifies: {target!r} is a bring-about dataset")
-    with torch_threads(1):
+    with compute_threads(1):
         return _train(target, seed, dataset_seed)
 
 

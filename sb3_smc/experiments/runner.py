@@ -34,7 +34,7 @@ from typing import Any
 
 from pixelworld_env.atomic import atomic_write
 from pixelworld_env.datasets import catalog
-from sb3_smc.common.threads import torch_threads
+from sb3_smc.common.threads import compute_threads
 from sb3_smc.core.hyperparameters import DEFAULT_ALGORITHM, DEFAULT_TIMESTEPS
 from sb3_smc.curricula.jobs import DEFAULT_REUSE, DEFAULT_SEEDS, file_stem, job_name, name_of_file
 from sb3_smc.curricula.options import BACKENDS, DEFAULT_GROUP_SIZE, RunOptions
@@ -399,7 +399,7 @@ def _evaluation(directory: Path, name: str, repeats: int) -> dict[str, Any]:
     if saved is not None:
         return saved
     smc = SMCLibrary.load(directory / "library", names=[name])[name]
-    with torch_threads(1):
+    with compute_threads(1):
         result = evaluate(smc, repeats=repeats, seed=0, record_cells=False)
     record = smc.record
     saved = {"smc": name, "repeats": repeats, "test_score": result.score,

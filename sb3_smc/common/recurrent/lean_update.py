@@ -28,7 +28,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from functools import cached_property
+from functools import cache, cached_property
 from typing import Any, NamedTuple, cast
 
 import numpy as np
@@ -41,12 +41,19 @@ from stable_baselines3.common.distributions import CategoricalDistribution
 from stable_baselines3.common.torch_layers import FlattenExtractor, MlpExtractor
 from stable_baselines3.common.type_aliases import Schedule
 from stable_baselines3.common.utils import explained_variance
+from threadpoolctl import ThreadpoolController
 from torch import nn
 
 from sb3_smc.common.kernels import fast_tanh
 from sb3_smc.common.recurrent.policies import SequenceLstmPolicy
 
 __all__ = ["lean_train", "lean_update_applies", "use_lean_update"]
+
+
+@cache
+def _blas() -> ThreadpoolController:
+    """numpy's BLAS libraries, found once (a limit on them then costs tens of microseconds)."""
+    return ThreadpoolController()
 
 
 @njit(cache=True, fastmath=True, inline="always")
@@ -372,11 +379,17 @@ def _torch_epoch(model: RecurrentPPO, policy: SequenceLstmPolicy, data: _Rollout
 
 def lean_train(model: RecurrentPPO) -> None:
     """``model.train()`` (sb3-contrib's ``RecurrentPPO.train``) with the compiled recurrence: the same update up to
-    float rounding, the same draws from numpy's global generator, the same logged values. ``ValueError`` where
-    :func:`lean_update_applies` is false."""
+    float rounding, the same draws from numpy's global generator, the same logged values. numpy's BLAS runs it in
+    one thread (its matrix products' sums would otherwise depend on the caller's thread count, and the SMC with
+    them). ``ValueError`` where :func:`lean_update_applies` is false."""
     if not lean_update_applies(model):
         raise ValueError("lean_train needs a RecurrentPPO with SequenceLstmPolicy's default recurrence (one LSTM "
                          "layer, no critic LSTM) and one minibatch per epoch")
+    with _blas().limit(limits=1, user_api="blas"):
+        _lean_train(model)
+
+
+def _lean_train(model: RecurrentPPO) -> None:
     # the types lean_update_applies checked
     policy, buffer = cast(SequenceLstmPolicy, model.policy), cast(RecurrentRolloutBuffer, model.rollout_buffer)
     schedule, schedule_vf = cast(Schedule, model.clip_range), cast("Schedule | None", model.clip_range_vf)
