@@ -132,6 +132,22 @@ class _RecurrentActor:
 
     _compiled: tuple[np.ndarray, ...] | None
 
+    def _stack(self, layers: Sequence[tuple[np.ndarray, ...]], cell: str, observation_size: int, dtype: Any) -> None:
+        """The sizes of a stack of ``cell`` layers (each ``(w_ih_T, w_hh_T, ...)``): ``dtype``, ``hidden_size``,
+        ``n_layers``, ``observation_size``; ``SMCError`` for an empty stack."""
+        self.dtype = np.dtype(dtype)
+        if not layers:
+            raise SMCError(f"{type(self).__name__} needs at least one {cell} layer")
+        self.hidden_size = int(np.shape(layers[0][1])[0])
+        self.n_layers = len(layers)
+        self.observation_size = int(observation_size)
+
+    def _head(self, head: Sequence[Layer], first_layer: tuple[np.ndarray, ...]) -> None:
+        """The feed-forward part after the recurrent layers, and the compiled step's weights where it applies."""
+        self.head = [_cast_layer(layer, self.dtype) for layer in head]
+        self.n_actions = _n_outputs(self.head)
+        self._compiled = (*first_layer, *self.head[0][1:]) if _compilable(self) else None
+
     @property
     def batch_from(self) -> int | None:
         """The fewest pending decisions worth one ``probabilities_batch`` call instead of single calls (None: never,
@@ -165,12 +181,7 @@ class NumpyLSTMPolicy(_RecurrentActor):
 
     def __init__(self, lstm: Sequence[tuple[np.ndarray, np.ndarray, np.ndarray]], head: Sequence[Layer],
                  observation_size: int, dtype: Any = np.float64) -> None:
-        self.dtype = np.dtype(dtype)
-        if not lstm:
-            raise SMCError("NumpyLSTMPolicy needs at least one LSTM layer")
-        self.hidden_size = int(np.shape(lstm[0][1])[0])
-        self.n_layers = len(lstm)
-        self.observation_size = int(observation_size)
+        self._stack(lstm, "LSTM", observation_size, dtype)
         # sigmoid(z) = 0.5 * tanh(z / 2) + 0.5: halve the i, f, o rows once so that one tanh serves all gates
         scale = np.full(4 * self.hidden_size, 0.5)
         scale[2 * self.hidden_size:3 * self.hidden_size] = 1.0
@@ -184,9 +195,7 @@ class NumpyLSTMPolicy(_RecurrentActor):
             if w_ih.shape != (expected_in, gates) or w_hh.shape != (self.hidden_size, gates) or bias.shape != (gates,):
                 raise SMCError(f"LSTM layer {k}: inconsistent weight shapes {w_ih.shape}, {w_hh.shape}, "
                                f"{bias.shape}")
-        self.head = [_cast_layer(layer, self.dtype) for layer in head]
-        self.n_actions = _n_outputs(self.head)
-        self._compiled = (*self.lstm[0], *self.head[0][1:]) if _compilable(self) else None
+        self._head(head, self.lstm[0])
 
     def initial_state(self) -> LSTMState:
         zeros = np.zeros((self.n_layers, self.hidden_size), dtype=self.dtype)
@@ -258,12 +267,7 @@ class NumpyGRUPolicy(_RecurrentActor):
 
     def __init__(self, gru: Sequence[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]], head: Sequence[Layer],
                  observation_size: int, dtype: Any = np.float64) -> None:
-        self.dtype = np.dtype(dtype)
-        if not gru:
-            raise SMCError("NumpyGRUPolicy needs at least one GRU layer")
-        self.hidden_size = int(np.shape(gru[0][1])[0])
-        self.n_layers = len(gru)
-        self.observation_size = int(observation_size)
+        self._stack(gru, "GRU", observation_size, dtype)
         self.gru = [tuple(np.ascontiguousarray(a, dtype=self.dtype) for a in layer) for layer in gru]
         for k, (w_ih, w_hh, b_ih, b_hh) in enumerate(self.gru):
             expected_in = self.observation_size if k == 0 else self.hidden_size
@@ -272,9 +276,7 @@ class NumpyGRUPolicy(_RecurrentActor):
                     or b_ih.shape != (gates,) or b_hh.shape != (gates,)):
                 raise SMCError(f"GRU layer {k}: inconsistent weight shapes {w_ih.shape}, {w_hh.shape}, "
                                f"{b_ih.shape}, {b_hh.shape}")
-        self.head = [_cast_layer(layer, self.dtype) for layer in head]
-        self.n_actions = _n_outputs(self.head)
-        self._compiled = (*self.gru[0], *self.head[0][1:]) if _compilable(self) else None
+        self._head(head, self.gru[0])
 
     def initial_state(self) -> np.ndarray:
         return np.zeros((self.n_layers, self.hidden_size), dtype=self.dtype)
@@ -319,7 +321,7 @@ class NumpyGRUPolicy(_RecurrentActor):
                 f"n_layers={self.n_layers}, n_actions={self.n_actions})")
 
 
-def _compilable(policy: NumpyLSTMPolicy | NumpyGRUPolicy) -> bool:
+def _compilable(policy: _RecurrentActor) -> bool:
     """Whether the compiled step of :mod:`sb3_smc.common.kernels` serves ``policy``: float64, one recurrent layer,
     one linear layer as the head (``net_arch=[]``)."""
     if not (policy.dtype == np.float64 and policy.n_layers == 1 and len(policy.head) == 1
