@@ -142,8 +142,10 @@ def main() -> None:
     rows = list({_key(r): r for r in _rows(args.out)}.values())
     rows = [r for r in rows if r["timesteps"] == args.timesteps]
     seconds = {lean: sum(r["train_s"] for r in rows if r["lean"] == lean) for lean in (False, True)}
+    commits = {lean: sorted({str(r.get("commit")) for r in rows if r["lean"] == lean}) for lean in (False, True)}
     print(f"\n{args.timesteps:,} steps per SMC, stopping at the largest return; training time: default "
-          f"{seconds[False]:.0f} s, lean {seconds[True]:.0f} s\n")
+          f"{seconds[False]:.0f} s, lean {seconds[True]:.0f} s; trained at: default {', '.join(commits[False])}, "
+          f"lean {', '.join(commits[True])} (None: the first run's rows, 2026-11-27)\n")
     print(table(compare(rows, args.margin), args.margin))
 
 

@@ -111,6 +111,7 @@ def test_lean_update_in_a_group_is_train_smc_with_lean_update() -> None:
     batched = train_smcs(specs, lean_update=True)
     for spec, smc in zip(specs, batched, strict=True):
         assert smc.record is not None and smc.record.lean_update
+        assert "lean_collection" not in vars(smc.model.policy)  # the lean collection's flag is the training's only
         assert_same_smc(train_smc(spec, log_every=0, lean_update=True), smc)
     stock = train_smcs(specs[:1])[0].model.policy.state_dict()
     lean = batched[0].model.policy.state_dict()
@@ -119,3 +120,20 @@ def test_lean_update_in_a_group_is_train_smc_with_lean_update() -> None:
                                  policy_kwargs={"enable_critic_lstm": True})
     with pytest.raises(SMCError, match="'with-critic': lean_update needs RecurrentPPO"):
         train_smcs([specs[0], critic], lean_update=True)
+
+
+def test_networks_of_other_shapes_take_their_own_policy_steps(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Two SMCs of one task whose LSTMs differ in size share the vector env but not the group's policy step; each is
+    still train_smc's SMC."""
+    from sb3_smc.common import kernels
+
+    calls: list[int] = []
+    group_step = kernels.lstm_collection_steps
+    monkeypatch.setattr(kernels, "lstm_collection_steps", lambda *args: calls.append(1) or group_step(*args))
+    specs = [TrainingSpec.create(CORNER_ID, total_timesteps=4_000, seed=0),
+             TrainingSpec.create(CORNER_ID, total_timesteps=4_000, seed=1, policy_kwargs={"lstm_hidden_size": 16})]
+    batched = train_smcs(specs)
+    monkeypatch.undo()
+    assert not calls
+    for spec, smc in zip(specs, batched, strict=True):
+        assert_same_smc(train_smc(spec, log_every=0), smc)

@@ -205,3 +205,17 @@ def test_every_shipped_smc_loads_by_a_name():
     with pytest.raises(LibraryError, match="no pretrained SMCs for curriculum 'nothing-like-it'; pretrained "
                                            "curricula: con2-ba, .*; or one of the 45 nodes it holds by name"):
         SMCLibrary.pretrained("nothing-like-it")
+
+
+def test_a_rebuild_from_a_lean_run_replaces_the_stock_smcs(tmp_path):
+    """The same specs trained with the other update are other SMCs: a rebuild from a lean run does not keep the
+    stock SMCs the library holds (nor the other way round)."""
+    tiny = Curriculum("tiny", (Node(LEFT, LEFT), Node(RIGHT, RIGHT), Node("top", TARGET, (LEFT, RIGHT))), ("top",))
+    stock, lean = tmp_path / "stock", tmp_path / "lean"
+    train_curriculum(tiny, stock, targets=[LEFT], seeds=2, timesteps=4000, progress=False)
+    train_curriculum(tiny, lean, targets=[LEFT], seeds=2, timesteps=4000, lean_update=True, progress=False)
+    out = build_pretrained([stock], [tiny], tmp_path / "pretrained", repeats=1, finished_only=True)
+    assert not any(SMCLibrary.load(out)[name].record.lean_update for name in SMCLibrary.load(out).names)
+    build_pretrained([lean], [tiny], out, repeats=1, finished_only=True)
+    rebuilt = SMCLibrary.load(out)
+    assert rebuilt.names and all(rebuilt[name].record.lean_update for name in rebuilt.names)

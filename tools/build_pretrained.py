@@ -18,7 +18,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from sb3_smc.common.threads import torch_threads
+from sb3_smc.common.threads import compute_threads
 from sb3_smc.curricula.pretrained import build_pretrained
 from sb3_smc.library.pretrained import pretrained_index
 
@@ -32,7 +32,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--finished-only", action="store_true",
                         help="take only the nodes whose every seed is trained (of a run still going)")
     args = parser.parse_args(argv)
-    with torch_threads(1):
+    with compute_threads(1):
         path = build_pretrained(args.run, [c for c in args.curricula.split(",") if c], args.out,
                                 finished_only=args.finished_only)
     nodes = pretrained_index(path)["nodes"]

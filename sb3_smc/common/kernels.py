@@ -282,9 +282,11 @@ def lstm_collection_steps(x: np.ndarray, h: np.ndarray, c: np.ndarray, starts: n
     axis), for the policies ``members`` only (the other rows: action 0, zeros). Each row is what
     :func:`lstm_collection_step` computes for it, bit for bit."""
     n, hidden = h.shape
-    if x.shape[0] != n or c.shape != h.shape or w_ih.shape[1] != x.shape[1] or w_hh.shape[1] != hidden \
-            or bounds[-1] != n:
-        raise ValueError("observations, LSTM states or bounds of the wrong shape for these policies")
+    if x.shape[0] != n or c.shape != h.shape or starts.shape[0] != n or uniforms.shape[0] != n \
+            or w_ih.shape[1] != x.shape[1] or w_hh.shape[1] != hidden or bounds.shape[0] != w_ih.shape[0] + 1 \
+            or bounds[0] != 0 or bounds[-1] != n or np.any(bounds[1:] < bounds[:-1]) \
+            or (members.size and (members.min() < 0 or members.max() >= w_ih.shape[0])):
+        raise ValueError("observations, LSTM states, bounds or members of the wrong shape for these policies")
     actions = np.zeros(n, dtype=np.int64)
     values = np.zeros((n, 1), dtype=np.float32)
     log_probs = np.zeros(n, dtype=np.float32)

@@ -4,8 +4,27 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from contextlib import contextmanager
+from functools import cache
+from typing import Any
 
-__all__ = ["compute_threads"]
+__all__ = ["blas_threads", "compute_threads"]
+
+
+@cache
+def _blas() -> Any:
+    """The BLAS libraries loaded at the first call (numpy's among them, numpy being imported with this package),
+    found once: a limit on them then costs tens of microseconds, not the hundreds of a new search."""
+    from threadpoolctl import ThreadpoolController
+
+    return ThreadpoolController()
+
+
+@contextmanager
+def blas_threads(n: int = 1) -> Iterator[None]:
+    """Run the block with ``n`` BLAS threads for numpy, the caller's count restored afterwards (cheap enough for
+    every update; libraries loaded after the first call, such as scipy's, are not limited)."""
+    with _blas().limit(limits=n, user_api="blas"):
+        yield
 
 
 @contextmanager
@@ -20,7 +39,7 @@ def compute_threads(n: int = 1) -> Iterator[None]:
     before = torch.get_num_threads()
     torch.set_num_threads(n)
     try:
-        with threadpool_limits(limits=n, user_api="blas"):
+        with threadpool_limits(limits=n, user_api="blas"):  # every BLAS loaded by now
             yield
     finally:
         torch.set_num_threads(before)

@@ -117,8 +117,8 @@ class JobResult:
 
 
 def run_job(job: Job) -> JobResult:
-    """Train ``job`` (one torch thread; the caller's count is restored) and return its result; the same in any
-    process or Ray worker."""
+    """Train ``job`` (one torch and one BLAS thread; the caller's counts are restored) and return its result; the
+    same in any process or Ray worker."""
     from sb3_smc.learning.training import train_smc  # torch and Stable-Baselines3: in the worker only
 
     spec = job.spec
@@ -131,8 +131,8 @@ def run_job(job: Job) -> JobResult:
 
 def run_group(jobs: Sequence[Job]) -> list[JobResult]:
     """Train flat ``jobs`` (no children; one TensorBoard folder and one ``lean_update`` for all) together with
-    :func:`~sb3_smc.learning.batched.train_smcs` in one torch thread and return their results in order, each what
-    :func:`run_job` returns for its job (bit-identical SMCs)."""
+    :func:`~sb3_smc.learning.batched.train_smcs` in one torch and one BLAS thread and return their results in order,
+    each what :func:`run_job` returns for its job (bit-identical SMCs)."""
     from sb3_smc.learning.batched import train_smcs  # torch and Stable-Baselines3: in the worker only
 
     with compute_threads(1):

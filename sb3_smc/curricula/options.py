@@ -32,7 +32,7 @@ DEFAULT_GROUP_SIZE = 5
 issue 44). docs/benchmarks.md, "Grouped jobs in the curriculum trainer", has the measurement behind it."""
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class RunOptions:
     """The options of a curriculum run, checked when the record is made (``ValueError`` naming the first option out of
     range; nothing is done before). ``seeds``, ``timesteps``, ``reuse``, ``algo``, ``rnn`` and ``lean_update`` decide

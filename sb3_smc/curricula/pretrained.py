@@ -103,12 +103,13 @@ def build_pretrained(runs: Sequence[str | Path], curricula: Sequence[str | Curri
     previous = storage.check_manifest(*storage.read_manifest(target)) if held.is_file() else {}
 
     def held_alike(node: str, run: Path, names: list[str]) -> bool:
-        """Whether ``out`` holds the same best seeds of ``node`` with the same specs (a run that copied them, or
-        trained them again: the same SMCs, training being deterministic), tested as this build would test them:
-        kept as they are."""
+        """Whether ``out`` holds the same best seeds of ``node`` with the same specs and the same update (a run that
+        copied them, or trained them again: the same SMCs, training being deterministic), tested as this build would
+        test them: kept as they are."""
         mine = {name for name in previous if node_of(name) == node}
         return mine == set(names) and all(
             previous[name].spec == entries[run][name].spec
+            and _lean(previous[name]) == _lean(entries[run][name])
             and any((e.split, e.repeats, e.evaluation_seed) == ("test", repeats, 0) for e in library[name].evaluations)
             for name in names)
 
@@ -153,3 +154,8 @@ def _index(names: Sequence[str], before: dict[str, list[str]], built: Sequence[C
               **{c.name: lower_level(c) for c in built}}
     curricula = {name: lower for name, lower in wanted.items() if lower and set(lower) <= set(nodes)}
     return {"curricula": curricula, "nodes": nodes, "seeds": {node: ranked_among[node] for node in nodes}}
+
+
+def _lean(entry: storage.LibraryEntry) -> bool:
+    """Whether a library entry's SMC was trained with the lean update (its record says so)."""
+    return entry.record is not None and entry.record.lean_update

@@ -343,7 +343,8 @@ def _command(directory: Path, settings: dict[str, Any]) -> str:
     return experiment_command("DIR", methods=settings["methods"], targets=settings["targets"],
                               seeds=settings["seeds"], timesteps=run.get("timesteps"),
                               repeats=settings.get("repeats", 10), workers=settings.get("workers", 1),
-                              backend=settings.get("backend", "local"), algo=run.get("algo"), rnn=run.get("rnn"))
+                              backend=settings.get("backend", "local"), algo=run.get("algo"), rnn=run.get("rnn"),
+                              lean_update=bool(run.get("lean_update")))
 
 
 def _machine_line(machine: dict[str, Any]) -> str:

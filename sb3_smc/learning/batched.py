@@ -526,12 +526,14 @@ def _train_group(specs: Sequence[TrainingSpec], group: _EnvGroup, *, tensorboard
         if collection is not None:
             collection.start_rollout(running)
         for _ in range(n_steps):
-            begin = time.perf_counter()
-            if collection is not None:
-                collection.act(running)
-            else:
+            if collection is None:  # each SMC's own step, its own time
                 for job in running:
+                    begin = time.perf_counter()
                     job.act()
+                    job.seconds += time.perf_counter() - begin
+            begin = time.perf_counter()
+            if collection is not None:  # the group's step, shared as the environment step is
+                collection.act(running)
             group.step()
             if collection is not None:
                 collection.observed()

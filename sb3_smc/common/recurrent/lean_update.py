@@ -28,7 +28,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from functools import cache, cached_property
+from functools import cached_property
 from typing import Any, NamedTuple, cast
 
 import numpy as np
@@ -41,19 +41,13 @@ from stable_baselines3.common.distributions import CategoricalDistribution
 from stable_baselines3.common.torch_layers import FlattenExtractor, MlpExtractor
 from stable_baselines3.common.type_aliases import Schedule
 from stable_baselines3.common.utils import explained_variance
-from threadpoolctl import ThreadpoolController
 from torch import nn
 
 from sb3_smc.common.kernels import fast_tanh
 from sb3_smc.common.recurrent.policies import SequenceLstmPolicy
+from sb3_smc.common.threads import blas_threads
 
 __all__ = ["lean_train", "lean_update_applies", "use_lean_update"]
-
-
-@cache
-def _blas() -> ThreadpoolController:
-    """numpy's BLAS libraries, found once (a limit on them then costs tens of microseconds)."""
-    return ThreadpoolController()
 
 
 @njit(cache=True, fastmath=True, inline="always")
@@ -385,7 +379,7 @@ def lean_train(model: RecurrentPPO) -> None:
     if not lean_update_applies(model):
         raise ValueError("lean_train needs a RecurrentPPO with SequenceLstmPolicy's default recurrence (one LSTM "
                          "layer, no critic LSTM) and one minibatch per epoch")
-    with _blas().limit(limits=1, user_api="blas"):
+    with blas_threads(1):
         _lean_train(model)
 
 
