@@ -98,3 +98,18 @@ def test_the_commands_that_resume_a_lean_run_say_so(tmp_path):
                                "--timesteps", "256", "--no-tensorboard", "--lean-update")
     assert code == 0, err
     assert json.loads((tmp_path / "cli" / "run.json").read_text())["lean_update"] is True
+
+
+def test_a_lean_experiment_records_its_update(tmp_path):
+    """results.json's settings and command, and the report's learner line, say the SMCs had the lean update."""
+    from sb3_smc.experiments.report import _learners
+
+    results = run_experiment(tmp_path / "lean", methods=["base"], targets=[TARGET], seeds=1, timesteps=2000,
+                             repeats=1, lean_update=True, progress=False)
+    assert results["settings"]["lean_update"] is True and results["command"].endswith(" --lean-update")
+    assert _learners(results["settings"]) == "RecurrentPPO (LSTM, the lean update)"
+    library = SMCLibrary.load(tmp_path / "lean" / "library")
+    assert all(library[name].record.lean_update for name in library.names)
+    plain = run_experiment(tmp_path / "plain", methods=["base"], targets=[TARGET], seeds=1, timesteps=2000,
+                           repeats=1, progress=False)
+    assert "lean_update" not in plain["settings"] and _learners(plain["settings"]) == "RecurrentPPO (LSTM)"
