@@ -1423,3 +1423,26 @@ def test_the_whole_tables_script_keeps_nothing_of_a_run_with_nothing_evaluated(t
     (tmp_path / "results.json").write_text(json.dumps({"rows": [{"target": "t"}], "complete": False}))
     partial()
     assert (kept / "results.json").is_file() and (tmp_path / "reported").read_text().startswith(f"report {kept}")
+
+
+def test_the_whole_tables_script_passes_a_queue_lines_further_options(tmp_path):
+    """A queue line's fourth column on (such as ``--lean-update``) goes to its category's ``sb3-smc experiment``,
+    in ``run`` and in ``partial``; a line without one adds nothing."""
+    import os
+
+    _executable(tmp_path / "env" / "bin" / "sb3-smc", f'echo "$*" >> {tmp_path}/calls')
+    repo = _script_repo(tmp_path, {})
+    paper = repo / "docs" / "results" / "paper"
+    paper.mkdir(parents=True)
+    (paper / "queue.txt").write_text("# category, commit, reuse, options\nobjects  abc  -  --lean-update\n"
+                                     "search  abc  pretrained\n")
+    env = {**os.environ, "RUNS": str(tmp_path / "runs"), "RUN_ENV": str(tmp_path / "env")}
+    script = str(repo / "tools" / "paper_table.sh")
+    subprocess.run([script, "run", "objects", "search"], env=env, check=True, capture_output=True)
+    subprocess.run([script, "partial", "objects"], env=env, check=True, capture_output=True)
+    calls = (tmp_path / "calls").read_text().splitlines()
+    assert len(calls) == 3
+    assert calls[0].startswith(f"experiment --out {tmp_path}/runs/paper-objects --category objects --seeds 5 "
+                               "--workers 2") and calls[0].endswith(" --lean-update")
+    assert "--lean-update" not in calls[1] and calls[1].endswith("--workers 2")
+    assert calls[2].endswith("--no-train --lean-update")

@@ -11,7 +11,9 @@
 #                                                on SWEEP_TARGETS of sb3_smc.experiments.design;
 #                                                experience: the flat SMC with 1, 4 and 16 x the budget,
 #                                                EXPERIENCE_METHODS on SWEEP_TARGETS)
-#   tools/paper_table.sh continue                the queue (docs/results/paper/queue.txt), on this machine or a new one:
+#   tools/paper_table.sh continue                the queue (docs/results/paper/queue.txt: category, commit, reuse, and
+#                                                any further options of its sb3-smc experiment, e.g. --lean-update),
+#                                                on this machine or a new one:
 #                                                waits for a running `run`, then for each category whose records are not
 #                                                complete sets up its commit's worktree and venv (once), restores its run
 #                                                directory from the kept records (once) and runs it
@@ -49,8 +51,12 @@ print(",".join(t for t in level2_targets() if catalog.dataset(t).kind == kind))'
   esac
 }
 
-queue() {  # the queue's lines: category, commit, --reuse-from
+queue() {  # the queue's lines: category, commit, --reuse-from, then any further options of its experiment
   grep -v '^#' "$repo/docs/results/paper/queue.txt"
+}
+
+options() {  # the further sb3-smc experiment options of category $1 (its queue line from the fourth column on)
+  queue | awk -v c="$1" '$1 == c {for (i = 4; i <= NF; i++) printf "%s ", $i}'
 }
 
 holds() {  # whether the JSON file $1 exists and its key $2 is true (not false, empty or absent)
@@ -92,7 +98,7 @@ case ${1:-} in
     mkdir -p "$RUNS" && exec 9>"$RUNS/.paper_table.lock"
     flock -n 9 || { echo "another 'paper_table.sh continue' is running" >&2; exit 1; }
     while pgrep -f "paper_table.sh run" >/dev/null; do sleep 60; done
-    queue | while read -r cat commit reuse; do
+    queue | while read -r cat commit reuse _; do
       [ -n "$cat" ] || continue
       if complete "$RUNS/paper-$cat/results.json" || complete "$repo/docs/results/paper/$cat/results.json"; then
         echo "=== $cat: complete"; continue
@@ -109,7 +115,7 @@ case ${1:-} in
       RUN_ENV=$env REUSE_FROM=$(reuse_path "$reuse") nice -n 5 "$0" run "$cat" < /dev/null
     done ;;
   checkpoint)
-    queue | while read -r cat commit reuse; do
+    queue | while read -r cat commit reuse _; do
       if [ -z "$cat" ] || [ ! -f "$RUNS/paper-$cat/run.json" ] || complete "$repo/docs/results/paper/$cat/results.json"
       then continue; fi
       echo "=== checkpoint $cat $(date -Is)"
@@ -124,7 +130,7 @@ case ${1:-} in
       rc=0
       # shellcheck disable=SC2046
       "$RUN_ENV/bin/sb3-smc" experiment --out "$RUNS/paper-$cat" $(selection "$cat") --seeds 5 --workers 2 \
-        ${REUSE_FROM:+--reuse-from "$REUSE_FROM"} || rc=$?
+        ${REUSE_FROM:+--reuse-from "$REUSE_FROM"} $(options "$cat") || rc=$?
       echo "=== $cat end $(date -Is) rc=$rc"
     done ;;
   keep)
@@ -143,7 +149,7 @@ case ${1:-} in
     export OMP_NUM_THREADS=1 MKL_NUM_THREADS=1
     # shellcheck disable=SC2046
     if ! "$RUN_ENV/bin/sb3-smc" experiment --out "$RUNS/paper-$cat" $(selection "$cat") --seeds 5 --workers 2 \
-        --no-train; then echo "=== $cat: not tabulated (the error above), not kept"; exit 0; fi
+        --no-train $(options "$cat"); then echo "=== $cat: not tabulated (the error above), not kept"; exit 0; fi
     if ! holds "$RUNS/paper-$cat/results.json" rows; then echo "=== $cat: nothing evaluated yet, not kept"; exit 0; fi
     "$0" keep "$cat"
     "$repo/.venv/bin/sb3-smc" report "$repo/docs/results/paper/$cat" --no-behaviour ;;
