@@ -222,6 +222,15 @@ def _heads(x: np.ndarray, latent: np.ndarray, uniform: float, deterministic: boo
 
 
 @njit(cache=True, inline="always")
+def _collection_outputs(n: int, hidden: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                                                       np.ndarray]:  # pragma: no cover
+    """A collection step's outputs for ``n`` rows (actions, values ``(n, 1)``, log-probabilities, h', c'; zeros,
+    which rows no policy acts in keep) and the rows' ``(4, hidden)`` scratch."""
+    return (np.zeros(n, dtype=np.int64), np.zeros((n, 1), dtype=np.float32), np.zeros(n, dtype=np.float32),
+            np.zeros((n, hidden), dtype=np.float32), np.zeros((n, hidden), dtype=np.float32), np.empty((4, hidden)))
+
+
+@njit(cache=True, inline="always")
 def _lstm_collection_row(x: np.ndarray, h: np.ndarray, c: np.ndarray, start: float, uniform: float,
                          deterministic: bool, exact: bool, w_ih: np.ndarray, w_hh: np.ndarray, bias: np.ndarray,
                          w_critic: np.ndarray, b_critic: np.ndarray, w_value: np.ndarray, b_value: float,
@@ -257,12 +266,7 @@ def lstm_collection_step(x: np.ndarray, h: np.ndarray, c: np.ndarray, starts: np
     n, hidden = h.shape
     if x.shape[0] != n or c.shape != h.shape or w_ih.shape[0] != x.shape[1] or w_hh.shape[0] != hidden:
         raise ValueError("observations or LSTM states of the wrong shape for this policy")
-    actions = np.empty(n, dtype=np.int64)
-    values = np.empty((n, 1), dtype=np.float32)
-    log_probs = np.empty(n, dtype=np.float32)
-    h_next = np.empty((n, hidden), dtype=np.float32)
-    c_next = np.empty((n, hidden), dtype=np.float32)
-    scratch = np.empty((4, hidden))
+    actions, values, log_probs, h_next, c_next, scratch = _collection_outputs(n, hidden)
     for k in range(n):
         actions[k], value, log_probs[k] = _lstm_collection_row(
             x[k], h[k], c[k], starts[k], uniforms[k], deterministic, exact, w_ih, w_hh, bias, w_critic, b_critic,
@@ -287,12 +291,7 @@ def lstm_collection_steps(x: np.ndarray, h: np.ndarray, c: np.ndarray, starts: n
             or bounds[0] != 0 or bounds[-1] != n or np.any(bounds[1:] < bounds[:-1]) \
             or (members.size and (members.min() < 0 or members.max() >= w_ih.shape[0])):
         raise ValueError("observations, LSTM states, bounds or members of the wrong shape for these policies")
-    actions = np.zeros(n, dtype=np.int64)
-    values = np.zeros((n, 1), dtype=np.float32)
-    log_probs = np.zeros(n, dtype=np.float32)
-    h_next = np.zeros((n, hidden), dtype=np.float32)
-    c_next = np.zeros((n, hidden), dtype=np.float32)
-    scratch = np.empty((4, hidden))
+    actions, values, log_probs, h_next, c_next, scratch = _collection_outputs(n, hidden)
     for m in members:
         for k in range(bounds[m], bounds[m + 1]):
             actions[k], value, log_probs[k] = _lstm_collection_row(

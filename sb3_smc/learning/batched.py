@@ -38,7 +38,7 @@ from __future__ import annotations
 import random
 import time
 from collections.abc import Callable, Iterator, Sequence
-from contextlib import contextmanager
+from contextlib import ExitStack, contextmanager
 from copy import deepcopy
 from dataclasses import dataclass, field
 from typing import Any, cast
@@ -54,7 +54,7 @@ from stable_baselines3.common.vec_env.base_vec_env import VecEnvIndices, VecEnvO
 from pixelworld_env.envs.vector import PixelWorldVectorEnv
 from sb3_smc.common import kernels
 from sb3_smc.common.recurrent import SequenceLstmPolicy
-from sb3_smc.common.recurrent.lean_update import lean_train
+from sb3_smc.common.recurrent.lean_update import use_lean_update
 from sb3_smc.core.hyperparameters import constructor_arguments
 from sb3_smc.envs.vec_env import FlatSMCVecEnv, FlatStep
 from sb3_smc.errors import SMCError
@@ -204,9 +204,10 @@ class _Job:
         self.model, self.initial = build_model(spec, venv, task, tensorboard_log=tensorboard_log)
         if not isinstance(self.model, RecurrentPPO):
             raise SMCError(f"SMC {spec.name!r}: a group trains recurrent learners, got {spec.algo}")
+        self._lean = ExitStack()  # the lean update's train and collection, from here to finish, as in train_smc
         if lean_update:
             check_lean_update(spec, self.model)
-            cast(SequenceLstmPolicy, self.model.policy).lean_collection = True  # as use_lean_update (finish removes it)
+            self._lean.enter_context(use_lean_update(self.model))
         self.lean_update = lean_update
         self.random = _RandomState()  # the streams as the model's seeding left them
         self.stats, self.callback = training_callbacks(spec, task, log_every=log_every, printer=printer,
@@ -376,14 +377,10 @@ class _Job:
         model._update_current_progress_remaining(model.num_timesteps, self.total_timesteps)
         model.dump_logs(self.iteration)
         with self.random.all_streams():
-            if self.lean_update:
-                lean_train(model)
-            else:
-                model.train()
+            model.train()  # lean_train under the lean update
 
     def finish(self) -> SMC:
-        if self.lean_update:
-            del self.model.policy.lean_collection
+        self._lean.close()
         self.callback.on_training_end()
         self.stats.on_training_end()
         return finished_smc(self.spec, (), self.model, self.stats, self.task, self.initial, self.seconds,
