@@ -136,3 +136,33 @@ def sb3_smc_cli(*argv: str) -> tuple[int, str, str]:
         except SystemExit as exit_:
             code = exit_.code
     return code, out.getvalue(), err.getvalue()
+
+
+def step_side_by_side(native, reference, steps: int, keys: tuple[str, ...]) -> tuple[int, list[dict]]:
+    """Step two SB3 vec envs (``native`` and its ``reference``, monitored) with the same random actions after the same
+    reset, asserting the same observations, rewards, dones, info ``keys``, terminal observations and monitor
+    episodes; returns how many episodes ended and the native infos of every step."""
+    assert native.observation_space == reference.observation_space
+    assert native.action_space == reference.action_space
+    np.testing.assert_array_equal(native.reset(), reference.reset())
+    rng = np.random.default_rng(0)
+    ended, seen = 0, []
+    for _ in range(steps):
+        actions = rng.integers(native.action_space.n, size=native.num_envs)
+        obs, rewards, dones, infos = native.step(actions)
+        obs_ref, rewards_ref, dones_ref, infos_ref = reference.step(actions)
+        np.testing.assert_array_equal(obs, obs_ref)
+        np.testing.assert_array_equal(rewards, rewards_ref)
+        np.testing.assert_array_equal(dones, dones_ref)
+        assert rewards.dtype == rewards_ref.dtype and obs.dtype == obs_ref.dtype
+        for info, info_ref in zip(infos, infos_ref, strict=True):
+            for key in keys:
+                assert info[key] == info_ref[key], key
+            assert ("terminal_observation" in info) == ("terminal_observation" in info_ref)
+            if "terminal_observation" in info:
+                np.testing.assert_array_equal(info["terminal_observation"], info_ref["terminal_observation"])
+                assert info["episode"]["r"] == info_ref["episode"]["r"]
+                assert info["episode"]["l"] == info_ref["episode"]["l"]
+        ended += int(dones.sum())
+        seen.extend(infos)
+    return ended, seen

@@ -45,7 +45,7 @@ PUBLIC = (
     *_modules("sb3_smc.core", "layout", "dag", "hyperparameters"),
     *_modules("sb3_smc.tasks", "task", "resolved_task"),
     *_modules("sb3_smc.smc", "smc", "policies", "numpy_actors"),
-    *_modules("sb3_smc.envs", "smc_step", "wrapper", "gymnasium_vec_env", "vec_env", "factory"),
+    *_modules("sb3_smc.envs", "smc_step", "wrapper", "gymnasium_vec_env", "vec_env", "hierarchical_vec_env", "factory"),
     *_modules("sb3_smc.learning", "bias", "features", "callbacks", "training", "batched", "evaluation"),
     *_modules("sb3_smc.records", "spec", "results", "base"),
     *_modules("sb3_smc.common", "kernels", "discounting", "threads"),

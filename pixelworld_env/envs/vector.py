@@ -21,7 +21,7 @@ positions.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any, Literal
+from typing import Any, Literal, NamedTuple
 
 import gymnasium as gym
 import numpy as np
@@ -53,6 +53,27 @@ RENDER_ENVS = ("all", "first")
 
 _COLOR_CODES = np.arange(NUM_COLORS, dtype=np.uint8)[:, None, None]
 _MASK64 = (1 << 64) - 1
+
+
+class SelfMoves(NamedTuple):
+    """The live arrays of a :class:`PixelWorldVectorEnv` whose worlds move only the self, for a compiled caller that
+    moves the self itself instead of calling ``step`` (``sb3_smc``'s :class:`~sb3_smc.envs.hierarchical_vec_env.
+    HierarchicalSMCVecEnv`): it resets through ``reset`` (with ``reset_mask``) and keeps each environment's cell
+    and goal truth here, as :meth:`PixelWorldVectorEnv.step` would."""
+
+    scene: np.ndarray  #: per environment: its scene (read only)
+    row: np.ndarray  #: per environment: the self's row (the caller writes it)
+    col: np.ndarray  #: per environment: the self's column (the caller writes it)
+    goal: np.ndarray  #: per environment: the goal's truth now, int8 (bring-about; the caller writes it)
+    goal_table: np.ndarray  #: per scene and self cell: the goal's truth, -1 not known yet (``goal_at`` tests it)
+    grid0: np.ndarray  #: per scene: the padded initial colours (int8), the self at its start
+    owner0: np.ndarray  #: per scene: the padded initial owners (int16), the self's index at its start
+    me: np.ndarray  #: per scene: the self's object index
+    self_color: np.ndarray  #: per scene: the self's colour
+    labels: np.ndarray  #: per scene: its label (classification; zeros otherwise)
+    kinds: np.ndarray  #: per action: 1 a move, 0 a signal
+    values: np.ndarray  #: per action: a signal's value (1 SIG1, 0 SIG0)
+    deltas: np.ndarray  #: per action: a move's row and column offsets
 
 
 class PixelWorldVectorEnv(VectorEnv):
@@ -240,6 +261,27 @@ class PixelWorldVectorEnv(VectorEnv):
                 if not self._ready[s]:
                     self._prepare_scene(int(s))
 
+    def goal_at(self, scene: int, row: int, col: int) -> bool:
+        """Whether the concept holds with the self at ``(row, col)`` of ``scene`` in a world where only the self
+        moves, tested once per scene and cell into :attr:`SelfMoves.goal_table` (as the single env tests it)."""
+        return self._self_goal(scene, row, col)
+
+    @property
+    def self_only(self) -> bool:
+        """Whether only the self moves in every scene (``World.self_only``: all AAAI-18 data)."""
+        return not self._push_scene.any()
+
+    def self_moves(self) -> SelfMoves:
+        """The live arrays through which a compiled caller moves the self itself (:class:`SelfMoves`);
+        ``PixelWorldError`` where objects besides the self move in some scene (``World.self_only`` false)."""
+        if not self.self_only:
+            pushing = np.flatnonzero(self._push_scene)[:3].tolist()
+            raise PixelWorldError(f"objects besides the self move in scenes {pushing} (of {len(self.scenes)}): only "
+                                  "step() moves them")
+        return SelfMoves(self._scene, self._row, self._col, self._goal, self._goal_table, self._pushing[0],
+                         self._owner0, self._me, self._self_color, self._labels, self._kinds, self._values,
+                         self._deltas)
+
     # ------------------------------------------------------------------------------------------ pushing worlds
 
     def _push_goal(self, s: int, positions: np.ndarray) -> bool:
@@ -270,7 +312,8 @@ class PixelWorldVectorEnv(VectorEnv):
 
     # ------------------------------------------------------------------------------------------ observations, infos
 
-    def _observe(self) -> np.ndarray:
+    def observe(self) -> np.ndarray:
+        """The observations of every environment now (for a caller that moves the self itself: :meth:`self_moves`)."""
         n, observation = self.num_envs, self.observation
         if observation in ("full", "image"):
             out = np.empty((n, self.scenes[0].height, self.scenes[0].width), dtype=np.uint8)
@@ -337,7 +380,7 @@ class PixelWorldVectorEnv(VectorEnv):
         self._truncated[mask] = False
         self._started = True
         nothing = np.zeros(n, dtype=np.bool_)
-        return self._observe(), self._infos(mask, nothing, nothing, mask)
+        return self.observe(), self._infos(mask, nothing, nothing, mask)
 
     def _reset_mask(self, mask: Any) -> np.ndarray:
         if mask is None:
@@ -388,7 +431,7 @@ class PixelWorldVectorEnv(VectorEnv):
         if self._bring_about and self._goal_pending.any():
             self._goals_after_moves()
         info = self._infos(self._everyone, self._success, self._terminated, self._was_reset)
-        return (self._observe(), self._rewards.copy(), self._terminated.copy(), self._truncated.copy(), info)
+        return (self.observe(), self._rewards.copy(), self._terminated.copy(), self._truncated.copy(), info)
 
     def _state(self, k: int) -> np.ndarray:
         """Environment ``k``'s state array (colour codes)."""

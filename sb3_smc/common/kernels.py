@@ -29,7 +29,7 @@ from numba import njit
 from pixelworld_env.core.kernels import self_target_free
 
 __all__ = ["fast_tanh", "gru_cell", "gru_collection_step", "gru_linear_step", "leaf_call", "lstm_cell",
-           "lstm_collection_step", "lstm_collection_steps", "lstm_linear_step", "sample_index"]
+           "lstm_collection_step", "lstm_collection_steps", "lstm_linear_step", "sample_index", "smc_steps"]
 
 
 @njit(cache=True)
@@ -337,7 +337,9 @@ known yet (fill it in ``goal_cells`` and call again: it resumes); a policy gave 
 finite sum."""
 
 # the entries of leaf_call's ``counters``
-ROW, COL, DECISIONS_LEFT, BUDGET, MOVES_MADE, PREVIOUS, GOAL, RESUME = range(8)
+ROW, COL, DECISIONS_LEFT, BUDGET, MOVES_MADE, PREVIOUS, GOAL, RESUME, DRAWN = range(9)
+N_COUNTERS = 9
+"""The length of leaf_call's ``counters``."""
 
 
 @njit(cache=True)
@@ -353,7 +355,7 @@ def leaf_call(grid: np.ndarray, owner: np.ndarray, me: int, self_color: int, goa
               bring_about: bool, potential: float, n_colors: int, kinds: np.ndarray, values: np.ndarray,
               deltas: np.ndarray, counters: np.ndarray, totals: np.ndarray, gru: bool, h: np.ndarray, c: np.ndarray,
               w_ih: np.ndarray, w_hh: np.ndarray, b_first: np.ndarray, b_second: np.ndarray, w_out: np.ndarray,
-              b_out: np.ndarray, rng: np.random.Generator) -> int:  # pragma: no cover
+              b_out: np.ndarray, rng: np.random.Generator, uniforms: np.ndarray) -> int:  # pragma: no cover
     """One call of a leaf SMC (no children; its actions are signals and moves) with a compiled actor, made entirely
     here, in a world where only the one-pixel self moves: the loop of
     :meth:`sb3_smc.HierarchicalSMCWrapper.call_coroutine` with :meth:`pixelworld_env.World.move`'s self-only move
@@ -367,7 +369,9 @@ def leaf_call(grid: np.ndarray, owner: np.ndarray, me: int, self_color: int, goa
     ``values`` (a signal's outcome) and ``deltas`` (a move's row/column offsets). ``counters`` (int64, see
     ``ROW`` ...) and ``totals`` (``[reward, outcome]``) carry the call's state in and out, ``h`` / ``c`` the
     recurrent state (``c`` unused for a GRU, whose biases are ``b_first`` / ``b_second``; an LSTM's bias is
-    ``b_first``). Returns ``LEAF_DONE``, ``LEAF_NEEDS_GOAL`` or ``LEAF_BAD_PROBABILITIES``."""
+    ``b_first``). Each decision takes one uniform: ``rng.random()`` when ``uniforms`` is empty, else
+    ``uniforms[counters[DRAWN]]`` (draws made ahead from the same generator: the same numbers; ``uniforms`` must
+    hold one per decision left). Returns ``LEAF_DONE``, ``LEAF_NEEDS_GOAL`` or ``LEAF_BAD_PROBABILITIES``."""
     n_actions = kinds.shape[0]
     hidden = h.shape[0]
     x = np.zeros(w_ih.shape[0])
@@ -396,7 +400,9 @@ def leaf_call(grid: np.ndarray, owner: np.ndarray, me: int, self_color: int, goa
             c[:] = c_next
         h[:] = h_next
         _linear_softmax(h_next, w_out, b_out, probabilities)
-        action = sample_index(probabilities, rng.random())
+        u = rng.random() if uniforms.shape[0] == 0 else uniforms[counters[DRAWN]]
+        counters[DRAWN] += 1
+        action = sample_index(probabilities, u)
         if action < 0:
             return LEAF_BAD_PROBABILITIES
         if kinds[action] == 0:
@@ -423,3 +429,110 @@ def leaf_call(grid: np.ndarray, owner: np.ndarray, me: int, self_color: int, goa
                 return LEAF_NEEDS_GOAL
             _shape(goal, counters, totals, potential)
     return LEAF_DONE
+
+
+SIGNAL, MOVE, CALL = 0, 1, 2
+"""The kinds of a top-level action in :func:`smc_steps`."""
+STARTING, IN_CALL, IN_MOVE, STEPPED = 0, 1, 2, 3
+"""An environment's progress through a step of :func:`smc_steps` (``phase``): not begun; stopped inside a call or
+after a top-level move for a goal truth not known yet (the step resumes there); done."""
+
+
+@njit(cache=True)
+def smc_steps(actions: np.ndarray, kinds: np.ndarray, values: np.ndarray, deltas: np.ndarray, targets: np.ndarray,
+              caps: np.ndarray, bring_about: bool, signal_reward: float, potential: float, goal_reward: float,
+              n_colors: int, me: np.ndarray, self_color: np.ndarray, labels: np.ndarray, goal_table: np.ndarray,
+              child_actions: np.ndarray, child_kinds: np.ndarray, child_values: np.ndarray,
+              child_deltas: np.ndarray, gru: bool,
+              w_ih: np.ndarray, w_hh: np.ndarray, b_first: np.ndarray, b_second: np.ndarray, w_out: np.ndarray,
+              b_out: np.ndarray, scene: np.ndarray, row: np.ndarray, col: np.ndarray, goal: np.ndarray,
+              grids: np.ndarray, owners: np.ndarray, phase: np.ndarray, counters: np.ndarray, totals: np.ndarray,
+              h: np.ndarray, c: np.ndarray, uniforms: np.ndarray, used: np.ndarray, rng: np.random.Generator,
+              rewards: np.ndarray, terminated: np.ndarray, moves: np.ndarray) -> int:  # pragma: no cover
+    """One step of an SMC whose children are compiled leaves, in every environment of a PixelWorld where only the
+    self moves: :meth:`sb3_smc.HierarchicalSMCWrapper.step`'s action (a signal, a move, or a whole call of a child
+    by :func:`leaf_call`) with :class:`~pixelworld_env.PixelWorldEnv`'s rewards, the same moves and draws.
+
+    Per top-level action ``kinds`` (:data:`SIGNAL`, :data:`MOVE`, :data:`CALL`), ``values`` (a signal's value),
+    ``deltas`` (a move's offsets), ``targets`` (a call's child); ``caps`` per environment its call's decisions and
+    moves. Per scene ``me``, ``self_color``, ``labels`` and ``goal_table`` (the goal's truth per self cell, -1 not
+    known yet). The children's plans and weights stacked (one row per child, ``child_actions`` its actions; the rows
+    padded to the most actions; ``b_second`` empty rows for an LSTM).
+    Per environment its live state (``scene``, ``row``, ``col``, ``goal``, its padded ``grids`` / ``owners``), a
+    call's ``counters`` / ``totals`` / ``h`` / ``c`` and its ``uniforms`` drawn ahead, ``used`` of them. Writes
+    ``rewards``, ``terminated`` and ``moves`` (a call's outcome stays in ``totals[k, 1]``).
+
+    Environments whose ``phase`` is :data:`STEPPED` are skipped. Returns -1 when every environment has stepped;
+    ``k >= 0`` when environment ``k`` moved the self into a cell of its scene whose goal truth is not known yet
+    (fill it in ``goal_table`` and call again: it resumes); ``-2 - k`` when a child's policy gave probabilities
+    without a positive finite sum in environment ``k``."""
+    n_most = child_kinds.shape[1]
+    for k in range(actions.shape[0]):
+        if phase[k] == STEPPED:
+            continue
+        s = scene[k]
+        a = actions[k]
+        if kinds[a] == CALL:
+            child = targets[a]
+            na = child_actions[child]
+            if phase[k] == STARTING:
+                counters[k, :] = 0
+                counters[k, ROW] = row[k]
+                counters[k, COL] = col[k]
+                counters[k, DECISIONS_LEFT] = caps[k]
+                counters[k, BUDGET] = caps[k]
+                counters[k, PREVIOUS] = -1
+                counters[k, GOAL] = goal[k]
+                counters[k, DRAWN] = used[k]
+                totals[k, :] = 0.0
+                h[k, :] = 0.0
+                c[k, :] = 0.0
+            status = leaf_call(grids[k], owners[k], me[s], self_color[s], goal_table[s], bring_about, potential,
+                               n_colors, child_kinds[child, :na], child_values[child, :na], child_deltas[child, :na],
+                               counters[k], totals[k], gru, h[k], c[k], w_ih[child, :w_ih.shape[1] - n_most + na],
+                               w_hh[child], b_first[child], b_second[child], w_out[child, :, :na], b_out[child, :na],
+                               rng, uniforms[k])
+            row[k] = counters[k, ROW]
+            col[k] = counters[k, COL]
+            goal[k] = counters[k, GOAL]
+            used[k] = counters[k, DRAWN]
+            if status == LEAF_NEEDS_GOAL:
+                phase[k] = IN_CALL
+                return k
+            if status == LEAF_BAD_PROBABILITIES:
+                return -2 - k
+            rewards[k] = totals[k, 0]
+            moves[k] = counters[k, MOVES_MADE]
+            terminated[k] = False
+        elif kinds[a] == MOVE:
+            if phase[k] == STARTING:
+                rewards[k] = 0.0
+                moves[k] = 1
+                terminated[k] = False
+                r, q = row[k], col[k]
+                r_next, q_next = r + deltas[a, 0], q + deltas[a, 1]
+                if self_target_free(owners[k], me[s], r_next, q_next):  # the self's move (World.move, self only)
+                    grids[k, r + 1, q + 1] = 0
+                    owners[k, r + 1, q + 1] = -1
+                    grids[k, r_next + 1, q_next + 1] = self_color[s]
+                    owners[k, r_next + 1, q_next + 1] = me[s]
+                    row[k] = r_next
+                    col[k] = q_next
+                    if bring_about:
+                        phase[k] = IN_MOVE
+                if phase[k] == IN_MOVE and goal_table[s, row[k], col[k]] < 0:
+                    return k
+            if phase[k] == IN_MOVE:
+                g = goal_table[s, row[k], col[k]]
+                if g != goal[k]:
+                    goal[k] = g
+                    rewards[k] = potential if g == 1 else -potential
+        else:  # a signal ends the episode
+            moves[k] = 0
+            terminated[k] = True
+            if bring_about:
+                rewards[k] = goal_reward - potential if goal[k] == 1 else 0.0
+            else:
+                rewards[k] = signal_reward if values[a] == labels[s] else -signal_reward
+        phase[k] = STEPPED
+    return -1

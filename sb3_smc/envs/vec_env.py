@@ -26,11 +26,11 @@ from pixelworld_env.envs.vector import PixelWorldVectorEnv
 from sb3_smc.core.layout import HAND_SIZE, MOVES, smc_action_names
 from sb3_smc.envs import smc_step
 from sb3_smc.envs.gymnasium_vec_env import GymnasiumVecEnv
-from sb3_smc.envs.smc_step import IS_SUCCESS, NO_ACTION, PRIMITIVE_STEPS, SMCObservation
+from sb3_smc.envs.smc_step import IS_SUCCESS, NO_ACTION, NO_OUTCOME, PRIMITIVE_STEPS, SMCObservation
 from sb3_smc.envs.wrapper import HierarchicalSMCWrapper
 from sb3_smc.errors import SMCError
 
-__all__ = ["FlatSMCVecEnv", "FlatStep", "SMCVecEnv", "answer_in_batches"]
+__all__ = ["FlatSMCVecEnv", "FlatStep", "NativeSMCVecEnv", "SMCVecEnv", "answer_in_batches"]
 
 
 def answer_in_batches(requests: dict[int, tuple[Any, np.ndarray, Any]]) -> dict[int, tuple[np.ndarray, Any]]:
@@ -107,7 +107,59 @@ class SMCVecEnv(DummyVecEnv):
         return self._obs_from_buf(), np.copy(self.buf_rews), np.copy(self.buf_dones), [dict(i) for i in self.buf_infos]
 
 
-class FlatSMCVecEnv(GymnasiumVecEnv):
+class NativeSMCVecEnv(GymnasiumVecEnv):
+    """What the SMC environments over PixelWorld's native vector env (``observation="hand"``) share: the SMC's
+    observation (:class:`~sb3_smc.envs.smc_step.SMCObservation`: the window, ``n_outcomes`` outcomes, the one-hot
+    previous action), spaces, each environment's previous action and elapsed steps, a reset without options, and
+    integer actions. :class:`FlatSMCVecEnv` and :class:`~sb3_smc.envs.hierarchical_vec_env.HierarchicalSMCVecEnv`
+    step them."""
+
+    def __init__(self, env: PixelWorldVectorEnv, action_names: Sequence[str], n_outcomes: int) -> None:
+        if env.observation != "hand":
+            raise SMCError(f"{type(self).__name__} builds SMC observations from the one-hot 3 x 3 window: the vector "
+                           f"env needs observation='hand', got {env.observation!r}")
+        super().__init__(env)
+        self.vector_env = env
+        self.kind: str = env.kind
+        self.action_names = tuple(action_names)
+        self._parts = SMCObservation(HAND_SIZE, n_outcomes, len(self.action_names))
+        self.observation_space = self._parts.space()
+        self.action_space = spaces.Discrete(len(self.action_names))
+        self._primitive_steps = np.array(smc_step.primitive_steps(self.action_names, MOVES), dtype=np.int64)
+        self._outcomes = np.full((env.num_envs, n_outcomes), NO_OUTCOME, dtype=np.float32)
+        self._previous = np.full(env.num_envs, NO_ACTION, dtype=np.int64)
+        self._elapsed = np.zeros(env.num_envs, dtype=np.int64)
+        self._max_steps: int = env.max_steps
+
+    def _observation(self, hand: np.ndarray) -> np.ndarray:
+        parts = self._parts
+        obs = parts.blank(self.num_envs)
+        obs[:, parts.sensor] = hand
+        return parts.write(obs, self._outcomes, self._previous)
+
+    def _reset_all(self) -> np.ndarray:
+        """Reset every environment (with the seeds given, if any; options are refused): their windows."""
+        if any(self._options):
+            raise SMCError(f"{type(self).__name__} takes no reset options, got {self._options}")
+        seeds = None if all(s is None for s in self._seeds) else list(self._seeds)
+        hand, _ = self.env.reset(seed=cast("int | None", seeds))  # a list of seeds: one per environment
+        self.reset_infos = [{} for _ in range(self.num_envs)]
+        self._outcomes[:] = NO_OUTCOME
+        self._previous[:] = NO_ACTION
+        self._elapsed[:] = 0
+        return hand
+
+    def step_async(self, actions: np.ndarray) -> None:
+        self._actions = np.asarray(actions, dtype=np.int64).reshape(self.num_envs)
+
+    def _taken_actions(self) -> np.ndarray:
+        """The actions of :meth:`step_async`, taken (step once)."""
+        assert self._actions is not None, "step_async first"
+        actions, self._actions = self._actions, None
+        return actions
+
+
+class FlatSMCVecEnv(NativeSMCVecEnv):
     """SB3's ``VecEnv`` of a flat SMC (one without children) over PixelWorld's native vector env
     (:class:`pixelworld_env.envs.vector.PixelWorldVectorEnv`, ``observation="hand"``): all environments stepped in one
     compiled call.
@@ -124,46 +176,17 @@ class FlatSMCVecEnv(GymnasiumVecEnv):
     """
 
     def __init__(self, env: PixelWorldVectorEnv) -> None:
-        if env.observation != "hand":
-            raise SMCError(f"FlatSMCVecEnv builds SMC observations from the one-hot 3 x 3 window: the vector env "
-                           f"needs observation='hand', got {env.observation!r}")
-        super().__init__(env)
-        self.kind: str = env.kind
-        self.action_names = smc_action_names(env.kind)
-        n_actions = len(self.action_names)
-        self._parts = SMCObservation(HAND_SIZE, 0, n_actions)
-        self.observation_space = self._parts.space()
-        self.action_space = spaces.Discrete(n_actions)
+        super().__init__(env, smc_action_names(env.kind), 0)
         self._to_base = np.array([env.action_names.index(name) for name in self.action_names], dtype=np.int64)
-        self._primitive_steps = np.array(smc_step.primitive_steps(self.action_names, MOVES), dtype=np.int64)
         self._step_cost = smc_step.step_cost(None, False)  # every action of a flat SMC is a signal or a move
-        self._previous = np.full(env.num_envs, NO_ACTION, dtype=np.int64)
-        self._elapsed = np.zeros(env.num_envs, dtype=np.int64)
-        self._max_steps: int = env.max_steps
-
-    def _observation(self, hand: np.ndarray) -> np.ndarray:
-        parts = self._parts
-        obs = parts.blank(self.num_envs)
-        obs[:, parts.sensor] = hand
-        return parts.write(obs, None, self._previous)
 
     def reset(self) -> VecEnvObs:
-        seeds = None if all(s is None for s in self._seeds) else list(self._seeds)
-        if any(self._options):
-            raise SMCError(f"FlatSMCVecEnv takes no reset options, got {self._options}")
-        hand, _ = self.env.reset(seed=cast("int | None", seeds))  # a list of seeds: one per environment
-        self.reset_infos = [{} for _ in range(self.num_envs)]
+        hand = self._reset_all()
         self._reset_seeds()
-        self._previous[:] = NO_ACTION
-        self._elapsed[:] = 0
         return self._observation(hand)
 
-    def step_async(self, actions: np.ndarray) -> None:
-        self._actions = np.asarray(actions, dtype=np.int64).reshape(self.num_envs)
-
     def step_wait(self) -> VecEnvStepReturn:
-        assert self._actions is not None, "step_async first"
-        actions, self._actions = self._actions, None
+        actions = self._taken_actions()
         step = self.step_arrays(actions)
         return step.obs, step.rewards, step.dones, self.step_infos(step, actions)
 

@@ -4,7 +4,7 @@ Gymnasium environment (:mod:`sb3_smc.tasks.task`) (docs/design.md, "Hierarchy: S
 from __future__ import annotations
 
 from collections.abc import Generator, Iterable, Sequence
-from typing import Any, Protocol, TypeVar, cast
+from typing import Any, NamedTuple, Protocol, TypeVar, cast
 
 import gymnasium as gym
 import numpy as np
@@ -33,6 +33,7 @@ from sb3_smc.smc.smc import SMC, StepPolicy
 from sb3_smc.tasks.task import layout_of, returns_bounded, task_layer
 
 _SIGNAL, _MOVE, _CALL = 0, 1, 2
+_NO_UNIFORMS = np.empty(0)  # leaf_call draws from the generator
 
 PolicyRequest = tuple[StepPolicy, np.ndarray, Any]
 """What a wrapper coroutine yields when a policy must decide: ``(policy, observation, state)``."""
@@ -45,6 +46,35 @@ class _CompiledPolicy(StepPolicy, Protocol):
     observation_size: int
     n_actions: int
     hidden_size: int
+
+
+class LeafPlan(NamedTuple):
+    """The constant arguments of a compiled call of a leaf SMC (:func:`sb3_smc.common.kernels.leaf_call`)."""
+
+    kinds: np.ndarray  #: per action: 1 a move, 0 a signal
+    values: np.ndarray  #: per action: a signal's outcome (0 for a move)
+    deltas: np.ndarray  #: per action: a move's row and column offsets (0 for a signal)
+    gru: bool  #: the policy is a GRU (else an LSTM)
+    hidden: int  #: the recurrent state's size
+    weights: tuple[np.ndarray, ...]  #: the compiled step's weights (``compiled_weights``)
+
+
+def leaf_plan(smc: SMC, sensor_size: int, primitives: Sequence[str]) -> LeafPlan | None:
+    """How a call of ``smc`` runs compiled on a task with ``sensor_size`` sensor values and the moves
+    ``primitives``; None unless ``smc`` is a leaf (no children; its actions are signals and those moves) whose policy
+    has a compiled step taking exactly its observation and actions."""
+    policy = cast(_CompiledPolicy, smc.policy)  # a policy with compiled weights has the sizes read below
+    weights = getattr(policy, "compiled_weights", None)
+    names = smc.action_names
+    n_actions = len(names)
+    if (weights is None or smc.children or any(n not in SIGNAL_OUTCOMES and n not in primitives for n in names)
+            or policy.observation_size != SMCObservation(sensor_size, 0, n_actions).size
+            or policy.n_actions != n_actions):
+        return None
+    return LeafPlan(np.array([int(name in primitives) for name in names], dtype=np.int64),
+                    np.array([SIGNAL_OUTCOMES.get(name, 0.0) for name in names], dtype=np.float64),
+                    np.array([MOVE_OFFSETS.get(name, (0, 0)) for name in names], dtype=np.int64).reshape(n_actions, 2),
+                    isinstance(policy, NumpyGRUPolicy), policy.hidden_size, weights)
 
 
 def _only_order_checks(env: gym.Env, base: gym.Env) -> bool:
@@ -140,7 +170,7 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         self._plan = self._action_plan(self.action_names, self.action_names.index)
         self._primitive_steps = smc_step.primitive_steps(self.action_names, self.layout.primitives)
         self._child_plans: dict[int, list[tuple[int, Any]]] = {}
-        self._leaf_plans: dict[int, tuple[SMC, Any, tuple[Any, ...] | None]] = {}
+        self._leaf_plans: dict[int, tuple[SMC, Any, LeafPlan | None]] = {}
         self._outcomes = np.full(len(self.smcs), NO_OUTCOME, dtype=np.float32)
         self._previous_action = NO_ACTION
         # Moves and signals may skip the layers between this wrapper and the base env when those only check the
@@ -187,29 +217,13 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
             plan = self._child_plans[id(smc)] = self._action_plan(smc.action_names, None)
         return plan
 
-    def _leaf_plan(self, smc: SMC) -> tuple[Any, ...] | None:
-        """The constant arguments of a compiled call of ``smc`` (:func:`sb3_smc.common.kernels.leaf_call`): its
-        action kinds, outcomes and move offsets, whether its policy is a GRU, and its weights; None unless ``smc`` is a
-        leaf (no children) whose policy has a compiled step taking exactly its observation and actions."""
+    def _leaf_plan(self, smc: SMC) -> LeafPlan | None:
+        """:func:`leaf_plan` of ``smc`` on this task, cached while ``smc`` keeps its policy."""
         key = id(smc)
         cached = self._leaf_plans.get(key)
         if cached is None or cached[0] is not smc or cached[1] is not smc.policy:  # new, or its policy replaced
-            # a policy with compiled weights (sb3_smc.smc.policies' recurrent actors) has the sizes read below
-            policy = cast(_CompiledPolicy, smc.policy)
-            weights = getattr(policy, "compiled_weights", None)
-            n_actions = len(smc.action_names)
-            plan = self._plan_of(smc)
-            usable = (weights is not None and not smc.children and all(kind != _CALL for kind, _ in plan)
-                      and policy.observation_size == self._observation_of(0, n_actions).size
-                      and policy.n_actions == n_actions)
-            leaf = None
-            if usable:
-                effects = [MOVE_OFFSETS.get(name, (0, 0)) for name in smc.action_names]
-                leaf = (np.array([int(kind == _MOVE) for kind, _ in plan], dtype=np.int64),
-                        np.array([value if kind == _SIGNAL else 0.0 for kind, value in plan], dtype=np.float64),
-                        np.array(effects, dtype=np.int64).reshape(n_actions, 2),
-                        isinstance(policy, NumpyGRUPolicy), policy.hidden_size, weights)
-            cached = self._leaf_plans[key] = (smc, policy, leaf)  # the SMC kept: its id is not reused meanwhile
+            leaf = leaf_plan(smc, self.layout.sensor_size, self.layout.primitives)
+            cached = self._leaf_plans[key] = (smc, smc.policy, leaf)  # the SMC kept: its id is not reused meanwhile
         return cached[2]
 
     def _compilable(self) -> bool:
@@ -217,7 +231,7 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         world = cast(PixelWorldEnv, self.base).world
         return world.self_only and not world.stale
 
-    def _compiled_call(self, smc: SMC, leaf: tuple[Any, ...], cap: int, budget: list[int]
+    def _compiled_call(self, smc: SMC, leaf: LeafPlan, cap: int, budget: list[int]
                        ) -> tuple[float, int, float]:
         """One call of the leaf ``smc`` made by the compiled loop: the same moves, draws and result as the loop of
         :meth:`call_coroutine`."""
@@ -226,7 +240,7 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         base = cast(PixelWorldEnv, self.base)
         world = base.world
         row, col = world.positions[world.self_index]
-        counters = np.array([row, col, cap, budget[0], 0, -1, int(base.goal), 0], dtype=np.int64)
+        counters = np.array([row, col, cap, budget[0], 0, -1, int(base.goal), 0, 0], dtype=np.int64)
         totals = np.zeros(2)
         h, c = np.zeros(hidden), np.zeros(hidden)
         cells = base.goal_cells()
@@ -236,7 +250,7 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
             while True:
                 status = kernels.leaf_call(world.grid, world.owner, world.self_index, color, cells, bring_about,
                                            GOAL_POTENTIAL, NUM_COLORS, kinds, values, deltas, counters, totals, gru,
-                                           h, c, *weights, self._rng)
+                                           h, c, *weights, self._rng, _NO_UNIFORMS)
                 if status != kernels.LEAF_NEEDS_GOAL:
                     break
                 base.goal_at((int(counters[kernels.ROW]), int(counters[kernels.COL])))

@@ -53,6 +53,7 @@ from sb3_smc.core.hyperparameters import (
 )
 from sb3_smc.core.layout import PIXELWORLD_LAYOUT, Layout
 from sb3_smc.envs.factory import make_smc_env
+from sb3_smc.envs.hierarchical_vec_env import HierarchicalSMCVecEnv, hosts
 from sb3_smc.envs.vec_env import FlatSMCVecEnv, SMCVecEnv
 from sb3_smc.envs.wrapper import HierarchicalSMCWrapper
 from sb3_smc.errors import SMCError, SMCKeyError, SMCTypeError
@@ -144,10 +145,12 @@ def make_vec_env(spec: TrainingSpec, children: Sequence[SMC] = (), *, native: bo
     """``n_envs`` copies of the SMC's environment in a seeded, monitored SB3 ``VecEnv`` (``VecFrameStack`` on top
     when ``spec.frame_stack > 1``).
 
-    A flat SMC (no children) on a task PixelWorld's native vector env hosts
-    (:attr:`~sb3_smc.tasks.resolved_task.ResolvedTask.native_vector`) trains in :class:`FlatSMCVecEnv` over it (one
-    compiled call steps every environment); any other SMC in :class:`~sb3_smc.envs.vec_env.SMCVecEnv` over
-    :func:`~sb3_smc.envs.factory.make_smc_env` (SMC calls in lockstep). Both give the same transitions with the same
+    On a task PixelWorld's native vector env hosts (:attr:`~sb3_smc.tasks.resolved_task.ResolvedTask.native_vector`),
+    a flat SMC (no children) trains in :class:`FlatSMCVecEnv` over it and an SMC whose children are compiled leaves
+    (:func:`~sb3_smc.envs.hierarchical_vec_env.hosts`; worlds where only the self moves) in
+    :class:`~sb3_smc.envs.hierarchical_vec_env.HierarchicalSMCVecEnv`: one compiled call steps every environment,
+    the children's calls included. Any other SMC trains in :class:`~sb3_smc.envs.vec_env.SMCVecEnv` over
+    :func:`~sb3_smc.envs.factory.make_smc_env` (SMC calls in lockstep). They give the same transitions with the same
     seeds (tested).
 
     :param spec: the SMC's spec.
@@ -161,12 +164,23 @@ def make_vec_env(spec: TrainingSpec, children: Sequence[SMC] = (), *, native: bo
 
     if task is None:
         task = resolve_task(spec.task, smc=spec.name)
-    hosted = task.native_vector and not children and not spec.children
-    if native and not hosted:
-        raise SMCError(f"SMC {spec.name!r}: the native vector env hosts flat SMCs on PixelWorld ids only")
+    flat = not children and not spec.children
+    hosted = task.native_vector and (flat or hosts(children))
+    vector = task.make_vector_env(spec.budget.n_envs, spec.wrapper.max_steps) if hosted and native is not False \
+        else None
+    if vector is not None and not flat and not vector.self_only:
+        vector = None  # objects besides the self move: the children's calls run in the wrapper
+    if native and vector is None:
+        raise SMCError(f"SMC {spec.name!r}: the native vector env hosts SMCs on PixelWorld ids only, flat ones or "
+                       "those whose children are compiled leaves (on worlds where only the self moves)")
     base: VecEnv
-    if hosted and native is not False:
-        base = FlatSMCVecEnv(task.make_vector_env(spec.budget.n_envs, spec.wrapper.max_steps))
+    if vector is not None and flat:
+        base = FlatSMCVecEnv(vector)
+    elif vector is not None:
+        settings = spec.wrapper
+        base = HierarchicalSMCVecEnv(vector, children, include_primitives=settings.include_primitives,
+                                     count_primitive_steps=settings.count_primitive_steps,
+                                     call_step_cap=settings.call_step_cap)
     else:
         envs = [make_smc_env(spec, children, task=task) for _ in range(spec.budget.n_envs)]
         base = SMCVecEnv([_returning(e) for e in envs])
@@ -360,7 +374,7 @@ def task_of(spec: TrainingSpec, under: VecEnv) -> TaskFacts:
     """The :class:`TaskFacts` of the environments ``spec`` trains in (``under``: the :class:`FlatSMCVecEnv` or
     :class:`SMCVecEnv` under the monitor), read from them; ``SMCError`` where they are not the task the spec (its
     task resolved, :func:`resolved_spec`) says."""
-    if isinstance(under, FlatSMCVecEnv):  # PixelWorld's compiled vector env: its own rewards
+    if isinstance(under, FlatSMCVecEnv | HierarchicalSMCVecEnv):  # PixelWorld's compiled vector env: its own rewards
         kind, action_names, layout, bounded = under.kind, under.action_names, PIXELWORLD_LAYOUT, True
     else:
         wrappers = [cast(HierarchicalSMCWrapper, env) for env in cast(SMCVecEnv, under).envs]
