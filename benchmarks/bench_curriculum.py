@@ -16,11 +16,12 @@ lower-level nodes and the flat baseline of every target (smc-base), smc-curr, sm
 5 seeds; 400,000 steps per job) and prints the estimated wall time with 1 and 2 workers (jobs packed perfectly, a
 second worker on the second core).
 
-With ``--lean`` every job trains with the lean update (``lean_update=True``, the run option ``--lean-update``) and
-the flat jobs are measured as the trainer runs them, five seeds in one group (``run_group``; decisions per second
-over the five).
+Every kind is measured as the trainer runs it: ``--group`` seeds (default 5, the trainer's ``--group-size``) in one
+group (``run_group``; decisions per second over the group; flat and level-2 nodes over flat ones group), or one job
+alone with ``--group 1``. With ``--lean`` every job trains with the lean update (``lean_update=True``, the run
+option ``--lean-update``).
 
-Run: ``python benchmarks/bench_curriculum.py [--updates N] [--lean]``.
+Run: ``python benchmarks/bench_curriculum.py [--updates N] [--group K] [--lean]``.
 """
 
 from __future__ import annotations
@@ -47,8 +48,8 @@ TIMESTEPS = 400_000
 
 
 def measure(library: Path, children: tuple[str, ...], updates: int, lean: bool = False, group: int = 1) -> float:
-    """Decisions per second of one job with ``children`` (names in ``library``); ``group`` seeds of a flat job
-    trained together (``run_group``: the decisions of all over the group's time)."""
+    """Decisions per second of a job with ``children`` (names in ``library``); ``group`` seeds of it trained
+    together (``run_group``: the decisions of all over the group's time)."""
     jobs = [Job(spec=TrainingSpec(name=f"bench@{seed}", task=TaskSpec(f"PW-{TARGET}-v0").resolved(), seed=seed,
                                   children=children, budget=Budget(2000 * updates)),
                 library=str(library), lean_update=lean) for seed in range(group)]
@@ -76,7 +77,8 @@ def protocol_jobs() -> dict[str, int]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--updates", type=int, default=10, help="updates (2,000 steps) per measured job")
-    parser.add_argument("--lean", action="store_true", help="the lean update, and the flat jobs in groups of five")
+    parser.add_argument("--group", type=int, default=SEEDS, help="seeds of a node trained together (1: alone)")
+    parser.add_argument("--lean", action="store_true", help="the lean update")
     args = parser.parse_args()
     torch.set_num_threads(1)
     canonical = [dataset for _, dataset in catalog.canonical_smc_lists()["canonical_containment_curriculum"]]
@@ -92,13 +94,13 @@ def main() -> None:
         path = library.save(Path(tmp) / "library")
         curr_children = tuple(job_name(n, s) for n in canonical[:4] for s in (0, 1))
         canon_children = tuple(job_name(n, s) for n in canonical for s in (0, 1))
-        rates = {"flat": measure(path, (), args.updates, args.lean, SEEDS if args.lean else 1),
-                 "curr": measure(path, curr_children, args.updates, args.lean),
-                 "canon": measure(path, canon_children, args.updates, args.lean)}
+        rates = {"flat": measure(path, (), args.updates, args.lean, args.group),
+                 "curr": measure(path, curr_children, args.updates, args.lean, args.group),
+                 "canon": measure(path, canon_children, args.updates, args.lean, args.group)}
     jobs = protocol_jobs()
     seconds = {kind: TIMESTEPS / rates[kind] for kind in rates}
     print(f"\nmeasured: {args.updates} updates of 2,000 steps per job, 1 torch thread, torch {torch.__version__}"
-          f"{', the lean update, flat jobs in groups of 5' if args.lean else ''}; "
+          f"{', the lean update' if args.lean else ''}, seeds in groups of {args.group}; "
           f"smc-curr entries use {statistics.median(curr_sizes):.0f} nodes (median; {min(curr_sizes)}-"
           f"{max(curr_sizes)})\n")
     print("| job | decisions/s | s per 400k-step job | jobs in the protocol (x 5 seeds) | CPU hours |")

@@ -114,7 +114,8 @@ def _resume_command(directory: Path, settings: dict[str, Any]) -> str:
 def _group_size_option(p: argparse.ArgumentParser) -> None:
     """``--group-size`` of ``sb3-smc train`` and ``sb3-smc experiment``."""
     p.add_argument("--group-size", type=_positive, default=DEFAULT_GROUP_SIZE,
-                   help="the most seeds of a flat node trained together by one worker (default "
+                   help="the most seeds of a node (flat, or level 2 over flat nodes) trained together by one worker "
+                        "(default "
                         f"{DEFAULT_GROUP_SIZE}; 1: one job per worker); the SMCs are the same whatever it is")
 
 

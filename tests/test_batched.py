@@ -137,3 +137,52 @@ def test_networks_of_other_shapes_take_their_own_policy_steps(monkeypatch: pytes
     assert not calls
     for spec, smc in zip(specs, batched, strict=True):
         assert_same_smc(train_smc(spec, log_every=0), smc)
+
+
+def test_level2_seeds_trained_together_are_each_their_own_training(monkeypatch: pytest.MonkeyPatch) -> None:
+    """SMCs whose children are compiled leaves train in one group (HierarchicalSMCVecEnv over all their
+    environments), on the array path and, with a critic LSTM, on SB3's path with info dicts: each is train_smc's SMC,
+    with the same statistics of its calls; children the group cannot host (one with children of its own) are
+    trained by train_smc."""
+    import sb3_smc.learning.batched as batched_module
+    import sb3_smc.learning.training as training_module
+    from sb3_smc.envs.hierarchical_vec_env import HierarchicalSMCVecEnv
+    from tests.test_compiled_calls import random_smc
+
+    histories: dict[str, list[list[dict]]] = {}
+    original = training_module.training_callbacks
+
+    def capture(spec, *args, **kwargs):
+        stats, callbacks = original(spec, *args, **kwargs)
+        histories.setdefault(spec.name, []).append(stats.history)
+        return stats, callbacks
+
+    monkeypatch.setattr(training_module, "training_callbacks", capture)
+    monkeypatch.setattr(batched_module, "training_callbacks", capture)
+    kids = [random_smc(f"child{i}", kind, "lstm", seed=i) for i, kind in enumerate(["bring-about", "classification"])]
+    kids.append(random_smc("parent", "bring-about", "lstm", children=tuple(kids[:1]), seed=5))
+    library = {smc.name: smc for smc in kids}  # a mapping name -> SMC, as a library is
+    target = "PW-ba_self-in-container_from_on-floor-v0"
+    specs = [TrainingSpec.create(target, children=["child0", "child1"], total_timesteps=4_000, n_envs=8,
+                                 n_steps=125, seed=s, name=f"level2@{s}") for s in range(3)]
+    specs.append(TrainingSpec.create(target, children=["child0", "child1"], total_timesteps=2_000, n_envs=8,
+                                     n_steps=125, seed=3, name="level2-critic",
+                                     policy_kwargs={"enable_critic_lstm": True}))
+    specs.append(TrainingSpec.create(target, children=["parent"], total_timesteps=1_000, n_envs=4, n_steps=125,
+                                     seed=4, name="level3"))
+    hosted: list[int] = []
+    group = batched_module._EnvGroup.__init__
+    monkeypatch.setattr(batched_module._EnvGroup, "__init__", lambda self, vector, sizes, *rest: hosted.append(
+        len(sizes)) or group(self, vector, sizes, *rest))
+    together = train_smcs(specs, children=library)
+    assert hosted == [4]  # the level-2 SMCs in one group; the level-3 one alone
+    for spec, smc in zip(specs, together, strict=True):
+        alone = train_smc(spec, children=library, log_every=0)
+        if spec.name != "level3":
+            assert isinstance(alone.model.get_env().unwrapped, HierarchicalSMCVecEnv)
+        assert_same_smc(alone, smc)
+        grouped, single = histories[spec.name]
+        strip = [{k: v for k, v in row.items() if not k.startswith("time/")} for row in grouped]
+        assert strip == [{k: v for k, v in row.items() if not k.startswith("time/")} for row in single]
+        child = "parent" if spec.name == "level3" else "child1"
+        assert any(row[f"smc_calls/{child}/calls_per_episode"] > 0 for row in grouped)

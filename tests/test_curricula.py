@@ -295,7 +295,7 @@ def test_the_longest_chain_starts_first_and_top_nodes_fill_in(tmp_path):
     assert scheduler.jobs()[:2] == [(order[0], 0), (order[0], 1)]  # tables keep the curriculum's order
 
 
-def test_flat_seeds_form_groups_of_up_to_group_size_spread_over_the_workers(tmp_path):
+def test_seeds_form_groups_of_up_to_group_size_spread_over_the_workers(tmp_path):
     from sb3_smc.curricula.jobs import JobId
     from sb3_smc.curricula.options import RunOptions
     from sb3_smc.curricula.scheduler import Scheduler
@@ -304,11 +304,16 @@ def test_flat_seeds_form_groups_of_up_to_group_size_spread_over_the_workers(tmp_
   - name: trpo
     task: {RIGHT}
     algo: TRPO
+  - name: top
+    task: {RIGHT}
+    uses: [container]
 """)
     scheduler = Scheduler(curriculum, curriculum.order(), RunOptions(seeds=5, timesteps=1000), tmp_path)
-    assert [scheduler.groupable(n) for n in ("left", "above", "container", "trpo")] == [True, True, False, False]
+    # flat nodes and a level-2 node over flat ones group; a level-3 node and a memoryless learner do not
+    assert [scheduler.groupable(n) for n in ("left", "above", "container", "trpo", "top")] == [
+        True, True, True, False, False]
     left, above = [JobId("left", s) for s in range(5)], [JobId("above", s) for s in range(5)]
-    container, trpo = [JobId("container", s) for s in range(2)], [JobId("trpo", 0)]
+    container, trpo, top = [JobId("container", s) for s in range(2)], [JobId("trpo", 0)], [JobId("top", 0)]
 
     def sizes(ready, group_size, workers):
         units = scheduler.units(ready, group_size, workers)
@@ -323,7 +328,7 @@ def test_flat_seeds_form_groups_of_up_to_group_size_spread_over_the_workers(tmp_
     assert sizes(left, 5, 2) == [3, 2]  # a lone node's seeds spread over the workers
     assert sizes(left, 5, 4) == [1, 1, 1, 2] and sizes(left[:2], 5, 8) == [1, 1]
     assert sizes(left[:3] + trpo, 5, 2) == [3, 1]
-    assert sizes(trpo + container + left[3:], 5, 1) == [1, 1, 1, 2]  # jobs that gain nothing from a group: alone
+    assert sizes(trpo + top + container + left[3:], 5, 1) == [1, 1, 2, 2]  # trpo and top gain nothing: alone
     assert scheduler.units([], 5, 2) == []
     with pytest.raises(ValueError, match="group_size must be a positive integer, got 0"):
         train_curriculum(str(_tiny(tmp_path)), tmp_path / "run", seeds=1, group_size=0, progress=False)
@@ -467,13 +472,13 @@ def test_a_failing_job_is_reported_and_retried(tmp_path, monkeypatch):
 
     real = trainer.run_job
     monkeypatch.setattr(trainer, "run_job", run_job)
-    run = train_curriculum(str(path), tmp_path / "run", seeds=1, timesteps=2000, progress=False)
+    run = train_curriculum(str(path), tmp_path / "run", seeds=1, timesteps=2000, group_size=1, progress=False)
     assert set(run.failed) == {"tiny/container@0"} and "out of luck" in run.failed["tiny/container@0"]
     assert (tmp_path / "run" / "failed" / "tiny%2Fcontainer@0.txt").is_file()
     state = status(tmp_path / "run")
     assert state["done"] == ["left@0", "above@0"] and state["failed"] == ["tiny/container@0"] and state["left"] == []
     monkeypatch.setattr(trainer, "run_job", real)
-    again = train_curriculum(str(path), tmp_path / "run", seeds=1, timesteps=2000, progress=False)
+    again = train_curriculum(str(path), tmp_path / "run", seeds=1, timesteps=2000, group_size=1, progress=False)
     assert not again.failed and status(tmp_path / "run")["done"] == ["left@0", "above@0", "tiny/container@0"]
     assert not (tmp_path / "run" / "failed" / "tiny%2Fcontainer@0.txt").exists()
 
@@ -507,7 +512,7 @@ def test_a_partial_library_cannot_replace_the_whole(tmp_path):
 
 
 def test_workers_groups_and_ray_give_the_same_library(tmp_path):
-    """One job at a time, flat seeds in groups in this process, and groups on 2 workers and on Ray: the same SMCs
+    """One job at a time, seeds in groups in this process, and groups on 2 workers and on Ray: the same SMCs
     (weights and records), and a progress line per round of finished jobs, counting SMCs."""
     import ray
 
@@ -523,10 +528,10 @@ def test_workers_groups_and_ray_give_the_same_library(tmp_path):
     progress = {key: [line.split(",")[:2] for line in lines if line.startswith("jobs ")] for key, lines in logs.items()}
     # one worker: the next job is running when a line is written (the last line: none)
     assert progress["one"] == [[f"jobs {k}/6", " running 1"] for k in range(1, 6)] + [["jobs 6/6", " running 0"]]
-    # groups: left@0-1 together, then above@0-1 (running 2: the group's SMCs), then container@0 and @1 alone
-    assert progress["grouped"] == [["jobs 2/6", " running 2"], ["jobs 4/6", " running 1"], ["jobs 5/6", " running 1"],
-                                   ["jobs 6/6", " running 0"]]
-    assert logs["grouped"][0].endswith("1 worker, flat seeds in groups of up to 5") and logs["one"][0].endswith(
+    # groups: left@0-1 together, then above@0-1 (running 2: the group's SMCs), then container@0-1 (level 2 over
+    # flat nodes: their calls in the group's one vector env)
+    assert progress["grouped"] == [["jobs 2/6", " running 2"], ["jobs 4/6", " running 2"], ["jobs 6/6", " running 0"]]
+    assert logs["grouped"][0].endswith("1 worker, seeds in groups of up to 5") and logs["one"][0].endswith(
         "1 worker")
     # two workers: left's and above's seeds, a group each, side by side
     assert progress["two"][0] in (["jobs 2/6", " running 2"], ["jobs 4/6", " running 2"])

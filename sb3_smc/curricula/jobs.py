@@ -4,8 +4,9 @@ A job's :class:`~sb3_smc.records.TrainingSpec` calls, for every node its node us
 node (``reuse="two_best"``: k = 2; :func:`rank_seeds`) as distinct SMC actions. A :class:`Job` carries
 the picklable spec and the path of the run's library, where the worker loads the children by name (never torch
 objects); :func:`run_job` trains it and returns the model as bytes, the same in this process, a local worker process
-or a Ray task. :func:`run_group` trains several flat jobs at once (:func:`~sb3_smc.learning.batched.train_smcs`), each
-result the one :func:`run_job` gives. :func:`check_curriculum` checks every node's spec before a run trains anything.
+or a Ray task. :func:`run_group` trains several jobs of a node at once (:func:`~sb3_smc.learning.batched.train_smcs`),
+each result the one :func:`run_job` gives. :func:`check_curriculum` checks every node's spec before a run trains
+anything.
 """
 
 from __future__ import annotations
@@ -130,14 +131,16 @@ def run_job(job: Job) -> JobResult:
 
 
 def run_group(jobs: Sequence[Job]) -> list[JobResult]:
-    """Train flat ``jobs`` (no children; one TensorBoard folder and one ``lean_update`` for all) together with
+    """Train ``jobs`` (one library, one TensorBoard folder and one ``lean_update`` for all) together with
     :func:`~sb3_smc.learning.batched.train_smcs` in one torch and one BLAS thread and return their results in order,
-    each what :func:`run_job` returns for its job (bit-identical SMCs)."""
+    each what :func:`run_job` returns for its job (bit-identical SMCs). The children they call are loaded once."""
     from sb3_smc.learning.batched import train_smcs  # torch and Stable-Baselines3: in the worker only
 
+    names = sorted({name for job in jobs for name in job.spec.children})
+    children = SMCLibrary.load(jobs[0].library, names=names) if names else {}
     with compute_threads(1):
-        smcs = train_smcs([job.spec for job in jobs], tensorboard_log=jobs[0].tensorboard_log, log_every=0,
-                          lean_update=jobs[0].lean_update)
+        smcs = train_smcs([job.spec for job in jobs], children=children, tensorboard_log=jobs[0].tensorboard_log,
+                          log_every=0, lean_update=jobs[0].lean_update)
     return [_result(smc) for smc in smcs]
 
 

@@ -28,8 +28,9 @@ __all__ = ["BACKENDS", "DEFAULT_GROUP_SIZE", "RunOptions"]
 BACKENDS = ("local", "ray")
 """Where jobs run: local processes or Ray tasks."""
 DEFAULT_GROUP_SIZE = 5
-"""The most seeds of a flat node trained together in one worker (``group_size``; 1: one job per worker, as before
-issue 44). docs/benchmarks.md, "Grouped jobs in the curriculum trainer", has the measurement behind it."""
+"""The most seeds of a node trained together in one worker (``group_size``; flat nodes and level-2 nodes whose
+children are flat; 1: one job per worker, as before issue 44). docs/benchmarks.md, "Grouped jobs in the curriculum
+trainer", has the measurement behind it."""
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -49,7 +50,8 @@ class RunOptions:
     :param workers: jobs in parallel (local processes; with Ray, the jobs in flight).
     :param backend: ``"local"`` or ``"ray"``.
     :param ray_address: the Ray cluster (``backend="ray"`` only; default: ``RAY_ADDRESS``).
-    :param group_size: the most ready seeds of a flat node trained together as one unit (1: every job alone).
+    :param group_size: the most ready seeds of a node trained together as one unit (flat nodes and level-2 nodes
+        whose children are flat; 1: every job alone).
     :param tensorboard: write each job's curves under ``DIR/tensorboard``.
     :param reuse_from: a library whose SMCs the run copies instead of training them where it holds them with the
         very spec the run would train (:mod:`sb3_smc.curricula.reuse`); a string is taken as its path.

@@ -80,14 +80,16 @@ class Scheduler:
         return out
 
     def groupable(self, node_name: str) -> bool:
-        """Whether the jobs of ``node_name`` train in groups: a flat node whose SMCs
-        :func:`~sb3_smc.learning.batched.train_smcs` trains in one vector env (for any other it would train them one
-        after another in one worker: no faster, and fewer jobs in parallel)."""
+        """Whether the jobs of ``node_name`` train in groups: a flat node, or a level-2 node whose children are flat
+        (its seeds call the same children: compiled leaves), whose SMCs :func:`~sb3_smc.learning.batched.train_smcs`
+        trains in one vector env (for any other it would train them one after another in one worker: no faster, and
+        fewer jobs in parallel)."""
         if node_name not in self._groupable:
             from sb3_smc.learning.batched import batchable  # torch: once grouping is asked for
 
             node = self.curriculum.node(node_name)
-            self._groupable[node_name] = not node.uses and batchable(self.options.spec(node, 0, ()))
+            flat_children = all(not self.curriculum.node(used).uses for used in node.uses)
+            self._groupable[node_name] = flat_children and batchable(self.options.spec(node, 0, ()))
         return self._groupable[node_name]
 
     def units(self, ready: list[JobId], group_size: int, workers: int) -> list[tuple[JobId, ...]]:

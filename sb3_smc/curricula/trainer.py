@@ -309,7 +309,7 @@ def _run(scheduler: Scheduler, progress: bool, printer: Callable[[str], None], s
         printer(f"{merged.name}: {len(scheduler.order)} nodes x {options.seeds} seeds = {len(jobs)} jobs "
                 f"({done_before} already done{f', {skipped} of them skipped' if skipped else ''}) "
                 f"in {directory}, backend {options.backend}, {workers} worker{'s' * (workers > 1)}"
-                f"{f', flat seeds in groups of up to {group_size}' if group_size > 1 else ''}")
+                f"{f', seeds in groups of up to {group_size}' if group_size > 1 else ''}")
         for why in damaged.values():
             printer(f"{why}: it is trained again")
     started = time.time()

@@ -13,7 +13,7 @@ whose episode ended. Each environment's calls draw from its own generator, seede
 
 So it gives what ``SMCVecEnv`` over ``HierarchicalSMCWrapper`` environments gives, step for step with the same seeds
 (tested): observations, rewards, SB3's same-step reset with ``terminal_observation`` and ``TimeLimit.truncated``,
-and the wrapper's info keys that training reads (``is_success``, ``primitive_steps``, ``elapsed_steps``,
+and the wrapper's info keys that training reads (``is_success``, ``primitive_steps``,
 ``smc_calls``). :func:`~sb3_smc.learning.training.make_vec_env` trains SMCs in it where it applies
 (:func:`hosts`).
 """
@@ -24,7 +24,7 @@ from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
-from stable_baselines3.common.vec_env.base_vec_env import VecEnvObs, VecEnvStepReturn
+from stable_baselines3.common.vec_env.base_vec_env import VecEnvObs
 
 from pixelworld_env.core.constants import NUM_COLORS
 from pixelworld_env.envs.env import BRING_ABOUT, CLASSIFICATION_REWARD, GOAL_POTENTIAL, GOAL_REWARD
@@ -32,14 +32,10 @@ from pixelworld_env.envs.vector import PixelWorldVectorEnv
 from sb3_smc.core.layout import CALL_PREFIX, HAND_SIZE, MOVES, PIXELWORLD_LAYOUT, smc_action_names
 from sb3_smc.envs import smc_step
 from sb3_smc.envs.smc_step import (
-    ELAPSED_STEPS,
-    IS_SUCCESS,
     NO_ACTION,
     NO_OUTCOME,
-    PRIMITIVE_STEPS,
-    SMC_CALLS,
 )
-from sb3_smc.envs.vec_env import NativeSMCVecEnv
+from sb3_smc.envs.vec_env import NativeSMCVecEnv, SMCStep
 from sb3_smc.envs.wrapper import LeafPlan, leaf_plan
 from sb3_smc.errors import SMCError
 from sb3_smc.smc.policies import _kernels
@@ -120,7 +116,7 @@ class HierarchicalSMCVecEnv(NativeSMCVecEnv):
         plans, why = _leaf_plans(smcs)
         if why is not None:
             raise SMCError(f"HierarchicalSMCVecEnv calls compiled leaf SMCs of one network shape: {why}")
-        super().__init__(env, smc_action_names(env.kind, names, include_primitives, MOVES), len(smcs))
+        super().__init__(env, smc_action_names(env.kind, names, include_primitives, MOVES), names)
         self._world = env.self_moves()  # PixelWorldError where objects besides the self move
         self.smcs = smcs
         self.count_primitive_steps = count_primitive_steps
@@ -201,8 +197,7 @@ class HierarchicalSMCVecEnv(NativeSMCVecEnv):
         self._started(self._everyone)
         return self._observation(hand)
 
-    def step_wait(self) -> VecEnvStepReturn:
-        actions = self._taken_actions()
+    def step_arrays(self, actions: np.ndarray) -> SMCStep:
         kernels, world = self._kernels, self._world
         caps = np.full(self.num_envs, self.call_step_cap, dtype=np.int64)
         if self.count_primitive_steps:  # a call may not run past the episode's moves (the wrapper's rule)
@@ -225,8 +220,10 @@ class HierarchicalSMCVecEnv(NativeSMCVecEnv):
                 continue
             child = self.smcs[self._targets[actions[-2 - status]]]
             raise SMCError(f"SMC {child.name!r}: its policy gave action probabilities without a positive finite sum")
-        called = np.flatnonzero(calls)
-        self._outcomes[called, self._targets[actions[called]]] = self._totals[called, 1]
+        called = np.where(calls, self._targets[actions], -1)
+        outcomes = np.where(calls, self._totals[:, 1], 0.0)
+        where = np.flatnonzero(calls)
+        self._outcomes[where, called[where]] = outcomes[where]
         moves = self._moves.copy()
         self._elapsed += np.where(calls & self.count_primitive_steps, np.maximum(1, moves), 1)
         terminated = self._terminated.copy()
@@ -236,27 +233,11 @@ class HierarchicalSMCVecEnv(NativeSMCVecEnv):
         rewards = self._rewards.copy()
         self._previous[:] = actions
         obs = self._observation(self.vector_env.observe())
-        infos = self._infos(actions, calls, moves, rewards, dones, truncated)
         ended = np.flatnonzero(dones)
-        for k in ended.tolist():
-            infos[k]["terminal_observation"] = obs[k].copy()
+        terminal = obs[ended]  # a copy (fancy indexing)
         if ended.size:
             hand, _ = self.env.reset(options={"reset_mask": dones.copy()})
             self._started(dones)
             obs[ended] = self._observation(hand)[ended]
-        return obs, rewards.astype(np.float32), dones, infos
-
-    def _infos(self, actions: np.ndarray, calls: np.ndarray, moves: np.ndarray, rewards: np.ndarray,
-               dones: np.ndarray, truncated: np.ndarray) -> list[dict[str, Any]]:
-        """SB3's info dicts of a step: the wrapper's keys (a call's record in ``smc_calls``) and SB3's time limit."""
-        success = smc_step.is_success(dones, rewards).tolist()
-        elapsed = self._elapsed.tolist()
-        infos: list[dict[str, Any]] = []
-        for k, (m, r, call) in enumerate(zip(moves.tolist(), rewards.tolist(), calls.tolist(), strict=True)):
-            records = []
-            if call:
-                records.append({"smc": self.smcs[self._targets[actions[k]]].name, "depth": 1, "primitive_steps": m,
-                                "outcome": int(self._totals[k, 1]), "reward": r})
-            infos.append({IS_SUCCESS: success[k], PRIMITIVE_STEPS: m, ELAPSED_STEPS: elapsed[k], SMC_CALLS: records,
-                          "TimeLimit.truncated": bool(truncated[k])})
-        return infos
+        return SMCStep(obs, rewards.astype(np.float32), dones, smc_step.is_success(dones, rewards), truncated, ended,
+                       terminal, moves, called, outcomes, np.where(calls, rewards, 0.0))

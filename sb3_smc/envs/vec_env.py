@@ -13,6 +13,7 @@ unbatched ones (see ``docs/benchmarks.md``).
 
 from __future__ import annotations
 
+from abc import abstractmethod
 from collections.abc import Callable, Sequence
 from typing import Any, NamedTuple, cast
 
@@ -26,11 +27,11 @@ from pixelworld_env.envs.vector import PixelWorldVectorEnv
 from sb3_smc.core.layout import HAND_SIZE, MOVES, smc_action_names
 from sb3_smc.envs import smc_step
 from sb3_smc.envs.gymnasium_vec_env import GymnasiumVecEnv
-from sb3_smc.envs.smc_step import IS_SUCCESS, NO_ACTION, NO_OUTCOME, PRIMITIVE_STEPS, SMCObservation
+from sb3_smc.envs.smc_step import IS_SUCCESS, NO_ACTION, NO_OUTCOME, PRIMITIVE_STEPS, SMC_CALLS, SMCObservation
 from sb3_smc.envs.wrapper import HierarchicalSMCWrapper
 from sb3_smc.errors import SMCError
 
-__all__ = ["FlatSMCVecEnv", "FlatStep", "NativeSMCVecEnv", "SMCVecEnv", "answer_in_batches"]
+__all__ = ["FlatSMCVecEnv", "NativeSMCVecEnv", "SMCStep", "SMCVecEnv", "answer_in_batches"]
 
 
 def answer_in_batches(requests: dict[int, tuple[Any, np.ndarray, Any]]) -> dict[int, tuple[np.ndarray, Any]]:
@@ -109,12 +110,13 @@ class SMCVecEnv(DummyVecEnv):
 
 class NativeSMCVecEnv(GymnasiumVecEnv):
     """What the SMC environments over PixelWorld's native vector env (``observation="hand"``) share: the SMC's
-    observation (:class:`~sb3_smc.envs.smc_step.SMCObservation`: the window, ``n_outcomes`` outcomes, the one-hot
-    previous action), spaces, each environment's previous action and elapsed steps, a reset without options, and
-    integer actions. :class:`FlatSMCVecEnv` and :class:`~sb3_smc.envs.hierarchical_vec_env.HierarchicalSMCVecEnv`
-    step them."""
+    observation (:class:`~sb3_smc.envs.smc_step.SMCObservation`: the window, one outcome per SMC of ``children``,
+    the one-hot previous action), spaces, each environment's previous action and elapsed steps, a reset without
+    options, integer actions, and the step as arrays (``step_arrays``: an :class:`SMCStep`) or with SB3's info
+    dicts (``step_infos``). :class:`FlatSMCVecEnv` and
+    :class:`~sb3_smc.envs.hierarchical_vec_env.HierarchicalSMCVecEnv` step them."""
 
-    def __init__(self, env: PixelWorldVectorEnv, action_names: Sequence[str], n_outcomes: int) -> None:
+    def __init__(self, env: PixelWorldVectorEnv, action_names: Sequence[str], children: Sequence[str] = ()) -> None:
         if env.observation != "hand":
             raise SMCError(f"{type(self).__name__} builds SMC observations from the one-hot 3 x 3 window: the vector "
                            f"env needs observation='hand', got {env.observation!r}")
@@ -122,6 +124,9 @@ class NativeSMCVecEnv(GymnasiumVecEnv):
         self.vector_env = env
         self.kind: str = env.kind
         self.action_names = tuple(action_names)
+        self.children = tuple(children)
+        """The names of the SMCs called (the outcomes' order)."""
+        n_outcomes = len(self.children)
         self._parts = SMCObservation(HAND_SIZE, n_outcomes, len(self.action_names))
         self.observation_space = self._parts.space()
         self.action_space = spaces.Discrete(len(self.action_names))
@@ -130,6 +135,8 @@ class NativeSMCVecEnv(GymnasiumVecEnv):
         self._previous = np.full(env.num_envs, NO_ACTION, dtype=np.int64)
         self._elapsed = np.zeros(env.num_envs, dtype=np.int64)
         self._max_steps: int = env.max_steps
+        self._no_calls = np.full(env.num_envs, -1, dtype=np.int64)
+        self._no_outcomes = np.zeros(env.num_envs)
 
     def _observation(self, hand: np.ndarray) -> np.ndarray:
         parts = self._parts
@@ -152,11 +159,33 @@ class NativeSMCVecEnv(GymnasiumVecEnv):
     def step_async(self, actions: np.ndarray) -> None:
         self._actions = np.asarray(actions, dtype=np.int64).reshape(self.num_envs)
 
-    def _taken_actions(self) -> np.ndarray:
-        """The actions of :meth:`step_async`, taken (step once)."""
+    def step_wait(self) -> VecEnvStepReturn:
         assert self._actions is not None, "step_async first"
         actions, self._actions = self._actions, None
-        return actions
+        step = self.step_arrays(actions)
+        return step.obs, step.rewards, step.dones, self.step_infos(step)
+
+    @abstractmethod
+    def step_arrays(self, actions: np.ndarray) -> SMCStep:
+        """:meth:`step_wait` for ``actions`` (int64, one per environment) without the info dicts."""
+
+    def step_infos(self, step: SMCStep) -> list[dict[str, Any]]:
+        """SB3's info dicts of a step of :meth:`step_arrays`: the wrapper's keys that training reads
+        (``is_success``, ``primitive_steps``, a call's record in ``smc_calls``), ``TimeLimit.truncated`` and
+        ``terminal_observation``."""
+        infos: list[dict[str, Any]] = []
+        names = self.children
+        for s, m, t, child, outcome, r in zip(step.success.tolist(), step.moves.tolist(), step.time_limit.tolist(),
+                                              step.called.tolist(), step.outcomes.tolist(),
+                                              step.call_rewards.tolist(), strict=True):
+            info: dict[str, Any] = {IS_SUCCESS: s, PRIMITIVE_STEPS: m, "TimeLimit.truncated": t}
+            if names:
+                info[SMC_CALLS] = [] if child < 0 else [{"smc": names[child], "depth": 1, "primitive_steps": m,
+                                                         "outcome": int(outcome), "reward": r}]
+            infos.append(info)
+        for k, terminal in zip(step.ended.tolist(), step.terminal, strict=True):
+            infos[k]["terminal_observation"] = terminal
+        return infos
 
 
 class FlatSMCVecEnv(NativeSMCVecEnv):
@@ -176,7 +205,7 @@ class FlatSMCVecEnv(NativeSMCVecEnv):
     """
 
     def __init__(self, env: PixelWorldVectorEnv) -> None:
-        super().__init__(env, smc_action_names(env.kind), 0)
+        super().__init__(env, smc_action_names(env.kind))
         self._to_base = np.array([env.action_names.index(name) for name in self.action_names], dtype=np.int64)
         self._step_cost = smc_step.step_cost(None, False)  # every action of a flat SMC is a signal or a move
 
@@ -185,22 +214,7 @@ class FlatSMCVecEnv(NativeSMCVecEnv):
         self._reset_seeds()
         return self._observation(hand)
 
-    def step_wait(self) -> VecEnvStepReturn:
-        actions = self._taken_actions()
-        step = self.step_arrays(actions)
-        return step.obs, step.rewards, step.dones, self.step_infos(step, actions)
-
-    def step_infos(self, step: FlatStep, actions: np.ndarray) -> list[dict[str, Any]]:
-        """SB3's info dicts of a step of :meth:`step_arrays` (``actions``: the step's)."""
-        moves = self._primitive_steps[actions].tolist()
-        infos: list[dict[str, Any]] = [
-            {IS_SUCCESS: s, PRIMITIVE_STEPS: m, "TimeLimit.truncated": t}
-            for s, m, t in zip(step.success.tolist(), moves, step.time_limit.tolist(), strict=True)]
-        for k, terminal in zip(step.ended.tolist(), step.terminal, strict=True):
-            infos[k]["terminal_observation"] = terminal
-        return infos
-
-    def step_arrays(self, actions: np.ndarray) -> FlatStep:
+    def step_arrays(self, actions: np.ndarray) -> SMCStep:
         """:meth:`step_wait` for ``actions`` (int64, one per environment) without the info dicts (their content is
         in the arrays: a flat SMC's step is one primitive action)."""
         hand, rewards, terminated, env_truncated, _ = self.env.step(self._to_base[actions])
@@ -217,12 +231,13 @@ class FlatSMCVecEnv(NativeSMCVecEnv):
             self._previous[ended] = NO_ACTION
             self._elapsed[ended] = 0
             obs[ended] = self._observation(hand)[ended]
-        return FlatStep(obs, rewards.astype(np.float32), dones, smc_step.is_success(dones, rewards), truncated,
-                        ended, terminal)
+        return SMCStep(obs, rewards.astype(np.float32), dones, smc_step.is_success(dones, rewards), truncated,
+                       ended, terminal, self._primitive_steps[actions], self._no_calls, self._no_outcomes,
+                       self._no_outcomes)
 
 
-class FlatStep(NamedTuple):
-    """One step of :class:`FlatSMCVecEnv` as arrays (:meth:`FlatSMCVecEnv.step_arrays`)."""
+class SMCStep(NamedTuple):
+    """One step of a :class:`NativeSMCVecEnv` as arrays (``step_arrays``)."""
 
     obs: np.ndarray  #: the observations after the step (after the reset where an episode ended)
     rewards: np.ndarray  #: float32
@@ -231,3 +246,7 @@ class FlatStep(NamedTuple):
     time_limit: np.ndarray  #: it was cut by the time limit (``TimeLimit.truncated``)
     ended: np.ndarray  #: the indices of the environments whose episode ended
     terminal: np.ndarray  #: their last observations (``terminal_observation``), one row each
+    moves: np.ndarray  #: the primitive steps of each environment's action (``primitive_steps``: a call's moves)
+    called: np.ndarray  #: the child each environment called (its index; -1: none)
+    outcomes: np.ndarray  #: the outcome of that call (0 where none)
+    call_rewards: np.ndarray  #: the reward of that call, float64 (0 where none)

@@ -1,13 +1,15 @@
-"""Train many flat SMCs in one process: :func:`train_smcs`.
+"""Train many SMCs in one process: :func:`train_smcs`.
 
 Every experiment trains many small, independent SMCs (5 seeds of every node, many nodes of a level). Trained one
 after another, each pays the per-call costs of its environment and its learner alone. :func:`train_smcs` trains a
 group of SMCs together:
 
-* the environments of all SMCs on the same task (same env id and settings) are one PixelWorld vector env
-  (:class:`~sb3_smc.envs.vec_env.FlatSMCVecEnv` over ``sum(n_envs)`` environments), stepped in **one compiled call** per
-  step for the whole group; each SMC's model sees its own environments through a :class:`SliceVecEnv` (with SB3's
-  ``VecMonitor`` on top, as in :func:`~sb3_smc.learning.training.train_smc`);
+* the environments of all SMCs on the same task (same env id and settings, the same children) are one PixelWorld
+  vector env (:class:`~sb3_smc.envs.vec_env.FlatSMCVecEnv` over ``sum(n_envs)`` environments, or, for SMCs whose
+  children are compiled leaves, :class:`~sb3_smc.envs.hierarchical_vec_env.HierarchicalSMCVecEnv`, the children's calls
+  included), stepped in **one compiled call** per step for the whole group; each SMC's model sees its own
+  environments through a :class:`SliceVecEnv` (with SB3's ``VecMonitor`` on top, as in
+  :func:`~sb3_smc.learning.training.train_smc`);
 * each SMC keeps its own model (a real sb3-contrib ``RecurrentPPO`` / :class:`~sb3_smc.recurrent_trpo.RecurrentTRPO`
   object, saved and loaded as today), optimizer state, rollout buffer,
   :class:`~sb3_smc.learning.callbacks.SMCTrainingCallback` (records, best-update selection, early stop) and its own
@@ -29,7 +31,8 @@ So each SMC is the one :func:`~sb3_smc.learning.training.train_smc` gives for it
 and for a group of five seeds). Its record's ``wall_time_s`` is its share of the group's time: its own bookkeeping
 and updates, and the group's policy and environment steps divided among the SMCs training at that step.
 
-Specs the group cannot host (an SMC with children, a non-PixelWorld task, a memoryless learner, frame stacking,
+Specs the group cannot host (children that are not compiled leaves of one cell and size, a world where objects
+besides the self move under an SMC with children, a non-PixelWorld task, a memoryless learner, frame stacking,
 RecurrentTRPO's linear feature baseline, semi-MDP discounting) are trained by ``train_smc``, one after another.
 """
 
@@ -37,7 +40,7 @@ from __future__ import annotations
 
 import random
 import time
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import ExitStack, contextmanager
 from copy import deepcopy
 from dataclasses import dataclass, field
@@ -56,7 +59,8 @@ from sb3_smc.common import kernels
 from sb3_smc.common.recurrent import SequenceLstmPolicy
 from sb3_smc.common.recurrent.lean_update import use_lean_update
 from sb3_smc.core.hyperparameters import constructor_arguments
-from sb3_smc.envs.vec_env import FlatSMCVecEnv, FlatStep
+from sb3_smc.envs.hierarchical_vec_env import HierarchicalSMCVecEnv, hosts
+from sb3_smc.envs.vec_env import FlatSMCVecEnv, NativeSMCVecEnv, SMCStep
 from sb3_smc.errors import SMCError
 from sb3_smc.learning.training import (
     TaskFacts,
@@ -64,12 +68,13 @@ from sb3_smc.learning.training import (
     check_lean_update,
     check_model_settings,
     finished_smc,
+    resolve_children,
     resolved_spec,
     task_of,
     train_smc,
     training_callbacks,
 )
-from sb3_smc.records import TrainingSpec
+from sb3_smc.records import TrainingSpec, WrapperSettings
 from sb3_smc.smc.smc import SMC
 from sb3_smc.tasks.resolved_task import resolve_task
 
@@ -77,10 +82,12 @@ __all__ = ["SliceVecEnv", "batchable", "train_smcs"]
 
 
 def batchable(spec: TrainingSpec) -> bool:
-    """Whether :func:`train_smcs` trains ``spec`` in a group (else it runs ``train_smc`` for it): a flat SMC on a
-    PixelWorld id with a native vector env, a recurrent learner (``RecurrentPPO`` or ``RecurrentTRPO`` with its
-    critic), no frame stacking, the paper's discounting."""
-    if spec.children or spec.frame_stack != 1 or spec.wrapper.discount != "decision":
+    """Whether :func:`train_smcs` trains ``spec`` in a group (else it runs ``train_smc`` for it): a recurrent learner
+    (``RecurrentPPO`` or ``RecurrentTRPO`` with its critic), no frame stacking, the paper's discounting. The group
+    also needs a PixelWorld id with a native vector env, and, for an SMC with children, children that are compiled
+    leaves in worlds where only the self moves (:func:`~sb3_smc.envs.hierarchical_vec_env.hosts`): ``train_smcs``
+    checks those."""
+    if spec.frame_stack != 1 or spec.wrapper.discount != "decision":
         return False
     if spec.algo not in ("RecurrentPPO", "RecurrentTRPO"):
         return False
@@ -130,15 +137,22 @@ class SliceVecEnv(VecEnv):
 
 
 class _EnvGroup:
-    """One vector env for the SMCs of a task: ``sizes[i]`` environments for SMC ``i``, stepped in one call."""
+    """One vector env for the SMCs of a task: ``sizes[i]`` environments for SMC ``i``, stepped in one call; with
+    ``children`` (the same for every SMC), an SMC environment that calls them, with the wrapper ``settings``."""
 
-    def __init__(self, vector: PixelWorldVectorEnv, sizes: Sequence[int]) -> None:
-        self.env = FlatSMCVecEnv(vector)
+    def __init__(self, vector: PixelWorldVectorEnv, sizes: Sequence[int], children: Sequence[SMC] = (),
+                 settings: WrapperSettings | None = None) -> None:
+        self.env: NativeSMCVecEnv = FlatSMCVecEnv(vector)
+        if children:
+            assert settings is not None
+            self.env = HierarchicalSMCVecEnv(vector, children, include_primitives=settings.include_primitives,
+                                             count_primitive_steps=settings.count_primitive_steps,
+                                             call_step_cap=settings.call_step_cap)
         bounds = np.cumsum([0, *sizes])
         self.slices = [SliceVecEnv(self, int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
         self.actions = np.zeros(self.env.num_envs, dtype=np.int64)
         self.reset_obs: np.ndarray = np.zeros(0)
-        self.step_result: FlatStep | None = None
+        self.step_result: SMCStep | None = None
         self.results: tuple[np.ndarray, np.ndarray, np.ndarray, list[dict[str, Any]]] = (
             np.zeros(0), np.zeros(0), np.zeros(0), [])
         self.with_infos = True  #: whether a step builds SB3's info dicts (for SMCs on the generic path)
@@ -153,7 +167,7 @@ class _EnvGroup:
     def step(self) -> None:
         step = self.step_result = self.env.step_arrays(self.actions)
         if self.with_infos:
-            self.results = (step.obs, step.rewards, step.dones, self.env.step_infos(step, self.actions))
+            self.results = (step.obs, step.rewards, step.dones, self.env.step_infos(step))
         self.actions[:] = 0  # the actions of SMCs that left the group
 
 
@@ -197,10 +211,11 @@ class _Job:
     """One SMC of a group: its model and callbacks, and sb3-contrib's ``collect_rollouts`` / SB3's ``learn`` cut
     at the environment step (:meth:`act` before it, :meth:`observe` after it)."""
 
-    def __init__(self, spec: TrainingSpec, task: TaskFacts, venv: VecEnv, *, tensorboard_log: str | None,
+    def __init__(self, spec: TrainingSpec, children: tuple[SMC, ...], task: TaskFacts, venv: VecEnv, *,
+                 tensorboard_log: str | None,
                  log_every: int | None, printer: Callable[[str], None], stop_at_max_return: bool,
                  lean_update: bool) -> None:
-        self.spec, self.task = spec, task
+        self.spec, self.children, self.task = spec, children, task
         self.model, self.initial = build_model(spec, venv, task, tensorboard_log=tensorboard_log)
         if not isinstance(self.model, RecurrentPPO):
             raise SMCError(f"SMC {spec.name!r}: a group trains recurrent learners, got {spec.algo}")
@@ -310,7 +325,7 @@ class _Job:
 
     def _observe_arrays(self) -> bool:
         """:meth:`observe` on the group's arrays: ``VecMonitor``'s sums, the callback's statistics
-        (:meth:`~sb3_smc.learning.callbacks.SMCTrainingCallback.on_flat_step`), the time-limit bootstrap and the
+        (:meth:`~sb3_smc.learning.callbacks.SMCTrainingCallback.on_array_step`), the time-limit bootstrap and the
         buffer's ``add`` written out, the same numbers without info dicts."""
         model = self.model
         part = cast(SliceVecEnv, model.env.unwrapped)
@@ -327,7 +342,8 @@ class _Job:
         episode_returns, episode_lengths = returns[ended], lengths[ended]
         returns[ended] = 0
         lengths[ended] = 0
-        if not self.stats.on_flat_step(rewards, dones, step.success[a:b], episode_returns, episode_lengths):
+        if not self.stats.on_array_step(rewards, dones, episode_returns, episode_lengths, step, slice(a, b),
+                                        part.group.env.children):
             return False
         actions, values, log_probs, h, c = self._step
         if ended.size:
@@ -383,7 +399,7 @@ class _Job:
         self._lean.close()
         self.callback.on_training_end()
         self.stats.on_training_end()
-        return finished_smc(self.spec, (), self.model, self.stats, self.task, self.initial, self.seconds,
+        return finished_smc(self.spec, self.children, self.model, self.stats, self.task, self.initial, self.seconds,
                             lean_update=self.lean_update)
 
 
@@ -449,26 +465,27 @@ class _GroupCollection:
 
 
 def _env_key(spec: TrainingSpec) -> tuple[Any, ...]:
-    """What the SMCs trained in one vector env must share: their task (resolved once for all of them) and its
-    environments' settings."""
+    """What the SMCs trained in one vector env must share: their task (resolved once for all of them), its
+    environments' settings and the children they call."""
     task = spec.task
     return (task.env_id, task.split, task.kind, task.datasets, task.layout, repr(sorted(task.env_kwargs.items())),
-            spec.wrapper.max_steps, spec.budget.env_steps)
+            repr(spec.wrapper), spec.budget.env_steps, spec.children)
 
 
-def train_smcs(specs: Sequence[TrainingSpec], *, tensorboard_log: str | None = None, log_every: int | None = 0,
-               printer: Callable[[str], None] = print, stop_at_max_return: bool = True,
-               lean_update: bool = False) -> list[SMC]:
+def train_smcs(specs: Sequence[TrainingSpec], *, children: Mapping[str, SMC] | None = None,
+               tensorboard_log: str | None = None, log_every: int | None = 0, printer: Callable[[str], None] = print,
+               stop_at_max_return: bool = True, lean_update: bool = False) -> list[SMC]:
     """Train the SMCs of ``specs`` together and return them in the same order, each the SMC
     :func:`~sb3_smc.learning.training.train_smc` gives for its spec (same weights, records and selection).
 
-    Batchable specs (:func:`batchable`) with the same task, environment settings and steps per rollout train as
-    one group, their environments stepped in one call; every other spec is trained by ``train_smc`` alone.
-    ``tensorboard_log``, ``log_every``, ``printer``, ``stop_at_max_return`` and ``lean_update`` are
-    ``train_smc``'s, for every SMC (with ``tensorboard_log``, each SMC's curves in
-    ``<tensorboard_log>/<name>_<n>/``); with ``lean_update`` each SMC is the one ``train_smc(spec,
-    lean_update=True)`` gives, and a spec whose model the lean update does not fit is refused before its group
-    trains."""
+    Batchable specs (:func:`batchable`) with the same task, environment settings, children and steps per rollout
+    train as one group, their environments stepped in one call (with children: when they are compiled leaves on a
+    world where only the self moves); every other spec is trained by ``train_smc`` alone. ``children``: the SMCs
+    the specs call, by name (an :class:`~sb3_smc.library.SMCLibrary`). ``tensorboard_log``, ``log_every``,
+    ``printer``, ``stop_at_max_return`` and ``lean_update`` are ``train_smc``'s, for every SMC (with
+    ``tensorboard_log``, each SMC's curves in ``<tensorboard_log>/<name>_<n>/``); with ``lean_update`` each SMC is
+    the one ``train_smc(spec, lean_update=True)`` gives, and a spec whose model the lean update does not fit is
+    refused before its group trains."""
     results: list[SMC | None] = [None] * len(specs)
     groups: dict[tuple[Any, ...], list[int]] = {}
     for i, spec in enumerate(specs):
@@ -479,6 +496,7 @@ def train_smcs(specs: Sequence[TrainingSpec], *, tensorboard_log: str | None = N
         groups.setdefault(_env_key(spec) if batchable(spec) else (i,), []).append(i)
     for members in groups.values():
         chosen = [specs[i] for i in members]
+        called = resolve_children(children or {}, chosen[0].children) if chosen[0].children else ()
         task = resolve_task(chosen[0].task, smc=chosen[0].name) if batchable(chosen[0]) else None
         if task is not None:  # the group's task, resolved once: its specs completed with it
             chosen = [resolved_spec(spec, task) for spec in chosen]
@@ -486,30 +504,32 @@ def train_smcs(specs: Sequence[TrainingSpec], *, tensorboard_log: str | None = N
             if spec.task.kind is not None:
                 check_model_settings(spec)  # a typo in a hyperparameter: a message before any environment is built
         sizes = [spec.budget.n_envs for spec in chosen]
-        if task is None or not task.native_vector:
-            trained = [train_smc(spec, tensorboard_log=tensorboard_log, log_every=log_every, printer=printer,
-                                 stop_at_max_return=stop_at_max_return, lean_update=lean_update) for spec in chosen]
+        vector = task.make_vector_env(sum(sizes), chosen[0].wrapper.max_steps) \
+            if task is not None and task.native_vector and (not called or hosts(called)) else None
+        if vector is None or called and not vector.self_only:
+            trained = [train_smc(spec, children=called, tensorboard_log=tensorboard_log, log_every=log_every,
+                                 printer=printer, stop_at_max_return=stop_at_max_return, lean_update=lean_update)
+                       for spec in chosen]
         else:
-            vector = task.make_vector_env(sum(sizes), chosen[0].wrapper.max_steps)
-            trained = _train_group(chosen, _EnvGroup(vector, sizes), tensorboard_log=tensorboard_log,
-                                   log_every=log_every, printer=printer, stop_at_max_return=stop_at_max_return,
-                                   lean_update=lean_update)
+            group = _EnvGroup(vector, sizes, called, chosen[0].wrapper)
+            trained = _train_group(chosen, called, group, tensorboard_log=tensorboard_log, log_every=log_every,
+                                   printer=printer, stop_at_max_return=stop_at_max_return, lean_update=lean_update)
         for i, smc in zip(members, trained, strict=True):
             results[i] = smc
     return [smc for smc in results if smc is not None]
 
 
-def _train_group(specs: Sequence[TrainingSpec], group: _EnvGroup, *, tensorboard_log: str | None,
-                 log_every: int | None, printer: Callable[[str], None], stop_at_max_return: bool,
-                 lean_update: bool) -> list[SMC]:
+def _train_group(specs: Sequence[TrainingSpec], children: tuple[SMC, ...], group: _EnvGroup, *,
+                 tensorboard_log: str | None, log_every: int | None, printer: Callable[[str], None],
+                 stop_at_max_return: bool, lean_update: bool) -> list[SMC]:
     """Train SMCs on one task in one vector env (see the module's docstring)."""
     jobs = []
     for spec, part in zip(specs, group.slices, strict=True):
         task = task_of(spec, group.env)
         venv = VecMonitor(part)
         venv.seed(spec.seed)
-        jobs.append(_Job(spec, task, venv, tensorboard_log=tensorboard_log, log_every=log_every, printer=printer,
-                         stop_at_max_return=stop_at_max_return, lean_update=lean_update))
+        jobs.append(_Job(spec, children, task, venv, tensorboard_log=tensorboard_log, log_every=log_every,
+                         printer=printer, stop_at_max_return=stop_at_max_return, lean_update=lean_update))
     group.reset()
     for job in jobs:
         job.start()

@@ -50,6 +50,8 @@ from typing import Any
 import numpy as np
 from stable_baselines3.common.callbacks import BaseCallback
 
+from sb3_smc.envs.vec_env import SMCStep
+
 __all__ = ["BestSnapshot", "RolloutStats", "SMCTrainingCallback"]
 
 
@@ -181,17 +183,32 @@ class SMCTrainingCallback(BaseCallback):
                                 bool(info.get("is_success", False)))
         return not self.solved  # False: the first step after the solving rollout's update (its steps counted)
 
-    def on_flat_step(self, rewards: np.ndarray, dones: np.ndarray, success: np.ndarray,
-                     episode_returns: np.ndarray, episode_lengths: np.ndarray) -> bool:
-        """``on_step`` for a flat SMC's step given as arrays instead of info dicts (every decision one primitive
-        action, no SMC calls; :mod:`sb3_smc.learning.batched`): the same statistics. ``episode_returns`` /
-        ``episode_lengths``: ``VecMonitor``'s records of the episodes ending at this step, in environment order."""
+    def on_array_step(self, rewards: np.ndarray, dones: np.ndarray, episode_returns: np.ndarray,
+                      episode_lengths: np.ndarray, step: SMCStep, part: slice, names: Sequence[str]) -> bool:
+        """``on_step`` for a step given as arrays instead of info dicts (:mod:`sb3_smc.learning.batched`): the same
+        statistics. ``step`` is the group's step, ``part`` this SMC's environments in it (``rewards`` / ``dones``
+        theirs); ``episode_returns`` / ``episode_lengths``: ``VecMonitor``'s records of the episodes ending at this
+        step, in environment order; ``names`` the SMCs that ``step.called`` indexes."""
         self.n_calls += 1
         self.num_timesteps = self.model.num_timesteps
         self._episode_return += rewards
         self._episode_length += 1
-        self._stats.decisions += len(rewards)
+        stats = self._stats
+        stats.decisions += len(rewards)
+        called = step.called[part]
+        calls = np.flatnonzero(called >= 0)
+        # primitive actions executed on the environment: moves (inside calls too) and the SMC's own signals
         self._episode_primitive += 1
+        if calls.size:
+            moves = step.moves[part]
+            self._episode_primitive[calls] += moves[calls] - 1
+            for k, child, outcome in zip(calls.tolist(), called[calls].tolist(), step.outcomes[part][calls].tolist(),
+                                         strict=True):
+                name = names[child]
+                stats.calls[name] = stats.calls.get(name, 0) + 1
+                stats.call_steps[name] = stats.call_steps.get(name, 0) + int(moves[k])
+                stats.call_sig1[name] = stats.call_sig1.get(name, 0) + (outcome > 0)
+        success = step.success[part]
         for k, ret, length in zip(np.flatnonzero(dones).tolist(), episode_returns.tolist(), episode_lengths.tolist(),
                                   strict=True):
             self._episode_ended(k, ret, int(length), bool(success[k]))
