@@ -328,3 +328,30 @@ def test_trpo_and_recurrent_ppo_train_on_the_adapter_as_on_dummy_vec_env(algo: s
     assert a.num_timesteps == b.num_timesteps == 128
     for key, value in a.policy.state_dict().items():
         assert torch.equal(value, b.policy.state_dict()[key])
+
+
+def test_self_moves_are_the_live_state_of_a_caller_that_moves_the_self():
+    """``self_moves()``: the arrays a compiled caller moves the self through (the vector env keeps reading them),
+    ``goal_at`` the single env's goal test memoised per scene and cell, ``observe`` the observations now; refused
+    where objects besides the self move."""
+    vector = gym.make_vec(BRING_ABOUT, num_envs=3, vectorization_mode="vector_entry_point")
+    assert vector.self_only
+    first, _ = vector.reset(seed=4)
+    state = vector.self_moves()
+    np.testing.assert_array_equal(vector.observe(), first)
+    single = gym.make(BRING_ABOUT).unwrapped
+    single.reset(options={"index": int(state.scene[0])})
+    for row in range(1, state.goal_table.shape[1] - 1):  # a column of cells: each tested as the single env does
+        cell = (row, int(state.col[0]))
+        assert vector.goal_at(int(state.scene[0]), *cell) == single.goal_at(cell)
+        assert state.goal_table[state.scene[0], cell[0], cell[1]] == int(single.goal_at(cell))
+    down = vector.action_names.index("DOWN")
+    assert state.kinds[down] == 1 and tuple(state.deltas[down]) == (1, 0)
+    state.row[1] -= 1  # the caller moved the self of environment 1 up a cell: the next observation shows it
+    moved = vector.observe()
+    np.testing.assert_array_equal(moved[0], first[0])
+    assert not np.array_equal(moved[1], first[1])
+    pushing = gym.make_vec(PUSHABLE_MIXED, num_envs=2, vectorization_mode="vector_entry_point")
+    assert not pushing.self_only
+    with pytest.raises(ValueError, match="objects besides the self move in scenes"):
+        pushing.self_moves()
