@@ -17,10 +17,11 @@ from pixelworld_env.envs.env import PixelWorldEnv
 from pixelworld_env.envs.vector import PixelWorldVectorEnv
 from sb3_smc.core.layout import PIXELWORLD_LAYOUT, Layout
 from sb3_smc.envs.factory import make_smc_env
+from sb3_smc.envs.hierarchical_vec_env import HierarchicalSMCVecEnv
 from sb3_smc.envs.vec_env import FlatSMCVecEnv, SMCVecEnv
 from sb3_smc.errors import SMCError
 from sb3_smc.learning.batched import train_smcs
-from sb3_smc.learning.training import untrained_smc
+from sb3_smc.learning.training import make_vec_env, untrained_smc
 from sb3_smc.records import TaskSpec, TrainingSpec
 from sb3_smc.tasks.resolved_task import TaskSource, resolve_task
 from sb3_smc.tasks.task import SMCTask
@@ -155,8 +156,12 @@ def test_train_smc_looks_the_id_up_once(look_ups: list[str]) -> None:
     untrained_smc(flat.spec)
     assert look_ups == [ID]
     look_ups.clear()
-    parent = untrained_smc(CLASSIFY_ID, children=[flat], n_envs=3)  # three environments, one look-up
-    assert isinstance(parent.model.get_env().unwrapped, SMCVecEnv) and look_ups == [CLASSIFY_ID]
+    parent = untrained_smc(CLASSIFY_ID, children=[flat], n_envs=3)  # a compiled leaf's caller: the native env
+    assert isinstance(parent.model.get_env().unwrapped, HierarchicalSMCVecEnv) and look_ups == [CLASSIFY_ID]
+    look_ups.clear()
+    assert parent.spec is not None
+    wrapped = make_vec_env(parent.spec, [flat], native=False)  # three wrapped environments, one look-up
+    assert isinstance(wrapped.unwrapped, SMCVecEnv) and wrapped.num_envs == 3 and look_ups == [CLASSIFY_ID]
     look_ups.clear()
     walker = untrained_smc(_corridor_id(), algo="PPO", n_envs=2, n_steps=64, batch_size=64)
     assert walker.spec.task.layout == Layout(5, ("L", "R", "S")) and look_ups == [CORRIDOR_ID]
