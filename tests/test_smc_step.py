@@ -1,7 +1,8 @@
-"""The SMC observation and the step's rules are defined once (``sb3_smc.envs.smc_step``) and both step paths use them:
-``HierarchicalSMCWrapper`` (one environment) and ``FlatSMCVecEnv`` (arrays of environments). The equality of the
-two paths' transitions is tested in ``tests/test_vec_env.py``; here, that the shared definitions are the ones each
-path calls: changed here, both paths change."""
+"""The SMC observation and the step's rules are defined once (``sb3_smc.envs.smc_step``) and every step path uses
+them: ``HierarchicalSMCWrapper`` (one environment), ``FlatSMCVecEnv`` and ``HierarchicalSMCVecEnv`` (arrays of
+environments). The equality of the paths' transitions is tested in ``tests/test_vec_env.py`` and
+``tests/test_hierarchical_vec_env.py``; here, that the shared definitions are the ones each path calls: changed
+here, every path changes."""
 
 from __future__ import annotations
 
@@ -14,6 +15,7 @@ import pytest
 from sb3_smc import SMC
 from sb3_smc.core.layout import observation_size, smc_action_names
 from sb3_smc.envs import smc_step
+from sb3_smc.envs.hierarchical_vec_env import HierarchicalSMCVecEnv
 from sb3_smc.envs.smc_step import NO_ACTION, SMCObservation
 from sb3_smc.envs.vec_env import FlatSMCVecEnv
 from sb3_smc.envs.wrapper import HierarchicalSMCWrapper
@@ -25,6 +27,16 @@ MOVES = ("DOWN", "RIGHT", "UP", "LEFT")
 
 def flat_env(num_envs: int = 3, max_steps: int = 100) -> FlatSMCVecEnv:
     venv = FlatSMCVecEnv(gym.make_vec(ENV_ID, num_envs=num_envs, max_steps=max_steps))
+    venv.seed(0)
+    return venv
+
+
+def hierarchical_env(num_envs: int = 3, max_steps: int = 100) -> HierarchicalSMCVecEnv:
+    """The native env of an SMC calling one compiled leaf (a random policy)."""
+    from tests.test_compiled_calls import random_smc
+
+    venv = HierarchicalSMCVecEnv(gym.make_vec(ENV_ID, num_envs=num_envs, max_steps=max_steps),
+                                 [random_smc("leaf", "classification", "lstm")])
     venv.seed(0)
     return venv
 
@@ -96,12 +108,13 @@ def test_both_paths_write_the_observation_with_the_shared_function(monkeypatch: 
         return obs
 
     monkeypatch.setattr(SMCObservation, "write", marked)
-    venv = flat_env(max_steps=2)
-    observations = [venv.reset()]
-    for _ in range(3):  # the second step ends every episode (max_steps=2): same-step resets
-        observations.append(venv.step(np.full(venv.num_envs, 2))[0])
-    assert np.all(np.stack(observations)[..., :81] == -0.5)
-    assert calls and set(calls) == {2}
+    for venv in (flat_env(max_steps=2), hierarchical_env(max_steps=2)):
+        observations = [venv.reset()]
+        for _ in range(3):  # the second step ends every episode (max_steps=2): same-step resets
+            observations.append(venv.step(np.full(venv.num_envs, 2))[0])
+        assert np.all(np.stack(observations)[..., :81] == -0.5)
+        assert calls and set(calls) == {2}
+        calls.clear()
 
     calls.clear()
     seen: list[np.ndarray] = []
@@ -120,19 +133,22 @@ def test_both_paths_apply_the_shared_step_rules(monkeypatch: pytest.MonkeyPatch)
     monkeypatch.setattr(smc_step, "primitive_steps", lambda names, primitives: tuple(
         7 * int(name in primitives) for name in names))
     right = 3  # RIGHT in a classification SMC's actions: SIG0, SIG1, DOWN, RIGHT, ...
-    venv = flat_env(max_steps=6)
-    venv.reset()
+    flat, native = flat_env(max_steps=6), hierarchical_env(max_steps=6)
+    for venv in (flat, native):
+        venv.reset()
     env = HierarchicalSMCWrapper(gym.make(ENV_ID, max_steps=6))
     env.reset(seed=0)
     for step in range(3):
-        _, _, dones, infos = venv.step(np.full(venv.num_envs, right))
         _, _, terminated, truncated, info = env.step(right)
         ended = step == 2  # 3 steps of cost 2: max_steps=6 reached
-        assert dones.tolist() == [ended] * venv.num_envs and (terminated, truncated) == (False, ended)
-        assert [i["is_success"] for i in infos] == [ended] * venv.num_envs and info["is_success"] == ended
-        assert [i["primitive_steps"] for i in infos] == [7] * venv.num_envs and info["primitive_steps"] == 7
-        assert [i["TimeLimit.truncated"] for i in infos] == [ended] * venv.num_envs
-        assert info["elapsed_steps"] == 2 * (step + 1)
+        assert (terminated, truncated) == (False, ended) and info["is_success"] == ended
+        assert info["primitive_steps"] == 7 and info["elapsed_steps"] == 2 * (step + 1)
+        for venv in (flat, native):
+            _, _, dones, infos = venv.step(np.full(venv.num_envs, right))
+            assert dones.tolist() == [ended] * venv.num_envs
+            assert [i["is_success"] for i in infos] == [ended] * venv.num_envs
+            assert [i["primitive_steps"] for i in infos] == [7] * venv.num_envs
+            assert [i["TimeLimit.truncated"] for i in infos] == [ended] * venv.num_envs
 
 
 def test_the_truncation_rule_is_the_one_both_paths_call(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -140,9 +156,9 @@ def test_the_truncation_rule_is_the_one_both_paths_call(monkeypatch: pytest.Monk
     original = smc_step.truncated
     monkeypatch.setattr(smc_step, "truncated", lambda terminated, env_truncated, elapsed, max_steps: original(
         terminated, env_truncated, elapsed, 1))
-    venv = flat_env()
-    venv.reset()
+    for venv in (flat_env(), hierarchical_env()):
+        venv.reset()
+        assert venv.step(np.full(venv.num_envs, 3))[2].all()
     env = HierarchicalSMCWrapper(gym.make(ENV_ID))
     env.reset(seed=0)
-    assert venv.step(np.full(venv.num_envs, 3))[2].all()
     assert env.step(3)[3]

@@ -460,7 +460,7 @@ def smc_steps(actions: np.ndarray, kinds: np.ndarray, values: np.ndarray, deltas
     padded to the most actions; ``b_second`` empty rows for an LSTM).
     Per environment its live state (``scene``, ``row``, ``col``, ``goal``, its padded ``grids`` / ``owners``), a
     call's ``counters`` / ``totals`` / ``h`` / ``c`` and its ``uniforms`` drawn ahead, ``used`` of them. Writes
-    ``rewards``, ``terminated`` and ``moves`` (a call's outcome stays in ``totals[k, 1]``).
+    ``rewards`` and ``terminated``, and for a call ``moves`` (its outcome stays in ``totals[k, 1]``).
 
     Environments whose ``phase`` is :data:`STEPPED` are skipped. Returns -1 when every environment has stepped;
     ``k >= 0`` when environment ``k`` moved the self into a cell of its scene whose goal truth is not known yet
@@ -507,7 +507,6 @@ def smc_steps(actions: np.ndarray, kinds: np.ndarray, values: np.ndarray, deltas
         elif kinds[a] == MOVE:
             if phase[k] == STARTING:
                 rewards[k] = 0.0
-                moves[k] = 1
                 terminated[k] = False
                 r, q = row[k], col[k]
                 r_next, q_next = r + deltas[a, 0], q + deltas[a, 1]
@@ -528,7 +527,6 @@ def smc_steps(actions: np.ndarray, kinds: np.ndarray, values: np.ndarray, deltas
                     goal[k] = g
                     rewards[k] = potential if g == 1 else -potential
         else:  # a signal ends the episode
-            moves[k] = 0
             terminated[k] = True
             if bring_about:
                 rewards[k] = goal_reward - potential if goal[k] == 1 else 0.0

@@ -224,8 +224,8 @@ class HierarchicalSMCVecEnv(NativeSMCVecEnv):
         outcomes = np.where(calls, self._totals[:, 1], 0.0)
         where = np.flatnonzero(calls)
         self._outcomes[where, called[where]] = outcomes[where]
-        moves = self._moves.copy()
-        self._elapsed += np.where(calls & self.count_primitive_steps, np.maximum(1, moves), 1)
+        moves = np.where(calls, self._moves, self._primitive_steps[actions])  # a call's moves, else the rule's
+        self._elapsed += smc_step.step_cost(np.where(calls, moves, -1), self.count_primitive_steps)
         terminated = self._terminated.copy()
         # the task's own time limit counts the actions that are not calls: never more than the elapsed steps
         truncated = smc_step.truncated(terminated, np.zeros_like(terminated), self._elapsed, self._max_steps)

@@ -99,9 +99,16 @@ class SMCObservation:
         return obs
 
 
-def step_cost(call_moves: int | None, count_primitive_steps: bool) -> int:
+@overload
+def step_cost(call_moves: int | None, count_primitive_steps: bool) -> int: ...
+@overload
+def step_cost(call_moves: np.ndarray, count_primitive_steps: bool) -> np.ndarray: ...
+def step_cost(call_moves: Any, count_primitive_steps: bool) -> Any:
     """How many of the episode's ``max_steps`` an action takes: one for a signal or a primitive action
-    (``call_moves`` None); an SMC call one, or, with ``count_primitive_steps``, the moves it made (at least one)."""
+    (``call_moves`` None; in an array, -1); an SMC call one, or, with ``count_primitive_steps``, the moves it made (at
+    least one)."""
+    if isinstance(call_moves, np.ndarray):
+        return np.where((call_moves >= 0) & count_primitive_steps, np.maximum(1, call_moves), 1)
     if call_moves is not None and count_primitive_steps:
         return max(1, call_moves)
     return 1
