@@ -31,17 +31,15 @@ from pixelworld_env.envs.env import BRING_ABOUT, CLASSIFICATION_REWARD, GOAL_POT
 from pixelworld_env.envs.vector import PixelWorldVectorEnv
 from sb3_smc.core.layout import CALL_PREFIX, HAND_SIZE, MOVES, PIXELWORLD_LAYOUT, smc_action_names
 from sb3_smc.envs import smc_step
-from sb3_smc.envs.smc_step import (
-    NO_ACTION,
-    NO_OUTCOME,
-)
-from sb3_smc.envs.vec_env import NativeSMCVecEnv, SMCStep
+from sb3_smc.envs.vec_env import FlatSMCVecEnv, NativeSMCVecEnv, SMCStep
 from sb3_smc.envs.wrapper import LeafPlan, leaf_plan
 from sb3_smc.errors import SMCError
+from sb3_smc.records import WrapperSettings
 from sb3_smc.smc.policies import _kernels
 from sb3_smc.smc.smc import SMC
+from sb3_smc.tasks.resolved_task import ResolvedTask
 
-__all__ = ["HierarchicalSMCVecEnv", "hosts"]
+__all__ = ["HierarchicalSMCVecEnv", "hosts", "native_smc_vec_env"]
 
 UNIFORM_BLOCK = 1024
 """Uniforms drawn ahead per environment at a time (at least the call's cap: one per decision of a call)."""
@@ -94,6 +92,24 @@ def hosts(smcs: Sequence[SMC]) -> bool:
     """Whether :class:`HierarchicalSMCVecEnv` can call ``smcs``: compiled leaves on PixelWorld's layout, with
     networks of the same cell and sizes (the task must also move only the self: the vector env checks that)."""
     return _leaf_plans(smcs)[1] is None
+
+
+def native_smc_vec_env(task: ResolvedTask, num_envs: int, children: Sequence[SMC],
+                       settings: WrapperSettings) -> NativeSMCVecEnv | None:
+    """The environments of an SMC calling ``children`` on ``task`` over PixelWorld's native vector env, ``num_envs``
+    of them with the wrapper ``settings``: a :class:`~sb3_smc.envs.vec_env.FlatSMCVecEnv` without children, a
+    :class:`HierarchicalSMCVecEnv` with children it :func:`hosts` on worlds where only the self moves; None where
+    neither hosts the SMC (the task has no native vector env, other children, objects besides the self move)."""
+    if not task.native_vector or children and not hosts(children):
+        return None
+    vector = task.make_vector_env(num_envs, settings.max_steps)
+    if not children:
+        return FlatSMCVecEnv(vector)
+    if not vector.self_only:
+        return None  # the children's calls run in the wrapper
+    return HierarchicalSMCVecEnv(vector, children, include_primitives=settings.include_primitives,
+                                 count_primitive_steps=settings.count_primitive_steps,
+                                 call_step_cap=settings.call_step_cap)
 
 
 class HierarchicalSMCVecEnv(NativeSMCVecEnv):
@@ -159,18 +175,15 @@ class HierarchicalSMCVecEnv(NativeSMCVecEnv):
         self._rewards = np.zeros(n)
         self._terminated = np.zeros(n, dtype=np.bool_)
         self._moves = np.zeros(n, dtype=np.int64)
-        self._everyone = np.ones(n, dtype=np.bool_)
 
     # ------------------------------------------------------------------------------------------ helpers
 
     def _started(self, ended: np.ndarray) -> None:
         """The environments ``ended`` (a bool mask) have been reset: their worlds and episode state anew."""
+        super()._started(ended)
         scenes = self._world.scene[ended]
         self._grids[ended] = self._world.grid0[scenes]
         self._owners[ended] = self._world.owner0[scenes]
-        self._outcomes[ended] = NO_OUTCOME
-        self._previous[ended] = NO_ACTION
-        self._elapsed[ended] = 0
 
     def _draw_ahead(self, k: int, needed: int) -> None:
         """At least ``needed`` uniforms of environment ``k`` drawn ahead (those drawn and not used kept first)."""
@@ -194,7 +207,6 @@ class HierarchicalSMCVecEnv(NativeSMCVecEnv):
                 self._generators[k] = np.random.default_rng((seed, 0x5EED) if seed is not None else None)
                 self._used[k] = self._block
         self._reset_seeds()
-        self._started(self._everyone)
         return self._observation(hand)
 
     def step_arrays(self, actions: np.ndarray) -> SMCStep:

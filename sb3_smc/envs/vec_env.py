@@ -151,10 +151,14 @@ class NativeSMCVecEnv(GymnasiumVecEnv):
         seeds = None if all(s is None for s in self._seeds) else list(self._seeds)
         hand, _ = self.env.reset(seed=cast("int | None", seeds))  # a list of seeds: one per environment
         self.reset_infos = [{} for _ in range(self.num_envs)]
-        self._outcomes[:] = NO_OUTCOME
-        self._previous[:] = NO_ACTION
-        self._elapsed[:] = 0
+        self._started(np.ones(self.num_envs, dtype=np.bool_))
         return hand
+
+    def _started(self, ended: np.ndarray) -> None:
+        """The environments ``ended`` (a bool mask) have been reset: their episode state anew."""
+        self._outcomes[ended] = NO_OUTCOME
+        self._previous[ended] = NO_ACTION
+        self._elapsed[ended] = 0
 
     def step_async(self, actions: np.ndarray) -> None:
         self._actions = np.asarray(actions, dtype=np.int64).reshape(self.num_envs)
@@ -228,8 +232,7 @@ class FlatSMCVecEnv(NativeSMCVecEnv):
         terminal = obs[ended]  # a copy (fancy indexing)
         if ended.size:
             hand, _ = self.env.reset(options={"reset_mask": dones})
-            self._previous[ended] = NO_ACTION
-            self._elapsed[ended] = 0
+            self._started(dones)
             obs[ended] = self._observation(hand)[ended]
         return SMCStep(obs, rewards.astype(np.float32), dones, smc_step.is_success(dones, rewards), truncated,
                        ended, terminal, self._primitive_steps[actions], self._no_calls, self._no_outcomes,

@@ -54,13 +54,12 @@ from stable_baselines3.common.utils import obs_as_tensor
 from stable_baselines3.common.vec_env import VecEnv, VecMonitor
 from stable_baselines3.common.vec_env.base_vec_env import VecEnvIndices, VecEnvObs, VecEnvStepReturn
 
-from pixelworld_env.envs.vector import PixelWorldVectorEnv
 from sb3_smc.common import kernels
 from sb3_smc.common.recurrent import SequenceLstmPolicy
 from sb3_smc.common.recurrent.lean_update import use_lean_update
 from sb3_smc.core.hyperparameters import constructor_arguments
-from sb3_smc.envs.hierarchical_vec_env import HierarchicalSMCVecEnv, hosts
-from sb3_smc.envs.vec_env import FlatSMCVecEnv, NativeSMCVecEnv, SMCStep
+from sb3_smc.envs.hierarchical_vec_env import native_smc_vec_env
+from sb3_smc.envs.vec_env import NativeSMCVecEnv, SMCStep
 from sb3_smc.errors import SMCError
 from sb3_smc.learning.training import (
     TaskFacts,
@@ -74,7 +73,7 @@ from sb3_smc.learning.training import (
     train_smc,
     training_callbacks,
 )
-from sb3_smc.records import TrainingSpec, WrapperSettings
+from sb3_smc.records import TrainingSpec
 from sb3_smc.smc.smc import SMC
 from sb3_smc.tasks.resolved_task import resolve_task
 
@@ -96,7 +95,7 @@ def batchable(spec: TrainingSpec) -> bool:
 
 
 class SliceVecEnv(VecEnv):
-    """Environments ``[start, stop)`` of a group's shared :class:`~sb3_smc.envs.vec_env.FlatSMCVecEnv`, as one model's
+    """Environments ``[start, stop)`` of a group's shared :class:`~sb3_smc.envs.vec_env.NativeSMCVecEnv`, as one model's
     SB3 ``VecEnv``. The group steps them: :meth:`step_async` writes the actions into the group's action array,
     :meth:`step_wait` returns this slice of the group's last step; :meth:`reset` returns this slice of the
     group's reset (done once for all, with each slice's seeds)."""
@@ -137,17 +136,11 @@ class SliceVecEnv(VecEnv):
 
 
 class _EnvGroup:
-    """One vector env for the SMCs of a task: ``sizes[i]`` environments for SMC ``i``, stepped in one call; with
-    ``children`` (the same for every SMC), an SMC environment that calls them, with the wrapper ``settings``."""
+    """One native SMC env (:func:`~sb3_smc.envs.hierarchical_vec_env.native_smc_vec_env`) for the SMCs of a task:
+    ``sizes[i]`` of its environments for SMC ``i``, stepped in one call."""
 
-    def __init__(self, vector: PixelWorldVectorEnv, sizes: Sequence[int], children: Sequence[SMC] = (),
-                 settings: WrapperSettings | None = None) -> None:
-        self.env: NativeSMCVecEnv = FlatSMCVecEnv(vector)
-        if children:
-            assert settings is not None
-            self.env = HierarchicalSMCVecEnv(vector, children, include_primitives=settings.include_primitives,
-                                             count_primitive_steps=settings.count_primitive_steps,
-                                             call_step_cap=settings.call_step_cap)
+    def __init__(self, env: NativeSMCVecEnv, sizes: Sequence[int]) -> None:
+        self.env = env
         bounds = np.cumsum([0, *sizes])
         self.slices = [SliceVecEnv(self, int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
         self.actions = np.zeros(self.env.num_envs, dtype=np.int64)
@@ -504,14 +497,13 @@ def train_smcs(specs: Sequence[TrainingSpec], *, children: Mapping[str, SMC] | N
             if spec.task.kind is not None:
                 check_model_settings(spec)  # a typo in a hyperparameter: a message before any environment is built
         sizes = [spec.budget.n_envs for spec in chosen]
-        vector = task.make_vector_env(sum(sizes), chosen[0].wrapper.max_steps) \
-            if task is not None and task.native_vector and (not called or hosts(called)) else None
-        if vector is None or called and not vector.self_only:
+        env = native_smc_vec_env(task, sum(sizes), called, chosen[0].wrapper) if task is not None else None
+        if env is None:
             trained = [train_smc(spec, children=called, tensorboard_log=tensorboard_log, log_every=log_every,
                                  printer=printer, stop_at_max_return=stop_at_max_return, lean_update=lean_update)
                        for spec in chosen]
         else:
-            group = _EnvGroup(vector, sizes, called, chosen[0].wrapper)
+            group = _EnvGroup(env, sizes)
             trained = _train_group(chosen, called, group, tensorboard_log=tensorboard_log, log_every=log_every,
                                    printer=printer, stop_at_max_return=stop_at_max_return, lean_update=lean_update)
         for i, smc in zip(members, trained, strict=True):

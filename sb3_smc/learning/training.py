@@ -53,8 +53,8 @@ from sb3_smc.core.hyperparameters import (
 )
 from sb3_smc.core.layout import PIXELWORLD_LAYOUT, Layout
 from sb3_smc.envs.factory import make_smc_env
-from sb3_smc.envs.hierarchical_vec_env import HierarchicalSMCVecEnv, hosts
-from sb3_smc.envs.vec_env import FlatSMCVecEnv, SMCVecEnv
+from sb3_smc.envs.hierarchical_vec_env import native_smc_vec_env
+from sb3_smc.envs.vec_env import NativeSMCVecEnv, SMCVecEnv
 from sb3_smc.envs.wrapper import HierarchicalSMCWrapper
 from sb3_smc.errors import SMCError, SMCKeyError, SMCTypeError
 from sb3_smc.learning.bias import apply_signal_bias
@@ -146,11 +146,12 @@ def make_vec_env(spec: TrainingSpec, children: Sequence[SMC] = (), *, native: bo
     when ``spec.frame_stack > 1``).
 
     On a task PixelWorld's native vector env hosts (:attr:`~sb3_smc.tasks.resolved_task.ResolvedTask.native_vector`),
-    a flat SMC (no children) trains in :class:`FlatSMCVecEnv` over it and an SMC whose children are compiled leaves
-    (:func:`~sb3_smc.envs.hierarchical_vec_env.hosts`; worlds where only the self moves) in
+    a flat SMC (no children) trains in :class:`~sb3_smc.envs.vec_env.FlatSMCVecEnv` over it and an SMC whose children
+    are compiled leaves (:func:`~sb3_smc.envs.hierarchical_vec_env.hosts`; worlds where only the self moves) in
     :class:`~sb3_smc.envs.hierarchical_vec_env.HierarchicalSMCVecEnv`: one compiled call steps every environment,
-    the children's calls included. Any other SMC trains in :class:`~sb3_smc.envs.vec_env.SMCVecEnv` over
-    :func:`~sb3_smc.envs.factory.make_smc_env` (SMC calls in lockstep). They give the same transitions with the same
+    the children's calls included (:func:`~sb3_smc.envs.hierarchical_vec_env.native_smc_vec_env` chooses). Any
+    other SMC trains in :class:`~sb3_smc.envs.vec_env.SMCVecEnv` over :func:`~sb3_smc.envs.factory.make_smc_env`
+    (SMC calls in lockstep). They give the same transitions with the same
     seeds (tested).
 
     :param spec: the SMC's spec.
@@ -164,24 +165,13 @@ def make_vec_env(spec: TrainingSpec, children: Sequence[SMC] = (), *, native: bo
 
     if task is None:
         task = resolve_task(spec.task, smc=spec.name)
-    flat = not children and not spec.children
-    hosted = task.native_vector and (flat or hosts(children))
-    vector = task.make_vector_env(spec.budget.n_envs, spec.wrapper.max_steps) if hosted and native is not False \
-        else None
-    if vector is not None and not flat and not vector.self_only:
-        vector = None  # objects besides the self move: the children's calls run in the wrapper
-    if native and vector is None:
+    base: VecEnv | None = None
+    if native is not False and (children or not spec.children):  # named children not given: refused below
+        base = native_smc_vec_env(task, spec.budget.n_envs, children, spec.wrapper)
+    if native and base is None:
         raise SMCError(f"SMC {spec.name!r}: the native vector env hosts SMCs on PixelWorld ids only, flat ones or "
                        "those whose children are compiled leaves (on worlds where only the self moves)")
-    base: VecEnv
-    if vector is not None and flat:
-        base = FlatSMCVecEnv(vector)
-    elif vector is not None:
-        settings = spec.wrapper
-        base = HierarchicalSMCVecEnv(vector, children, include_primitives=settings.include_primitives,
-                                     count_primitive_steps=settings.count_primitive_steps,
-                                     call_step_cap=settings.call_step_cap)
-    else:
+    if base is None:
         envs = [make_smc_env(spec, children, task=task) for _ in range(spec.budget.n_envs)]
         base = SMCVecEnv([_returning(e) for e in envs])
     venv: VecEnv = VecMonitor(base)
@@ -336,7 +326,7 @@ def _train(spec: TrainingSpec, children: tuple[SMC, ...], resolved: ResolvedTask
     if spec.task.kind is not None:
         check_model_settings(spec)  # a typo in a hyperparameter: a message before any environment is built
     venv = make_vec_env(spec, children, task=resolved)
-    task = task_of(spec, venv.unwrapped)  # the FlatSMCVecEnv or SMCVecEnv under the monitor
+    task = task_of(spec, venv.unwrapped)  # the NativeSMCVecEnv or SMCVecEnv under the monitor
     model, initial = build_model(spec, venv, task, tensorboard_log=tensorboard_log)
     if lean_update:
         check_lean_update(spec, model)
@@ -371,10 +361,10 @@ class TaskFacts:
 
 
 def task_of(spec: TrainingSpec, under: VecEnv) -> TaskFacts:
-    """The :class:`TaskFacts` of the environments ``spec`` trains in (``under``: the :class:`FlatSMCVecEnv` or
+    """The :class:`TaskFacts` of the environments ``spec`` trains in (``under``: the :class:`NativeSMCVecEnv` or
     :class:`SMCVecEnv` under the monitor), read from them; ``SMCError`` where they are not the task the spec (its
     task resolved, :func:`resolved_spec`) says."""
-    if isinstance(under, FlatSMCVecEnv | HierarchicalSMCVecEnv):  # PixelWorld's compiled vector env: its own rewards
+    if isinstance(under, NativeSMCVecEnv):  # PixelWorld's compiled vector env: its own rewards
         kind, action_names, layout, bounded = under.kind, under.action_names, PIXELWORLD_LAYOUT, True
     else:
         wrappers = [cast(HierarchicalSMCWrapper, env) for env in cast(SMCVecEnv, under).envs]
