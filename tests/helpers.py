@@ -8,6 +8,7 @@ import json
 import os
 from pathlib import Path
 from types import ModuleType
+from typing import Any
 
 import numpy as np
 import pytest
@@ -166,3 +167,22 @@ def step_side_by_side(native, reference, steps: int, keys: tuple[str, ...]) -> t
         ended += int(dones.sum())
         seen.extend(infos)
     return ended, seen
+
+
+def assert_same_smc(reference: Any, other: Any) -> None:
+    """Two SMCs trained from one spec by two paths are the same: weights (the selected snapshot), records and
+    selection, the spec; ``other`` recorded a wall time."""
+    import torch  # the tests that compare trained SMCs only
+
+    first, second = reference.model.policy.state_dict(), other.model.policy.state_dict()
+    assert first.keys() == second.keys()
+    assert all(torch.equal(first[name], second[name]) for name in first)
+    a, b = reference.record, other.record
+    assert a is not None and b is not None
+    assert a.training_returns == b.training_returns
+    assert a.success_rates == b.success_rates
+    assert (a.selected_update, a.selected_return) == (b.selected_update, b.selected_return)
+    assert (a.total_timesteps, a.primitive_steps) == (b.total_timesteps, b.primitive_steps)
+    assert a.initial_action_probabilities == b.initial_action_probabilities
+    assert reference.spec == other.spec
+    assert b.wall_time_s > 0

@@ -15,27 +15,11 @@ from sb3_smc.errors import SMCError
 from sb3_smc.learning.batched import batchable, train_smcs
 from sb3_smc.learning.training import train_smc
 from sb3_smc.records import TrainingSpec
-from sb3_smc.smc.smc import SMC
+from tests.helpers import assert_same_smc
 
 CORNER_ID = "PW-cl_self-in-left-corner_vs_on-hline-v0"
 ABOVE_ID = "PW-ba_self-on-something_from_directly-above-v0"
 OUTSIDE_ID = "PW-cl_self-in-container_vs_outside-v0"
-
-
-def assert_same_smc(alone: SMC, batched: SMC) -> None:
-    """The same weights (the selected snapshot), records and selection."""
-    first, second = alone.model.policy.state_dict(), batched.model.policy.state_dict()
-    assert first.keys() == second.keys()
-    assert all(torch.equal(first[name], second[name]) for name in first)
-    a, b = alone.record, batched.record
-    assert a is not None and b is not None
-    assert a.training_returns == b.training_returns
-    assert a.success_rates == b.success_rates
-    assert (a.selected_update, a.selected_return) == (b.selected_update, b.selected_return)
-    assert (a.total_timesteps, a.primitive_steps) == (b.total_timesteps, b.primitive_steps)
-    assert a.initial_action_probabilities == b.initial_action_probabilities
-    assert alone.spec == batched.spec
-    assert b.wall_time_s > 0
 
 
 def test_one_smc_is_train_smcs_bit_for_bit() -> None:

@@ -9,7 +9,6 @@ import functools
 import gymnasium as gym
 import numpy as np
 import pytest
-import torch
 
 import pixelworld_env  # noqa: F401  (the PW-* ids)
 from pixelworld_env.errors import PixelWorldError
@@ -19,7 +18,7 @@ from sb3_smc.envs.vec_env import SMCVecEnv
 from sb3_smc.errors import SMCError
 from sb3_smc.learning.training import make_vec_env, train_smc
 from sb3_smc.records import TrainingSpec
-from tests.helpers import step_side_by_side
+from tests.helpers import assert_same_smc, step_side_by_side
 from tests.test_compiled_calls import random_smc
 
 CLASSIFY = "PW-cl_self-in-container_vs_noncontainer-v0"
@@ -68,11 +67,7 @@ def test_train_smc_in_it_is_bit_identical(monkeypatch: pytest.MonkeyPatch) -> No
     monkeypatch.setattr(training, "make_vec_env", functools.partial(training.make_vec_env, native=False))
     reference = train_smc(BRING_ABOUT, **settings)
     assert isinstance(reference.model.get_env().unwrapped, SMCVecEnv)
-    assert native.record.training_returns == reference.record.training_returns
-    assert native.record.primitive_steps == reference.record.primitive_steps
-    assert native.record.success_rates == reference.record.success_rates
-    state, state_ref = native.model.policy.state_dict(), reference.model.policy.state_dict()
-    assert all(torch.equal(state[k], state_ref[k]) for k in state)
+    assert_same_smc(reference, native)
 
 
 def test_what_it_cannot_host_keeps_smc_vec_env() -> None:

@@ -20,7 +20,7 @@ from sb3_smc.learning.training import make_vec_env, train_smc, untrained_smc
 from sb3_smc.records import TrainingSpec
 from sb3_smc.smc.numpy_actors import NumpyLSTMPolicy
 from sb3_smc.smc.policies import ScriptedPolicy
-from tests.helpers import classification_env, step_side_by_side
+from tests.helpers import assert_same_smc, classification_env, step_side_by_side
 
 
 def random_lstm(name: str, kind: str, children: tuple[SMC, ...] = (), seed: int = 0) -> SMC:
@@ -185,12 +185,7 @@ def test_train_smc_on_the_native_env_is_bit_identical(algo: str, frame_stack: in
     monkeypatch.setattr(training, "make_vec_env", functools.partial(training.make_vec_env, native=False))
     reference = train_smc("PW-ba_self-in-container-v0", **settings)
     assert isinstance(reference.model.get_env().unwrapped, SMCVecEnv)
-    assert native.record.training_returns == reference.record.training_returns
-    assert native.record.selected_update == reference.record.selected_update
-    assert native.record.success_rates == reference.record.success_rates
-    assert native.record.primitive_steps == reference.record.primitive_steps
-    state, state_ref = native.model.policy.state_dict(), reference.model.policy.state_dict()
-    assert all(torch.equal(state[k], state_ref[k]) for k in state)
+    assert_same_smc(reference, native)
 
 
 def test_smcs_with_children_and_other_ids_keep_smc_vec_env() -> None:
