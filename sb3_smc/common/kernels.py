@@ -5,7 +5,8 @@ window, the outcome vector, the previous action). In numpy that is about a dozen
 numpy's call overhead on vectors of 32-128 numbers; here it is one compiled function that also skips the zero
 inputs. :class:`~sb3_smc.smc.numpy_actors.NumpyLSTMPolicy` and :class:`~sb3_smc.smc.numpy_actors.NumpyGRUPolicy` use
 these for float64 policies with one recurrent layer and ``net_arch=[]`` (the defaults: every SMC sb3-smc trains) and
-keep their numpy code for every other architecture. The arithmetic is the numpy code's, summed in another order: the
+keep their numpy code for every other architecture. The arithmetic is the numpy code's, summed in another order and
+with :func:`accurate_tanh` (within 2 units in the last place of the C library's ``tanh``, which numpy calls): the
 probabilities agree to 1e-14 (tested; in practice to a few units of the last place), so a sampled action differs
 only when the uniform draw falls within that distance of a boundary. The module also holds the inverse-CDF draw of
 :func:`~sb3_smc.smc.policies.sample_action`. Imported lazily (numba's import and the first compilation cost about a
@@ -17,8 +18,9 @@ in place of a dozen small torch calls (see its ``forward``).
 
 Every compiled path (the single steps, :func:`leaf_call`, the collection steps) runs the one :func:`lstm_cell` /
 :func:`gru_cell`; the numpy actors' other architectures run the same arithmetic vectorised over rows in numpy
-(``NumpyLSTMPolicy._layers`` / ``NumpyGRUPolicy._layers``), kept because numpy's vectorised ``tanh`` beats the
-cell's scalar one on batches (``docs/benchmarks.md``, "One recurrent cell").
+(``NumpyLSTMPolicy._layers`` / ``NumpyGRUPolicy._layers``), kept because numpy's vectorised batches beat the
+cell's row-by-row steps there (``docs/benchmarks.md``, "One recurrent cell"). Which ``tanh`` a cell takes is
+:data:`LIBM_TANH` / :data:`ACCURATE_TANH` / :data:`FAST_TANH`.
 """
 
 from __future__ import annotations
@@ -28,7 +30,7 @@ from numba import njit
 
 from pixelworld_env.core.kernels import self_target_free
 
-__all__ = ["fast_tanh", "gru_cell", "gru_collection_step", "gru_linear_step", "leaf_call", "lstm_cell",
+__all__ = ["accurate_tanh", "fast_tanh", "gru_cell", "gru_collection_step", "gru_linear_step", "leaf_call", "lstm_cell",
            "lstm_collection_step", "lstm_collection_steps", "lstm_linear_step", "sample_index", "smc_steps"]
 
 
@@ -61,11 +63,59 @@ def _add_rows(t: np.ndarray, x: np.ndarray, w: np.ndarray) -> None:  # pragma: n
                 t[j] += xi * w[i, j]
 
 
+LIBM_TANH, ACCURATE_TANH, FAST_TANH = 0, 1, 2
+"""How a cell computes ``tanh`` (:func:`lstm_cell`, :func:`gru_cell`): the C library's ``np.tanh`` (the training side's
+collection steps, :func:`lstm_collection_step` and its kin: bit for bit what they have always computed, so trained
+SMCs stay the same); :func:`accurate_tanh` (within 2 units in the last place of it: the numpy actors' steps and the
+leaf calls, the steps of SMCs that are called or evaluated); :func:`fast_tanh` (float32 accuracy: the lean update's
+collection)."""
+
+_LN2_HI, _LN2_LO = 6.93147180369123816490e-01, 1.90821492927058770002e-10  # ln 2 split: k * _LN2_HI is exact
+_INV_LN2 = 1.44269504088896338700e+00
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def accurate_tanh(x: float) -> float:  # pragma: no cover
+    """``tanh(x)`` within 2 units in the last place of the C library's (tested), without a library call, so the
+    loops around it vectorize (about 3x the C library's speed on a cell's 160 values).
+
+    ``|x| < 0.625``: Cephes' rational form ``x + x^3 P(x^2) / Q(x^2)``. Else ``1 - 2 / (exp(2|x|) + 1)``, the
+    exponential by Cody and Waite's reduction ``2|x| = k ln 2 + r`` (``|r| <= ln 2 / 2``), ``exp(r)`` by its Taylor
+    polynomial of degree 13 and ``2^k`` by its binary digits (all exact). ``2|x|`` is clamped at 40 (``tanh`` is 1
+    in double precision from ``|x| = 19.06``); NaN stays NaN, the sign of zero is kept."""
+    a = abs(x)
+    z = a * a
+    p = (-9.64399179425052238628e-1 * z + -9.92877231001918586564e1) * z + -1.61468768441708447952e3
+    q = ((z + 1.12811678491632931402e2) * z + 2.23548839060100448583e3) * z + 4.84406305325125486048e3
+    small = a + a * z * p / q
+    y = 40.0 if 2.0 * a > 40.0 else 2.0 * a
+    k = np.floor(y * _INV_LN2 + 0.5)
+    r = (y - k * _LN2_HI) - k * _LN2_LO
+    e = ((((((1.0 / 6227020800.0 * r + 1.0 / 479001600.0) * r + 1.0 / 39916800.0) * r + 1.0 / 3628800.0) * r
+              + 1.0 / 362880.0) * r + 1.0 / 40320.0) * r + 1.0 / 5040.0) * r + 1.0 / 720.0
+    e = ((((((e * r + 1.0 / 120.0) * r + 1.0 / 24.0) * r + 1.0 / 6.0) * r + 0.5) * r + 1.0) * r) + 1.0
+    scale = 1.0
+    if k >= 32.0:
+        scale, k = scale * 4294967296.0, k - 32.0
+    if k >= 16.0:
+        scale, k = scale * 65536.0, k - 16.0
+    if k >= 8.0:
+        scale, k = scale * 256.0, k - 8.0
+    if k >= 4.0:
+        scale, k = scale * 16.0, k - 4.0
+    if k >= 2.0:
+        scale, k = scale * 4.0, k - 2.0
+    if k >= 1.0:
+        scale *= 2.0
+    large = 1.0 - 2.0 / (scale * e + 1.0)
+    return np.copysign(small if a < 0.625 else large, x)
+
+
 @njit(cache=True, inline="always", error_model="numpy")
 def fast_tanh(x: float) -> float:  # pragma: no cover
     """``tanh(x)`` to float32 accuracy (absolute error below 3e-7) without a library call, so the loops around it
     vectorize: Eigen's rational approximation (``ptanh_float``), clamped to +-7.905. The lean update's arithmetic
-    (:mod:`sb3_smc.common.recurrent.lean_update`); every other path uses ``np.tanh``."""
+    (:mod:`sb3_smc.common.recurrent.lean_update`) and its collection (:data:`FAST_TANH`)."""
     x = 7.90531110763549805 if x > 7.90531110763549805 else (-7.90531110763549805 if x < -7.90531110763549805 else x)
     x2 = x * x
     p = x2 * -2.76076847742355e-16 + 2.00018790482477e-13
@@ -80,32 +130,39 @@ def fast_tanh(x: float) -> float:  # pragma: no cover
     return x * p / q
 
 
+@njit(cache=True, inline="always", error_model="numpy")
+def _tanh(x: float, mode: int) -> float:  # pragma: no cover
+    """``tanh(x)`` as ``mode`` says (:data:`LIBM_TANH`, :data:`ACCURATE_TANH`, :data:`FAST_TANH`)."""
+    if mode == LIBM_TANH:
+        return np.tanh(x)
+    return accurate_tanh(x) if mode == ACCURATE_TANH else fast_tanh(x)
+
+
 @njit(cache=True, inline="always")
 def lstm_cell(x: np.ndarray, h: np.ndarray, c: np.ndarray, w_ih: np.ndarray, w_hh: np.ndarray, bias: np.ndarray,
-              gate_scale: float, h_next: np.ndarray, c_next: np.ndarray, exact: bool = True
-              ) -> None:  # pragma: no cover
+              gate_scale: float, h_next: np.ndarray, c_next: np.ndarray, tanh: int) -> None:  # pragma: no cover
     """The LSTM cell, the one place its arithmetic is written: one step of one layer for one row, in float64.
 
     ``x`` the layer's input, ``h`` / ``c`` the previous state; the weights transposed (``(inputs, 4 n)``), gates i,
     f, g, o in torch's order, ``bias`` the sum of torch's two biases. ``sigmoid(z) = 0.5 * tanh(z / 2) + 0.5`` with
     ``z / 2 = gate_scale * (preactivation)``: 0.5 for torch's weights, 1.0 for weights whose i, f, o columns are
     halved already (:class:`~sb3_smc.smc.numpy_actors.NumpyLSTMPolicy`'s). Writes ``h'`` / ``c'`` into ``h_next`` /
-    ``c_next``. The zero entries of ``x`` and ``h`` are skipped (mostly one-hot observations). ``exact=False``
-    takes :func:`fast_tanh` for ``np.tanh`` (the lean update's collection: its loops vectorize)."""
+    ``c_next``. The zero entries of ``x`` and ``h`` are skipped (mostly one-hot observations). ``tanh``: which
+    ``tanh`` (:data:`LIBM_TANH` ...)."""
     n = h.shape[0]
     t = bias.astype(np.float64)
     _add_rows(t, x, w_ih)
     _add_rows(t, h, w_hh)
     for j in range(4 * n):  # the gates' tanh: of gate_scale * t on i, f, o (sigmoids), of t on g
         z = t[j] if 2 * n <= j < 3 * n else gate_scale * t[j]
-        t[j] = np.tanh(z) if exact else fast_tanh(z)
+        t[j] = _tanh(z, tanh)
     for j in range(n):
         cell = (0.5 * t[n + j] + 0.5) * c[j] + (0.5 * t[j] + 0.5) * t[2 * n + j]
         c_next[j] = cell
-        h_next[j] = (0.5 * t[3 * n + j] + 0.5) * (np.tanh(cell) if exact else fast_tanh(cell))
+        h_next[j] = (0.5 * t[3 * n + j] + 0.5) * _tanh(cell, tanh)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")  # no division checks: the cell's tanh vectorizes
 def lstm_linear_step(x: np.ndarray, h: np.ndarray, c: np.ndarray, w_ih: np.ndarray, w_hh: np.ndarray,
                      bias: np.ndarray, w_out: np.ndarray, b_out: np.ndarray
                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # pragma: no cover
@@ -119,31 +176,31 @@ def lstm_linear_step(x: np.ndarray, h: np.ndarray, c: np.ndarray, w_ih: np.ndarr
     probabilities = np.empty(b_out.shape[0])
     h_next = np.empty((1, h.shape[0]))
     c_next = np.empty((1, h.shape[0]))
-    lstm_cell(x, h, c, w_ih, w_hh, bias, 1.0, h_next[0], c_next[0])
+    lstm_cell(x, h, c, w_ih, w_hh, bias, 1.0, h_next[0], c_next[0], ACCURATE_TANH)
     _linear_softmax(h_next[0], w_out, b_out, probabilities)
     return probabilities, h_next, c_next
 
 
 @njit(cache=True, inline="always")
 def gru_cell(x: np.ndarray, h: np.ndarray, w_ih: np.ndarray, w_hh: np.ndarray, b_ih: np.ndarray, b_hh: np.ndarray,
-             h_next: np.ndarray) -> None:  # pragma: no cover
+             h_next: np.ndarray, tanh: int) -> None:  # pragma: no cover
     """The GRU cell, the one place its arithmetic is written: one step of one layer for one row, in float64, with
     torch's equations (gates r, z, n; ``n = tanh(W_in x + b_in + r * (W_hn h + b_hn))``, ``h' = (1 - z) * n + z * h``
     written ``n + z * (h - n)``). The weights transposed (``(inputs, 3 n)``); writes ``h'`` into ``h_next``; the
-    zero entries of ``x`` and ``h`` are skipped."""
+    zero entries of ``x`` and ``h`` are skipped; ``tanh`` as in :func:`lstm_cell`."""
     n = h.shape[0]
     gi = b_ih.astype(np.float64)
     _add_rows(gi, x, w_ih)
     gh = b_hh.astype(np.float64)
     _add_rows(gh, h, w_hh)
     for j in range(n):
-        r = 0.5 * np.tanh(0.5 * (gi[j] + gh[j])) + 0.5
-        z = 0.5 * np.tanh(0.5 * (gi[n + j] + gh[n + j])) + 0.5
-        candidate = np.tanh(gi[2 * n + j] + r * gh[2 * n + j])
+        r = 0.5 * _tanh(0.5 * (gi[j] + gh[j]), tanh) + 0.5
+        z = 0.5 * _tanh(0.5 * (gi[n + j] + gh[n + j]), tanh) + 0.5
+        candidate = _tanh(gi[2 * n + j] + r * gh[2 * n + j], tanh)
         h_next[j] = candidate + z * (h[j] - candidate)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")  # no division checks: the cell's tanh vectorizes
 def gru_linear_step(x: np.ndarray, h: np.ndarray, w_ih: np.ndarray, w_hh: np.ndarray, b_ih: np.ndarray,
                     b_hh: np.ndarray, w_out: np.ndarray, b_out: np.ndarray
                     ) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover
@@ -153,7 +210,7 @@ def gru_linear_step(x: np.ndarray, h: np.ndarray, w_ih: np.ndarray, w_hh: np.nda
         raise ValueError("GRU state or observation of the wrong size for this policy")
     probabilities = np.empty(b_out.shape[0])
     h_next = np.empty((1, h.shape[0]))
-    gru_cell(x, h, w_ih, w_hh, b_ih, b_hh, h_next[0])
+    gru_cell(x, h, w_ih, w_hh, b_ih, b_hh, h_next[0], ACCURATE_TANH)
     _linear_softmax(h_next[0], w_out, b_out, probabilities)
     return probabilities, h_next
 
@@ -243,7 +300,7 @@ def _lstm_collection_row(x: np.ndarray, h: np.ndarray, c: np.ndarray, start: flo
     for i in range(h.shape[0]):
         previous_h[i] = keep * h[i]
         previous_c[i] = keep * c[i]
-    lstm_cell(x, previous_h, previous_c, w_ih, w_hh, bias, 0.5, latent, cell, exact)
+    lstm_cell(x, previous_h, previous_c, w_ih, w_hh, bias, 0.5, latent, cell, LIBM_TANH if exact else FAST_TANH)
     for j in range(h.shape[0]):
         c_out[j] = cell[j]
         h_out[j] = latent[j]
@@ -322,7 +379,7 @@ def gru_collection_step(x: np.ndarray, h: np.ndarray, starts: np.ndarray, unifor
         keep = 1.0 - starts[k]
         for i in range(hidden):
             previous[i] = keep * h[k, i]
-        gru_cell(x[k], previous, w_ih, w_hh, b_ih, b_hh, latent)
+        gru_cell(x[k], previous, w_ih, w_hh, b_ih, b_hh, latent, LIBM_TANH)
         for j in range(hidden):
             h_next[k, j] = latent[j]
         actions[k], value, log_probs[k] = _heads(x[k], latent, uniforms[k], deterministic, w_critic, b_critic,
@@ -350,7 +407,7 @@ def _shape(goal: int, counters: np.ndarray, totals: np.ndarray, potential: float
         totals[0] += potential if goal == 1 else -potential
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")  # no division checks: the cell's tanh vectorizes
 def leaf_call(grid: np.ndarray, owner: np.ndarray, me: int, self_color: int, goal_cells: np.ndarray,
               bring_about: bool, potential: float, n_colors: int, kinds: np.ndarray, values: np.ndarray,
               deltas: np.ndarray, counters: np.ndarray, totals: np.ndarray, gru: bool, h: np.ndarray, c: np.ndarray,
@@ -394,9 +451,9 @@ def leaf_call(grid: np.ndarray, owner: np.ndarray, me: int, self_color: int, goa
         if counters[PREVIOUS] >= 0:
             x[first_previous + counters[PREVIOUS]] = 1.0
         if gru:
-            gru_cell(x, h, w_ih, w_hh, b_first, b_second, h_next)
+            gru_cell(x, h, w_ih, w_hh, b_first, b_second, h_next, ACCURATE_TANH)
         else:
-            lstm_cell(x, h, c, w_ih, w_hh, b_first, 1.0, h_next, c_next)
+            lstm_cell(x, h, c, w_ih, w_hh, b_first, 1.0, h_next, c_next, ACCURATE_TANH)
             c[:] = c_next
         h[:] = h_next
         _linear_softmax(h_next, w_out, b_out, probabilities)
