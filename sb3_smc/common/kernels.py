@@ -300,7 +300,10 @@ def _lstm_collection_row(x: np.ndarray, h: np.ndarray, c: np.ndarray, start: flo
     for i in range(h.shape[0]):
         previous_h[i] = keep * h[i]
         previous_c[i] = keep * c[i]
-    lstm_cell(x, previous_h, previous_c, w_ih, w_hh, bias, 0.5, latent, cell, LIBM_TANH if exact else FAST_TANH)
+    if exact:  # two calls with constant modes: each inlined cell keeps one tanh (its loops vectorize with fast_tanh)
+        lstm_cell(x, previous_h, previous_c, w_ih, w_hh, bias, 0.5, latent, cell, LIBM_TANH)
+    else:
+        lstm_cell(x, previous_h, previous_c, w_ih, w_hh, bias, 0.5, latent, cell, FAST_TANH)
     for j in range(h.shape[0]):
         c_out[j] = cell[j]
         h_out[j] = latent[j]
