@@ -9,10 +9,12 @@ same start), Welch's t-test, and equivalence by two one-sided paired t-tests (TO
 points of a test score in percent, five hundredths of the return, whose largest value is 1).
 
 Run: ``python benchmarks/lean_update_equivalence.py [--timesteps N] [--seeds S] [--targets ENV_IDS]
-[--out runs.jsonl]``; each finished SMC is appended to ``--out`` as one JSON line (with the commit that trained it),
-and a run skips the SMCs already there (so a stopped run resumes, a run with more seeds adds only the new ones, and a
-second process with ``--last-seed-first`` on the same file shares the work). ``--updates default`` or ``lean`` trains
-one update's SMCs only. The table covers every target and seed in the file that both updates trained.
+[--algo RecurrentTRPO --rnn gru] [--out runs.jsonl]``; each finished SMC is appended to ``--out`` as one JSON line
+(with the commit that trained it), and a run skips the SMCs already there (so a stopped run resumes, a run with more
+seeds adds only the new ones, and a second process with ``--last-seed-first`` on the same file shares the work).
+``--updates default`` or ``lean`` trains one update's SMCs only; ``--algo`` / ``--rnn`` train another learner than
+the default (the paper's: RecurrentTRPO with a GRU), recorded in its rows. The table covers every target and seed in
+the file that both updates trained with the run's learner and budget.
 """
 
 from __future__ import annotations
@@ -33,8 +35,10 @@ TARGETS = ("PW-cl_self-in-left-corner_vs_on-hline-v0", "PW-cl_self-in-container_
 MEASURES = ("selected_return", "test_score")
 
 
-def train_and_test(env_id: str, seed: int, lean: bool, timesteps: int) -> dict[str, Any]:
-    """One SMC trained and tested: its selected training return, test score, steps and wall time."""
+def train_and_test(env_id: str, seed: int, lean: bool, timesteps: int, learner: dict[str, str] | None = None
+                   ) -> dict[str, Any]:
+    """One SMC trained and tested (``learner``: ``algo`` / ``rnn`` of ``train_smc``, default its own): its selected
+    training return, test score, steps and wall time."""
     import torch
 
     from sb3_smc.experiments.runner import code_commit
@@ -43,13 +47,14 @@ def train_and_test(env_id: str, seed: int, lean: bool, timesteps: int) -> dict[s
 
     torch.set_num_threads(1)
     start = time.perf_counter()
-    smc = train_smc(env_id, total_timesteps=timesteps, seed=seed, lean_update=lean, log_every=0)
+    smc = train_smc(env_id, total_timesteps=timesteps, seed=seed, lean_update=lean, log_every=0, **(learner or {}))
     record = smc.record
     assert record is not None
     score = evaluate(smc, record_cells=False, keep=False).score
     return {"env_id": env_id, "seed": seed, "lean": lean, "timesteps": timesteps,
             "selected_return": record.selected_return, "test_score": score, "steps": record.total_timesteps,
-            "train_s": record.wall_time_s, "seconds": time.perf_counter() - start, "commit": code_commit()}
+            "train_s": record.wall_time_s, "seconds": time.perf_counter() - start, "commit": code_commit(),
+            **(learner or {})}
 
 
 def tost_paired(differences: np.ndarray, margin: float) -> float:
@@ -109,7 +114,7 @@ def _rows(path: Path) -> list[dict[str, Any]]:
 
 
 def _key(row: dict[str, Any]) -> tuple[Any, ...]:
-    return row["env_id"], row["seed"], row["lean"], row["timesteps"]
+    return row["env_id"], row["seed"], row["lean"], row["timesteps"], row.get("algo"), row.get("rnn")
 
 
 def main() -> None:
@@ -124,7 +129,11 @@ def main() -> None:
     parser.add_argument("--out", type=Path, default=Path("lean_update_equivalence.jsonl"), help="one JSON line per SMC")
     parser.add_argument("--last-seed-first", action="store_true",
                         help="take the seeds in reverse order (a second process on the same --out meets the first)")
+    parser.add_argument("--algo", default=None,
+                        help="the learner (default: train_smc's); RecurrentTRPO for the paper's")
+    parser.add_argument("--rnn", default=None, help="the recurrent cell (default: train_smc's); gru for the paper's")
     args = parser.parse_args()
+    learner = {key: value for key, value in (("algo", args.algo), ("rnn", args.rnn)) if value is not None}
     targets = [t for t in args.targets.split(",") if t]
     unknown = sorted(set(targets) - set(TARGETS))
     if unknown:
@@ -133,17 +142,19 @@ def main() -> None:
     for seed in reversed(seeds) if args.last_seed_first else seeds:
         for env_id in targets:
             for lean in {"both": (False, True), "default": (False,), "lean": (True,)}[args.updates]:
-                if (env_id, seed, lean, args.timesteps) in {_key(r) for r in _rows(args.out)}:
+                if (env_id, seed, lean, args.timesteps, args.algo, args.rnn) in {_key(r) for r in _rows(args.out)}:
                     continue  # finished here, or by another process on the same file
-                row = train_and_test(env_id, seed, lean, args.timesteps)
+                row = train_and_test(env_id, seed, lean, args.timesteps, learner)
                 with args.out.open("a") as out:
                     out.write(json.dumps(row) + "\n")
                 print(json.dumps(row), flush=True)
     rows = list({_key(r): r for r in _rows(args.out)}.values())
-    rows = [r for r in rows if r["timesteps"] == args.timesteps]
+    rows = [r for r in rows
+            if r["timesteps"] == args.timesteps and (r.get("algo"), r.get("rnn")) == (args.algo, args.rnn)]
     seconds = {lean: sum(r["train_s"] for r in rows if r["lean"] == lean) for lean in (False, True)}
     commits = {lean: sorted({str(r.get("commit")) for r in rows if r["lean"] == lean}) for lean in (False, True)}
-    print(f"\n{args.timesteps:,} steps per SMC, stopping at the largest return; training time: default "
+    print(f"\n{args.timesteps:,} steps per SMC{', learner ' + json.dumps(learner) if learner else ''}, stopping at the "
+          f"largest return; training time: default "
           f"{seconds[False]:.0f} s, lean {seconds[True]:.0f} s; trained at: default {', '.join(commits[False])}, "
           f"lean {', '.join(commits[True])} (None: the first run's rows, 2026-11-27)\n")
     print(table(compare(rows, args.margin), args.margin))

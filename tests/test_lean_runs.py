@@ -70,16 +70,24 @@ def test_a_library_is_reused_only_where_its_smcs_had_the_runs_update(tmp_path):
     assert "(0 already done)" in lines[0]  # and not a stock run's
 
 
+def test_a_lean_run_of_the_paper_s_learner_trains_every_smc_as_train_smc_with_the_lean_update(tmp_path):
+    """``base-gru`` (RecurrentTRPO with a GRU) with the lean update: its seeds train in a group, each SMC the one
+    ``train_smc(spec, lean_update=True)`` gives alone, and its record says so."""
+    run_experiment(tmp_path / "experiment", methods=["base-gru"], targets=[TARGET], seeds=2, timesteps=1024,
+                   lean_update=True, progress=False)
+    library = SMCLibrary.load(tmp_path / "experiment" / "library")
+    assert len(library.names) == 2
+    for name in library.names:
+        smc = library[name]
+        assert smc.record.lean_update and smc.spec.algo == "RecurrentTRPO"
+        assert type(smc.model.policy).__name__ == "SequenceGruPolicy"
+        assert _weights_equal(train_smc(smc.spec, lean_update=True, log_every=0), smc)
+
+
 def test_a_lean_run_whose_learner_it_does_not_fit_is_refused_before_anything_is_written(tmp_path):
     with pytest.raises(CurriculumError, match=f"node '{LEFT}': SMC '{LEFT}@0': lean_update needs RecurrentPPO"):
         train_curriculum(TINY, tmp_path / "trpo", seeds=1, timesteps=256, algo="TRPO", lean_update=True,
                          progress=False)
-    with pytest.raises(CurriculumError, match="lean_update needs RecurrentPPO"):
-        train_curriculum(TINY, tmp_path / "gru", seeds=1, timesteps=256, rnn="gru", lean_update=True,
-                         progress=False)
-    with pytest.raises(CurriculumError, match="node 'base-gru/.*lean_update needs RecurrentPPO"):
-        run_experiment(tmp_path / "experiment", methods=["base-gru"], targets=[TARGET], seeds=1, timesteps=256,
-                       lean_update=True, progress=False)
     assert not any(tmp_path.iterdir())
     with pytest.raises(SMCTypeError, match="lean_update must be True or False, got 'yes'"):
         RunOptions(lean_update="yes")  # type: ignore[arg-type]

@@ -1,8 +1,10 @@
-"""The lean PPO update (:mod:`sb3_smc.common.recurrent.lean_update`): the stock update's losses, gradients and
-logs up to float rounding, ``train_smc``'s ``lean_update`` option, and (``slow``) its statistical equivalence."""
+"""The lean update (:mod:`sb3_smc.common.recurrent.lean_update`, :mod:`sb3_smc.common.recurrent.lean_recurrence`):
+the compiled recurrence against torch's layers, the stock PPO update's losses, gradients and logs and RecurrentTRPO's
+step up to float rounding, ``train_smc``'s ``lean_update`` option, and (``slow``) its statistical equivalence."""
 
 from __future__ import annotations
 
+import contextlib
 import copy
 from typing import Any, cast
 
@@ -10,9 +12,12 @@ import numpy as np
 import pytest
 import torch
 from sb3_contrib import RecurrentPPO
+from torch import nn
 
 import pixelworld_env  # noqa: F401  (registers the PW-* ids)
 from sb3_smc.common.kernels import fast_tanh
+from sb3_smc.common.recurrent.layers import GRUAsLSTM
+from sb3_smc.common.recurrent.lean_recurrence import Sequences, compiled_layer, recurrence
 from sb3_smc.common.recurrent.lean_update import _plain_heads, lean_train, lean_update_applies, use_lean_update
 from sb3_smc.errors import SMCError
 from sb3_smc.learning.training import train_smc
@@ -38,20 +43,22 @@ def _update(model: RecurrentPPO, train: Any, state: dict, optimizer_state: dict
     return grads, dict(model.logger.name_to_value), np.random.get_state()
 
 
-@pytest.mark.parametrize(("settings", "policy_kwargs"), [
-    ({}, {}), ({"clip_range_vf": 0.1, "target_kl": 0.0001, "ent_coef": 0.01}, {}),
-    ({"ent_coef": 0.01}, {"net_arch": {"pi": [16], "vf": [8]}})], ids=["default", "clipped", "torch-heads"])
-def test_lean_update_is_the_stock_update_up_to_rounding(settings: dict[str, Any], policy_kwargs: dict[str, Any]
-                                                        ) -> None:
+@pytest.mark.parametrize(("settings", "policy_kwargs", "rnn"), [
+    ({}, {}, "lstm"), ({"clip_range_vf": 0.1, "target_kl": 0.0001, "ent_coef": 0.01}, {}, "lstm"),
+    ({"ent_coef": 0.01}, {"net_arch": {"pi": [16], "vf": [8]}}, "lstm"), ({}, {}, "gru")],
+    ids=["default", "clipped", "torch-heads", "gru"])
+def test_lean_update_is_the_stock_update_up_to_rounding(settings: dict[str, Any], policy_kwargs: dict[str, Any],
+                                                        rnn: str) -> None:
     """On a real rollout (collected by the weights updated, after 4 updates), every epoch's gradients and every
     logged value of ``lean_train`` equal ``model.train()``'s to 1e-5 relative, with the same random draws. The
     default heads take the update written out in numpy; the second case clips the value loss, has an entropy term
-    and stops early on the KL (after its third step); the third has layers after the LSTM (torch's heads)."""
+    and stops early on the KL (after its third step); the third has layers after the LSTM (torch's heads); the
+    fourth is a GRU (torch's heads around the compiled GRU)."""
     smc = train_smc(CORNER_ID, total_timesteps=8_000, seed=1, log_every=0, stop_at_max_return=False,
-                    policy_kwargs=policy_kwargs or None)
+                    policy_kwargs=policy_kwargs or None, rnn=rnn)
     model = smc.model
     assert lean_update_applies(model)
-    assert _plain_heads(model.policy) == (not policy_kwargs)  # which path computes the heads
+    assert _plain_heads(model.policy) == (not policy_kwargs and rnn == "lstm")  # which path computes the heads
     _, callback = model._setup_learn(model.n_steps * model.n_envs, None, reset_num_timesteps=False)
     model.collect_rollouts(model.env, callback, model.rollout_buffer, model.n_steps)  # a rollout of these weights
     if "clip_range_vf" in settings:
@@ -90,8 +97,9 @@ def test_train_smc_lean_update_option() -> None:
     assert all(torch.equal(first[name], second[name]) for name in first)
     default = train_smc(CORNER_ID, total_timesteps=2_000, seed=2, log_every=0)
     assert default.record is not None and "lean_update" not in default.record.to_dict()  # records as before
-    with pytest.raises(SMCError, match="lean_update"):
-        train_smc(CORNER_ID, total_timesteps=2_000, rnn="gru", log_every=0, lean_update=True)
+    with pytest.raises(SMCError, match="lean_update needs RecurrentPPO or RecurrentTRPO"):
+        train_smc(CORNER_ID, total_timesteps=2_000, policy_kwargs={"enable_critic_lstm": True}, log_every=0,
+                  lean_update=True)
     with pytest.raises(SMCError, match="lean_update"):
         train_smc(CORNER_ID, total_timesteps=2_000, batch_size=500, log_every=0, lean_update=True)
     with pytest.raises(ValueError, match="lean update"), use_lean_update(train_smc(
@@ -145,3 +153,69 @@ def test_lean_update_is_statistically_the_default_update() -> None:
     assert len(comparisons) == 2 * len(bench.TARGETS), report
     assert all(c["paired_p"] >= 0.05 and c["welch_p"] >= 0.05 for c in comparisons), report
     assert all(c["tost_p"] < 0.05 for c in comparisons if c["env_id"] == bench.TARGETS[0]), report
+
+
+@pytest.mark.parametrize("cell", ["lstm", "gru"])
+def test_the_compiled_recurrence_is_torch_s_layer_up_to_rounding(cell: str) -> None:
+    """On sequences of a flat batch (mostly zero inputs, some from a zero state, some from a stored one), the
+    compiled layer's outputs and its four parameters' gradients equal torch's to float32 rounding."""
+    torch.manual_seed(0)
+    rng = np.random.default_rng(0)
+    layer: Any = nn.LSTM(20, 8) if cell == "lstm" else GRUAsLSTM(20, 8)
+    rows = 50
+    x = ((rng.random((rows, 20)) < 0.2) * rng.standard_normal((rows, 20))).astype(np.float32)
+    starts = np.array([0, 7, 20, 21, 40])
+    lengths = np.diff(np.append(starts, rows))
+    h0, c0 = rng.standard_normal((5, 8)), rng.standard_normal((5, 8))
+    h0[2] = c0[2] = 0.0  # an episode start
+    compiled = recurrence(layer, x, Sequences(starts, lengths, h0, c0))
+    initial = [(torch.tensor(h0[i], dtype=torch.float32)[None, None],
+                torch.tensor(c0[i], dtype=torch.float32)[None, None]) for i in range(len(starts))]
+    reference = torch.cat([layer(torch.from_numpy(x[start:start + length])[:, None], initial[i])[0][:, 0]
+                           for i, (start, length) in enumerate(zip(starts, lengths, strict=True))])
+    assert float((compiled - reference).detach().abs().max()) < 1e-6
+    weights = torch.from_numpy(rng.standard_normal((rows, 8)).astype(np.float32))
+    params = list(layer.parameters())
+    compiled_grads = torch.autograd.grad((compiled * weights).sum(), params)
+    reference_grads = torch.autograd.grad((reference * weights).sum(), params)
+    assert len(params) == 4
+    for a, b in zip(compiled_grads, reference_grads, strict=True):
+        assert float((a - b).abs().max()) <= 1e-6 * float(b.abs().max())
+    assert not compiled_layer(nn.LSTM(20, 8, num_layers=2)) and not compiled_layer(nn.LSTM(20, 8, bias=False))
+    assert not compiled_layer(GRUAsLSTM(20, 8, 2)) and not compiled_layer(nn.GRU(20, 8))
+
+
+@pytest.mark.parametrize("rnn", ["gru", "lstm"])
+def test_recurrent_trpo_s_lean_policy_step_is_its_default_one_up_to_rounding(rnn: str) -> None:
+    """RecurrentTRPO's update on a real rollout, from the same weights and draws, with the default policy step and
+    with the lean one (the compiled recurrence): the same step to float rounding (the change of every parameter
+    to 1e-4 relative, the same logged values to 1e-4), and the model is a plain RecurrentTRPO after the block."""
+    smc = train_smc(CORNER_ID, algo="RecurrentTRPO", rnn=rnn, total_timesteps=8_000, seed=1, log_every=0,
+                    stop_at_max_return=False)
+    model = smc.model
+    assert lean_update_applies(model)
+    _, callback = model._setup_learn(model.n_steps * model.n_envs, None, reset_num_timesteps=False)
+    model.collect_rollouts(model.env, callback, model.rollout_buffer, model.n_steps)
+    state = copy.deepcopy(model.policy.state_dict())
+    optimizer_state = copy.deepcopy(model.policy.optimizer.state_dict())
+
+    def update(lean: bool) -> tuple[dict[str, torch.Tensor], dict[str, Any]]:
+        model.policy.load_state_dict(state)
+        model.policy.optimizer.load_state_dict(copy.deepcopy(optimizer_state))
+        model._n_updates = 0
+        torch.manual_seed(3)
+        np.random.seed(3)
+        with use_lean_update(model) if lean else contextlib.nullcontext():
+            assert model.lean_policy_step == lean
+            model.train()
+        return copy.deepcopy(model.policy.state_dict()), dict(model.logger.name_to_value)
+
+    default, default_logs = update(False)
+    lean, lean_logs = update(True)
+    assert "lean_policy_step" not in vars(model) and not model.lean_policy_step
+    assert default_logs["train/is_line_search_success"] == 1.0  # a real step, taken by both
+    for name, before in state.items():
+        change = default[name] - before
+        assert float((lean[name] - default[name]).norm()) <= 1e-4 * float(change.norm()) + 1e-9, name
+    for key, value in default_logs.items():
+        assert lean_logs[key] == pytest.approx(value, rel=1e-4, abs=1e-7), key

@@ -363,12 +363,13 @@ def lstm_collection_steps(x: np.ndarray, h: np.ndarray, c: np.ndarray, starts: n
 
 @njit(cache=True)
 def gru_collection_step(x: np.ndarray, h: np.ndarray, starts: np.ndarray, uniforms: np.ndarray,
-                        deterministic: bool, w_ih: np.ndarray, w_hh: np.ndarray, b_ih: np.ndarray, b_hh: np.ndarray,
+                        deterministic: bool, exact: bool, w_ih: np.ndarray, w_hh: np.ndarray, b_ih: np.ndarray,
+                        b_hh: np.ndarray,
                         w_critic: np.ndarray, b_critic: np.ndarray, w_value: np.ndarray, b_value: float,
                         w_action: np.ndarray, b_action: np.ndarray
                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:  # pragma: no cover
     """:func:`lstm_collection_step` for a one-layer GRU (torch's gates r, z, n): ``(actions, values, log-probabilities,
-    h')``."""
+    h')``; ``exact`` as there."""
     n, hidden = h.shape
     if x.shape[0] != n or w_ih.shape[0] != x.shape[1] or w_hh.shape[0] != hidden:
         raise ValueError("observations or GRU states of the wrong shape for this policy")
@@ -382,7 +383,10 @@ def gru_collection_step(x: np.ndarray, h: np.ndarray, starts: np.ndarray, unifor
         keep = 1.0 - starts[k]
         for i in range(hidden):
             previous[i] = keep * h[k, i]
-        gru_cell(x[k], previous, w_ih, w_hh, b_ih, b_hh, latent, LIBM_TANH)
+        if exact:  # constant modes, as in _lstm_collection_row
+            gru_cell(x[k], previous, w_ih, w_hh, b_ih, b_hh, latent, LIBM_TANH)
+        else:
+            gru_cell(x[k], previous, w_ih, w_hh, b_ih, b_hh, latent, FAST_TANH)
         for j in range(hidden):
             h_next[k, j] = latent[j]
         actions[k], value, log_probs[k] = _heads(x[k], latent, uniforms[k], deterministic, w_critic, b_critic,

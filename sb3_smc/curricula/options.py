@@ -45,8 +45,8 @@ class RunOptions:
     :param algo: replaces every node's learner.
     :param rnn: the recurrent cell of every node (``"lstm"`` or ``"gru"``; recurrent algorithms only).
     :param lean_update: train every SMC with the lean update (``train_smc(..., lean_update=True)``: the same update
-        up to float rounding, not bit for bit; every node's learner must be ``RecurrentPPO`` with the LSTM policy's
-        default recurrence, checked before anything is trained); recorded in ``run.json`` when set.
+        up to float rounding, not bit for bit; every node's learner must be ``RecurrentPPO`` or ``RecurrentTRPO``
+        with one LSTM or GRU layer, checked before anything is trained); recorded in ``run.json`` when set.
     :param workers: jobs in parallel (local processes; with Ray, the jobs in flight).
     :param backend: ``"local"`` or ``"ray"``.
     :param ray_address: the Ray cluster (``backend="ray"`` only; default: ``RAY_ADDRESS``).

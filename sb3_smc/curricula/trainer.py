@@ -152,7 +152,7 @@ def train_curriculum(
     :param algo: replaces every node's learner.
     :param rnn: the recurrent cell of every node (``"lstm"`` or ``"gru"``; recurrent algorithms only).
     :param lean_update: train every SMC with the lean update (equal up to float rounding, not bit for bit;
-        RecurrentPPO with the LSTM policy's default recurrence only, checked for every node first); ``run.json``
+        RecurrentPPO or RecurrentTRPO with one LSTM or GRU layer, checked for every node first); ``run.json``
         records it, and a library's SMCs are reused only when trained with the same update.
     :param ray_address: the Ray cluster (default: ``RAY_ADDRESS``, else a local instance).
     :param group_size: the most ready seeds of a flat node trained together as one unit (one worker process or Ray

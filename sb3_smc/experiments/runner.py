@@ -102,7 +102,8 @@ def run_experiment(
         learner of its own (``base-gru``) refuses it.
     :param rnn: the recurrent cell, ``lstm`` (default) or ``gru`` (the paper's); refused as ``algo`` is.
     :param lean_update: train every SMC with the lean update (:func:`train_curriculum`'s; equal up to float rounding,
-        not bit for bit); every method's learner must be RecurrentPPO with an LSTM (checked before training).
+        not bit for bit); every method's learner must be RecurrentPPO or RecurrentTRPO with one LSTM or GRU layer
+        (checked before training).
     :param train: ``False`` trains nothing: it tabulates what the directory's run has finished so far (while it may
         still be training): the finished SMCs are evaluated (and the CNN trained), the rest are listed in
         ``missing`` and the results are marked ``"complete": false`` (the report says so).

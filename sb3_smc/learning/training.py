@@ -43,7 +43,7 @@ from stable_baselines3.common.vec_env import VecEnv
 
 from sb3_smc.common.discounting import SemiMDPDiscount
 from sb3_smc.common.recurrent import use_compact_buffer
-from sb3_smc.common.recurrent.lean_update import lean_update_applies, use_lean_update
+from sb3_smc.common.recurrent.lean_update import LEAN_UPDATE_NEEDS, lean_update_applies, use_lean_update
 from sb3_smc.core.hyperparameters import (
     ALGORITHM_REGISTRY,
     DEFAULT_ALGORITHM,
@@ -342,11 +342,10 @@ def _train(spec: TrainingSpec, children: tuple[SMC, ...], resolved: ResolvedTask
 
 
 def check_lean_update(spec: TrainingSpec, model: Any) -> None:
-    """``SMCError`` unless the lean update (:func:`~sb3_smc.common.recurrent.lean_update.lean_train`) computes
-    ``model``'s update."""
+    """``SMCError`` unless the lean update (:mod:`~sb3_smc.common.recurrent.lean_update`) computes ``model``'s
+    update."""
     if not lean_update_applies(model):
-        raise SMCError(f"SMC {spec.name!r}: lean_update needs RecurrentPPO with the LSTM policy's default recurrence "
-                       "(one LSTM layer, no critic LSTM) and one minibatch per epoch")
+        raise SMCError(f"SMC {spec.name!r}: lean_update needs {LEAN_UPDATE_NEEDS}")
 
 
 @dataclasses.dataclass(frozen=True)

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Callable
+from contextlib import nullcontext
 from functools import partial
 from typing import TYPE_CHECKING, Any, ClassVar, TypeVar, cast
 
@@ -27,6 +28,8 @@ from torch.distributions import Categorical, kl_divergence
 from torch.nn import functional as F
 
 from sb3_smc.common.recurrent import SequenceGruPolicy, SequenceLstmPolicy, use_compact_buffer
+from sb3_smc.common.recurrent.lean_recurrence import Sequences, recurrence
+from sb3_smc.common.threads import blas_threads
 from sb3_smc.errors import SMCError, SMCTypeError
 
 if TYPE_CHECKING:
@@ -125,6 +128,10 @@ class RecurrentTRPO(RecurrentPPO):
     """
 
     policy_aliases: ClassVar[dict[str, type]] = {"MlpLstmPolicy": SequenceLstmPolicy, "MlpGruPolicy": SequenceGruPolicy}
+    #: Whether the policy step runs the actor's recurrence compiled
+    #: (:func:`~sb3_smc.common.recurrent.lean_recurrence.recurrence`: equal up to float rounding, faster); set by
+    #: :func:`~sb3_smc.common.recurrent.lean_update.use_lean_update`.
+    lean_policy_step: bool = False
     target_kl: float  # never None here (checked > 0), unlike RecurrentPPO's
     policy: SequenceLstmPolicy  # checked by _setup_model
 
@@ -251,12 +258,20 @@ class RecurrentTRPO(RecurrentPPO):
         """TRPO's step of the actor on the batch ``data``: the actor's parameters, whether the line search took a
         step, the surrogate after it (before, when none) and the step's mean KL (0 when none)."""
         actions = data.actions.long().flatten()
+        policy = self.policy
+        if self.lean_policy_step:
+            x = np.ascontiguousarray(data.observations.numpy(), dtype=np.float32)
+            sequences = Sequences.of(data.lstm_states)
 
-        def evaluate():
-            evaluated = self.policy.evaluate_sequences(data.observations, data.lstm_states, data.episode_starts)
-            if evaluated is None:
-                raise RuntimeError("RecurrentTRPO needs the compact recurrent buffer's minibatches")
-            return evaluated[0]
+            def evaluate():
+                latent = policy.mlp_extractor.forward_actor(recurrence(policy.lstm_actor, x, sequences))
+                return policy._get_action_dist_from_latent(latent)
+        else:
+            def evaluate():
+                evaluated = policy.evaluate_sequences(data.observations, data.lstm_states, data.episode_starts)
+                if evaluated is None:
+                    raise RuntimeError("RecurrentTRPO needs the compact recurrent buffer's minibatches")
+                return evaluated[0]
 
         distribution = evaluate()
         logits = distribution.distribution.logits
@@ -296,7 +311,8 @@ class RecurrentTRPO(RecurrentPPO):
         self._update_learning_rate(self.policy.optimizer)
         with warnings.catch_warnings():  # on a GPU, ``_set`` holds the parameters apart from cuDNN's packed copy
             warnings.filterwarnings("ignore", _UNPACKED, UserWarning)  # during the search (packed again below)
-            steps = [self._policy_step(data) for data in self.rollout_buffer.get(batch_size=None)]
+            with blas_threads(1) if self.lean_policy_step else nullcontext():  # as lean_train: the same SMC
+                steps = [self._policy_step(data) for data in self.rollout_buffer.get(batch_size=None)]
         for module in self.policy.modules():  # the data swaps of ``_set`` leave cuDNN's packed recurrent weights
             if isinstance(module, torch.nn.RNNBase):  # apart; pack them again (a no-op on the CPU)
                 module.flatten_parameters()

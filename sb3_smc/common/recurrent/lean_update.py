@@ -1,24 +1,25 @@
-"""A lean PPO update for ``RecurrentPPO`` with :class:`SequenceLstmPolicy`: sb3-contrib's ``RecurrentPPO.train``
-with the LSTM's recurrence compiled (opt-in; equal up to float rounding, not bit for bit).
+"""The lean update: sb3-contrib's ``RecurrentPPO.train``, and RecurrentTRPO's policy step, with the actor's
+recurrence compiled (opt-in; equal up to float rounding, not bit for bit).
 
-:func:`lean_train` computes what ``model.train()`` computes: the same minibatch per epoch (the buffer's random
-rotation drawn from numpy as sb3-contrib draws it, so the sequences are cut where the stock minibatch cuts them), the
-same losses (clipped surrogate, value loss with ``clip_range_vf`` if set, entropy), gradient clipping to
-``max_grad_norm``, the ``target_kl`` early stop, the same optimizer and the same logged values. What differs is
-how the LSTM runs: the rollout is laid out once (sequences cut at environment boundaries and episode starts; each
-epoch adds the cut of its rotation), the input projection of all rows is one matrix product, and the recurrence,
-forward and backward, runs over every sequence in one compiled (numba) loop in float64, with no padding and no
-per-step torch calls; the weight gradient of the recurrence is one matrix product over all rows. Sums are taken in
-another order and in float64, so the losses and gradients equal the stock ones to float rounding (tested to 1e-5
-relative on real rollouts); training on them is shown statistically equal, not bit-identical (``docs/training.md``,
-"The lean update"). With the package's default heads (:func:`_plain_heads`: no layers after the LSTM, a linear
-critic on the features, a categorical distribution, Adam) the whole epoch is written out in numpy, forward and
-backward (:func:`_numpy_epoch`), with no autograd graph; other heads run in torch around the compiled recurrence
-(:func:`_torch_epoch`).
+:func:`lean_train` computes what ``model.train()`` computes for a ``RecurrentPPO``: the same minibatch per epoch
+(the buffer's random rotation drawn from numpy as sb3-contrib draws it, so the sequences are cut where the stock
+minibatch cuts them), the same losses (clipped surrogate, value loss with ``clip_range_vf`` if set, entropy),
+gradient clipping to ``max_grad_norm``, the ``target_kl`` early stop, the same optimizer and the same logged values.
+What differs is how the recurrence runs: the rollout is laid out once (sequences cut at environment boundaries and
+episode starts; each epoch adds the cut of its rotation), and the recurrence, forward and backward, runs over every
+sequence in one compiled (numba) loop in float64 (:mod:`~sb3_smc.common.recurrent.lean_recurrence`), with no padding
+and no per-step torch calls. Sums are taken in another order and in float64, so the losses and gradients equal the
+stock ones to float rounding (tested to 1e-5 relative on real rollouts); training on them is shown statistically
+equal, not bit-identical (``docs/training.md``, "The lean update"). With an LSTM and the package's default heads
+(:func:`_plain_heads`: no layers after the LSTM, a linear critic on the features, a categorical distribution, Adam)
+the whole epoch is written out in numpy, forward and backward (:func:`_numpy_epoch`), with no autograd graph; a GRU
+or other heads run in torch around the compiled recurrence (:func:`_torch_epoch`).
+:class:`~sb3_smc.recurrent_trpo.RecurrentTRPO` takes the compiled recurrence in its own policy step (its
+``lean_policy_step``).
 
-It applies to the default architecture's recurrence: one ``nn.LSTM`` layer for the actor, no critic LSTM, one
-minibatch per epoch (``batch_size`` at least the rollout, the default); :func:`lean_update_applies` says whether a
-model qualifies. :func:`use_lean_update` swaps a model's ``train`` for it (``train_smc(..., lean_update=True)``).
+It applies to the default architecture's recurrence: one ``nn.LSTM`` or GRU layer for the actor, no critic LSTM,
+and, for PPO, one minibatch per epoch (``batch_size`` at least the rollout, the default); :func:`lean_update_applies`
+says whether a model qualifies. :func:`use_lean_update` switches a model to it (``train_smc(..., lean_update=True)``).
 The recurrence's tanh is :func:`~sb3_smc.common.kernels.fast_tanh` (float32 accuracy, no library call, so the loops
 vectorize), and while the lean update trains a model its compiled collection step takes the same tanh
 (``SequenceLstmPolicy.lean_collection``).
@@ -34,7 +35,6 @@ from typing import Any, NamedTuple, cast
 import numpy as np
 import torch
 from gymnasium import spaces
-from numba import njit
 from sb3_contrib import RecurrentPPO
 from sb3_contrib.common.recurrent.buffers import RecurrentRolloutBuffer
 from stable_baselines3.common.distributions import CategoricalDistribution
@@ -43,156 +43,36 @@ from stable_baselines3.common.type_aliases import Schedule
 from stable_baselines3.common.utils import explained_variance
 from torch import nn
 
-from sb3_smc.common.kernels import fast_tanh
+from sb3_smc.common.recurrent.buffers import CompactRecurrentRolloutBuffer
+from sb3_smc.common.recurrent.lean_recurrence import Sequences, compiled_layer, lstm_backward, lstm_forward, recurrence
 from sb3_smc.common.recurrent.policies import SequenceLstmPolicy
 from sb3_smc.common.threads import blas_threads
 
-__all__ = ["lean_train", "lean_update_applies", "use_lean_update"]
+__all__ = ["LEAN_UPDATE_NEEDS", "lean_train", "lean_update_applies", "use_lean_update"]
 
-
-@njit(cache=True, fastmath=True, inline="always")
-def _axpy(y: np.ndarray, a: float, x: np.ndarray) -> None:  # pragma: no cover
-    """``y += a * x``."""
-    for j in range(y.shape[0]):
-        y[j] += a * x[j]
-
-
-@njit(cache=True, fastmath=True, error_model="numpy")
-def _forward(x: np.ndarray, w_ih_t: np.ndarray, w_hh_t: np.ndarray, bias: np.ndarray, starts: np.ndarray,
-             lengths: np.ndarray, h0: np.ndarray, c0: np.ndarray, out_h: np.ndarray, gates: np.ndarray,
-             tanh_c: np.ndarray, cells: np.ndarray) -> None:  # pragma: no cover
-    """The LSTM over each sequence ``rows starts[s] : starts[s] + lengths[s]`` of the inputs ``x`` from
-    ``(h0[s], c0[s])``, skipping zero inputs (a mostly one-hot observation): writes each row's output ``h``
-    (``out_h``), its gate activations i, f, g, o (``gates``), its cell and the cell's tanh. The weights transposed
-    (``(inputs, 4 n)``), ``bias`` the sum of torch's two."""
-    n = h0.shape[1]
-    z = np.empty(4 * n)
-    h = np.empty(n)
-    c = np.empty(n)
-    for s in range(starts.shape[0]):
-        h[:] = h0[s]
-        c[:] = c0[s]
-        for t in range(starts[s], starts[s] + lengths[s]):
-            z[:] = bias
-            x_t = x[t]
-            for k in range(x_t.shape[0]):
-                if x_t[k] != 0.0:
-                    _axpy(z, x_t[k], w_ih_t[k])
-            for k in range(n):
-                _axpy(z, h[k], w_hh_t[k])
-            gate = gates[t]
-            for j in range(4 * n):  # sigmoid(z) = 0.5 tanh(z / 2) + 0.5 on i, f, o; tanh on g (overwritten)
-                gate[j] = 0.5 * fast_tanh(0.5 * z[j]) + 0.5
-            for j in range(2 * n, 3 * n):
-                gate[j] = fast_tanh(z[j])
-            tc, out = tanh_c[t], out_h[t]
-            for j in range(n):
-                c[j] = gate[n + j] * c[j] + gate[j] * gate[2 * n + j]
-            for j in range(n):
-                tc[j] = fast_tanh(c[j])
-            for j in range(n):
-                h[j] = gate[3 * n + j] * tc[j]
-                out[j] = h[j]
-            cells[t] = c
-
-
-@njit(cache=True, fastmath=True, error_model="numpy")
-def _backward(grad_h: np.ndarray, x: np.ndarray, w_hh_t: np.ndarray, starts: np.ndarray, lengths: np.ndarray,
-              c0: np.ndarray, gates: np.ndarray, tanh_c: np.ndarray, cells: np.ndarray, grad_z: np.ndarray,
-              grad_w_ih_t: np.ndarray) -> None:  # pragma: no cover
-    """Backpropagation through time of :func:`_forward`: from the loss's gradient at each row's output
-    (``grad_h``) writes the gradient at each row's gate pre-activations (``grad_z``) and adds the input weights'
-    (transposed) to ``grad_w_ih_t``; the initial states get none (they are rollout data)."""
-    n = c0.shape[1]
-    dh = np.empty(n)
-    dc = np.empty(n)
-    for s in range(starts.shape[0]):
-        first = starts[s]
-        dh[:] = 0.0
-        dc[:] = 0.0
-        for t in range(first + lengths[s] - 1, first - 1, -1):
-            gate, tc, gz, gh = gates[t], tanh_c[t], grad_z[t], grad_h[t]
-            c_prev = cells[t - 1] if t > first else c0[s]
-            for j in range(n):
-                d_h = gh[j] + dh[j]
-                d_c = dc[j] + d_h * gate[3 * n + j] * (1.0 - tc[j] * tc[j])
-                gz[j] = d_c * gate[2 * n + j] * gate[j] * (1.0 - gate[j])
-                gz[n + j] = d_c * c_prev[j] * gate[n + j] * (1.0 - gate[n + j])
-                gz[2 * n + j] = d_c * gate[j] * (1.0 - gate[2 * n + j] * gate[2 * n + j])
-                gz[3 * n + j] = d_h * tc[j] * gate[3 * n + j] * (1.0 - gate[3 * n + j])
-                dc[j] = d_c * gate[n + j]
-            for k in range(n):
-                w_k, total = w_hh_t[k], 0.0
-                for j in range(4 * n):
-                    total += w_k[j] * gz[j]
-                dh[k] = total
-            x_t = x[t]
-            for k in range(x_t.shape[0]):
-                if x_t[k] != 0.0:
-                    _axpy(grad_w_ih_t[k], x_t[k], gz)
-
-
-class _Sequences:
-    """The sequences of one minibatch: flat start rows, lengths, initial states (float64, zeroed where a sequence
-    starts an episode)."""
-
-    def __init__(self, cut: np.ndarray, h0: np.ndarray, c0: np.ndarray, resets: np.ndarray) -> None:
-        self.starts = np.flatnonzero(cut)
-        self.lengths = np.diff(np.append(self.starts, len(cut)))
-        keep = 1.0 - resets[self.starts, None]
-        self.h0 = h0[self.starts].astype(np.float64) * keep
-        self.c0 = c0[self.starts].astype(np.float64) * keep
-
-
-class _Recurrence(torch.autograd.Function):
-    """The LSTM layer's outputs over the sequences of a :class:`_Sequences` (see :func:`_forward`), with the
-    gradients of its four parameters."""
-
-    @staticmethod
-    def forward(ctx: Any, x: np.ndarray, seqs: _Sequences, w_ih: torch.Tensor, w_hh: torch.Tensor,
-                b_ih: torch.Tensor, b_hh: torch.Tensor) -> torch.Tensor:
-        rows, n = x.shape[0], w_hh.shape[1]
-        w_ih64, w_hh64 = (w.detach().numpy().astype(np.float64) for w in (w_ih, w_hh))
-        bias = b_ih.detach().numpy().astype(np.float64) + b_hh.detach().numpy()
-        out_h, tanh_c, cells = np.empty((rows, n)), np.empty((rows, n)), np.empty((rows, n))
-        gates = np.empty((rows, 4 * n))
-        w_hh_t = np.ascontiguousarray(w_hh64.T)
-        _forward(x, np.ascontiguousarray(w_ih64.T), w_hh_t, bias, seqs.starts, seqs.lengths, seqs.h0, seqs.c0, out_h,
-                 gates, tanh_c, cells)
-        ctx.saved = (x, seqs, w_hh_t, out_h, gates, tanh_c, cells)
-        return torch.from_numpy(out_h.astype(np.float32))
-
-    @staticmethod
-    def backward(ctx: Any, grad_out: torch.Tensor) -> tuple[None, None, torch.Tensor, torch.Tensor, torch.Tensor,
-                                                             torch.Tensor]:
-        x, seqs, w_hh_t, out_h, gates, tanh_c, cells = ctx.saved
-        grad_z = np.empty_like(gates)
-        grad_w_ih_t = np.zeros((x.shape[1], gates.shape[1]))
-        _backward(grad_out.detach().numpy().astype(np.float64), x, w_hh_t, seqs.starts, seqs.lengths, seqs.c0, gates,
-                  tanh_c, cells, grad_z, grad_w_ih_t)
-        h_prev = np.empty_like(out_h)  # each row's input state: the row before's output, or its sequence's h0
-        h_prev[1:] = out_h[:-1]
-        h_prev[seqs.starts] = seqs.h0
-        grad_bias = torch.from_numpy(grad_z.sum(axis=0).astype(np.float32))
-        return (None, None, torch.from_numpy(grad_w_ih_t.T.astype(np.float32)),
-                torch.from_numpy((grad_z.T @ h_prev).astype(np.float32)), grad_bias, grad_bias.clone())
+LEAN_UPDATE_NEEDS = ("RecurrentPPO or RecurrentTRPO with one LSTM or GRU layer for the actor, no critic LSTM, flat "
+                     "observations and, for RecurrentPPO, one minibatch per epoch")
+"""What :func:`lean_update_applies` checks, in words (for error messages)."""
 
 
 def lean_update_applies(model: Any) -> bool:
-    """Whether :func:`lean_train` computes ``model``'s update: a ``RecurrentPPO`` with a :class:`SequenceLstmPolicy`
-    whose actor is one ``nn.LSTM`` layer (no projection, with biases), no critic LSTM, flat ``Box`` observations,
-    and one minibatch per epoch."""
-    if type(model) is not RecurrentPPO or not isinstance(model.rollout_buffer, RecurrentRolloutBuffer):
+    """Whether the lean update computes ``model``'s update: a ``RecurrentPPO`` with one minibatch per epoch
+    (:func:`lean_train`), or a :class:`~sb3_smc.recurrent_trpo.RecurrentTRPO` (any class with a
+    ``lean_policy_step``) with the compact rollout buffer; with a :class:`SequenceLstmPolicy` (or its GRU variant)
+    whose actor is one LSTM or GRU layer (no projection, with biases), no critic LSTM, flat ``Box`` observations."""
+    if not isinstance(model, RecurrentPPO) or not isinstance(model.rollout_buffer, RecurrentRolloutBuffer):
+        return False
+    ppo = type(model) is RecurrentPPO
+    if not ppo and not (hasattr(type(model), "lean_policy_step")
+                        and isinstance(model.rollout_buffer, CompactRecurrentRolloutBuffer)):
         return False
     policy = model.policy
-    if not isinstance(policy, SequenceLstmPolicy) or type(policy.lstm_actor) is not nn.LSTM:
+    if not isinstance(policy, SequenceLstmPolicy) or not compiled_layer(policy.lstm_actor):
         return False
-    lstm = policy.lstm_actor
-    return (lstm.num_layers == 1 and lstm.bias and not lstm.proj_size and not lstm.batch_first
-            and policy.lstm_critic is None and not policy.shared_lstm and policy.share_features_extractor
+    return (policy.lstm_critic is None and not policy.shared_lstm and policy.share_features_extractor
             and type(policy.features_extractor) is FlattenExtractor
             and isinstance(model.observation_space, spaces.Box) and len(model.observation_space.shape) == 1
-            and (model.batch_size is None or model.batch_size >= model.n_steps * model.n_envs))
+            and (not ppo or model.batch_size is None or model.batch_size >= model.n_steps * model.n_envs))
 
 
 def _flat(buffer: RecurrentRolloutBuffer, name: str) -> np.ndarray:
@@ -207,10 +87,11 @@ def _flat(buffer: RecurrentRolloutBuffer, name: str) -> np.ndarray:
 
 
 def _plain_heads(policy: SequenceLstmPolicy) -> bool:
-    """Whether the policy's heads are the package's default ones, which :func:`_numpy_epoch` computes: no layers
-    after the LSTM (``net_arch=[]``), a linear critic on the features, a categorical distribution, Adam."""
+    """Whether :func:`_numpy_epoch` computes the policy's epoch: an LSTM actor and the package's default heads (no
+    layers after the LSTM, ``net_arch=[]``; a linear critic on the features; a categorical distribution; Adam)."""
     extractor = policy.mlp_extractor
-    return (type(extractor) is MlpExtractor and len(extractor.policy_net) == 0 and len(extractor.value_net) == 0
+    return (type(policy.lstm_actor) is nn.LSTM and type(extractor) is MlpExtractor and len(extractor.policy_net) == 0
+            and len(extractor.value_net) == 0
             and type(policy.critic) is nn.Linear and isinstance(policy.action_dist, CategoricalDistribution)
             and type(policy.optimizer) is torch.optim.Adam)
 
@@ -235,11 +116,11 @@ class _Rollout:
             advantages = (advantages - advantages.mean()) / (advantages.std(ddof=1) + 1e-8)
         self.advantages = advantages
 
-    def sequences(self) -> _Sequences:
+    def sequences(self) -> Sequences:
         """An epoch's sequences: the rollout's cut plus the rotation ``RecurrentRolloutBuffer.get`` draws."""
         epoch_cut = self.cut.copy()
         epoch_cut[np.random.randint(self.rows)] = True
-        return _Sequences(epoch_cut, self.h0, self.c0, self.episode_starts)
+        return Sequences.cut(epoch_cut, self.h0, self.c0, self.episode_starts)
 
     @cached_property
     def tensors(self) -> tuple[torch.Tensor, ...]:
@@ -276,7 +157,7 @@ def _numpy_epoch(model: RecurrentPPO, policy: SequenceLstmPolicy, data: _Rollout
     out_h, tanh_c, cells, gates = (np.empty((n_rows, n)), np.empty((n_rows, n)), np.empty((n_rows, n)),
                                    np.empty((n_rows, 4 * n)))
     w_hh_t = np.ascontiguousarray(w["lstm_actor.weight_hh_l0"].T)
-    _forward(data.x, np.ascontiguousarray(w["lstm_actor.weight_ih_l0"].T), w_hh_t,
+    lstm_forward(data.x, np.ascontiguousarray(w["lstm_actor.weight_ih_l0"].T), w_hh_t,
              w["lstm_actor.bias_ih_l0"] + w["lstm_actor.bias_hh_l0"], seqs.starts, seqs.lengths, seqs.h0, seqs.c0,
              out_h, gates, tanh_c, cells)
     logits = out_h @ w["action_net.weight"].T + w["action_net.bias"]
@@ -314,7 +195,7 @@ def _numpy_epoch(model: RecurrentPPO, policy: SequenceLstmPolicy, data: _Rollout
         grad_latent_vf = grad_values[:, None] * w["value_net.weight"]
         grad_h = grad_logits @ w["action_net.weight"]
         grad_z, grad_w_ih_t = np.empty_like(gates), np.zeros((data.x.shape[1], 4 * n))
-        _backward(grad_h, data.x, w_hh_t, seqs.starts, seqs.lengths, seqs.c0, gates, tanh_c, cells, grad_z,
+        lstm_backward(grad_h, data.x, w_hh_t, seqs.starts, seqs.lengths, seqs.c0, gates, tanh_c, cells, grad_z,
                   grad_w_ih_t)
         h_prev = np.empty(out_h.shape, dtype=np.float32)  # each row's input state: the row before's output, or
         h_prev[1:] = out_h[:-1]                             # its sequence's h0
@@ -340,12 +221,11 @@ def _numpy_epoch(model: RecurrentPPO, policy: SequenceLstmPolicy, data: _Rollout
 def _torch_epoch(model: RecurrentPPO, policy: SequenceLstmPolicy, data: _Rollout, clip_range: float,
                  clip_range_vf: float | None) -> _Losses:
     """An epoch of PPO with the policy's own heads in torch (any ``net_arch``, distribution and optimizer), the
-    LSTM by the compiled kernels (:class:`_Recurrence`)."""
-    lstm, critic = policy.lstm_actor, cast(nn.Module, policy.critic)
+    recurrence compiled (:func:`~sb3_smc.common.recurrent.lean_recurrence.recurrence`)."""
+    critic = cast(nn.Module, policy.critic)
     obs, actions, old_values, old_log_prob, advantages, returns = data.tensors
     features = policy.extract_features(obs)
-    hidden = _Recurrence.apply(data.x, data.sequences(), lstm.weight_ih_l0, lstm.weight_hh_l0, lstm.bias_ih_l0,
-                               lstm.bias_hh_l0)
+    hidden = recurrence(policy.lstm_actor, data.x, data.sequences())
     latent_pi = policy.mlp_extractor.forward_actor(hidden)
     latent_vf = policy.mlp_extractor.forward_critic(critic(features))
     values = policy.value_net(latent_vf).flatten()
@@ -376,9 +256,8 @@ def lean_train(model: RecurrentPPO) -> None:
     float rounding, the same draws from numpy's global generator, the same logged values. numpy's BLAS runs it in
     one thread (its matrix products' sums would otherwise depend on the caller's thread count, and the SMC with
     them). ``ValueError`` where :func:`lean_update_applies` is false."""
-    if not lean_update_applies(model):
-        raise ValueError("lean_train needs a RecurrentPPO with SequenceLstmPolicy's default recurrence (one LSTM "
-                         "layer, no critic LSTM) and one minibatch per epoch")
+    if type(model) is not RecurrentPPO or not lean_update_applies(model):
+        raise ValueError(f"lean_train needs a RecurrentPPO that the lean update applies to: {LEAN_UPDATE_NEEDS}")
     with blas_threads(1):
         _lean_train(model)
 
@@ -423,16 +302,23 @@ def _lean_train(model: RecurrentPPO) -> None:
 
 @contextmanager
 def use_lean_update(model: RecurrentPPO) -> Iterator[None]:
-    """Within the block, ``model.train()`` is :func:`lean_train` and the policy's compiled collection step takes the
-    lean update's tanh (``policy.lean_collection``); both are instance attributes, removed on leaving, so the model
-    saves and loads as a plain ``RecurrentPPO``. ``ValueError`` where :func:`lean_update_applies` is false."""
+    """Within the block, ``model`` trains with the lean update: a ``RecurrentPPO``'s ``train()`` is :func:`lean_train`,
+    a RecurrentTRPO's ``lean_policy_step`` is true, and the policy's compiled collection step takes the lean update's
+    tanh (``policy.lean_collection``); all are instance attributes, removed on leaving, so the model saves and loads
+    as a plain one. ``ValueError`` where :func:`lean_update_applies` is false."""
     if not lean_update_applies(model):
-        raise ValueError("the lean update needs a RecurrentPPO with SequenceLstmPolicy's default recurrence (one "
-                         "LSTM layer, no critic LSTM) and one minibatch per epoch")
-    model.train = lambda: lean_train(model)  # type: ignore[method-assign]
+        raise ValueError(f"the lean update needs {LEAN_UPDATE_NEEDS}")
+    ppo = type(model) is RecurrentPPO
+    if ppo:
+        model.train = lambda: lean_train(model)  # type: ignore[method-assign]
+    else:
+        cast(Any, model).lean_policy_step = True  # a RecurrentTRPO (lean_update_applies checked)
     cast(SequenceLstmPolicy, model.policy).lean_collection = True  # lean_update_applies checked the type
     try:
         yield
     finally:
-        del model.train
+        if ppo:
+            del model.train
+        else:
+            del cast(Any, model).lean_policy_step
         del model.policy.lean_collection

@@ -146,10 +146,10 @@ class SequenceLstmPolicy(RecurrentActorCriticPolicy):
         """:meth:`forward`'s compiled collection step on numpy arrays: ``obs`` ``(n, features)`` float32, the
         actor's previous ``h`` / ``c`` ``(n, hidden)``, ``starts`` float64 (1.0 at an episode start), ``uniforms``
         the draws; returns ``(actions, values (n, 1), log-probabilities, h', c')``. With :attr:`lean_collection`
-        the LSTM's tanh is :func:`~sb3_smc.common.kernels.fast_tanh`."""
+        the cell's tanh is :func:`~sb3_smc.common.kernels.fast_tanh`."""
         if hasattr(self.lstm_actor, "gru"):
             actions, values, log_probs, h_next = kernels.gru_collection_step(
-                obs, h, starts, uniforms, deterministic, *weights)
+                obs, h, starts, uniforms, deterministic, not self.lean_collection, *weights)
             return actions, values, log_probs, h_next, c * (1.0 - starts[:, None]).astype(np.float32)  # as torch
         return kernels.lstm_collection_step(obs, h, c, starts, uniforms, deterministic, not self.lean_collection,
                                             *weights)
