@@ -214,9 +214,9 @@ def _learner_arguments(parser: argparse.ArgumentParser) -> None:
                         help="recurrent cell of every SMC (recurrent algorithms; default lstm); the paper's learner "
                              "is --algo RecurrentTRPO --rnn gru")
     parser.add_argument("--lean-update", action="store_true",
-                        help="update every SMC with the lean update (RecurrentPPO or RecurrentTRPO with one LSTM or GRU "
-                             "layer; the same update up to float rounding, faster, not bit-identical; recorded in "
-                             "run.json)")
+                        help="update every SMC with the lean update (RecurrentPPO or RecurrentTRPO with one LSTM or "
+                             "GRU layer; the same update up to float rounding, faster, not bit-identical; recorded "
+                             "in run.json)")
 
 
 def main(argv: Sequence[str] | None = None) -> int:

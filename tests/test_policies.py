@@ -253,8 +253,8 @@ def _random_recurrent(cell: str, layers: int = 1, head: int = 0, dtype: type = n
 
 
 def test_accurate_tanh_is_the_c_library_s_within_2_ulp() -> None:
-    """The numpy actors' cells take ``accurate_tanh``: within 2 units in the last place of the C library's ``tanh`` on every scale
-    (both branches, the clamp), equal on the special values, the sign of zero kept."""
+    """The numpy actors' cells take ``accurate_tanh``: within 2 units in the last place of the C library's ``tanh`` on
+    every scale (both branches, the clamp), equal on the special values, the sign of zero kept."""
     rng = np.random.default_rng(0)
     x = np.concatenate([rng.uniform(-1.0, 1.0, 20_000) * scale
                         for scale in (1e-300, 1e-9, 1e-3, 0.3, 0.625, 1.0, 3.0, 10.0, 19.1, 25.0, 1e6)])
