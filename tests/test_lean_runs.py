@@ -71,17 +71,23 @@ def test_a_library_is_reused_only_where_its_smcs_had_the_runs_update(tmp_path):
 
 
 def test_a_lean_run_of_the_paper_s_learner_trains_every_smc_as_train_smc_with_the_lean_update(tmp_path):
-    """``base-gru`` (RecurrentTRPO with a GRU) with the lean update: its seeds train in a group, each SMC the one
-    ``train_smc(spec, lean_update=True)`` gives alone, and its record says so."""
-    run_experiment(tmp_path / "experiment", methods=["base-gru"], targets=[TARGET], seeds=2, timesteps=1024,
-                   lean_update=True, progress=False)
-    library = SMCLibrary.load(tmp_path / "experiment" / "library")
-    assert len(library.names) == 2
-    for name in library.names:
+    """RecurrentTRPO with a GRU and the lean update: a curriculum's flat seeds train in a group and its level-2 SMC
+    over compiled children, each the one ``train_smc(spec, lean_update=True)`` gives alone, its record saying so;
+    ``base-gru`` (this learner whatever the run's) takes the option in an experiment."""
+    run = train_curriculum(TINY, tmp_path / "lean", seeds=2, timesteps=2000, algo="RecurrentTRPO", rnn="gru",
+                           lean_update=True, group_size=2, progress=False)
+    library = SMCLibrary.load(run.library)
+    assert len(library.names) == 6
+    for name in (f"{LEFT}@1", "top@0"):
         smc = library[name]
         assert smc.record.lean_update and smc.spec.algo == "RecurrentTRPO"
         assert type(smc.model.policy).__name__ == "SequenceGruPolicy"
-        assert _weights_equal(train_smc(smc.spec, lean_update=True, log_every=0), smc)
+        again = train_smc(smc.spec, children=library, lean_update=True, log_every=0)
+        assert again.record.training_returns == smc.record.training_returns and _weights_equal(again, smc), name
+    run_experiment(tmp_path / "experiment", methods=["base-gru"], targets=[TARGET], seeds=1, timesteps=512,
+                   lean_update=True, progress=False)
+    experiment = SMCLibrary.load(tmp_path / "experiment" / "library")
+    assert len(experiment.names) == 1 and all(experiment[name].record.lean_update for name in experiment.names)
 
 
 def test_a_lean_run_whose_learner_it_does_not_fit_is_refused_before_anything_is_written(tmp_path):
