@@ -219,3 +219,18 @@ def test_recurrent_trpo_s_lean_policy_step_is_its_default_one_up_to_rounding(rnn
         assert float((lean[name] - default[name]).norm()) <= 1e-4 * float(change.norm()) + 1e-9, name
     for key, value in default_logs.items():
         assert lean_logs[key] == pytest.approx(value, rel=1e-4, abs=1e-7), key
+
+
+@pytest.mark.parametrize("algo", ["RecurrentPPO", "RecurrentTRPO"])
+def test_a_model_saved_within_the_lean_update_loads_as_a_plain_model(algo: str, tmp_path) -> None:
+    """A checkpoint taken while the lean update trains (``model.save`` within ``use_lean_update``) holds none of its
+    switches: it loads as a plain model, and the model has none of them after the block."""
+    model = train_smc(CORNER_ID, algo=algo, total_timesteps=2_000, log_every=0).model
+    with use_lean_update(model):
+        model.save(tmp_path / "checkpoint.zip")
+    switches = {"train", "lean_policy_step", "_excluded_save_params"}
+    assert not switches & set(vars(model)) and "lean_collection" not in vars(model.policy)
+    loaded = type(model).load(tmp_path / "checkpoint.zip")
+    assert not switches & set(vars(loaded)) and not loaded.policy.lean_collection
+    assert all(torch.equal(a, b) for a, b in zip(model.policy.state_dict().values(),
+                                                  loaded.policy.state_dict().values(), strict=True))

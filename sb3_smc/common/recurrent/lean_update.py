@@ -304,21 +304,19 @@ def _lean_train(model: RecurrentPPO) -> None:
 def use_lean_update(model: RecurrentPPO) -> Iterator[None]:
     """Within the block, ``model`` trains with the lean update: a ``RecurrentPPO``'s ``train()`` is :func:`lean_train`,
     a RecurrentTRPO's ``lean_policy_step`` is true, and the policy's compiled collection step takes the lean update's
-    tanh (``policy.lean_collection``); all are instance attributes, removed on leaving, so the model saves and loads
-    as a plain one. ``ValueError`` where :func:`lean_update_applies` is false."""
+    tanh (``policy.lean_collection``). All are instance attributes, removed on leaving, and ``model.save`` leaves
+    them out within the block too (a checkpoint callback's), so the model saves and loads as a plain one.
+    ``ValueError`` where :func:`lean_update_applies` is false."""
     if not lean_update_applies(model):
         raise ValueError(f"the lean update needs {LEAN_UPDATE_NEEDS}")
-    ppo = type(model) is RecurrentPPO
-    if ppo:
-        model.train = lambda: lean_train(model)  # type: ignore[method-assign]
-    else:
-        cast(Any, model).lean_policy_step = True  # a RecurrentTRPO (lean_update_applies checked)
+    switch = "train" if type(model) is RecurrentPPO else "lean_policy_step"  # else a RecurrentTRPO (checked above)
+    excluded = model._excluded_save_params
+    setattr(model, switch, (lambda: lean_train(model)) if switch == "train" else True)
+    model._excluded_save_params = lambda: [*excluded(), switch, "_excluded_save_params"]  # type: ignore[method-assign]
     cast(SequenceLstmPolicy, model.policy).lean_collection = True  # lean_update_applies checked the type
     try:
         yield
     finally:
-        if ppo:
-            del model.train
-        else:
-            del cast(Any, model).lean_policy_step
+        delattr(model, switch)
+        del model._excluded_save_params
         del model.policy.lean_collection
