@@ -49,7 +49,8 @@ PUBLIC = (
     *_modules("sb3_smc.learning", "bias", "features", "callbacks", "training", "batched", "evaluation"),
     *_modules("sb3_smc.records", "spec", "results", "base"),
     *_modules("sb3_smc.common", "kernels", "discounting", "threads"),
-    *_modules("sb3_smc.common.recurrent", "policies", "buffers", "type_aliases", "gru", "layers", "lean_update"),
+    *_modules("sb3_smc.common.recurrent", "policies", "buffers", "type_aliases", "gru", "layers", "lean_recurrence",
+              "lean_update"),
     *_modules("sb3_smc.recurrent_trpo"),
     *_modules("sb3_smc.library", "library", "manifest", "upgrade", "pretrained", "storage", "errors"),
     # sb3_smc.zoo.record_video is a launcher: it runs rl_zoo3's record_video on import
