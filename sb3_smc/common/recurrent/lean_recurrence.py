@@ -24,8 +24,8 @@ from sb3_smc.common.kernels import fast_tanh
 from sb3_smc.common.recurrent.layers import GRUAsLSTM
 from sb3_smc.common.recurrent.type_aliases import SequenceStates
 
-__all__ = ["GruRecurrence", "LstmRecurrence", "Sequences", "gru_backward", "gru_forward", "lstm_backward",
-           "lstm_forward", "recurrence"]
+__all__ = ["GruRecurrence", "LstmRecurrence", "Sequences", "compiled_layer", "gru_backward", "gru_forward",
+           "lstm_backward", "lstm_forward", "recurrence"]
 
 
 @njit(cache=True, fastmath=True, inline="always")
@@ -37,8 +37,8 @@ def _axpy(y: np.ndarray, a: float, x: np.ndarray) -> None:  # pragma: no cover
 
 @njit(cache=True, fastmath=True, error_model="numpy")
 def lstm_forward(x: np.ndarray, w_ih_t: np.ndarray, w_hh_t: np.ndarray, bias: np.ndarray, starts: np.ndarray,
-             lengths: np.ndarray, h0: np.ndarray, c0: np.ndarray, out_h: np.ndarray, gates: np.ndarray,
-             tanh_c: np.ndarray, cells: np.ndarray) -> None:  # pragma: no cover
+                 lengths: np.ndarray, h0: np.ndarray, c0: np.ndarray, out_h: np.ndarray, gates: np.ndarray,
+                 tanh_c: np.ndarray, cells: np.ndarray) -> None:  # pragma: no cover
     """The LSTM over each sequence ``rows starts[s] : starts[s] + lengths[s]`` of the inputs ``x`` from
     ``(h0[s], c0[s])``, skipping zero inputs (a mostly one-hot observation): writes each row's output ``h``
     (``out_h``), its gate activations i, f, g, o (``gates``), its cell and the cell's tanh. The weights transposed
@@ -76,8 +76,8 @@ def lstm_forward(x: np.ndarray, w_ih_t: np.ndarray, w_hh_t: np.ndarray, bias: np
 
 @njit(cache=True, fastmath=True, error_model="numpy")
 def lstm_backward(grad_h: np.ndarray, x: np.ndarray, w_hh_t: np.ndarray, starts: np.ndarray, lengths: np.ndarray,
-              c0: np.ndarray, gates: np.ndarray, tanh_c: np.ndarray, cells: np.ndarray, grad_z: np.ndarray,
-              grad_w_ih_t: np.ndarray) -> None:  # pragma: no cover
+                  c0: np.ndarray, gates: np.ndarray, tanh_c: np.ndarray, cells: np.ndarray, grad_z: np.ndarray,
+                  grad_w_ih_t: np.ndarray) -> None:  # pragma: no cover
     """Backpropagation through time of :func:`lstm_forward`: from the loss's gradient at each row's output
     (``grad_h``) writes the gradient at each row's gate pre-activations (``grad_z``) and adds the input weights'
     (transposed) to ``grad_w_ih_t``; the initial states get none (they are rollout data)."""

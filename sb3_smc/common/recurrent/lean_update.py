@@ -158,8 +158,8 @@ def _numpy_epoch(model: RecurrentPPO, policy: SequenceLstmPolicy, data: _Rollout
                                    np.empty((n_rows, 4 * n)))
     w_hh_t = np.ascontiguousarray(w["lstm_actor.weight_hh_l0"].T)
     lstm_forward(data.x, np.ascontiguousarray(w["lstm_actor.weight_ih_l0"].T), w_hh_t,
-             w["lstm_actor.bias_ih_l0"] + w["lstm_actor.bias_hh_l0"], seqs.starts, seqs.lengths, seqs.h0, seqs.c0,
-             out_h, gates, tanh_c, cells)
+                 w["lstm_actor.bias_ih_l0"] + w["lstm_actor.bias_hh_l0"], seqs.starts, seqs.lengths, seqs.h0, seqs.c0,
+                 out_h, gates, tanh_c, cells)
     logits = out_h @ w["action_net.weight"].T + w["action_net.bias"]
     logits -= logits.max(axis=1, keepdims=True)
     log_p = logits - np.log(np.exp(logits).sum(axis=1, keepdims=True))
@@ -196,7 +196,7 @@ def _numpy_epoch(model: RecurrentPPO, policy: SequenceLstmPolicy, data: _Rollout
         grad_h = grad_logits @ w["action_net.weight"]
         grad_z, grad_w_ih_t = np.empty_like(gates), np.zeros((data.x.shape[1], 4 * n))
         lstm_backward(grad_h, data.x, w_hh_t, seqs.starts, seqs.lengths, seqs.c0, gates, tanh_c, cells, grad_z,
-                  grad_w_ih_t)
+                      grad_w_ih_t)
         h_prev = np.empty(out_h.shape, dtype=np.float32)  # each row's input state: the row before's output, or
         h_prev[1:] = out_h[:-1]                             # its sequence's h0
         h_prev[seqs.starts] = seqs.h0
