@@ -126,6 +126,14 @@ class Sequences:
         return cls(starts, np.diff(np.append(starts, len(cut))), h0[starts].astype(np.float64) * keep,
                    c0[starts].astype(np.float64) * keep)
 
+    def input_states(self, out_h: np.ndarray, dtype: type = np.float64) -> np.ndarray:
+        """Each row's input state, from the layer's outputs ``out_h`` over these sequences: the row before's output,
+        or its sequence's ``h0`` on a sequence's first row."""
+        h_prev: np.ndarray = np.empty(out_h.shape, dtype=dtype)
+        h_prev[1:] = out_h[:-1]
+        h_prev[self.starts] = self.h0
+        return h_prev
+
     @classmethod
     def of(cls, states: SequenceStates) -> Sequences:
         """The layout of a compact minibatch (:class:`SequenceStates`; the actor's first layer's states)."""
@@ -160,9 +168,7 @@ class LstmRecurrence(torch.autograd.Function):
         grad_w_ih_t = np.zeros((x.shape[1], gates.shape[1]))
         lstm_backward(grad_out.detach().numpy().astype(np.float64), x, w_hh_t, seqs.starts, seqs.lengths, seqs.c0,
                       gates, tanh_c, cells, grad_z, grad_w_ih_t)
-        h_prev = np.empty_like(out_h)  # each row's input state: the row before's output, or its sequence's h0
-        h_prev[1:] = out_h[:-1]
-        h_prev[seqs.starts] = seqs.h0
+        h_prev = seqs.input_states(out_h)
         grad_bias = torch.from_numpy(grad_z.sum(axis=0).astype(np.float32))
         return (None, None, torch.from_numpy(grad_w_ih_t.T.astype(np.float32)),
                 torch.from_numpy((grad_z.T @ h_prev).astype(np.float32)), grad_bias, grad_bias.clone())
@@ -262,9 +268,7 @@ class GruRecurrence(torch.autograd.Function):
         grad_w_ih_t = np.zeros((x.shape[1], gates.shape[1]))
         gru_backward(grad_out.detach().numpy().astype(np.float64), x, w_hh_t, seqs.starts, seqs.lengths, seqs.h0,
                      out_h, gates, hidden_n, grad_gi, grad_gh, grad_w_ih_t)
-        h_prev = np.empty_like(out_h)  # each row's input state: the row before's output, or its sequence's h0
-        h_prev[1:] = out_h[:-1]
-        h_prev[seqs.starts] = seqs.h0
+        h_prev = seqs.input_states(out_h)
         return (None, None, torch.from_numpy(grad_w_ih_t.T.astype(np.float32)),
                 torch.from_numpy((grad_gh.T @ h_prev).astype(np.float32)),
                 torch.from_numpy(grad_gi.sum(axis=0).astype(np.float32)),

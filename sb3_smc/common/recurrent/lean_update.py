@@ -197,9 +197,7 @@ def _numpy_epoch(model: RecurrentPPO, policy: SequenceLstmPolicy, data: _Rollout
         grad_z, grad_w_ih_t = np.empty_like(gates), np.zeros((data.x.shape[1], 4 * n))
         lstm_backward(grad_h, data.x, w_hh_t, seqs.starts, seqs.lengths, seqs.c0, gates, tanh_c, cells, grad_z,
                       grad_w_ih_t)
-        h_prev = np.empty(out_h.shape, dtype=np.float32)  # each row's input state: the row before's output, or
-        h_prev[1:] = out_h[:-1]                             # its sequence's h0
-        h_prev[seqs.starts] = seqs.h0
+        h_prev = seqs.input_states(out_h, np.float32)
         grad_bias = grad_z.sum(axis=0)
         grads = {"action_net.weight": grad_logits.T @ out_h, "action_net.bias": grad_logits.sum(axis=0),
                  "value_net.weight": (grad_values @ latent_vf)[None], "value_net.bias": grad_values.sum(keepdims=True),
