@@ -15,6 +15,7 @@ from sb3_smc.experiments.claims import (
     NOT_RUN,
     READINGS,
     VERDICTS,
+    Judged,
     judge,
     method_checks,
     statements,
@@ -112,7 +113,7 @@ def test_every_statement_of_the_paper_under_each_reading() -> None:
                                                "base-400": 0.65})
     found = statements(kind_of, category_of)
     assert len(found) == 31 and not any(isinstance(s, str) for s in found)
-    one_step, moves, flat400 = READINGS
+    one_step, moves, flat400, *_ = READINGS
     by_text = {s.text: s for s in found}
     curr_mean = by_text["bring-about: mean of curr"]
     cell = judge(curr_mean, one_step, replicates)
@@ -130,6 +131,49 @@ def test_every_statement_of_the_paper_under_each_reading() -> None:
     assert all(isinstance(s, str) or s.targets[0] in subset for s in statements(subset, category_of))
     assert any(isinstance(s, str) and "17 concepts" in s for s in statements(subset, category_of))
     assert NOT_COMPARABLE == "not comparable: a subset"
+
+
+def test_a_blend_is_the_weighted_sum_of_scores_in_every_replicate() -> None:
+    """The flat SMC's score at a curriculum's experience: a weighted sum of two flat methods' scores, in the estimate
+    and in each replicate (so its interval is theirs, drawn together); the original is left as it was."""
+    candidates = _candidates()
+    replicates = Replicates(candidates, replicates=300)
+    blended = replicates.blended({"mix": {"a": (("base", 0.25), ("curr", 0.75))}})
+    assert blended.estimate[("a", "mix")] == pytest.approx(
+        0.25 * replicates.estimate[("a", "base")] + 0.75 * replicates.estimate[("a", "curr")])
+    assert np.allclose(blended.draws[("a", "mix")],
+                       0.25 * replicates.draws[("a", "base")] + 0.75 * replicates.draws[("a", "curr")])
+    assert ("a", "mix") not in replicates.estimate and not replicates.has(["a"], "mix")
+    assert blended.has(["a"], "mix") and not blended.has(["a", "b"], "mix")
+    assert blended.mean(["a", "b"], "curr") == replicates.mean(["a", "b"], "curr")
+
+
+def test_the_equal_experience_readings_judge_curr_against_the_flat_smc_by_sign_on_the_sweep_s_concepts() -> None:
+    """Only the comparisons of curr with the flat SMC are judged, on the sweep's concepts of their kind, by the sign
+    the paper claims: above zero reproduced, below opposite, holding zero short; other statements are blank, a
+    reading without the flat SMC's blend is not run, and a pair still training is not judged."""
+    from sb3_smc.experiments.design import SWEEP_TARGETS
+    from sb3_smc.experiments.experience import flat_at
+
+    replicates, kind_of, category_of = _table({"base": 0.6, "curr": 0.9})
+    by_text = {s.text: s for s in statements(kind_of, category_of) if not isinstance(s, str)}
+    one_step, moves = READINGS[3:]
+    assert one_step.methods == {"curr": "curr-cap100", "base": flat_at("curr-cap100")}
+    assert moves.methods == {"curr": "curr-moves-100", "base": flat_at("curr-moves-100")}
+    test = by_text["bring-about: curr above base (paired t-test)"]
+    assert judge(test, one_step, replicates).verdict == NOT_RUN
+    sweep = [t for t in SWEEP_TARGETS if kind_of[t] == "bring-about"]
+    extra = {(t, m): [Candidate(t, level + step * k)] for k, t in enumerate(sweep)  # the flat SMC: 50 + k there
+             for m, level, step in (("curr-cap100", 0.8, 0.02), ("curr-moves-100", 0.45, 0.005), ("base-x1", 0.4, 0.01),
+                                    ("base-x4", 0.6, 0.01))}
+    flat = Replicates(extra, replicates=50).blended(
+        {flat_at(m): {t: (("base-x1", 0.5), ("base-x4", 0.5)) for t in sweep} for m in ("curr-cap100",
+                                                                                        "curr-moves-100")})
+    cell = judge(test, one_step, flat)  # curr-cap100 30 + k points above the flat SMC on the 5 concepts
+    assert cell.verdict == "reproduced" and cell.ours.startswith(f"+32.0 [+32.0, +32.0] on {len(sweep)}; t(4) = ")
+    assert judge(test, moves, flat).verdict == "opposite"  # curr-moves-100 5 + k / 2 points below it
+    assert judge(by_text["bring-about: mean of curr"], one_step, flat) == Judged("", "")
+    assert judge(test, one_step, flat, unfinished={(sweep[0], flat_at("curr-cap100"))}).verdict == NOT_JUDGED
 
 
 def test_our_own_methods_are_checked_apart() -> None:

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from pathlib import Path
 from typing import Any
 
@@ -78,8 +79,54 @@ def test_the_section_reads_the_flat_curve_at_the_curriculum_experience(tmp_path:
     assert "10.0 @ 2.0M / 30.0 @ 8.0M / 50.0 @ 32.0M" in row and "| curr | 40.0 @ 4.0M (2 x) |" in row
     assert math.isclose(10 + (math.log(4) - math.log(2)) / (math.log(8) - math.log(2)) * 20, 20.0)
     assert row.endswith("| 20.0 | +20.0 |")
-    assert "curr: ahead on 1 of 1 targets, mean lead +20.0 points" in lines[-2]
+    assert "curr: ahead on 1 of 1 targets, mean lead +20.0 points [" in lines[-2]
     beyond = Experience(5, experience.uses, {**experience.steps, CURR: {s: 20_000_000 for s in range(5)}})
     (row,) = [line for line in experience_section(ResultTable(rows, reported), beyond) if line.startswith("| ba")]
     assert row.endswith("| 50.0 (its most: less experience) | -10.0 |")
     assert experience_section(ResultTable(rows, reported), None) == []
+
+
+def test_the_claims_table_judges_curr_against_the_flat_smc_at_its_experience(tmp_path: Path) -> None:
+    """The whole table (base and curr on all 51 concepts) with the sweep's curr-cap100 and the flat SMC's curve on
+    the sweep's 12: curr-cap100's experience (8M moves) is base-x4's, so the flat SMC there is base-x4's score; the
+    one-step equal-experience column judges curr-cap100 against it on the sweep's concepts of each kind, and the
+    section gives each method's lead with its interval and t-test. Without the curve the column is not shown."""
+    from pixelworld_env.datasets import catalog
+    from sb3_smc.experiments import level2_targets
+    from sb3_smc.experiments.design import SWEEP_TARGETS
+    from sb3_smc.experiments.tables import number_sections
+
+    rows: list[dict[str, Any]] = []
+    nodes: dict[str, list[str]] = {"lower": []}
+    steps = {f"lower@{s}": 1_000_000 for s in range(5)}
+    for k, target in enumerate(level2_targets()):
+        data = catalog.dataset(target)
+        levels = {"base": 0.5, "curr": 0.9}
+        if target in SWEEP_TARGETS:
+            levels.update({"curr-cap100": 0.8 + 0.01 * (k % 3), "base-x1": 0.3, "base-x4": 0.5, "base-x16": 0.7})
+            for factor in (1, 4, 16):
+                nodes[f"base-x{factor}/{target}"] = []
+                steps.update({f"base-x{factor}/{target}@{s}": factor * 400_000 for s in range(5)})
+            nodes[f"cap/{target}"] = ["lower"]
+            steps.update({f"cap/{target}@{s}": 600_000 for s in range(5)})  # 3M + the lower node's 5M = 8M
+        for method, level in levels.items():
+            node = f"cap/{target}" if method == "curr-cap100" else f"{method}/{target}"
+            rows += [{"target": target, "kind": data.kind, "category": data.category, "method": method,
+                      "curriculum": node, "seed": s, "test_score": level - 0.01 * s} for s in range(5)]
+    reported = [r for r in rows if r["seed"] == 0]
+    experience = Experience.from_run(_run(tmp_path / "run", nodes, steps))
+    lines = number_sections(ResultTable(rows, reported), experience)
+    header = next(line for line in lines if line.startswith("| statement | paper |"))
+    assert header.endswith("| one step, at equal experience |")  # curr-moves-100 did not run: no column of its own
+    (row,) = [line for line in lines if line.startswith("| bring-about: curr above base (paired t-test)")]
+    sweep = [t for t in SWEEP_TARGETS if catalog.dataset(t).kind == "bring-about"]
+    lead = 100 * sum(0.01 * (level2_targets().index(t) % 3) for t in sweep) / len(sweep) + 30
+    assert f"| +{lead:.1f} [" in row and f"] on {len(sweep)}; t({len(sweep) - 1}) = " in row
+    assert row.endswith(": reproduced |")
+    (mean_row,) = [line for line in lines if line.startswith("| bring-about: mean of curr |")]
+    assert mean_row.endswith("|  |")  # not a comparison with the flat SMC: blank
+    summary = next(line for line in lines if line.startswith("**At equal experience**"))
+    assert re.search(r"curr-cap100: ahead on 12 of 12 targets, mean lead \+3\d\.\d points \[\+\d+\.\d, \+\d+\.\d\], "
+                     r"t\(11\) = \d+\.\d\d, p = ", summary)
+    without = number_sections(ResultTable(rows, reported), None)
+    assert "equal experience" not in next(line for line in without if line.startswith("| statement | paper |"))

@@ -14,6 +14,7 @@ with its test score in every draw of worlds.
 
 from __future__ import annotations
 
+import copy
 import zlib
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
@@ -95,6 +96,19 @@ class Replicates:
             drawn = rng.integers(0, len(seeds), size=(self.replicates, len(seeds)))
             best = np.maximum(best, scores[drawn, np.arange(self.replicates)[:, None]].max(axis=1))
         return best
+
+    def blended(self, blends: Mapping[str, Mapping[str, Sequence[tuple[str, float]]]]) -> Replicates:
+        """A copy with a score of its own for each name of ``blends``: on each of its targets, the weighted sum of
+        other methods' scores there (``{name: {target: [(method, weight), ...]}}``), in the estimate and in every
+        replicate (the flat SMC's score at a curriculum's experience, read off its curve)."""
+        out = copy.copy(self)
+        out.estimate, out.draws = dict(self.estimate), dict(self.draws)
+        for name, per_target in blends.items():
+            for target, weights in per_target.items():
+                out.estimate[(target, name)] = sum(w * self.estimate[(target, m)] for m, w in weights)
+                out.draws[(target, name)] = sum((w * self.draws[(target, m)] for m, w in weights),
+                                                 np.zeros(self.replicates))
+        return out
 
     def has(self, targets: Sequence[str], *methods: str) -> bool:
         """Whether every one of ``methods`` has a score on every one of ``targets``."""

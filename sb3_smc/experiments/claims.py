@@ -4,7 +4,9 @@ call, bootstrap intervals (:mod:`sb3_smc.experiments.bootstrap`) instead of a fi
 The paper does not say how a hierarchical SMC's episode counted a call, so every statement about a hierarchical
 method is judged under each :data:`READINGS` entry: a call is one step (``curr``, ``canon``), a call costs its moves
 (``curr-moves``), and, where the statement compares with the flat SMC, the one-step reading against a flat SMC with
-as many moves (``base-400``). A verdict compares the paper's number with our interval:
+as many moves (``base-400``) and both readings against the flat SMC at as much experience (the sweep's settings of
+curr and curr-moves on its 12 concepts, :mod:`sb3_smc.experiments.experience`). A verdict compares the paper's
+number with our interval:
 
 * ``reproduced``: the paper's number lies inside our interval;
 * ``exceeded``: our interval lies beyond it, in the direction the statement claims (a higher mean, a larger gap);
@@ -12,7 +14,8 @@ as many moves (``base-400``). A verdict compares the paper's number with our int
 * ``opposite``: our interval lies entirely on the other side of zero (a comparison reversed).
 
 A statement without a number of the paper (the CNN by category, Fig. 5a) is reproduced where our interval has the
-claimed sign, opposite where it has the other, and short where it holds zero. Our own methods that no reading uses
+claimed sign, opposite where it has the other, and short where it holds zero; so is a comparison judged on a subset
+of the concepts the paper's number is over (the equal-experience readings). Our own methods that no reading uses
 (``base-gru``, ``canon-scaled``, the sweep's settings) are judged in a table of their own (:func:`method_checks`).
 """
 
@@ -25,7 +28,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from sb3_smc.experiments.bootstrap import Interval, Replicates
-from sb3_smc.experiments.design import METHOD_REGISTRY
+from sb3_smc.experiments.design import METHOD_REGISTRY, SWEEP_TARGETS
+from sb3_smc.experiments.experience import flat_at
 from sb3_smc.experiments.paper import PAPER_CONCEPTS, PAPER_COUNTS, PAPER_MEANS, PAPER_NOPRIM, PAPER_TTESTS
 from sb3_smc.experiments.statistics import method_test
 
@@ -46,6 +50,8 @@ class Reading:
     methods: Mapping[str, str]
     compares_flat_only: bool = False
     """It differs from the first reading only in the flat SMC: judged only on statements about the flat SMC."""
+    targets: tuple[str, ...] | None = None
+    """Judged on these concepts only (chosen before the run): the comparisons of two of its methods, by sign."""
 
 
 _PAPERS = ("cnn", "base", "curr", "canon", "curr-noprim", "canon-noprim")
@@ -54,6 +60,10 @@ READINGS = (
     Reading("a call costs its moves", {"cnn": "cnn", "base": "base", "curr": "curr-moves"}),
     Reading("one step, the flat SMC with 400 moves", {**{m: m for m in _PAPERS}, "base": "base-400"},
             compares_flat_only=True),
+    Reading("one step, at equal experience", {"curr": "curr-cap100", "base": flat_at("curr-cap100")},
+            targets=SWEEP_TARGETS),
+    Reading("costs its moves, at equal experience", {"curr": "curr-moves-100", "base": flat_at("curr-moves-100")},
+            targets=SWEEP_TARGETS),
 )
 """The readings of a call the claims are judged under, in the table's column order."""
 
@@ -190,6 +200,8 @@ def judge(statement: Statement, reading: Reading, replicates: Replicates,
     """``statement`` under ``reading``: our number with its interval and the verdict, or why there is none."""
     if reading.compares_flat_only and not statement.about_flat:
         return Judged("as one step", "")
+    if reading.targets is not None:
+        return _judge_on_subset(statement, reading, reading.targets, replicates, unfinished)
     if not all(m in reading.methods for m in statement.methods):
         return Judged("-", NOT_RUN)
     ours = [reading.methods[m] for m in statement.methods]
@@ -205,6 +217,28 @@ def judge(statement: Statement, reading: Reading, replicates: Replicates,
         if test is not None:
             text += f"; t({test[0]}) = {test[1]:.2f}, p = {test[2]:.2g}"
     return Judged(text, verdict(statement.paper, interval, statement.gap))
+
+
+def _judge_on_subset(statement: Statement, reading: Reading, subset: Collection[str], replicates: Replicates,
+                     unfinished: Collection[tuple[str, str]]) -> Judged:
+    """A comparison of two of ``reading``'s methods on the concepts of ``subset`` it is about, judged by the sign of
+    the paper's claim (its number is over all of them); any other statement is not judged (a blank cell)."""
+    if not (statement.gap and statement.paper is not None and len(statement.methods) == 2
+            and all(m in reading.methods for m in statement.methods)):
+        return Judged("", "")
+    a, b = (reading.methods[m] for m in statement.methods)
+    targets = [t for t in statement.targets if t in subset]
+    if any((t, m) in unfinished for t in targets for m in (a, b)):
+        return Judged("-", NOT_JUDGED)
+    if not replicates.has(targets, a, b):
+        return Judged("-", NOT_RUN)
+    gap = replicates.interval(lambda score: 100 * sum(score(t, a) - score(t, b) for t in targets) / len(targets))
+    sign = 1.0 if statement.paper >= 0 else -1.0
+    claimed = Interval(sign * gap.estimate, min(sign * gap.low, sign * gap.high), max(sign * gap.low, sign * gap.high))
+    _, test = method_test(replicates.estimate, targets, a, b)
+    text = f"{points(gap, True)} on {len(targets)}" + (f"; t({test[0]}) = {test[1]:.2f}, p = {test[2]:.2g}"
+                                                       if test is not None else "")
+    return Judged(text, verdict(None, claimed, gap=True))
 
 
 def points(interval: Interval, signed: bool) -> str:
@@ -226,9 +260,9 @@ def tally(cells: Sequence[str]) -> str:
 def method_checks(replicates: Replicates, kind_of: Mapping[str, str], category_of: Mapping[str, str],
                   methods: Sequence[str], unfinished: Collection[tuple[str, str]] = ()) -> list[tuple[str, str, str,
                                                                                                     str]]:
-    """Our own methods that no reading uses, against the paper's numbers for the method they stand for: per kind,
-    their mean and their gap to the flat SMC (``base``). Rows of (statement, paper, ours, verdict)."""
-    used = {m for reading in READINGS for m in reading.methods.values()}
+    """Our own methods that no reading of every concept uses, against the paper's numbers for the method they stand
+    for: per kind, their mean and their gap to the flat SMC (``base``). Rows of (statement, paper, ours, verdict)."""
+    used = {m for reading in READINGS if reading.targets is None for m in reading.methods.values()}
     rows = []
     for method in (m for m in methods if m not in used and METHOD_REGISTRY[m].smc):
         paper_name = METHOD_REGISTRY[method].paper_name

@@ -12,12 +12,16 @@ some of its seeds (the pretrained library keeps the two best of five) counts as 
 
 :func:`experience_section` sets each hierarchical method's best-seed score beside the flat SMC's at 1, 4 and 16 times
 its budget (:data:`~sb3_smc.experiments.design.EXPERIENCE_METHODS`), the flat SMC's score read off its curve at the
-hierarchical method's experience (linear in the logarithm of the experience between the points measured).
+hierarchical method's experience (linear in the logarithm of the experience between the points measured). That score
+is a weighted sum of the flat methods' scores (:func:`at_experience`), so the bootstrap replicates of those scores
+give it replicates too (:func:`blends`, named :func:`flat_at`): each method's mean lead gets an interval, and the
+claims table judges the paper's "curr above base" at equal experience (:mod:`sb3_smc.experiments.claims`).
 """
 
 from __future__ import annotations
 
 import argparse
+import itertools
 import json
 import math
 from collections.abc import Collection, Iterable, Mapping, Sequence
@@ -30,9 +34,12 @@ from sb3_smc.core.dag import reachable
 from sb3_smc.curricula.jobs import JobId
 from sb3_smc.curricula.run_directory import read_json
 from sb3_smc.errors import SMCError
+from sb3_smc.experiments.bootstrap import Replicates
 from sb3_smc.experiments.design import EXPERIENCE_METHODS, METHOD_REGISTRY
+from sb3_smc.experiments.statistics import method_test
 
-__all__ = ["EXPERIENCE_FILE", "EXPERIENCE_HEADING", "Experience", "experience_section"]
+__all__ = ["EXPERIENCE_FILE", "EXPERIENCE_HEADING", "AtExperience", "Experience", "at_experience", "blends",
+           "experience_section", "flat_at"]
 
 EXPERIENCE_FILE = "experience.json"
 """The file of a run directory's (or its kept records') :class:`Experience`."""
@@ -139,6 +146,10 @@ class ScoreTable(Protocol):
     targets: list[str]
     score: dict[tuple[str, str], float]
     kind_of: dict[str, str]
+    unfinished: frozenset[tuple[str, str]]
+
+    @property
+    def replicates(self) -> Replicates: ...
 
     @property
     def hierarchical(self) -> list[str]: ...
@@ -158,60 +169,106 @@ def _moves(count: float) -> str:
     return f"{count / 1e6:.1f}M" if count >= 100_000 else f"{count / 1e3:.1f}k"
 
 
-def _at(curve: Sequence[tuple[float, float]], experience: float) -> tuple[float, str]:
-    """The flat SMC's score at ``experience`` read off its curve (points sorted by experience), and where: inside
-    the measured range (interpolated in log experience), or at its nearest end."""
-    if experience <= curve[0][0]:
-        return curve[0][1], "below"
-    if experience >= curve[-1][0]:
-        return curve[-1][1], "beyond"
-    for (e0, s0), (e1, s1) in zip(curve, curve[1:], strict=False):
-        if e0 <= experience <= e1:
-            share = (math.log(experience) - math.log(e0)) / (math.log(e1) - math.log(e0)) if e1 > e0 else 0.0
-            return s0 + share * (s1 - s0), "inside"
+def _weights(curve: Sequence[tuple[float, str]], spent: float) -> tuple[tuple[tuple[str, float], ...], str]:
+    """The flat SMC's score at the experience ``spent`` as weights on its curve's points ((experience, method),
+    sorted by experience), and where it lies: inside the measured range (interpolated in log experience), or at its
+    nearest end (``below``, ``beyond``)."""
+    if spent <= curve[0][0]:
+        return ((curve[0][1], 1.0),), "below"
+    if spent >= curve[-1][0]:
+        return ((curve[-1][1], 1.0),), "beyond"
+    for (e0, m0), (e1, m1) in itertools.pairwise(curve):
+        if e0 <= spent <= e1:
+            share = (math.log(spent) - math.log(e0)) / (math.log(e1) - math.log(e0)) if e1 > e0 else 0.0
+            return ((m0, 1.0 - share), (m1, share)), "inside"
     raise AssertionError("unreachable: the curve is sorted")
+
+
+def flat_at(method: str) -> str:
+    """The name of the flat SMC's score at ``method``'s experience (a blend of the flat methods' scores)."""
+    return f"base@{method}"
+
+
+@dataclass(frozen=True)
+class AtExperience:
+    """A hierarchical method's experience on a target, the flat SMC's curve there and its score at that experience
+    as weights on the curve's points."""
+
+    spent: float
+    curve: tuple[tuple[float, str], ...]
+    """(experience, flat method) for each point of the curve, by experience."""
+    weights: tuple[tuple[str, float], ...]
+    where: str
+    """``inside`` the curve's range, ``below`` it or ``beyond`` it (the flat SMC's score at the nearest end)."""
+
+
+def at_experience(table: ScoreTable, experience: Experience | None) -> dict[tuple[str, str], AtExperience]:
+    """(target, hierarchical method) -> where its experience falls on the flat SMC's curve, for every target with
+    at least two points of the curve and every method whose experience is recorded there."""
+    flats = [m for m in EXPERIENCE_METHODS if m in table.methods]
+    if experience is None or len(flats) < 2:
+        return {}
+    found: dict[tuple[str, str], AtExperience] = {}
+    for target in table.targets:
+        points = [(experience.total([METHOD_REGISTRY[m].flat_node(target).name]), m) for m in flats
+                  if (target, m) in table.score]
+        curve = tuple(sorted((e, m) for e, m in points if e))
+        if len(curve) < 2:
+            continue
+        for method in table.hierarchical:
+            spent = experience.total(table.candidate_nodes(target, method)) \
+                if (target, method) in table.score else None
+            if spent is not None:
+                found[(target, method)] = AtExperience(spent, curve, *_weights(curve, spent))
+    return found
+
+
+def blends(found: Mapping[tuple[str, str], AtExperience]) -> dict[str, dict[str, tuple[tuple[str, float], ...]]]:
+    """:meth:`~sb3_smc.experiments.bootstrap.Replicates.blended`'s argument: the flat SMC's score at each method's
+    experience (:func:`flat_at`) on each target."""
+    out: dict[str, dict[str, tuple[tuple[str, float], ...]]] = {}
+    for (target, method), at in found.items():
+        out.setdefault(flat_at(method), {})[target] = at.weights
+    return out
 
 
 def experience_section(table: ScoreTable, experience: Experience | None) -> list[str]:
     """The report's section: per target with the flat SMC's curve, each hierarchical method's best-seed score and
-    experience beside the flat SMC's score at that experience; nothing without the curve's records."""
-    flats = [m for m in EXPERIENCE_METHODS if m in table.methods]
-    if experience is None or len(flats) < 2:
+    experience beside the flat SMC's score at that experience, and per method its lead with a bootstrap interval and
+    a paired t-test; nothing without the curve's records."""
+    found = at_experience(table, experience)
+    if not found:
         return []
+    replicates = table.replicates.blended(blends(found))
     rows: list[str] = []
-    leads: dict[str, list[float]] = {}
-    for target in table.targets:
-        points = [(experience.total([METHOD_REGISTRY[m].flat_node(target).name]), table.score.get((target, m)))
-                  for m in flats]
-        curve = sorted((e, s) for e, s in points if e and s is not None)
-        if len(curve) < 2:
-            continue
-        for method in table.hierarchical:
-            if (target, method) not in table.score:
-                continue
-            spent = experience.total(table.candidate_nodes(target, method))
-            if spent is None:
-                continue
-            ours = table.score[(target, method)]
-            flat, where = _at(curve, spent)
-            mark = {"inside": "", "below": " (its least)", "beyond": " (its most: less experience)"}[where]
-            rows.append(f"| {target} | {table.kind_of[target]} | "
-                        + " / ".join(f"{100 * s:.1f} @ {_moves(e)}" for e, s in curve)
-                        + f" | {method} | {100 * ours:.1f} @ {_moves(spent)} ({spent / curve[0][0]:.0f} x) | "
-                        f"{100 * flat:.1f}{mark} | {100 * (ours - flat):+.1f} |")
-            leads.setdefault(method, []).append(ours - flat)
-    if not rows:
-        return []
-    summary = "; ".join(f"{m}: ahead on {sum(d > 0 for d in ds)} of {len(ds)} targets, mean lead "
-                        f"{100 * sum(ds) / len(ds):+.1f} points" for m, ds in leads.items())
+    for (target, method), at in found.items():
+        ours, flat = table.score[(target, method)], replicates.estimate[(target, flat_at(method))]
+        mark = {"inside": "", "below": " (its least)", "beyond": " (its most: less experience)"}[at.where]
+        rows.append(f"| {target} | {table.kind_of[target]} | "
+                    + " / ".join(f"{100 * table.score[(target, m)]:.1f} @ {_moves(e)}" for e, m in at.curve)
+                    + f" | {method} | {100 * ours:.1f} @ {_moves(at.spent)} ({at.spent / at.curve[0][0]:.0f} x) | "
+                    f"{100 * flat:.1f}{mark} | {100 * (ours - flat):+.1f} |")
+    summary = []
+    for method in [m for m in table.hierarchical if any(k == m for _, k in found)]:
+        targets = sorted(t for t, m in found if m == method)
+        blend = flat_at(method)
+        lead = replicates.gap(targets, method, blend)
+        ahead = sum(replicates.estimate[(t, method)] > replicates.estimate[(t, blend)] for t in targets)
+        _, test = method_test(replicates.estimate, targets, method, blend)
+        summary.append(f"{method}: ahead on {ahead} of {len(targets)} targets, mean lead "
+                       f"{100 * lead.estimate:+.1f} points [{100 * lead.low:+.1f}, {100 * lead.high:+.1f}]"
+                       + (f", t({test[0]}) = {test[1]:.2f}, p = {test[2]:.2g}" if test is not None else "")
+                       + (" (partial)" if any((t, method) in table.unfinished for t in targets) else ""))
     return [EXPERIENCE_HEADING, "",
-            f"The flat SMC at {', '.join(flats)} (best seed @ the primitive moves all its seeds trained on) and each "
-            "hierarchical method's best-seed score @ its experience: the moves of all seeds of its target nodes and "
-            "of every lower-level node they were built on (docs/experiments.md, \"Equal experience\"), with how many "
-            "times the first point's that is; the flat SMC's score at that experience, interpolated in log "
-            "experience (at the curve's end where the method's experience lies beyond it), and the method's lead.",
+            f"The flat SMC at {', '.join(m for m in EXPERIENCE_METHODS if m in table.methods)} (best seed @ the "
+            "primitive moves all its seeds trained on) and each hierarchical method's best-seed score @ its "
+            "experience: the moves of all seeds of its target nodes and of every lower-level node they were built on "
+            "(docs/experiments.md, \"Equal experience\"), with how many times the first point's that is; the flat "
+            "SMC's score at that experience, interpolated in log experience (at the curve's end where the method's "
+            "experience lies beyond it), and the method's lead. Per method: its mean lead with a 95 % bootstrap "
+            "interval over seeds and test worlds, and the paired t-test across the targets.",
             "", "| target | kind | flat SMC: score @ moves | method | score @ moves | flat SMC there | lead |",
-            "|---|---|---|---|---|---:|---:|", *rows, "", f"**At equal experience**: {summary}.", ""]
+            "|---|---|---|---|---|---:|---:|", *rows, "", f"**At equal experience**: {'; '.join(summary)}.", ""]
 
 
 def main(argv: Sequence[str] | None = None) -> None:

@@ -29,8 +29,8 @@ from sb3_smc.experiments.claims import (
     statements,
     tally,
 )
-from sb3_smc.experiments.design import CATEGORIES, METHOD_REGISTRY, METHODS, PAPER_CATEGORIES
-from sb3_smc.experiments.experience import Experience, experience_section
+from sb3_smc.experiments.design import CATEGORIES, EXPERIENCE_METHODS, METHOD_REGISTRY, METHODS, PAPER_CATEGORIES
+from sb3_smc.experiments.experience import Experience, at_experience, blends, experience_section, flat_at
 from sb3_smc.experiments.paper import (
     ORIGINAL_FLAT_RUNS,
     PAPER_CONCEPTS,
@@ -171,10 +171,16 @@ class ResultTable:
         return f"{100 * mean:.1f}" + (f" ± {100 * se:.1f}" if se is not None else "") + self.partial(members, method)
 
 
-def _claims_section(table: ResultTable) -> list[str]:
-    """One row per statement of the paper, a verdict under each reading of a call that ran (``claims``)."""
+def _claims_section(table: ResultTable, experience: Experience | None) -> list[str]:
+    """One row per statement of the paper, a verdict under each reading of a call that ran (``claims``); the flat
+    SMC at a curriculum's experience where the runs' ``experience`` was kept."""
     found = statements(table.kind_of, table.category_of)
-    cells = {id(st): [judge(st, reading, table.replicates, table.unfinished) for reading in READINGS]
+    at = at_experience(table, experience)
+    replicates = table.replicates.blended(blends(at))
+    # the flat SMC at a method's experience is unfinished where a point of its curve is
+    unfinished = table.unfinished | {(t, flat_at(m)) for t, m in at
+                                     if any((t, f) in table.unfinished for f in EXPERIENCE_METHODS)}
+    cells = {id(st): [judge(st, reading, replicates, unfinished) for reading in READINGS]
              for st in found if not isinstance(st, str)}
     first = set(READINGS[0].methods.values())  # a later reading is shown where a method of its own ran
     shown = [k for k, reading in enumerate(READINGS)
@@ -189,7 +195,10 @@ def _claims_section(table: ResultTable) -> list[str]:
              "number lies inside our interval, exceeded or short where our interval lies beyond or before it, "
              "opposite where it lies on the other side of zero (docs/experiments.md, \"The claims table\"). "
              + " ".join(f"*{r.name}*: {', '.join(f'{p} = {m}' for p, m in r.methods.items() if p != m) or 'as run'}"
-                        + (" (the statements about the flat SMC only)" if r.compares_flat_only else "") + "."
+                        + (" (the statements about the flat SMC only)" if r.compares_flat_only else "")
+                        + (f" (the comparisons of curr with the flat SMC on the {len(r.targets)} concepts of the sweep "
+                           "and the flat SMC's curve of experience, judged by the sign the paper claims)"
+                           if r.targets is not None else "") + "."
                         for r in readings), "",
              "| statement | paper | " + " | ".join(r.name for r in readings) + " |",
              "|---|---|" + "---|" * len(readings)]
@@ -473,7 +482,7 @@ def _ttest_row(label: str, comparison: str, members: Sequence[str], a: str, b: s
 def number_sections(table: ResultTable, experience: Experience | None = None) -> list[str]:
     """The report's Markdown sections of numbers, in the report's order (the equal-experience section where the
     runs' ``experience`` was kept)."""
-    return [*_claims_section(table), *_sweep_section(table), *experience_section(table, experience),
+    return [*_claims_section(table, experience), *_sweep_section(table), *experience_section(table, experience),
             *_concept_section(table),
             *_original_flat_section(table),
             *_means_section(table), *_ttest_section(table), *_seed_means_section(table), *_noprim_section(table)]
