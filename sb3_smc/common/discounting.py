@@ -1,13 +1,14 @@
 """Semi-MDP discounting of SMC calls: a decision that ran ``k`` primitive steps is discounted by ``gamma ** k``.
 
-The paper counts an SMC call as one step: the learner discounts every decision by ``gamma``, whether it was one move
-or a call of 40. With ``discount="semi-mdp"`` (:class:`~sb3_smc.records.WrapperSettings`) the advantage and the
-return of decision ``t`` use ``gamma_t = gamma ** max(1, k_t)``, where ``k_t`` is the number of primitive steps the
-decision executed (the wrapper's ``info["primitive_steps"]``: 1 for a move, the moves of a call; a signal counts 1):
+By default a call is one decision (the simplest reading: the paper does not say how its learner discounted a call):
+the learner discounts every decision by ``gamma``, whether it was one move or a call of 40. With ``discount="semi-mdp"``
+(:class:`~sb3_smc.records.WrapperSettings`) the advantage and the return of decision ``t`` use
+``gamma_t = gamma ** max(1, k_t)``, where ``k_t`` is the number of primitive steps the decision executed (the wrapper's
+``info["primitive_steps"]``: 1 for a move, the moves of a call; a signal counts 1):
 
     delta_t = r_t + gamma_t V(s_t+1) (1 - done_t) - V(s_t),   A_t = delta_t + gamma_t lambda (1 - done_t) A_t+1
 
-A flat SMC (every decision one step) trains exactly as under the paper's rule (tested). SB3's bootstrap at a
+A flat SMC (every decision one step) trains exactly as under the default (tested). SB3's bootstrap at a
 time-limit cut (``TimeLimit.truncated``: ``gamma V(terminal)`` added to the last reward) keeps ``gamma``.
 
 :class:`SemiMDPDiscount` is a callback that records ``k_t`` for every stored transition and replaces the rollout

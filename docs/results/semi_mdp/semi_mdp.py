@@ -1,6 +1,7 @@
-"""Semi-MDP discounting against the paper's rule on the headline bring-about target, with the shipped pretrained
-children of its canonical curriculum (the two best seeds of each node it uses); default RecurrentPPO, 400,000 steps,
-the paper's test. One JSON line per job: ``python docs/results/semi_mdp/semi_mdp.py 0 1 2 > results.jsonl``."""
+"""Semi-MDP discounting against the default discounting (a call as one decision) on the headline bring-about target,
+with the shipped pretrained children of its canonical curriculum (the two best seeds of each node it uses); default
+RecurrentPPO, 400,000 steps, the paper's test. One JSON line per job:
+``python docs/results/semi_mdp/semi_mdp.py 0 1 2 > results.jsonl``."""
 
 import json
 import sys
