@@ -49,6 +49,32 @@ def test_the_import_graph_has_no_cycle():
         pytest.fail(f"modules import each other: {err}")
 
 
+LAYERS = (("pixelworld_env",), ("sb3_smc.common",), ("sb3_smc.core", "sb3_smc.recurrent_trpo"), ("sb3_smc.tasks",),
+          ("sb3_smc.records", "sb3_smc.examples"), ("sb3_smc.smc",), ("sb3_smc.envs",),
+          ("sb3_smc.learning", "sb3_smc.library"), ("sb3_smc.curricula", "sb3_smc.zoo"), ("sb3_smc.experiments",),
+          ("sb3_smc.cli", "sb3_smc.demo"))
+"""The stages of docs/architecture.md, lowest first (the packages of one stage do not import each other)."""
+
+
+def _stage(module: str) -> tuple[int, str] | None:
+    """The stage of ``module`` (its index in :data:`LAYERS`) and its package there; ``None`` outside them."""
+    found = [(k, p) for k, stage in enumerate(LAYERS) for p in stage if module == p or module.startswith(p + ".")]
+    return found[0] if found else None
+
+
+def test_the_data_flows_one_way_through_the_stages():
+    """No module of a stage imports one of a later stage, or of another package of its own stage (the library does
+    not import the curricula, training does not import the library, ...)."""
+    against = []
+    for module, edges in import_graph().items():
+        here = _stage(module)
+        against += [f"{module} -> {e}" for e in edges if here is not None and (there := _stage(e)) is not None
+                    and (there[0] > here[0] or (there[0] == here[0] and there[1] != here[1]))]
+    assert against == [], f"imports against the flow: {against}"
+    assert _stage("sb3_smc.library.pretrained") == (7, "sb3_smc.library")
+    assert _stage("sb3_smc.curricula.shipped") == (8, "sb3_smc.curricula") and _stage("sb3_smc.errors") is None
+
+
 def test_the_cycle_check_sees_imports_inside_functions():
     graph = import_graph()
     assert "sb3_smc.smc.policies" in graph["sb3_smc.library.library"]  # imported in SMCLibrary.load (it loads torch)

@@ -20,7 +20,7 @@ from sb3_smc.curricula.shipped import shipped_curricula
 from sb3_smc.curricula.trainer import rank_seeds, train_curriculum
 from sb3_smc.library import LibraryError, SMCLibrary
 from sb3_smc.library.errors import ManifestError
-from sb3_smc.library.pretrained import INDEX, pretrained_curricula, pretrained_names, pretrained_root
+from sb3_smc.library.pretrained import INDEX, pretrained_curricula, pretrained_index, pretrained_names, pretrained_root
 from tests.helpers import sb3_smc_cli
 
 LEFT, RIGHT = "cl_self-in-left-corner_vs_on-hline", "cl_self-in-right-corner_vs_on-hline"
@@ -172,6 +172,9 @@ def test_the_shipped_pretrained_library():
     complete = {name: lower_level(c) for name, c in shipped_curricula().items()
                 if lower_level(c) and set(lower_level(c)) <= held}  # every shipped curriculum it has all nodes of
     assert index["curricula"] == complete and sorted(complete) == sorted(shipped)
+    partial = {name: lower_level(c) for name, c in shipped_curricula().items()
+               if set(lower_level(c)) & held and name not in complete}  # for the error that refuses them
+    assert index["partial"] == partial and "con2-cl" in partial
     for curriculum in shipped:  # two seeds of each lower-level node (names from the manifest: no model loaded)
         nodes = {name.rpartition("@")[0] for name in pretrained_names(curriculum)}
         assert len(pretrained_names(curriculum)) == 2 * len(nodes)
@@ -205,6 +208,23 @@ def test_every_shipped_smc_loads_by_a_name():
     with pytest.raises(LibraryError, match="no pretrained SMCs for curriculum 'nothing-like-it'; pretrained "
                                            "curricula: con2-ba, .*; or one of the 45 nodes it holds by name"):
         SMCLibrary.pretrained("nothing-like-it")
+
+
+def test_a_library_indexed_before_partial_curricula_were_listed_still_loads(tmp_path):
+    """An index without ``partial`` (built before it was written) loads as one with none: a curriculum held in part
+    is then refused as one it does not know, with the names that load."""
+    copy = tmp_path / "pretrained"
+    shutil.copytree(pretrained_root(), copy)
+    index = json.loads((copy / INDEX).read_text())
+    del index["partial"]
+    (copy / INDEX).write_text(json.dumps(index))
+    assert pretrained_index(copy)["partial"] == {} and pretrained_names("search2-canon", copy)
+    with pytest.raises(LibraryError, match="no pretrained SMCs for curriculum 'con2-cl'; did you mean 'con2-ba'"):
+        pretrained_names("con2-cl", copy)
+    index["partial"] = {"con2-cl": "all of them"}
+    (copy / INDEX).write_text(json.dumps(index))
+    with pytest.raises(ManifestError, match="'partial': {name: \\[nodes\\]}"):
+        pretrained_index(copy)
 
 
 def test_a_rebuild_from_a_lean_run_replaces_the_stock_smcs(tmp_path):

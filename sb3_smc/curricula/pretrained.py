@@ -146,14 +146,17 @@ def build_pretrained(runs: Sequence[str | Path], curricula: Sequence[str | Curri
 def _index(names: Sequence[str], before: dict[str, list[str]], built: Sequence[Curriculum],
            ranked_among: dict[str, int]) -> dict:
     """The index of a library holding ``names``: the curricula of ``before``, ``built`` and the shipped ones whose
-    lower-level nodes it all holds, each node's SMCs, and the number of seeds each node's were ranked among."""
+    lower-level nodes it all holds, each node's SMCs, the number of seeds each node's were ranked among, and the
+    curricula whose lower-level nodes it holds only some of."""
     nodes: dict[str, list[str]] = {}
     for name in names:
         nodes.setdefault(node_of(name), []).append(name)
     wanted = {**{name: lower_level(c) for name, c in shipped_curricula().items()}, **before,
               **{c.name: lower_level(c) for c in built}}
     curricula = {name: lower for name, lower in wanted.items() if lower and set(lower) <= set(nodes)}
-    return {"curricula": curricula, "nodes": nodes, "seeds": {node: ranked_among[node] for node in nodes}}
+    partial = {name: lower for name, lower in wanted.items() if set(lower) & set(nodes) and name not in curricula}
+    return {"curricula": curricula, "nodes": nodes, "seeds": {node: ranked_among[node] for node in nodes},
+            "partial": partial}
 
 
 def _lean(entry: storage.LibraryEntry) -> bool:

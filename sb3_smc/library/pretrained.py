@@ -30,8 +30,9 @@ __all__ = ["INDEX", "pretrained_curricula", "pretrained_index", "pretrained_name
 
 INDEX = "pretrained.json"
 """The index of a pretrained library: ``{"curricula": {curriculum: [nodes]}, "nodes": {node: [SMC names]},
-"seeds": {node: n}}``: the nodes each curriculum calls, the SMCs (best seeds) that stand for each node, and how many
-seeds of its run those were ranked among."""
+"seeds": {node: n}, "partial": {curriculum: [nodes]}}``: the nodes each curriculum calls, the SMCs (best seeds) that
+stand for each node, how many seeds of its run those were ranked among, and the lower-level nodes of each shipped
+curriculum the library holds only some of (for the error that refuses it; absent in libraries built before it)."""
 
 
 def pretrained_root() -> Path:
@@ -50,18 +51,21 @@ def pretrained_index(root: str | Path | None = None, names: Sequence[str] | None
             raise ManifestError(f"{root} is an SMC library without {INDEX} (the index of a pretrained library, "
                                 "written by build_pretrained since manifest version 3): build it again with "
                                 "tools/build_pretrained.py")
-        return {"curricula": {}, "nodes": {}, "seeds": {}}
+        return {"curricula": {}, "nodes": {}, "seeds": {}, "partial": {}}
     try:
         index = json.loads(path.read_text(encoding="utf-8"))
         curricula, nodes, seeds = index["curricula"], index["nodes"], index["seeds"]
+        partial = index.setdefault("partial", {})
         ok = all(isinstance(v, list) and all(isinstance(n, str) and n in nodes for n in v) for v in curricula.values())
+        ok = ok and all(isinstance(v, list) and all(isinstance(n, str) for n in v) for v in partial.values())
         ok = ok and all(isinstance(v, list) and all(isinstance(n, str) for n in v) for v in nodes.values())
         ok = ok and set(seeds) == set(nodes) and all(type(n) is int and n >= len(nodes[k]) for k, n in seeds.items())
     except (ValueError, KeyError, TypeError, AttributeError) as err:
         raise ManifestError(f"{path} is damaged ({type(err).__name__}: {err})") from None
     if not ok:
         raise ManifestError(f"{path}: expected {{'curricula': {{name: [nodes]}}, 'nodes': {{node: [SMC names]}}, "
-                            "'seeds': {node: seeds ranked among}}, every node of a curriculum among 'nodes'")
+                            "'seeds': {node: seeds ranked among}, 'partial': {name: [nodes]}}, every node of a "
+                            "curriculum among 'nodes'")
     held = set(_names(root) if names is None else names)
     missing = sorted({name for names in nodes.values() for name in names} - held)
     if missing:
@@ -96,14 +100,11 @@ def pretrained_names(curriculum: str, root: str | Path | None = None) -> list[st
 def _not_pretrained(name: str, index: dict[str, Any]) -> str:
     """Why ``name`` loads nothing: a shipped curriculum's lower level held in part (what is missing, and its nodes
     that load by name), or no curriculum or node of the library (close names); with the curricula that load."""
-    from sb3_smc.curricula.shipped import shipped_curricula  # only for this message: curricula import this module
-
     available = list(index["curricula"])
     loads = (f"pretrained curricula: {', '.join(available) or 'none'}; or one of the {len(index['nodes'])} nodes "
              "it holds by name (pretrained_index()['nodes'])")
-    curriculum = shipped_curricula().get(name)
-    if curriculum is not None:
-        lower = list(dict.fromkeys(u for target in curriculum.targets for u in curriculum.node(target).uses))
+    lower = index["partial"].get(name)
+    if lower is not None:
         held = [node for node in lower if node in index["nodes"]]
         missing = [node for node in lower if node not in index["nodes"]]
         return (f"no pretrained SMCs for curriculum {name!r}: the pretrained library holds {len(held)} of its "
