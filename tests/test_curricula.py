@@ -536,7 +536,8 @@ def test_workers_groups_and_ray_give_the_same_library(tmp_path):
     # two workers: left's and above's seeds, a group each, side by side
     assert progress["two"][0] in (["jobs 2/6", " running 2"], ["jobs 4/6", " running 2"])
     assert progress["two"][-1] == ["jobs 6/6", " running 0"]
-    ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False)
+    # Ray's workers run at niceness 15 unless told otherwise: beside other work they would crawl
+    ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False, _system_config={"worker_niceness": 0})
     try:
         on_ray = train_curriculum(str(path), tmp_path / "ray", seeds=2, timesteps=2000, workers=2, backend="ray",
                                   progress=False)

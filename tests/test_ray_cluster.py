@@ -48,11 +48,13 @@ WAIT_S = 120.0
 def two_nodes(monkeypatch: pytest.MonkeyPatch) -> Iterator[tuple[Cluster, Any]]:
     """A head and a second node on this machine's loopback, each with one CPU, shut down whatever the test does.
     Ray's files (and the address file through which ``ray.init()`` finds a running cluster) go to a folder of the
-    test's own, so that no other Ray session on the machine connects to this cluster. Ray replaces an address of
-    127.0.0.1 with the machine's own, where nothing listens on a loopback cluster, unless this process runs Ray as
-    on one machine (its ``ENABLE_RAY_CLUSTER`` off, which only turns off that replacement)."""
+    test's own, so that no other Ray session on the machine connects to this cluster; its workers run at this
+    process's niceness (Ray's default, 15, starves them beside other work). Ray replaces an address of 127.0.0.1 with
+    the machine's own, where nothing listens on a loopback cluster, unless this process runs Ray as on one machine
+    (its ``ENABLE_RAY_CLUSTER`` off, which only turns off that replacement)."""
     folder = tempfile.mkdtemp(prefix="ray-", dir="/tmp")  # short: Ray's socket paths must stay under 108 bytes
     monkeypatch.setenv("RAY_TMPDIR", folder)
+    monkeypatch.setenv("RAY_worker_niceness", "0")
     monkeypatch.delenv("RAY_ADDRESS", raising=False)
     monkeypatch.setattr("ray._private.ray_constants.ENABLE_RAY_CLUSTER", False)
     cluster = Cluster(initialize_head=True, head_node_args={**NODE, "include_dashboard": False})
