@@ -83,6 +83,8 @@ def test_the_section_reads_the_flat_curve_at_the_curriculum_experience(tmp_path:
     beyond = Experience(5, experience.uses, {**experience.steps, CURR: {s: 20_000_000 for s in range(5)}})
     (row,) = [line for line in experience_section(ResultTable(rows, reported), beyond) if line.startswith("| ba")]
     assert row.endswith("| 50.0 (its most: less experience) | -10.0 |")
+    assert "curr: ahead on 0 of 1 targets (on 1 the flat SMC's curve ends below its experience), mean lead -10.0" in \
+        experience_section(ResultTable(rows, reported), beyond)[-2]
     assert experience_section(ResultTable(rows, reported), None) == []
 
 

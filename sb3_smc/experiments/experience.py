@@ -255,7 +255,10 @@ def experience_section(table: ScoreTable, experience: Experience | None) -> list
         lead = replicates.gap(targets, method, blend)
         ahead = sum(replicates.estimate[(t, method)] > replicates.estimate[(t, blend)] for t in targets)
         _, test = method_test(replicates.estimate, targets, method, blend)
-        summary.append(f"{method}: ahead on {ahead} of {len(targets)} targets, mean lead "
+        short = sum(found[(t, method)].where == "beyond" for t in targets)
+        summary.append(f"{method}: ahead on {ahead} of {len(targets)} targets"
+                       + (f" (on {short} the flat SMC's curve ends below its experience)" if short else "")
+                       + ", mean lead "
                        f"{100 * lead.estimate:+.1f} points [{100 * lead.low:+.1f}, {100 * lead.high:+.1f}]"
                        + (f", t({test[0]}) = {test[1]:.2f}, p = {test[2]:.2g}" if test is not None else "")
                        + (" (partial)" if any((t, method) in table.unfinished for t in targets) else ""))
