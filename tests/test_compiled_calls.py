@@ -1,4 +1,4 @@
-"""Compiled leaf calls (:func:`sb3_smc.common.kernels.leaf_call`): a call of a child without children of its own,
+"""Compiled leaf calls (:func:`sb3_smc.envs.leaf_calls.leaf_call`): a call of a child without children of its own,
 with the default compiled actor, in a world where only the self moves, runs as one compiled loop. It must make the
 same moves, draws, rewards, outcomes and move budgets as the wrapper's Python loop, which still runs everything else
 (``record_cells=True`` forces it, so the two are compared side by side)."""

@@ -4,9 +4,9 @@ children's calls included, in one compiled call over PixelWorld's native vector 
 A level-2 SMC of a curriculum calls children without children of their own. In :class:`~sb3_smc.envs.vec_env.SMCVecEnv`
 each environment's step is a :class:`~sb3_smc.envs.wrapper.HierarchicalSMCWrapper` step in Python (the action, the
 compiled call of the child, the observation), about a hundred microseconds per environment and decision besides the
-call itself. Here the step of every environment is one :func:`sb3_smc.common.kernels.smc_steps` call: each
+call itself. Here the step of every environment is one :func:`sb3_smc.envs.leaf_calls.smc_steps` call: each
 environment keeps its padded world arrays and moves the self in them with the same
-:func:`~sb3_smc.common.kernels.leaf_call` the wrapper runs, on the native vector env's scenes, cells and goal
+:func:`~sb3_smc.envs.leaf_calls.leaf_call` the wrapper runs, on the native vector env's scenes, cells and goal
 tables (:meth:`pixelworld_env.envs.vector.PixelWorldVectorEnv.self_moves`), which also resets the environments
 whose episode ended. Each environment's calls draw from its own generator, seeded as the wrapper seeds its own
 (``(seed, 0x5EED)``), the uniforms drawn ahead in blocks: the same numbers in the same order.
@@ -35,7 +35,6 @@ from sb3_smc.envs.vec_env import FlatSMCVecEnv, NativeSMCVecEnv, SMCStep
 from sb3_smc.envs.wrapper import LeafPlan, leaf_plan
 from sb3_smc.errors import SMCError
 from sb3_smc.records import WrapperSettings
-from sb3_smc.smc.policies import _kernels
 from sb3_smc.smc.smc import SMC
 from sb3_smc.tasks.resolved_task import ResolvedTask
 
@@ -67,7 +66,7 @@ def _leaf_plans(smcs: Sequence[SMC]) -> tuple[list[LeafPlan], str | None]:
 
 
 def _stacked(plans: Sequence[LeafPlan]) -> tuple[Any, ...]:
-    """The children's plans and weights as :func:`~sb3_smc.common.kernels.smc_steps` takes them: per child its
+    """The children's plans and weights as :func:`~sb3_smc.envs.leaf_calls.smc_steps` takes them: per child its
     number of actions, then each array stacked, one row per child, padded with zeros to the most actions (the
     previous-action inputs of ``w_ih``, the columns of ``w_out``; the kernel takes each child's part)."""
     actions = np.array([len(p.kinds) for p in plans], dtype=np.int64)
@@ -138,19 +137,20 @@ class HierarchicalSMCVecEnv(NativeSMCVecEnv):
         self.count_primitive_steps = count_primitive_steps
         self.call_step_cap = int(call_step_cap)
         n, n_actions = env.num_envs, len(self.action_names)
-        kernels = _kernels()
-        self._kernels = kernels
+        from sb3_smc.envs import leaf_calls  # numba: loaded with the first such vector env
+
+        self._calls = leaf_calls
         # the top-level actions: a signal or a move (the base env's effect), or a call of a child
         kinds, values, deltas, targets = [], [], [], []
         for name in self.action_names:
             if name.startswith(CALL_PREFIX):
-                kinds.append(kernels.CALL)
+                kinds.append(leaf_calls.CALL)
                 values.append(0)
                 deltas.append((0, 0))
                 targets.append(names.index(name[len(CALL_PREFIX):]))
             else:
                 a = env.action_names.index(name)
-                kinds.append(int(self._world.kinds[a]))  # kernels.MOVE or kernels.SIGNAL, as the vector env's
+                kinds.append(int(self._world.kinds[a]))  # leaf_calls.MOVE or leaf_calls.SIGNAL, as the vector env's
                 values.append(int(self._world.values[a]))
                 deltas.append(tuple(self._world.deltas[a]))
                 targets.append(-1)
@@ -164,7 +164,7 @@ class HierarchicalSMCVecEnv(NativeSMCVecEnv):
         self._grids = np.zeros((n, *self._world.grid0.shape[1:]), dtype=self._world.grid0.dtype)
         self._owners = np.zeros((n, *self._world.owner0.shape[1:]), dtype=self._world.owner0.dtype)
         self._phase = np.zeros(n, dtype=np.int64)
-        self._counters = np.zeros((n, kernels.N_COUNTERS), dtype=np.int64)
+        self._counters = np.zeros((n, leaf_calls.N_COUNTERS), dtype=np.int64)
         self._totals = np.zeros((n, 2))
         self._h, self._c = np.zeros((n, hidden)), np.zeros((n, hidden))
         self._block = max(UNIFORM_BLOCK, self.call_step_cap)
@@ -210,16 +210,16 @@ class HierarchicalSMCVecEnv(NativeSMCVecEnv):
         return self._observation(hand)
 
     def step_arrays(self, actions: np.ndarray) -> SMCStep:
-        kernels, world = self._kernels, self._world
+        leaf_calls, world = self._calls, self._world
         caps = np.full(self.num_envs, self.call_step_cap, dtype=np.int64)
         if self.count_primitive_steps:  # a call may not run past the episode's moves (the wrapper's rule)
             caps = np.maximum(1, np.minimum(caps, self._max_steps - self._elapsed))
-        calls = self._kinds[actions] == kernels.CALL
+        calls = self._kinds[actions] == leaf_calls.CALL
         for k in np.flatnonzero(calls).tolist():
             self._draw_ahead(k, int(caps[k]))
-        self._phase[:] = kernels.STARTING
+        self._phase[:] = leaf_calls.STARTING
         while True:
-            status = kernels.smc_steps(
+            status = leaf_calls.smc_steps(
                 actions, self._kinds, self._values, self._deltas, self._targets, caps, self.kind == BRING_ABOUT,
                 CLASSIFICATION_REWARD, GOAL_POTENTIAL, GOAL_REWARD, NUM_COLORS, world.me, world.self_color,
                 world.labels, world.goal_table, *self._children, world.scene, world.row, world.col, world.goal,

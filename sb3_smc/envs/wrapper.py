@@ -28,7 +28,7 @@ from sb3_smc.envs.smc_step import (
     SMCObservation,
 )
 from sb3_smc.errors import SMCError, SMCTypeError
-from sb3_smc.smc.policies import NumpyGRUPolicy, _kernels, sample_action
+from sb3_smc.smc.policies import NumpyGRUPolicy, sample_action
 from sb3_smc.smc.smc import SMC, StepPolicy
 from sb3_smc.tasks.task import layout_of, returns_bounded, task_layer
 
@@ -49,7 +49,7 @@ class _CompiledPolicy(StepPolicy, Protocol):
 
 
 class LeafPlan(NamedTuple):
-    """The constant arguments of a compiled call of a leaf SMC (:func:`sb3_smc.common.kernels.leaf_call`)."""
+    """The constant arguments of a compiled call of a leaf SMC (:func:`sb3_smc.envs.leaf_calls.leaf_call`)."""
 
     kinds: np.ndarray  #: per action: 1 a move, 0 a signal
     values: np.ndarray  #: per action: a signal's outcome (0 for a move)
@@ -231,12 +231,13 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         world = cast(PixelWorldEnv, self.base).world
         return world.self_only and not world.stale
 
-    def _compiled_call(self, smc: SMC, leaf: LeafPlan, cap: int, budget: list[int]
+    def _compiled_call(self, smc: SMC, leaf: LeafPlan, cap: int, budget: list[int], rng: np.random.Generator
                        ) -> tuple[float, int, float]:
         """One call of the leaf ``smc`` made by the compiled loop: the same moves, draws and result as the loop of
         :meth:`call_coroutine`."""
-        kernels = _kernels()
-        kinds, values, deltas, gru, hidden, weights = leaf
+        from sb3_smc.envs import leaf_calls  # numba: loaded on the first compiled call
+
+        kinds, values, deltas, gru, hidden, (w_ih, w_hh, b_first, b_second, w_out, b_out) = leaf
         base = cast(PixelWorldEnv, self.base)
         world = base.world
         row, col = world.positions[world.self_index]
@@ -248,19 +249,20 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         color = int(world.scene.self_object.color)
         try:
             while True:
-                status = kernels.leaf_call(world.grid, world.owner, world.self_index, color, cells, bring_about,
-                                           GOAL_POTENTIAL, NUM_COLORS, kinds, values, deltas, counters, totals, gru,
-                                           h, c, *weights, self._rng, _NO_UNIFORMS)
-                if status != kernels.LEAF_NEEDS_GOAL:
+                status = leaf_calls.leaf_call(world.grid, world.owner, world.self_index, color, cells, bring_about,
+                                              GOAL_POTENTIAL, NUM_COLORS, kinds, values, deltas, counters, totals, gru,
+                                              h, c, w_ih, w_hh, b_first, b_second, w_out, b_out, rng,
+                                              _NO_UNIFORMS)
+                if status != leaf_calls.LEAF_NEEDS_GOAL:
                     break
-                base.goal_at((int(counters[kernels.ROW]), int(counters[kernels.COL])))
+                base.goal_at((int(counters[leaf_calls.ROW]), int(counters[leaf_calls.COL])))
         finally:  # the world's arrays hold the moves made so far, whatever happened: keep the rest in step
-            world.place_self((int(counters[kernels.ROW]), int(counters[kernels.COL])))
-            base.self_moved(bool(counters[kernels.GOAL]))
-            budget[0] = int(counters[kernels.BUDGET])
-        if status == kernels.LEAF_BAD_PROBABILITIES:
+            world.place_self((int(counters[leaf_calls.ROW]), int(counters[leaf_calls.COL])))
+            base.self_moved(bool(counters[leaf_calls.GOAL]))
+            budget[0] = int(counters[leaf_calls.BUDGET])
+        if status == leaf_calls.LEAF_BAD_PROBABILITIES:
             raise SMCError(f"SMC {smc.name!r}: its policy gave action probabilities without a positive finite sum")
-        return float(totals[0]), int(counters[kernels.MOVES_MADE]), float(totals[1])
+        return float(totals[0]), int(counters[leaf_calls.MOVES_MADE]), float(totals[1])
 
     @property
     def outcomes(self) -> np.ndarray:
@@ -286,7 +288,7 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         compiled numpy actors, whose single steps cost less than stacking a group) is asked here directly instead,
         without the round trip. The draws from this env's generator are the same either way. A call of a leaf SMC (no
         children, a compiled actor) in a world where only the self moves is made whole by one compiled loop
-        (:func:`sb3_smc.common.kernels.leaf_call`), with the same moves, draws and result, and yields nothing.
+        (:func:`sb3_smc.envs.leaf_calls.leaf_call`), with the same moves, draws and result, and yields nothing.
         """
         assert self._rng is not None
         if budget is None:
@@ -294,7 +296,7 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         if self.pixelworld and not self.record_cells and self._compilable():
             leaf = self._leaf_plan(smc)
             if leaf is not None:  # the whole call compiled: no decision to yield
-                reward, moves, outcome = self._compiled_call(smc, leaf, cap, budget)
+                reward, moves, outcome = self._compiled_call(smc, leaf, cap, budget, self._rng)
                 calls.append({"smc": smc.name, "depth": depth, "primitive_steps": moves, "outcome": int(outcome),
                               "reward": reward})
                 return reward, moves, outcome

@@ -156,7 +156,7 @@ class _RecurrentActor:
 
     @property
     def compiled_weights(self) -> tuple[np.ndarray, ...] | None:
-        """The compiled step's weights as :func:`sb3_smc.common.kernels.leaf_call` takes them: ``(w_ih, w_hh,
+        """The compiled step's weights as :func:`sb3_smc.envs.leaf_calls.leaf_call` takes them: ``(w_ih, w_hh,
         first bias, second bias, w_out, b_out)`` (an LSTM's one bias first, an empty second), None for the numpy
         code."""
         if self._compiled is None:
