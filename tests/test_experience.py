@@ -132,3 +132,34 @@ def test_the_claims_table_judges_curr_against_the_flat_smc_at_its_experience(tmp
                      r"t\(11\) = \d+\.\d\d, p = ", summary)
     without = number_sections(ResultTable(rows, reported), None)
     assert "equal experience" not in next(line for line in without if line.startswith("| statement | paper |"))
+
+
+def test_while_the_flat_smc_s_curve_is_trained_curr_is_not_judged_at_its_experience(tmp_path: Path) -> None:
+    """While the flat SMC's curve is being trained (base-x1 done, base-x4 and base-x16 not yet: no curve at all), the
+    equal-experience comparison is shown as "not judged: partial" (not "not run")."""
+    from pixelworld_env.datasets import catalog
+    from sb3_smc.experiments import level2_targets
+    from sb3_smc.experiments.design import SWEEP_TARGETS
+    from sb3_smc.experiments.tables import number_sections
+
+    rows: list[dict[str, Any]] = []
+    nodes: dict[str, list[str]] = {}
+    steps: dict[str, int] = {}
+    for target in level2_targets():
+        data = catalog.dataset(target)
+        levels = {"base": 0.5, "curr": 0.9}
+        if target in SWEEP_TARGETS:
+            levels.update({"curr-cap100": 0.8, "base-x1": 0.3})
+            for name, per in ((f"base-x1/{target}", 400_000), (f"cap/{target}", 1_000_000)):
+                nodes[name] = []
+                steps.update({f"{name}@{s}": per for s in range(5)})
+        for method, level in levels.items():
+            node = f"cap/{target}" if method == "curr-cap100" else f"{method}/{target}"
+            rows += [{"target": target, "kind": data.kind, "category": data.category, "method": method,
+                      "curriculum": node, "seed": s, "test_score": level - 0.01 * s} for s in range(5)]
+    reported = [r for r in rows if r["seed"] == 0]
+    unfinished = {(t, m) for t in SWEEP_TARGETS for m in ("base-x4", "base-x16")}
+    experience = Experience.from_run(_run(tmp_path / "run", nodes, steps))
+    lines = number_sections(ResultTable(rows, reported, unfinished), experience)
+    (row,) = [line for line in lines if line.startswith("| bring-about: curr above base (paired t-test)")]
+    assert row.endswith("| not judged: partial |")

@@ -177,8 +177,8 @@ def _claims_section(table: ResultTable, experience: Experience | None) -> list[s
     found = statements(table.kind_of, table.category_of)
     at = at_experience(table, experience)
     replicates = table.replicates.blended(blends(at))
-    # the flat SMC at a method's experience is unfinished where a point of its curve is
-    unfinished = table.unfinished | {(t, flat_at(m)) for t, m in at
+    # the flat SMC at a method's experience is unfinished where a point of its curve is (trained in part, or not yet)
+    unfinished = table.unfinished | {(t, flat_at(m)) for t in table.targets for m in table.hierarchical
                                      if any((t, f) in table.unfinished for f in EXPERIENCE_METHODS)}
     cells = {id(st): [judge(st, reading, replicates, unfinished) for reading in READINGS]
              for st in found if not isinstance(st, str)}
