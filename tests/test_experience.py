@@ -132,6 +132,10 @@ def test_the_claims_table_judges_curr_against_the_flat_smc_at_its_experience(tmp
                      r"t\(11\) = \d+\.\d\d, p = ", summary)
     without = number_sections(ResultTable(rows, reported), None)
     assert "equal experience" not in next(line for line in without if line.startswith("| statement | paper |"))
+    # curr-cap100 still training and no curve yet (its run not begun): still no column
+    still = ResultTable(rows, reported, {(t, "curr-cap100") for t in SWEEP_TARGETS})
+    assert "equal experience" not in next(line for line in number_sections(still, None)
+                                          if line.startswith("| statement | paper |"))
 
 
 def test_while_the_flat_smc_s_curve_is_trained_curr_is_not_judged_at_its_experience(tmp_path: Path) -> None:

@@ -228,6 +228,8 @@ def _judge_on_subset(statement: Statement, reading: Reading, subset: Collection[
         return Judged("", "")
     a, b = (reading.methods[m] for m in statement.methods)
     targets = [t for t in statement.targets if t in subset]
+    if not all(any((t, m) in replicates.estimate or (t, m) in unfinished for t in targets) for m in (a, b)):
+        return Judged("-", NOT_RUN)  # one of the two neither ran nor is running here (the curve's run not begun)
     if any((t, m) in unfinished for t in targets for m in (a, b)):
         return Judged("-", NOT_JUDGED)
     if not replicates.has(targets, a, b):
