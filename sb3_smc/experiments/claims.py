@@ -31,7 +31,7 @@ from sb3_smc.experiments.bootstrap import Interval, Replicates
 from sb3_smc.experiments.design import METHOD_REGISTRY, SWEEP_TARGETS
 from sb3_smc.experiments.experience import flat_at
 from sb3_smc.experiments.paper import PAPER_CONCEPTS, PAPER_COUNTS, PAPER_MEANS, PAPER_NOPRIM, PAPER_TTESTS
-from sb3_smc.experiments.statistics import method_test
+from sb3_smc.experiments.statistics import method_test, ttest_text
 
 __all__ = ["NOT_COMPARABLE", "NOT_JUDGED", "NOT_RUN", "READINGS", "VERDICTS", "Judged", "Reading", "Statement",
            "judge", "method_checks", "points", "statements", "tally", "verdict"]
@@ -215,7 +215,7 @@ def judge(statement: Statement, reading: Reading, replicates: Replicates,
         a, b = (reading.methods[m] for m in statement.test)
         _, test = method_test(replicates.estimate, statement.targets, a, b)
         if test is not None:
-            text += f"; t({test[0]}) = {test[1]:.2f}, p = {test[2]:.2g}"
+            text += f"; {ttest_text(test)}"
     return Judged(text, verdict(statement.paper, interval, statement.gap))
 
 
@@ -238,8 +238,7 @@ def _judge_on_subset(statement: Statement, reading: Reading, subset: Collection[
     sign = 1.0 if statement.paper >= 0 else -1.0
     claimed = Interval(sign * gap.estimate, min(sign * gap.low, sign * gap.high), max(sign * gap.low, sign * gap.high))
     _, test = method_test(replicates.estimate, targets, a, b)
-    text = f"{points(gap, True)} on {len(targets)}" + (f"; t({test[0]}) = {test[1]:.2f}, p = {test[2]:.2g}"
-                                                       if test is not None else "")
+    text = f"{points(gap, True)} on {len(targets)}" + (f"; {ttest_text(test)}" if test is not None else "")
     return Judged(text, verdict(None, claimed, gap=True))
 
 

@@ -36,7 +36,7 @@ from sb3_smc.curricula.run_directory import read_json
 from sb3_smc.errors import SMCError
 from sb3_smc.experiments.bootstrap import Replicates
 from sb3_smc.experiments.design import EXPERIENCE_METHODS, METHOD_REGISTRY
-from sb3_smc.experiments.statistics import method_test
+from sb3_smc.experiments.statistics import method_test, ttest_text, wins
 
 __all__ = ["EXPERIENCE_FILE", "EXPERIENCE_HEADING", "AtExperience", "Experience", "at_experience", "blends",
            "experience_section", "flat_at"]
@@ -253,14 +253,14 @@ def experience_section(table: ScoreTable, experience: Experience | None) -> list
         targets = sorted(t for t, m in found if m == method)
         blend = flat_at(method)
         lead = replicates.gap(targets, method, blend)
-        ahead = sum(replicates.estimate[(t, method)] > replicates.estimate[(t, blend)] for t in targets)
+        ahead, _ = wins(replicates.estimate, targets, [method], blend)
         _, test = method_test(replicates.estimate, targets, method, blend)
         short = sum(found[(t, method)].where == "beyond" for t in targets)
         summary.append(f"{method}: ahead on {ahead} of {len(targets)} targets"
                        + (f" (on {short} the flat SMC's curve ends below its experience)" if short else "")
                        + ", mean lead "
                        f"{100 * lead.estimate:+.1f} points [{100 * lead.low:+.1f}, {100 * lead.high:+.1f}]"
-                       + (f", t({test[0]}) = {test[1]:.2f}, p = {test[2]:.2g}" if test is not None else "")
+                       + (f", {ttest_text(test)}" if test is not None else "")
                        + (" (partial)" if any((t, method) in table.unfinished for t in targets) else ""))
     return [EXPERIENCE_HEADING, "",
             f"The flat SMC at {', '.join(m for m in EXPERIENCE_METHODS if m in table.methods)} (best seed @ the "

@@ -32,6 +32,11 @@ def paired_ttest(ours: Sequence[float], theirs: Sequence[float]) -> tuple[int, f
     return len(a) - 1, float(result.statistic), float(result.pvalue)
 
 
+def ttest_text(test: tuple[int, float, float]) -> str:
+    """A paired t-test's result as the report writes it: ``t(16) = 5.68, p = 3.4e-05``."""
+    return f"t({test[0]}) = {test[1]:.2f}, p = {test[2]:.2g}"
+
+
 def p_at_df(t: float, df: int) -> float:
     """The two-sided p of ``t`` read with ``df`` degrees of freedom (the paper's t(34) on 34 concepts, say)."""
     from scipy import stats

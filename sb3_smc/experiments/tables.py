@@ -48,6 +48,7 @@ from sb3_smc.experiments.statistics import (
     p_at_df,
     paired_ttest,
     seed_summary,
+    ttest_text,
     wins,
 )
 from sb3_smc.experiments.sweep import sweep_fits, sweep_reference
@@ -317,7 +318,7 @@ def _original_flat_section(table: ResultTable) -> list[str]:
                 ours = [score[(t, flat)] for t in members]
                 theirs = [ORIGINAL_FLAT_RUNS[t][column] / 100 for t in members]
                 test = paired_ttest(ours, theirs)
-                tested = f" (paired t({test[0]}) = {test[1]:.2f}, p = {test[2]:.2g})" if test else ""
+                tested = f" (paired {ttest_text(test)})" if test else ""
                 sentences.append(f"{which} ours {100 * sum(ours) / len(ours):.1f}, original "
                                  f"{100 * sum(theirs) / len(theirs):.1f}{tested}")
             lines.append(f"\n{kind}, {len(members)} concepts{table.partial(members, flat)}, means: "
