@@ -4,6 +4,7 @@ bit."""
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -129,6 +130,7 @@ def test_level2_seeds_trained_together_are_each_their_own_training(monkeypatch: 
     with the same statistics of its calls; children the group cannot host (one with children of its own) are
     trained by train_smc."""
     import sb3_smc.learning.batched as batched_module
+    import sb3_smc.learning.env_group as env_group_module
     import sb3_smc.learning.training as training_module
     from sb3_smc.envs.hierarchical_vec_env import HierarchicalSMCVecEnv
     from tests.test_compiled_calls import random_smc
@@ -155,8 +157,8 @@ def test_level2_seeds_trained_together_are_each_their_own_training(monkeypatch: 
     specs.append(TrainingSpec.create(target, children=["parent"], total_timesteps=1_000, n_envs=4, n_steps=125,
                                      seed=4, name="level3"))
     hosted: list[int] = []
-    group = batched_module._EnvGroup.__init__
-    monkeypatch.setattr(batched_module._EnvGroup, "__init__", lambda self, vector, sizes, *rest: hosted.append(
+    group = env_group_module.EnvGroup.__init__
+    monkeypatch.setattr(env_group_module.EnvGroup, "__init__", lambda self, vector, sizes, *rest: hosted.append(
         len(sizes)) or group(self, vector, sizes, *rest))
     together = train_smcs(specs, children=library)
     assert hosted == [4]  # the level-2 SMCs in one group; the level-3 one alone
@@ -170,3 +172,80 @@ def test_level2_seeds_trained_together_are_each_their_own_training(monkeypatch: 
         assert strip == [{k: v for k, v in row.items() if not k.startswith("time/")} for row in single]
         child = "parent" if spec.name == "level3" else "child1"
         assert any(row[f"smc_calls/{child}/calls_per_episode"] > 0 for row in grouped)
+
+
+class _Killed(Exception):
+    """The process stops in the middle of a group's training."""
+
+
+def _stopped(monkeypatch: pytest.MonkeyPatch, after: int, **train: Any) -> None:
+    """``train_smcs(**train)`` stopped in the rollout after its update ``after`` (saved after every update)."""
+    import sb3_smc.learning.batched as batched_module
+
+    end_rollout = batched_module._Job.end_rollout
+
+    def killed(job: batched_module._Job) -> None:
+        if job.iteration == after:
+            raise _Killed
+        end_rollout(job)
+
+    monkeypatch.setattr(batched_module._Job, "end_rollout", killed)
+    with pytest.raises(_Killed):
+        train_smcs(checkpoint_every=0, **train)
+    monkeypatch.undo()
+
+
+@pytest.mark.parametrize(("target", "steps", "lean", "updates"), [(OUTSIDE_ID, 40_000, False, (20, 19)),
+                                                                 (CORNER_ID, 10_000, True, (5, 5))])
+def test_a_group_stopped_between_updates_resumes_from_its_checkpoint(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                                                                     target: str, steps: int, lean: bool,
+                                                                     updates: tuple[int, int]) -> None:
+    """A group killed in its fourth rollout goes on from the checkpoint saved after its third update: only the
+    updates after it are trained again, and each SMC is the one an uninterrupted training gives (weights, records,
+    selection; seed 1 of the outside classifier stops early, in its 20th rollout, in both), with the stock and the
+    lean update; the file is removed at the end. A damaged one is reported and the group trained from the start;
+    another group leaves it alone."""
+    import sb3_smc.learning.batched as batched_module
+
+    specs = [TrainingSpec.create(target, total_timesteps=steps, seed=s, name=f"smc@{s}") for s in (0, 1)]
+    uninterrupted = train_smcs(specs, lean_update=lean)
+    _stopped(monkeypatch, 3, specs=specs, lean_update=lean, checkpoints=tmp_path)
+    (saved,) = tmp_path.glob("group-*.pkl")
+    counted: list[int] = []
+    end_rollout = batched_module._Job.end_rollout
+    monkeypatch.setattr(batched_module._Job, "end_rollout", lambda job: counted.append(1) or end_rollout(job))
+    resumed = train_smcs(specs, lean_update=lean, checkpoints=tmp_path, checkpoint_every=0)
+    monkeypatch.undo()
+    assert len(counted) == sum(updates) - 2 * 3
+    for before, after in zip(uninterrupted, resumed, strict=True):
+        assert_same_smc(before, after)
+        assert after.record is not None and after.record.lean_update is lean
+    assert not saved.exists()
+    saved.write_bytes(b"not a pickle")
+    lines: list[str] = []
+    train_smcs(specs[:1], lean_update=lean, printer=lines.append, checkpoints=tmp_path)
+    assert list(tmp_path.glob("group-*.pkl")) == [saved] and not lines
+    again = train_smcs(specs, lean_update=lean, printer=lines.append, checkpoints=tmp_path)
+    assert len(lines) == 1 and f"{saved}: cannot resume from it" in lines[0] and not saved.exists()
+    for before, after in zip(uninterrupted, again, strict=True):
+        assert_same_smc(before, after)
+
+
+def test_a_level2_group_resumes_with_the_children_it_is_given(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A checkpoint refers to the children by name (and to the module of their compiled calls): a level-2 group
+    resumes with the children of the call, the same SMCs as without a break, its TensorBoard curves going on in the
+    same folder."""
+    from tests.test_compiled_calls import random_smc
+
+    kids = {smc.name: smc for smc in (random_smc(f"child{i}", kind, "lstm", seed=i)
+                                      for i, kind in enumerate(["bring-about", "classification"]))}
+    specs = [TrainingSpec.create("PW-ba_self-in-container_from_on-floor-v0", children=["child0", "child1"],
+                                 total_timesteps=4_000, n_envs=8, n_steps=125, seed=s, name=f"level2@{s}")
+             for s in (0, 1)]
+    uninterrupted = train_smcs(specs, children=kids)
+    _stopped(monkeypatch, 2, specs=specs, children=kids, checkpoints=tmp_path, tensorboard_log=str(tmp_path))
+    assert len(list(tmp_path.glob("group-*.pkl"))) == 1
+    resumed = train_smcs(specs, children=kids, checkpoints=tmp_path, tensorboard_log=str(tmp_path))
+    for before, after in zip(uninterrupted, resumed, strict=True):
+        assert_same_smc(before, after)
+    assert len(list((tmp_path / "level2@0_1").glob("events.out.tfevents.*"))) == 2  # the curves go on in its folder

@@ -607,6 +607,39 @@ def test_a_failing_group_fails_each_of_its_jobs_and_stores_none(tmp_path, monkey
     assert not again.failed and len(status(out)["done"]) == 6 and not list((out / "failed").iterdir())
 
 
+def test_a_group_stopped_mid_training_resumes_from_its_checkpoint(tmp_path, monkeypatch):
+    """A group whose worker stops between two updates (here: an error in its third rollout, after two updates were
+    saved) is trained on from its checkpoint in the run directory by the next run, which trains only the updates
+    after it and gives the library an uninterrupted run gives; the checkpoints go when the run is complete."""
+    import sb3_smc.learning.batched as batched_module
+    from sb3_smc.curricula import jobs as jobs_module
+
+    path, out = str(_tiny(tmp_path)), tmp_path / "run"
+    settings = {"seeds": 2, "timesteps": 6000, "targets": ["left", "above"], "tensorboard": False, "progress": False}
+    end_rollout = batched_module._Job.end_rollout
+    updates: list[str] = []
+    stops: list[str] = []
+
+    def stopped(job):
+        if job.spec.name.startswith("left@") and job.iteration == 2 and not stops:
+            stops.append(job.spec.name)
+            raise RuntimeError("stopped")  # the first attempt only
+        updates.append(job.spec.name)
+        end_rollout(job)
+
+    monkeypatch.setattr(jobs_module, "CHECKPOINT_EVERY", 0.0)
+    monkeypatch.setattr(batched_module._Job, "end_rollout", stopped)
+    first = train_curriculum(path, out, **settings)
+    assert set(first.failed) == {"left@0", "left@1"} and len(list((out / "checkpoints").glob("group-*.pkl"))) == 1
+    updates.clear()
+    again = train_curriculum(path, out, **settings)
+    assert not again.failed and sorted(updates) == ["left@0", "left@1"]  # the third update of each, no more
+    assert not (out / "checkpoints").exists()
+    monkeypatch.undo()
+    assert_same_library(_library_state(out / "library"), _library_state(
+        train_curriculum(path, tmp_path / "fresh", **settings).library))
+
+
 def test_ray_without_a_cluster_says_how_to_connect(tmp_path, monkeypatch):
     monkeypatch.delenv("RAY_ADDRESS", raising=False)
     with pytest.raises(RuntimeError, match="existing Ray cluster: pass ray_address"):

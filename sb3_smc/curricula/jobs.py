@@ -105,6 +105,9 @@ class Job:
     tensorboard_log: str | None = None
     lean_update: bool = False
     """Train with the lean update (:class:`~sb3_smc.curricula.options.RunOptions`' ``lean_update``)."""
+    checkpoints: str | None = None
+    """Where a group's training is saved between two updates and resumed from after a stop (``train_smcs``'
+    ``checkpoints``; the run directory's ``checkpoints/``)."""
 
 
 @dataclass(frozen=True)
@@ -130,17 +133,24 @@ def run_job(job: Job) -> JobResult:
     return _result(smc)
 
 
+CHECKPOINT_EVERY = 300.0
+"""Seconds between two saves of a group's training in a run (a group stopped loses at most this much)."""
+
+
 def run_group(jobs: Sequence[Job]) -> list[JobResult]:
     """Train ``jobs`` (one library, one TensorBoard folder and one ``lean_update`` for all) together with
     :func:`~sb3_smc.learning.batched.train_smcs` in one torch and one BLAS thread and return their results in order,
-    each what :func:`run_job` returns for its job (bit-identical SMCs). The children they call are loaded once."""
+    each what :func:`run_job` returns for its job (bit-identical SMCs). The children they call are loaded once. The
+    group's training is saved to the jobs' ``checkpoints`` every :data:`CHECKPOINT_EVERY` seconds, and resumed from
+    there when the same group is trained again after a stop."""
     from sb3_smc.learning.batched import train_smcs  # torch and Stable-Baselines3: in the worker only
 
     names = sorted({name for job in jobs for name in job.spec.children})
     children = SMCLibrary.load(jobs[0].library, names=names) if names else {}
     with compute_threads(1):
         smcs = train_smcs([job.spec for job in jobs], children=children, tensorboard_log=jobs[0].tensorboard_log,
-                          log_every=0, lean_update=jobs[0].lean_update)
+                          log_every=0, lean_update=jobs[0].lean_update, checkpoints=jobs[0].checkpoints,
+                          checkpoint_every=CHECKPOINT_EVERY)
     return [_result(smc) for smc in smcs]
 
 

@@ -33,10 +33,13 @@ from sb3_smc.errors import SMCError
 from sb3_smc.library import storage
 from sb3_smc.library.errors import CorruptModelError
 
-__all__ = ["PENDING_RETRAIN", "RUN_FORMAT", "RUN_VERSION", "RunFileError", "RunSettingsError", "SettingsChanges",
-           "glob_escape", "library_jobs", "read_json", "read_settings", "replace_jobs", "run_settings", "status",
-           "write_state"]
+__all__ = ["CHECKPOINTS", "PENDING_RETRAIN", "RUN_FORMAT", "RUN_VERSION", "RunFileError", "RunSettingsError",
+           "SettingsChanges", "glob_escape", "library_jobs", "read_json", "read_settings", "replace_jobs",
+           "run_settings", "status", "write_state"]
 
+CHECKPOINTS = "checkpoints"
+"""A run directory's folder of groups' trainings saved between two updates (resumed after a stop, removed when the run
+is complete)."""
 PENDING_RETRAIN = "retrain.json"
 """A run directory's note of the jobs to take out of the library after a repaired job trained differently, written
 before the repaired job is stored and removed once they are out (a run that dies in between finishes it first)."""

@@ -11,7 +11,7 @@ from pathlib import Path
 from sb3_smc.curricula.format import Curriculum, Node
 from sb3_smc.curricula.jobs import Job, JobId, rank_seeds
 from sb3_smc.curricula.options import RunOptions
-from sb3_smc.curricula.run_directory import glob_escape
+from sb3_smc.curricula.run_directory import CHECKPOINTS, glob_escape
 from sb3_smc.records import TrainingRecord
 
 __all__ = ["Scheduler"]
@@ -124,18 +124,20 @@ class Scheduler:
 
     def job(self, job: JobId) -> Job:
         """What a worker trains for ``job``: its spec (calling the best seeds of the nodes it uses) and where its
-        TensorBoard curves go (an earlier attempt's removed)."""
+        TensorBoard curves go (an earlier attempt's removed, unless a group's training saved in the run's
+        checkpoints may go on in it)."""
         node = self.curriculum.node(job.node)
         spec = self.options.spec(node, job.seed, self.children(node))
         name = spec.name
         log = None
         if self.options.tensorboard:
             folder = self.directory / "tensorboard"
-            for stale in folder.glob(f"{glob_escape(name)}_*"):  # a half-finished earlier attempt
-                shutil.rmtree(stale, ignore_errors=True)
+            if not any((self.directory / CHECKPOINTS).glob("group-*.pkl")):
+                for stale in folder.glob(f"{glob_escape(name)}_*"):  # a half-finished earlier attempt
+                    shutil.rmtree(stale, ignore_errors=True)
             log = str(folder)
         return Job(spec=spec, library=str(self.library.absolute()), tensorboard_log=log,
-                   lean_update=self.options.lean_update)
+                   lean_update=self.options.lean_update, checkpoints=str((self.directory / CHECKPOINTS).absolute()))
 
 
 def _split(jobs: list[JobId], parts: int) -> list[list[JobId]]:

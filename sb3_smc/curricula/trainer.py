@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import fcntl
 import json
+import shutil
 import sys
 import time
 import traceback
@@ -64,6 +65,7 @@ from sb3_smc.curricula.jobs import (
 from sb3_smc.curricula.options import BACKENDS, DEFAULT_GROUP_SIZE, RunOptions
 from sb3_smc.curricula.reuse import ReuseLibrary
 from sb3_smc.curricula.run_directory import (
+    CHECKPOINTS,
     PENDING_RETRAIN,
     RunFileError,
     RunSettingsError,
@@ -340,6 +342,8 @@ def _run(scheduler: Scheduler, progress: bool, printer: Callable[[str], None], s
         executor.shutdown()
         write_state(directory, [], started, scheduler.skip)
         bar.close()
+    if all(scheduler.done(job) for job in jobs):  # groups saved in an earlier attempt and then split otherwise
+        shutil.rmtree(directory / CHECKPOINTS, ignore_errors=True)
     run = TrainingRun(directory=directory, library=scheduler.library, rows=_rows(scheduler),
                       failed={str(job): why for job, why in scheduler.failed.items()})
     blocked = scheduler.blocked()

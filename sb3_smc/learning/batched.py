@@ -8,7 +8,7 @@ group of SMCs together:
   vector env (:class:`~sb3_smc.envs.vec_env.FlatSMCVecEnv` over ``sum(n_envs)`` environments, or, for SMCs whose
   children are compiled leaves, :class:`~sb3_smc.envs.hierarchical_vec_env.HierarchicalSMCVecEnv`, the children's calls
   included), stepped in **one compiled call** per step for the whole group; each SMC's model sees its own
-  environments through a :class:`SliceVecEnv` (with SB3's ``VecMonitor`` on top, as in
+  environments through a :class:`~sb3_smc.learning.env_group.SliceVecEnv` (with SB3's ``VecMonitor`` on top, as in
   :func:`~sb3_smc.learning.training.train_smc`);
 * each SMC keeps its own model (a real sb3-contrib ``RecurrentPPO`` / :class:`~sb3_smc.recurrent_trpo.RecurrentTRPO`
   object, saved and loaded as today), optimizer state, rollout buffer,
@@ -44,6 +44,7 @@ from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import ExitStack, contextmanager
 from copy import deepcopy
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any, cast
 
 import numpy as np
@@ -52,15 +53,15 @@ from sb3_contrib import RecurrentPPO
 from sb3_contrib.common.recurrent.type_aliases import RNNStates
 from stable_baselines3.common.utils import obs_as_tensor
 from stable_baselines3.common.vec_env import VecEnv, VecMonitor
-from stable_baselines3.common.vec_env.base_vec_env import VecEnvIndices, VecEnvObs, VecEnvStepReturn
 
 from sb3_smc.common import kernels
 from sb3_smc.common.recurrent import SequenceLstmPolicy
 from sb3_smc.common.recurrent.lean_update import use_lean_update
 from sb3_smc.core.hyperparameters import constructor_arguments
 from sb3_smc.envs.hierarchical_vec_env import native_smc_vec_env
-from sb3_smc.envs.vec_env import NativeSMCVecEnv, SMCStep
 from sb3_smc.errors import SMCError
+from sb3_smc.learning.env_group import EnvGroup, SliceVecEnv
+from sb3_smc.learning.group_checkpoint import GroupCheckpoint
 from sb3_smc.learning.training import (
     TaskFacts,
     build_model,
@@ -77,7 +78,7 @@ from sb3_smc.records import TrainingSpec
 from sb3_smc.smc.smc import SMC
 from sb3_smc.tasks.resolved_task import resolve_task
 
-__all__ = ["SliceVecEnv", "batchable", "train_smcs"]
+__all__ = ["batchable", "train_smcs"]
 
 
 def batchable(spec: TrainingSpec) -> bool:
@@ -92,76 +93,6 @@ def batchable(spec: TrainingSpec) -> bool:
         return False
     _, settings = constructor_arguments(spec.hyperparameters)
     return settings.get("baseline", "critic") == "critic"
-
-
-class SliceVecEnv(VecEnv):
-    """Environments ``[start, stop)`` of a group's shared :class:`~sb3_smc.envs.vec_env.NativeSMCVecEnv`, as one model's
-    SB3 ``VecEnv``. The group steps them: :meth:`step_async` writes the actions into the group's action array,
-    :meth:`step_wait` returns this slice of the group's last step; :meth:`reset` returns this slice of the
-    group's reset (done once for all, with each slice's seeds)."""
-
-    def __init__(self, group: _EnvGroup, start: int, stop: int) -> None:
-        self.group, self.start, self.stop = group, start, stop  # before VecEnv's set-up: it reads render_mode
-        super().__init__(stop - start, group.env.observation_space, group.env.action_space)
-
-    def reset(self) -> VecEnvObs:
-        return self.group.reset_obs[self.start:self.stop]
-
-    def step_async(self, actions: np.ndarray) -> None:
-        self.group.actions[self.start:self.stop] = actions
-
-    def step_wait(self) -> VecEnvStepReturn:
-        obs, rewards, dones, infos = self.group.results
-        part = slice(self.start, self.stop)
-        return obs[part], rewards[part], dones[part], infos[part]
-
-    def close(self) -> None:
-        """Nothing: the group owns the environments."""
-
-    def _indices(self, indices: VecEnvIndices) -> list[int]:
-        return [self.start + i for i in self._get_indices(indices)]
-
-    def get_attr(self, attr_name: str, indices: VecEnvIndices = None) -> list[Any]:
-        return self.group.env.get_attr(attr_name, self._indices(indices))
-
-    def set_attr(self, attr_name: str, value: Any, indices: VecEnvIndices = None) -> None:
-        self.group.env.set_attr(attr_name, value, self._indices(indices))
-
-    def env_method(self, method_name: str, *method_args: Any, indices: VecEnvIndices = None,
-                   **method_kwargs: Any) -> list[Any]:
-        return self.group.env.env_method(method_name, *method_args, indices=self._indices(indices), **method_kwargs)
-
-    def env_is_wrapped(self, wrapper_class: type, indices: VecEnvIndices = None) -> list[bool]:
-        return self.group.env.env_is_wrapped(wrapper_class, self._indices(indices))
-
-
-class _EnvGroup:
-    """One native SMC env (:func:`~sb3_smc.envs.hierarchical_vec_env.native_smc_vec_env`) for the SMCs of a task:
-    ``sizes[i]`` of its environments for SMC ``i``, stepped in one call."""
-
-    def __init__(self, env: NativeSMCVecEnv, sizes: Sequence[int]) -> None:
-        self.env = env
-        bounds = np.cumsum([0, *sizes])
-        self.slices = [SliceVecEnv(self, int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
-        self.actions = np.zeros(self.env.num_envs, dtype=np.int64)
-        self.reset_obs: np.ndarray = np.zeros(0)
-        self.step_result: SMCStep | None = None
-        self.results: tuple[np.ndarray, np.ndarray, np.ndarray, list[dict[str, Any]]] = (
-            np.zeros(0), np.zeros(0), np.zeros(0), [])
-        self.with_infos = True  #: whether a step builds SB3's info dicts (for SMCs on the generic path)
-
-    def reset(self) -> None:
-        """Reset every environment with the seeds its model set (``VecEnv.seed`` of each slice)."""
-        self.env._seeds = [seed for part in self.slices for seed in part._seeds]
-        self.reset_obs = np.asarray(self.env.reset())
-        for part in self.slices:
-            part._reset_seeds()
-
-    def step(self) -> None:
-        step = self.step_result = self.env.step_arrays(self.actions)
-        if self.with_infos:
-            self.results = (step.obs, step.rewards, step.dones, self.env.step_infos(step))
-        self.actions[:] = 0  # the actions of SMCs that left the group
 
 
 @dataclass
@@ -249,6 +180,29 @@ class _Job:
     @property
     def running(self) -> bool:
         return bool(self.model.num_timesteps < self.total_timesteps)
+
+    def __getstate__(self) -> dict[str, Any]:
+        """For a group's checkpoint (:mod:`~sb3_smc.learning.group_checkpoint`, taken within :meth:`lean_off`): the
+        monitor's clock as seconds elapsed."""
+        return {**vars(self), "_lean": None, "_monitor_start": time.time() - self._monitor_start}
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        vars(self).update(state)
+        self._monitor_start = time.time() - state["_monitor_start"]
+        self._lean = ExitStack()
+        if self.lean_update:
+            self._lean.enter_context(use_lean_update(self.model))
+
+    @contextmanager
+    def lean_off(self) -> Iterator[None]:
+        """The model without the lean update's patches within the block (a checkpoint pickles it)."""
+        self._lean.close()
+        try:
+            yield
+        finally:
+            self._lean = ExitStack()
+            if self.lean_update:
+                self._lean.enter_context(use_lean_update(self.model))
 
     def start_rollout(self) -> None:
         model = self.model
@@ -402,7 +356,7 @@ class _GroupCollection:
     shapes: the group's observations, episode starts and states are whole arrays, each SMC's weights and draws are
     stacked once per rollout; each SMC's step is the one :meth:`_Job.act` computes, bit for bit."""
 
-    def __init__(self, group: _EnvGroup, jobs: Sequence[_Job]) -> None:
+    def __init__(self, group: EnvGroup, jobs: Sequence[_Job]) -> None:
         self.group, self.jobs = group, list(jobs)
         self.bounds = np.array([0, *(part.stop for part in group.slices)], dtype=np.int64)
         n, hidden = group.env.num_envs, jobs[0].model.policy.lstm_actor.hidden_size
@@ -415,7 +369,7 @@ class _GroupCollection:
         self.members = np.zeros(0, dtype=np.int64)
 
     @classmethod
-    def of(cls, group: _EnvGroup, jobs: Sequence[_Job]) -> _GroupCollection | None:
+    def of(cls, group: EnvGroup, jobs: Sequence[_Job]) -> _GroupCollection | None:
         """The group's collection in one call, or ``None`` where an SMC takes another step (a GRU, SB3's path) or
         the SMCs' networks differ in shape."""
         if not all(job.lean and not hasattr(job.model.policy.lstm_actor, "gru") for job in jobs):
@@ -467,7 +421,8 @@ def _env_key(spec: TrainingSpec) -> tuple[Any, ...]:
 
 def train_smcs(specs: Sequence[TrainingSpec], *, children: Mapping[str, SMC] | None = None,
                tensorboard_log: str | None = None, log_every: int | None = 0, printer: Callable[[str], None] = print,
-               stop_at_max_return: bool = True, lean_update: bool = False) -> list[SMC]:
+               stop_at_max_return: bool = True, lean_update: bool = False, checkpoints: str | Path | None = None,
+               checkpoint_every: float = 300.0) -> list[SMC]:
     """Train the SMCs of ``specs`` together and return them in the same order, each the SMC
     :func:`~sb3_smc.learning.training.train_smc` gives for its spec (same weights, records and selection).
 
@@ -478,7 +433,9 @@ def train_smcs(specs: Sequence[TrainingSpec], *, children: Mapping[str, SMC] | N
     ``printer``, ``stop_at_max_return`` and ``lean_update`` are ``train_smc``'s, for every SMC (with
     ``tensorboard_log``, each SMC's curves in ``<tensorboard_log>/<name>_<n>/``); with ``lean_update`` each SMC is
     the one ``train_smc(spec, lean_update=True)`` gives, and a spec whose model the lean update does not fit is
-    refused before its group trains."""
+    refused before its group trains. With ``checkpoints`` (a folder), each group's training is saved there between
+    two updates, at most every ``checkpoint_every`` seconds, and a later call with the same group resumes from it
+    (:mod:`~sb3_smc.learning.group_checkpoint`): the same SMCs as without a break."""
     results: list[SMC | None] = [None] * len(specs)
     groups: dict[tuple[Any, ...], list[int]] = {}
     for i, spec in enumerate(specs):
@@ -497,37 +454,54 @@ def train_smcs(specs: Sequence[TrainingSpec], *, children: Mapping[str, SMC] | N
             if spec.task.kind is not None:
                 check_model_settings(spec)  # a typo in a hyperparameter: a message before any environment is built
         sizes = [spec.budget.n_envs for spec in chosen]
-        env = native_smc_vec_env(task, sum(sizes), called, chosen[0].wrapper) if task is not None else None
-        if env is None:
+        checkpoint = saved = None
+        if checkpoints is not None and task is not None:
+            settings = {"stop_at_max_return": stop_at_max_return, "lean_update": lean_update}
+            checkpoint = GroupCheckpoint(checkpoints, chosen, called, every=checkpoint_every, settings=settings,
+                                         printer=printer)
+            saved = checkpoint.load()
+        env = None if task is None or saved else native_smc_vec_env(task, sum(sizes), called, chosen[0].wrapper)
+        if saved:
+            trained = _train_group(chosen, called, None, saved=saved, checkpoint=checkpoint,
+                                   tensorboard_log=tensorboard_log, log_every=log_every, printer=printer,
+                                   stop_at_max_return=stop_at_max_return, lean_update=lean_update)
+        elif env is None:
             trained = [train_smc(spec, children=called, tensorboard_log=tensorboard_log, log_every=log_every,
                                  printer=printer, stop_at_max_return=stop_at_max_return, lean_update=lean_update)
                        for spec in chosen]
         else:
-            group = _EnvGroup(env, sizes)
-            trained = _train_group(chosen, called, group, tensorboard_log=tensorboard_log, log_every=log_every,
-                                   printer=printer, stop_at_max_return=stop_at_max_return, lean_update=lean_update)
+            group = EnvGroup(env, sizes)
+            trained = _train_group(chosen, called, group, checkpoint=checkpoint, tensorboard_log=tensorboard_log,
+                                   log_every=log_every, printer=printer, stop_at_max_return=stop_at_max_return,
+                                   lean_update=lean_update)
         for i, smc in zip(members, trained, strict=True):
             results[i] = smc
     return [smc for smc in results if smc is not None]
 
 
-def _train_group(specs: Sequence[TrainingSpec], children: tuple[SMC, ...], group: _EnvGroup, *,
-                 tensorboard_log: str | None, log_every: int | None, printer: Callable[[str], None],
-                 stop_at_max_return: bool, lean_update: bool) -> list[SMC]:
-    """Train SMCs on one task in one vector env (see the module's docstring)."""
-    jobs = []
-    for spec, part in zip(specs, group.slices, strict=True):
-        task = task_of(spec, group.env)
-        venv = VecMonitor(part)
-        venv.seed(spec.seed)
-        jobs.append(_Job(spec, children, task, venv, tensorboard_log=tensorboard_log, log_every=log_every,
-                         printer=printer, stop_at_max_return=stop_at_max_return, lean_update=lean_update))
-    group.reset()
-    for job in jobs:
-        job.start()
-    group.with_infos = not all(job.lean for job in jobs)
-    collection = _GroupCollection.of(group, jobs)
-    running = [job for job in jobs if job.running]
+def _train_group(specs: Sequence[TrainingSpec], children: tuple[SMC, ...], group: EnvGroup | None, *,
+                 saved: Any = None, checkpoint: GroupCheckpoint | None, tensorboard_log: str | None,
+                 log_every: int | None, printer: Callable[[str], None], stop_at_max_return: bool,
+                 lean_update: bool) -> list[SMC]:
+    """Train SMCs on one task in one vector env (see the module's docstring), or go on from ``saved``, the state a
+    ``checkpoint`` kept between two updates."""
+    if saved:
+        jobs, group, collection, running = saved
+    else:
+        assert group is not None
+        jobs = []
+        for spec, part in zip(specs, group.slices, strict=True):
+            task = task_of(spec, group.env)
+            venv = VecMonitor(part)
+            venv.seed(spec.seed)
+            jobs.append(_Job(spec, children, task, venv, tensorboard_log=tensorboard_log, log_every=log_every,
+                             printer=printer, stop_at_max_return=stop_at_max_return, lean_update=lean_update))
+        group.reset()
+        for job in jobs:
+            job.start()
+        group.with_infos = not all(job.lean for job in jobs)
+        collection = _GroupCollection.of(group, jobs)
+        running = [job for job in jobs if job.running]
     n_steps = jobs[0].model.n_steps
     while running:
         for job in running:
@@ -561,4 +535,12 @@ def _train_group(specs: Sequence[TrainingSpec], children: tuple[SMC, ...], group
             job.end_rollout()
             job.seconds += time.perf_counter() - begin
         running = [job for job in running if job.running]
-    return [job.finish() for job in jobs]
+        if checkpoint is not None and running and checkpoint.due():
+            with ExitStack() as stack:
+                for job in jobs:
+                    stack.enter_context(job.lean_off())
+                checkpoint.save((jobs, group, collection, running))
+    smcs = [job.finish() for job in jobs]
+    if checkpoint is not None:
+        checkpoint.remove()
+    return smcs

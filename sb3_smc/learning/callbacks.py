@@ -137,6 +137,17 @@ class SMCTrainingCallback(BaseCallback):
         self._start_time = 0.0
         self._finished = False
 
+    def __getstate__(self) -> dict[str, Any]:
+        """For a group's checkpoint (:mod:`sb3_smc.learning.group_checkpoint`): the clock as seconds elapsed, without
+        ``learn``'s locals and globals (set again before they are read)."""
+        state = dict(vars(self))
+        state.update(_start_time=self.elapsed, locals={}, globals={})
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        vars(self).update(state)
+        self._start_time = time.perf_counter() - state["_start_time"]
+
     # -------------------------------------------------------------------------------------------- SB3 hooks
 
     def _on_training_start(self) -> None:

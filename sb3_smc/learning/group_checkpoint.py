@@ -1,0 +1,172 @@
+"""A group's training saved between two updates and resumed bit for bit: ``train_smcs(..., checkpoints=folder)``.
+
+A group of :func:`~sb3_smc.learning.batched.train_smcs` holds everything its SMCs will become: each SMC's model with
+its optimizer, rollout state and random streams, its callback (records, best snapshot, early stop), the group's
+native vector env with its worlds and generators, and the group's collection arrays. Between two updates that state
+is complete, so it is pickled as a whole (shared references kept) to ``<folder>/group-<key>.pkl``, written then
+renamed, at most every ``every`` seconds. The key is a digest of what decides the training (the specs, the children
+they call, ``stop_at_max_return``, ``lean_update``), so only the same group resumes from it. A later call with the
+same group and folder loads it and goes on from that update: each SMC is the one an uninterrupted call gives (weights,
+records and selection); its wall time is the time trained, not the time between the calls. The file is removed when
+the group is done.
+
+What is not pickled is rebuilt: the children SMCs (taken from the call's ``children``), the loggers (same folder and
+outputs: TensorBoard goes on in the SMC's folder, in a new events file), the callbacks' printer (the call's), the
+lean update's patches of the model (entered again), modules that objects keep (imported), and ``VecEnvWrapper``'s
+class attributes.
+
+A checkpoint is a pickle: load only checkpoints your own runs wrote (as with any pickled model). One that cannot be
+read (damaged, or written by another version of this package) is reported through ``printer`` and removed, and the
+group trains from the start.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import importlib
+import inspect
+import io
+import json
+import pickle
+import sys
+import time
+import types
+from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from stable_baselines3.common.logger import HumanOutputFormat, Logger, TensorBoardOutputFormat, make_output_format
+from stable_baselines3.common.vec_env import VecEnvWrapper
+
+from pixelworld_env.atomic import atomic_write
+from sb3_smc.errors import SMCError
+from sb3_smc.records import TrainingSpec
+from sb3_smc.smc.smc import SMC
+
+__all__ = ["GroupCheckpoint"]
+
+FORMAT = 1  #: the layout of a checkpoint's payload
+
+
+class GroupCheckpoint:
+    """The checkpoint file of one group: :meth:`load` at the start, :meth:`save` after updates, :meth:`remove` at
+    the end.
+
+    :param folder: where the group's file goes.
+    :param specs: the group's specs, in order.
+    :param children: the SMCs they call, by name (what the pickle refers to by name).
+    :param every: the least seconds between two saves (``0``: after every update).
+    :param settings: the other arguments that decide the training (in the key).
+    :param printer: where a checkpoint that cannot be read is reported.
+    """
+
+    def __init__(self, folder: str | Path, specs: Sequence[TrainingSpec], children: Sequence[SMC], *, every: float,
+                 settings: Mapping[str, Any], printer: Callable[[str], None]) -> None:
+        if every < 0:
+            raise SMCError(f"checkpoint_every must be >= 0 seconds, got {every}")
+        what = {"specs": [spec.to_dict() for spec in specs], "children": [smc.name for smc in children],
+                "settings": dict(settings)}
+        self.key = hashlib.sha256(json.dumps(what, sort_keys=True).encode()).hexdigest()[:20]
+        self.path = Path(folder) / f"group-{self.key}.pkl"
+        self.children = {smc.name: smc for smc in children}
+        self.every, self.printer = every, printer
+        self._saved = time.monotonic()
+
+    def load(self) -> Any | None:
+        """The state saved by :meth:`save`, or ``None`` where there is none (or it cannot be read: reported and
+        removed)."""
+        if not self.path.is_file():
+            return None
+        try:
+            payload = _Unpickler(io.BytesIO(self.path.read_bytes()), self.children, self.printer).load()
+            if not isinstance(payload, dict) or payload.get("format") != FORMAT or payload.get("key") != self.key:
+                raise ValueError("not a checkpoint of this group")
+        except Exception as err:  # damaged or from another version: the group starts again
+            self.printer(f"{self.path}: cannot resume from it ({type(err).__name__}: {err}); trained from the start")
+            self.remove()
+            return None
+        self._saved = time.monotonic()
+        return payload["state"]
+
+    def due(self) -> bool:
+        """Whether ``every`` seconds have passed since the last save (or the start)."""
+        return time.monotonic() - self._saved >= self.every
+
+    def save(self, state: Any) -> None:
+        """Write ``state`` (the group's jobs, env and collection, between two updates) atomically."""
+        buffer = io.BytesIO()
+        _Pickler(buffer, self.printer).dump({"format": FORMAT, "key": self.key, "state": state})
+        atomic_write(self.path, buffer.getvalue())
+        self._saved = time.monotonic()
+
+    def remove(self) -> None:
+        self.path.unlink(missing_ok=True)
+
+
+class _Pickler(pickle.Pickler):
+    """Children SMCs, loggers and the printer by reference; ``VecEnvWrapper`` s without their class attributes."""
+
+    def __init__(self, file: io.BytesIO, printer: Callable[[str], None]) -> None:
+        super().__init__(file, protocol=pickle.HIGHEST_PROTOCOL)
+        self.printer = printer
+
+    def persistent_id(self, obj: Any) -> Any:
+        if isinstance(obj, SMC):
+            return ("smc", obj.name)
+        if isinstance(obj, Logger):
+            return ("logger", obj.dir, tuple(_output_kind(fmt) for fmt in obj.output_formats),
+                    dict(obj.name_to_value), dict(obj.name_to_count), dict(obj.name_to_excluded), obj.level)
+        if obj is self.printer:
+            return ("printer",)
+        if isinstance(obj, types.ModuleType):  # a module an object keeps (the leaves' compiled calls)
+            return ("module", obj.__name__)
+        return None
+
+    def reducer_override(self, obj: Any) -> Any:
+        if isinstance(obj, VecEnvWrapper):
+            state = {k: v for k, v in vars(obj).items() if k != "class_attributes"}
+            return _wrapper, (type(obj), state)
+        return NotImplemented
+
+
+class _Unpickler(pickle.Unpickler):
+    def __init__(self, file: io.BytesIO, children: Mapping[str, SMC], printer: Callable[[str], None]) -> None:
+        super().__init__(file)
+        self.children, self.printer = children, printer
+
+    def persistent_load(self, pid: Any) -> Any:
+        if pid[0] == "smc":
+            if pid[1] not in self.children:
+                raise ValueError(f"it calls {pid[1]!r}, which this call does not give")
+            return self.children[pid[1]]
+        if pid[0] == "logger":
+            folder, kinds, values, counts, excluded, level = pid[1:]
+            outputs = [HumanOutputFormat(sys.stdout) if kind == "stdout" else make_output_format(kind, folder)
+                       for kind in kinds]
+            logger = Logger(folder=folder, output_formats=outputs)
+            logger.name_to_value.update(values)
+            logger.name_to_count.update(counts)
+            logger.name_to_excluded.update(excluded)
+            logger.set_level(level)
+            return logger
+        if pid[0] == "printer":
+            return self.printer
+        if pid[0] == "module":
+            return importlib.import_module(pid[1])
+        raise pickle.UnpicklingError(f"unknown reference {pid[0]!r}")
+
+
+def _output_kind(fmt: Any) -> str:
+    """The kind of a logger's output that a resumed logger opens again (TensorBoard, or the console)."""
+    if isinstance(fmt, TensorBoardOutputFormat):
+        return "tensorboard"
+    if isinstance(fmt, HumanOutputFormat) and fmt.file is sys.stdout:
+        return "stdout"
+    raise SMCError(f"a group's checkpoint cannot reopen a logger output {type(fmt).__name__}")
+
+
+def _wrapper(cls: type[VecEnvWrapper], state: dict[str, Any]) -> VecEnvWrapper:
+    wrapper = cls.__new__(cls)
+    vars(wrapper).update(state)
+    wrapper.class_attributes = dict(inspect.getmembers(cls))
+    return wrapper
