@@ -16,8 +16,10 @@ $(STAMP): pyproject.toml setup.py sb3_smc_gym_hook.pth
 demo: $(STAMP)
 	$(PY) -m sb3_smc.demo
 
+# the default suite on TEST_WORKERS processes (pytest-xdist), a test module's tests on one of them
+TEST_WORKERS ?= 2
 test: $(STAMP)
-	$(PY) -m pytest -q
+	$(PY) -m pytest -q -n $(TEST_WORKERS) --dist loadfile
 	$(VENV)/bin/mypy
 	$(MAKE) --no-print-directory docs
 

@@ -1,4 +1,5 @@
-"""A Ray node lost while it trains a curriculum job (or a group of a flat node's seeds): on a local cluster of two
+"""The tests that start Ray (one module, so that a parallel test run keeps them on one worker): the same library on
+Ray as in one process (in ``test_workers_groups_and_ray_give_the_same_library``), and a Ray node lost while it trains a curriculum job (or a group of a flat node's seeds): on a local cluster of two
 nodes (loopback, one CPU each), the node running a job is removed mid-run; the run goes on without that job, which
 fails with an error saying what happened and what to do, and the same command run again trains it, once, keeping
 every finished job as it was.
@@ -24,6 +25,7 @@ import pytest
 
 from sb3_smc.curricula import jobs, trainer
 from sb3_smc.curricula.trainer import status, train_curriculum
+from tests.test_curricula import _library_state, _tiny, assert_same_library
 
 ray = pytest.importorskip("ray", reason="needs Ray (pip install 'sb3-smc[ray]')")
 from ray.cluster_utils import Cluster  # noqa: E402 - only where Ray is installed
@@ -167,3 +169,41 @@ def test_a_job_on_a_lost_node_fails_clearly_and_the_rerun_trains_it_once(tmp_pat
     assert collections.Counter(trainings.read_text().split()) == dict.fromkeys(level_1 + containers, 1)
     state = status(out)
     assert state["done"] == level_1 + containers and state["failed"] == state["left"] == []
+
+
+def test_workers_groups_and_ray_give_the_same_library(tmp_path):
+    """One job at a time, seeds in groups in this process, and groups on 2 workers and on Ray: the same SMCs
+    (weights and records), and a progress line per round of finished jobs, counting SMCs."""
+    path = _tiny(tmp_path)
+    logs: dict[str, list[str]] = {"one": [], "grouped": [], "two": []}
+    sequential = train_curriculum(str(path), tmp_path / "one", seeds=2, timesteps=2000, group_size=1,
+                                  printer=logs["one"].append)
+    grouped = train_curriculum(str(path), tmp_path / "grouped", seeds=2, timesteps=2000,
+                               printer=logs["grouped"].append)
+    parallel = train_curriculum(str(path), tmp_path / "two", seeds=2, timesteps=2000, workers=2,
+                                printer=logs["two"].append)
+    # a log line per round of finished jobs, counting the jobs running once the finished ones' places are refilled
+    progress = {key: [line.split(",")[:2] for line in lines if line.startswith("jobs ")] for key, lines in logs.items()}
+    # one worker: the next job is running when a line is written (the last line: none)
+    assert progress["one"] == [[f"jobs {k}/6", " running 1"] for k in range(1, 6)] + [["jobs 6/6", " running 0"]]
+    # groups: left@0-1 together, then above@0-1 (running 2: the group's SMCs), then container@0-1 (level 2 over
+    # flat nodes: their calls in the group's one vector env)
+    assert progress["grouped"] == [["jobs 2/6", " running 2"], ["jobs 4/6", " running 2"], ["jobs 6/6", " running 0"]]
+    assert logs["grouped"][0].endswith("1 worker, seeds in groups of up to 5") and logs["one"][0].endswith(
+        "1 worker")
+    # two workers: left's and above's seeds, a group each, side by side
+    assert progress["two"][0] in (["jobs 2/6", " running 2"], ["jobs 4/6", " running 2"])
+    assert progress["two"][-1] == ["jobs 6/6", " running 0"]
+    # Ray's workers run at niceness 15 unless told otherwise: beside other work they would crawl
+    ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False, _system_config={"worker_niceness": 0})
+    try:
+        on_ray = train_curriculum(str(path), tmp_path / "ray", seeds=2, timesteps=2000, workers=2, backend="ray",
+                                  progress=False)
+    finally:
+        ray.shutdown()
+    expected = _library_state(sequential.library)
+    assert len(expected) == 6
+    for run in (grouped, parallel, on_ray):
+        assert_same_library(_library_state(run.library), expected)
+        assert sorted(p.name for p in (run.directory / "tensorboard").iterdir()) == sorted(
+            p.name for p in (tmp_path / "one" / "tensorboard").iterdir())
