@@ -229,6 +229,8 @@ def test_a_group_stopped_between_updates_resumes_from_its_checkpoint(tmp_path: P
     assert len(lines) == 1 and f"{saved}: cannot resume from it" in lines[0] and not saved.exists()
     for before, after in zip(uninterrupted, again, strict=True):
         assert_same_smc(before, after)
+    with pytest.raises(SMCError, match="checkpoint_every must be >= 0 seconds, got -1"):
+        train_smcs(specs, checkpoints=tmp_path, checkpoint_every=-1)
 
 
 def test_a_level2_group_resumes_with_the_children_it_is_given(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:

@@ -1,8 +1,8 @@
 """The tests that start Ray (one module, so that a parallel test run keeps them on one worker): the same library on
-Ray as in one process (in ``test_workers_groups_and_ray_give_the_same_library``), and a Ray node lost while it trains a curriculum job (or a group of a flat node's seeds): on a local cluster of two
-nodes (loopback, one CPU each), the node running a job is removed mid-run; the run goes on without that job, which
-fails with an error saying what happened and what to do, and the same command run again trains it, once, keeping
-every finished job as it was.
+Ray as in one process (``test_workers_groups_and_ray_give_the_same_library``), and a Ray node lost while it trains a
+curriculum job (or a group of a flat node's seeds): on a local cluster of two nodes (loopback, one CPU each), the
+node running a job is removed mid-run; the run goes on without that job, which fails with an error saying what
+happened and what to do, and the same command run again trains it, once, keeping every finished job as it was.
 
 The order of events is forced, not timed, so that a loaded machine (slow workers, slow node start and removal)
 changes only how long the test takes: the job on the head waits (on a file) until the second node is gone, so the

@@ -436,6 +436,8 @@ def train_smcs(specs: Sequence[TrainingSpec], *, children: Mapping[str, SMC] | N
     refused before its group trains. With ``checkpoints`` (a folder), each group's training is saved there between
     two updates, at most every ``checkpoint_every`` seconds, and a later call with the same group resumes from it
     (:mod:`~sb3_smc.learning.group_checkpoint`): the same SMCs as without a break."""
+    if checkpoint_every < 0:
+        raise SMCError(f"checkpoint_every must be >= 0 seconds, got {checkpoint_every}")
     results: list[SMC | None] = [None] * len(specs)
     groups: dict[tuple[Any, ...], list[int]] = {}
     for i, spec in enumerate(specs):

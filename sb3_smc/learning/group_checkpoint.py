@@ -62,8 +62,6 @@ class GroupCheckpoint:
 
     def __init__(self, folder: str | Path, specs: Sequence[TrainingSpec], children: Sequence[SMC], *, every: float,
                  settings: Mapping[str, Any], printer: Callable[[str], None]) -> None:
-        if every < 0:
-            raise SMCError(f"checkpoint_every must be >= 0 seconds, got {every}")
         what = {"specs": [spec.to_dict() for spec in specs], "children": [smc.name for smc in children],
                 "settings": dict(settings)}
         self.key = hashlib.sha256(json.dumps(what, sort_keys=True).encode()).hexdigest()[:20]
