@@ -241,11 +241,12 @@ def _sweep_section(table: ResultTable) -> list[str]:
     paper = {n.what: f"{n.paper:{'+.1f' if n.gap else '.1f'}}" for f in fits for n in f.numbers}
     lines = [SWEEP_HEADING, "",
              "Each setting of the sweep (docs/experiments.md, \"Equal budgets and the readings of a call\") against "
-             "every number of the paper it touches: a kind's mean estimated over all its concepts (the whole table's "
-             "curr or curr-moves plus the setting's difference from the sweep's setting of 100 on the sweep's "
-             "targets), its lead over the flat SMC, the share of bring-about concepts won, the headline targets; "
-             "ours with its 95 % bootstrap interval and the verdict. Best fit first: the most of the paper's numbers "
-             "inside our intervals, then the smallest mean distance from them.", "",
+             "every number of the paper it touches: a kind's mean estimated over all its concepts (on the sweep's "
+             "targets the setting's own score; on the others the whole table's curr or curr-moves plus the "
+             "setting's mean difference from the sweep's setting of 100, kept within 0-100 %), its lead over the "
+             "flat SMC, the share of bring-about concepts won, the headline targets; ours with its 95 % bootstrap "
+             "interval and the verdict. Best fit first: the most of the paper's numbers inside our intervals, then "
+             "the smallest mean distance from them; a fit is clear when no other setting has as many inside.", "",
              "| setting | paper's numbers inside | mean distance (points) | " + " | ".join(columns) + " |",
              "|---|---:|---:|" + "---|" * len(columns),
              "| **paper** | | | " + " | ".join(paper[c] for c in columns) + " |"]
@@ -262,12 +263,16 @@ def _sweep_section(table: ResultTable) -> list[str]:
             judged.append(fit)
     if not judged:
         return [*lines, "", "No setting has finished yet: no best fit.", ""]
-    best = judged[0]
-    lines += ["", f"Best fit: **{best.method}** ({best.reproduced} of {len(best.numbers)} of the paper's numbers "
-              f"inside its intervals, {best.distance:.1f} points from them on average)"
-              + (f"; next {judged[1].method} ({judged[1].reproduced} of {len(judged[1].numbers)}, "
-                 f"{judged[1].distance:.1f} points)." if len(judged) > 1 else "."), ""]
-    return lines
+    best, tied = judged[0], [fit for fit in judged[1:] if fit.reproduced == judged[0].reproduced]
+    found = (f"{best.reproduced} of {len(best.numbers)} of the paper's numbers inside its intervals, "
+             f"{best.distance:.1f} points from them on average")
+    if tied:
+        others = "; ".join(f"{fit.method} {fit.reproduced} of {len(fit.numbers)}, {fit.distance:.1f} points"
+                           for fit in tied)
+        return [*lines, "", f"No clear fit: **{best.method}** ({found}) and as many inside for {others}.", ""]
+    return [*lines, "", f"Best fit: **{best.method}** ({found})"
+            + (f"; next {judged[1].method} ({judged[1].reproduced} of {len(judged[1].numbers)}, "
+               f"{judged[1].distance:.1f} points)." if len(judged) > 1 else "."), ""]
 
 
 def _concept_section(table: ResultTable) -> list[str]:
