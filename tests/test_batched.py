@@ -247,7 +247,41 @@ def test_a_level2_group_resumes_with_the_children_it_is_given(tmp_path: Path, mo
     uninterrupted = train_smcs(specs, children=kids)
     _stopped(monkeypatch, 2, specs=specs, children=kids, checkpoints=tmp_path, tensorboard_log=str(tmp_path))
     assert len(list(tmp_path.glob("group-*.pkl"))) == 1
+    other = {**kids, "child0": random_smc("child0", "bring-about", "lstm", seed=7)}  # retrained under its name
+    lines: list[str] = []
+    assert len(train_smcs(specs[:1], children=other, checkpoints=tmp_path, printer=lines.append)) == 1
+    assert not lines  # another group: its file is not read
     resumed = train_smcs(specs, children=kids, checkpoints=tmp_path, tensorboard_log=str(tmp_path))
     for before, after in zip(uninterrupted, resumed, strict=True):
         assert_same_smc(before, after)
     assert len(list((tmp_path / "level2@0_1").glob("events.out.tfevents.*"))) == 2  # the curves go on in its folder
+    _stopped(monkeypatch, 2, specs=specs, children=kids, checkpoints=tmp_path)
+    retrained = train_smcs(specs, children=other, checkpoints=tmp_path, printer=lines.append)
+    assert len(lines) == 1 and "cannot resume from it" in lines[0]  # a child with other weights: from the start
+    for fresh, after in zip(train_smcs(specs, children=other), retrained, strict=True):
+        assert_same_smc(fresh, after)
+
+
+def test_a_linear_schedule_is_saved_and_a_failed_save_does_not_fail_the_training(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A ``"lin_<x>"`` learning rate (a function made at run time) is saved by value and resumed; a save that fails
+    (a full disk) is reported once and the group trains on without saving, to the same SMCs."""
+    import sb3_smc.learning.group_checkpoint as checkpoint_module
+
+    specs = [TrainingSpec.create(CORNER_ID, total_timesteps=8_000, seed=s, name=f"lin@{s}", learning_rate="lin_1e-3")
+             for s in (0, 1)]
+    uninterrupted = train_smcs(specs)
+    _stopped(monkeypatch, 2, specs=specs, checkpoints=tmp_path)
+    for before, after in zip(uninterrupted, train_smcs(specs, checkpoints=tmp_path), strict=True):
+        assert_same_smc(before, after)
+
+    def full(path: Path, data: bytes) -> None:
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(checkpoint_module, "atomic_write", full)
+    lines: list[str] = []
+    for before, after in zip(uninterrupted, train_smcs(specs, checkpoints=tmp_path, checkpoint_every=0,
+                                                       printer=lines.append), strict=True):
+        assert_same_smc(before, after)
+    assert len(lines) == 1 and "cannot save the group's training (OSError" in lines[0]
+    assert not any(tmp_path.iterdir())

@@ -206,7 +206,8 @@ def test_a_settings_kind_mean_is_its_score_on_the_sweep_and_stays_within_100_els
 
 def test_the_sweep_scores_each_setting_against_the_paper_and_names_the_best_fit(tmp_path) -> None:
     """A setting's kind mean is the whole table's (curr or curr-moves) plus its difference from the sweep's setting of
-    100 on the sweep's targets (here the same shift on every concept); the setting whose numbers the paper's lie inside comes first; the report says so."""
+    100 on the sweep's targets (here the same shift on every concept); the setting whose numbers the paper's lie
+    inside comes first; the report says so, or that no setting clearly fits."""
     import json
 
     from sb3_smc.experiments.design import SWEEP_METHODS, SWEEP_TARGETS, plan

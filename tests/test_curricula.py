@@ -330,6 +330,14 @@ def test_seeds_form_groups_of_up_to_group_size_spread_over_the_workers(tmp_path)
     assert sizes(left[:3] + trpo, 5, 2) == [3, 1]
     assert sizes(trpo + top + container + left[3:], 5, 1) == [1, 1, 2, 2]  # trpo and top gain nothing: alone
     assert scheduler.units([], 5, 2) == []
+    # a group whose training is saved in the run's checkpoints goes on whole; the others are halved as before
+    from sb3_smc.learning.group_checkpoint import checkpoint_path
+
+    saved = checkpoint_path(tmp_path / "checkpoints", [str(job) for job in left])
+    saved.parent.mkdir()
+    saved.write_bytes(b"")
+    assert sizes(left, 5, 2) == [5] and sizes(left[:4], 5, 2) == [2, 2]
+    assert sizes(left + above[:4], 5, 4) == [5, 1, 1, 2]
     with pytest.raises(ValueError, match="group_size must be a positive integer, got 0"):
         train_curriculum(str(_tiny(tmp_path)), tmp_path / "run", seeds=1, group_size=0, progress=False)
 

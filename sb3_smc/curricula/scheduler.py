@@ -6,6 +6,7 @@ blocked, the units they run in (one job, or a group of a flat node's ready seeds
 from __future__ import annotations
 
 import shutil
+from collections.abc import Sequence
 from pathlib import Path
 
 from sb3_smc.curricula.format import Curriculum, Node
@@ -96,7 +97,8 @@ class Scheduler:
         """The ``ready`` jobs as units of execution, in ``ready``'s order: the ready seeds of a groupable node in
         groups of at most ``group_size``, as even as can be, any other job alone; while the units are fewer than
         ``workers``, the largest group is halved, so that a lone node's seeds (or a run's last ones) spread over
-        the workers. What is trained does not depend on the units."""
+        the workers, unless its training is saved in the run's checkpoints (it goes on from there whole). What is
+        trained does not depend on the units."""
         if group_size == 1:
             return [(job,) for job in ready]
         by_node: dict[str, list[JobId]] = {}
@@ -110,11 +112,18 @@ class Scheduler:
                 nodes.append(by_node.setdefault(job.node, [job]))
         units = [part for jobs in nodes for part in _split(jobs, -(-len(jobs) // group_size))]
         while 0 < len(units) < workers:
-            largest = max(range(len(units)), key=lambda i: len(units[i]))
-            if len(units[largest]) == 1:
+            halve = [i for i, unit in enumerate(units) if len(unit) > 1 and not self.saved(unit)]
+            if not halve:
                 break
+            largest = max(halve, key=lambda i: len(units[i]))
             units[largest:largest + 1] = _split(units[largest], 2)
         return [tuple(unit) for unit in units]
+
+    def saved(self, unit: Sequence[JobId]) -> bool:
+        """Whether the group ``unit`` has a checkpoint in the run (halved, it would train from the start)."""
+        from sb3_smc.learning.group_checkpoint import checkpoint_path  # torch: only where a group may be halved
+
+        return checkpoint_path(self.directory / CHECKPOINTS, [str(job) for job in unit]).is_file()
 
     def blocked(self) -> list[JobId]:
         """Jobs that cannot run because a node they need has a failed job."""
@@ -122,17 +131,17 @@ class Scheduler:
         return [job for job in self.jobs()
                 if not self.done(job) and job not in self.failed and self.below[job.node] & bad]
 
-    def job(self, job: JobId) -> Job:
+    def job(self, job: JobId, *, resumed: bool = False) -> Job:
         """What a worker trains for ``job``: its spec (calling the best seeds of the nodes it uses) and where its
-        TensorBoard curves go (an earlier attempt's removed, unless a group's training saved in the run's
-        checkpoints may go on in it)."""
+        TensorBoard curves go (an earlier attempt's removed, unless the job's group is ``resumed`` from its
+        checkpoint: :meth:`saved`)."""
         node = self.curriculum.node(job.node)
         spec = self.options.spec(node, job.seed, self.children(node))
         name = spec.name
         log = None
         if self.options.tensorboard:
             folder = self.directory / "tensorboard"
-            if not any((self.directory / CHECKPOINTS).glob("group-*.pkl")):
+            if not resumed:
                 for stale in folder.glob(f"{glob_escape(name)}_*"):  # a half-finished earlier attempt
                     shutil.rmtree(stale, ignore_errors=True)
             log = str(folder)

@@ -324,11 +324,12 @@ def _run(scheduler: Scheduler, progress: bool, printer: Callable[[str], None], s
             for unit in scheduler.units(scheduler.ready(), options.group_size, options.workers):
                 if len(pending) >= options.workers:
                     break
-                work = tuple(scheduler.job(job) for job in unit)
+                grouped = options.group_size > 1 and scheduler.groupable(unit[0].node)  # train_smcs, also for one
+                resumed = grouped and scheduler.saved(unit)  # its TensorBoard curves go on
+                work = tuple(scheduler.job(job, resumed=resumed) for job in unit)
                 for job in unit:
                     (failed_dir / f"{file_stem(str(job))}.txt").unlink(missing_ok=True)
                 scheduler.running.update(unit)
-                grouped = options.group_size > 1 and scheduler.groupable(unit[0].node)  # train_smcs, also for one
                 pending[executor.submit(work if grouped else work[0])] = unit
             write_state(directory, scheduler.running, started, scheduler.skip)
             bar.show(len(scheduler.running))

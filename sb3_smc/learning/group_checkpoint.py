@@ -3,12 +3,13 @@
 A group of :func:`~sb3_smc.learning.batched.train_smcs` holds everything its SMCs will become: each SMC's model with
 its optimizer, rollout state and random streams, its callback (records, best snapshot, early stop), the group's
 native vector env with its worlds and generators, and the group's collection arrays. Between two updates that state
-is complete, so it is pickled as a whole (shared references kept) to ``<folder>/group-<key>.pkl``, written then
-renamed, at most every ``every`` seconds. The key is a digest of what decides the training (the specs, the children
-they call, ``stop_at_max_return``, ``lean_update``), so only the same group resumes from it. A later call with the
-same group and folder loads it and goes on from that update: each SMC is the one an uninterrupted call gives (weights,
-records and selection); its wall time is the time trained, not the time between the calls. The file is removed when
-the group is done.
+is complete, so it is pickled as a whole (shared references kept) to ``<folder>/group-<digest>.pkl``
+(:func:`checkpoint_path`: a digest of the SMCs' names), written then renamed, at most every ``every`` seconds. The file
+holds a key, a digest of what decides the training (the specs, the children they call with their weights' digests,
+``stop_at_max_return``, ``lean_update``, the package's version), so only the same group resumes from it. A later call
+with the same group and folder loads it and goes on from that update: each SMC is the one an uninterrupted call gives
+(weights, records and selection); its wall time is the time trained, not the time between the calls. The file is
+removed when the group is done.
 
 What is not pickled is rebuilt: the children SMCs (taken from the call's ``children``), the loggers (same folder and
 outputs: TensorBoard goes on in the SMC's folder, in a new events file), the callbacks' printer (the call's), the
@@ -17,13 +18,15 @@ class attributes.
 
 A checkpoint is a pickle: load only checkpoints your own runs wrote (as with any pickled model). One that cannot be
 read (damaged, or written by another version of this package) is reported through ``printer`` and removed, and the
-group trains from the start.
+group trains from the start (a file the system cannot read, an ``OSError``, is left alone and the error raised). A
+save that fails is reported and the group trains on without saving.
 """
 
 from __future__ import annotations
 
 import hashlib
 import importlib
+import importlib.metadata
 import inspect
 import io
 import json
@@ -35,6 +38,7 @@ from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+import cloudpickle
 from stable_baselines3.common.logger import HumanOutputFormat, Logger, TensorBoardOutputFormat, make_output_format
 from stable_baselines3.common.vec_env import VecEnvWrapper
 
@@ -43,7 +47,7 @@ from sb3_smc.errors import SMCError
 from sb3_smc.records import TrainingSpec
 from sb3_smc.smc.smc import SMC
 
-__all__ = ["GroupCheckpoint"]
+__all__ = ["GroupCheckpoint", "checkpoint_path"]
 
 FORMAT = 1  #: the layout of a checkpoint's payload
 
@@ -62,24 +66,30 @@ class GroupCheckpoint:
 
     def __init__(self, folder: str | Path, specs: Sequence[TrainingSpec], children: Sequence[SMC], *, every: float,
                  settings: Mapping[str, Any], printer: Callable[[str], None]) -> None:
-        what = {"specs": [spec.to_dict() for spec in specs], "children": [smc.name for smc in children],
-                "settings": dict(settings)}
-        self.key = hashlib.sha256(json.dumps(what, sort_keys=True).encode()).hexdigest()[:20]
-        self.path = Path(folder) / f"group-{self.key}.pkl"
+        what = {"specs": [spec.to_dict() for spec in specs], "settings": dict(settings), "version": _version(),
+                "children": [[smc.name, _weights(smc)] for smc in children]}
+        self.key = hashlib.sha256(json.dumps(what, sort_keys=True).encode()).hexdigest()
+        self.path = checkpoint_path(folder, [spec.name for spec in specs])
         self.children = {smc.name: smc for smc in children}
         self.every, self.printer = every, printer
         self._saved = time.monotonic()
+        self.failed = False  #: a save failed: the group trains on without saving
 
     def load(self) -> Any | None:
         """The state saved by :meth:`save`, or ``None`` where there is none (or it cannot be read: reported and
         removed)."""
+        for stale in self.path.parent.glob(f".{self.path.name}.*.tmp"):  # a save killed while writing
+            stale.unlink(missing_ok=True)
         if not self.path.is_file():
             return None
         try:
             payload = _Unpickler(io.BytesIO(self.path.read_bytes()), self.children, self.printer).load()
             if not isinstance(payload, dict) or payload.get("format") != FORMAT or payload.get("key") != self.key:
-                raise ValueError("not a checkpoint of this group")
-        except Exception as err:  # damaged or from another version: the group starts again
+                raise ValueError("not a checkpoint of this group (its specs, children, settings or the package's "
+                                 "version differ)")
+        except (OSError, MemoryError):  # the file may be fine: kept, and the error is the caller's
+            raise
+        except Exception as err:  # damaged, or another group's or version's: the group starts again
             self.printer(f"{self.path}: cannot resume from it ({type(err).__name__}: {err}); trained from the start")
             self.remove()
             return None
@@ -87,22 +97,39 @@ class GroupCheckpoint:
         return payload["state"]
 
     def due(self) -> bool:
-        """Whether ``every`` seconds have passed since the last save (or the start)."""
-        return time.monotonic() - self._saved >= self.every
+        """Whether ``every`` seconds have passed since the last save (or the start), and saving has not failed."""
+        return not self.failed and time.monotonic() - self._saved >= self.every
 
     def save(self, state: Any) -> None:
-        """Write ``state`` (the group's jobs, env and collection, between two updates) atomically."""
-        buffer = io.BytesIO()
-        _Pickler(buffer, self.printer).dump({"format": FORMAT, "key": self.key, "state": state})
-        atomic_write(self.path, buffer.getvalue())
+        """Write ``state`` (the group's jobs, env and collection, between two updates) atomically. A save that fails
+        (a full disk, something that cannot be pickled) never fails the training: it is reported through
+        ``printer``, the file removed, and the group trains on without saving."""
+        try:
+            buffer = io.BytesIO()
+            _Pickler(buffer, self.printer).dump({"format": FORMAT, "key": self.key, "state": state})
+            atomic_write(self.path, buffer.getvalue())
+        except Exception as err:
+            self.failed = True
+            self.remove()
+            self.printer(f"{self.path}: cannot save the group's training ({type(err).__name__}: {err}); it trains on "
+                         "without checkpoints")
         self._saved = time.monotonic()
 
     def remove(self) -> None:
         self.path.unlink(missing_ok=True)
 
 
-class _Pickler(pickle.Pickler):
-    """Children SMCs, loggers and the printer by reference; ``VecEnvWrapper`` s without their class attributes."""
+def checkpoint_path(folder: str | Path, names: Sequence[str]) -> Path:
+    """The file of the group of SMCs ``names`` (in the group's order) in ``folder``: ``group-<digest of the
+    names>.pkl``, which a scheduler finds without building the specs (the file holds the digest of everything that
+    decides the training, checked when it is loaded)."""
+    digest = hashlib.sha256("\n".join(names).encode()).hexdigest()[:20]
+    return Path(folder) / f"group-{digest}.pkl"
+
+
+class _Pickler(cloudpickle.CloudPickler):
+    """Children SMCs, loggers and the printer by reference; ``VecEnvWrapper`` s without their class attributes;
+    functions made at run time (a ``"lin_<x>"`` learning-rate schedule) by value, as SB3 saves them."""
 
     def __init__(self, file: io.BytesIO, printer: Callable[[str], None]) -> None:
         super().__init__(file, protocol=pickle.HIGHEST_PROTOCOL)
@@ -124,7 +151,7 @@ class _Pickler(pickle.Pickler):
         if isinstance(obj, VecEnvWrapper):
             state = {k: v for k, v in vars(obj).items() if k != "class_attributes"}
             return _wrapper, (type(obj), state)
-        return NotImplemented
+        return super().reducer_override(obj)
 
 
 class _Unpickler(pickle.Unpickler):
@@ -152,6 +179,24 @@ class _Unpickler(pickle.Unpickler):
         if pid[0] == "module":
             return importlib.import_module(pid[1])
         raise pickle.UnpicklingError(f"unknown reference {pid[0]!r}")
+
+
+def _weights(smc: SMC) -> str | None:
+    """A digest of what ``smc`` computes: its trained weights' digest, else its pickled policy's (a scripted or
+    compiled numpy policy), else nothing but its name."""
+    if smc.digest is not None:
+        return smc.digest
+    try:
+        return hashlib.sha256(cloudpickle.dumps(smc.policy)).hexdigest()
+    except Exception:  # a policy that cannot be pickled: the name only
+        return None
+
+
+def _version() -> str:
+    try:
+        return importlib.metadata.version("sb3-smc")
+    except importlib.metadata.PackageNotFoundError:  # run from a checkout that is not installed
+        return "unknown"
 
 
 def _output_kind(fmt: Any) -> str:
