@@ -103,14 +103,13 @@ class GroupCheckpoint:
     def save(self, state: Any) -> None:
         """Write ``state`` (the group's jobs, env and collection, between two updates) atomically. A save that fails
         (a full disk, something that cannot be pickled) never fails the training: it is reported through
-        ``printer``, the file removed, and the group trains on without saving."""
+        ``printer`` and the group trains on without saving (a stop then resumes from the last save, if any)."""
         try:
             buffer = io.BytesIO()
             _Pickler(buffer, self.printer).dump({"format": FORMAT, "key": self.key, "state": state})
             atomic_write(self.path, buffer.getvalue())
         except Exception as err:
             self.failed = True
-            self.remove()
             self.printer(f"{self.path}: cannot save the group's training ({type(err).__name__}: {err}); it trains on "
                          "without checkpoints")
         self._saved = time.monotonic()
