@@ -143,11 +143,10 @@ class _Job:
         self.model, self.initial = build_model(spec, venv, task, tensorboard_log=tensorboard_log)
         if not isinstance(self.model, RecurrentPPO):
             raise SMCError(f"SMC {spec.name!r}: a group trains recurrent learners, got {spec.algo}")
-        self._lean = ExitStack()  # the lean update's train and collection, from here to finish, as in train_smc
         if lean_update:
             check_lean_update(spec, self.model)
-            self._lean.enter_context(use_lean_update(self.model))
         self.lean_update = lean_update
+        self._enter_lean()
         self.random = _RandomState()  # the streams as the model's seeding left them
         self.stats, self.callback = training_callbacks(spec, task, log_every=log_every, printer=printer,
                                                        stop_at_max_return=stop_at_max_return)
@@ -189,6 +188,10 @@ class _Job:
     def __setstate__(self, state: dict[str, Any]) -> None:
         vars(self).update(state)
         self._monitor_start = time.time() - state["_monitor_start"]
+        self._enter_lean()
+
+    def _enter_lean(self) -> None:
+        """The lean update's train and collection (with ``lean_update``), until :meth:`finish`, as in train_smc."""
         self._lean = ExitStack()
         if self.lean_update:
             self._lean.enter_context(use_lean_update(self.model))
@@ -200,9 +203,7 @@ class _Job:
         try:
             yield
         finally:
-            self._lean = ExitStack()
-            if self.lean_update:
-                self._lean.enter_context(use_lean_update(self.model))
+            self._enter_lean()
 
     def start_rollout(self) -> None:
         model = self.model
@@ -463,19 +464,15 @@ def train_smcs(specs: Sequence[TrainingSpec], *, children: Mapping[str, SMC] | N
                                          printer=printer)
             saved = checkpoint.load()
         env = None if task is None or saved else native_smc_vec_env(task, sum(sizes), called, chosen[0].wrapper)
-        if saved:
-            trained = _train_group(chosen, called, None, saved=saved, checkpoint=checkpoint,
+        if saved or env is not None:
+            group = EnvGroup(env, sizes) if env is not None else None
+            trained = _train_group(chosen, called, group, saved=saved, checkpoint=checkpoint,
                                    tensorboard_log=tensorboard_log, log_every=log_every, printer=printer,
                                    stop_at_max_return=stop_at_max_return, lean_update=lean_update)
-        elif env is None:
+        else:
             trained = [train_smc(spec, children=called, tensorboard_log=tensorboard_log, log_every=log_every,
                                  printer=printer, stop_at_max_return=stop_at_max_return, lean_update=lean_update)
                        for spec in chosen]
-        else:
-            group = EnvGroup(env, sizes)
-            trained = _train_group(chosen, called, group, checkpoint=checkpoint, tensorboard_log=tensorboard_log,
-                                   log_every=log_every, printer=printer, stop_at_max_return=stop_at_max_return,
-                                   lean_update=lean_update)
         for i, smc in zip(members, trained, strict=True):
             results[i] = smc
     return [smc for smc in results if smc is not None]
