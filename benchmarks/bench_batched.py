@@ -18,7 +18,12 @@ Reported: environment steps per second over all SMCs of a case (per core: one pr
 stock, the peak resident memory of the process, and whether each batched SMC equals ``train_smc``'s of its seed
 (training returns; the tests compare the weights).
 
-Run: ``python benchmarks/bench_batched.py [--timesteps N] [--repeats R] [--k K ...] [--lean] [--algo A --rnn R]``.
+With ``--baseline DIR`` (a checkout of an earlier commit, such as ``git worktree add /tmp/base <commit>``), the
+``train_smcs`` cases (the lean ones with ``--lean``) also run from it, alternating with this tree's: a before/after
+pair in one run.
+
+Run: ``python benchmarks/bench_batched.py [--timesteps N] [--repeats R] [--k K ...] [--lean] [--algo A --rnn R]
+[--baseline DIR]``.
 """
 
 from __future__ import annotations
@@ -71,8 +76,8 @@ print(json.dumps({"seconds": seconds, "steps": total, "peak_mib": peak, "returns
 """
 
 
-def run(case: str, timesteps: int, k: int = 1, learner: dict | None = None) -> dict:
-    env = {**os.environ, "PYTHONPATH": str(HERE), "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+def run(case: str, timesteps: int, k: int = 1, learner: dict | None = None, root: Path = HERE) -> dict:
+    env = {**os.environ, "PYTHONPATH": str(root), "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
     out = subprocess.run([sys.executable, "-c", _JOB, case, ENV_ID, str(timesteps), str(k), json.dumps(learner or {})],
                          env=env,
                          capture_output=True, text=True, check=True)
@@ -92,15 +97,21 @@ def main() -> None:
     parser.add_argument("--algo", default=None, help="the learner of the train_smc(s) cases (stock stays "
                         "RecurrentPPO): RecurrentTRPO for the paper's")
     parser.add_argument("--rnn", default=None, help="their recurrent cell: gru for the paper's")
+    parser.add_argument("--baseline", type=Path, default=None, help="a checkout of an earlier commit (a git "
+                        "worktree): its train_smcs cases (the lean ones with --lean) run too, alternating")
     args = parser.parse_args()
     learner = {key: value for key, value in (("algo", args.algo), ("rnn", args.rnn)) if value is not None}
     cases = [("stock", 1), ("train_smc", 1), *(("train_smcs", k) for k in args.k)]
     if args.lean:
         cases += [("train_smc-lean", 1), *(("train_smcs-lean", k) for k in args.k)]
+    if args.baseline is not None:
+        cases += [("before:train_smcs" + ("-lean" if args.lean else ""), k) for k in args.k]
     best: dict[tuple[str, int], dict] = {}
     for _ in range(args.repeats):
         for case, k in cases:
-            result = run(case, args.timesteps, k, None if case == "stock" else learner)
+            root = args.baseline if case.startswith("before:") else HERE
+            result = run(case.removeprefix("before:"), args.timesteps, k, None if case == "stock" else learner,
+                         root.resolve())
             if (case, k) not in best or result["seconds"] < best[case, k]["seconds"]:
                 best[case, k] = result
     alone = {"": best["train_smc", 1]["returns"][0]}
@@ -114,11 +125,13 @@ def main() -> None:
     for case, k in cases:
         row = best[case, k]
         rate = row["steps"] / row["seconds"]
-        base, lean = case.removesuffix("-lean"), "-lean" if case.endswith("-lean") else ""
+        before = case.startswith("before:")
+        base, lean = case.removeprefix("before:").removesuffix("-lean"), "-lean" if case.endswith("-lean") else ""
         label = {"stock": "stock sb3-contrib RecurrentPPO (`learn`)", "train_smc": "`train_smc` (whole call)",
                  "train_smcs": f"`train_smcs`, K = {k} (whole call)"}[base]
         label += ", `lean_update=True`" if lean else ""
-        same = "" if case == "stock" else ("yes" if row["returns"][0] == alone[lean] else "NO")
+        label += f" (baseline `{args.baseline}`)" if before else ""
+        same = "" if case == "stock" or before else ("yes" if row["returns"][0] == alone[lean] else "NO")
         print(f"| {label} | {k} | {row['seconds']:.2f} | {rate:,.0f} | {rate / stock:.2f} | {row['peak_mib']:.0f} | "
               f"{same} |")
         if base == "train_smc":

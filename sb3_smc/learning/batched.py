@@ -277,12 +277,13 @@ class _Job:
         buffer's ``add`` written out, the same numbers without info dicts."""
         model = self.model
         part = cast(SliceVecEnv, model.env.unwrapped)
-        step = part.group.step_result
+        group, i = part.group, part.index
+        step = group.step_result
         assert step is not None
         a, b = part.start, part.stop
         obs, rewards, dones = step.obs[a:b], step.rewards[a:b], step.dones[a:b]
-        mine = (step.ended >= a) & (step.ended < b)
-        ended, terminal = step.ended[mine] - a, step.terminal[mine]
+        first, last = group.ended_at[i], group.ended_at[i + 1]
+        ended, terminal = step.ended[first:last] - a, step.terminal[first:last]
         model.num_timesteps += b - a
         returns, lengths = self._monitor
         returns += rewards
@@ -290,8 +291,10 @@ class _Job:
         episode_returns, episode_lengths = returns[ended], lengths[ended]
         returns[ended] = 0
         lengths[ended] = 0
-        if not self.stats.on_array_step(rewards, dones, episode_returns, episode_lengths, step, slice(a, b),
-                                        part.group.env.children):
+        calls = group.calls[group.calls_at[i]:group.calls_at[i + 1]] - a
+        if not self.stats.on_array_step(rewards, ended, calls, episode_returns, episode_lengths, step, slice(a, b),
+                                        group.env.children):
+            self._set_lstm_states()
             return False
         actions, values, log_probs, h, c = self._step
         if ended.size:
@@ -323,14 +326,19 @@ class _Job:
         buffer.full = buffer.pos == buffer.buffer_size
         model._last_obs = obs
         model._last_episode_starts = dones
-        self._h, self._c = h, c
-        states = (torch.from_numpy(h)[None], torch.from_numpy(c)[None])
-        model._last_lstm_states = self.lstm_states = RNNStates(states, states)
+        self._h, self._c = h, c  # the model's torch states from them at the rollout's end (_set_lstm_states)
         return True
+
+    def _set_lstm_states(self) -> None:
+        """The model's last LSTM states from the last step's arrays (the lean collection keeps them as numpy)."""
+        states = (torch.from_numpy(self._h)[None], torch.from_numpy(self._c)[None])
+        self.model._last_lstm_states = self.lstm_states = RNNStates(states, states)
 
     def end_rollout(self) -> None:
         """The rollout's returns and advantages, the callbacks' rollout end, then ``learn``'s update step."""
         model = self.model
+        if self.lean:
+            self._set_lstm_states()
         with torch.no_grad():
             episode_starts = torch.tensor(model._last_episode_starts, dtype=torch.float32, device=model.device)
             values = model.policy.predict_values(obs_as_tensor(model._last_obs, model.device), self.lstm_states.vf,

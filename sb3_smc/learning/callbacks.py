@@ -194,24 +194,24 @@ class SMCTrainingCallback(BaseCallback):
                                 bool(info.get("is_success", False)))
         return not self.solved  # False: the first step after the solving rollout's update (its steps counted)
 
-    def on_array_step(self, rewards: np.ndarray, dones: np.ndarray, episode_returns: np.ndarray,
+    def on_array_step(self, rewards: np.ndarray, ended: np.ndarray, calls: np.ndarray, episode_returns: np.ndarray,
                       episode_lengths: np.ndarray, step: SMCStep, part: slice, names: Sequence[str]) -> bool:
         """``on_step`` for a step given as arrays instead of info dicts (:mod:`sb3_smc.learning.batched`): the same
-        statistics. ``step`` is the group's step, ``part`` this SMC's environments in it (``rewards`` / ``dones``
-        theirs); ``episode_returns`` / ``episode_lengths``: ``VecMonitor``'s records of the episodes ending at this
-        step, in environment order; ``names`` the SMCs that ``step.called`` indexes."""
+        statistics. ``step`` is the group's step, ``part`` this SMC's environments in it (``rewards`` theirs);
+        ``ended`` / ``calls``: those of them (indices in ``part``, ascending) whose episode ended / that called a
+        child; ``episode_returns`` / ``episode_lengths``: ``VecMonitor``'s records of the episodes ending;
+        ``names`` the SMCs that ``step.called`` indexes."""
         self.n_calls += 1
         self.num_timesteps = self.model.num_timesteps
         self._episode_return += rewards
         self._episode_length += 1
         stats = self._stats
         stats.decisions += len(rewards)
-        called = step.called[part]
-        calls = np.flatnonzero(called >= 0)
         # primitive actions executed on the environment: moves (inside calls too) and the SMC's own signals
         self._episode_primitive += 1
         if calls.size:
             moves = step.moves[part]
+            called = step.called[part]
             self._episode_primitive[calls] += moves[calls] - 1
             for k, child, outcome in zip(calls.tolist(), called[calls].tolist(), step.outcomes[part][calls].tolist(),
                                          strict=True):
@@ -219,10 +219,11 @@ class SMCTrainingCallback(BaseCallback):
                 stats.calls[name] = stats.calls.get(name, 0) + 1
                 stats.call_steps[name] = stats.call_steps.get(name, 0) + int(moves[k])
                 stats.call_sig1[name] = stats.call_sig1.get(name, 0) + (outcome > 0)
-        success = step.success[part]
-        for k, ret, length in zip(np.flatnonzero(dones).tolist(), episode_returns.tolist(), episode_lengths.tolist(),
-                                  strict=True):
-            self._episode_ended(k, ret, int(length), bool(success[k]))
+        if ended.size:
+            success = step.success[part]
+            for k, ret, length in zip(ended.tolist(), episode_returns.tolist(), episode_lengths.tolist(),
+                                      strict=True):
+                self._episode_ended(k, ret, int(length), bool(success[k]))
         return not self.solved
 
     def _episode_ended(self, k: int, episode_return: float, length: int, success: bool) -> None:

@@ -22,8 +22,8 @@ class SliceVecEnv(VecEnv):
     :meth:`step_wait` returns this slice of the group's last step; :meth:`reset` returns this slice of the
     group's reset (done once for all, with each slice's seeds)."""
 
-    def __init__(self, group: EnvGroup, start: int, stop: int) -> None:
-        self.group, self.start, self.stop = group, start, stop  # before VecEnv's set-up: it reads render_mode
+    def __init__(self, group: EnvGroup, index: int, start: int, stop: int) -> None:
+        self.group, self.index, self.start, self.stop = group, index, start, stop  # before VecEnv's set-up
         super().__init__(stop - start, group.env.observation_space, group.env.action_space)
 
     def reset(self) -> VecEnvObs:
@@ -63,14 +63,17 @@ class EnvGroup:
 
     def __init__(self, env: NativeSMCVecEnv, sizes: Sequence[int]) -> None:
         self.env = env
-        bounds = np.cumsum([0, *sizes])
-        self.slices = [SliceVecEnv(self, int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
+        self.bounds = np.cumsum([0, *sizes])
+        self.slices = [SliceVecEnv(self, i, int(a), int(b))
+                       for i, (a, b) in enumerate(zip(self.bounds[:-1], self.bounds[1:], strict=True))]
         self.actions = np.zeros(self.env.num_envs, dtype=np.int64)
         self.reset_obs: np.ndarray = np.zeros(0)
         self.step_result: SMCStep | None = None
         self.results: tuple[np.ndarray, np.ndarray, np.ndarray, list[dict[str, Any]]] = (
             np.zeros(0), np.zeros(0), np.zeros(0), [])
         self.with_infos = True  #: whether a step builds SB3's info dicts (for SMCs on the generic path)
+        self.calls = np.zeros(0, dtype=np.int64)  #: the environments that called a child at the last step
+        self.ended_at = self.calls_at = np.zeros(len(sizes) + 1, dtype=np.int64)
 
     def reset(self) -> None:
         """Reset every environment with the seeds its model set (``VecEnv.seed`` of each slice)."""
@@ -80,7 +83,13 @@ class EnvGroup:
             part._reset_seeds()
 
     def step(self) -> None:
+        """Step every environment with :attr:`actions`; slice ``i``'s environments whose episode ended are
+        ``step_result.ended[ended_at[i]:ended_at[i + 1]]``, those that called a child
+        ``calls[calls_at[i]:calls_at[i + 1]]`` (group indices)."""
         step = self.step_result = self.env.step_arrays(self.actions)
+        self.ended_at = np.searchsorted(step.ended, self.bounds)
+        self.calls = np.flatnonzero(step.called >= 0)
+        self.calls_at = np.searchsorted(self.calls, self.bounds)
         if self.with_infos:
             self.results = (step.obs, step.rewards, step.dones, self.env.step_infos(step))
         self.actions[:] = 0  # the actions of SMCs that left the group

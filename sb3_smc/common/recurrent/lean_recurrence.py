@@ -13,7 +13,7 @@ layer up to float rounding (tested), not bit for bit.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 import torch
@@ -24,8 +24,8 @@ from sb3_smc.common.kernels import fast_tanh
 from sb3_smc.common.recurrent.layers import GRUAsLSTM
 from sb3_smc.common.recurrent.type_aliases import SequenceStates
 
-__all__ = ["GruRecurrence", "LstmRecurrence", "Sequences", "compiled_layer", "gru_backward", "gru_forward",
-           "lstm_backward", "lstm_forward", "recurrence"]
+__all__ = ["GruRecurrence", "LstmRecurrence", "Sequences", "SparseRows", "compiled_layer", "gru_backward",
+           "gru_forward", "lstm_backward", "lstm_forward", "recurrence"]
 
 
 @njit(cache=True, fastmath=True, inline="always")
@@ -36,11 +36,12 @@ def _axpy(y: np.ndarray, a: float, x: np.ndarray) -> None:  # pragma: no cover
 
 
 @njit(cache=True, fastmath=True, error_model="numpy")
-def lstm_forward(x: np.ndarray, w_ih_t: np.ndarray, w_hh_t: np.ndarray, bias: np.ndarray, starts: np.ndarray,
-                 lengths: np.ndarray, h0: np.ndarray, c0: np.ndarray, out_h: np.ndarray, gates: np.ndarray,
-                 tanh_c: np.ndarray, cells: np.ndarray) -> None:  # pragma: no cover
-    """The LSTM over each sequence ``rows starts[s] : starts[s] + lengths[s]`` of the inputs ``x`` from
-    ``(h0[s], c0[s])``, skipping zero inputs (a mostly one-hot observation): writes each row's output ``h``
+def lstm_forward(ptr: np.ndarray, idx: np.ndarray, val: np.ndarray, w_ih_t: np.ndarray, w_hh_t: np.ndarray,
+                 bias: np.ndarray, starts: np.ndarray, lengths: np.ndarray, h0: np.ndarray, c0: np.ndarray,
+                 out_h: np.ndarray, gates: np.ndarray, tanh_c: np.ndarray,
+                 cells: np.ndarray) -> None:  # pragma: no cover
+    """The LSTM over each sequence ``rows starts[s] : starts[s] + lengths[s]`` of the inputs (their non-zero entries
+    ``ptr``, ``idx``, ``val``: :class:`SparseRows`) from ``(h0[s], c0[s])``: writes each row's output ``h``
     (``out_h``), its gate activations i, f, g, o (``gates``), its cell and the cell's tanh. The weights transposed
     (``(inputs, 4 n)``), ``bias`` the sum of torch's two."""
     n = h0.shape[1]
@@ -52,10 +53,8 @@ def lstm_forward(x: np.ndarray, w_ih_t: np.ndarray, w_hh_t: np.ndarray, bias: np
         c[:] = c0[s]
         for t in range(starts[s], starts[s] + lengths[s]):
             z[:] = bias
-            x_t = x[t]
-            for k in range(x_t.shape[0]):
-                if x_t[k] != 0.0:
-                    _axpy(z, x_t[k], w_ih_t[k])
+            for e in range(ptr[t], ptr[t + 1]):
+                _axpy(z, val[e], w_ih_t[idx[e]])
             for k in range(n):
                 _axpy(z, h[k], w_hh_t[k])
             gate = gates[t]
@@ -75,9 +74,9 @@ def lstm_forward(x: np.ndarray, w_ih_t: np.ndarray, w_hh_t: np.ndarray, bias: np
 
 
 @njit(cache=True, fastmath=True, error_model="numpy")
-def lstm_backward(grad_h: np.ndarray, x: np.ndarray, w_hh_t: np.ndarray, starts: np.ndarray, lengths: np.ndarray,
-                  c0: np.ndarray, gates: np.ndarray, tanh_c: np.ndarray, cells: np.ndarray, grad_z: np.ndarray,
-                  grad_w_ih_t: np.ndarray) -> None:  # pragma: no cover
+def lstm_backward(grad_h: np.ndarray, ptr: np.ndarray, idx: np.ndarray, val: np.ndarray, w_hh_t: np.ndarray,
+                  starts: np.ndarray, lengths: np.ndarray, c0: np.ndarray, gates: np.ndarray, tanh_c: np.ndarray,
+                  cells: np.ndarray, grad_z: np.ndarray, grad_w_ih_t: np.ndarray) -> None:  # pragma: no cover
     """Backpropagation through time of :func:`lstm_forward`: from the loss's gradient at each row's output
     (``grad_h``) writes the gradient at each row's gate pre-activations (``grad_z``) and adds the input weights'
     (transposed) to ``grad_w_ih_t``; the initial states get none (they are rollout data)."""
@@ -104,10 +103,47 @@ def lstm_backward(grad_h: np.ndarray, x: np.ndarray, w_hh_t: np.ndarray, starts:
                 for j in range(4 * n):
                     total += w_k[j] * gz[j]
                 dh[k] = total
-            x_t = x[t]
-            for k in range(x_t.shape[0]):
-                if x_t[k] != 0.0:
-                    _axpy(grad_w_ih_t[k], x_t[k], gz)
+            for e in range(ptr[t], ptr[t + 1]):
+                _axpy(grad_w_ih_t[idx[e]], val[e], gz)
+
+
+@njit(cache=True)
+def _nonzeros(x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # pragma: no cover
+    """The non-zero entries of ``x``'s rows, row after row, in column order: :class:`SparseRows`' arrays."""
+    rows, cols = x.shape
+    count = 0
+    for r in range(rows):
+        for k in range(cols):
+            if x[r, k] != 0.0:
+                count += 1
+    ptr = np.empty(rows + 1, dtype=np.int64)
+    idx = np.empty(count, dtype=np.int64)
+    val = np.empty(count)
+    e = 0
+    for r in range(rows):
+        ptr[r] = e
+        for k in range(cols):
+            if x[r, k] != 0.0:
+                idx[e] = k
+                val[e] = x[r, k]
+                e += 1
+    ptr[rows] = e
+    return ptr, idx, val
+
+
+class SparseRows(NamedTuple):
+    """A batch's inputs by their non-zero entries (an observation is mostly one-hot): row ``r``'s are
+    ``val[ptr[r]:ptr[r + 1]]`` (float64) in the columns ``idx[ptr[r]:ptr[r + 1]]``, in column order, so that the
+    kernels' sums over them are in the order of a dense loop that skips zeros."""
+
+    ptr: np.ndarray
+    idx: np.ndarray
+    val: np.ndarray
+
+    @classmethod
+    def of(cls, x: np.ndarray) -> SparseRows:
+        """The non-zero entries of ``x`` (``(rows, inputs)``)."""
+        return cls(*_nonzeros(x))
 
 
 class Sequences:
@@ -155,19 +191,20 @@ class LstmRecurrence(torch.autograd.Function):
         out_h, tanh_c, cells = np.empty((rows, n)), np.empty((rows, n)), np.empty((rows, n))
         gates = np.empty((rows, 4 * n))
         w_hh_t = np.ascontiguousarray(w_hh64.T)
-        lstm_forward(x, np.ascontiguousarray(w_ih64.T), w_hh_t, bias, seqs.starts, seqs.lengths, seqs.h0, seqs.c0,
+        sparse = SparseRows.of(x)
+        lstm_forward(*sparse, np.ascontiguousarray(w_ih64.T), w_hh_t, bias, seqs.starts, seqs.lengths, seqs.h0, seqs.c0,
                      out_h, gates, tanh_c, cells)
-        ctx.saved = (x, seqs, w_hh_t, out_h, gates, tanh_c, cells)
+        ctx.saved = (x, sparse, seqs, w_hh_t, out_h, gates, tanh_c, cells)
         return torch.from_numpy(out_h.astype(np.float32))
 
     @staticmethod
     def backward(ctx: Any, grad_out: torch.Tensor) -> tuple[None, None, torch.Tensor, torch.Tensor, torch.Tensor,
                                                              torch.Tensor]:
-        x, seqs, w_hh_t, out_h, gates, tanh_c, cells = ctx.saved
+        x, sparse, seqs, w_hh_t, out_h, gates, tanh_c, cells = ctx.saved
         grad_z = np.empty_like(gates)
         grad_w_ih_t = np.zeros((x.shape[1], gates.shape[1]))
-        lstm_backward(grad_out.detach().numpy().astype(np.float64), x, w_hh_t, seqs.starts, seqs.lengths, seqs.c0,
-                      gates, tanh_c, cells, grad_z, grad_w_ih_t)
+        lstm_backward(grad_out.detach().numpy().astype(np.float64), sparse.ptr, sparse.idx, sparse.val, w_hh_t,
+                      seqs.starts, seqs.lengths, seqs.c0, gates, tanh_c, cells, grad_z, grad_w_ih_t)
         h_prev = seqs.input_states(out_h)
         grad_bias = torch.from_numpy(grad_z.sum(axis=0).astype(np.float32))
         return (None, None, torch.from_numpy(grad_w_ih_t.T.astype(np.float32)),
@@ -175,12 +212,12 @@ class LstmRecurrence(torch.autograd.Function):
 
 
 @njit(cache=True, fastmath=True, error_model="numpy")
-def gru_forward(x: np.ndarray, w_ih_t: np.ndarray, w_hh_t: np.ndarray, b_ih: np.ndarray, b_hh: np.ndarray,
-                starts: np.ndarray, lengths: np.ndarray, h0: np.ndarray, out_h: np.ndarray, gates: np.ndarray,
-                hidden_n: np.ndarray) -> None:  # pragma: no cover
+def gru_forward(ptr: np.ndarray, idx: np.ndarray, val: np.ndarray, w_ih_t: np.ndarray, w_hh_t: np.ndarray,
+                b_ih: np.ndarray, b_hh: np.ndarray, starts: np.ndarray, lengths: np.ndarray, h0: np.ndarray,
+                out_h: np.ndarray, gates: np.ndarray, hidden_n: np.ndarray) -> None:  # pragma: no cover
     """A GRU (torch's equations: gates r, z, n; ``n = tanh(W_in x + b_in + r * (W_hn h + b_hn))``,
-    ``h' = n + z * (h - n)``) over each sequence ``rows starts[s] : starts[s] + lengths[s]`` of the inputs ``x``
-    from ``h0[s]``, skipping zero inputs: writes each row's output ``h`` (``out_h``), its gates r, z, n
+    ``h' = n + z * (h - n)``) over each sequence ``rows starts[s] : starts[s] + lengths[s]`` of the inputs (as
+    :func:`lstm_forward`'s) from ``h0[s]``: writes each row's output ``h`` (``out_h``), its gates r, z, n
     (``gates``) and ``W_hn h + b_hn`` (``hidden_n``). The weights transposed (``(inputs, 3 n)``)."""
     n = h0.shape[1]
     gi = np.empty(3 * n)
@@ -190,10 +227,8 @@ def gru_forward(x: np.ndarray, w_ih_t: np.ndarray, w_hh_t: np.ndarray, b_ih: np.
         h[:] = h0[s]
         for t in range(starts[s], starts[s] + lengths[s]):
             gi[:] = b_ih
-            x_t = x[t]
-            for k in range(x_t.shape[0]):
-                if x_t[k] != 0.0:
-                    _axpy(gi, x_t[k], w_ih_t[k])
+            for e in range(ptr[t], ptr[t + 1]):
+                _axpy(gi, val[e], w_ih_t[idx[e]])
             gh[:] = b_hh
             for k in range(n):
                 _axpy(gh, h[k], w_hh_t[k])
@@ -209,9 +244,10 @@ def gru_forward(x: np.ndarray, w_ih_t: np.ndarray, w_hh_t: np.ndarray, b_ih: np.
 
 
 @njit(cache=True, fastmath=True, error_model="numpy")
-def gru_backward(grad_h: np.ndarray, x: np.ndarray, w_hh_t: np.ndarray, starts: np.ndarray, lengths: np.ndarray,
-                 h0: np.ndarray, out_h: np.ndarray, gates: np.ndarray, hidden_n: np.ndarray, grad_gi: np.ndarray,
-                 grad_gh: np.ndarray, grad_w_ih_t: np.ndarray) -> None:  # pragma: no cover
+def gru_backward(grad_h: np.ndarray, ptr: np.ndarray, idx: np.ndarray, val: np.ndarray, w_hh_t: np.ndarray,
+                 starts: np.ndarray, lengths: np.ndarray, h0: np.ndarray, out_h: np.ndarray, gates: np.ndarray,
+                 hidden_n: np.ndarray, grad_gi: np.ndarray, grad_gh: np.ndarray,
+                 grad_w_ih_t: np.ndarray) -> None:  # pragma: no cover
     """Backpropagation through time of :func:`gru_forward`: from the loss's gradient at each row's output
     (``grad_h``) writes the gradients at each row's input and hidden pre-activations (``grad_gi`` = the gradient of
     ``W_ih x + b_ih``, ``grad_gh`` = that of ``W_hh h + b_hh``) and adds the input weights' (transposed) to
@@ -238,10 +274,8 @@ def gru_backward(grad_h: np.ndarray, x: np.ndarray, w_hh_t: np.ndarray, starts: 
                 for j in range(3 * n):
                     total += w_k[j] * gh[j]
                 dh[k] += total
-            x_t = x[t]
-            for k in range(x_t.shape[0]):
-                if x_t[k] != 0.0:
-                    _axpy(grad_w_ih_t[k], x_t[k], gi)
+            for e in range(ptr[t], ptr[t + 1]):
+                _axpy(grad_w_ih_t[idx[e]], val[e], gi)
 
 
 class GruRecurrence(torch.autograd.Function):
@@ -255,19 +289,20 @@ class GruRecurrence(torch.autograd.Function):
         w_ih64, w_hh64, b_ih64, b_hh64 = (w.detach().numpy().astype(np.float64) for w in (w_ih, w_hh, b_ih, b_hh))
         out_h, hidden_n, gates = np.empty((rows, n)), np.empty((rows, n)), np.empty((rows, 3 * n))
         w_hh_t = np.ascontiguousarray(w_hh64.T)
-        gru_forward(x, np.ascontiguousarray(w_ih64.T), w_hh_t, b_ih64, b_hh64, seqs.starts, seqs.lengths, seqs.h0,
+        sparse = SparseRows.of(x)
+        gru_forward(*sparse, np.ascontiguousarray(w_ih64.T), w_hh_t, b_ih64, b_hh64, seqs.starts, seqs.lengths, seqs.h0,
                     out_h, gates, hidden_n)
-        ctx.saved = (x, seqs, w_hh_t, out_h, gates, hidden_n)
+        ctx.saved = (x, sparse, seqs, w_hh_t, out_h, gates, hidden_n)
         return torch.from_numpy(out_h.astype(np.float32))
 
     @staticmethod
     def backward(ctx: Any, grad_out: torch.Tensor) -> tuple[None, None, torch.Tensor, torch.Tensor, torch.Tensor,
                                                              torch.Tensor]:
-        x, seqs, w_hh_t, out_h, gates, hidden_n = ctx.saved
+        x, sparse, seqs, w_hh_t, out_h, gates, hidden_n = ctx.saved
         grad_gi, grad_gh = np.empty_like(gates), np.empty_like(gates)
         grad_w_ih_t = np.zeros((x.shape[1], gates.shape[1]))
-        gru_backward(grad_out.detach().numpy().astype(np.float64), x, w_hh_t, seqs.starts, seqs.lengths, seqs.h0,
-                     out_h, gates, hidden_n, grad_gi, grad_gh, grad_w_ih_t)
+        gru_backward(grad_out.detach().numpy().astype(np.float64), sparse.ptr, sparse.idx, sparse.val, w_hh_t,
+                     seqs.starts, seqs.lengths, seqs.h0, out_h, gates, hidden_n, grad_gi, grad_gh, grad_w_ih_t)
         h_prev = seqs.input_states(out_h)
         return (None, None, torch.from_numpy(grad_w_ih_t.T.astype(np.float32)),
                 torch.from_numpy((grad_gh.T @ h_prev).astype(np.float32)),

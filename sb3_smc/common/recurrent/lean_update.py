@@ -35,6 +35,7 @@ from typing import Any, NamedTuple, cast
 import numpy as np
 import torch
 from gymnasium import spaces
+from numba import njit
 from sb3_contrib import RecurrentPPO
 from sb3_contrib.common.recurrent.buffers import RecurrentRolloutBuffer
 from stable_baselines3.common.distributions import CategoricalDistribution
@@ -44,7 +45,14 @@ from stable_baselines3.common.utils import explained_variance
 from torch import nn
 
 from sb3_smc.common.recurrent.buffers import CompactRecurrentRolloutBuffer
-from sb3_smc.common.recurrent.lean_recurrence import Sequences, compiled_layer, lstm_backward, lstm_forward, recurrence
+from sb3_smc.common.recurrent.lean_recurrence import (
+    Sequences,
+    SparseRows,
+    compiled_layer,
+    lstm_backward,
+    lstm_forward,
+    recurrence,
+)
 from sb3_smc.common.recurrent.policies import SequenceLstmPolicy
 from sb3_smc.common.threads import blas_threads
 
@@ -108,6 +116,7 @@ class _Rollout:
         self.cut = np.logical_or(self.episode_starts != 0.0, env_first.reshape(rows))
         self.h0, self.c0 = _flat(buffer, "hidden_states_pi")[:, 0], _flat(buffer, "cell_states_pi")[:, 0]
         self.x = _flat(buffer, "observations").reshape(rows, -1).astype(np.float32)
+        self.sparse = SparseRows.of(self.x)
         self.actions = _flat(buffer, "actions")
         self.old_values, self.old_log_prob, advantages, self.returns = (
             _flat(buffer, name).reshape(rows).astype(np.float64)
@@ -121,6 +130,11 @@ class _Rollout:
         epoch_cut = self.cut.copy()
         epoch_cut[np.random.randint(self.rows)] = True
         return Sequences.cut(epoch_cut, self.h0, self.c0, self.episode_starts)
+
+    @cached_property
+    def int_actions(self) -> np.ndarray:
+        """A ``Discrete`` action space's actions as int64, one per row."""
+        return self.actions.reshape(self.rows).astype(np.int64)
 
     @cached_property
     def tensors(self) -> tuple[torch.Tensor, ...]:
@@ -145,75 +159,140 @@ class _Losses(NamedTuple):
     set_gradients: Callable[[], None]
 
 
+@njit(cache=True, fastmath={"reassoc", "contract", "nsz", "arcp"}, error_model="numpy")
+def ppo_heads(out_h: np.ndarray, ptr: np.ndarray, idx: np.ndarray, val: np.ndarray, w_action: np.ndarray,
+              b_action: np.ndarray, w_critic_t: np.ndarray, b_critic: np.ndarray, w_value: np.ndarray, b_value: float,
+              actions: np.ndarray, old_log_prob: np.ndarray, old_values: np.ndarray, advantages: np.ndarray,
+              returns: np.ndarray, clip_range: float, clip_range_vf: float, ent_coef: float, vf_coef: float,
+              grad_h: np.ndarray, grad_w_action: np.ndarray, grad_b_action: np.ndarray, grad_w_critic_t: np.ndarray,
+              grad_b_critic: np.ndarray, grad_w_value: np.ndarray) -> np.ndarray:  # pragma: no cover
+    """PPO's loss on the default heads, forward and backward, row by row in float64: a categorical policy on the
+    LSTM's outputs ``out_h`` (``w_action``, ``b_action``), a linear critic on the inputs (their non-zero entries
+    ``ptr``, ``idx``, ``val``: :class:`~sb3_smc.common.recurrent.lean_recurrence.SparseRows`; ``w_critic_t``
+    transposed) then a linear value (``w_value``, ``b_value``); the clipped surrogate, the value loss
+    (clipped where ``clip_range_vf >= 0``), the entropy term. Writes the loss's gradient at each output row
+    (``grad_h``) and the heads' weight gradients (torch's at ``min`` ties and ``clamp`` bounds; into zeroed
+    arrays); returns the sums over rows of the surrogate's minimum, the clipped rows, the squared value error, the
+    entropy, ``ratio - 1 - log ratio`` and the value head's bias gradient."""
+    rows, hidden = out_h.shape
+    n_actions, width = w_action.shape[0], w_critic_t.shape[1]
+    sums = np.zeros(6)
+    logits, probabilities = np.empty(n_actions), np.empty(n_actions)
+    latent = np.empty(width)
+    for r in range(rows):
+        h = out_h[r]
+        top = -np.inf
+        for a in range(n_actions):
+            total = b_action[a]
+            for j in range(hidden):
+                total += w_action[a, j] * h[j]
+            logits[a] = total
+            top = max(top, total)
+        norm = 0.0
+        for a in range(n_actions):
+            logits[a] -= top
+            norm += np.exp(logits[a])
+        log_norm = np.log(norm)
+        entropy = 0.0
+        for a in range(n_actions):  # logits become log-probabilities
+            logits[a] -= log_norm
+            probabilities[a] = np.exp(logits[a])
+            entropy -= probabilities[a] * logits[a]
+        action = actions[r]
+        latent[:] = b_critic
+        for e in range(ptr[r], ptr[r + 1]):
+            k, v = idx[e], val[e]
+            for m in range(width):
+                latent[m] += v * w_critic_t[k, m]
+        value = b_value
+        for m in range(width):
+            value += latent[m] * w_value[m]
+
+        log_ratio = logits[action] - old_log_prob[r]
+        ratio = np.exp(log_ratio)
+        adv = advantages[r]
+        inside = 1.0 if 1.0 - clip_range <= ratio <= 1.0 + clip_range else 0.0
+        surrogate, clipped = adv * ratio, adv * min(max(ratio, 1.0 - clip_range), 1.0 + clip_range)
+        sums[0] += min(surrogate, clipped)
+        if abs(ratio - 1.0) > clip_range:
+            sums[1] += 1.0
+        value_pred, value_inside = value, 1.0
+        if clip_range_vf >= 0.0:
+            change = value - old_values[r]
+            value_pred = old_values[r] + min(max(change, -clip_range_vf), clip_range_vf)
+            value_inside = 1.0 if -clip_range_vf <= change <= clip_range_vf else 0.0
+        error = returns[r] - value_pred
+        sums[2] += error * error
+        sums[3] += entropy
+        sums[4] += (ratio - 1.0) - log_ratio
+
+        first = 1.0 if surrogate < clipped else (0.5 if surrogate == clipped else 0.0)  # torch.min's split
+        grad_log_prob = -adv * ratio * (first + (1.0 - first) * inside) / rows
+        g_h = grad_h[r]
+        g_h[:] = 0.0
+        for a in range(n_actions):
+            p = probabilities[a]
+            g = -grad_log_prob * p + (ent_coef / rows) * p * (logits[a] + entropy)
+            if a == action:
+                g += grad_log_prob
+            grad_b_action[a] += g
+            for j in range(hidden):
+                g_h[j] += g * w_action[a, j]
+                grad_w_action[a, j] += g * h[j]
+        grad_value = vf_coef * -2.0 / rows * error * value_inside
+        sums[5] += grad_value
+        for m in range(width):
+            grad_w_value[m] += grad_value * latent[m]
+            grad_b_critic[m] += grad_value * w_value[m]
+        for e in range(ptr[r], ptr[r + 1]):
+            k, v = idx[e], val[e] * grad_value
+            for m in range(width):
+                grad_w_critic_t[k, m] += v * w_value[m]
+    return sums
+
+
 def _numpy_epoch(model: RecurrentPPO, policy: SequenceLstmPolicy, data: _Rollout, clip_range: float,
                  clip_range_vf: float | None) -> _Losses:
-    """An epoch of PPO on the default heads (:func:`_plain_heads`) in float64 numpy, forward and backward written
-    out: the LSTM by the compiled kernels, the action and value heads, the clipped surrogate, the value loss (clipped
-    if ``clip_range_vf``), the entropy term; the gradients (torch's at ``min`` ties and ``clamp`` bounds) clipped to
-    ``max_grad_norm`` as ``clip_grad_norm_`` does."""
+    """An epoch of PPO on the default heads (:func:`_plain_heads`) in float64, forward and backward written out,
+    with no autograd graph: the LSTM by the compiled recurrence, the heads and losses by :func:`ppo_heads`; the
+    gradients clipped to ``max_grad_norm`` as ``clip_grad_norm_`` does."""
     w = {name: p.detach().numpy().astype(np.float64) for name, p in policy.named_parameters()}
     seqs, n_rows = data.sequences(), data.rows
     n = w["lstm_actor.weight_hh_l0"].shape[1]
     out_h, tanh_c, cells, gates = (np.empty((n_rows, n)), np.empty((n_rows, n)), np.empty((n_rows, n)),
                                    np.empty((n_rows, 4 * n)))
     w_hh_t = np.ascontiguousarray(w["lstm_actor.weight_hh_l0"].T)
-    lstm_forward(data.x, np.ascontiguousarray(w["lstm_actor.weight_ih_l0"].T), w_hh_t,
+    lstm_forward(*data.sparse, np.ascontiguousarray(w["lstm_actor.weight_ih_l0"].T), w_hh_t,
                  w["lstm_actor.bias_ih_l0"] + w["lstm_actor.bias_hh_l0"], seqs.starts, seqs.lengths, seqs.h0, seqs.c0,
                  out_h, gates, tanh_c, cells)
-    logits = out_h @ w["action_net.weight"].T + w["action_net.bias"]
-    logits -= logits.max(axis=1, keepdims=True)
-    log_p = logits - np.log(np.exp(logits).sum(axis=1, keepdims=True))
-    p = np.exp(log_p)
-    rows, actions = np.arange(n_rows), data.actions.reshape(n_rows).astype(np.int64)
-    log_prob = log_p[rows, actions]
-    entropy = -(p * log_p).sum(axis=1)
-    critic = cast(nn.Linear, policy.critic)  # _plain_heads checked
-    latent_vf = (data.x @ critic.weight.detach().numpy().T).astype(np.float64) + w["critic.bias"]
-    values = latent_vf @ w["value_net.weight"][0] + w["value_net.bias"][0]
-
-    log_ratio = log_prob - data.old_log_prob
-    ratio = np.exp(log_ratio)
-    adv = data.advantages
-    inside = (ratio >= 1 - clip_range) & (ratio <= 1 + clip_range)
-    surrogate, clipped = adv * ratio, adv * np.clip(ratio, 1 - clip_range, 1 + clip_range)
-    policy_loss = -float(np.minimum(surrogate, clipped).mean())
-    values_pred, value_inside = values, np.ones(n_rows, dtype=bool)
-    if clip_range_vf is not None:
-        change = values - data.old_values
-        values_pred = data.old_values + np.clip(change, -clip_range_vf, clip_range_vf)
-        value_inside = (change >= -clip_range_vf) & (change <= clip_range_vf)
-    value_loss = float(((data.returns - values_pred) ** 2).mean())
-    entropy_loss = -float(entropy.mean())
+    grads = {name: np.zeros_like(w[name]) for name in ("action_net.weight", "action_net.bias", "critic.bias",
+                                                       "value_net.weight")}
+    grad_h, grad_w_critic_t = np.empty_like(out_h), np.zeros(w["critic.weight"].shape[::-1])
+    sums = ppo_heads(out_h, *data.sparse, w["action_net.weight"], w["action_net.bias"],
+                     np.ascontiguousarray(w["critic.weight"].T), w["critic.bias"], w["value_net.weight"][0],
+                     float(w["value_net.bias"][0]), data.int_actions, data.old_log_prob, data.old_values,
+                     data.advantages, data.returns, clip_range, -1.0 if clip_range_vf is None else clip_range_vf,
+                     model.ent_coef, model.vf_coef, grad_h, grads["action_net.weight"], grads["action_net.bias"],
+                     grad_w_critic_t, grads["critic.bias"], grads["value_net.weight"][0])
+    policy_loss, value_loss, entropy_loss = -sums[0] / n_rows, sums[2] / n_rows, -sums[3] / n_rows
 
     def set_gradients() -> None:
-        first = np.where(surrogate < clipped, 1.0, np.where(surrogate == clipped, 0.5, 0.0))  # torch.min's split
-        grad_log_prob = -adv * ratio * (first + (1.0 - first) * inside) / n_rows
-        grad_logits = -grad_log_prob[:, None] * p
-        grad_logits[rows, actions] += grad_log_prob
-        grad_logits += (model.ent_coef / n_rows) * p * (log_p + entropy[:, None])
-        grad_values = model.vf_coef * -2.0 / n_rows * (data.returns - values_pred) * value_inside
-        grad_latent_vf = grad_values[:, None] * w["value_net.weight"]
-        grad_h = grad_logits @ w["action_net.weight"]
         grad_z, grad_w_ih_t = np.empty_like(gates), np.zeros((data.x.shape[1], 4 * n))
-        lstm_backward(grad_h, data.x, w_hh_t, seqs.starts, seqs.lengths, seqs.c0, gates, tanh_c, cells, grad_z,
+        lstm_backward(grad_h, *data.sparse, w_hh_t, seqs.starts, seqs.lengths, seqs.c0, gates, tanh_c, cells, grad_z,
                       grad_w_ih_t)
-        h_prev = seqs.input_states(out_h, np.float32)
         grad_bias = grad_z.sum(axis=0)
-        grads = {"action_net.weight": grad_logits.T @ out_h, "action_net.bias": grad_logits.sum(axis=0),
-                 "value_net.weight": (grad_values @ latent_vf)[None], "value_net.bias": grad_values.sum(keepdims=True),
-                 "lstm_actor.weight_ih_l0": grad_w_ih_t.T,
-                 "lstm_actor.weight_hh_l0": grad_z.T.astype(np.float32) @ h_prev,
-                 "lstm_actor.bias_ih_l0": grad_bias, "lstm_actor.bias_hh_l0": grad_bias,
-                 "critic.weight": grad_latent_vf.T.astype(np.float32) @ data.x,
-                 "critic.bias": grad_latent_vf.sum(axis=0)}
+        grads.update({"value_net.bias": sums[5:6], "critic.weight": grad_w_critic_t.T,
+                      "lstm_actor.weight_ih_l0": grad_w_ih_t.T,
+                      "lstm_actor.weight_hh_l0": grad_z.T.astype(np.float32) @ seqs.input_states(out_h, np.float32),
+                      "lstm_actor.bias_ih_l0": grad_bias, "lstm_actor.bias_hh_l0": grad_bias})
         norm = float(np.sqrt(sum(float(np.sum(g * g)) for g in grads.values())))
         scale = min(1.0, model.max_grad_norm / (norm + 1e-6))
         for name, param in policy.named_parameters():
             param.grad = torch.from_numpy((grads[name] * scale).astype(np.float32)) if name in grads else None
 
-    return _Losses(policy_loss, float(np.mean(np.abs(ratio - 1) > clip_range)), value_loss, entropy_loss,
-                   policy_loss + model.ent_coef * entropy_loss + model.vf_coef * value_loss,
-                   float(np.mean((ratio - 1) - log_ratio)), set_gradients)
+    return _Losses(policy_loss, sums[1] / n_rows, value_loss, entropy_loss,
+                   policy_loss + model.ent_coef * entropy_loss + model.vf_coef * value_loss, sums[4] / n_rows,
+                   set_gradients)
 
 
 def _torch_epoch(model: RecurrentPPO, policy: SequenceLstmPolicy, data: _Rollout, clip_range: float,
