@@ -14,6 +14,11 @@ steps per SMC, the whole budget (no early stop), the defaults otherwise (16 envi
 * with ``--algo RecurrentTRPO --rnn gru``, the ``train_smc`` / ``train_smcs`` cases (``--lean`` ones included)
   with the paper's learner (stock stays sb3-contrib's ``RecurrentPPO``, the issue's yardstick).
 
+Each case first runs once with ``--warm-up`` steps per SMC in the same process, untimed (its time is reported):
+the process's one-time costs (the lazy imports, among them torch's dynamo at the first optimizer, about 3 s;
+numba's cached kernels) are then paid, as they are in a curriculum run's worker after its first job, and the timed
+run is the training's own rate. ``--warm-up 0`` times a fresh process's first call instead.
+
 Reported: environment steps per second over all SMCs of a case (per core: one process, one thread), the ratio to
 stock, the peak resident memory of the process, and whether each batched SMC equals ``train_smc``'s of its seed
 (training returns; the tests compare the weights).
@@ -45,40 +50,47 @@ from sb3_smc.records import TrainingSpec
 from sb3_smc.learning.training import train_smc
 from sb3_smc.learning.batched import train_smcs
 case, env_id, steps, k, learner = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4]), json.loads(sys.argv[5])
+warm_up = int(sys.argv[6])
 lean = case.endswith("-lean")
-specs = [TrainingSpec.create(env_id, total_timesteps=steps, seed=s, **learner) for s in range(k)]
-returns = []
-if case == "stock":
-    from sb3_contrib import RecurrentPPO
-    from stable_baselines3.common.logger import Logger
-    from sb3_smc.core.hyperparameters import constructor_arguments
-    from sb3_smc.learning.training import make_vec_env
-    _, settings = constructor_arguments(TrainingSpec.create(env_id).hyperparameters)  # stock: RecurrentPPO
-    model = RecurrentPPO("MlpLstmPolicy", make_vec_env(specs[0]), n_steps=specs[0].budget.env_steps, seed=0,
-                         device="cpu", verbose=0, **settings)
-    model.set_logger(Logger(folder=None, output_formats=[]))
-    start = time.perf_counter()
-    model.learn(steps)
-    seconds, total = time.perf_counter() - start, model.num_timesteps
-elif case.startswith("train_smc") and not case.startswith("train_smcs"):
-    start = time.perf_counter()
-    smc = train_smc(specs[0], log_every=0, stop_at_max_return=False, lean_update=lean)
-    seconds, total = time.perf_counter() - start, smc.record.total_timesteps
-    returns = [smc.record.training_returns]
-    print(json.dumps({"learn": smc.record.wall_time_s}), flush=True)
-else:
+
+def run(steps):
+    \"\"\"The case for ``steps`` per SMC: seconds, steps in all, training returns, learn's seconds.\"\"\"
+    specs = [TrainingSpec.create(env_id, total_timesteps=steps, seed=s, **learner) for s in range(k)]
+    if case == "stock":
+        from sb3_contrib import RecurrentPPO
+        from stable_baselines3.common.logger import Logger
+        from sb3_smc.core.hyperparameters import constructor_arguments
+        from sb3_smc.learning.training import make_vec_env
+        _, settings = constructor_arguments(TrainingSpec.create(env_id).hyperparameters)  # stock: RecurrentPPO
+        model = RecurrentPPO("MlpLstmPolicy", make_vec_env(specs[0]), n_steps=specs[0].budget.env_steps, seed=0,
+                             device="cpu", verbose=0, **settings)
+        model.set_logger(Logger(folder=None, output_formats=[]))
+        start = time.perf_counter()
+        model.learn(steps)
+        return time.perf_counter() - start, model.num_timesteps, [], None
+    if case.startswith("train_smc") and not case.startswith("train_smcs"):
+        start = time.perf_counter()
+        smc = train_smc(specs[0], log_every=0, stop_at_max_return=False, lean_update=lean)
+        seconds = time.perf_counter() - start
+        return seconds, smc.record.total_timesteps, [smc.record.training_returns], smc.record.wall_time_s
     start = time.perf_counter()
     smcs = train_smcs(specs, stop_at_max_return=False, lean_update=lean)
-    seconds, total = time.perf_counter() - start, sum(s.record.total_timesteps for s in smcs)
-    returns = [s.record.training_returns for s in smcs]
+    seconds = time.perf_counter() - start
+    return seconds, sum(s.record.total_timesteps for s in smcs), [s.record.training_returns for s in smcs], None
+
+cold = run(warm_up)[0] if warm_up else None
+seconds, total, returns, learn = run(steps)
 peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-print(json.dumps({"seconds": seconds, "steps": total, "peak_mib": peak, "returns": returns}))
+print(json.dumps({"seconds": seconds, "steps": total, "peak_mib": peak, "returns": returns, "learn": learn,
+                  "cold": cold}))
 """
 
 
-def run(case: str, timesteps: int, k: int = 1, learner: dict | None = None, root: Path = HERE) -> dict:
+def run(case: str, timesteps: int, k: int = 1, learner: dict | None = None, root: Path = HERE,
+        warm_up: int = 2_000) -> dict:
     env = {**os.environ, "PYTHONPATH": str(root), "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
-    out = subprocess.run([sys.executable, "-c", _JOB, case, ENV_ID, str(timesteps), str(k), json.dumps(learner or {})],
+    out = subprocess.run([sys.executable, "-c", _JOB, case, ENV_ID, str(timesteps), str(k), json.dumps(learner or {}),
+                          str(warm_up)],
                          env=env,
                          capture_output=True, text=True, check=True)
     lines = [json.loads(line) for line in out.stdout.splitlines() if line.startswith("{")]
@@ -99,6 +111,8 @@ def main() -> None:
     parser.add_argument("--rnn", default=None, help="their recurrent cell: gru for the paper's")
     parser.add_argument("--baseline", type=Path, default=None, help="a checkout of an earlier commit (a git "
                         "worktree): its train_smcs cases (the lean ones with --lean) run too, alternating")
+    parser.add_argument("--warm-up", type=int, default=2_000, help="steps per SMC of a first, untimed run of each "
+                        "case in its process (0: none, the timed run pays the process's one-time costs)")
     args = parser.parse_args()
     learner = {key: value for key, value in (("algo", args.algo), ("rnn", args.rnn)) if value is not None}
     cases = [("stock", 1), ("train_smc", 1), *(("train_smcs", k) for k in args.k)]
@@ -111,7 +125,7 @@ def main() -> None:
         for case, k in cases:
             root = args.baseline if case.startswith("before:") else HERE
             result = run(case.removeprefix("before:"), args.timesteps, k, None if case == "stock" else learner,
-                         root.resolve())
+                         root.resolve(), args.warm_up)
             if (case, k) not in best or result["seconds"] < best[case, k]["seconds"]:
                 best[case, k] = result
     alone = {"": best["train_smc", 1]["returns"][0]}
@@ -119,9 +133,12 @@ def main() -> None:
         alone["-lean"] = best["train_smc-lean", 1]["returns"][0]
     stock = best["stock", 1]["steps"] / best["stock", 1]["seconds"]
     print(f"{args.timesteps:,} steps per SMC, {ENV_ID}, one torch thread, best of {args.repeats}"
-          f"{', learner ' + json.dumps(learner) if learner else ''}\n")
-    print("| case | SMCs | seconds | steps/s (per core) | x stock | peak memory (MiB) | same as train_smc |")
-    print("|---|---:|---:|---:|---:|---:|---|")
+          f"{', learner ' + json.dumps(learner) if learner else ''}, "
+          + (f"after a warm-up of {args.warm_up:,} steps per SMC in the same process\n" if args.warm_up
+             else "no warm-up\n"))
+    print("| case | SMCs | seconds | steps/s (per core) | x stock | peak memory (MiB) | same as train_smc "
+          "| warm-up: s |")
+    print("|---|---:|---:|---:|---:|---:|---|---:|")
     for case, k in cases:
         row = best[case, k]
         rate = row["steps"] / row["seconds"]
@@ -132,13 +149,14 @@ def main() -> None:
         label += ", `lean_update=True`" if lean else ""
         label += f" (baseline `{args.baseline}`)" if before else ""
         same = "" if case == "stock" or before else ("yes" if row["returns"][0] == alone[lean] else "NO")
+        cold = f"{row['cold']:.2f}" if row["cold"] is not None else ""
         print(f"| {label} | {k} | {row['seconds']:.2f} | {rate:,.0f} | {rate / stock:.2f} | {row['peak_mib']:.0f} | "
-              f"{same} |")
+              f"{same} | {cold} |")
         if base == "train_smc":
             learn = best[case, k]["learn"]
             print(f"| `train_smc` (`learn` only){', lean' if lean else ''} | 1 | {learn:.2f} | "
                   f"{row['steps'] / learn:,.0f} | "
-                  f"{row['steps'] / learn / stock:.2f} | | |")
+                  f"{row['steps'] / learn / stock:.2f} | | | |")
 
 
 if __name__ == "__main__":

@@ -156,7 +156,7 @@ class _Losses(NamedTuple):
     entropy: float
     total: float
     approx_kl: float
-    set_gradients: Callable[[], None]
+    set_gradients: Callable[[], None]  #: sets every parameter's ``grad`` (``None`` where it has none)
 
 
 @njit(cache=True, fastmath={"reassoc", "contract", "nsz", "arcp"}, error_model="numpy")
@@ -321,6 +321,7 @@ def _torch_epoch(model: RecurrentPPO, policy: SequenceLstmPolicy, data: _Rollout
         approx_kl = float(torch.mean((torch.exp(log_ratio) - 1) - log_ratio))
 
     def set_gradients() -> None:
+        policy.optimizer.zero_grad()
         loss.backward()
         torch.nn.utils.clip_grad_norm_(policy.parameters(), model.max_grad_norm)
 
@@ -358,7 +359,6 @@ def _lean_train(model: RecurrentPPO) -> None:
             if model.verbose >= 1:
                 print(f"Early stopping at step {len(losses) - 1} due to reaching max kl: {losses[-1].approx_kl:.2f}")
             break
-        policy.optimizer.zero_grad()
         losses[-1].set_gradients()
         policy.optimizer.step()
 
