@@ -27,6 +27,7 @@ vectorize), and while the lean update trains a model its compiled collection ste
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from functools import cached_property
@@ -251,6 +252,20 @@ def ppo_heads(out_h: np.ndarray, ptr: np.ndarray, idx: np.ndarray, val: np.ndarr
     return sums
 
 
+_SCRATCH = threading.local()
+
+
+def _scratch(rows: int, n: int) -> tuple[np.ndarray, ...]:
+    """The float64 arrays an epoch of :func:`_numpy_epoch` writes (the LSTM's outputs, cell tanh, cells and gates,
+    the gradients at its outputs and gates), made once per thread and shape and reused by every epoch: a fresh set
+    each epoch was freshly mapped memory, its first writes page faults (a third of the kernels' time in a group)."""
+    cache: dict[tuple[int, int], tuple[np.ndarray, ...]] = _SCRATCH.__dict__.setdefault("arrays", {})
+    if (rows, n) not in cache:
+        cache[(rows, n)] = (np.empty((rows, n)), np.empty((rows, n)), np.empty((rows, n)), np.empty((rows, 4 * n)),
+                            np.empty((rows, n)), np.empty((rows, 4 * n)))
+    return cache[(rows, n)]
+
+
 def _numpy_epoch(model: RecurrentPPO, policy: SequenceLstmPolicy, data: _Rollout, clip_range: float,
                  clip_range_vf: float | None) -> _Losses:
     """An epoch of PPO on the default heads (:func:`_plain_heads`) in float64, forward and backward written out,
@@ -259,15 +274,14 @@ def _numpy_epoch(model: RecurrentPPO, policy: SequenceLstmPolicy, data: _Rollout
     w = {name: p.detach().numpy().astype(np.float64) for name, p in policy.named_parameters()}
     seqs, n_rows = data.sequences(), data.rows
     n = w["lstm_actor.weight_hh_l0"].shape[1]
-    out_h, tanh_c, cells, gates = (np.empty((n_rows, n)), np.empty((n_rows, n)), np.empty((n_rows, n)),
-                                   np.empty((n_rows, 4 * n)))
+    out_h, tanh_c, cells, gates, grad_h, grad_z = _scratch(n_rows, n)
     w_hh_t = np.ascontiguousarray(w["lstm_actor.weight_hh_l0"].T)
     lstm_forward(*data.sparse, np.ascontiguousarray(w["lstm_actor.weight_ih_l0"].T), w_hh_t,
                  w["lstm_actor.bias_ih_l0"] + w["lstm_actor.bias_hh_l0"], seqs.starts, seqs.lengths, seqs.h0, seqs.c0,
                  out_h, gates, tanh_c, cells)
     grads = {name: np.zeros_like(w[name]) for name in ("action_net.weight", "action_net.bias", "critic.bias",
                                                        "value_net.weight")}
-    grad_h, grad_w_critic_t = np.empty_like(out_h), np.zeros(w["critic.weight"].shape[::-1])
+    grad_w_critic_t = np.zeros(w["critic.weight"].shape[::-1])
     sums = ppo_heads(out_h, *data.sparse, w["action_net.weight"], w["action_net.bias"],
                      np.ascontiguousarray(w["critic.weight"].T), w["critic.bias"], w["value_net.weight"][0],
                      float(w["value_net.bias"][0]), data.int_actions, data.old_log_prob, data.old_values,
@@ -277,7 +291,7 @@ def _numpy_epoch(model: RecurrentPPO, policy: SequenceLstmPolicy, data: _Rollout
     policy_loss, value_loss, entropy_loss = -sums[0] / n_rows, sums[2] / n_rows, -sums[3] / n_rows
 
     def set_gradients() -> None:
-        grad_z, grad_w_ih_t = np.empty_like(gates), np.zeros((data.x.shape[1], 4 * n))
+        grad_w_ih_t = np.zeros((data.x.shape[1], 4 * n))
         lstm_backward(grad_h, *data.sparse, w_hh_t, seqs.starts, seqs.lengths, seqs.c0, gates, tanh_c, cells, grad_z,
                       grad_w_ih_t)
         grad_bias = grad_z.sum(axis=0)
