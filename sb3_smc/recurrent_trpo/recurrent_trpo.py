@@ -28,7 +28,7 @@ from torch.distributions import Categorical, kl_divergence
 from torch.nn import functional as F
 
 from sb3_smc.common.recurrent import SequenceGruPolicy, SequenceLstmPolicy, use_compact_buffer
-from sb3_smc.common.recurrent.lean_recurrence import Sequences, recurrence
+from sb3_smc.common.recurrent.lean_recurrence import Sequences, SparseRows, recurrence
 from sb3_smc.common.threads import blas_threads
 from sb3_smc.errors import SMCError, SMCTypeError
 
@@ -261,10 +261,10 @@ class RecurrentTRPO(RecurrentPPO):
         policy = self.policy
         if self.lean_policy_step:
             x = np.ascontiguousarray(data.observations.numpy(), dtype=np.float32)
-            sequences = Sequences.of(data.lstm_states)
+            sequences, sparse = Sequences.of(data.lstm_states), SparseRows.of(x)  # once for every evaluation
 
             def evaluate():
-                latent = policy.mlp_extractor.forward_actor(recurrence(policy.lstm_actor, x, sequences))
+                latent = policy.mlp_extractor.forward_actor(recurrence(policy.lstm_actor, x, sequences, sparse))
                 return policy._get_action_dist_from_latent(latent)
         else:
             def evaluate():

@@ -183,7 +183,7 @@ class LstmRecurrence(torch.autograd.Function):
     gradients of its four parameters."""
 
     @staticmethod
-    def forward(ctx: Any, x: np.ndarray, seqs: Sequences, w_ih: torch.Tensor, w_hh: torch.Tensor,
+    def forward(ctx: Any, x: np.ndarray, seqs: Sequences, sparse: SparseRows, w_ih: torch.Tensor, w_hh: torch.Tensor,
                 b_ih: torch.Tensor, b_hh: torch.Tensor) -> torch.Tensor:
         rows, n = x.shape[0], w_hh.shape[1]
         w_ih64, w_hh64 = (w.detach().numpy().astype(np.float64) for w in (w_ih, w_hh))
@@ -191,15 +191,14 @@ class LstmRecurrence(torch.autograd.Function):
         out_h, tanh_c, cells = np.empty((rows, n)), np.empty((rows, n)), np.empty((rows, n))
         gates = np.empty((rows, 4 * n))
         w_hh_t = np.ascontiguousarray(w_hh64.T)
-        sparse = SparseRows.of(x)
         lstm_forward(*sparse, np.ascontiguousarray(w_ih64.T), w_hh_t, bias, seqs.starts, seqs.lengths, seqs.h0, seqs.c0,
                      out_h, gates, tanh_c, cells)
         ctx.saved = (x, sparse, seqs, w_hh_t, out_h, gates, tanh_c, cells)
         return torch.from_numpy(out_h.astype(np.float32))
 
     @staticmethod
-    def backward(ctx: Any, grad_out: torch.Tensor) -> tuple[None, None, torch.Tensor, torch.Tensor, torch.Tensor,
-                                                             torch.Tensor]:
+    def backward(ctx: Any, grad_out: torch.Tensor) -> tuple[None, None, None, torch.Tensor, torch.Tensor,
+                                                             torch.Tensor, torch.Tensor]:
         x, sparse, seqs, w_hh_t, out_h, gates, tanh_c, cells = ctx.saved
         grad_z = np.empty_like(gates)
         grad_w_ih_t = np.zeros((x.shape[1], gates.shape[1]))
@@ -207,7 +206,7 @@ class LstmRecurrence(torch.autograd.Function):
                       seqs.starts, seqs.lengths, seqs.c0, gates, tanh_c, cells, grad_z, grad_w_ih_t)
         h_prev = seqs.input_states(out_h)
         grad_bias = torch.from_numpy(grad_z.sum(axis=0).astype(np.float32))
-        return (None, None, torch.from_numpy(grad_w_ih_t.T.astype(np.float32)),
+        return (None, None, None, torch.from_numpy(grad_w_ih_t.T.astype(np.float32)),
                 torch.from_numpy((grad_z.T @ h_prev).astype(np.float32)), grad_bias, grad_bias.clone())
 
 
@@ -283,28 +282,27 @@ class GruRecurrence(torch.autograd.Function):
     gradients of its four parameters."""
 
     @staticmethod
-    def forward(ctx: Any, x: np.ndarray, seqs: Sequences, w_ih: torch.Tensor, w_hh: torch.Tensor,
+    def forward(ctx: Any, x: np.ndarray, seqs: Sequences, sparse: SparseRows, w_ih: torch.Tensor, w_hh: torch.Tensor,
                 b_ih: torch.Tensor, b_hh: torch.Tensor) -> torch.Tensor:
         rows, n = x.shape[0], w_hh.shape[1]
         w_ih64, w_hh64, b_ih64, b_hh64 = (w.detach().numpy().astype(np.float64) for w in (w_ih, w_hh, b_ih, b_hh))
         out_h, hidden_n, gates = np.empty((rows, n)), np.empty((rows, n)), np.empty((rows, 3 * n))
         w_hh_t = np.ascontiguousarray(w_hh64.T)
-        sparse = SparseRows.of(x)
         gru_forward(*sparse, np.ascontiguousarray(w_ih64.T), w_hh_t, b_ih64, b_hh64, seqs.starts, seqs.lengths, seqs.h0,
                     out_h, gates, hidden_n)
         ctx.saved = (x, sparse, seqs, w_hh_t, out_h, gates, hidden_n)
         return torch.from_numpy(out_h.astype(np.float32))
 
     @staticmethod
-    def backward(ctx: Any, grad_out: torch.Tensor) -> tuple[None, None, torch.Tensor, torch.Tensor, torch.Tensor,
-                                                             torch.Tensor]:
+    def backward(ctx: Any, grad_out: torch.Tensor) -> tuple[None, None, None, torch.Tensor, torch.Tensor,
+                                                             torch.Tensor, torch.Tensor]:
         x, sparse, seqs, w_hh_t, out_h, gates, hidden_n = ctx.saved
         grad_gi, grad_gh = np.empty_like(gates), np.empty_like(gates)
         grad_w_ih_t = np.zeros((x.shape[1], gates.shape[1]))
         gru_backward(grad_out.detach().numpy().astype(np.float64), sparse.ptr, sparse.idx, sparse.val, w_hh_t,
                      seqs.starts, seqs.lengths, seqs.h0, out_h, gates, hidden_n, grad_gi, grad_gh, grad_w_ih_t)
         h_prev = seqs.input_states(out_h)
-        return (None, None, torch.from_numpy(grad_w_ih_t.T.astype(np.float32)),
+        return (None, None, None, torch.from_numpy(grad_w_ih_t.T.astype(np.float32)),
                 torch.from_numpy((grad_gh.T @ h_prev).astype(np.float32)),
                 torch.from_numpy(grad_gi.sum(axis=0).astype(np.float32)),
                 torch.from_numpy(grad_gh.sum(axis=0).astype(np.float32)))
@@ -320,11 +318,16 @@ def compiled_layer(layer: Any) -> bool:
     return layer.num_layers == 1 and layer.bias and not getattr(layer, "proj_size", 0) and not layer.batch_first
 
 
-def recurrence(layer: nn.LSTM | GRUAsLSTM, x: np.ndarray, seqs: Sequences) -> torch.Tensor:
+def recurrence(layer: nn.LSTM | GRUAsLSTM, x: np.ndarray, seqs: Sequences,
+               sparse: SparseRows | None = None) -> torch.Tensor:
     """``layer``'s outputs (float32, ``(rows, hidden)``) over the sequences ``seqs`` of the inputs ``x``
     (``(rows, inputs)``, float32), differentiable in the layer's parameters; ``layer`` as :func:`compiled_layer`
-    accepts."""
+    accepts. ``sparse``: ``x``'s non-zero entries (:meth:`SparseRows.of`), for a caller that evaluates the layer on
+    the same inputs many times (made here when not given)."""
+    sparse = SparseRows.of(x) if sparse is None else sparse
     if isinstance(layer, GRUAsLSTM):
         gru = layer.gru
-        return GruRecurrence.apply(x, seqs, gru.weight_ih_l0, gru.weight_hh_l0, gru.bias_ih_l0, gru.bias_hh_l0)
-    return LstmRecurrence.apply(x, seqs, layer.weight_ih_l0, layer.weight_hh_l0, layer.bias_ih_l0, layer.bias_hh_l0)
+        return GruRecurrence.apply(x, seqs, sparse, gru.weight_ih_l0, gru.weight_hh_l0, gru.bias_ih_l0,
+                                   gru.bias_hh_l0)
+    return LstmRecurrence.apply(x, seqs, sparse, layer.weight_ih_l0, layer.weight_hh_l0, layer.bias_ih_l0,
+                                layer.bias_hh_l0)

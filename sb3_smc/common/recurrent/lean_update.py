@@ -316,7 +316,7 @@ def _torch_epoch(model: RecurrentPPO, policy: SequenceLstmPolicy, data: _Rollout
     critic = cast(nn.Module, policy.critic)
     obs, actions, old_values, old_log_prob, advantages, returns = data.tensors
     features = policy.extract_features(obs)
-    hidden = recurrence(policy.lstm_actor, data.x, data.sequences())
+    hidden = recurrence(policy.lstm_actor, data.x, data.sequences(), data.sparse)
     latent_pi = policy.mlp_extractor.forward_actor(hidden)
     latent_vf = policy.mlp_extractor.forward_critic(critic(features))
     values = policy.value_net(latent_vf).flatten()
