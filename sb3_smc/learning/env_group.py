@@ -73,7 +73,8 @@ class EnvGroup:
             np.zeros(0), np.zeros(0), np.zeros(0), [])
         self.with_infos = True  #: whether a step builds SB3's info dicts (for SMCs on the generic path)
         self.calls = np.zeros(0, dtype=np.int64)  #: the environments that called a child at the last step
-        self.ended_at = self.calls_at = np.zeros(len(sizes) + 1, dtype=np.int64)
+        self.ended_at = np.zeros(len(sizes) + 1, dtype=np.int64)  #: see step
+        self.calls_at = np.zeros(len(sizes) + 1, dtype=np.int64)
 
     def reset(self) -> None:
         """Reset every environment with the seeds its model set (``VecEnv.seed`` of each slice)."""

@@ -49,7 +49,7 @@ from sb3_smc.smc.smc import SMC
 
 __all__ = ["GroupCheckpoint", "checkpoint_path"]
 
-FORMAT = 1  #: the layout of a checkpoint's payload
+FORMAT = 2  #: the layout of a checkpoint's payload (2: the group's slices know their index, 2026-11-28)
 
 
 class GroupCheckpoint:
