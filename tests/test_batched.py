@@ -107,6 +107,25 @@ def test_lean_update_in_a_group_is_train_smc_with_lean_update() -> None:
         train_smcs([specs[0], critic], lean_update=True)
 
 
+def test_lean_gru_seeds_take_one_policy_step_for_the_group(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Lean GRU SMCs of a group (RecurrentPPO and RecurrentTRPO) take their policy steps in one compiled call per
+    step (``gru_collection_steps``), and each is ``train_smc(spec, lean_update=True)``'s SMC."""
+    from sb3_smc.common import kernels
+
+    calls: list[int] = []
+    group_step = kernels.gru_collection_steps
+    monkeypatch.setattr(kernels, "gru_collection_steps", lambda *args: calls.append(len(args[5])) or group_step(*args))
+    specs = [TrainingSpec.create(CORNER_ID, rnn="gru", total_timesteps=4_000, seed=s, name=f"gru@{s}")
+             for s in (0, 1)]
+    specs += [TrainingSpec.create(ABOVE_ID, algo="RecurrentTRPO", rnn="gru", total_timesteps=4_000, seed=s,
+                                  name=f"trpo@{s}") for s in (0, 1)]
+    batched = train_smcs(specs, lean_update=True)
+    monkeypatch.undo()
+    assert calls == [2] * (2 * 2 * 125)  # two groups of two, two rollouts of 125 steps each
+    for spec, smc in zip(specs, batched, strict=True):
+        assert_same_smc(train_smc(spec, log_every=0, lean_update=True), smc)
+
+
 def test_networks_of_other_shapes_take_their_own_policy_steps(monkeypatch: pytest.MonkeyPatch) -> None:
     """Two SMCs of one task whose LSTMs differ in size share the vector env but not the group's policy step; each is
     still train_smc's SMC."""

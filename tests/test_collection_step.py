@@ -122,6 +122,38 @@ def test_a_seed_collects_the_same_rollout() -> None:
 
 
 @pytest.mark.parametrize("exact", [True, False], ids=["np.tanh", "fast_tanh"])
+def test_the_gru_group_step_is_each_policys_step_bit_for_bit(exact: bool) -> None:
+    """``gru_collection_steps`` computes three GRU policies of the same shapes in one call (policy 1 not a member:
+    its rows are action 0 and zeros); every member's rows are ``gru_collection_step``'s with its own weights."""
+    from sb3_smc.common import kernels
+
+    rng = np.random.default_rng(1)
+    features, hidden, n_actions, sizes = 20, 8, 5, (3, 2, 4)
+    policies = [(rng.standard_normal((features, 3 * hidden)), rng.standard_normal((hidden, 3 * hidden)),
+                 rng.standard_normal(3 * hidden), rng.standard_normal(3 * hidden),
+                 rng.standard_normal((features, hidden)), rng.standard_normal(hidden), rng.standard_normal(hidden),
+                 float(rng.standard_normal()),
+                 rng.standard_normal((hidden, n_actions)), rng.standard_normal(n_actions)) for _ in sizes]
+    n = sum(sizes)
+    x = (rng.random((n, features)) < 0.3).astype(np.float32)
+    h = rng.standard_normal((n, hidden)).astype(np.float32)
+    starts, uniforms = (rng.random(n) < 0.3).astype(np.float64), rng.random(n)
+    bounds = np.array([0, 3, 5, 9])
+    stacked = [np.stack([np.asarray(p[i]) for p in policies]) for i in range(10)]
+    got = kernels.gru_collection_steps(x, h, starts, uniforms, bounds, np.array([0, 2]), exact, *stacked)
+    for wrong_bounds, members in ((np.array([0, 3, 5, 8]), np.array([0])), (bounds, np.array([3]))):
+        with pytest.raises(ValueError, match="wrong shape"):
+            kernels.gru_collection_steps(x, h, starts, uniforms, wrong_bounds, members, exact, *stacked)
+    for m in (0, 2):
+        rows = slice(bounds[m], bounds[m + 1])
+        alone = kernels.gru_collection_step(x[rows], h[rows], starts[rows], uniforms[rows], False, exact,
+                                            *policies[m])
+        for a, b in zip(got, alone, strict=True):
+            assert np.array_equal(a[rows], b)
+    assert not got[0][3:5].any() and not got[3][3:5].any() and not got[1][3:5].any()
+
+
+@pytest.mark.parametrize("exact", [True, False], ids=["np.tanh", "fast_tanh"])
 def test_the_group_step_is_each_policys_step_bit_for_bit(exact: bool) -> None:
     """``lstm_collection_steps`` computes three policies of the same shapes in one call (policy 1 not a member: its
     rows are action 0 and zeros); every member's rows are ``lstm_collection_step``'s with its own weights."""
@@ -140,6 +172,9 @@ def test_the_group_step_is_each_policys_step_bit_for_bit(exact: bool) -> None:
     bounds = np.array([0, 3, 5, 9])
     stacked = [np.stack([np.asarray(p[i]) for p in policies]) for i in range(9)]
     got = kernels.lstm_collection_steps(x, h, c, starts, uniforms, bounds, np.array([0, 2]), exact, *stacked)
+    for wrong_bounds, members in ((np.array([0, 3, 5, 8]), np.array([0])), (bounds, np.array([3]))):
+        with pytest.raises(ValueError, match="wrong shape"):
+            kernels.lstm_collection_steps(x, h, c, starts, uniforms, wrong_bounds, members, exact, *stacked)
     for m in (0, 2):
         rows = slice(bounds[m], bounds[m + 1])
         alone = kernels.lstm_collection_step(x[rows], h[rows], c[rows], starts[rows], uniforms[rows], False, exact,

@@ -30,8 +30,8 @@ import numpy as np
 from numba import njit
 
 __all__ = ["ACCURATE_TANH", "FAST_TANH", "LIBM_TANH", "accurate_tanh", "fast_tanh", "gru_cell", "gru_collection_step",
-           "gru_linear_step", "linear_softmax", "lstm_cell", "lstm_collection_step", "lstm_collection_steps",
-           "lstm_linear_step", "sample_index"]
+           "gru_collection_steps", "gru_linear_step", "linear_softmax", "lstm_cell", "lstm_collection_step",
+           "lstm_collection_steps", "lstm_linear_step", "sample_index"]
 
 
 @njit(cache=True)
@@ -335,6 +335,19 @@ def lstm_collection_step(x: np.ndarray, h: np.ndarray, c: np.ndarray, starts: np
     return actions, values, log_probs, h_next, c_next
 
 
+@njit(cache=True, inline="always")
+def _group_shapes(x: np.ndarray, h: np.ndarray, starts: np.ndarray, uniforms: np.ndarray, bounds: np.ndarray,
+                  members: np.ndarray, w_ih: np.ndarray, w_hh: np.ndarray) -> bool:  # pragma: no cover
+    """Whether a group step's arrays fit: one row each of ``x``, ``h``, ``starts`` and ``uniforms``, the stacked
+    weights' inputs and hidden size, ``bounds`` from 0 to the rows, not decreasing, one more than the policies, and
+    ``members`` among the policies."""
+    n, hidden = h.shape
+    return not (x.shape[0] != n or starts.shape[0] != n or uniforms.shape[0] != n or w_ih.shape[1] != x.shape[1]
+                or w_hh.shape[1] != hidden or bounds.shape[0] != w_ih.shape[0] + 1 or bounds[0] != 0
+                or bounds[-1] != n or np.any(bounds[1:] < bounds[:-1])
+                or (members.size > 0 and (members.min() < 0 or members.max() >= w_ih.shape[0])))
+
+
 @njit(cache=True)
 def lstm_collection_steps(x: np.ndarray, h: np.ndarray, c: np.ndarray, starts: np.ndarray, uniforms: np.ndarray,
                           bounds: np.ndarray, members: np.ndarray, exact: bool, w_ih: np.ndarray, w_hh: np.ndarray,
@@ -346,10 +359,7 @@ def lstm_collection_steps(x: np.ndarray, h: np.ndarray, c: np.ndarray, starts: n
     axis), for the policies ``members`` only (the other rows: action 0, zeros). Each row is what
     :func:`lstm_collection_step` computes for it, bit for bit."""
     n, hidden = h.shape
-    if x.shape[0] != n or c.shape != h.shape or starts.shape[0] != n or uniforms.shape[0] != n \
-            or w_ih.shape[1] != x.shape[1] or w_hh.shape[1] != hidden or bounds.shape[0] != w_ih.shape[0] + 1 \
-            or bounds[0] != 0 or bounds[-1] != n or np.any(bounds[1:] < bounds[:-1]) \
-            or (members.size and (members.min() < 0 or members.max() >= w_ih.shape[0])):
+    if c.shape != h.shape or not _group_shapes(x, h, starts, uniforms, bounds, members, w_ih, w_hh):
         raise ValueError("observations, LSTM states, bounds or members of the wrong shape for these policies")
     actions, values, log_probs, h_next, c_next, scratch = _collection_outputs(n, hidden)
     for m in members:
@@ -359,6 +369,27 @@ def lstm_collection_steps(x: np.ndarray, h: np.ndarray, c: np.ndarray, starts: n
                 b_critic[m], w_value[m], b_value[m], w_action[m], b_action[m], h_next[k], c_next[k], scratch)
             values[k, 0] = value
     return actions, values, log_probs, h_next, c_next
+
+
+@njit(cache=True, inline="always")
+def _gru_collection_row(x: np.ndarray, h: np.ndarray, start: float, uniform: float, deterministic: bool,
+                        exact: bool, w_ih: np.ndarray, w_hh: np.ndarray, b_ih: np.ndarray, b_hh: np.ndarray,
+                        w_critic: np.ndarray, b_critic: np.ndarray, w_value: np.ndarray, b_value: float,
+                        w_action: np.ndarray, b_action: np.ndarray, h_out: np.ndarray,
+                        scratch: np.ndarray) -> tuple[int, float, float]:  # pragma: no cover
+    """One row of :func:`gru_collection_step`: the state reset at an episode start, the cell (new state into
+    ``h_out``) and the heads; ``scratch`` ``(2, hidden)`` float64."""
+    previous, latent = scratch[0], scratch[1]
+    keep = 1.0 - start
+    for i in range(h.shape[0]):
+        previous[i] = keep * h[i]
+    if exact:  # constant modes, as in _lstm_collection_row
+        gru_cell(x, previous, w_ih, w_hh, b_ih, b_hh, latent, LIBM_TANH)
+    else:
+        gru_cell(x, previous, w_ih, w_hh, b_ih, b_hh, latent, FAST_TANH)
+    for j in range(h.shape[0]):
+        h_out[j] = latent[j]
+    return _heads(x, latent, uniform, deterministic, w_critic, b_critic, w_value, b_value, w_action, b_action)
 
 
 @njit(cache=True)
@@ -373,23 +404,32 @@ def gru_collection_step(x: np.ndarray, h: np.ndarray, starts: np.ndarray, unifor
     n, hidden = h.shape
     if x.shape[0] != n or w_ih.shape[0] != x.shape[1] or w_hh.shape[0] != hidden:
         raise ValueError("observations or GRU states of the wrong shape for this policy")
-    actions = np.empty(n, dtype=np.int64)
-    values = np.empty((n, 1), dtype=np.float32)
-    log_probs = np.empty(n, dtype=np.float32)
-    h_next = np.empty((n, hidden), dtype=np.float32)
-    latent = np.empty(hidden)
-    previous = np.empty(hidden)
+    actions, values, log_probs, h_next, _, scratch = _collection_outputs(n, hidden)
     for k in range(n):
-        keep = 1.0 - starts[k]
-        for i in range(hidden):
-            previous[i] = keep * h[k, i]
-        if exact:  # constant modes, as in _lstm_collection_row
-            gru_cell(x[k], previous, w_ih, w_hh, b_ih, b_hh, latent, LIBM_TANH)
-        else:
-            gru_cell(x[k], previous, w_ih, w_hh, b_ih, b_hh, latent, FAST_TANH)
-        for j in range(hidden):
-            h_next[k, j] = latent[j]
-        actions[k], value, log_probs[k] = _heads(x[k], latent, uniforms[k], deterministic, w_critic, b_critic,
-                                                 w_value, b_value, w_action, b_action)
+        actions[k], value, log_probs[k] = _gru_collection_row(
+            x[k], h[k], starts[k], uniforms[k], deterministic, exact, w_ih, w_hh, b_ih, b_hh, w_critic, b_critic,
+            w_value, b_value, w_action, b_action, h_next[k], scratch)
         values[k, 0] = value
+    return actions, values, log_probs, h_next
+
+
+@njit(cache=True)
+def gru_collection_steps(x: np.ndarray, h: np.ndarray, starts: np.ndarray, uniforms: np.ndarray, bounds: np.ndarray,
+                         members: np.ndarray, exact: bool, w_ih: np.ndarray, w_hh: np.ndarray, b_ih: np.ndarray,
+                         b_hh: np.ndarray, w_critic: np.ndarray, b_critic: np.ndarray, w_value: np.ndarray,
+                         b_value: np.ndarray, w_action: np.ndarray, b_action: np.ndarray
+                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:  # pragma: no cover
+    """:func:`gru_collection_step` (sampling) for several policies of the same shapes in one call, as
+    :func:`lstm_collection_steps` is :func:`lstm_collection_step`'s: each row bit for bit what the one-policy step
+    computes for it."""
+    n, hidden = h.shape
+    if not _group_shapes(x, h, starts, uniforms, bounds, members, w_ih, w_hh):
+        raise ValueError("observations, GRU states, bounds or members of the wrong shape for these policies")
+    actions, values, log_probs, h_next, _, scratch = _collection_outputs(n, hidden)
+    for m in members:
+        for k in range(bounds[m], bounds[m + 1]):
+            actions[k], value, log_probs[k] = _gru_collection_row(
+                x[k], h[k], starts[k], uniforms[k], False, exact, w_ih[m], w_hh[m], b_ih[m], b_hh[m], w_critic[m],
+                b_critic[m], w_value[m], b_value[m], w_action[m], b_action[m], h_next[k], scratch)
+            values[k, 0] = value
     return actions, values, log_probs, h_next

@@ -361,9 +361,10 @@ class _Job:
 
 class _GroupCollection:
     """The compiled collection steps of a group's SMCs in one call
-    (:func:`~sb3_smc.common.kernels.lstm_collection_steps`) where every SMC takes the compiled LSTM step with the same
-    shapes: the group's observations, episode starts and states are whole arrays, each SMC's weights and draws are
-    stacked once per rollout; each SMC's step is the one :meth:`_Job.act` computes, bit for bit."""
+    (:func:`~sb3_smc.common.kernels.lstm_collection_steps`, :func:`~sb3_smc.common.kernels.gru_collection_steps`)
+    where every SMC takes the compiled step with the same cell and shapes: the group's observations, episode starts
+    and states are whole arrays, each SMC's weights and draws are stacked once per rollout; each SMC's step is the
+    one :meth:`_Job.act` computes, bit for bit."""
 
     def __init__(self, group: EnvGroup, jobs: Sequence[_Job]) -> None:
         self.group, self.jobs = group, list(jobs)
@@ -373,15 +374,16 @@ class _GroupCollection:
         self.starts = np.ones(n)  # learn's first step starts every episode
         self.h, self.c = np.zeros((n, hidden), dtype=np.float32), np.zeros((n, hidden), dtype=np.float32)
         self.exact = not jobs[0].lean_update
+        self.gru = hasattr(jobs[0].model.policy.lstm_actor, "gru")
         self.weights: tuple[np.ndarray, ...] = ()
         self.uniforms = np.zeros((0, n))
         self.members = np.zeros(0, dtype=np.int64)
 
     @classmethod
     def of(cls, group: EnvGroup, jobs: Sequence[_Job]) -> _GroupCollection | None:
-        """The group's collection in one call, or ``None`` where an SMC takes another step (a GRU, SB3's path) or
-        the SMCs' networks differ in shape."""
-        if not all(job.lean and not hasattr(job.model.policy.lstm_actor, "gru") for job in jobs):
+        """The group's collection in one call, or ``None`` where an SMC takes another step (SB3's path) or the SMCs'
+        networks differ in shape or cell."""
+        if not all(job.lean for job in jobs) or len({hasattr(job.model.policy.lstm_actor, "gru") for job in jobs}) > 1:
             return None
         shapes = {tuple(tuple(p.shape) for p in job.model.policy.parameters()) for job in jobs}
         return cls(group, jobs) if len(shapes) == 1 else None
@@ -405,8 +407,13 @@ class _GroupCollection:
         if len(running) != len(self.members):  # an SMC left the group: its environments get action 0
             self.members = self._members(running)
         pos = running[0].model.rollout_buffer.pos
-        step = kernels.lstm_collection_steps(self.obs, self.h, self.c, self.starts, self.uniforms[pos], self.bounds,
-                                             self.members, self.exact, *self.weights)
+        if self.gru:  # the cell state as the one-SMC step leaves it (compiled_step)
+            step = (*kernels.gru_collection_steps(self.obs, self.h, self.starts, self.uniforms[pos], self.bounds,
+                                                  self.members, self.exact, *self.weights),
+                    self.c * (1.0 - self.starts[:, None]).astype(np.float32))
+        else:
+            step = kernels.lstm_collection_steps(self.obs, self.h, self.c, self.starts, self.uniforms[pos],
+                                                 self.bounds, self.members, self.exact, *self.weights)
         self.group.actions[:] = step[0]
         for job in running:
             part = cast(SliceVecEnv, job.model.env.unwrapped)
