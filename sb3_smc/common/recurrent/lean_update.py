@@ -12,8 +12,9 @@ and no per-step torch calls. Sums are taken in another order and in float64, so 
 stock ones to float rounding (tested to 1e-5 relative on real rollouts); training on them is shown statistically
 equal, not bit-identical (``docs/training.md``, "The lean update"). With an LSTM and the package's default heads
 (:func:`_plain_heads`: no layers after the LSTM, a linear critic on the features, a categorical distribution, Adam)
-the whole epoch is written out in numpy, forward and backward (:func:`_numpy_epoch`), with no autograd graph; a GRU
-or other heads run in torch around the compiled recurrence (:func:`_torch_epoch`).
+the whole epoch is written out, forward and backward, with no autograd graph (:func:`_numpy_epoch`: the heads and
+losses compiled too, :func:`ppo_heads`; its large arrays reused from epoch to epoch); a GRU or other heads run in
+torch around the compiled recurrence (:func:`_torch_epoch`).
 :class:`~sb3_smc.recurrent_trpo.RecurrentTRPO` takes the compiled recurrence in its own policy step (its
 ``lean_policy_step``).
 
