@@ -58,7 +58,7 @@ from sb3_smc.common.recurrent.lean_recurrence import (
 from sb3_smc.common.recurrent.policies import SequenceLstmPolicy
 from sb3_smc.common.threads import blas_threads
 
-__all__ = ["LEAN_UPDATE_NEEDS", "lean_train", "lean_update_applies", "use_lean_update"]
+__all__ = ["LEAN_UPDATE_NEEDS", "lean_train", "lean_update_applies", "ppo_heads", "use_lean_update"]
 
 LEAN_UPDATE_NEEDS = ("RecurrentPPO or RecurrentTRPO with one LSTM or GRU layer for the actor, no critic LSTM, flat "
                      "observations and, for RecurrentPPO, one minibatch per epoch")
