@@ -93,11 +93,7 @@ def run(case: str, timesteps: int, k: int = 1, learner: dict | None = None, root
                           str(warm_up)],
                          env=env,
                          capture_output=True, text=True, check=True)
-    lines = [json.loads(line) for line in out.stdout.splitlines() if line.startswith("{")]
-    result = lines[-1]
-    for extra in lines[:-1]:
-        result.update(extra)
-    return result
+    return json.loads([line for line in out.stdout.splitlines() if line.startswith("{")][-1])
 
 
 def main() -> None:

@@ -57,6 +57,7 @@ from stable_baselines3.common.vec_env import VecEnv, VecMonitor
 from sb3_smc.common import kernels
 from sb3_smc.common.recurrent import SequenceLstmPolicy
 from sb3_smc.common.recurrent.lean_update import use_lean_update
+from sb3_smc.common.recurrent.policies import gru_cell_state
 from sb3_smc.core.hyperparameters import constructor_arguments
 from sb3_smc.envs.hierarchical_vec_env import native_smc_vec_env
 from sb3_smc.errors import SMCError
@@ -407,10 +408,10 @@ class _GroupCollection:
         if len(running) != len(self.members):  # an SMC left the group: its environments get action 0
             self.members = self._members(running)
         pos = running[0].model.rollout_buffer.pos
-        if self.gru:  # the cell state as the one-SMC step leaves it (compiled_step)
+        if self.gru:  # the cell state as the one-SMC step leaves it
             step = (*kernels.gru_collection_steps(self.obs, self.h, self.starts, self.uniforms[pos], self.bounds,
                                                   self.members, self.exact, *self.weights),
-                    self.c * (1.0 - self.starts[:, None]).astype(np.float32))
+                    gru_cell_state(self.c, self.starts))
         else:
             step = kernels.lstm_collection_steps(self.obs, self.h, self.c, self.starts, self.uniforms[pos],
                                                  self.bounds, self.members, self.exact, *self.weights)

@@ -20,7 +20,13 @@ from sb3_smc.common.recurrent.type_aliases import SequenceStates
 if TYPE_CHECKING:
     from sb3_smc.common.recurrent.layers import GRUAsLSTM
 
-__all__ = ["SequenceLstmPolicy"]
+__all__ = ["SequenceLstmPolicy", "gru_cell_state"]
+
+
+def gru_cell_state(c: np.ndarray, starts: np.ndarray) -> np.ndarray:
+    """A GRU policy's next (unused) cell state after a compiled collection step, as torch's step leaves it:
+    ``c`` zeroed where an episode starts (``starts`` 1.0), float32."""
+    return c * (1.0 - starts[:, None]).astype(np.float32)
 
 
 def _lstm_by_length(lstm: torch.nn.LSTM, features: torch.Tensor, starts: torch.Tensor, lengths: torch.Tensor,
@@ -150,7 +156,7 @@ class SequenceLstmPolicy(RecurrentActorCriticPolicy):
         if hasattr(self.lstm_actor, "gru"):
             actions, values, log_probs, h_next = kernels.gru_collection_step(
                 obs, h, starts, uniforms, deterministic, not self.lean_collection, *weights)
-            return actions, values, log_probs, h_next, c * (1.0 - starts[:, None]).astype(np.float32)  # as torch
+            return actions, values, log_probs, h_next, gru_cell_state(c, starts)
         return kernels.lstm_collection_step(obs, h, c, starts, uniforms, deterministic, not self.lean_collection,
                                             *weights)
 
