@@ -5,8 +5,9 @@ update and one with the lean update (:mod:`sb3_smc.common.recurrent.lean_update`
 (``--timesteps`` steps, the defaults, stopping at the largest return), and tested with
 :func:`sb3_smc.learning.evaluation.evaluate` (the test split, the paper's 10 repeats, evaluation seed 0). Per target it
 compares the means of the selected training return and of the test score over seeds: a paired t-test (same seed,
-same start), Welch's t-test, and equivalence by two one-sided paired t-tests (TOST) within ``--margin`` (0.05: five
-points of a test score in percent, five hundredths of the return, whose largest value is 1).
+same start), Welch's t-test (each also Holm-adjusted over the table's comparisons, a family of tests of "no
+difference"), and equivalence by two one-sided paired t-tests (TOST) within ``--margin`` (0.05: five points of a test
+score in percent, five hundredths of the return, whose largest value is 1).
 
 Run: ``python benchmarks/lean_update_equivalence.py [--timesteps N] [--seeds S] [--targets ENV_IDS]
 [--algo RecurrentTRPO --rnn gru] [--out runs.jsonl]``; each finished SMC is appended to ``--out`` as one JSON line
@@ -68,10 +69,23 @@ def tost_paired(differences: np.ndarray, margin: float) -> float:
     return float(max(lower, upper))
 
 
+def holm(pvalues: Sequence[float]) -> list[float]:
+    """Holm's step-down adjustment of ``pvalues`` (one family of tests): each below 0.05 exactly when Holm's
+    procedure rejects its hypothesis at a family-wise error rate of 0.05."""
+    order = sorted(range(len(pvalues)), key=lambda i: pvalues[i])
+    adjusted = [0.0] * len(pvalues)
+    running = 0.0
+    for rank, i in enumerate(order):
+        running = max(running, min(1.0, (len(pvalues) - rank) * pvalues[i]))
+        adjusted[i] = running
+    return adjusted
+
+
 def compare(rows: Sequence[dict[str, Any]], margin: float) -> list[dict[str, Any]]:
     """Per target and measure: the seeds both updates finished, their means, the paired and Welch p-values of a
-    difference, the 90 % interval of the mean paired difference and the TOST p-value of equivalence within
-    ``margin`` (below 0.05 exactly when that interval lies within ``(-margin, margin)``)."""
+    difference (each also Holm-adjusted over the comparisons returned: ``paired_holm``, ``welch_holm``), the 90 %
+    interval of the mean paired difference and the TOST p-value of equivalence within ``margin`` (below 0.05 exactly
+    when that interval lies within ``(-margin, margin)``)."""
     result = []
     for env_id in TARGETS:
         runs = {(r["seed"], r["lean"]): r for r in rows if r["env_id"] == env_id}
@@ -92,20 +106,29 @@ def compare(rows: Sequence[dict[str, Any]], margin: float) -> list[dict[str, Any
                 "paired_p": 1.0 if same else float(stats.ttest_rel(lean, default).pvalue),
                 "welch_p": 1.0 if same else float(stats.ttest_ind(lean, default, equal_var=False).pvalue),
                 "tost_p": tost_paired(diff, margin)})
+    for test in ("paired", "welch"):
+        for c, adjusted in zip(result, holm([c[f"{test}_p"] for c in result]), strict=True):
+            c[f"{test}_holm"] = adjusted
     return result
 
 
 def table(comparisons: Sequence[dict[str, Any]], margin: float) -> str:
     """The comparisons as a markdown table."""
     lines = [f"| target | measure | seeds | default: mean (sd) | lean: mean (sd) | lean - default (90 % interval) | "
-             f"paired p | Welch p | TOST p (+-{margin}) |", "|---|---|---:|---:|---:|---:|---:|---:|---:|"]
+             f"paired p (Holm) | Welch p (Holm) | TOST p (+-{margin}) |",
+             "|---|---|---:|---:|---:|---:|---:|---:|---:|"]
     for c in comparisons:
         name = c["env_id"].removeprefix("PW-").removesuffix("-v0")
         lines.append(f"| `{name}` | {c['measure']} | {c['n']} | {c['default']:.3f} ({c['default_sd']:.3f}) | "
                      f"{c['lean']:.3f} ({c['lean_sd']:.3f}) | {c['difference']:+.3f} ({c['interval'][0]:+.3f}, "
-                     f"{c['interval'][1]:+.3f}) | {c['paired_p']:.2f} | "
-                     f"{c['welch_p']:.2f} | {c['tost_p']:.3f} |")
+                     f"{c['interval'][1]:+.3f}) | {c['paired_p']:.2f} ({c['paired_holm']:.2f}) | "
+                     f"{c['welch_p']:.2f} ({c['welch_holm']:.2f}) | {_p(c['tost_p'])} |")
     return "\n".join(lines)
+
+
+def _p(p: float) -> str:
+    """A TOST p-value as the tables give it."""
+    return "< 0.001" if p < 0.001 else f"{p:.3f}"
 
 
 def _rows(path: Path) -> list[dict[str, Any]]:
