@@ -27,7 +27,7 @@ from sb3_smc.experiments.claims import tally
 from sb3_smc.experiments.cnn import CHANNELS, encode, train_cnn
 from sb3_smc.experiments.design import EXPERIENCE_METHODS, PAPER_CATEGORIES, SWEEP_METHODS, SWEEP_TARGETS
 from sb3_smc.experiments.report import write_report
-from sb3_smc.experiments.runner import RESULT_FIELDS, reported, run_experiment
+from sb3_smc.experiments.runner import RESULT_FIELDS, cpu_model, reported, run_experiment
 from sb3_smc.experiments.statistics import paired_ttest
 from tests.helpers import import_tool
 
@@ -1446,3 +1446,18 @@ def test_the_whole_tables_script_passes_a_queue_lines_further_options(tmp_path):
                                "--workers 2") and calls[0].endswith(" --lean-update")
     assert "--lean-update" not in calls[1] and calls[1].endswith("--workers 2")
     assert calls[2].endswith("--no-train --lean-update")
+
+
+def test_cpu_model_names_the_family_and_model(tmp_path: Path) -> None:
+    """The CPU's model of a result (and of the slow tests' reference values): the first processor's name with its
+    family and model numbers, since two generations may share a name; the name alone where the numbers are absent,
+    None without a name or a file."""
+    info = tmp_path / "cpuinfo"
+    block = "processor\t: {0}\nvendor_id\t: AuthenticAMD\ncpu family\t: 25\nmodel\t\t: {1}\nmodel name\t: AMD EPYC\n\n"
+    info.write_text(block.format(0, 1) + block.format(1, 17))
+    assert cpu_model(info) == "AMD EPYC (family 25, model 1)"
+    info.write_text("processor\t: 0\nmodel name\t: Apple M2\n")
+    assert cpu_model(info) == "Apple M2"
+    info.write_text("processor\t: 0\nCPU implementer\t: 0x41\n")
+    assert cpu_model(info) is None
+    assert cpu_model(tmp_path / "absent") is None

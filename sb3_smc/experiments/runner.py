@@ -296,14 +296,27 @@ def experiment_command(out: str | Path, *, methods: Sequence[str], targets: Sequ
             + (" --lean-update" if lean_update else "") + ("" if train else " --no-train"))
 
 
-def cpu_model() -> str | None:
-    """The CPU's model name from ``/proc/cpuinfo`` (None where there is none): training is deterministic for a seed
-    on one CPU model, and other models take other floating-point paths."""
+def cpu_model(cpuinfo: str | Path = "/proc/cpuinfo") -> str | None:
+    """The CPU's model name from ``cpuinfo`` with its family and model numbers where it gives them (``"AMD
+    EPYC (family 25, model 1)"``; None where there is no model name): training is deterministic for a seed on one CPU
+    model, and other models take other floating-point paths. Two generations of a vendor's CPUs may share a name
+    (two "AMD EPYC" machines trained different SMCs from the same seed and code), so the numbers are part of it."""
+    fields: dict[str, str] = {}
     try:
-        with open("/proc/cpuinfo", encoding="utf-8") as cpuinfo:
-            return next((line.split(":", 1)[1].strip() for line in cpuinfo if line.startswith("model name")), None)
+        with open(cpuinfo, encoding="utf-8") as lines:
+            for line in lines:
+                if not line.strip():
+                    break  # the first processor's block
+                key, _, value = line.partition(":")
+                fields.setdefault(key.strip(), value.strip())
     except OSError:
         return None
+    name = fields.get("model name")
+    if not name:
+        return None
+    numbers = [f"{label} {fields[key]}" for key, label in (("cpu family", "family"), ("model", "model"))
+               if key in fields]
+    return f"{name} ({', '.join(numbers)})" if numbers else name
 
 
 def machine() -> dict[str, Any]:
