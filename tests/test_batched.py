@@ -145,9 +145,9 @@ def test_networks_of_other_shapes_take_their_own_policy_steps(monkeypatch: pytes
 
 def test_level2_seeds_trained_together_are_each_their_own_training(monkeypatch: pytest.MonkeyPatch) -> None:
     """SMCs whose children are compiled leaves train in one group (HierarchicalSMCVecEnv over all their
-    environments), on the array path and, with a critic LSTM, on SB3's path with info dicts: each is train_smc's SMC,
-    with the same statistics of its calls; children the group cannot host (one with children of its own) are
-    trained by train_smc."""
+    environments), on the array path and, with a critic LSTM, on SB3's path with info dicts, and without primitives
+    (noprim): each is train_smc's SMC, with the same statistics of its calls; children the group cannot host (one
+    with children of its own) are trained by train_smc."""
     import sb3_smc.learning.batched as batched_module
     import sb3_smc.learning.env_group as env_group_module
     import sb3_smc.learning.training as training_module
@@ -173,6 +173,8 @@ def test_level2_seeds_trained_together_are_each_their_own_training(monkeypatch: 
     specs.append(TrainingSpec.create(target, children=["child0", "child1"], total_timesteps=2_000, n_envs=8,
                                      n_steps=125, seed=3, name="level2-critic",
                                      policy_kwargs={"enable_critic_lstm": True}))
+    specs.append(TrainingSpec.create(target, children=["child0", "child1"], total_timesteps=2_000, n_envs=8,
+                                     n_steps=125, seed=6, name="level2-noprim", include_primitives=False))
     specs.append(TrainingSpec.create(target, children=["parent"], total_timesteps=1_000, n_envs=4, n_steps=125,
                                      seed=4, name="level3"))
     hosted: list[int] = []
@@ -180,7 +182,7 @@ def test_level2_seeds_trained_together_are_each_their_own_training(monkeypatch: 
     monkeypatch.setattr(env_group_module.EnvGroup, "__init__", lambda self, vector, sizes, *rest: hosted.append(
         len(sizes)) or group(self, vector, sizes, *rest))
     together = train_smcs(specs, children=library)
-    assert hosted == [4]  # the level-2 SMCs in one group; the level-3 one alone
+    assert hosted == [4, 1]  # the level-2 SMCs in one group, the noprim one in its own (other actions); level 3 alone
     for spec, smc in zip(specs, together, strict=True):
         alone = train_smc(spec, children=library, log_every=0)
         if spec.name != "level3":

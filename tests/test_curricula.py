@@ -307,11 +307,16 @@ def test_seeds_form_groups_of_up_to_group_size_spread_over_the_workers(tmp_path)
   - name: top
     task: {RIGHT}
     uses: [container]
+  - name: container-noprim
+    task: {CONTAINER}
+    uses: [left, above]
+    primitives: false
 """)
     scheduler = Scheduler(curriculum, curriculum.order(), RunOptions(seeds=5, timesteps=1000), tmp_path)
-    # flat nodes and a level-2 node over flat ones group; a level-3 node and a memoryless learner do not
-    assert [scheduler.groupable(n) for n in ("left", "above", "container", "trpo", "top")] == [
-        True, True, True, False, False]
+    # flat nodes and a level-2 node over flat ones group (one without primitives too: its spec needs its children);
+    # a level-3 node and a memoryless learner do not
+    assert [scheduler.groupable(n) for n in ("left", "above", "container", "trpo", "top", "container-noprim")] == [
+        True, True, True, False, False, True]
     left, above = [JobId("left", s) for s in range(5)], [JobId("above", s) for s in range(5)]
     container, trpo, top = [JobId("container", s) for s in range(2)], [JobId("trpo", 0)], [JobId("top", 0)]
 

@@ -26,8 +26,8 @@ from sb3_smc.records import Budget, TaskSpec, TrainingRecord, TrainingSpec, Wrap
 from sb3_smc.smc.smc import SMC
 
 __all__ = ["DEFAULT_REUSE", "DEFAULT_SEEDS", "REUSE", "Job", "JobId", "JobResult", "check_curriculum", "file_stem",
-           "job_name", "name_of_file", "node_budget", "node_of", "node_records", "node_spec", "rank_seeds", "run_group",
-           "run_job"]
+           "job_name", "name_of_file", "node_budget", "node_of", "node_records", "node_spec", "planned_children",
+           "rank_seeds", "run_group", "run_job"]
 
 REUSE = {"one_best": 1, "two_best": 2}
 """SMC filters of the paper: how many seeds of each lower-level node a caller gets."""
@@ -193,6 +193,13 @@ def node_spec(node: Node, seed: int, children: tuple[str, ...], *, timesteps: in
                         children=children)
 
 
+def planned_children(node: Node, k: int) -> tuple[str, ...]:
+    """The children a job of ``node`` calls before its lower levels are ranked: seeds ``0..k-1`` of each node it
+    uses. As many as it will call (``k`` best seeds of each), so a spec built from them is checked and judged as the
+    job's own will be (a noprim node needs children)."""
+    return tuple(job_name(used, seed) for used in node.uses for seed in range(k))
+
+
 def check_curriculum(curriculum: Curriculum, names: Sequence[str] | None = None, *, timesteps: int | None = None,
                      algo: str | None = None, rnn: str | None = None, reuse: str = DEFAULT_REUSE,
                      lean_update: bool = False) -> None:
@@ -206,7 +213,7 @@ def check_curriculum(curriculum: Curriculum, names: Sequence[str] | None = None,
     checked: set[str] = set()  # nodes alike in what builds their model are built once
     for name in curriculum.order() if names is None else names:
         node = curriculum.node(name)
-        children = tuple(job_name(u, seed) for u in node.uses for seed in range(REUSE[reuse]))
+        children = planned_children(node, REUSE[reuse])
         try:
             spec = node_spec(node, 0, children, timesteps=timesteps, algo=algo, rnn=rnn)
             key = json.dumps([spec.algo, spec.hyperparameters, spec.budget.to_dict(), spec.frame_stack,

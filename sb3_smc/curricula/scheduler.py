@@ -10,7 +10,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from sb3_smc.curricula.format import Curriculum, Node
-from sb3_smc.curricula.jobs import Job, JobId, rank_seeds
+from sb3_smc.curricula.jobs import Job, JobId, planned_children, rank_seeds
 from sb3_smc.curricula.options import RunOptions
 from sb3_smc.curricula.run_directory import CHECKPOINTS, glob_escape
 from sb3_smc.records import TrainingRecord
@@ -90,7 +90,8 @@ class Scheduler:
 
             node = self.curriculum.node(node_name)
             flat_children = all(not self.curriculum.node(used).uses for used in node.uses)
-            self._groupable[node_name] = flat_children and batchable(self.options.spec(node, 0, ()))
+            spec = self.options.spec(node, 0, planned_children(node, self.options.k))
+            self._groupable[node_name] = flat_children and batchable(spec)
         return self._groupable[node_name]
 
     def units(self, ready: list[JobId], group_size: int, workers: int) -> list[tuple[JobId, ...]]:
