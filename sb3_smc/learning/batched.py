@@ -375,7 +375,7 @@ class _GroupCollection:
         self.starts = np.ones(n)  # learn's first step starts every episode
         self.h, self.c = np.zeros((n, hidden), dtype=np.float32), np.zeros((n, hidden), dtype=np.float32)
         self.exact = not jobs[0].lean_update
-        self.gru = hasattr(jobs[0].model.policy.lstm_actor, "gru")
+        self.gru = jobs[0].model.policy.gru_actor
         self.weights: tuple[np.ndarray, ...] = ()
         self.uniforms = np.zeros((0, n))
         self.members = np.zeros(0, dtype=np.int64)
@@ -384,7 +384,7 @@ class _GroupCollection:
     def of(cls, group: EnvGroup, jobs: Sequence[_Job]) -> _GroupCollection | None:
         """The group's collection in one call, or ``None`` where an SMC takes another step (SB3's path) or the SMCs'
         networks differ in shape or cell."""
-        if not all(job.lean for job in jobs) or len({hasattr(job.model.policy.lstm_actor, "gru") for job in jobs}) > 1:
+        if not all(job.lean for job in jobs) or len({job.model.policy.gru_actor for job in jobs}) > 1:
             return None
         shapes = {tuple(tuple(p.shape) for p in job.model.policy.parameters()) for job in jobs}
         return cls(group, jobs) if len(shapes) == 1 else None

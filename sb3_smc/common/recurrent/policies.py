@@ -134,6 +134,12 @@ class SequenceLstmPolicy(RecurrentActorCriticPolicy):
         actions = torch.argmax(distribution.probs, dim=1) if deterministic else distribution.sample()
         return actions, values, distribution.log_prob(actions), RNNStates(states_pi, states_pi)
 
+    @property
+    def gru_actor(self) -> bool:
+        """Whether the actor's recurrent cell is a GRU (:class:`~sb3_smc.common.recurrent.layers.GRUAsLSTM`): its
+        compiled steps take :func:`~sb3_smc.common.kernels.gru_collection_step` and keep no cell state."""
+        return hasattr(self.lstm_actor, "gru")
+
     def _lean_step(self) -> bool:
         """Whether :meth:`forward` takes its lean one-step path (a categorical action, a feed-forward critic)."""
         return (self.lstm_critic is None and not self.shared_lstm and self.share_features_extractor
@@ -153,7 +159,7 @@ class SequenceLstmPolicy(RecurrentActorCriticPolicy):
         actor's previous ``h`` / ``c`` ``(n, hidden)``, ``starts`` float64 (1.0 at an episode start), ``uniforms``
         the draws; returns ``(actions, values (n, 1), log-probabilities, h', c')``. With :attr:`lean_collection`
         the cell's tanh is :func:`~sb3_smc.common.kernels.fast_tanh`."""
-        if hasattr(self.lstm_actor, "gru"):
+        if self.gru_actor:
             actions, values, log_probs, h_next = kernels.gru_collection_step(
                 obs, h, starts, uniforms, deterministic, not self.lean_collection, *weights)
             return actions, values, log_probs, h_next, gru_cell_state(c, starts)
@@ -202,7 +208,7 @@ class SequenceLstmPolicy(RecurrentActorCriticPolicy):
             return None
         w_ih, w_hh, b_ih, b_hh, w_critic, b_critic, w_value, b_value, w_action, b_action = (
             t.detach().numpy().astype(np.float64) for t in tensors)
-        biases = (b_ih, b_hh) if hasattr(self.lstm_actor, "gru") else (b_ih + b_hh,)
+        biases = (b_ih, b_hh) if self.gru_actor else (b_ih + b_hh,)
         weights = (w_ih.T.copy(), w_hh.T.copy(), *biases, w_critic.T.copy(), b_critic, w_value[0], float(b_value[0]),
                    w_action.T.copy(), b_action)
         key = tuple(t._version for t in tensors), tuple(t.data_ptr() for t in tensors)
