@@ -31,6 +31,8 @@ from typing import Any
 import numpy as np
 from scipy import stats
 
+from sb3_smc.experiments.statistics import holm
+
 TARGETS = ("PW-cl_self-in-left-corner_vs_on-hline-v0", "PW-cl_self-in-container_vs_noncontainer-v0",
            "PW-ba_self-in-container_from_on-floor-v0")
 MEASURES = ("selected_return", "test_score")
@@ -67,18 +69,6 @@ def tost_paired(differences: np.ndarray, margin: float) -> float:
     lower = stats.t.sf((mean + margin) / se, n - 1)
     upper = stats.t.cdf((mean - margin) / se, n - 1)
     return float(max(lower, upper))
-
-
-def holm(pvalues: Sequence[float]) -> list[float]:
-    """Holm's step-down adjustment of ``pvalues`` (one family of tests): each below 0.05 exactly when Holm's
-    procedure rejects its hypothesis at a family-wise error rate of 0.05."""
-    order = sorted(range(len(pvalues)), key=lambda i: pvalues[i])
-    adjusted = [0.0] * len(pvalues)
-    running = 0.0
-    for rank, i in enumerate(order):
-        running = max(running, min(1.0, (len(pvalues) - rank) * pvalues[i]))
-        adjusted[i] = running
-    return adjusted
 
 
 def compare(rows: Sequence[dict[str, Any]], margin: float) -> list[dict[str, Any]]:

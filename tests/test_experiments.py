@@ -286,6 +286,53 @@ def test_the_paired_seeds_tool_compares_across_targets_on_the_same_lower_level_o
         assert says in captured.err and captured.out == ""
 
 
+def test_the_compare_runs_tool_pairs_the_smcs_of_two_runs(tmp_path, capsys):
+    """``tools/compare_runs.py``: per method both runs reported, the SMCs both trained and how many came out the
+    same, the reported scores and the per-target means over the shared SMCs compared across targets (numbers by hand:
+    two targets, t(1) = 1, p = 0.5, Holm 1.0 over the two tests), the time per SMC; bad input refused before output."""
+    compare_runs = import_tool("compare_runs")
+
+    def run(name, scores, times, **extra):
+        """An experiment directory: ``scores`` {(method, target): per-seed test scores}; ``extra`` its results.json's
+        other keys."""
+        rows = [{"target": t, "kind": "classification", "category": "objcon", "method": m, "curriculum": t,
+                 "seed": seed, "training_return": 1.0, "selected_update": 7, "test_score": v, "wall_time_s": times}
+                for (m, t), values in scores.items() for seed, v in enumerate(values)]
+        (tmp_path / name).mkdir()
+        (tmp_path / name / "results.json").write_text(json.dumps({"rows": rows, "reported": reported(rows), **extra}))
+        return str(tmp_path / name)
+
+    first = run("first", {("base", "cl_t"): [0.5, 0.6, 0.7], ("base", "cl_u"): [0.8, 0.9, 1.0],
+                          ("curr", "cl_t"): [0.9]}, 10.0, complete=True, wall_time_total_s=7200.0, command="x",
+                machine={"processor": "AMD EPYC (family 26, model 2)"}, code={"commit": "0123456789"})
+    second = run("second", {("base", "cl_t"): [0.5, 0.6, 0.7, 0.99], ("base", "cl_u"): [0.7, 0.9, 1.0]}, 5.0)
+    assert compare_runs.main([first, second]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0] == (f"- `{first}`: commit `0123456`, CPU AMD EPYC (family 26, model 2), 2.00 h recorded, "
+                        "complete: `x`")
+    assert lines[1] == f"- `{second}`: commit `unknown`, CPU unknown, no wall time recorded, incomplete: `?`"
+    # reported: 70 / 99 and 100 / 100; SMC means over seeds 0-2: 60 / 60 and 90 / 86.7; seed 0 of cl_u differs
+    assert lines[5:] == ["| base | 2 | 6 | 5 | 85.0 | 99.5 | +14.5 [-169.7, +198.7] | 0.50 (1.00) | 75.0 | 73.3 | "
+                         "-1.7 [-22.8, +19.5] | 0.50 (1.00) | 10.0 | 5.0 | 0.50 |"]
+    assert compare_runs.main([first, first]) == 0
+    assert capsys.readouterr().out.splitlines()[5:] == [
+        "| base | 2 | 6 | 6 | 85.0 | 85.0 | +0.0 [+0.0, +0.0] | 1.00 (1.00) | 75.0 | 75.0 | +0.0 [+0.0, +0.0] | "
+        "1.00 (1.00) | 10.0 | 10.0 | 1.00 |",
+        "| curr | 1 | 1 | 1 | 90.0 | 90.0 | +0.0 | - | 90.0 | 90.0 | +0.0 | - | 10.0 | 10.0 | 1.00 |"]
+    twice = run("twice", {("base", "cl_t"): [0.5]}, 1.0)
+    saved = json.loads(Path(twice, "results.json").read_text())
+    saved["rows"] *= 2
+    Path(twice, "results.json").write_text(json.dumps(saved))
+    other = run("other", {("cnn", "cl_t"): [0.5]}, 1.0)
+    for argv, says in (([first, str(tmp_path / "none")], "results.json not found"),
+                       ([first, twice], "holds base on cl_t (cl_t, seed 0) twice"),
+                       ([first, other], "report no method in common")):
+        with pytest.raises(SystemExit):
+            compare_runs.main(argv)
+        captured = capsys.readouterr()
+        assert says in captured.err and captured.out == ""
+
+
 def test_reported_scores_are_the_best_seed_and_curriculum():
     rows = [{"target": "t", "kind": "classification", "category": "objcon", "method": "curr", "curriculum": c,
              "seed": s, "test_score": v} for c, s, v in (("a", 0, 0.5), ("a", 1, 0.7), ("b", 0, 0.9), ("b", 1, 0.1))]
