@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import math
 import os
 import re
 import signal
@@ -611,6 +612,25 @@ def test_a_group_stopped_mid_training_resumes_from_its_checkpoint(tmp_path, monk
     monkeypatch.undo()
     assert_same_library(_library_state(out / "library"), _library_state(
         train_curriculum(path, tmp_path / "fresh", **settings).library))
+
+
+def test_other_work_runs_on_the_workers_and_its_first_error_is_raised():
+    """``map_unordered`` (an experiment's evaluations after training): every item's result, in this process in
+    order for one worker, on 2 spawned processes as they finish; an item's error is raised, after the items yielded
+    before it."""
+    from sb3_smc.curricula.executors import map_unordered
+    from sb3_smc.curricula.options import RunOptions
+
+    one, two = RunOptions(workers=1), RunOptions(workers=2)
+    assert list(map_unordered(math.factorial, [5, 3, 4], one)) == [(5, 120), (3, 6), (4, 24)]
+    assert sorted(map_unordered(math.factorial, [5, 3, 4], two)) == [(3, 6), (4, 24), (5, 120)]
+    assert list(map_unordered(math.factorial, [], two)) == []
+    for options in (one, two):
+        done = []
+        with pytest.raises(ValueError, match="negative values"):
+            for item, _ in map_unordered(math.factorial, [3, -1], options):
+                done.append(item)
+        assert done == [3] if options is one else done in ([3], [])  # on workers: as they finish
 
 
 def test_ray_without_a_cluster_says_how_to_connect(tmp_path, monkeypatch):

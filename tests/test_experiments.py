@@ -485,6 +485,28 @@ def test_a_tiny_experiment_end_to_end(tmp_path):
         assert f"figures/{name}.png" in text
 
 
+def test_evaluations_and_cnns_on_two_workers_are_those_of_one(tmp_path):
+    """After training, the evaluations and CNNs an experiment needs run on its workers (each saved as it finishes,
+    with a progress line): on 2 worker processes the same records as in one process (the CNNs' training time aside),
+    and a run that has them all computes nothing again."""
+    out = tmp_path / "one"
+    settings = dict(methods=["cnn", "base", "curr"], targets=[LEFT_OF], seeds=1, timesteps=2000, repeats=1)
+    first = run_experiment(out, progress=False, **settings)
+    shutil.copytree(out, tmp_path / "two")
+    for folder in ("evaluations", "cnn"):
+        shutil.rmtree(tmp_path / "two" / folder)
+    lines: list[str] = []
+    second = run_experiment(tmp_path / "two", workers=2, printer=lines.append, **settings)
+    assert "evaluating 4 SMC(s), training 1 CNN(s), 2 at a time" in lines and "evaluated 5/5" in lines
+    assert [{k: v for k, v in r.items() if r["method"] != "cnn" or k != "wall_time_s"} for r in second["rows"]] == \
+        [{k: v for k, v in r.items() if r["method"] != "cnn" or k != "wall_time_s"} for r in first["rows"]]
+    for path in sorted((out / "evaluations").glob("*.json")):
+        assert path.read_text() == (tmp_path / "two" / "evaluations" / path.name).read_text(), path.name
+    lines.clear()
+    run_experiment(tmp_path / "two", workers=2, printer=lines.append, **settings)
+    assert not any(line.startswith("evaluat") for line in lines), lines
+
+
 def test_the_papers_learner_as_a_second_flat_baseline(tmp_path):
     """``base-gru``: a flat SMC trained with RecurrentTRPO + GRU whatever the run's learner, beside ``base``; its
     jobs are those of ``base`` run with ``--algo RecurrentTRPO --rnn gru`` but for their names."""

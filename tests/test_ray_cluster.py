@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import collections
 import json
+import math
 import os
 import shutil
 import tempfile
@@ -24,6 +25,8 @@ from typing import Any
 import pytest
 
 from sb3_smc.curricula import jobs, trainer
+from sb3_smc.curricula.executors import map_unordered
+from sb3_smc.curricula.options import RunOptions
 from sb3_smc.curricula.trainer import status, train_curriculum
 from tests.test_curricula import _library_state, _tiny, assert_same_library
 
@@ -199,6 +202,11 @@ def test_workers_groups_and_ray_give_the_same_library(tmp_path):
     try:
         on_ray = train_curriculum(str(path), tmp_path / "ray", seeds=2, timesteps=2000, workers=2, backend="ray",
                                   progress=False)
+        # other work (an experiment's evaluations) on the same cluster: every item's result, an item's error raised
+        ray_options = RunOptions(workers=2, backend="ray")
+        assert sorted(map_unordered(math.factorial, [3, 4, 5], ray_options)) == [(3, 6), (4, 24), (5, 120)]
+        with pytest.raises(Exception, match="negative values"):
+            list(map_unordered(math.factorial, [3, -1], ray_options))
     finally:
         ray.shutdown()
     expected = _library_state(sequential.library)

@@ -5,7 +5,8 @@ Each executor takes the functions that train a job (:func:`~sb3_smc.curricula.jo
 tuple of jobs trained as one unit, one worker process or one Ray task), ``wait(handles) -> [(handle, outcome)]``
 (at least one; the outcome is a job's :class:`JobResult`, a group's list of them, or the exception) and
 ``shutdown()``; :func:`make_executor` picks the one of a run's options. An exception is the outcome of the whole
-unit, reported as the failure of each of its jobs by the trainer.
+unit, reported as the failure of each of its jobs by the trainer. :func:`map_unordered` runs any other independent
+work on the same backend and workers (an experiment's evaluations and CNNs).
 """
 
 from __future__ import annotations
@@ -14,16 +15,16 @@ import multiprocessing
 import os
 import threading
 import time
-from collections.abc import Callable, Sequence
-from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from collections.abc import Callable, Iterator, Sequence
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, as_completed, wait
 from concurrent.futures.process import BrokenProcessPool
-from typing import Any
+from typing import Any, TypeVar
 
 from sb3_smc.curricula.jobs import Job, JobResult
 from sb3_smc.curricula.options import BACKENDS, RunOptions
 from sb3_smc.errors import SMCRuntimeError
 
-__all__ = ["BACKENDS", "Outcome", "Work", "make_executor"]
+__all__ = ["BACKENDS", "Outcome", "Work", "make_executor", "map_unordered"]
 
 Work = Job | tuple[Job, ...]
 """What is submitted: one job, or a group of jobs trained together."""
@@ -70,18 +71,20 @@ def _exit_with(parent: int) -> None:
     threading.Thread(target=watch, name="exit-with-run", daemon=True).start()
 
 
+def _process_pool(workers: int) -> ProcessPoolExecutor:
+    """``workers`` spawned processes, each ending once this process is gone."""
+    return ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
+                               initializer=_exit_with, initargs=(os.getpid(),))
+
+
 class _Processes:
     """Trains jobs in ``workers`` spawned processes; a worker that dies fails its jobs, and the pool is made
     again. A worker ends when the run's process does, however it ended."""
 
     def __init__(self, run: RunJob, run_group: RunGroup, workers: int) -> None:
-        def make() -> ProcessPoolExecutor:
-            return ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
-                                       initializer=_exit_with, initargs=(os.getpid(),))
-
         self._run, self._run_group = run, run_group
-        self._make = make
-        self._pool = make()
+        self._make = lambda: _process_pool(workers)
+        self._pool = self._make()
 
     def submit(self, work: Work) -> Future[Outcome]:
         if isinstance(work, Job):
@@ -128,22 +131,27 @@ def _lost(error: Exception, ray: Any) -> Exception:
     return lost
 
 
+def _ray_session(address: str | None) -> Any:
+    """The ``ray`` module, connected to the cluster at ``address`` (else ``$RAY_ADDRESS``) unless it is already."""
+    try:
+        import ray
+    except ImportError:
+        raise SMCRuntimeError("backend='ray' needs Ray: pip install 'sb3-smc[ray]'") from None
+    if not ray.is_initialized():
+        address = address or os.environ.get("RAY_ADDRESS")
+        if address is None:
+            raise SMCRuntimeError("backend='ray' runs on an existing Ray cluster: pass ray_address (--ray-address) "
+                                  "or set RAY_ADDRESS (e.g. 'auto' on a node of the cluster, or ray://host:10001)")
+        ray.init(address=address, log_to_driver=False)
+    return ray
+
+
 class _Ray:
     """Trains jobs as tasks of an existing Ray cluster (one CPU each, a group of jobs one task; no retries: a job the
     cluster loses fails, and the next run trains it, as a job whose local worker died)."""
 
     def __init__(self, run: RunJob, run_group: RunGroup, address: str | None) -> None:
-        try:
-            import ray
-        except ImportError:
-            raise SMCRuntimeError("backend='ray' needs Ray: pip install 'sb3-smc[ray]'") from None
-        self._ray = ray
-        if not ray.is_initialized():
-            address = address or os.environ.get("RAY_ADDRESS")
-            if address is None:
-                raise SMCRuntimeError("backend='ray' runs on an existing Ray cluster: pass ray_address (--ray-address) "
-                                      "or set RAY_ADDRESS (e.g. 'auto' on a node of the cluster, or ray://host:10001)")
-            ray.init(address=address, log_to_driver=False)
+        self._ray = ray = _ray_session(address)
         self._remote = ray.remote(num_cpus=1, max_retries=0)(run)
         self._remote_group = ray.remote(num_cpus=1, max_retries=0)(run_group)
         self._pending: set[Any] = set()
@@ -177,3 +185,51 @@ def make_executor(options: RunOptions, run: RunJob, run_group: RunGroup) -> _InP
     if options.backend == "ray":
         return _Ray(run, run_group, options.ray_address)
     return _Processes(run, run_group, options.workers) if options.workers > 1 else _InProcess(run, run_group)
+
+
+Item = TypeVar("Item")
+Result = TypeVar("Result")
+
+
+def _call(function: Callable[[Item], Result], item: Item) -> Result:
+    """``function(item)``: a Ray task (Ray's tasks are functions; ``function`` may be a ``functools.partial``)."""
+    return function(item)
+
+
+def map_unordered(function: Callable[[Item], Result], items: Sequence[Item], options: RunOptions
+                  ) -> Iterator[tuple[Item, Result]]:
+    """``(item, function(item))`` for each of ``items``, as each finishes, on ``options``' backend: in this process in
+    order for one local worker, else ``options.workers`` spawned processes, or Ray tasks of one CPU each. ``function``
+    must be importable by a worker (a module's function, or a ``functools.partial`` of one). The first exception of
+    an item is raised here, the items not started cancelled; those yielded before it stay done."""
+    if not items:
+        return
+    if options.backend == "ray":
+        ray = _ray_session(options.ray_address)
+        remote = ray.remote(num_cpus=1, max_retries=0)(_call)
+        pending = {remote.remote(function, item): item for item in items}
+        try:
+            while pending:
+                ready, _ = ray.wait(list(pending), num_returns=1)
+                for ref in ready:
+                    item = pending.pop(ref)
+                    try:
+                        result = ray.get(ref)
+                    except Exception as err:  # noqa: BLE001 - a task the cluster lost says so
+                        raise _lost(err, ray) from err
+                    yield item, result
+        finally:
+            for ref in pending:
+                ray.cancel(ref)
+        return
+    if options.workers == 1:
+        for item in items:
+            yield item, function(item)
+        return
+    pool = _process_pool(min(options.workers, len(items)))
+    try:
+        futures = {pool.submit(function, item): item for item in items}
+        for future in as_completed(futures):
+            yield futures[future], future.result()
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)

@@ -29,6 +29,7 @@ import platform
 import shlex
 import subprocess
 from collections.abc import Callable, Collection, Mapping, Sequence
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -36,6 +37,7 @@ from pixelworld_env.atomic import atomic_write
 from pixelworld_env.datasets import catalog
 from sb3_smc.common.threads import compute_threads
 from sb3_smc.core.hyperparameters import DEFAULT_ALGORITHM, DEFAULT_TIMESTEPS
+from sb3_smc.curricula.executors import map_unordered
 from sb3_smc.curricula.jobs import DEFAULT_REUSE, DEFAULT_SEEDS, file_stem, job_name, name_of_file
 from sb3_smc.curricula.options import BACKENDS, DEFAULT_GROUP_SIZE, RunOptions
 from sb3_smc.curricula.run_directory import RunFileError, RunSettingsError, read_json
@@ -257,7 +259,9 @@ def _tabulate(directory: Path, design: ExperimentPlan, options: RunOptions, repe
               kept: dict[str, dict[str, Any]], finished: set[str] | None, progress: bool, printer: Callable[[str], None]
               ) -> tuple[list[dict[str, Any]], list[str]]:
     """Every target x method x curriculum x seed's row (evaluated where not ``kept``; the CNN trained where it has no
-    result) and the jobs still missing (those not ``finished``, when tabulating without training)."""
+    result: :func:`_compute_missing`) and the jobs still missing (those not ``finished``, when tabulating without
+    training)."""
+    _compute_missing(directory, design, options, repeats, kept, finished, progress, printer)
     rows: list[dict[str, Any]] = []
     missing: list[str] = []
     for (target, method), nodes in sorted(design.nodes.items()):
@@ -276,9 +280,58 @@ def _tabulate(directory: Path, design: ExperimentPlan, options: RunOptions, repe
             evaluation = kept.get(name) or _evaluation(directory, name, repeats)
             rows.append(_row(target, info, method, job.node, job.seed, evaluation["training_return"],
                              evaluation["selected_update"], evaluation["test_score"], evaluation["wall_time_s"]))
-        if progress:
-            printer(f"evaluated {target} / {method}")
     return rows, missing
+
+
+Work = tuple[str, str, int]
+"""What an experiment computes after training: ``("smc", job name, 0)`` an SMC's evaluation, ``("cnn", target,
+seed)`` a CNN trained and tested."""
+
+
+def _compute_missing(directory: Path, design: ExperimentPlan, options: RunOptions, repeats: int,
+                     kept: dict[str, dict[str, Any]], finished: set[str] | None, progress: bool,
+                     printer: Callable[[str], None]) -> None:
+    """The evaluations and CNN results the table needs and the directory has not saved, computed on the run's
+    workers (:func:`~sb3_smc.curricula.executors.map_unordered`: the run's backend) and saved as each finishes (the
+    same results in any process: each is seeded on its own)."""
+    work: list[Work] = []
+    for (target, method), nodes in sorted(design.nodes.items()):
+        if not METHOD_REGISTRY[method].smc:
+            work += [("cnn", target, seed) for seed in range(options.seeds)
+                     if not (directory / "cnn" / f"{target}@{seed}.json").is_file()]
+            continue
+        work += [("smc", str(job), 0) for job in options.jobs(nodes) if str(job) not in kept
+                 and (finished is None or str(job) in finished)
+                 and _saved_evaluation(evaluation_path(directory, str(job)), repeats) is None]
+    if progress and work:
+        printer(f"evaluating {sum(w[0] == 'smc' for w in work)} SMC(s), training {sum(w[0] == 'cnn' for w in work)} "
+                f"CNN(s), {options.workers} at a time")
+    every = max(1, len(work) // 20)
+    for done, (item, result) in enumerate(map_unordered(partial(_compute, directory, repeats), work, options), 1):
+        kind, name, seed = item
+        path = evaluation_path(directory, name) if kind == "smc" else directory / "cnn" / f"{name}@{seed}.json"
+        atomic_write(path, json.dumps(result, indent=2) + "\n")
+        if progress and (done % every == 0 or done == len(work)):
+            printer(f"evaluated {done}/{len(work)}")
+
+
+def _compute(directory: Path, repeats: int, work: Work) -> dict[str, Any]:
+    """One item of :data:`Work`: the evaluation record of an SMC of the directory's library (tested on the test
+    split with ``repeats``), or a CNN's result."""
+    kind, name, seed = work
+    if kind == "cnn":
+        return train_cnn(name, seed).to_dict()
+    smc = SMCLibrary.load(directory / "library", names=[name])[name]
+    with compute_threads(1):
+        result = evaluate(smc, repeats=repeats, seed=0, record_cells=False)
+    record = smc.record
+    return {"smc": name, "repeats": repeats, "test_score": result.score,
+            "training_return": record.selected_return if record is not None else None,
+            "selected_update": record.selected_update if record is not None else None,
+            "wall_time_s": record.wall_time_s if record is not None else None,
+            "spec": smc.spec.to_dict() if smc.spec is not None else None,
+            "digest": smc.digest, "children_digests": [child.digest for child in smc.children],
+            "evaluation": result.record.to_dict()}
 
 
 def experiment_command(out: str | Path, *, methods: Sequence[str], targets: Sequence[str] | None = None,
@@ -408,35 +461,19 @@ def _kept_evaluations(directory: Path, training_targets: Sequence[str], options:
 
 
 def _evaluation(directory: Path, name: str, repeats: int) -> dict[str, Any]:
-    path = evaluation_path(directory, name)
-    saved = _saved_evaluation(path, repeats)
-    if saved is not None:
-        return saved
-    smc = SMCLibrary.load(directory / "library", names=[name])[name]
-    with compute_threads(1):
-        result = evaluate(smc, repeats=repeats, seed=0, record_cells=False)
-    record = smc.record
-    saved = {"smc": name, "repeats": repeats, "test_score": result.score,
-             "training_return": record.selected_return if record is not None else None,
-             "selected_update": record.selected_update if record is not None else None,
-             "wall_time_s": record.wall_time_s if record is not None else None,
-             "spec": smc.spec.to_dict() if smc.spec is not None else None,
-             "digest": smc.digest, "children_digests": [child.digest for child in smc.children],
-             "evaluation": result.record.to_dict()}
-    atomic_write(path, json.dumps(saved, indent=2) + "\n")
+    """The saved evaluation of SMC ``name`` (:func:`_compute_missing` saved every one the table needs)."""
+    saved = _saved_evaluation(evaluation_path(directory, name), repeats)
+    if saved is None:
+        raise RunFileError(f"{evaluation_path(directory, name)}: no evaluation of {name} with repeats {repeats}")
     return saved
 
 
 def _cnn(directory: Path, target: str, seed: int) -> dict[str, Any]:
     path = directory / "cnn" / f"{target}@{seed}.json"
-    if path.is_file():
-        saved = read_json(path, "a CNN result; delete it to train that CNN again")
-        if not isinstance(saved, dict) or not isinstance(saved.get("test_score"), int | float):
-            raise RunFileError(f"{path} is not a CNN result (no test_score); delete it to train that CNN again")
-        return saved
-    result = train_cnn(target, seed).to_dict()
-    atomic_write(path, json.dumps(result, indent=2) + "\n")
-    return result
+    saved = read_json(path, "a CNN result; delete it to train that CNN again")
+    if not isinstance(saved, dict) or not isinstance(saved.get("test_score"), int | float):
+        raise RunFileError(f"{path} is not a CNN result (no test_score); delete it to train that CNN again")
+    return saved
 
 
 def read_results(directory: str | Path) -> dict[str, Any]:
