@@ -891,6 +891,32 @@ def test_an_edited_manifest_is_refused_naming_the_file_and_the_smc(copy):
     assert SMCLibrary.load(copy)["corner"].spec.seed == 7
 
 
+def test_an_unchanged_manifest_is_checked_once_per_process(copy, monkeypatch):
+    """Loading SMCs one at a time (an experiment's evaluations) checks an unchanged manifest once; the manifest's
+    bytes key what is kept, so an edit in place of the same size, at once, is seen; the entries returned are the
+    caller's to change."""
+    calls = []
+    real = storage.check_manifest
+    monkeypatch.setattr(storage, "check_manifest", lambda manifest, where: calls.append(where) or real(manifest, where))
+    assert SMCLibrary.load(copy, names=["corner"]).names == ("corner",)
+    assert SMCLibrary.load(copy, names=["climber"]).names == ("corner", "container", "climber")
+    entries, created_with, _ = storage.checked_entries(copy)
+    entries.clear()
+    created_with.clear()
+    again = SMCLibrary.load(copy)
+    assert again.names == ("corner", "container", "climber", "corner-ppo") and again.created_with
+    assert len(calls) == 1
+    path = copy / "manifest.json"
+    text = path.read_text()
+    edited = text.replace('"seed": 3', '"seed": 4', 1)  # the climber's spec, the same size
+    assert edited != text and len(edited) == len(text)
+    path.write_text(edited)
+    with pytest.raises(ManifestError, match="the entry of SMC 'climber' does not match its 'entry_sha256'"):
+        SMCLibrary.load(copy, names=["corner"])
+    path.write_text(text)
+    assert SMCLibrary.load(copy, names=["corner"]).names == ("corner",) and len(calls) == 2
+
+
 def test_version_3_libraries_load_and_get_checksums_when_written(copy):
     """A library written before the manifest's content had checksums (version 3) loads as it is; the next write of
     its manifest (a save, an SMC added or removed in place) stores it as the current version with them."""

@@ -78,7 +78,7 @@ def build_pretrained(runs: Sequence[str | Path], curricula: Sequence[str | Curri
         raise LibraryError(f"refusing to write the pretrained library to {target}: it is a file or a non-empty "
                            f"directory without {storage.MANIFEST} (not an SMC library)")
     runs_ = [Path(run) for run in runs]
-    entries = {run: storage.check_manifest(*storage.read_manifest(run / "library")) for run in runs_}
+    entries = {run: storage.checked_entries(run / "library")[0] for run in runs_}
     chosen: list[tuple[str, Path, list[str]]] = []
     ranked_among: dict[str, int] = {}
     for node in dict.fromkeys(n for c in resolved for n in lower_level(c)):
@@ -100,7 +100,7 @@ def build_pretrained(runs: Sequence[str | Path], curricula: Sequence[str | Curri
     held = target / storage.MANIFEST
     before = pretrained_index(target) if (target / INDEX).is_file() else {"curricula": {}, "seeds": {}}
     library = SMCLibrary.load(target) if held.is_file() else SMCLibrary()
-    previous = storage.check_manifest(*storage.read_manifest(target)) if held.is_file() else {}
+    previous = storage.checked_entries(target)[0] if held.is_file() else {}
 
     def held_alike(node: str, run: Path, names: list[str]) -> bool:
         """Whether ``out`` holds the same best seeds of ``node`` with the same specs and the same update (a run that

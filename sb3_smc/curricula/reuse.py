@@ -31,7 +31,7 @@ class ReuseLibrary:
 
     def __init__(self, root: str | Path) -> None:
         self.root = Path(root)
-        self.entries = storage.check_manifest(*storage.read_manifest(self.root))
+        self.entries = storage.checked_entries(self.root)[0]
         index = pretrained_index(self.root, list(self.entries)) if (self.root / INDEX).is_file() else {"seeds": {}}
         self.ranked_among: dict[str, int] = dict(index["seeds"])
         """Node -> the number of seeds its held (best) seeds were ranked among, for a pretrained library."""

@@ -224,7 +224,7 @@ def _library_jobs(directory: Path) -> set[str]:
     library = directory / "library"
     if not (library / storage.MANIFEST).is_file():
         return set()
-    return set(storage.check_manifest(*storage.read_manifest(library)))
+    return set(storage.checked_entries(library)[0])
 
 
 def _copies(directory: Path, jobs: set[str], reuse_from: Path | None) -> set[str]:
@@ -232,8 +232,8 @@ def _copies(directory: Path, jobs: set[str], reuse_from: Path | None) -> set[str
     file): trained elsewhere, not by this run."""
     if reuse_from is None or not jobs:
         return set()
-    source = storage.check_manifest(*storage.read_manifest(Path(reuse_from)))
-    held = storage.check_manifest(*storage.read_manifest(directory / "library"))
+    source = storage.checked_entries(Path(reuse_from))[0]
+    held = storage.checked_entries(directory / "library")[0]
     return {job for job in jobs if job in source and job in held and held[job].sha256 == source[job].sha256}
 
 

@@ -251,14 +251,13 @@ class SMCLibrary(Mapping[str, SMC]):
         from sb3_smc.smc.policies import FrameStackPolicy, policy_from_model
 
         root = Path(path)
-        manifest, manifest_path = storage.read_manifest(root)
-        entries = storage.check_manifest(manifest, manifest_path)
+        entries, created_with, manifest_path = storage.checked_entries(root)
         order = storage.topological_order(entries, manifest_path)
         if names is not None:
             wanted = _descendants(entries, names, manifest_path)
             order = [name for name in order if name in wanted]
         library = cls(path=root if names is None else None)  # a partial copy must not replace the whole library
-        library.created_with = dict(manifest.get("created_with") or {})
+        library.created_with = created_with
         for name in order:
             entry = entries[name]
             model = storage.load_model(root, name, entry)

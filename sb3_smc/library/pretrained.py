@@ -117,4 +117,4 @@ def _not_pretrained(name: str, index: dict[str, Any]) -> str:
 
 def _names(root: Path) -> list[str]:
     """The SMC names of the library in ``root``, in its order (its manifest checked)."""
-    return list(storage.check_manifest(*storage.read_manifest(root)))
+    return list(storage.checked_entries(root)[0])

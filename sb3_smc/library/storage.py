@@ -60,9 +60,9 @@ if TYPE_CHECKING:
     from stable_baselines3.common.on_policy_algorithm import OnPolicyAlgorithm
 
 __all__ = ["ALGORITHMS", "FORMAT", "FORMAT_VERSION", "MANIFEST", "MODELS", "SUMMARY_FIELDS", "LibraryEntry",
-           "add_to_library", "check_manifest", "check_model_file", "entry_for", "entry_json", "interrupted_hint",
-           "link_copy", "load_model", "model_files", "new_manifest", "read_manifest", "remove_from_library", "sha256",
-           "topological_order", "write_library", "write_manifest"]
+           "add_to_library", "check_manifest", "check_model_file", "checked_entries", "entry_for", "entry_json",
+           "interrupted_hint", "link_copy", "load_model", "model_files", "new_manifest", "read_manifest",
+           "remove_from_library", "sha256", "topological_order", "write_library", "write_manifest"]
 
 MODELS = "models"
 SAVING_MARKER = ".saving-"
@@ -298,15 +298,47 @@ def check_manifest(manifest: Any, where: Path) -> dict[str, LibraryEntry]:
     return check_entries(upgrade(manifest, where), where)
 
 
-def read_manifest(root: Path) -> tuple[dict[str, Any], Path]:
-    """The manifest of the library in ``root`` as JSON data (any version), and its path."""
+def _manifest_bytes(root: Path) -> tuple[bytes, Path]:
     manifest_path = root / MANIFEST
     if not manifest_path.is_file():
         raise ManifestError(f"no SMC library at {root}: {manifest_path} not found{interrupted_hint(root)}")
+    return manifest_path.read_bytes(), manifest_path
+
+
+def _parse_manifest(data: bytes, manifest_path: Path) -> dict[str, Any]:
     try:
-        return json.loads(manifest_path.read_text(encoding="utf-8")), manifest_path
+        return json.loads(data.decode("utf-8"))
     except (UnicodeDecodeError, json.JSONDecodeError) as err:
         raise ManifestError(f"{manifest_path} is not valid JSON (corrupt or truncated?): {err}") from None
+
+
+def read_manifest(root: Path) -> tuple[dict[str, Any], Path]:
+    """The manifest of the library in ``root`` as JSON data (any version), and its path."""
+    data, manifest_path = _manifest_bytes(root)
+    return _parse_manifest(data, manifest_path), manifest_path
+
+
+_CHECKED: dict[tuple[str, str], tuple[dict[str, LibraryEntry], dict[str, Any]]] = {}
+_CHECKED_MOST = 4
+"""The manifests :func:`checked_entries` keeps checked in a process (the latest ones)."""
+
+
+def checked_entries(root: Path) -> tuple[dict[str, LibraryEntry], dict[str, Any], Path]:
+    """The checked entries of the library in ``root`` (:func:`check_manifest` of :func:`read_manifest`), its
+    ``created_with`` and the manifest's path. A process keeps the last few by the manifest's path and the SHA-256 of
+    its bytes, so loading SMCs one at a time from a large library (an experiment's evaluations, a run's jobs loading
+    their children) parses and checks an unchanged manifest once: checking 575 entries takes most of a second, and
+    hashing the file a few milliseconds. The entries are immutable records; the dicts returned are the caller's."""
+    data, manifest_path = _manifest_bytes(root)
+    key = (str(manifest_path.resolve()), hashlib.sha256(data).hexdigest())
+    if key not in _CHECKED:
+        manifest = _parse_manifest(data, manifest_path)
+        checked = check_manifest(manifest, manifest_path), dict(manifest.get("created_with") or {})
+        while len(_CHECKED) >= _CHECKED_MOST:
+            del _CHECKED[next(iter(_CHECKED))]
+        _CHECKED[key] = checked
+    entries, created_with = _CHECKED[key]
+    return dict(entries), dict(created_with), manifest_path
 
 
 def check_model_file(root: Path, name: str, entry: LibraryEntry) -> None:
