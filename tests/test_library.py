@@ -917,6 +917,39 @@ def test_an_unchanged_manifest_is_checked_once_per_process(copy, monkeypatch):
     assert SMCLibrary.load(copy, names=["corner"]).names == ("corner",) and len(calls) == 2
 
 
+def test_adding_smcs_one_by_one_checks_the_manifest_once(copy, tmp_path, monkeypatch):
+    """A run adds its SMCs one by one: while the manifest holds the bytes this process's last add wrote, the next
+    add starts from that add's manifest, not reading and checking every entry again, and writes the same bytes as an
+    add that does; an edit by another writer in between is seen and kept; a replaced entry gets a new checksum."""
+    calls = []
+    real = storage.check_entries
+    monkeypatch.setattr(storage, "check_entries", lambda manifest, where: calls.append(where) or real(manifest, where))
+    saved = json.loads((copy / "manifest.json").read_text())["smcs"]["corner"]
+    model = (copy / saved["model"]).read_bytes()
+
+    def entry(name: str, seed: int = 0) -> dict:
+        spec = {**saved["spec"], "name": name, "seed": seed}
+        return {k: v for k, v in {**saved, "spec": spec}.items() if k not in ("model", "sha256", ENTRY_CHECKSUM)}
+
+    other = Path(shutil.copytree(copy, tmp_path / "other"))
+    for name in ("a", "b", "c"):
+        storage.add_to_library(copy, name, entry(name), model)
+    assert len(calls) == 1
+    for name in ("a", "b", "c"):  # each add reading and checking the manifest
+        storage._ADDED.clear()
+        storage.add_to_library(other, name, entry(name), model)
+    assert (copy / "manifest.json").read_bytes() == (other / "manifest.json").read_bytes()
+    edited = json.loads((copy / "manifest.json").read_text())
+    edited["smcs"]["a"]["spec"]["seed"] = 9
+    storage.write_manifest(copy / "manifest.json", edited)  # another writer's edit
+    storage.add_to_library(copy, "d", entry("d"), model)
+    assert len(calls) == 5
+    storage.add_to_library(copy, "d", entry("d", seed=4), model, replace=True)
+    library = SMCLibrary.load(copy)
+    assert (library["a"].spec.seed, library["d"].spec.seed) == (9, 4) and len(calls) == 6
+    assert library.names[-4:] == ("a", "b", "c", "d")
+
+
 def test_version_3_libraries_load_and_get_checksums_when_written(copy):
     """A library written before the manifest's content had checksums (version 3) loads as it is; the next write of
     its manifest (a save, an SMC added or removed in place) stores it as the current version with them."""

@@ -165,11 +165,16 @@ def _entry_sha256(name: str, entry: dict[str, Any]) -> str:
     return content_sha256([name, _without(entry, ENTRY_CHECKSUM)])
 
 
-def seal(manifest: dict[str, Any]) -> dict[str, Any]:
+def seal(manifest: dict[str, Any], known: dict[str, str] | None = None) -> dict[str, Any]:
     """``manifest`` with the checksums of its own content, as it is written: in each entry ``entry_sha256`` (of the
     SMC's name and every other field of its entry), and ``manifest_sha256`` (of everything else, the entries'
-    checksums included). Checksums ``manifest`` holds already are replaced."""
-    smcs = {name: {**_without(entry, ENTRY_CHECKSUM), ENTRY_CHECKSUM: _entry_sha256(name, entry)}
+    checksums included). Checksums ``manifest`` holds already are replaced. ``known``: entries' checksums computed
+    before, by name, for entries unchanged since (the caller's word); those missing are computed and added to it."""
+    known = {} if known is None else known
+    for name, entry in manifest["smcs"].items():
+        if name not in known:
+            known[name] = _entry_sha256(name, entry)
+    smcs = {name: {**_without(entry, ENTRY_CHECKSUM), ENTRY_CHECKSUM: known[name]}
             for name, entry in manifest["smcs"].items()}
     content = {**_without(manifest, MANIFEST_CHECKSUM), "smcs": smcs}
     return {**content, MANIFEST_CHECKSUM: content_sha256(content)}

@@ -185,11 +185,33 @@ def write_library(target: Path, smcs: Mapping[str, SMC], manifest: dict[str, Any
         raise
 
 
-def write_manifest(path: Path, manifest: dict[str, Any]) -> None:
+def write_manifest(path: Path, manifest: dict[str, Any], known: dict[str, str] | None = None) -> bytes:
     """Write ``manifest`` (JSON data of the current version) to ``path`` atomically, with the checksums of its content
-    (:func:`~sb3_smc.library.manifest.seal`; those it holds are replaced). Every manifest is written here; so is a
-    deliberate edit by hand that a library is to load."""
-    atomic_write(path, json.dumps(seal(manifest), indent=2, allow_nan=False) + "\n")
+    (:func:`~sb3_smc.library.manifest.seal`; those it holds are replaced; ``known``: those of unchanged entries,
+    completed there). Every manifest is written here; so is a deliberate edit by hand that a library is to load.
+    Returns the bytes written."""
+    data = (json.dumps(seal(manifest, known), indent=2, allow_nan=False) + "\n").encode("utf-8")
+    atomic_write(path, data)
+    return data
+
+
+_ADDED: dict[str, tuple[str, dict[str, Any], dict[str, str]]] = {}
+"""Per manifest path, what :func:`add_to_library` last wrote there in this process: the SHA-256 of the file's bytes,
+the manifest without its checksums, and its entries' checksums."""
+
+
+def _manifest_to_add_to(root: Path) -> tuple[dict[str, Any], dict[str, str], Path]:
+    """What :func:`add_to_library` adds to: the manifest of the library in ``root`` as the current version without its
+    checksums (:func:`_current_manifest`: checked), and its entries' checksums where known. While the file holds the
+    bytes this process's last add wrote there, that add's manifest is taken as it is (a run adding its SMCs one by
+    one reads and checks its manifest once, not at every add)."""
+    manifest_path = root / MANIFEST
+    if manifest_path.is_file():
+        added = _ADDED.get(str(manifest_path.resolve()))
+        if added is not None and added[0] == hashlib.sha256(manifest_path.read_bytes()).hexdigest():
+            return {**added[1], "smcs": dict(added[1]["smcs"])}, dict(added[2]), manifest_path
+    manifest, _, manifest_path = _current_manifest(root)
+    return manifest, {}, manifest_path
 
 
 def _current_manifest(root: Path) -> tuple[dict[str, Any], dict[str, LibraryEntry], Path]:
@@ -229,7 +251,7 @@ def add_to_library(root: Path, name: str, entry: dict[str, Any], model: bytes, *
     manifest. ``replace=True``: ``name`` must be there already (an SMC whose model file was damaged, trained
     again); its model file and entry are replaced the same way.
     """
-    manifest, _, manifest_path = _current_manifest(root)
+    manifest, known, manifest_path = _manifest_to_add_to(root)
     smcs = manifest["smcs"]
     if name in smcs and not replace:
         raise LibraryError(f"{manifest_path}: already has an SMC named {name!r}")
@@ -237,8 +259,10 @@ def add_to_library(root: Path, name: str, entry: dict[str, Any], model: bytes, *
         raise LibraryError(f"{manifest_path}: has no SMC named {name!r} to replace")
     file = smcs[name]["model"] if replace else model_file_for(name, [e["model"] for e in smcs.values()])
     atomic_write(root / file, model)
-    smcs[name] = {"model": file, **entry, "sha256": hashlib.sha256(model).hexdigest()}
-    write_manifest(manifest_path, manifest)
+    smcs[name] = json.loads(json.dumps({"model": file, **entry, "sha256": hashlib.sha256(model).hexdigest()}))
+    known.pop(name, None)
+    data = write_manifest(manifest_path, manifest, known)
+    _ADDED[str(manifest_path.resolve())] = (hashlib.sha256(data).hexdigest(), manifest, known)
 
 
 def remove_from_library(root: Path, names: Collection[str]) -> None:
