@@ -216,7 +216,10 @@ def map_unordered(function: Callable[[Item], Result], items: Sequence[Item], opt
                     try:
                         result = ray.get(ref)
                     except Exception as err:  # noqa: BLE001 - a task the cluster lost says so
-                        raise _lost(err, ray) from err
+                        lost = _lost(err, ray)
+                        if lost is err:
+                            raise
+                        raise lost from err
                     yield item, result
         finally:
             for ref in pending:

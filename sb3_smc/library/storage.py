@@ -195,6 +195,9 @@ def write_manifest(path: Path, manifest: dict[str, Any], known: dict[str, str] |
     return data
 
 
+_KEPT = 4
+"""How many manifests a process keeps, checked (:func:`checked_entries`) and as last added to (:func:`add_to_library`):
+the latest ones."""
 _ADDED: dict[str, tuple[str, dict[str, Any], dict[str, str]]] = {}
 """Per manifest path, what :func:`add_to_library` last wrote there in this process: the SHA-256 of the file's bytes,
 the manifest without its checksums, and its entries' checksums."""
@@ -262,7 +265,11 @@ def add_to_library(root: Path, name: str, entry: dict[str, Any], model: bytes, *
     smcs[name] = json.loads(json.dumps({"model": file, **entry, "sha256": hashlib.sha256(model).hexdigest()}))
     known.pop(name, None)
     data = write_manifest(manifest_path, manifest, known)
-    _ADDED[str(manifest_path.resolve())] = (hashlib.sha256(data).hexdigest(), manifest, known)
+    key = str(manifest_path.resolve())
+    _ADDED.pop(key, None)
+    while len(_ADDED) >= _KEPT:
+        del _ADDED[next(iter(_ADDED))]
+    _ADDED[key] = (hashlib.sha256(data).hexdigest(), manifest, known)
 
 
 def remove_from_library(root: Path, names: Collection[str]) -> None:
@@ -343,8 +350,7 @@ def read_manifest(root: Path) -> tuple[dict[str, Any], Path]:
 
 
 _CHECKED: dict[tuple[str, str], tuple[dict[str, LibraryEntry], dict[str, Any]]] = {}
-_CHECKED_MOST = 4
-"""The manifests :func:`checked_entries` keeps checked in a process (the latest ones)."""
+"""The manifests :func:`checked_entries` keeps checked, by path and the SHA-256 of their bytes (the latest ones)."""
 
 
 def checked_entries(root: Path) -> tuple[dict[str, LibraryEntry], dict[str, Any], Path]:
@@ -358,7 +364,7 @@ def checked_entries(root: Path) -> tuple[dict[str, LibraryEntry], dict[str, Any]
     if key not in _CHECKED:
         manifest = _parse_manifest(data, manifest_path)
         checked = check_manifest(manifest, manifest_path), dict(manifest.get("created_with") or {})
-        while len(_CHECKED) >= _CHECKED_MOST:
+        while len(_CHECKED) >= _KEPT:
             del _CHECKED[next(iter(_CHECKED))]
         _CHECKED[key] = checked
     entries, created_with = _CHECKED[key]
