@@ -917,6 +917,23 @@ def test_an_unchanged_manifest_is_checked_once_per_process(copy, monkeypatch):
     assert SMCLibrary.load(copy, names=["corner"]).names == ("corner",) and len(calls) == 2
 
 
+def test_the_manifest_is_written_as_json_dumps_writes_it(saved):
+    """``manifest_text``, which writes a manifest entry by entry (an add writes only its own entry), gives
+    ``json.dumps(..., indent=2)`` character for character: for a real library's manifest, with texts given for some
+    entries, for nested values, escapes and non-ASCII names, and for an empty library."""
+    sealed = seal(storage.read_manifest(saved)[0])
+    assert storage.manifest_text(sealed) == json.dumps(sealed, indent=2)
+    texts: dict[str, str] = {}
+    storage.manifest_text(sealed, texts)
+    assert set(texts) == set(sealed["smcs"])
+    assert storage.manifest_text(sealed, dict(texts)) == json.dumps(sealed, indent=2)
+    odd = {"format": "x", "created_with": {"a\n\"b": [1, 2.5, None, {"c": []}]}, "smcs": {
+        "n\u00e9/\u2603": {"x": {"y": [{}, [], "z\t"]}, "e": {}}, "plain": {"list": [[1], [2, [3]]]}}, "v": 4}
+    assert storage.manifest_text(odd) == json.dumps(odd, indent=2)
+    empty = seal(storage.new_manifest({}))
+    assert storage.manifest_text(empty) == json.dumps(empty, indent=2)
+
+
 def test_adding_smcs_one_by_one_checks_the_manifest_once(copy, tmp_path, monkeypatch):
     """A run adds its SMCs one by one: while the manifest holds the bytes this process's last add wrote, the next
     add starts from that add's manifest, not reading and checking every entry again, and writes the same bytes as an
