@@ -258,17 +258,16 @@ def _previous_results(directory: Path) -> dict[str, Any]:
 def _tabulate(directory: Path, design: ExperimentPlan, options: RunOptions, repeats: int,
               kept: dict[str, dict[str, Any]], finished: set[str] | None, progress: bool, printer: Callable[[str], None]
               ) -> tuple[list[dict[str, Any]], list[str]]:
-    """Every target x method x curriculum x seed's row (evaluated where not ``kept``; the CNN trained where it has no
-    result: :func:`_compute_missing`) and the jobs still missing (those not ``finished``, when tabulating without
-    training)."""
-    _compute_missing(directory, design, options, repeats, kept, finished, progress, printer)
+    """Every target x method x curriculum x seed's row (its evaluation or CNN result: :func:`_results`) and the jobs
+    still missing (those not ``finished``, when tabulating without training)."""
+    results = _results(directory, design, options, repeats, kept, finished, progress, printer)
     rows: list[dict[str, Any]] = []
     missing: list[str] = []
     for (target, method), nodes in sorted(design.nodes.items()):
         info = catalog.dataset(target)
         if not METHOD_REGISTRY[method].smc:
             for seed in range(options.seeds):
-                result = _cnn(directory, target, seed)
+                result = results[("cnn", target, seed)]
                 rows.append(_row(target, info, method, "cnn", seed, None, None, result["test_score"],
                                  result["wall_time_s"]))
             continue
@@ -277,7 +276,7 @@ def _tabulate(directory: Path, design: ExperimentPlan, options: RunOptions, repe
             if finished is not None and name not in finished:
                 missing.append(name)
                 continue
-            evaluation = kept.get(name) or _evaluation(directory, name, repeats)
+            evaluation = results[("smc", name, 0)]
             rows.append(_row(target, info, method, job.node, job.seed, evaluation["training_return"],
                              evaluation["selected_update"], evaluation["test_score"], evaluation["wall_time_s"]))
     return rows, missing
@@ -288,31 +287,53 @@ Work = tuple[str, str, int]
 seed)`` a CNN trained and tested."""
 
 
-def _compute_missing(directory: Path, design: ExperimentPlan, options: RunOptions, repeats: int,
-                     kept: dict[str, dict[str, Any]], finished: set[str] | None, progress: bool,
-                     printer: Callable[[str], None]) -> None:
-    """The evaluations and CNN results the table needs and the directory has not saved, computed on the run's
-    workers (:func:`~sb3_smc.curricula.executors.map_unordered`: the run's backend) and saved as each finishes (the
-    same results in any process: each is seeded on its own)."""
+def _result_path(directory: Path, work: Work) -> Path:
+    """Where the result of ``work`` is saved: ``evaluations/<node>@<seed>.json`` or ``cnn/<target>@<seed>.json``."""
+    kind, name, seed = work
+    return evaluation_path(directory, name) if kind == "smc" else directory / "cnn" / f"{name}@{seed}.json"
+
+
+def _saved_result(directory: Path, work: Work, repeats: int, kept: dict[str, dict[str, Any]]) -> dict[str, Any] | None:
+    """The saved result of ``work`` (an evaluation ``kept`` or saved with ``repeats``; a CNN's, checked), or None."""
+    path = _result_path(directory, work)
+    if work[0] == "smc":
+        return kept.get(work[1]) or _saved_evaluation(path, repeats)
+    if not path.is_file():
+        return None
+    saved = read_json(path, "a CNN result; delete it to train that CNN again")
+    if not isinstance(saved, dict) or not isinstance(saved.get("test_score"), int | float):
+        raise RunFileError(f"{path} is not a CNN result (no test_score); delete it to train that CNN again")
+    return saved
+
+
+def _results(directory: Path, design: ExperimentPlan, options: RunOptions, repeats: int,
+             kept: dict[str, dict[str, Any]], finished: set[str] | None, progress: bool,
+             printer: Callable[[str], None]) -> dict[Work, dict[str, Any]]:
+    """Every evaluation and CNN result the table needs: those saved read (each once, every one checked before any
+    work), the others computed on the run's workers (:func:`~sb3_smc.curricula.executors.map_unordered`: the run's
+    backend) and saved as each finishes (the same results in any process: each is seeded on its own)."""
+    found: dict[Work, dict[str, Any]] = {}
     work: list[Work] = []
     for (target, method), nodes in sorted(design.nodes.items()):
-        if not METHOD_REGISTRY[method].smc:
-            work += [("cnn", target, seed) for seed in range(options.seeds)
-                     if not (directory / "cnn" / f"{target}@{seed}.json").is_file()]
-            continue
-        work += [("smc", str(job), 0) for job in options.jobs(nodes) if str(job) not in kept
-                 and (finished is None or str(job) in finished)
-                 and _saved_evaluation(evaluation_path(directory, str(job)), repeats) is None]
+        items: list[Work] = [("cnn", target, seed) for seed in range(options.seeds)] \
+            if not METHOD_REGISTRY[method].smc else \
+            [("smc", str(job), 0) for job in options.jobs(nodes) if finished is None or str(job) in finished]
+        for item in items:
+            saved = _saved_result(directory, item, repeats, kept)
+            if saved is None:
+                work.append(item)
+            else:
+                found[item] = saved
     if progress and work:
         printer(f"evaluating {sum(w[0] == 'smc' for w in work)} SMC(s), training {sum(w[0] == 'cnn' for w in work)} "
                 f"CNN(s), {options.workers} at a time")
     every = max(1, len(work) // 20)
     for done, (item, result) in enumerate(map_unordered(partial(_compute, directory, repeats), work, options), 1):
-        kind, name, seed = item
-        path = evaluation_path(directory, name) if kind == "smc" else directory / "cnn" / f"{name}@{seed}.json"
-        atomic_write(path, json.dumps(result, indent=2) + "\n")
+        atomic_write(_result_path(directory, item), json.dumps(result, indent=2) + "\n")
+        found[item] = result
         if progress and (done % every == 0 or done == len(work)):
             printer(f"evaluated {done}/{len(work)}")
+    return found
 
 
 def _compute(directory: Path, repeats: int, work: Work) -> dict[str, Any]:
@@ -458,22 +479,6 @@ def _kept_evaluations(directory: Path, training_targets: Sequence[str], options:
     saved = {name_of_file(p.stem): _saved_evaluation(p, repeats) for p in sorted(folder.glob("*.json"))
              if name_of_file(p.stem) in wanted}
     return {name: evaluation for name, evaluation in saved.items() if evaluation is not None}
-
-
-def _evaluation(directory: Path, name: str, repeats: int) -> dict[str, Any]:
-    """The saved evaluation of SMC ``name`` (:func:`_compute_missing` saved every one the table needs)."""
-    saved = _saved_evaluation(evaluation_path(directory, name), repeats)
-    if saved is None:
-        raise RunFileError(f"{evaluation_path(directory, name)}: no evaluation of {name} with repeats {repeats}")
-    return saved
-
-
-def _cnn(directory: Path, target: str, seed: int) -> dict[str, Any]:
-    path = directory / "cnn" / f"{target}@{seed}.json"
-    saved = read_json(path, "a CNN result; delete it to train that CNN again")
-    if not isinstance(saved, dict) or not isinstance(saved.get("test_score"), int | float):
-        raise RunFileError(f"{path} is not a CNN result (no test_score); delete it to train that CNN again")
-    return saved
 
 
 def read_results(directory: str | Path) -> dict[str, Any]:
