@@ -382,8 +382,8 @@ _CHECKED: dict[tuple[str, str], tuple[dict[str, LibraryEntry], dict[str, Any]]] 
 def checked_entries(root: Path) -> tuple[dict[str, LibraryEntry], dict[str, Any], Path]:
     """The checked entries of the library in ``root`` (:func:`check_manifest` of :func:`read_manifest`), its
     ``created_with`` and the manifest's path. A process keeps the last few by the manifest's path and the SHA-256 of
-    its bytes, so loading SMCs one at a time from a large library (an experiment's evaluations, a run's jobs loading
-    their children) parses and checks an unchanged manifest once: checking 575 entries takes most of a second, and
+    its bytes, so loading SMCs one at a time from a large library that does not change meanwhile (an experiment's
+    evaluations) parses and checks it once: checking 575 entries takes most of a second, and
     hashing the file a few milliseconds. The entries are immutable records; the dicts returned are the caller's."""
     data, manifest_path = _manifest_bytes(root)
     key = (str(manifest_path.resolve()), hashlib.sha256(data).hexdigest())
