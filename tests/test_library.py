@@ -934,6 +934,25 @@ def test_the_manifest_is_written_as_json_dumps_writes_it(saved):
     assert storage.manifest_text(empty) == json.dumps(empty, indent=2)
 
 
+def test_the_manifest_checksum_is_joined_from_the_entries_texts(saved):
+    """``seal`` joins the whole manifest's canonical text from its entries' (kept in ``known`` from one seal to the
+    next): the checksum is ``content_sha256`` of the whole content, for a real manifest and for names out of order,
+    non-ASCII and escapes, and stays so after one entry changes and only its texts are dropped from ``known``."""
+    def whole(sealed: dict) -> str:
+        return content_sha256({k: v for k, v in sealed.items() if k != MANIFEST_CHECKSUM})
+
+    sealed = seal(storage.read_manifest(saved)[0])
+    assert sealed[MANIFEST_CHECKSUM] == whole(sealed)
+    odd = {"version": 4, "format": "x", "created_with": {"b": 1, "a\n\"": [None, 2.5]}, "smcs": {
+        "z": {"y": 1, "a": [{"q": 1, "p": 2}]}, "A": {}, "n\u00e9/\u2603": {"\u00e9": "\t"}, "m": {"x": "z"}}}
+    known: dict[str, tuple[str, str]] = {}
+    assert seal(odd, known)[MANIFEST_CHECKSUM] == whole(seal(odd)) and set(known) == set(odd["smcs"])
+    odd["smcs"]["m"] = {"x": "changed"}
+    del known["m"]
+    assert seal(odd, known) == seal(odd) and seal(odd)[MANIFEST_CHECKSUM] == whole(seal(odd))
+    assert seal(storage.new_manifest({}))[MANIFEST_CHECKSUM] == whole(seal(storage.new_manifest({})))
+
+
 def test_adding_smcs_one_by_one_checks_the_manifest_once(copy, tmp_path, monkeypatch):
     """A run adds its SMCs one by one: while the manifest holds the bytes this process's last add wrote, the next
     add starts from that add's manifest, not reading and checking every entry again, and writes the same bytes as an

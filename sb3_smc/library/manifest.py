@@ -150,11 +150,15 @@ def new_manifest(smcs: dict[str, dict[str, Any]]) -> dict[str, Any]:
 _SHA256 = re.compile(r"[0-9a-f]{64}")
 
 
+def _canonical(value: Any) -> str:
+    """JSON data's canonical text: keys sorted, no spaces (what :func:`content_sha256` hashes)."""
+    return json.dumps(value, sort_keys=True, separators=(",", ":"), ensure_ascii=False)
+
+
 def content_sha256(value: Any) -> str:
     """The SHA-256 of JSON data's content, whatever its layout in a file (its canonical form: keys sorted, no
     spaces)."""
-    text = json.dumps(value, sort_keys=True, separators=(",", ":"), ensure_ascii=False)
-    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+    return hashlib.sha256(_canonical(value).encode("utf-8")).hexdigest()
 
 
 def _without(data: dict[str, Any], field: str) -> dict[str, Any]:
@@ -165,19 +169,27 @@ def _entry_sha256(name: str, entry: dict[str, Any]) -> str:
     return content_sha256([name, _without(entry, ENTRY_CHECKSUM)])
 
 
-def seal(manifest: dict[str, Any], known: dict[str, str] | None = None) -> dict[str, Any]:
+def seal(manifest: dict[str, Any], known: dict[str, tuple[str, str]] | None = None) -> dict[str, Any]:
     """``manifest`` with the checksums of its own content, as it is written: in each entry ``entry_sha256`` (of the
     SMC's name and every other field of its entry), and ``manifest_sha256`` (of everything else, the entries'
-    checksums included). Checksums ``manifest`` holds already are replaced. ``known``: entries' checksums computed
-    before, by name, for entries unchanged since (the caller's word); those missing are computed and added to it."""
+    checksums included). Checksums ``manifest`` holds already are replaced.
+
+    ``known``: by name, what was computed before for entries unchanged since (the caller's word): the entry's
+    checksum and the canonical text of the sealed entry; those missing are computed and added to it. The whole
+    manifest's canonical text is joined from the entries' texts, so an add to a library of hundreds of SMCs
+    serializes only its own entry (the same text as ``content_sha256`` of the whole: tested)."""
     known = {} if known is None else known
     for name, entry in manifest["smcs"].items():
         if name not in known:
-            known[name] = _entry_sha256(name, entry)
-    smcs = {name: {**_without(entry, ENTRY_CHECKSUM), ENTRY_CHECKSUM: known[name]}
+            checksum = _entry_sha256(name, entry)
+            known[name] = checksum, _canonical({**_without(entry, ENTRY_CHECKSUM), ENTRY_CHECKSUM: checksum})
+    smcs = {name: {**_without(entry, ENTRY_CHECKSUM), ENTRY_CHECKSUM: known[name][0]}
             for name, entry in manifest["smcs"].items()}
     content = {**_without(manifest, MANIFEST_CHECKSUM), "smcs": smcs}
-    return {**content, MANIFEST_CHECKSUM: content_sha256(content)}
+    entries = "{" + ",".join(f"{_canonical(name)}:{known[name][1]}" for name in sorted(smcs)) + "}"
+    text = "{" + ",".join(f"{_canonical(key)}:{entries if key == 'smcs' else _canonical(content[key])}"
+                          for key in sorted(content)) + "}"
+    return {**content, MANIFEST_CHECKSUM: hashlib.sha256(text.encode("utf-8")).hexdigest()}
 
 
 def unseal(manifest: dict[str, Any], where: Path) -> dict[str, Any]:

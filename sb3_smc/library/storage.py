@@ -209,12 +209,13 @@ def manifest_text(sealed: dict[str, Any], texts: dict[str, str] | None = None) -
     return "{\n" + ",\n".join(parts) + "\n}" if parts else "{}"
 
 
-def write_manifest(path: Path, manifest: dict[str, Any], known: dict[str, str] | None = None,
+def write_manifest(path: Path, manifest: dict[str, Any], known: dict[str, tuple[str, str]] | None = None,
                    texts: dict[str, str] | None = None) -> bytes:
     """Write ``manifest`` (JSON data of the current version) to ``path`` atomically, with the checksums of its content
     (:func:`~sb3_smc.library.manifest.seal`; those it holds are replaced). Every manifest is written here; so is a
-    deliberate edit by hand that a library is to load. ``known`` / ``texts``: the checksums and written texts of
-    unchanged entries (:func:`add_to_library`'s), completed there. Returns the bytes written."""
+    deliberate edit by hand that a library is to load. ``known`` / ``texts``: the checksums and canonical texts
+    (:func:`~sb3_smc.library.manifest.seal`'s) and the written texts of unchanged entries (:func:`add_to_library`'s),
+    completed there. Returns the bytes written."""
     data = (manifest_text(seal(manifest, known), texts) + "\n").encode("utf-8")
     atomic_write(path, data)
     return data
@@ -223,12 +224,12 @@ def write_manifest(path: Path, manifest: dict[str, Any], known: dict[str, str] |
 _KEPT = 4
 """How many manifests a process keeps, checked (:func:`checked_entries`) and as last added to (:func:`add_to_library`):
 the latest ones."""
-_ADDED: dict[str, tuple[str, dict[str, Any], dict[str, str], dict[str, str]]] = {}
+_ADDED: dict[str, tuple[str, dict[str, Any], dict[str, tuple[str, str]], dict[str, str]]] = {}
 """Per manifest path, what :func:`add_to_library` last wrote there in this process: the SHA-256 of the file's bytes,
-the manifest without its checksums, and its entries' checksums and written texts."""
+the manifest without its checksums, and its entries' checksums with canonical texts, and written texts."""
 
 
-def _manifest_to_add_to(root: Path) -> tuple[dict[str, Any], dict[str, str], dict[str, str], Path]:
+def _manifest_to_add_to(root: Path) -> tuple[dict[str, Any], dict[str, tuple[str, str]], dict[str, str], Path]:
     """What :func:`add_to_library` adds to: the manifest of the library in ``root`` as the current version without its
     checksums (:func:`_current_manifest`: checked), and its entries' checksums and texts where known. While the file
     holds the bytes this process's last add wrote there, that add's manifest is taken as it is (a run adding its SMCs
