@@ -3,7 +3,8 @@
 A run directory of ``sb3-smc experiment`` or ``sb3-smc train`` (for example ``/work/runs/paper-readings`` of
 ``tools/paper_table.sh``) holds every trained SMC's spec and, in its library, the children it called. This takes the
 seeds of one node, shortens their budget to ``--updates`` updates and trains them as the curriculum trainer does
-(``train_smcs``: one group, children from the run's library, one torch and one BLAS thread), each tree in its own
+(``train_smcs``: one group, children from the run's library, the lean update where the run's records say it trained
+with it, one torch and one BLAS thread), each tree in its own
 subprocess (``PYTHONPATH`` = the tree), alternating, ``--repeats`` rounds. Reported per round: wall seconds of the
 group's training, decisions per second and the primitive moves made, which must be the same in both trees where
 the change keeps the SMCs.
@@ -34,15 +35,16 @@ from sb3_smc.records import TrainingSpec
 root, node, updates = sys.argv[1], sys.argv[2], int(sys.argv[3])
 manifest = json.loads(open(root + "/library/manifest.json").read())["smcs"]
 specs = [TrainingSpec.from_dict(manifest[f"{node}@{seed}"]["spec"]) for seed in sys.argv[4:]]
+lean = {"lean_update": True} if manifest[f"{node}@{sys.argv[4]}"]["record"].get("lean_update") else {}
 specs = [dataclasses.replace(s, budget=dataclasses.replace(s.budget, total_timesteps=2000 * updates)) for s in specs]
 children = sorted({c for s in specs for c in s.children})
 library = SMCLibrary.load(root + "/library", names=children) if children else None
 warm = [dataclasses.replace(s, budget=dataclasses.replace(s.budget, total_timesteps=2000)) for s in specs[:1]]
-train_smcs(warm, children=library, log_every=0)  # compilation and first-time set-up
+train_smcs(warm, children=library, log_every=0, **lean)  # compilation and first-time set-up
 begin = time.perf_counter()
-smcs = train_smcs(specs, children=library, log_every=0)
+smcs = train_smcs(specs, children=library, log_every=0, **lean)
 seconds = time.perf_counter() - begin
-print(json.dumps({"seconds": seconds, "decisions": sum(s.record.total_timesteps for s in smcs),
+print(json.dumps({"seconds": seconds, "lean": bool(lean), "decisions": sum(s.record.total_timesteps for s in smcs),
                   "primitive": sum(s.record.primitive_steps for s in smcs)}))
 """
 
@@ -78,7 +80,8 @@ def main() -> None:
             rows[label].append(row)
             print(f"[{repeat + 1}/{args.repeats}] {label:9s} {row['seconds']:6.2f} s  "
                   f"{row['decisions'] / row['seconds']:,.0f} decisions/s  {row['primitive']:,} moves", flush=True)
-    print(f"\n{args.node}, seeds {args.seeds} in one group, {args.updates} updates each, one torch thread\n")
+    update = "the lean update" if rows[trees[-1][0]][0]["lean"] else "the default update"
+    print(f"\n{args.node}, seeds {args.seeds} in one group, {args.updates} updates each, {update}, one torch thread\n")
     print("| code | seconds (rounds) | median | decisions/s (median) | primitive moves |")
     print("|---|---|---:|---:|---:|")
     for label, _ in trees:
