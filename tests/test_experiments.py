@@ -333,6 +333,37 @@ def test_the_compare_runs_tool_pairs_the_smcs_of_two_runs(tmp_path, capsys):
         assert says in captured.err and captured.out == ""
 
 
+def test_the_job_costs_tool_gives_each_levels_cost_and_the_childrens_share(tmp_path, capsys):
+    """``tools/job_costs.py``: jobs grouped by level (SMCs without a record left out), medians per job and per
+    decision against the flat jobs', moves per decision, and the fit of microseconds per decision against moves per
+    decision, leaving out a job above 3 times its level's median (numbers by hand: 10 + 2 x moves); bad input refused
+    before any output."""
+    from types import SimpleNamespace
+
+    job_costs = import_tool("job_costs")
+
+    def entry(seconds: float | None, moves: float = 1.0, children: tuple[str, ...] = ()) -> SimpleNamespace:
+        record = None if seconds is None else SimpleNamespace(wall_time_s=seconds, total_timesteps=100_000,
+                                                              primitive_steps=int(moves * 100_000))
+        return SimpleNamespace(children=children, record=record)
+
+    entries = {"f0": entry(2.0), "f1": entry(4.0), "untrained": entry(None),
+               "a": entry(1.4, 2, ("f0",)), "b": entry(1.8, 4, ("f0", "f1")), "c": entry(2.2, 6, ("f1",)),
+               "paused": entry(30.0, 4, ("f0",)), "top": entry(9.0, 50, ("a",))}
+    levels = job_costs.jobs_by_level(entries)
+    assert {level: len(jobs) for level, jobs in levels.items()} == {1: 2, 2: 4, 3: 1}
+    a, b, r2, left_out = job_costs.fit(levels[2])
+    assert (round(a, 9), round(b, 9), round(r2, 9), left_out) == (10.0, 2.0, 1.0, 1)
+    assert job_costs.table(Path("run"), levels)[4:] == [
+        "| 1 | 2 | 3.0 | 30.0 | 1.0 | 1.00 | 1.00 |  |",
+        "| 2 | 4 | 2.0 | 20.0 | 4.0 | 0.67 | 0.67 | 10.0 + 2.00 x moves (1.00; 1) |",
+        "| 3 | 1 | 9.0 | 90.0 | 50.0 | 3.00 | 3.00 |  |"]
+    with pytest.raises(SystemExit):
+        job_costs.main([str(tmp_path / "none")])
+    captured = capsys.readouterr()
+    assert "none: not a run with a library" in captured.err and captured.out == ""
+
+
 def test_reported_scores_are_the_best_seed_and_curriculum():
     rows = [{"target": "t", "kind": "classification", "category": "objcon", "method": "curr", "curriculum": c,
              "seed": s, "test_score": v} for c, s, v in (("a", 0, 0.5), ("a", 1, 0.7), ("b", 0, 0.9), ("b", 1, 0.1))]
