@@ -333,11 +333,12 @@ def test_the_compare_runs_tool_pairs_the_smcs_of_two_runs(tmp_path, capsys):
         assert says in captured.err and captured.out == ""
 
 
-def test_the_job_costs_tool_gives_each_levels_cost_and_the_childrens_share(tmp_path, capsys):
+def test_the_job_costs_tool_gives_each_levels_cost_and_the_childrens_share(tmp_path, capsys, monkeypatch):
     """``tools/job_costs.py``: jobs grouped by level (SMCs without a record left out), medians per job and per
     decision against the flat jobs', moves per decision, and the fit of microseconds per decision against moves per
-    decision, leaving out a job above 3 times its level's median (numbers by hand: 10 + 2 x moves); bad input refused
-    before any output."""
+    decision over nodes (a node's seeds summed: they share their group's time whatever their own moves), leaving out
+    a node above 3 times its level's median (numbers by hand: 10 + 2 x moves); several runs pooled; bad input
+    refused before any output."""
     from types import SimpleNamespace
 
     job_costs = import_tool("job_costs")
@@ -347,17 +348,25 @@ def test_the_job_costs_tool_gives_each_levels_cost_and_the_childrens_share(tmp_p
                                                               primitive_steps=int(moves * 100_000))
         return SimpleNamespace(children=children, record=record)
 
-    entries = {"f0": entry(2.0), "f1": entry(4.0), "untrained": entry(None),
-               "a": entry(1.4, 2, ("f0",)), "b": entry(1.8, 4, ("f0", "f1")), "c": entry(2.2, 6, ("f1",)),
-               "paused": entry(30.0, 4, ("f0",)), "top": entry(9.0, 50, ("a",))}
+    # node a's two seeds: 3 and 1 moves a decision, 1.4 s each (the group's share): 2 moves, 14 us a decision
+    entries = {"f@0": entry(2.0), "f@1": entry(4.0), "untrained@0": entry(None),
+               "a@0": entry(1.4, 3, ("f@0",)), "a@1": entry(1.4, 1, ("f@1",)), "b@0": entry(1.8, 4, ("f@0", "f@1")),
+               "c": entry(2.2, 6, ("f@1",)), "paused@0": entry(30.0, 4, ("f@0",)), "top@0": entry(9.0, 50, ("a@0",))}
     levels = job_costs.jobs_by_level(entries)
-    assert {level: len(jobs) for level, jobs in levels.items()} == {1: 2, 2: 4, 3: 1}
+    assert {level: len(jobs) for level, jobs in levels.items()} == {1: 2, 2: 5, 3: 1}
     a, b, r2, left_out = job_costs.fit(levels[2])
     assert (round(a, 9), round(b, 9), round(r2, 9), left_out) == (10.0, 2.0, 1.0, 1)
     assert job_costs.table(Path("run"), levels)[4:] == [
         "| 1 | 2 | 3.0 | 30.0 | 1.0 | 1.00 | 1.00 |  |",
-        "| 2 | 4 | 2.0 | 20.0 | 4.0 | 0.67 | 0.67 | 10.0 + 2.00 x moves (1.00; 1) |",
+        "| 2 | 5 | 1.8 | 18.0 | 3.6 | 0.60 | 0.60 | 10.0 + 2.00 x moves (1.00; 1) |",
         "| 3 | 1 | 9.0 | 90.0 | 50.0 | 3.00 | 3.00 |  |"]
+
+    with monkeypatch.context() as patch:
+        patch.setattr(job_costs.storage, "checked_entries", lambda root: (entries, {}, root / "manifest.json"))
+        assert job_costs.main([str(tmp_path / "x"), str(tmp_path / "y")]) == 0
+    out = capsys.readouterr().out.split("\n\n")
+    assert out[4] == "the 2 runs pooled" and out[5].splitlines()[3] == (
+        "| 2 | 10 | 1.8 | 18.0 | 3.6 | 0.60 | 0.60 | 10.0 + 2.00 x moves (1.00; 2) |")
     with pytest.raises(SystemExit):
         job_costs.main([str(tmp_path / "none")])
     captured = capsys.readouterr()
