@@ -224,6 +224,15 @@ def write_manifest(path: Path, manifest: dict[str, Any], known: dict[str, tuple[
 _KEPT = 4
 """How many manifests a process keeps, checked (:func:`checked_entries`) and as last added to (:func:`add_to_library`):
 the latest ones."""
+
+
+def _keep(cache: dict[Any, Any], key: Any, value: Any) -> None:
+    """``cache[key] = value`` as the latest entry, the oldest dropped beyond :data:`_KEPT`."""
+    cache.pop(key, None)
+    while len(cache) >= _KEPT:
+        del cache[next(iter(cache))]
+    cache[key] = value
+
 _ADDED: dict[str, tuple[str, dict[str, Any], dict[str, tuple[str, str]], dict[str, str]]] = {}
 """Per manifest path, what :func:`add_to_library` last wrote there in this process: the SHA-256 of the file's bytes,
 the manifest without its checksums, and its entries' checksums with canonical texts, and written texts."""
@@ -293,10 +302,7 @@ def add_to_library(root: Path, name: str, entry: dict[str, Any], model: bytes, *
     texts.pop(name, None)
     data = write_manifest(manifest_path, manifest, known, texts)
     key = str(manifest_path.resolve())
-    _ADDED.pop(key, None)
-    while len(_ADDED) >= _KEPT:
-        del _ADDED[next(iter(_ADDED))]
-    _ADDED[key] = (hashlib.sha256(data).hexdigest(), manifest, known, texts)
+    _keep(_ADDED, key, (hashlib.sha256(data).hexdigest(), manifest, known, texts))
 
 
 def remove_from_library(root: Path, names: Collection[str]) -> None:
@@ -390,10 +396,7 @@ def checked_entries(root: Path) -> tuple[dict[str, LibraryEntry], dict[str, Any]
     key = (str(manifest_path.resolve()), hashlib.sha256(data).hexdigest())
     if key not in _CHECKED:
         manifest = _parse_manifest(data, manifest_path)
-        checked = check_manifest(manifest, manifest_path), dict(manifest.get("created_with") or {})
-        while len(_CHECKED) >= _KEPT:
-            del _CHECKED[next(iter(_CHECKED))]
-        _CHECKED[key] = checked
+        _keep(_CHECKED, key, (check_manifest(manifest, manifest_path), dict(manifest.get("created_with") or {})))
     entries, created_with = _CHECKED[key]
     return dict(entries), dict(created_with), manifest_path
 
