@@ -16,7 +16,8 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import BinaryIO
 
-__all__ = ["OLD_MARKER", "atomic_write", "fsync_dir", "fsync_file", "make_temporary_directory", "replace_directory"]
+__all__ = ["OLD_MARKER", "atomic_write", "fsync_dir", "fsync_file", "make_temporary_directory", "path_inside",
+           "replace_directory"]
 
 OLD_MARKER = ".old-"
 """A directory being replaced is renamed to ``.<name>.old-<random>`` beside it until the new one is in place."""
@@ -111,3 +112,24 @@ def replace_directory(new: str | os.PathLike, target: str | os.PathLike) -> None
     fsync_dir(target.parent)
     if old is not None:
         shutil.rmtree(old, ignore_errors=True)
+
+
+def path_inside(root: str | os.PathLike, *parts: str) -> Path:
+    """``root / parts...``, resolved, after proving that it lies inside ``root`` (resolved too) and that no part of it
+    below ``root`` is a symbolic link: a name such as ``../x``, an absolute path or a link planted in the folder
+    cannot make a write or a removal reach outside it (``PixelWorldError`` naming both paths otherwise)."""
+    from pixelworld_env.errors import PixelWorldError
+
+    base = Path(root).resolve()
+    path = base
+    for part in parts:
+        for piece in Path(part).parts:
+            if piece in ("", ".", "..") or Path(piece).is_absolute() or "\x00" in piece:
+                raise PixelWorldError(f"{part!r} is not a name inside {base} (it holds {piece!r})")
+            path = path / piece
+            if path.is_symlink():
+                raise PixelWorldError(f"{path} is a symbolic link; refusing to follow it out of {base}")
+    if not path.resolve().is_relative_to(base):
+        raise PixelWorldError(f"{path} lies outside {base}")
+    return path
+

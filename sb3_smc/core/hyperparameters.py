@@ -40,7 +40,12 @@ __all__ = [
     "DEFAULT_HYPERPARAMETERS",
     "DEFAULT_N_ENVS",
     "DEFAULT_TIMESTEPS",
+    "MAX_ITERATIONS",
+    "MAX_N_ENVS",
+    "MAX_STEPS_PER_UPDATE",
+    "MAX_TIMESTEPS",
     "RECURRENT_POLICIES",
+    "SAFE_CLASS_MODULES",
     "STEPS_PER_UPDATE",
     "Algorithm",
     "algorithm",
@@ -57,6 +62,19 @@ DEFAULT_N_ENVS = 16
 """Environments stepped together (``n_steps = STEPS_PER_UPDATE // n_envs`` each)."""
 DEFAULT_TIMESTEPS = 400_000
 """Environment steps of one SMC's training when none are given (200 updates of ``STEPS_PER_UPDATE``)."""
+
+MAX_TIMESTEPS = 10**10
+"""The most environment steps one SMC trains (``budget.total_timesteps``, ``--timesteps``): 25,000 times the default,
+decades of one job's CPU time; a larger number is a typo, refused before anything is built."""
+MAX_N_ENVS = 1024
+"""The most environments stepped together in one SMC's training (``budget.n_envs``)."""
+MAX_STEPS_PER_UPDATE = 10**6
+"""The most environment steps of one update's rollout (``budget.n_envs x budget.n_steps``; 500 times the paper's
+2,000): the rollout buffer holds them all."""
+MAX_ITERATIONS = 10_000
+"""The most passes an update makes of one kind (the hyperparameters of :data:`ITERATION_HYPERPARAMETERS`)."""
+ITERATION_HYPERPARAMETERS = ("n_epochs", "n_critic_updates", "cg_max_steps", "line_search_max_iter")
+"""Hyperparameters that count an update's passes: integers in ``[1, MAX_ITERATIONS]``."""
 
 RECURRENT_POLICIES = {"lstm": "SequenceLstmPolicy", "gru": "SequenceGruPolicy"}
 """``rnn`` option of ``train_smc`` -> the recurrent policy (by name) of the recurrent algorithms."""
@@ -204,14 +222,27 @@ def encode_value(value: Any, where: str) -> Any:
                    "spec; use JSON values, classes, or 'lin_<initial value>' for a linear schedule")
 
 
-def _import_class(path: str, where: str) -> type:
+SAFE_CLASS_MODULES = ("torch.nn", "torch.optim", "stable_baselines3", "sb3_contrib", "sb3_smc")
+"""The modules (and their sub-modules) a stored class is imported from without ``trust``: PyTorch's layers and
+optimisers, Stable-Baselines3's and sb3-contrib's classes and this package's. Importing a module runs its code, so a
+file that names another module's class (``{"__class__": "mypackage.MyExtractor"}``) loads only when its reader
+trusts it."""
+
+
+def _import_class(path: str, where: str, trust: bool = False) -> type:
     module, _, name = path.rpartition(".")
+    if not trust and not any(module == safe or module.startswith(safe + ".") for safe in SAFE_CLASS_MODULES):
+        raise SMCError(f"hyperparameter {where}: class {path!r} is not from a module loaded without trust "
+                       f"({', '.join(SAFE_CLASS_MODULES)}); importing it would run its module's code: pass "
+                       "trust=True (--trust) only for a file from a source you trust")
     try:
         obj: Any = importlib.import_module(module)
         for part in name.split("."):
             obj = getattr(obj, part)
     except (ImportError, AttributeError, ValueError) as err:
         raise SMCError(f"hyperparameter {where}: cannot import class {path!r} ({err})") from None
+    if not isinstance(obj, type):
+        raise SMCError(f"hyperparameter {where}: {path!r} is a {type(obj).__name__}, not a class")
     return obj
 
 
@@ -222,14 +253,17 @@ def _linear(initial: float) -> Callable[[float], float]:
     return schedule
 
 
-def decode_value(value: Any, where: str) -> Any:
-    """The inverse of :func:`encode_value` (classes imported, ``"lin_<x>"`` becomes a linear schedule)."""
+def decode_value(value: Any, where: str, *, trust: bool = True) -> Any:
+    """The inverse of :func:`encode_value` (classes imported, ``"lin_<x>"`` becomes a linear schedule).
+    ``trust=False`` (a file someone else wrote): classes only from :data:`SAFE_CLASS_MODULES`."""
     if isinstance(value, Mapping):
         if set(value) == {CLASS_KEY}:
-            return _import_class(value[CLASS_KEY], where)
-        return {k: decode_value(v, f"{where}.{k}") for k, v in value.items()}
+            if not isinstance(value[CLASS_KEY], str):
+                raise SMCError(f"hyperparameter {where}: a class path must be a string, got {value[CLASS_KEY]!r}")
+            return _import_class(value[CLASS_KEY], where, trust)
+        return {k: decode_value(v, f"{where}.{k}", trust=trust) for k, v in value.items()}
     if isinstance(value, list):
-        return [decode_value(v, f"{where}[{i}]") for i, v in enumerate(value)]
+        return [decode_value(v, f"{where}[{i}]", trust=trust) for i, v in enumerate(value)]
     if isinstance(value, str) and where.split(".")[-1] in SCHEDULE_KEYS and value.startswith("lin_"):
         try:
             return _linear(float(value[4:]))
@@ -253,7 +287,12 @@ def resolve_hyperparameters(algo: str, overrides: Mapping[str, Any] | None = Non
     policy = resolved.get("policy")
     if not isinstance(policy, str | type):
         raise SMCError(f"hyperparameter 'policy' must be a policy name or class, got {policy!r}")
-    return {key: encode_value(value, key) for key, value in resolved.items()}
+    encoded = {key: encode_value(value, key) for key, value in resolved.items()}
+    for key in ITERATION_HYPERPARAMETERS:
+        value = encoded.get(key)
+        if value is not None and not (type(value) is int and 1 <= value <= MAX_ITERATIONS):  # bools are not counts
+            raise SMCError(f"hyperparameter {key!r} must be an integer in [1, {MAX_ITERATIONS:,}], got {value!r}")
+    return encoded
 
 
 def constructor_arguments(hyperparameters: Mapping[str, Any]) -> tuple[str | type[ActorCriticPolicy], dict[str, Any]]:

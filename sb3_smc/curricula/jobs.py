@@ -11,7 +11,6 @@ anything.
 
 from __future__ import annotations
 
-import io
 import json
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -156,9 +155,8 @@ def run_group(jobs: Sequence[Job]) -> list[JobResult]:
 
 def _result(smc: SMC) -> JobResult:
     assert smc.spec is not None and smc.record is not None  # train_smc and train_smcs record both
-    buffer = io.BytesIO()
-    smc.model.save(buffer)
-    return JobResult(spec=smc.spec, record=smc.record, algo=smc.spec.algo, model=buffer.getvalue())
+    return JobResult(spec=smc.spec, record=smc.record, algo=smc.spec.algo,
+                     model=storage.model_bytes(smc.model, where=f"SMC {smc.name!r}"))
 
 
 def rank_seeds(records: dict[int, TrainingRecord]) -> list[int]:

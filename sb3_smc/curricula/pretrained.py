@@ -4,11 +4,8 @@ compact, with the index that loads them by curriculum name (``tools/build_pretra
 
 from __future__ import annotations
 
-import io
 import json
-import shutil
 import tempfile
-import zipfile
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -26,7 +23,7 @@ __all__ = ["PRETRAINED_SEEDS", "build_pretrained", "compact_model", "lower_level
 PRETRAINED_SEEDS = 2
 """Seeds shipped per node: the two best, as the paper's SMC filter gives a caller (docs/design.md, "Curricula:
 reuse of the best seeds")."""
-_OPTIMIZER = "policy.optimizer.pth"
+_OPTIMIZER_STATE = "policy.optimizer/state/"
 
 
 def lower_level(curriculum: Curriculum) -> list[str]:
@@ -35,27 +32,22 @@ def lower_level(curriculum: Curriculum) -> list[str]:
     return [node.name for node in curriculum.nodes if node.name in used]
 
 
-def compact_model(path: Path) -> None:
-    """Rewrite the SB3 archive ``path`` without the optimiser's running state (an empty state of the same
-    parameter groups: loading still matches the model's parameters) and compressed, atomically."""
-    import torch
+def compact_model(data: bytes, where: str = "model") -> bytes:
+    """A model file's bytes (:mod:`sb3_smc.library.model_file`) without the optimiser's running state (its parameter
+    groups kept: the model still loads and trains), the weights untouched."""
+    from safetensors.torch import load, save
 
-    buffer = io.BytesIO()
-    with zipfile.ZipFile(path) as source, zipfile.ZipFile(buffer, "w", zipfile.ZIP_DEFLATED, compresslevel=9) as out:
-        for item in source.infolist():
-            data = source.read(item.filename)
-            if item.filename == _OPTIMIZER:
-                state = torch.load(io.BytesIO(data), map_location="cpu", weights_only=True)
-                state["state"] = {}
-                stripped = io.BytesIO()
-                torch.save(state, stripped)
-                data = stripped.getvalue()
-            out.writestr(item.filename, data)
-    atomic_write(path, buffer.getvalue())
+    from sb3_smc.library.model_file import METADATA_KEY, check_model_bytes
+
+    metadata = check_model_bytes(data, None, where)
+    tensors = {key: value for key, value in load(data).items() if not key.startswith(_OPTIMIZER_STATE)}
+    metadata["optimizer"] = {**metadata["optimizer"], "scalars": {}}
+    return save(tensors, metadata={METADATA_KEY: json.dumps(metadata, sort_keys=True, allow_nan=False)})
 
 
 def build_pretrained(runs: Sequence[str | Path], curricula: Sequence[str | Curriculum],
-                     out: str | Path | None = None, *, repeats: int = 10, finished_only: bool = False) -> Path:
+                     out: str | Path | None = None, *, repeats: int = 10, finished_only: bool = False,
+                     trust: bool = False) -> Path:
     """Collect the two best seeds of every lower-level node of ``curricula`` from the libraries of ``runs`` (run
     directories holding ``library/``), evaluate each on its test split (``repeats``, seed 0), and write them, with
     what ``out`` already holds (default: the package's pretrained library), as a compact library to ``out``.
@@ -67,7 +59,8 @@ def build_pretrained(runs: Sequence[str | Path], curricula: Sequence[str | Curri
     instead of refusing, the nodes whose seeds are not all trained yet (a run still going: its finished nodes now,
     the rest in a later build). ``out`` must be missing, empty or a library. The index
     (:data:`~sb3_smc.library.pretrained.INDEX`) then lists ``curricula``, the curricula it listed before and every
-    shipped curriculum whose lower-level nodes are all held.
+    shipped curriculum whose lower-level nodes are all held. ``trust``: ``out`` is an old library of pickled models
+    that you trust (:meth:`SMCLibrary.load`'s ``trust``); it is written in the current format.
     """
     from sb3_smc.learning.evaluation import evaluate  # loads torch and SB3: only when a library is built
 
@@ -99,7 +92,7 @@ def build_pretrained(runs: Sequence[str | Path], curricula: Sequence[str | Curri
         ranked_among[node] = seeds
     held = target / storage.MANIFEST
     before = pretrained_index(target) if (target / INDEX).is_file() else {"curricula": {}, "seeds": {}}
-    library = SMCLibrary.load(target) if held.is_file() else SMCLibrary()
+    library = SMCLibrary.load(target, trust=trust) if held.is_file() else SMCLibrary()
     previous = storage.checked_entries(target)[0] if held.is_file() else {}
 
     def held_alike(node: str, run: Path, names: list[str]) -> bool:
@@ -123,22 +116,21 @@ def build_pretrained(runs: Sequence[str | Path], curricula: Sequence[str | Curri
             smc = loaded[name]
             evaluate(smc, repeats=repeats, seed=0, record_cells=False)
             library.add(smc)
+    models = {}
+    for name in library.names:
+        if name in previous and name not in rebuilt and not storage.is_pickled(previous[name]):
+            models[name] = storage.check_model_file(target, name, previous[name])  # kept as it was, byte for byte
+        else:
+            models[name] = compact_model(storage.model_bytes(library[name].model), f"SMC {name!r}")
     target.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(dir=target.parent) as tmp:
-        staged = library.save(Path(tmp) / "library")
-        manifest = json.loads((staged / storage.MANIFEST).read_text(encoding="utf-8"))
-        for name, entry in manifest["smcs"].items():
-            if name in previous and name not in rebuilt:  # kept as it was, byte for byte
-                shutil.copyfile(target / previous[name].model, staged / entry["model"])
-                entry["sha256"] = previous[name].sha256
-            else:
-                compact_model(staged / entry["model"])
-                entry["sha256"] = storage.sha256(staged / entry["model"])
-        storage.write_manifest(staged / storage.MANIFEST, manifest)
+        staged = Path(tmp) / "library"
+        storage.save_library(staged, {name: library.entry(name) for name in library.names}, models, {})
         index = _index(library.names, before["curricula"], resolved, {**before["seeds"], **ranked_among})
         atomic_write(staged / INDEX, json.dumps(index, indent=1) + "\n")
         SMCLibrary.load(staged)  # the compact copy loads and checks out before it replaces anything
         pretrained_index(staged)
+        (staged / storage.LOCK).unlink(missing_ok=True)
         replace_directory(staged, target)
     return target
 

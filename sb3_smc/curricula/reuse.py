@@ -17,6 +17,7 @@ from sb3_smc.curricula.format import Curriculum
 from sb3_smc.curricula.jobs import JobId, node_records, rank_seeds
 from sb3_smc.curricula.options import RunOptions
 from sb3_smc.library import storage
+from sb3_smc.library.errors import LibraryError
 from sb3_smc.library.pretrained import INDEX, pretrained_index
 from sb3_smc.records import TrainingRecord
 
@@ -56,8 +57,11 @@ class ReuseLibrary:
         wanted = options.spec(curriculum.node(job.node), job.seed, children)
         if entry.spec != wanted or entry.record.lean_update != options.lean_update:
             return None
-        storage.check_model_file(self.root, name, entry)
-        model = (self.root / entry.model).read_bytes()
+        if storage.is_pickled(entry):
+            raise LibraryError(f"{self.root}: SMC {name!r} is stored as a pickled archive (a library of version 4 or "
+                               "earlier), which a run does not copy: convert the library first, if you trust it, with "
+                               f"sb3-smc library {self.root} --upgrade --trust")
+        model = storage.check_model_file(self.root, name, entry)
         storage.add_to_library(library, name, storage.entry_json(name, entry.algo, entry.frame_stack, entry.spec,
                                                                  entry.record), model)
         return entry.record

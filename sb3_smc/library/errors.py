@@ -7,8 +7,8 @@ from collections.abc import Sequence
 
 from sb3_smc.errors import SMCError, SMCKeyError
 
-__all__ = ["CorruptModelError", "LayoutMismatchError", "LibraryError", "ManifestError", "MissingChildError",
-           "UnknownSMCError", "suggest"]
+__all__ = ["CorruptModelError", "LayoutMismatchError", "LibraryConflictError", "LibraryError", "ManifestError",
+           "MissingChildError", "UnknownSMCError", "UntrustedModelError", "suggest"]
 
 
 class LibraryError(SMCError):
@@ -33,6 +33,16 @@ class LayoutMismatchError(LibraryError):
 
 class CorruptModelError(LibraryError):
     """A model file is missing, truncated, corrupt, modified since it was saved, or not loadable."""
+
+
+class UntrustedModelError(LibraryError):
+    """A model file that only loads by running code from it (a pickled archive of an old library), asked for without
+    ``trust=True``."""
+
+
+class LibraryConflictError(LibraryError):
+    """Another writer changed the library since this one read it, in a way a save cannot merge (nothing is
+    written)."""
 
 
 def suggest(name: str, names: Sequence[str], empty: str = " (the library is empty)") -> str:

@@ -81,6 +81,9 @@ class SMCLibrary(Mapping[str, SMC]):
         """Where the library was loaded from or last saved to (the default target of :meth:`save`)."""
         self.created_with: dict[str, str] = {}
         """Package versions recorded in the loaded manifest (empty for a library not loaded from disk)."""
+        self._synced: dict[Path, dict[str, str]] = {}
+        """By folder, the checksums of the entries this object read from or wrote to it: what it knows of it, for
+        :meth:`save`'s merge."""
         for smc in smcs:
             self.add(smc)
 
@@ -194,23 +197,22 @@ class SMCLibrary(Mapping[str, SMC]):
         """The manifest entry of SMC ``name`` (without the ``model`` file and ``sha256`` fields :meth:`save` adds)."""
         return storage.entry_for(self[name])
 
-    def manifest(self) -> dict[str, Any]:
-        """The manifest :meth:`save` writes (model file names included, checksums not)."""
-        files = storage.model_files(self.names)
-        return storage.new_manifest({name: {"model": files[name], **self.entry(name)} for name in self.names})
-
     # ------------------------------------------------------------------------------------------ saving
 
-    def save(self, path: str | os.PathLike | None = None) -> Path:
-        """Write the library to a directory, atomically.
+    def save(self, path: str | os.PathLike | None = None, *, overwrite: bool = False) -> Path:
+        """Write the library to a directory, in place and safely against crashes and other writers.
 
-        Everything is written into a temporary directory beside ``path`` (models first, then the manifest, each
-        fsynced); only when it is complete is an existing library at ``path`` renamed aside, the new one renamed
-        into place and the old one deleted. An error while writing deletes the temporary directory and leaves the
-        previous library untouched.
+        Under the library's lock, each SMC's model file is written (named by the SHA-256 of its bytes, so a file is
+        never rewritten), then the manifest atomically, then the files no entry names any more are deleted: an
+        interrupted save leaves the previous library, a reader sees the old or the new one. SMCs another process
+        added to the folder since this library read it (or that the folder held before, for a library that never
+        read it) are kept: two processes that each load, add and save both keep their SMCs. An SMC this library read
+        from the folder and someone else changed there since is refused (:class:`LibraryConflictError`, nothing
+        written).
 
         :param path: the directory (default: :attr:`path`): missing, empty, or an existing library; anything else
             is refused (``LibraryError``).
+        :param overwrite: make the folder hold exactly this library's SMCs, dropping the others.
         :return: the absolute path written.
         """
         if path is None:
@@ -221,36 +223,49 @@ class SMCLibrary(Mapping[str, SMC]):
         if target.exists():
             if not target.is_dir():
                 raise LibraryError(f"cannot save an SMC library to {target}: it is a file")
-            if any(target.iterdir()) and not (target / storage.MANIFEST).is_file():
-                raise LibraryError(f"refusing to replace {target}: it is a non-empty directory without "
+            if any(p.name != storage.LOCK for p in target.iterdir()) and not (target / storage.MANIFEST).is_file():
+                raise LibraryError(f"refusing to write to {target}: it is a non-empty directory without "
                                    f"{storage.MANIFEST} (not an SMC library)")
         for name in self.names:  # an SMC may have been changed since it was added
             self._check_storable(self._smcs[name])
-        manifest = self.manifest()
-        storage.write_library(target, self._smcs, manifest)
+        entries = {name: self.entry(name) for name in self.names}
+        models = {name: storage.model_bytes(self._smcs[name].model, where=f"SMC {name!r}") for name in self.names}
+        known = self._synced.get(target.resolve(), {})
+        self._synced[target.resolve()] = storage.save_library(target, entries, models, known, overwrite=overwrite)
         self.path = target
-        self.created_with = manifest["created_with"]
+        self.created_with = storage.checked_entries(target)[1]
         return target
 
     # ------------------------------------------------------------------------------------------ loading
 
     @classmethod
-    def load(cls, path: str | os.PathLike, names: Sequence[str] | None = None) -> SMCLibrary:
-        """Load and validate a saved library.
+    def load(cls, path: str | os.PathLike, names: Sequence[str] | None = None, *, trust: bool = False) -> SMCLibrary:
+        """Load and validate a saved library, running no code from it.
 
         Checks the manifest (format, version, the checksums of its content, fields), that every child is in the
         library and no SMC calls itself (through any chain), that action names and observation sizes agree with
-        kind/children and with each model's spaces, and that each model file is intact (readable zip, SHA-256 as
-        recorded) and loads with its algorithm's class (``device="cpu"``).
+        kind/children and with each model's spaces, and that each model file is intact (its SHA-256 as recorded, a
+        well-formed model file) and rebuilds its model from its tensors and settings (``device="cpu"``; nothing is
+        unpickled, classes come only from Stable-Baselines3, sb3-contrib, PyTorch and this package). Reads under the
+        library's shared lock: a writer's save is seen whole or not at all. Symbolic links inside the folder are
+        refused. See ``docs/security.md``.
 
         :param path: the library's directory (with its ``manifest.json``).
-        :param names: load only these SMCs and their descendants; such a partial library has no default save path,
-            so ``save()`` cannot replace the whole library with it.
-        :raises LibraryError: (its subclasses) naming the file and the SMC at fault.
+        :param names: load only these SMCs and their descendants; such a partial library has no default save path.
+        :param trust: also load what runs code from the files: the pickled model archives of a library of version 4
+            or earlier, and classes of other modules named in a model's settings. Only for a library from a source
+            you trust: a forged archive runs its payload.
+        :raises LibraryError: (its subclasses) naming the file and the SMC at fault; :class:`UntrustedModelError`
+            for a pickled model without ``trust``.
         """
+        root = Path(path)
+        with storage.locked(root, exclusive=False):
+            return cls._load(root, names, trust)
+
+    @classmethod
+    def _load(cls, root: Path, names: Sequence[str] | None, trust: bool) -> SMCLibrary:
         from sb3_smc.smc.policies import FrameStackPolicy, policy_from_model
 
-        root = Path(path)
         entries, created_with, manifest_path = storage.checked_entries(root)
         order = storage.topological_order(entries, manifest_path)
         if names is not None:
@@ -260,7 +275,7 @@ class SMCLibrary(Mapping[str, SMC]):
         library.created_with = created_with
         for name in order:
             entry = entries[name]
-            model = storage.load_model(root, name, entry)
+            model = storage.load_model(root, name, entry, trust=trust)
             size, stack = entry.observation_size, entry.frame_stack
             storage.check_model_layout(name, model, entry.action_names, size,
                                        f"the {entry.algo} model in {root / entry.model}", stack, entry.layout)
@@ -279,6 +294,7 @@ class SMCLibrary(Mapping[str, SMC]):
                 smc = SMC(name, entry.kind, policy, children, entry.include_primitives, model=model,
                           record=entry.record, evaluations=entry.evaluations, layout=entry.layout)
             library._smcs[name] = smc
+        library._synced[root.resolve()] = {name: entries[name].checksum for name in order}
         return library
 
     @classmethod

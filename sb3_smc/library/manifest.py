@@ -37,16 +37,21 @@ from sb3_smc.records import (
     test_score_of,
 )
 
-__all__ = ["ALGORITHMS", "ENTRY_CHECKSUM", "FORMAT", "FORMAT_VERSION", "MANIFEST", "MANIFEST_CHECKSUM",
-           "SUMMARY_FIELDS", "LibraryEntry", "check_entries", "check_version", "content_sha256", "entry_json",
-           "layout_json", "new_manifest", "seal", "topological_order", "unseal"]
+__all__ = ["ALGORITHMS", "ENTRY_CHECKSUM", "FORMAT", "FORMAT_VERSION", "MANIFEST", "MANIFEST_CHECKSUM", "MODELS",
+           "SUMMARY_FIELDS", "LibraryEntry", "check_entries", "check_version", "content_sha256", "entry_checksum",
+           "entry_json", "layout_json", "model_path", "new_manifest", "seal", "topological_order", "unseal"]
 
 FORMAT = "sb3-smc-library"
 """Value of the manifest's ``format`` field."""
-FORMAT_VERSION = 4
-"""Manifest version written. Versions 1 (sb3-smc 0.1), 2 (each entry repeating its spec's facts and summaries) and 3
-(no checksums of the manifest's content) are read through :mod:`sb3_smc.library.upgrade`."""
+FORMAT_VERSION = 5
+"""Manifest version written. Versions 1 (sb3-smc 0.1), 2 (each entry repeating its spec's facts and summaries), 3
+(no checksums of the manifest's content) and 4 (pickled SB3 archives as model files) are read through
+:mod:`sb3_smc.library.upgrade`. Version 5 names content-addressed model files that load without unpickling
+(:mod:`sb3_smc.library.model_file`); an entry of an earlier library converted on read may still name a pickled
+``.zip`` archive until the library is saved again with ``trust=True``."""
 MANIFEST = "manifest.json"
+MODELS = "models"
+"""The folder of a library's model files."""
 ALGORITHMS = TRAINED_ALGORITHMS
 """Algorithms whose models a library stores (those ``train_smc`` trains; loaded with their class, ``device="cpu"``)."""
 
@@ -85,6 +90,8 @@ class LibraryEntry:
     spec: TrainingSpec | None
     record: TrainingRecord | None
     evaluations: tuple[EvaluationRecord, ...]
+    checksum: str = ""
+    """The entry's checksum (:func:`entry_checksum`): who saves the library compares it with the one on disk."""
 
     @property
     def action_names(self) -> tuple[str, ...]:
@@ -148,6 +155,15 @@ def new_manifest(smcs: dict[str, dict[str, Any]]) -> dict[str, Any]:
 
 
 _SHA256 = re.compile(r"[0-9a-f]{64}")
+_MODEL = re.compile(rf"{MODELS}/([0-9a-f]{{64}})\.safetensors")
+_PICKLED_MODEL = re.compile(rf"{MODELS}/[A-Za-z0-9][A-Za-z0-9_.+=@-]{{0,120}}\.zip")
+"""The model file of an entry: ``models/<its SHA-256>.safetensors``, or an old library's pickled archive
+``models/<safe name>.zip`` (loaded only with trust)."""
+
+
+def model_path(sha256: str) -> str:
+    """The manifest path of the model file whose bytes have this SHA-256."""
+    return f"{MODELS}/{sha256}.safetensors"
 
 
 def _canonical(value: Any) -> str:
@@ -167,6 +183,12 @@ def _without(data: dict[str, Any], field: str) -> dict[str, Any]:
 
 def _entry_sha256(name: str, entry: dict[str, Any]) -> str:
     return content_sha256([name, _without(entry, ENTRY_CHECKSUM)])
+
+
+def entry_checksum(name: str, entry: dict[str, Any]) -> str:
+    """The checksum :func:`seal` writes for entry ``name`` (JSON data, without its own checksum): equal checksums,
+    equal entries (model file included)."""
+    return _entry_sha256(name, entry)
 
 
 def seal(manifest: dict[str, Any], known: dict[str, tuple[str, str]] | None = None) -> dict[str, Any]:
@@ -193,7 +215,7 @@ def seal(manifest: dict[str, Any], known: dict[str, tuple[str, str]] | None = No
 
 
 def unseal(manifest: dict[str, Any], where: Path) -> dict[str, Any]:
-    """A version-4 manifest without its checksums, after checking that its content is what :func:`seal` wrote
+    """A version-4 or -5 manifest without its checksums, after checking that its content is what :func:`seal` wrote
     (:class:`ManifestError` naming the file and the SMC whose entry changed, or saying that something outside the
     entries did)."""
     fix = ("edited by hand or damaged since sb3_smc wrote it; restore it, or write an edit meant to be kept with "
@@ -282,6 +304,13 @@ def parse_entry(name: str, entry: Any, where: Path) -> LibraryEntry:
     model = entry["model"]
     if not isinstance(model, str) or Path(model).is_absolute() or ".." in Path(model).parts:
         raise ManifestError(f"{where}: entry {name!r}: model path {model!r} must be relative, inside the library")
+    addressed = _MODEL.fullmatch(model)
+    if addressed is None and not _PICKLED_MODEL.fullmatch(model):
+        raise ManifestError(f"{where}: entry {name!r}: model path {model!r} must be {MODELS}/<its SHA-256>.safetensors "
+                            f"(or an old library's {MODELS}/<name>.zip)")
+    if addressed is not None and addressed.group(1) != entry["sha256"]:
+        raise ManifestError(f"{where}: entry {name!r}: model file {model!r} is not named by its recorded SHA-256 "
+                            f"{entry['sha256']!r}")
     spec, record, evaluations = _parse_records(name, entry, where)
     if spec is None:
         smc = entry.get("smc")
@@ -298,7 +327,7 @@ def parse_entry(name: str, entry: Any, where: Path) -> LibraryEntry:
         kind, algo, children, frame_stack = spec.task.kind, spec.algo, spec.children, spec.frame_stack
         include_primitives, layout = spec.wrapper.include_primitives, spec.task.smc_layout
     return LibraryEntry(model, entry["sha256"], kind, algo, children, include_primitives, frame_stack, layout, spec,
-                        record, evaluations)
+                        record, evaluations, entry_checksum(name, entry))
 
 
 def _parse_smc(name: str, smc: Any, where: Path) -> tuple[str, str, tuple[str, ...], bool, int, Layout]:

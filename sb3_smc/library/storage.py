@@ -1,56 +1,70 @@
 """How an SMC library lies on disk: reading and writing the manifest file, model files and checksums, adding and
-removing SMCs in place, and the atomic save (:mod:`pixelworld_env.atomic`). The manifest's schema and validation
-(and the checksums of its content) are :mod:`sb3_smc.library.manifest`'s; its names that callers use
-through this module (``topological_order``, ``FORMAT`` ...) are re-exported here; :func:`check_manifest` reads a
-manifest of any version (the conversions: :mod:`sb3_smc.library.upgrade`).
+removing SMCs in place, under a lock. The manifest's schema and validation (and the checksums of its content) are
+:mod:`sb3_smc.library.manifest`'s; its names that callers use through this module (``topological_order``,
+``FORMAT`` ...) are re-exported here; :func:`check_manifest` reads a manifest of any version (the conversions:
+:mod:`sb3_smc.library.upgrade`); a model file's layout is :mod:`sb3_smc.library.model_file`'s.
 
 Layout::
 
     my-library/
-        manifest.json        {"format": "sb3-smc-library", "version": 4, "created_with": {...}, "smcs": {...},
+        manifest.json        {"format": "sb3-smc-library", "version": 5, "created_with": {...}, "smcs": {...},
                               "manifest_sha256": ...}
-        models/<name>.zip    one SB3 ``model.save`` archive per SMC
+        models/<sha256>.safetensors   one model per SMC, named by the SHA-256 of its bytes (never rewritten)
+        .lock                the lock of its writers and readers
+
+Model files are content-addressed and written before the manifest that names them, which is replaced atomically; a
+file no entry names any more is deleted after that. Writers hold an exclusive lock (``fcntl.flock`` on ``.lock``),
+readers a shared one, so a reader sees one manifest and the files it names. A library of version 4 or earlier holds
+SB3 ``model.save`` archives (``models/<name>.zip``), which pickle: they load only with ``trust=True``.
 
 Nothing here knows about :class:`~sb3_smc.library.SMCLibrary` beyond the SMCs it is given.
 """
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
+import io
 import json
 import os
-import re
 import shutil
+import stat
+import threading
 import zipfile
-from collections.abc import Collection, Mapping, Sequence
+from collections.abc import Collection, Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from pixelworld_env.atomic import (
-    OLD_MARKER,
-    atomic_write,
-    fsync_dir,
-    fsync_file,
-    make_temporary_directory,
-    replace_directory,
-)
+from pixelworld_env.atomic import OLD_MARKER, atomic_write
 from sb3_smc.core.hyperparameters import ALGORITHM_REGISTRY
 from sb3_smc.core.layout import HAND_SIZE, PIXELWORLD_LAYOUT, Layout
-from sb3_smc.library.errors import CorruptModelError, LayoutMismatchError, LibraryError, ManifestError, suggest
+from sb3_smc.library.errors import (
+    CorruptModelError,
+    LayoutMismatchError,
+    LibraryConflictError,
+    LibraryError,
+    ManifestError,
+    UntrustedModelError,
+    suggest,
+)
 from sb3_smc.library.manifest import (
     ALGORITHMS,
     FORMAT,
     FORMAT_VERSION,
     MANIFEST,
+    MODELS,
     SUMMARY_FIELDS,
     LibraryEntry,
     check_entries,
     check_version,
+    entry_checksum,
     entry_json,
+    model_path,
     new_manifest,
     seal,
     topological_order,
 )
+from sb3_smc.library.model_file import MAX_MODEL_BYTES, check_model_bytes, decode_model, encode_model
 from sb3_smc.library.upgrade import dropped_fields, upgrade
 from sb3_smc.records import package_versions
 from sb3_smc.smc.smc import SMC
@@ -59,13 +73,16 @@ if TYPE_CHECKING:
     from stable_baselines3.common.base_class import BaseAlgorithm
     from stable_baselines3.common.on_policy_algorithm import OnPolicyAlgorithm
 
-__all__ = ["ALGORITHMS", "FORMAT", "FORMAT_VERSION", "MANIFEST", "MODELS", "SUMMARY_FIELDS", "LibraryEntry",
-           "add_to_library", "check_manifest", "check_model_file", "checked_entries", "entry_for", "entry_json",
-           "interrupted_hint", "link_copy", "load_model", "manifest_text", "model_files", "new_manifest",
-           "read_manifest", "remove_from_library", "sha256", "topological_order", "write_library", "write_manifest"]
+__all__ = ["ALGORITHMS", "FORMAT", "FORMAT_VERSION", "LOCK", "MANIFEST", "MAX_MANIFEST_BYTES", "MODELS",
+           "SUMMARY_FIELDS", "LibraryEntry", "add_to_library", "check_manifest", "check_model_file", "checked_entries",
+           "entry_for", "entry_json", "interrupted_hint", "is_pickled", "link_copy", "load_model", "locked",
+           "manifest_text", "model_bytes", "new_manifest", "read_manifest", "remove_from_library", "save_library",
+           "sha256", "topological_order", "write_manifest"]
 
-MODELS = "models"
-SAVING_MARKER = ".saving-"
+LOCK = ".lock"
+"""The lock file inside a library folder (``fcntl.flock``: exclusive for writers, shared for readers)."""
+MAX_MANIFEST_BYTES = 256 * 2**20
+"""The largest manifest read (256 MiB; the package's pretrained library's is about 1 MB)."""
 
 
 def algorithm_classes() -> dict[str, type[OnPolicyAlgorithm]]:
@@ -80,28 +97,6 @@ def sha256(path: Path) -> str:
         for block in iter(lambda: handle.read(1 << 20), b""):
             digest.update(block)
     return digest.hexdigest()
-
-
-_SAFE = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.+=@-]*")
-
-
-def model_files(names: Sequence[str]) -> dict[str, str]:
-    """``name -> "models/<stem>.zip"``: the name itself when it is a safe file name, else a cleaned name + hash."""
-    files: dict[str, str] = {}
-    for name in names:
-        files[name] = model_file_for(name, list(files.values()))
-    return files
-
-
-def model_file_for(name: str, taken: Sequence[str]) -> str:
-    """The model file of a new SMC ``name`` in a library whose model files are ``taken``: the name itself when it is
-    a safe file name not taken (case-insensitively), else a cleaned name + hash."""
-    used = {Path(f).stem.casefold() for f in taken}
-    stem = name
-    if not _SAFE.fullmatch(name) or len(name) > 100 or name.casefold() in used:
-        cleaned = re.sub(r"[^A-Za-z0-9_.+=@-]", "_", name)[:80].lstrip("._") or "smc"
-        stem = f"{cleaned}-{hashlib.sha256(name.encode()).hexdigest()[:10]}"
-    return f"{MODELS}/{stem}.zip"
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -159,30 +154,144 @@ def entry_for(smc: SMC) -> dict[str, Any]:
                       include_primitives=smc.include_primitives, layout=smc.layout)
 
 
-def write_library(target: Path, smcs: Mapping[str, SMC], manifest: dict[str, Any]) -> None:
-    """Write ``manifest`` and the models of ``smcs`` to directory ``target``, atomically.
+def model_bytes(model: Any, *, compact: bool = False, where: str = "model") -> bytes:
+    """The bytes of ``model``'s file (:func:`sb3_smc.library.model_file.encode_model`); ``compact``: without the
+    optimiser's running state (the pretrained library's)."""
+    return encode_model(model, optimizer_state=not compact, where=where)
 
-    Everything goes into a temporary directory beside ``target`` (models first, then the manifest, each fsynced);
-    only when it is complete does :func:`pixelworld_env.atomic.replace_directory` swap it in. An error while writing
-    deletes the temporary directory and leaves the previous library untouched.
-    """
-    target.parent.mkdir(parents=True, exist_ok=True)
-    tmp = make_temporary_directory(target.parent, f".{target.name}{SAVING_MARKER}")
+
+_HELD: dict[str, tuple[int, bool, int]] = {}
+"""The library locks this process holds, by lock file: its descriptor, whether exclusive, how many holders."""
+_HELD_GUARD = threading.RLock()
+
+
+@contextlib.contextmanager
+def locked(root: Path, *, exclusive: bool) -> Iterator[None]:
+    """Hold the lock of the library in ``root``: exclusive for a writer (the folder is created), shared for a reader.
+
+    Writers wait for each other and for readers, readers only for writers (``fcntl.flock`` on ``root/.lock``); a
+    reader of a library whose folder it cannot write (a read-only copy) reads without a lock. Re-entrant within a
+    process (an exclusive hold serves a nested shared one)."""
     try:
-        (tmp / MODELS).mkdir()
-        for name, entry in manifest["smcs"].items():
-            file = tmp / entry["model"]
-            smcs[name].model.save(file)
-            if not file.is_file():
-                raise LibraryError(f"SMC {name!r}: saving its model did not create {file}")
-            fsync_file(file)
-            entry["sha256"] = sha256(file)
-        fsync_dir(tmp / MODELS)
-        write_manifest(tmp / MANIFEST, manifest)
-        replace_directory(tmp, target)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
+        import fcntl
+    except ImportError:  # not POSIX: no locking
+        yield
+        return
+    if exclusive:
+        root.mkdir(parents=True, exist_ok=True)
+    lock = root / LOCK
+    key = str(lock.absolute())
+    with _HELD_GUARD:
+        held = _HELD.get(key)
+        if held is not None and (held[1] or not exclusive):
+            _HELD[key] = (held[0], held[1], held[2] + 1)
+            fd = None
+        else:
+            if held is not None:
+                raise LibraryError(f"{root}: this process reads the library and asks to write it meanwhile (a "
+                                   "shared lock cannot become exclusive)")
+            try:
+                fd = os.open(lock, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_CLOEXEC, 0o666)
+            except FileNotFoundError:
+                if exclusive:
+                    raise
+                fd = -1  # no library folder: the read that follows says so
+            except OSError as err:
+                if exclusive:
+                    raise LibraryError(f"cannot lock {root} for writing ({lock}: {err.strerror})") from None
+                fd = -1
+            if fd >= 0:
+                fcntl.flock(fd, fcntl.LOCK_EX if exclusive else fcntl.LOCK_SH)
+            _HELD[key] = (fd, exclusive, 1)
+    try:
+        yield
+    finally:
+        with _HELD_GUARD:
+            fd_, mode, count = _HELD[key]
+            if count > 1:
+                _HELD[key] = (fd_, mode, count - 1)
+            else:
+                del _HELD[key]
+                if fd_ >= 0:
+                    os.close(fd_)  # releases the flock
+
+
+def _collect_garbage(root: Path, manifest: Mapping[str, Any]) -> None:
+    """Delete the files of ``root/models`` that no entry of ``manifest`` names (the caller holds the lock)."""
+    folder = root / MODELS
+    if not folder.is_dir():
+        return
+    named = {Path(entry["model"]).name for entry in manifest["smcs"].values()}
+    for file in folder.iterdir():
+        if file.name not in named and (file.is_file() or file.is_symlink()):
+            file.unlink(missing_ok=True)
+
+
+def _write_model(root: Path, data: bytes) -> tuple[str, str]:
+    """Write a model file content-addressed (kept where a file of the same name holds the same bytes); its manifest
+    path and SHA-256."""
+    digest = hashlib.sha256(data).hexdigest()
+    relative = model_path(digest)
+    file = root / relative
+    if file.is_symlink() or not file.is_file() or sha256(file) != digest:
+        file.unlink(missing_ok=True)
+        atomic_write(file, data)
+    return relative, digest
+
+
+def save_library(target: Path, entries: Mapping[str, dict[str, Any]], models: Mapping[str, bytes],
+                 known: Mapping[str, str], *, overwrite: bool = False) -> dict[str, str]:
+    """Write SMCs to the library in ``target`` under its lock: their model files (content-addressed), then the
+    manifest (atomically), then delete the files no entry names.
+
+    ``entries``: by name, each SMC's entry without ``model`` and ``sha256``; ``models``: its model's bytes;
+    ``known``: the checksums of the entries the caller read from or wrote to ``target`` before (its view of it).
+    An SMC on disk that the caller never knew (another process added it, or the folder held a library the caller did
+    not load) is kept, unless ``overwrite``; one the caller knew is the caller's to keep, replace or drop, unless it
+    changed on disk since: then, and where a kept SMC would lose a child or two SMCs share a name with different
+    content, :class:`LibraryConflictError`, and nothing is written. Returns the checksums of the entries written."""
+    with locked(target, exclusive=True):
+        disk, disk_entries, manifest_path = _current_manifest(target)
+        ours: dict[str, dict[str, Any]] = {}
+        for name, entry in entries.items():
+            digest = hashlib.sha256(models[name]).hexdigest()
+            ours[name] = json.loads(json.dumps({"model": model_path(digest), **entry, "sha256": digest}))
+        checksums = {name: entry_checksum(name, entry) for name, entry in ours.items()}
+        merged = dict(ours)
+        if not overwrite:
+            for name, entry in disk["smcs"].items():
+                on_disk = disk_entries[name].checksum
+                if name in known:
+                    if on_disk != known[name] and checksums.get(name) != on_disk:
+                        raise LibraryConflictError(
+                            f"{manifest_path}: SMC {name!r} was changed by another writer since this library was "
+                            "loaded; nothing was saved: load the library again and repeat the change")
+                elif name in ours:
+                    if checksums[name] != on_disk:
+                        raise LibraryConflictError(
+                            f"{manifest_path}: another writer added a different SMC named {name!r}; nothing was "
+                            "saved: load the library again, or save under another name")
+                else:
+                    merged[name] = entry
+            lost = sorted((name, child) for name in merged for child in _children(merged[name]) if child not in merged)
+            if lost:
+                raise LibraryConflictError(
+                    f"{manifest_path}: SMC {lost[0][0]!r} (kept from the library on disk) calls {lost[0][1]!r}, which "
+                    "this save removes; nothing was saved: load the library again")
+        for name in ours:
+            relative, _ = _write_model(target, models[name])
+            if relative != ours[name]["model"]:  # pragma: no cover - the digest is the name
+                raise LibraryError(f"SMC {name!r}: its model file was not written as {relative}")
+        manifest = new_manifest(merged)
+        write_manifest(manifest_path, manifest)
+        _collect_garbage(target, manifest)
+    return checksums
+
+
+def _children(entry: Mapping[str, Any]) -> list[str]:
+    """The children an entry (JSON) names, from its spec or its ``smc`` field."""
+    spec, smc = entry.get("spec"), entry.get("smc")
+    return list((spec or {}).get("children") or (smc or {}).get("children") or [])
 
 
 def _indented(value: Any, level: int) -> str:
@@ -246,7 +355,7 @@ def _manifest_to_add_to(root: Path) -> tuple[dict[str, Any], dict[str, tuple[str
     manifest_path = root / MANIFEST
     if manifest_path.is_file():
         added = _ADDED.get(str(manifest_path.resolve()))
-        if added is not None and added[0] == hashlib.sha256(manifest_path.read_bytes()).hexdigest():
+        if added is not None and added[0] == hashlib.sha256(_manifest_bytes(root)[0]).hexdigest():
             return {**added[1], "smcs": dict(added[1]["smcs"])}, dict(added[2]), dict(added[3]), manifest_path
     manifest, _, manifest_path = _current_manifest(root)
     return manifest, {}, {}, manifest_path
@@ -268,7 +377,7 @@ def _current_manifest(root: Path) -> tuple[dict[str, Any], dict[str, LibraryEntr
     version = check_version(manifest, manifest_path)
     if version == 1:
         raise ManifestError(f"{manifest_path}: version-1 library (sb3-smc 0.1); convert it first: "
-                            "SMCLibrary.load(path).save() writes it in the current version")
+                            "SMCLibrary.load(path, trust=True).save() writes it in the current version")
     if version == 2:
         extra = dropped_fields(manifest)
         if extra:
@@ -281,45 +390,51 @@ def _current_manifest(root: Path) -> tuple[dict[str, Any], dict[str, LibraryEntr
 
 
 def add_to_library(root: Path, name: str, entry: dict[str, Any], model: bytes, *, replace: bool = False) -> None:
-    """Add one SMC to the library directory ``root`` without touching what is already there.
+    """Add one SMC to the library directory ``root`` without touching what is already there, under the library's
+    lock (:func:`locked`): two processes adding at once both get their SMCs in.
 
-    The model file is written atomically first, then the manifest (read, the entry added, written atomically), so
-    an interruption leaves the library as it was or with the SMC complete; a version-2 or -3 library is written as
-    the current version (:func:`_current_manifest`), and ``name`` must be new. Creates the library when ``root`` has no
-    manifest. ``replace=True``: ``name`` must be there already (an SMC whose model file was damaged, trained
-    again); its model file and entry are replaced the same way.
+    The model file is written first (content-addressed), then the manifest (read, the entry added, written
+    atomically), so an interruption leaves the library as it was or with the SMC complete; a version-2 to -4 library
+    is written as the current version (:func:`_current_manifest`), and ``name`` must be new. Creates the library when
+    ``root`` has no manifest. ``replace=True``: ``name`` must be there already (an SMC whose model file was damaged,
+    trained again); its entry is replaced, and its old model file deleted where no other entry names it.
     """
-    manifest, known, texts, manifest_path = _manifest_to_add_to(root)
-    smcs = manifest["smcs"]
-    if name in smcs and not replace:
-        raise LibraryError(f"{manifest_path}: already has an SMC named {name!r}")
-    if replace and name not in smcs:
-        raise LibraryError(f"{manifest_path}: has no SMC named {name!r} to replace")
-    file = smcs[name]["model"] if replace else model_file_for(name, [e["model"] for e in smcs.values()])
-    atomic_write(root / file, model)
-    smcs[name] = json.loads(json.dumps({"model": file, **entry, "sha256": hashlib.sha256(model).hexdigest()}))
-    known.pop(name, None)
-    texts.pop(name, None)
-    data = write_manifest(manifest_path, manifest, known, texts)
-    key = str(manifest_path.resolve())
-    _keep(_ADDED, key, (hashlib.sha256(data).hexdigest(), manifest, known, texts))
+    with locked(root, exclusive=True):
+        manifest, known, texts, manifest_path = _manifest_to_add_to(root)
+        smcs = manifest["smcs"]
+        if name in smcs and not replace:
+            raise LibraryError(f"{manifest_path}: already has an SMC named {name!r}")
+        if replace and name not in smcs:
+            raise LibraryError(f"{manifest_path}: has no SMC named {name!r} to replace")
+        algo = ((entry.get("spec") or entry.get("smc") or {}).get("algo"))
+        check_model_bytes(model, str(algo), f"SMC {name!r}: the model to add")
+        file, digest = _write_model(root, model)
+        smcs[name] = json.loads(json.dumps({"model": file, **entry, "sha256": digest}))
+        known.pop(name, None)
+        texts.pop(name, None)
+        data = write_manifest(manifest_path, manifest, known, texts)
+        if replace:
+            _collect_garbage(root, manifest)
+        key = str(manifest_path.resolve())
+        _keep(_ADDED, key, (hashlib.sha256(data).hexdigest(), manifest, known, texts))
 
 
 def remove_from_library(root: Path, names: Collection[str]) -> None:
-    """Remove the SMCs ``names`` from the library in ``root``: the manifest first (atomically), then their model
-    files. No SMC left may call one of them."""
-    manifest, entries, manifest_path = _current_manifest(root)
-    smcs = manifest["smcs"]
-    unknown = sorted(set(names) - set(smcs))
-    if unknown:
-        raise LibraryError(f"{manifest_path}: has no SMC named {unknown[0]!r}{suggest(unknown[0], list(smcs))}")
-    callers = sorted(n for n, e in entries.items() if n not in names and set(e.children) & set(names))
-    if callers:
-        raise LibraryError(f"{manifest_path}: cannot remove {sorted(names)}: {callers} call them")
-    files = [smcs.pop(name)["model"] for name in names]
-    write_manifest(manifest_path, manifest)
-    for file in files:
-        (root / file).unlink(missing_ok=True)
+    """Remove the SMCs ``names`` from the library in ``root``, under its lock: the manifest first (atomically), then
+    the model files no entry names any more. No SMC left may call one of them."""
+    with locked(root, exclusive=True):
+        manifest, entries, manifest_path = _current_manifest(root)
+        smcs = manifest["smcs"]
+        unknown = sorted(set(names) - set(smcs))
+        if unknown:
+            raise LibraryError(f"{manifest_path}: has no SMC named {unknown[0]!r}{suggest(unknown[0], list(smcs))}")
+        callers = sorted(n for n, e in entries.items() if n not in names and set(e.children) & set(names))
+        if callers:
+            raise LibraryError(f"{manifest_path}: cannot remove {sorted(names)}: {callers} call them")
+        for name in names:
+            smcs.pop(name)
+        write_manifest(manifest_path, manifest)
+        _collect_garbage(root, manifest)
 
 
 def link_copy(root: Path, target: Path) -> None:
@@ -331,7 +446,7 @@ def link_copy(root: Path, target: Path) -> None:
         except OSError:
             shutil.copy2(source, destination)
 
-    shutil.copytree(root, target, copy_function=link)
+    shutil.copytree(root, target, copy_function=link, ignore=shutil.ignore_patterns(LOCK))
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -339,21 +454,16 @@ def link_copy(root: Path, target: Path) -> None:
 # ---------------------------------------------------------------------------------------------------------------
 
 def interrupted_hint(root: Path) -> str:
-    """Where the complete copies of an interrupted save of ``root`` are, if any ("" otherwise)."""
+    """Where the complete previous copy of ``root`` is when a replacement of the whole folder
+    (:func:`pixelworld_env.atomic.replace_directory`, e.g. by ``build_pretrained``) was interrupted ("" otherwise)."""
     parent = root.parent
     if not parent.is_dir():
         return ""
-    saving = sorted(p for p in parent.glob(f".{root.name}{SAVING_MARKER}*") if (p / MANIFEST).is_file())
     old = sorted(p for p in parent.glob(f".{root.name}{OLD_MARKER}*") if (p / MANIFEST).is_file())
-    if not saving and not old:
+    if not old:
         return ""
-    parts = []
-    if saving:
-        parts.append(f"a complete new library at {saving[-1]}")
-    if old:
-        parts.append(f"the previous library at {old[-1]}")
-    return (f"; a save to this path was interrupted: found {' and '.join(parts)} (rename one to {root.name} to "
-            "recover it)")
+    return (f"; a replacement of this folder was interrupted: found the previous library at {old[-1]} (rename it to "
+            f"{root.name} to recover it)")
 
 
 def check_manifest(manifest: Any, where: Path) -> dict[str, LibraryEntry]:
@@ -362,11 +472,42 @@ def check_manifest(manifest: Any, where: Path) -> dict[str, LibraryEntry]:
     return check_entries(upgrade(manifest, where), where)
 
 
+def _read_inside(root: Path, relative: str, limit: int, what: str) -> bytes:
+    """The bytes of the regular file ``root/relative``, at most ``limit`` of them; a symbolic link anywhere below
+    ``root`` is refused (a library's files are its own). :class:`FileNotFoundError` where it is missing;
+    :class:`LibraryError` for a link, a file too large or one that cannot be read."""
+    path = root
+    for part in Path(relative).parts:
+        path = path / part
+        if path.is_symlink():
+            raise LibraryError(f"{what} {path} is a symbolic link; a library's files must be its own (copy the file "
+                               "into the folder)")
+    try:
+        fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_CLOEXEC)
+    except FileNotFoundError:
+        raise
+    except OSError as err:
+        raise LibraryError(f"cannot read {what} {path}: {err.strerror}") from None
+    with os.fdopen(fd, "rb") as handle:
+        info = os.fstat(handle.fileno())
+        if not stat.S_ISREG(info.st_mode):
+            raise LibraryError(f"{what} {path} is not a regular file")
+        if info.st_size > limit:
+            raise LibraryError(f"{what} {path} holds {info.st_size} bytes, more than {limit}")
+        try:
+            return handle.read(limit + 1)[:limit]
+        except OSError as err:
+            raise LibraryError(f"cannot read {what} {path}: {err.strerror}") from None
+
+
 def _manifest_bytes(root: Path) -> tuple[bytes, Path]:
     manifest_path = root / MANIFEST
-    if not manifest_path.is_file():
-        raise ManifestError(f"no SMC library at {root}: {manifest_path} not found{interrupted_hint(root)}")
-    return manifest_path.read_bytes(), manifest_path
+    try:
+        return _read_inside(root, MANIFEST, MAX_MANIFEST_BYTES, "the manifest"), manifest_path
+    except FileNotFoundError:
+        raise ManifestError(f"no SMC library at {root}: {manifest_path} not found{interrupted_hint(root)}") from None
+    except LibraryError as err:
+        raise ManifestError(str(err)) from None
 
 
 def _parse_manifest(data: bytes, manifest_path: Path) -> dict[str, Any]:
@@ -401,37 +542,75 @@ def checked_entries(root: Path) -> tuple[dict[str, LibraryEntry], dict[str, Any]
     return dict(entries), dict(created_with), manifest_path
 
 
-def check_model_file(root: Path, name: str, entry: LibraryEntry) -> None:
-    """:class:`CorruptModelError` unless entry ``name``'s model file is there, a readable SB3 zip, with the recorded
-    SHA-256."""
+MAX_ARCHIVE_BYTES = 1 * 2**30
+"""The most an old (pickled) model archive may unpack to, its members' declared sizes added (1 GiB)."""
+
+
+def check_model_file(root: Path, name: str, entry: LibraryEntry) -> bytes:
+    """The bytes of entry ``name``'s model file, after checking that it is there, with the recorded SHA-256, and a
+    well-formed model file (:func:`~sb3_smc.library.model_file.check_model_bytes`; an old ``.zip`` archive: a
+    readable SB3 zip within :data:`MAX_ARCHIVE_BYTES`) — without unpickling or building anything
+    (:class:`CorruptModelError` otherwise)."""
     file = root / entry.model
-    if not file.is_file():
-        raise CorruptModelError(f"SMC {name!r}: model file {file} is missing")
+    where = f"SMC {name!r}: model file {file}"
     try:
-        with zipfile.ZipFile(file) as archive:
+        data = _read_inside(root, entry.model, MAX_MODEL_BYTES if not is_pickled(entry) else MAX_ARCHIVE_BYTES,
+                            "model file")
+    except FileNotFoundError:
+        raise CorruptModelError(f"SMC {name!r}: model file {file} is missing") from None
+    except LibraryError as err:
+        raise CorruptModelError(f"SMC {name!r}: {err}") from None
+    if hashlib.sha256(data).hexdigest() != entry.sha256:
+        raise CorruptModelError(f"{where} does not match the SHA-256 recorded in the manifest (modified or corrupt "
+                                "since it was saved)")
+    if not is_pickled(entry):
+        check_model_bytes(data, entry.algo, where)
+        return data
+    try:
+        with zipfile.ZipFile(io.BytesIO(data)) as archive:
+            infos = archive.infolist()
+            unpacked = sum(info.file_size for info in infos)
+            if unpacked > MAX_ARCHIVE_BYTES:
+                raise CorruptModelError(f"{where} unpacks to {unpacked} bytes, more than a model archive may "
+                                        f"({MAX_ARCHIVE_BYTES})")
             bad = archive.testzip()
-            members = set(archive.namelist())
-    except (zipfile.BadZipFile, OSError, EOFError, ValueError) as err:
-        raise CorruptModelError(f"SMC {name!r}: model file {file} is corrupt or truncated (not a readable zip "
-                                f"archive: {err})") from None
+            members = {info.filename for info in infos}
+    except (zipfile.BadZipFile, EOFError, ValueError) as err:
+        raise CorruptModelError(f"{where} is corrupt or truncated (not a readable zip archive: {err})") from None
     if bad is not None:
-        raise CorruptModelError(f"SMC {name!r}: model file {file} is corrupt (member {bad!r} fails its CRC check)")
+        raise CorruptModelError(f"{where} is corrupt (member {bad!r} fails its CRC check)")
     if "data" not in members or "policy.pth" not in members:
-        raise CorruptModelError(f"SMC {name!r}: model file {file} is not a Stable-Baselines3 model archive "
-                                f"(members: {sorted(members)})")
-    if sha256(file) != entry.sha256:
-        raise CorruptModelError(f"SMC {name!r}: model file {file} does not match the SHA-256 recorded in the "
-                                "manifest (modified or corrupt since it was saved)")
+        raise CorruptModelError(f"{where} is not a Stable-Baselines3 model archive (members: {sorted(members)})")
+    return data
 
 
-def load_model(root: Path, name: str, entry: LibraryEntry) -> BaseAlgorithm:
-    """The SB3 model of entry ``name``, after checking its file (:func:`check_model_file`)."""
-    check_model_file(root, name, entry)
+def is_pickled(entry: LibraryEntry) -> bool:
+    """Whether the entry's model file is an SB3 ``model.save`` archive (a library of version 4 or earlier), whose
+    loading unpickles, so runs code from the file."""
+    return entry.model.endswith(".zip")
+
+
+def load_model(root: Path, name: str, entry: LibraryEntry, *, trust: bool = False) -> BaseAlgorithm:
+    """The SB3 model of entry ``name``, after checking its file (:func:`check_model_file`), rebuilt from its tensors
+    and settings (:func:`~sb3_smc.library.model_file.decode_model`); nothing of the file is unpickled.
+
+    An old pickled archive (:func:`is_pickled`) loads only with ``trust=True`` (:class:`UntrustedModelError`
+    otherwise): loading it runs whatever code its author put in it. ``trust`` also lets a model file name classes of
+    any module (importing a module runs its code)."""
+    data = check_model_file(root, name, entry)
     file = root / entry.model
+    if not is_pickled(entry):
+        return decode_model(data, entry.algo, f"SMC {name!r}: model file {file}", trust=trust)
+    if not trust:
+        raise UntrustedModelError(
+            f"SMC {name!r}: {file} is a pickled Stable-Baselines3 archive (a library written before sb3-smc's "
+            "version-5 format); loading it runs any code its author put in it. If you trust where this library "
+            "comes from, load it with trust=True (sb3-smc library DIR --upgrade --trust converts it to the safe "
+            "format); otherwise ask for a version-5 copy")
     algorithm = ALGORITHM_REGISTRY[entry.algo]
     cls = algorithm.load_class()
     try:
-        model = cls.load(file, device="cpu")
+        model = cls.load(io.BytesIO(data), device="cpu")
     except Exception as err:  # noqa: BLE001 - SB3 raises many kinds of errors for a bad archive
         raise CorruptModelError(f"SMC {name!r}: cannot load model file {file} as {entry.algo}: "
                                 f"{type(err).__name__}: {err}") from err

@@ -6,6 +6,8 @@
   environment layout), its action names and observation layout, and seven summary fields, all cross-checked on read.
   :func:`upgrade_v2` runs those checks (a version-2 file that contradicts itself is still an error) and keeps what
   version 3 stores.
+- Version 4: the content of version 5 (its checksums verified), but its model files are pickled SB3 archives
+  (``models/<name>.zip``), which load only with ``trust=True``; saving the library writes them in version 5's format.
 - Version 3: the content of version 4 without its checksums (:func:`sb3_smc.library.manifest.seal`), which are
   written with it the next time it is written.
 
@@ -50,8 +52,8 @@ def upgrade(manifest: Any, where: Path) -> dict[str, Any]:
     """``manifest`` (JSON) as the current version without its checksums: one of the current version checked against
     them (:func:`~sb3_smc.library.manifest.unseal`), an older one converted step by step."""
     version = check_version(manifest, where)
-    if version == FORMAT_VERSION:
-        return unseal(manifest, where)
+    if version >= 4:
+        return {**unseal(manifest, where), "version": FORMAT_VERSION}
     if version == 1:
         manifest = upgrade_v1(manifest, where)
         version = 2
