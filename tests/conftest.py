@@ -1,4 +1,4 @@
-"""Test session set-up: one torch thread, and a dataset cache that is never the user's.
+"""Test session set-up: one torch thread, a dataset cache and a checkpoint key that are never the user's.
 
 The default run generates what it needs into a temporary ``PIXELWORLD_CACHE`` (removed at the end); set
 ``PIXELWORLD_TEST_CACHE=DIR`` to keep and reuse a cache folder between runs (never ``~/.cache/pixelworld`` unless
@@ -35,6 +35,8 @@ def pytest_configure(config: pytest.Config) -> None:
     else:
         _TEMPORARY_CACHE = tempfile.mkdtemp(prefix="pixelworld-test-cache-")
         os.environ["PIXELWORLD_CACHE"] = _TEMPORARY_CACHE
+    # group checkpoints are signed with a key of the session's own (sb3_smc.learning.group_checkpoint)
+    os.environ["SB3_SMC_CHECKPOINT_KEY"] = str(Path(tempfile.mkdtemp(prefix="sb3-smc-test-key-")) / "checkpoint.key")
 
 
 def pytest_unconfigure(config: pytest.Config) -> None:

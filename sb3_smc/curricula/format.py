@@ -38,14 +38,18 @@ from typing import Any
 
 import yaml
 
+from pixelworld_env.yaml_loading import YAMLInputError, safe_yaml_compose
 from sb3_smc.core.dag import CycleError, children_first, reachable
 from sb3_smc.core.hyperparameters import ALGORITHMS
+from sb3_smc.core.names import name_problem
 from sb3_smc.errors import SMCError
 from sb3_smc.records import WrapperSettings
 
 __all__ = ["FORMAT_KEYS", "NODE_KEYS", "SEED_SEPARATOR", "Curriculum", "CurriculumError", "Node", "describe",
            "is_env_id", "load_curriculum", "merge", "parse_curriculum"]
 
+MAX_CURRICULUM_CHARS = 10 * 2**20
+"""The longest curriculum file read (10 MiB; the shipped ones have 1-8 KB)."""
 FORMAT_KEYS = ("curriculum", "method", "description", "defaults", "nodes", "targets")
 """Top-level keys of a curriculum file."""
 NODE_KEYS = ("name", "task", "uses", "primitives", "algo", "timesteps", "budget_scale", "count_primitive_steps",
@@ -252,12 +256,14 @@ def load_curriculum(path: str | os.PathLike) -> Curriculum:
 
 def parse_curriculum(text: str, source: str = "<curriculum>") -> Curriculum:
     """Parse and validate curriculum YAML ``text``; ``source`` names it in errors."""
+    if len(text) > MAX_CURRICULUM_CHARS:
+        raise CurriculumError(f"{source}: {len(text)} characters, more than a curriculum file may have "
+                              f"({MAX_CURRICULUM_CHARS})")
     try:
-        root = yaml.compose(text, Loader=yaml.SafeLoader)
-    except yaml.YAMLError as err:
-        mark = getattr(err, "problem_mark", None)
-        line = f":{mark.line + 1}" if mark is not None else ""
-        raise CurriculumError(f"{source}{line}: malformed YAML: {getattr(err, 'problem', None) or err}") from None
+        root = safe_yaml_compose(text, source)
+    except YAMLInputError as err:
+        line = f":{err.line}" if err.line else ""
+        raise CurriculumError(f"{source}{line}: {err.problem}") from None
     if not isinstance(root, yaml.MappingNode):
         raise CurriculumError(f"{source}: a curriculum file is a mapping with the keys {list(FORMAT_KEYS)}")
     data = _plain(root, source)
@@ -276,8 +282,10 @@ def parse_curriculum(text: str, source: str = "<curriculum>") -> Curriculum:
         if key not in data:
             raise CurriculumError(f"{source}: missing key {key!r}")
     name = data["curriculum"]
-    if not isinstance(name, str) or not name:
-        raise CurriculumError(f"{source}:{lines['curriculum'][0]}: 'curriculum' must be a name, got {name!r}")
+    problem = name_problem(name)
+    if problem is not None:
+        raise CurriculumError(f"{source}:{lines['curriculum'][0]}: 'curriculum' must be a name, got {name!r}: "
+                              f"{problem}")
     defaults = data.get("defaults") or {}
     if not isinstance(defaults, dict):
         raise CurriculumError(f"{source}:{lines['defaults'][0]}: 'defaults' must be a mapping, got {defaults!r}")
@@ -301,8 +309,11 @@ def parse_curriculum(text: str, source: str = "<curriculum>") -> Curriculum:
     if method is not None and not isinstance(method, str):
         raise CurriculumError(f"{source}:{lines['method'][0]}: 'method' must be a string, got {method!r}")
     description = data.get("description") or ""
+    if not isinstance(description, str):
+        raise CurriculumError(f"{source}:{lines['description'][0]}: 'description' must be a string, got "
+                              f"{type(description).__name__}")
     return Curriculum(name=name, nodes=tuple(nodes), targets=tuple(targets), method=method,
-                      description=str(description), source=source)
+                      description=description, source=source)
 
 
 def _node(item: Any, line: int, defaults: Mapping[str, Any], source: str) -> Node:
@@ -388,6 +399,9 @@ def _validate(curriculum: Curriculum) -> None:
     def at(node: Node) -> str:
         return f"{source}:{node.line}" if node.line is not None else source
 
+    problem = name_problem(curriculum.name) if "+" not in curriculum.name else None  # "+": curricula merged
+    if problem is not None:
+        raise CurriculumError(f"{source}: curriculum {curriculum.name!r} is not a name: {problem}")
     tasks = _tasks()
     seen: dict[str, Node] = {}
     for node in curriculum.nodes:
@@ -396,6 +410,9 @@ def _validate(curriculum: Curriculum) -> None:
             where = f" (first defined at line {first.line})" if first.line is not None else ""
             raise CurriculumError(f"{at(node)}: node {node.name!r} is defined twice{where}")
         seen[node.name] = node
+        problem = name_problem(node.name)
+        if problem is not None:
+            raise CurriculumError(f"{at(node)}: node {node.name!r} is not a name: {problem}")
         if SEED_SEPARATOR in node.name:
             raise CurriculumError(f"{at(node)}: node {node.name!r}: names may not contain {SEED_SEPARATOR!r} "
                                   f"(library SMCs are named <node>{SEED_SEPARATOR}<seed>)")

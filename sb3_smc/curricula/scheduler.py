@@ -9,6 +9,7 @@ import shutil
 from collections.abc import Sequence
 from pathlib import Path
 
+from pixelworld_env.atomic import path_inside
 from sb3_smc.curricula.format import Curriculum, Node
 from sb3_smc.curricula.jobs import Job, JobId, planned_children, rank_seeds
 from sb3_smc.curricula.options import RunOptions
@@ -142,9 +143,10 @@ class Scheduler:
         log = None
         if self.options.tensorboard:
             folder = self.directory / "tensorboard"
+            path_inside(self.directory, "tensorboard", f"{name}_1")  # one folder inside DIR/tensorboard, no link
             if not resumed:
                 for stale in folder.glob(f"{glob_escape(name)}_*"):  # a half-finished earlier attempt
-                    shutil.rmtree(stale, ignore_errors=True)
+                    shutil.rmtree(path_inside(self.directory, "tensorboard", stale.name), ignore_errors=True)
             log = str(folder)
         return Job(spec=spec, library=str(self.library.absolute()), tensorboard_log=log,
                    lean_update=self.options.lean_update, checkpoints=str((self.directory / CHECKPOINTS).absolute()))

@@ -16,20 +16,27 @@ outputs: TensorBoard goes on in the SMC's folder, in a new events file), the cal
 lean update's patches of the model (entered again), modules that objects keep (imported), and ``VecEnvWrapper``'s
 class attributes.
 
-A checkpoint is a pickle: load only checkpoints your own runs wrote (as with any pickled model). One that cannot be
-read (damaged, or written by another version of this package) is reported through ``printer`` and removed, and the
-group trains from the start (a file the system cannot read, an ``OSError``, is left alone and the error raised). A
-save that fails is reported and the group trains on without saving.
+A checkpoint is a pickle, so it is signed: the file starts with an HMAC-SHA256 of the pickle under a secret key of
+the user (:func:`checkpoint_key`: ``$SB3_SMC_CHECKPOINT_KEY``, else ``~/.config/sb3-smc/checkpoint.key``, made on
+first use, readable by the user only), checked before anything is unpickled. A checkpoint from elsewhere (a run
+directory someone shared, a file planted in ``checkpoints/``) fails the check and is never unpickled. One that cannot
+be used (unsigned, signed with another key, damaged, or written by another version of this package) is reported
+through ``printer`` and removed, and the group trains from the start (a file the system cannot read, an ``OSError``,
+is left alone and the error raised). A save that fails is reported and the group trains on without saving. The
+machines of a Ray cluster resume each other's checkpoints where they share the key file (the same home folder, or
+``SB3_SMC_CHECKPOINT_KEY`` naming one file).
 """
 
 from __future__ import annotations
 
 import hashlib
+import hmac
 import importlib
 import importlib.metadata
 import inspect
 import io
 import json
+import os
 import pickle
 import sys
 import time
@@ -47,9 +54,42 @@ from sb3_smc.errors import SMCError
 from sb3_smc.records import TrainingSpec
 from sb3_smc.smc.smc import SMC
 
-__all__ = ["GroupCheckpoint", "checkpoint_path"]
+__all__ = ["KEY_ENV", "GroupCheckpoint", "checkpoint_key", "checkpoint_path"]
 
 FORMAT = 2  #: the layout of a checkpoint's payload (2: the group's slices know their index, 2026-11-28)
+MAGIC = b"sb3-smc group checkpoint, HMAC-SHA256 signed\n"
+"""How a checkpoint file starts; 32 bytes of HMAC follow, then the pickle."""
+KEY_ENV = "SB3_SMC_CHECKPOINT_KEY"
+"""The environment variable naming the key file that signs checkpoints (:func:`checkpoint_key`)."""
+
+
+def checkpoint_key() -> bytes:
+    """The user's secret key that signs group checkpoints: the file ``$SB3_SMC_CHECKPOINT_KEY`` names, else
+    ``$XDG_CONFIG_HOME/sb3-smc/checkpoint.key`` (``~/.config`` by default), 32 random bytes made on first use with
+    permissions 0600 (made whole, then linked into place: two processes starting at once agree on one key)."""
+    named = os.environ.get(KEY_ENV)
+    config = Path(os.environ.get("XDG_CONFIG_HOME") or Path.home() / ".config")
+    path = Path(named) if named else config / "sb3-smc" / "checkpoint.key"
+    if not path.is_file():
+        path.parent.mkdir(parents=True, exist_ok=True, mode=0o700)
+        tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
+        try:
+            os.write(fd, os.urandom(32))
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+        try:
+            os.link(tmp, path)
+        except FileExistsError:
+            pass  # another process made it first: its key is the key
+        finally:
+            tmp.unlink(missing_ok=True)
+    key = path.read_bytes()
+    if len(key) < 16:
+        raise SMCError(f"{path}: a checkpoint key has at least 16 bytes, this file {len(key)} (remove it to make a "
+                       "new one)")
+    return key
 
 
 class GroupCheckpoint:
@@ -83,7 +123,14 @@ class GroupCheckpoint:
         if not self.path.is_file():
             return None
         try:
-            payload = _Unpickler(io.BytesIO(self.path.read_bytes()), self.children, self.printer).load()
+            data = self.path.read_bytes()
+            head, signature, body = data[:len(MAGIC)], data[len(MAGIC):len(MAGIC) + 32], data[len(MAGIC) + 32:]
+            if head != MAGIC:
+                raise ValueError("not a signed checkpoint of this package; not unpickled")
+            if not hmac.compare_digest(signature, hmac.new(checkpoint_key(), body, hashlib.sha256).digest()):
+                raise ValueError("its signature is not this user's key's (written elsewhere, or damaged); not "
+                                 "unpickled")
+            payload = _Unpickler(io.BytesIO(body), self.children, self.printer).load()
             if not isinstance(payload, dict) or payload.get("format") != FORMAT or payload.get("key") != self.key:
                 raise ValueError("not a checkpoint of this group (its specs, children, settings or the package's "
                                  "version differ)")
@@ -107,7 +154,8 @@ class GroupCheckpoint:
         try:
             buffer = io.BytesIO()
             _Pickler(buffer, self.printer).dump({"format": FORMAT, "key": self.key, "state": state})
-            atomic_write(self.path, buffer.getvalue())
+            body = buffer.getvalue()
+            atomic_write(self.path, MAGIC + hmac.new(checkpoint_key(), body, hashlib.sha256).digest() + body)
         except Exception as err:
             self.failed = True
             self.printer(f"{self.path}: cannot save the group's training ({type(err).__name__}: {err}); it trains on "

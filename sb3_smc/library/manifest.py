@@ -26,6 +26,7 @@ from typing import Any
 from sb3_smc.core.dag import CycleError, children_first
 from sb3_smc.core.hyperparameters import ALGORITHMS as TRAINED_ALGORITHMS
 from sb3_smc.core.layout import PIXELWORLD_LAYOUT, SIGNALS, Layout, observation_size, smc_action_names
+from sb3_smc.core.names import name_problem
 from sb3_smc.errors import SMCError
 from sb3_smc.library.errors import LayoutMismatchError, LibraryError, ManifestError, MissingChildError, suggest
 from sb3_smc.records import (
@@ -270,6 +271,10 @@ def check_entries(manifest: dict[str, Any], where: Path) -> dict[str, LibraryEnt
     smcs = manifest.get("smcs")
     if not isinstance(smcs, dict):
         raise ManifestError(f"{where}: 'smcs' must be an object name -> entry, got {type(smcs).__name__}")
+    for name in smcs:
+        problem = name_problem(name)
+        if problem is not None:
+            raise ManifestError(f"{where}: SMC {name!r} is not a name: {problem}")
     entries = {name: parse_entry(name, entry, where) for name, entry in smcs.items()}
     for name, entry in entries.items():
         for child in entry.children:

@@ -488,10 +488,11 @@ def _read_inside(root: Path, relative: str, limit: int, what: str) -> bytes:
         raise
     except OSError as err:
         raise LibraryError(f"cannot read {what} {path}: {err.strerror}") from None
+    info = os.fstat(fd)
+    if not stat.S_ISREG(info.st_mode):
+        os.close(fd)
+        raise LibraryError(f"{what} {path} is not a regular file")
     with os.fdopen(fd, "rb") as handle:
-        info = os.fstat(handle.fileno())
-        if not stat.S_ISREG(info.st_mode):
-            raise LibraryError(f"{what} {path} is not a regular file")
         if info.st_size > limit:
             raise LibraryError(f"{what} {path} holds {info.st_size} bytes, more than {limit}")
         try:

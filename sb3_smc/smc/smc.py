@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 import numpy as np
 
 from sb3_smc.core.layout import PIXELWORLD_LAYOUT, SIGNALS, Layout, observation_size, smc_action_names
+from sb3_smc.core.names import check_name
 from sb3_smc.errors import SMCError, SMCTypeError
 
 if TYPE_CHECKING:
@@ -64,6 +65,7 @@ class SMC:
     layout: Layout = PIXELWORLD_LAYOUT
 
     def __post_init__(self) -> None:
+        check_name(self.name, "SMC name")
         if not isinstance(self.layout, Layout):
             raise SMCTypeError(f"SMC {self.name!r}: layout must be a Layout, got {type(self.layout).__name__}")
         if self.kind not in SIGNALS:
