@@ -298,3 +298,16 @@ def test_library_errors_stay_within_the_package(tmp_path):
     (tmp_path / storage.MANIFEST).mkdir()
     with pytest.raises(LibraryError, match=r"is not a regular file"):
         SMCLibrary.load(tmp_path)
+
+
+@pytest.mark.parametrize("name", ["cl_self-in-left-corner_vs_on-hline@0",
+                                  "ba_self-away-left-of-object_from_left-touches-on-floor@0"])
+def test_the_converted_pretrained_library_reproduces_its_records(name):
+    """The shipped library, converted to version 5 from pickled archives, gives each SMC's recorded test evaluation
+    again, world by world (the same weights, bit for bit, through the same numpy actor)."""
+    from sb3_smc.learning.evaluation import evaluate
+
+    smc = SMCLibrary.pretrained(name.split("@")[0])[name]
+    (recorded,) = [e for e in smc.evaluations if e.split == "test" and e.repeats == 10 and e.evaluation_seed == 0]
+    again = evaluate(smc, repeats=10, seed=0, record_cells=False)
+    assert (again.score, tuple(again.scores)) == (recorded.score, tuple(recorded.environment_scores))
