@@ -17,7 +17,7 @@ import json
 import shlex
 import sys
 import unicodedata
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -27,12 +27,13 @@ from sb3_smc.core.hyperparameters import ALGORITHMS, DEFAULT_ALGORITHM, DEFAULT_
 from sb3_smc.curricula import trainer
 from sb3_smc.curricula.format import describe
 from sb3_smc.curricula.jobs import DEFAULT_REUSE, DEFAULT_SEEDS, REUSE, check_curriculum
-from sb3_smc.curricula.options import BACKENDS, DEFAULT_GROUP_SIZE, RunOptions
+from sb3_smc.curricula.options import BACKENDS, DEFAULT_GROUP_SIZE, LIMITS, RunOptions
 from sb3_smc.curricula.run_directory import status
 from sb3_smc.errors import SMCError
 from sb3_smc.experiments import report, runner
 from sb3_smc.experiments.design import CATEGORIES, DEFAULT_METHODS, DEFAULT_REPEATS, METHOD_REGISTRY, METHODS
-from sb3_smc.library import SMCLibrary, storage
+from sb3_smc.learning.evaluation import MAX_REPEATS
+from sb3_smc.library import LibraryError, SMCLibrary, storage
 from sb3_smc.library.pretrained import pretrained_root
 
 __all__ = ["main"]
@@ -113,7 +114,7 @@ def _resume_command(directory: Path, settings: dict[str, Any]) -> str:
 
 def _group_size_option(p: argparse.ArgumentParser) -> None:
     """``--group-size`` of ``sb3-smc train`` and ``sb3-smc experiment``."""
-    p.add_argument("--group-size", type=_positive, default=DEFAULT_GROUP_SIZE,
+    p.add_argument("--group-size", type=_count(LIMITS["group_size"]), default=DEFAULT_GROUP_SIZE,
                    help="the most seeds of a node (flat, or level 2 over flat nodes) trained together by one worker "
                         "(default "
                         f"{DEFAULT_GROUP_SIZE}; 1: one job per worker); the SMCs are the same whatever it is")
@@ -140,15 +141,35 @@ def _library(args: argparse.Namespace) -> int:
     manifest, where = storage.read_manifest(root)
     entries = storage.check_manifest(manifest, where)
     storage.topological_order(entries, where)  # SMCs that call each other in a cycle: an error, as on load
-    if args.check:  # every model file: there, intact, its checksum, loads with its class, fits its SMC
-        SMCLibrary.load(root)
+    pickled = [name for name, entry in entries.items() if storage.is_pickled(entry)]
+    if args.upgrade:
+        if pickled and not args.trust:
+            raise LibraryError(f"{root}: {len(pickled)} SMC(s) stored as pickled archives (a library written before "
+                               "sb3-smc's version-5 format): converting them loads them, which runs any code their "
+                               "author put in them; add --trust if you trust where the library comes from")
+        SMCLibrary.load(root, trust=args.trust).save()
+        manifest, where = storage.read_manifest(root)
+        entries = storage.check_manifest(manifest, where)
+        pickled = []
+    checked = ""
+    if args.check:  # every model file: there, intact, its checksum; the safe ones rebuilt and fitted to their SMC
+        for name, entry in entries.items():
+            storage.check_model_file(root, name, entry)
+        if pickled and not args.trust:
+            checked = (f", every model file checked; {len(pickled)} pickled archive(s) checked but not loaded "
+                       "(loading runs their code: --trust loads them, --upgrade --trust converts them)")
+        else:
+            SMCLibrary.load(root, trust=args.trust)
+            checked = ", every model file checked and loaded"
+    elif pickled:
+        checked = (f"; {len(pickled)} SMC(s) stored as pickled archives, loaded only with trust "
+                   f"(sb3-smc library {shlex.quote(str(root))} --upgrade --trust converts them)")
     rows = [{"name": name, "kind": entry.kind, "algo": entry.algo, "children": list(entry.children),
              **entry.summary()} for name, entry in entries.items()]
     if args.json:
         print(json.dumps(rows, indent=1))
         return 0
     made = (manifest.get("created_with") or {}).get("sb3_smc", "an unknown sb3_smc")
-    checked = ", every model file checked and loaded" if args.check else ""
     print(f"{root}: {len(rows)} SMC(s), manifest version {manifest['version']} (sb3_smc {made}){checked}")
     table = [("name", "kind", "algo", "children", "env id", "seed", "update", "return", "test %")]
     for row in rows:
@@ -185,15 +206,22 @@ def _import_zoo(args: argparse.Namespace) -> int:
     return 0
 
 
-def _positive(text: str) -> int:
-    """An option's positive integer (argparse reports the error with the option's name)."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be a positive integer, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be a positive integer, got {value}")
-    return value
+def _count(limit: int) -> Callable[[str], int]:
+    """The type of an option that is a count in ``[1, limit]`` (argparse reports its error with the option's name),
+    checked as the command line is read: the limits are those of the run's options (:data:`LIMITS`) and
+    :data:`~sb3_smc.learning.evaluation.MAX_REPEATS`."""
+    def count(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"must be a positive integer, got {text!r}") from None
+        if value < 1:
+            raise argparse.ArgumentTypeError(f"must be a positive integer, got {value}")
+        if value > limit:
+            raise argparse.ArgumentTypeError(f"must be at most {limit:,}, got {value:,}")
+        return value
+
+    return count
 
 
 def _reuse_from(value: str | None) -> Path | None:
@@ -233,14 +261,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--out", required=True, help="the run directory")
     p.add_argument("--targets", action="append", help="node or dataset names (comma-separated; repeatable); "
                                                       "default: the curriculum's targets")
-    p.add_argument("--seeds", type=_positive, default=DEFAULT_SEEDS,
+    p.add_argument("--seeds", type=_count(LIMITS["seeds"]), default=DEFAULT_SEEDS,
                    help=f"seeds 0..N-1 per node (default {DEFAULT_SEEDS}, the paper's)")
-    p.add_argument("--timesteps", type=_positive, default=None,
+    p.add_argument("--timesteps", type=_count(LIMITS["timesteps"]), default=None,
                    help=f"steps per job, replacing the nodes' own (default: the node's, else {DEFAULT_TIMESTEPS:,}), "
                         "times a node's budget_scale")
     p.add_argument("--reuse", choices=list(REUSE), default=DEFAULT_REUSE,
                    help="seeds of each lower-level node a caller gets (default two_best)")
-    p.add_argument("--workers", type=_positive, default=1, help="jobs in parallel (local processes or Ray tasks)")
+    p.add_argument("--workers", type=_count(LIMITS["workers"]), default=1,
+                   help="jobs in parallel (local processes or Ray tasks)")
     _group_size_option(p)
     p.add_argument("--backend", choices=BACKENDS, default=BACKENDS[0])
     p.add_argument("--ray-address", default=None, help="Ray cluster address (default: $RAY_ADDRESS)")
@@ -261,11 +290,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     group.add_argument("--category", choices=[*CATEGORIES, "all"],
                        help="the higher-level targets of a category (default: all, the paper's 51; pushable: "
                             "the 8 of the designed pushable curriculum)")
-    p.add_argument("--seeds", type=_positive, default=DEFAULT_SEEDS)
-    p.add_argument("--timesteps", type=_positive, default=None, help=f"steps per SMC (default {DEFAULT_TIMESTEPS:,})")
-    p.add_argument("--repeats", type=_positive, default=DEFAULT_REPEATS,
+    p.add_argument("--seeds", type=_count(LIMITS["seeds"]), default=DEFAULT_SEEDS)
+    p.add_argument("--timesteps", type=_count(LIMITS["timesteps"]), default=None,
+                   help=f"steps per SMC (default {DEFAULT_TIMESTEPS:,})")
+    p.add_argument("--repeats", type=_count(MAX_REPEATS), default=DEFAULT_REPEATS,
                    help=f"test repeats per environment (default {DEFAULT_REPEATS})")
-    p.add_argument("--workers", type=_positive, default=1)
+    p.add_argument("--workers", type=_count(LIMITS["workers"]), default=1)
     _group_size_option(p)
     p.add_argument("--backend", choices=BACKENDS, default=BACKENDS[0])
     p.add_argument("--ray-address", default=None)
@@ -295,7 +325,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     p = sub.add_parser("library", help="what an SMC library holds: one row per SMC, read from its manifest")
     p.add_argument("directory", help="the library directory (e.g. runs/con2-cl/library)")
     p.add_argument("--check", action="store_true",
-                   help="also check every model file (checksum, loads with its class, fits its SMC)")
+                   help="also check every model file (there, its checksum, well-formed; rebuilt and fitted to its SMC "
+                        "without unpickling anything; an old library's pickled archives only with --trust)")
+    p.add_argument("--upgrade", action="store_true",
+                   help="write the library in the current format (an old library's pickled models need --trust)")
+    p.add_argument("--trust", action="store_true",
+                   help="load what runs code from the files (pickled models of a library written before version 5, "
+                        "classes of other modules): only for a library from a source you trust")
     p.add_argument("--json", action="store_true", help="the rows as JSON")
     p.set_defaults(run=_library)
 

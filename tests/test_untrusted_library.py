@@ -150,7 +150,7 @@ def test_names_with_paths_are_refused_where_they_enter(pretrained, tmp_path):
     trainer never removes a folder outside its run (``DIR/tensorboard/<name>@<seed>_*``)."""
     from sb3_smc.errors import SMCError
 
-    with pytest.raises(SMCError, match=r"SMC name '\.\./precious' is not a name: it holds '/'"):
+    with pytest.raises(SMCError, match=r"SMC name '\.\./precious' is not a name: its part '\.\.' starts with '\.'"):
         _renamed(pretrained[NAMES[0]], "../precious")
     library = SMCLibrary([pretrained[NAMES[0]]]).save(tmp_path / "lib")
     raw = json.loads((library / storage.MANIFEST).read_text())

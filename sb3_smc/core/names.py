@@ -1,9 +1,11 @@
 """What a name is (torch-free): the one rule for the names of SMCs, curriculum nodes, curricula and runs, which become
 parts of paths (``DIR/tensorboard/<name>_1``, ``DIR/failed/<name>.txt``) and keys of a library's manifest.
 
-A name is 1 to :data:`MAX_NAME_LENGTH` characters of any script, with no path separator (``/``, ``\\``), no NUL or
-other control character, not starting with ``.`` (so never ``.`` or ``..``, nor a hidden file) and not starting or
-ending with white space. :func:`check_name` applies it where a name enters: a curriculum file, an SMC, a manifest.
+A name is 1 to :data:`MAX_NAME_LENGTH` characters of any script, in one or more parts joined by ``/`` (a namespace,
+as the paper's experiments name their nodes: ``con2-ba-canon-noprim/ba_self-in-container_from_on-floor_canon``),
+each part non-empty and not starting with ``.`` (so never ``.`` or ``..``, nor a hidden file), with no ``\\``, no
+NUL or other control character, and not starting or ending with white space. So a name joined to a folder stays
+inside it. :func:`check_name` applies it where a name enters: a curriculum file, an SMC, a manifest.
 """
 
 from __future__ import annotations
@@ -26,11 +28,14 @@ def name_problem(name: object) -> str | None:
         return "a name cannot be empty"
     if len(name) > MAX_NAME_LENGTH:
         return f"{len(name)} characters, more than a name may have ({MAX_NAME_LENGTH})"
-    bad = next((c for c in name if c in "/\\" or unicodedata.category(c) in ("Cc", "Cs")), None)
+    bad = next((c for c in name if c == "\\" or unicodedata.category(c) in ("Cc", "Cs")), None)
     if bad is not None:
-        return f"it holds {bad!r} (a name may not hold a path separator or a control character)"
-    if name.startswith("."):
-        return "it starts with '.' (a name is never '.', '..' or a hidden file)"
+        return f"it holds {bad!r} (a name may not hold a backslash or a control character)"
+    for part in name.split("/"):
+        if not part:
+            return "it has an empty part (a '/' at its start or end, or '//')"
+        if part.startswith("."):
+            return f"its part {part!r} starts with '.' (a part of a name is never '.', '..' or a hidden file)"
     if name != name.strip():
         return "it starts or ends with white space"
     return None

@@ -40,10 +40,11 @@ import yaml
 
 from pixelworld_env.yaml_loading import YAMLInputError, safe_yaml_compose
 from sb3_smc.core.dag import CycleError, children_first, reachable
-from sb3_smc.core.hyperparameters import ALGORITHMS
+from sb3_smc.core.hyperparameters import ALGORITHMS, DEFAULT_TIMESTEPS, MAX_TIMESTEPS
 from sb3_smc.core.names import name_problem
 from sb3_smc.errors import SMCError
 from sb3_smc.records import WrapperSettings
+from sb3_smc.records.spec import MAX_EPISODE_STEPS
 
 __all__ = ["FORMAT_KEYS", "NODE_KEYS", "SEED_SEPARATOR", "Curriculum", "CurriculumError", "Node", "describe",
            "is_env_id", "load_curriculum", "merge", "parse_curriculum"]
@@ -263,7 +264,8 @@ def parse_curriculum(text: str, source: str = "<curriculum>") -> Curriculum:
         root = safe_yaml_compose(text, source)
     except YAMLInputError as err:
         line = f":{err.line}" if err.line else ""
-        raise CurriculumError(f"{source}{line}: {err.problem}") from None
+        problem = err.problem.replace("invalid YAML: ", "malformed YAML: ", 1)
+        raise CurriculumError(f"{source}{line}: {problem}") from None
     if not isinstance(root, yaml.MappingNode):
         raise CurriculumError(f"{source}: a curriculum file is a mapping with the keys {list(FORMAT_KEYS)}")
     data = _plain(root, source)
@@ -339,16 +341,22 @@ def _node(item: Any, line: int, defaults: Mapping[str, Any], source: str) -> Nod
         if not isinstance(value, bool):
             raise CurriculumError(f"{where}: {label}: {key!r} must be true or false, got {value!r}")
     timesteps = settings.get("timesteps")
-    if timesteps is not None and (isinstance(timesteps, bool) or not isinstance(timesteps, int) or timesteps < 1):
-        raise CurriculumError(f"{where}: {label}: 'timesteps' must be a positive integer, got {timesteps!r}")
+    if timesteps is not None and (isinstance(timesteps, bool) or not isinstance(timesteps, int)
+                                  or not 1 <= timesteps <= MAX_TIMESTEPS):
+        raise CurriculumError(f"{where}: {label}: 'timesteps' must be a positive integer, got {timesteps!r} (at "
+                              f"most {MAX_TIMESTEPS:,})")
     scale = settings.get("budget_scale", 1.0)
     if isinstance(scale, bool) or not isinstance(scale, int | float) or not math.isfinite(scale) or scale <= 0:
         raise CurriculumError(f"{where}: {label}: 'budget_scale' must be a positive number, got {scale!r}")
+    if (timesteps or DEFAULT_TIMESTEPS) * scale > MAX_TIMESTEPS:
+        raise CurriculumError(f"{where}: {label}: 'budget_scale' {scale!r} makes a budget of more than "
+                              f"{MAX_TIMESTEPS:,} timesteps")
     steps = {key: settings.get(key, default) for key, default in (("max_steps", DEFAULT_MAX_STEPS),
                                                                   ("call_step_cap", DEFAULT_CALL_STEP_CAP))}
     for key, value in steps.items():
-        if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-            raise CurriculumError(f"{where}: {label}: {key!r} must be a positive integer, got {value!r}")
+        if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= MAX_EPISODE_STEPS:
+            raise CurriculumError(f"{where}: {label}: {key!r} must be a positive integer, got {value!r} (at most "
+                                  f"{MAX_EPISODE_STEPS:,})")
     hyper = settings.get("hyperparameters") or {}
     if not isinstance(hyper, dict):
         raise CurriculumError(f"{where}: {label}: 'hyperparameters' must be a mapping, got {hyper!r}")

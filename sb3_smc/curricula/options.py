@@ -17,13 +17,13 @@ from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any
 
-from sb3_smc.core.hyperparameters import algorithm, recurrent_policy
+from sb3_smc.core.hyperparameters import MAX_TIMESTEPS, algorithm, recurrent_policy
 from sb3_smc.curricula.format import Curriculum, Node
 from sb3_smc.curricula.jobs import DEFAULT_REUSE, DEFAULT_SEEDS, REUSE, JobId, check_curriculum, node_budget, node_spec
 from sb3_smc.errors import SMCError, SMCTypeError
 from sb3_smc.records import TrainingSpec
 
-__all__ = ["BACKENDS", "DEFAULT_GROUP_SIZE", "RunOptions"]
+__all__ = ["BACKENDS", "DEFAULT_GROUP_SIZE", "LIMITS", "MAX_SEEDS", "MAX_WORKERS", "RunOptions"]
 
 BACKENDS = ("local", "ray")
 """Where jobs run: local processes or Ray tasks."""
@@ -31,6 +31,13 @@ DEFAULT_GROUP_SIZE = 5
 """The most seeds of a node trained together in one worker (``group_size``; flat nodes and level-2 nodes whose
 children are flat; 1: one job per worker, as before issue 44). docs/benchmarks.md, "Grouped jobs in the curriculum
 trainer", has the measurement behind it."""
+MAX_SEEDS = 1000
+"""The most seeds of a run (``seeds``: seeds ``0 .. seeds-1`` of every node; the paper trains 5)."""
+MAX_WORKERS = 1024
+"""The most jobs a run trains at once (``workers``: local processes, or Ray tasks in flight)."""
+LIMITS = {"seeds": MAX_SEEDS, "workers": MAX_WORKERS, "timesteps": MAX_TIMESTEPS, "group_size": MAX_SEEDS}
+"""The largest value of each count of :class:`RunOptions` (a group holds seeds of one node: at most ``MAX_SEEDS``),
+and of the ``sb3-smc`` options of those names."""
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -38,9 +45,11 @@ class RunOptions:
     """The options of a curriculum run, checked when the record is made (``ValueError`` naming the first option out of
     range; nothing is done before). ``seeds``, ``timesteps``, ``reuse``, ``algo``, ``rnn`` and ``lean_update`` decide
     the trained SMCs (``run.json`` records them); the others decide where and how the jobs train, never what they train.
+    The counts (``seeds``, ``workers``, ``timesteps``, ``group_size``) are positive integers up to their :data:`LIMITS`.
 
-    :param seeds: seeds ``0 .. seeds-1`` of every node.
-    :param timesteps: replaces every node's own budget (``None``: the node's, else the default).
+    :param seeds: seeds ``0 .. seeds-1`` of every node (at most :data:`MAX_SEEDS`).
+    :param timesteps: replaces every node's own budget (``None``: the node's, else the default; at most
+        :data:`~sb3_smc.core.hyperparameters.MAX_TIMESTEPS`).
     :param reuse: how many of a used node's best seeds a node calls: ``"two_best"`` or ``"one_best"``.
     :param algo: replaces every node's learner.
     :param rnn: the recurrent cell of every node (``"lstm"`` or ``"gru"``; recurrent algorithms only).
@@ -71,11 +80,14 @@ class RunOptions:
     reuse_from: Path | None = None
 
     def __post_init__(self) -> None:
-        for name, value, optional in (("seeds", self.seeds, False), ("workers", self.workers, False),
-                                      ("timesteps", self.timesteps, True), ("group_size", self.group_size, False)):
-            if not (optional and value is None) and (isinstance(value, bool) or not isinstance(value, int)
-                                                     or value < 1):
+        for name, limit in LIMITS.items():
+            value = getattr(self, name)
+            if value is None and name == "timesteps":
+                continue
+            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
                 raise SMCError(f"{name} must be a positive integer, got {value!r}")
+            if value > limit:
+                raise SMCError(f"{name} must be at most {limit:,}, got {value:,}")
         for name, flag in (("lean_update", self.lean_update), ("tensorboard", self.tensorboard)):
             if not isinstance(flag, bool):
                 raise SMCTypeError(f"{name} must be True or False, got {flag!r}")

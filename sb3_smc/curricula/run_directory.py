@@ -28,7 +28,7 @@ from typing import Any
 from pixelworld_env.atomic import atomic_write, make_temporary_directory
 from sb3_smc.curricula.format import Curriculum
 from sb3_smc.curricula.jobs import JobId, job_name, name_of_file, node_of
-from sb3_smc.curricula.options import RunOptions
+from sb3_smc.curricula.options import MAX_SEEDS, RunOptions
 from sb3_smc.errors import SMCError
 from sb3_smc.library import storage
 from sb3_smc.library.errors import CorruptModelError
@@ -120,9 +120,13 @@ def read_settings(directory: Path) -> dict[str, Any] | None:
         return None
     settings = read_json(path, "the settings of a curriculum run (sb3-smc train writes it)")
     if not isinstance(settings, dict) or settings.get("format") != RUN_FORMAT \
-            or not isinstance(settings.get("nodes"), dict) or not isinstance(settings.get("seeds"), int):
+            or not isinstance(settings.get("nodes"), dict) or "seeds" not in settings:
         raise RunFileError(f"{path} is not the settings of an sb3-smc run (a JSON object of format {RUN_FORMAT!r} "
                            "with its nodes and seeds)")
+    seeds = settings["seeds"]
+    if type(seeds) is not int or not 1 <= seeds <= MAX_SEEDS:  # bools are not counts
+        raise RunFileError(f"{path}: seeds must be an integer in [1, {MAX_SEEDS:,}] (the seeds of every node), got "
+                           f"{seeds!r}")
     return settings
 
 

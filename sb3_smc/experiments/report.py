@@ -335,10 +335,11 @@ def _learners(settings: dict[str, Any]) -> str:
 
 def _command(directory: Path, settings: dict[str, Any]) -> str:
     """The command of results recorded before ``results.json`` kept it: the learner options as ``run.json`` has them
-    (left out where the run took the defaults)."""
+    (left out where the run took the defaults; all left out without a ``run.json``, or with a damaged one; one that
+    cannot be read raises its ``OSError``)."""
     try:
         run = json.loads((directory / "run.json").read_text())
-    except (OSError, ValueError):
+    except (FileNotFoundError, ValueError):
         run = {}
     return experiment_command("DIR", methods=settings["methods"], targets=settings["targets"],
                               seeds=settings["seeds"], timesteps=run.get("timesteps"),

@@ -53,7 +53,7 @@ from sb3_smc.experiments.design import (
     plan,
 )
 from sb3_smc.experiments.wall_clock import UNKNOWN_COMMIT, WallClock, lower_bound
-from sb3_smc.learning.evaluation import evaluate
+from sb3_smc.learning.evaluation import MAX_REPEATS, evaluate
 from sb3_smc.library import SMCLibrary, storage
 from sb3_smc.records import package_versions
 
@@ -94,7 +94,8 @@ def run_experiment(
         paper's 51 targets).
     :param seeds: seeds per node (the paper's 5).
     :param timesteps: the budget of every SMC (default: each node's own, else 400,000).
-    :param repeats: test episodes per test environment and SMC (the paper's 10).
+    :param repeats: test episodes per test environment and SMC (the paper's 10; at most
+        :data:`~sb3_smc.learning.evaluation.MAX_REPEATS`).
     :param workers: jobs trained at once.
     :param group_size: the most seeds of a flat node trained together in one worker (1: every SMC alone); the
         results are the same whatever the grouping.
@@ -123,6 +124,8 @@ def run_experiment(
         raise SMCError("give targets or a category, not both")
     if isinstance(repeats, bool) or not isinstance(repeats, int) or repeats < 1:
         raise SMCError(f"repeats must be a positive integer, got {repeats!r}")
+    if repeats > MAX_REPEATS:
+        raise SMCError(f"repeats must be at most {MAX_REPEATS:,}, got {repeats:,}")
     options = RunOptions.of(options, seeds=seeds, timesteps=timesteps, workers=workers, group_size=group_size,
                             backend=backend, ray_address=ray_address, algo=algo, rnn=rnn, lean_update=lean_update,
                             reuse_from=reuse_from)
@@ -239,10 +242,17 @@ def _copies(directory: Path, jobs: set[str], reuse_from: Path | None) -> set[str
 
 def _previous_results(directory: Path) -> dict[str, Any]:
     """The directory's ``results.json`` as an earlier run wrote it (empty without one, or a damaged one: it is
-    written again)."""
+    written again); :class:`RunFileError` for one that cannot be read (not allowed, a folder in its place), which
+    would be lost or fail the run's end."""
+    path = directory / "results.json"
     try:
-        previous = json.loads((directory / "results.json").read_text(encoding="utf-8"))
-    except (OSError, ValueError):
+        previous = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        return {}
+    except OSError as err:
+        raise RunFileError(f"cannot read {path} ({err.strerror or err}): the results of earlier runs, which this "
+                           "run adds to; make it readable (or move it away to start the results again)") from None
+    except ValueError:
         return {}
     if not isinstance(previous, dict):
         return {}

@@ -41,20 +41,21 @@ RECORDS = ("run.json", "results.json", "evaluations", "cnn")
 
 
 def _recorded_total(directory: Path) -> float:
-    """The total wall time ``directory/results.json`` recorded (0 without one): where a ledger starts."""
+    """The total wall time ``directory/results.json`` recorded (0 without one, or a damaged one): where a ledger
+    starts. A file that cannot be read raises its ``OSError``: its total is not 0."""
     try:
         previous = json.loads((directory / "results.json").read_text())
         return float(previous.get("wall_time_total_s", previous.get("wall_time_s", 0.0)))
-    except (OSError, ValueError, AttributeError, TypeError):
+    except (FileNotFoundError, ValueError, AttributeError, TypeError):
         return 0.0
 
 
 def _recorded_bound(directory: Path) -> bool:
     """Whether the total ``directory/results.json`` recorded is a lower bound: unless its results say it is not (a
-    total kept by a ledger)."""
+    total kept by a ledger); a file that cannot be read raises its ``OSError``."""
     try:
         return json.loads((directory / "results.json").read_text()).get("wall_time_lower_bound") is not False
-    except (OSError, ValueError, AttributeError):
+    except (FileNotFoundError, ValueError, AttributeError):
         return True
 
 

@@ -33,8 +33,8 @@ if TYPE_CHECKING:
     from pixelworld_env.envs.env import PixelWorldEnv
     from sb3_smc.envs.wrapper import HierarchicalSMCWrapper
 
-__all__ = ["FOREIGN_TEST_SEED", "EnvironmentResult", "EpisodeResult", "EvaluationResult", "REPEAT_SEED_OFFSET",
-           "evaluate", "episode_seed", "make_evaluation_env", "run_episode", "start_seed"]
+__all__ = ["FOREIGN_TEST_SEED", "MAX_REPEATS", "MAX_STARTS", "EnvironmentResult", "EpisodeResult", "EvaluationResult",
+           "REPEAT_SEED_OFFSET", "evaluate", "episode_seed", "make_evaluation_env", "run_episode", "start_seed"]
 
 REPEAT_SEED_OFFSET = 512
 """Repeat ``r`` of the paper's test is seeded with ``512 + r``."""
@@ -42,6 +42,11 @@ FOREIGN_TEST_SEED = 1_000_000_000
 """The first start seed of the test split of a task without datasets (:func:`start_seed`)."""
 FOREIGN_SPLITS = {"train": 0, "test": FOREIGN_TEST_SEED}
 """The first start seed of each split of a task without datasets."""
+MAX_REPEATS = 1000
+"""The most episodes per environment of one test (``repeats``; the paper's 10): :func:`evaluate`,
+``run_experiment`` and ``sb3-smc experiment --repeats``."""
+MAX_STARTS = 100_000
+"""The most start states a test of a task without datasets runs (``starts``; default 100)."""
 
 Cell = tuple[int, int]
 
@@ -254,14 +259,14 @@ def evaluate(smc: SMC, env_id: str | None = None, *, split: str = "test", repeat
         Gymnasium environment) the environments are ``starts`` start states: the task reset with
         :func:`start_seed` (``"test"``: seeds from ``FOREIGN_TEST_SEED``, far from the ``seed + i`` training resets;
         ``"train"``: from 0), each repeat sampling the policy and the SMC calls anew from the same start.
-    :param repeats: episodes per environment (the paper's 10).
+    :param repeats: episodes per environment (the paper's 10; at most :data:`MAX_REPEATS`).
     :param seed: the evaluation seed (policy sampling and SMC calls), not the SMC's training seed.
     :param max_steps: the episode's length (default: the spec's).
     :param record_cells: keep the cells visited in each episode.
     :param env_kwargs: extra keyword arguments for ``gym.make``.
     :param keep: add the result's :class:`~sb3_smc.records.EvaluationRecord` to ``smc.evaluations`` (replacing an
         earlier one of the same env id and split), so a library saves it.
-    :param starts: start states of a task without datasets (default 100).
+    :param starts: start states of a task without datasets (default 100; at most :data:`MAX_STARTS`).
     :param wrapper: replaces the spec's wrapper settings (e.g. to count the moves of calls against the episode's
         steps).
     :return: the overall ``score`` (mean of final-step reward > 0 over environments x repeats), one
@@ -269,6 +274,8 @@ def evaluate(smc: SMC, env_id: str | None = None, *, split: str = "test", repeat
         cells.
     """
     repeats = check_int(repeats, "repeats", 1)
+    if repeats > MAX_REPEATS:
+        raise SMCError(f"repeats must be at most {MAX_REPEATS:,}, got {repeats:,}")
     seed = check_seed(seed, "evaluation seed")
     env_id = _env_id(smc, env_id)
     smc.check_layout()
@@ -280,10 +287,15 @@ def evaluate(smc: SMC, env_id: str | None = None, *, split: str = "test", repeat
         if tuple(env.action_names) != tuple(smc.action_names):
             raise SMCError(f"SMC {smc.name!r} has actions {smc.action_names}, the env {env.action_names}")
         pixelworld = cast("PixelWorldEnv", base) if env.pixelworld else None
-        if pixelworld is not None and starts is not None:
-            raise SMCError(f"starts= is for tasks without datasets; {env_id} runs every scene of its {split} split")
-        n = len(pixelworld.scenes) if pixelworld is not None else check_int(100 if starts is None else starts,
-                                                                             "starts", 1)
+        if pixelworld is not None:
+            if starts is not None:
+                raise SMCError(f"starts= is for tasks without datasets; {env_id} runs every scene of its {split} "
+                               "split")
+            n = len(pixelworld.scenes)
+        else:
+            n = check_int(100 if starts is None else starts, "starts", 1)
+            if n > MAX_STARTS:
+                raise SMCError(f"starts must be at most {MAX_STARTS:,}, got {n:,}")
         environments = []
         for index in range(n):
             episodes = []

@@ -8,7 +8,7 @@ from collections.abc import Sequence
 from sb3_smc.errors import SMCError, SMCKeyError
 
 __all__ = ["CorruptModelError", "LayoutMismatchError", "LibraryConflictError", "LibraryError", "ManifestError",
-           "MissingChildError", "UnknownSMCError", "UntrustedModelError", "suggest"]
+           "MissingChildError", "UnknownSMCError", "UnreadableFileError", "UntrustedModelError", "suggest"]
 
 
 class LibraryError(SMCError):
@@ -33,6 +33,11 @@ class LayoutMismatchError(LibraryError):
 
 class CorruptModelError(LibraryError):
     """A model file is missing, truncated, corrupt, modified since it was saved, or not loadable."""
+
+
+class UnreadableFileError(LibraryError):
+    """A library's file is there but the system does not let it be read (permissions, an I/O error): not a damaged
+    file, so a run never trains its SMC again or replaces it for that."""
 
 
 class UntrustedModelError(LibraryError):

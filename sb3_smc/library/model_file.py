@@ -79,7 +79,7 @@ def _schedule_json(value: Any, key: str, where: str) -> Any:
 
 
 def _constructor_parameters(cls: type) -> list[str]:
-    return [p for p in inspect.signature(cls.__init__).parameters if p not in ("self", "args", "kwargs")]
+    return [p for p in inspect.signature(cls).parameters if p not in ("args", "kwargs")]
 
 
 def _attributes(model: OnPolicyAlgorithm, where: str) -> dict[str, Any]:
@@ -273,7 +273,8 @@ def decode_model(data: bytes, algo: str, where: str, *, trust: bool = False) -> 
         wrong = sorted(set(shapes) ^ set(stored)) or sorted(k for k in shapes if shapes[k] != stored[k])
         raise _error(where, f"its weights do not fit its policy's settings (first difference: {wrong[0]!r})")
     try:
-        model = cls(policy=policy_class, env=None, device="cpu", _init_setup_model=False)
+        build: Any = cls  # as SB3's own load builds it: the settings come next, from the file
+        model = build(policy=policy_class, env=None, device="cpu", _init_setup_model=False)
         model.__dict__.update(attributes)
         model.observation_space, model.action_space = obs_space, action_space
         model.n_envs = int(attributes.get("n_envs", 1))
@@ -290,7 +291,8 @@ def decode_model(data: bytes, algo: str, where: str, *, trust: bool = False) -> 
         for index, values in (metadata["optimizer"].get("scalars") or {}).items():
             state.setdefault(int(index), {}).update(values)
         optimizer["state"] = state
-        model.set_parameters({"policy": weights, "policy.optimizer": optimizer}, exact_match=True, device="cpu")
+        parameters: dict[str, Any] = {"policy": weights, "policy.optimizer": optimizer}
+        model.set_parameters(parameters, exact_match=True, device="cpu")
     except CorruptModelError:
         raise
     except Exception as err:  # noqa: BLE001 - SB3 and torch raise many kinds of errors for settings that do not fit

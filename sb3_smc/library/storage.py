@@ -22,16 +22,13 @@ Nothing here knows about :class:`~sb3_smc.library.SMCLibrary` beyond the SMCs it
 
 from __future__ import annotations
 
-import contextlib
 import hashlib
 import io
 import json
 import os
 import shutil
-import stat
-import threading
 import zipfile
-from collections.abc import Collection, Iterator, Mapping, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -44,9 +41,11 @@ from sb3_smc.library.errors import (
     LibraryConflictError,
     LibraryError,
     ManifestError,
+    UnreadableFileError,
     UntrustedModelError,
     suggest,
 )
+from sb3_smc.library.files import LOCK, locked, read_inside
 from sb3_smc.library.manifest import (
     ALGORITHMS,
     FORMAT,
@@ -79,8 +78,6 @@ __all__ = ["ALGORITHMS", "FORMAT", "FORMAT_VERSION", "LOCK", "MANIFEST", "MAX_MA
            "manifest_text", "model_bytes", "new_manifest", "read_manifest", "remove_from_library", "save_library",
            "sha256", "topological_order", "write_manifest"]
 
-LOCK = ".lock"
-"""The lock file inside a library folder (``fcntl.flock``: exclusive for writers, shared for readers)."""
 MAX_MANIFEST_BYTES = 256 * 2**20
 """The largest manifest read (256 MiB; the package's pretrained library's is about 1 MB)."""
 
@@ -158,62 +155,6 @@ def model_bytes(model: Any, *, compact: bool = False, where: str = "model") -> b
     """The bytes of ``model``'s file (:func:`sb3_smc.library.model_file.encode_model`); ``compact``: without the
     optimiser's running state (the pretrained library's)."""
     return encode_model(model, optimizer_state=not compact, where=where)
-
-
-_HELD: dict[str, tuple[int, bool, int]] = {}
-"""The library locks this process holds, by lock file: its descriptor, whether exclusive, how many holders."""
-_HELD_GUARD = threading.RLock()
-
-
-@contextlib.contextmanager
-def locked(root: Path, *, exclusive: bool) -> Iterator[None]:
-    """Hold the lock of the library in ``root``: exclusive for a writer (the folder is created), shared for a reader.
-
-    Writers wait for each other and for readers, readers only for writers (``fcntl.flock`` on ``root/.lock``); a
-    reader of a library whose folder it cannot write (a read-only copy) reads without a lock. Re-entrant within a
-    process (an exclusive hold serves a nested shared one)."""
-    try:
-        import fcntl
-    except ImportError:  # not POSIX: no locking
-        yield
-        return
-    if exclusive:
-        root.mkdir(parents=True, exist_ok=True)
-    lock = root / LOCK
-    key = str(lock.absolute())
-    with _HELD_GUARD:
-        held = _HELD.get(key)
-        if held is not None and (held[1] or not exclusive):
-            _HELD[key] = (held[0], held[1], held[2] + 1)
-            fd = None
-        else:
-            if held is not None:
-                raise LibraryError(f"{root}: this process reads the library and asks to write it meanwhile (a "
-                                   "shared lock cannot become exclusive)")
-            try:
-                fd = os.open(lock, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_CLOEXEC, 0o666)
-            except FileNotFoundError:
-                if exclusive:
-                    raise
-                fd = -1  # no library folder: the read that follows says so
-            except OSError as err:
-                if exclusive:
-                    raise LibraryError(f"cannot lock {root} for writing ({lock}: {err.strerror})") from None
-                fd = -1
-            if fd >= 0:
-                fcntl.flock(fd, fcntl.LOCK_EX if exclusive else fcntl.LOCK_SH)
-            _HELD[key] = (fd, exclusive, 1)
-    try:
-        yield
-    finally:
-        with _HELD_GUARD:
-            fd_, mode, count = _HELD[key]
-            if count > 1:
-                _HELD[key] = (fd_, mode, count - 1)
-            else:
-                del _HELD[key]
-                if fd_ >= 0:
-                    os.close(fd_)  # releases the flock
 
 
 def _collect_garbage(root: Path, manifest: Mapping[str, Any]) -> None:
@@ -472,39 +413,10 @@ def check_manifest(manifest: Any, where: Path) -> dict[str, LibraryEntry]:
     return check_entries(upgrade(manifest, where), where)
 
 
-def _read_inside(root: Path, relative: str, limit: int, what: str) -> bytes:
-    """The bytes of the regular file ``root/relative``, at most ``limit`` of them; a symbolic link anywhere below
-    ``root`` is refused (a library's files are its own). :class:`FileNotFoundError` where it is missing;
-    :class:`LibraryError` for a link, a file too large or one that cannot be read."""
-    path = root
-    for part in Path(relative).parts:
-        path = path / part
-        if path.is_symlink():
-            raise LibraryError(f"{what} {path} is a symbolic link; a library's files must be its own (copy the file "
-                               "into the folder)")
-    try:
-        fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_CLOEXEC)
-    except FileNotFoundError:
-        raise
-    except OSError as err:
-        raise LibraryError(f"cannot read {what} {path}: {err.strerror}") from None
-    info = os.fstat(fd)
-    if not stat.S_ISREG(info.st_mode):
-        os.close(fd)
-        raise LibraryError(f"{what} {path} is not a regular file")
-    with os.fdopen(fd, "rb") as handle:
-        if info.st_size > limit:
-            raise LibraryError(f"{what} {path} holds {info.st_size} bytes, more than {limit}")
-        try:
-            return handle.read(limit + 1)[:limit]
-        except OSError as err:
-            raise LibraryError(f"cannot read {what} {path}: {err.strerror}") from None
-
-
 def _manifest_bytes(root: Path) -> tuple[bytes, Path]:
     manifest_path = root / MANIFEST
     try:
-        return _read_inside(root, MANIFEST, MAX_MANIFEST_BYTES, "the manifest"), manifest_path
+        return read_inside(root, MANIFEST, MAX_MANIFEST_BYTES, "the manifest"), manifest_path
     except FileNotFoundError:
         raise ManifestError(f"no SMC library at {root}: {manifest_path} not found{interrupted_hint(root)}") from None
     except LibraryError as err:
@@ -555,10 +467,12 @@ def check_model_file(root: Path, name: str, entry: LibraryEntry) -> bytes:
     file = root / entry.model
     where = f"SMC {name!r}: model file {file}"
     try:
-        data = _read_inside(root, entry.model, MAX_MODEL_BYTES if not is_pickled(entry) else MAX_ARCHIVE_BYTES,
+        data = read_inside(root, entry.model, MAX_MODEL_BYTES if not is_pickled(entry) else MAX_ARCHIVE_BYTES,
                             "model file")
     except FileNotFoundError:
         raise CorruptModelError(f"SMC {name!r}: model file {file} is missing") from None
+    except UnreadableFileError as err:  # there, but not readable: not damaged
+        raise UnreadableFileError(f"SMC {name!r}: {err}") from None
     except LibraryError as err:
         raise CorruptModelError(f"SMC {name!r}: {err}") from None
     if hashlib.sha256(data).hexdigest() != entry.sha256:

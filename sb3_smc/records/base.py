@@ -42,12 +42,14 @@ def package_versions() -> dict[str, str]:
 # Field checks
 # ---------------------------------------------------------------------------------------------------------------
 
-def int_field(value: Any, where: str, minimum: int | None = None) -> int:
+def int_field(value: Any, where: str, minimum: int | None = None, maximum: int | None = None) -> int:
     number = as_integer(value)  # the package's one integer rule (bools and floats are not integers)
     if number is None:
         raise RecordError(f"{where} must be an integer, got {value!r}")
     if minimum is not None and number < minimum:
         raise RecordError(f"{where} must be >= {minimum}, got {number}")
+    if maximum is not None and number > maximum:
+        raise RecordError(f"{where} must be at most {maximum:,}, got {number:,}")
     return number
 
 

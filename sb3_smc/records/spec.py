@@ -15,6 +15,9 @@ from sb3_smc.core.hyperparameters import (
     DEFAULT_ALGORITHM,
     DEFAULT_N_ENVS,
     DEFAULT_TIMESTEPS,
+    MAX_N_ENVS,
+    MAX_STEPS_PER_UPDATE,
+    MAX_TIMESTEPS,
     STEPS_PER_UPDATE,
     resolve_hyperparameters,
 )
@@ -32,13 +35,21 @@ from sb3_smc.records.base import (
     str_field,
 )
 
-__all__ = ["DISCOUNTS", "SPLITS", "Budget", "SignalBias", "TaskSpec", "TrainingSpec", "WrapperSettings",
-           "smc_name_from_env_id"]
+__all__ = ["DISCOUNTS", "MAX_EPISODE_STEPS", "MAX_FRAME_STACK", "MAX_TRAINING_SEED", "SPLITS", "Budget", "SignalBias",
+           "TaskSpec", "TrainingSpec", "WrapperSettings", "smc_name_from_env_id"]
 
 SPLITS = ("train", "test", "all")
 DISCOUNTS = ("decision", "semi-mdp")
 """How a decision is discounted (``WrapperSettings.discount``): ``decision``, by gamma, whatever it did (the paper);
 ``semi-mdp``, by gamma ** its primitive steps."""
+MAX_TRAINING_SEED = 2**32 - 1
+"""The largest training seed (``TrainingSpec.seed``): Stable-Baselines3 seeds numpy's global generator with it, which
+takes ``0 .. 2**32 - 1``."""
+MAX_EPISODE_STEPS = 10**6
+"""The most decisions of an episode (``wrapper.max_steps``) and moves of one SMC call (``wrapper.call_step_cap``):
+the native vector env keeps ``call_step_cap`` random numbers per environment."""
+MAX_FRAME_STACK = 100
+"""The most observations a memoryless policy sees stacked (``frame_stack``)."""
 
 
 def smc_name_from_env_id(env_id: str) -> str:
@@ -155,15 +166,17 @@ class WrapperSettings(Record):
         str_field(self.discount, "wrapper.discount", DISCOUNTS)
         bool_field(self.include_primitives, "wrapper.include_primitives")
         bool_field(self.count_primitive_steps, "wrapper.count_primitive_steps")
-        set_field(self, "call_step_cap", int_field(self.call_step_cap, "wrapper.call_step_cap", 1))
-        set_field(self, "max_steps", int_field(self.max_steps, "wrapper.max_steps", 1))
+        for name in ("call_step_cap", "max_steps"):
+            set_field(self, name, int_field(getattr(self, name), f"wrapper.{name}", 1, MAX_EPISODE_STEPS))
 
 
 @dataclass(frozen=True, eq=False)
 class Budget(Record):
     """How much experience: ``total_timesteps`` in updates of ``n_envs x n_steps`` environment steps.
 
-    ``n_steps=None`` means ``max(1, STEPS_PER_UPDATE // n_envs)`` (125 with 16 environments).
+    ``n_steps=None`` means ``max(1, STEPS_PER_UPDATE // n_envs)`` (125 with 16 environments). Each size is an integer
+    within its limit (:data:`~sb3_smc.core.hyperparameters.MAX_TIMESTEPS`, ``MAX_N_ENVS``, ``MAX_STEPS_PER_UPDATE``
+    for ``n_envs x n_steps``), checked when the record is made.
     """
 
     total_timesteps: int = DEFAULT_TIMESTEPS
@@ -171,10 +184,14 @@ class Budget(Record):
     n_steps: int | None = None
 
     def __post_init__(self) -> None:
-        set_field(self, "total_timesteps", int_field(self.total_timesteps, "budget.total_timesteps", 0))
-        set_field(self, "n_envs", int_field(self.n_envs, "budget.n_envs", 1))
+        set_field(self, "total_timesteps", int_field(self.total_timesteps, "budget.total_timesteps", 0, MAX_TIMESTEPS))
+        set_field(self, "n_envs", int_field(self.n_envs, "budget.n_envs", 1, MAX_N_ENVS))
         n_steps = max(1, STEPS_PER_UPDATE // self.n_envs) if self.n_steps is None else self.n_steps
-        set_field(self, "n_steps", int_field(n_steps, "budget.n_steps", 1))
+        n_steps = int_field(n_steps, "budget.n_steps", 1)
+        if self.n_envs * n_steps > MAX_STEPS_PER_UPDATE:
+            raise RecordError(f"budget.n_steps: n_envs x n_steps, the steps of one update's rollout, must be at most "
+                              f"{MAX_STEPS_PER_UPDATE:,}, got {self.n_envs} x {n_steps:,}")
+        set_field(self, "n_steps", n_steps)
 
     @property
     def env_steps(self) -> int:
@@ -245,8 +262,8 @@ class TrainingSpec(Record):
             if not isinstance(getattr(self, name), cls):
                 raise RecordError(f"{name} must be a {cls.__name__}, got {getattr(self, name)!r}")
         str_field(self.algo, "algo", ALGORITHMS)
-        set_field(self, "seed", int_field(self.seed, "seed", 0))
-        set_field(self, "frame_stack", int_field(self.frame_stack, "frame_stack", 1))
+        set_field(self, "seed", int_field(self.seed, "seed", 0, MAX_TRAINING_SEED))
+        set_field(self, "frame_stack", int_field(self.frame_stack, "frame_stack", 1, MAX_FRAME_STACK))
         if ALGORITHM_REGISTRY[self.algo].recurrent and self.frame_stack != 1:
             raise RecordError(f"frame_stack is meant for memoryless policies (TRPO, PPO); {self.algo} has a "
                               "recurrent cell")

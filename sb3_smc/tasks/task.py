@@ -20,7 +20,9 @@ The observation is the environment's, flattened to float32 (:attr:`SMCTask.senso
 ``Discrete`` (one-hot), ``MultiBinary`` / ``MultiDiscrete`` or a ``Dict`` / ``Tuple`` of them, as
 ``gymnasium.spaces.flatten`` flattens them; ``observation=("image", "direction")`` takes only those keys of a
 ``Dict`` (Minigrid's ``mission`` is text, which has no flat form), and a function ``observation(obs) -> array``
-builds it any other way. Anything else is refused at construction, naming what cannot be flattened.
+builds it any other way. Anything else is refused at construction, naming what cannot be flattened. Sensor values
+must be finite: an observation holding NaN or an infinity is an :class:`~sb3_smc.errors.SMCError` at the ``reset`` or
+step that gave it, naming the environment and the value's index among the sensor values.
 """
 
 from __future__ import annotations
@@ -218,6 +220,18 @@ class SMCTask(gym.Wrapper, gym.utils.RecordConstructorArgs):
                                f"{holds!r} ({type(holds).__name__})")
         return bool(holds)
 
+    def _read_sensor(self, obs: Any, method: str) -> np.ndarray:
+        """The sensor values of the observation ``obs`` the environment's ``method`` returned; :class:`SMCError`
+        naming the environment and the first value that is NaN or infinite (no policy can act on it)."""
+        sensor = self._flatten(obs)
+        if not np.isfinite(sensor).all():
+            bad = np.flatnonzero(~np.isfinite(sensor))
+            name = getattr(self.env.spec, "id", None) or type(self.env.unwrapped).__name__
+            raise SMCError(f"environment {name}: the observation its {method}() returned holds {sensor[bad[0]]} at "
+                           f"index {bad[0]} of the {sensor.size} sensor values (flattened; {bad.size} not finite): an "
+                           "SMC needs finite observations")
+        return sensor
+
     def _check_episode(self, method: str) -> None:
         """``RuntimeError`` unless an episode is running (``reset`` called, the episode not ended)."""
         if self._done:
@@ -245,7 +259,7 @@ class SMCTask(gym.Wrapper, gym.utils.RecordConstructorArgs):
         if not self._n_signals <= action < len(self.action_names):
             raise SMCError(f"action {action} is not a primitive action of this task ({self.action_names})")
         obs, _, terminated, truncated, _ = self.env.step(action - self._n_signals)
-        self._sensor = self._flatten(obs)
+        self._sensor = self._read_sensor(obs, "step")
         reward = 0.0
         if self.kind == BRING_ABOUT:
             goal = self._read_goal()
@@ -281,7 +295,7 @@ class SMCTask(gym.Wrapper, gym.utils.RecordConstructorArgs):
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None
               ) -> tuple[np.ndarray, dict[str, Any]]:
         obs, info = self.env.reset(seed=seed, options=options)
-        self._sensor = self._flatten(obs)
+        self._sensor = self._read_sensor(obs, "reset")
         self._steps = 0
         self._started = True
         self._done = False

@@ -32,8 +32,10 @@ _ZooLoader.add_constructor("tag:yaml.org,2002:python/object/apply:collections.Or
 def _read(path: Path) -> dict[str, Any]:
     try:
         data = yaml.load(path.read_text(encoding="utf-8"), Loader=_ZooLoader)  # noqa: S506 (safe loader subclass)
-    except (OSError, yaml.YAMLError) as error:
-        raise ZooRunError(f"{path}: cannot read the zoo's saved settings ({error})") from error
+    except OSError as error:
+        raise ZooRunError(f"{path}: cannot read the zoo's saved settings ({error.strerror or error})") from None
+    except (UnicodeDecodeError, yaml.YAMLError) as error:
+        raise ZooRunError(f"{path}: the zoo's saved settings are not YAML rl_zoo3 wrote ({error})") from None
     if not isinstance(data, dict):
         raise ZooRunError(f"{path}: expected a mapping of settings, got {type(data).__name__}")
     return data
@@ -63,6 +65,19 @@ def _wrapper_kwargs(config: dict[str, Any], where: Path, zoo_algo: str) -> dict[
         f"{where}: the run did not use sb3-smc's wrapper (env_wrapper: {wrappers!r}), so its model sees the bare "
         f"PixelWorld observation, not an SMC's (window, outcomes, previous action), and cannot be called as an SMC; "
         f"train it with `-conf sb3_smc.zoo.{zoo_algo}` (or env_wrapper: {ENV_WRAPPER} in your own configuration)")
+
+
+def _load_model(path: Path, algo: str) -> Any:
+    """The zoo's model file ``path`` loaded as ``algo``; :class:`ZooRunError` saying whether the file cannot be read
+    (an ``OSError``: not allowed, unreadable) or is no model archive of ``algo`` (corrupt, truncated, another kind)."""
+    cls = ALGORITHM_REGISTRY[algo].load_class()
+    try:
+        return cls.load(path, device="cpu")
+    except OSError as err:
+        raise ZooRunError(f"{path}: cannot read the zoo's model file ({err.strerror or err})") from None
+    except Exception as err:  # noqa: BLE001 - SB3 raises many kinds of errors for a bad archive
+        raise ZooRunError(f"{path}: not a {algo} model archive (corrupt or truncated?): {type(err).__name__}: "
+                          f"{err}") from None
 
 
 def import_zoo_model(run_dir: str | os.PathLike, library: str | os.PathLike, *, name: str | None = None,
@@ -99,10 +114,12 @@ def import_zoo_model(run_dir: str | os.PathLike, library: str | os.PathLike, *, 
     if model_file not in files:
         raise SMCError(f"model_file must be 'final' or 'best', got {model_file!r}")
     path = files[model_file]
+    if path.exists() and not path.is_file():
+        raise ZooRunError(f"{path}: the zoo's {model_file} model is not a file (a folder in its place?)")
     if not path.is_file():
         raise ZooRunError(f"{path}: no {model_file} model in the zoo run (have: "
                           f"{sorted(p.name for p in run.glob('*.zip'))})")
-    model = ALGORITHM_REGISTRY[ZOO_ALGOS[zoo_algo]].load_class().load(path, device="cpu")
+    model = _load_model(path, ZOO_ALGOS[zoo_algo])
     for package in args.get("gym_packages") or ():  # what registered the run's env id (--gym-packages)
         importlib.import_module(package)
     task = TaskSpec(str(env_id)).resolved()
