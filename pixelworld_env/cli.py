@@ -23,6 +23,7 @@ from pixelworld_env.datasets.loading import dataset_spec
 from pixelworld_env.envs.env import PixelWorldEnv
 from pixelworld_env.envs.registration import make_env, registered_ids
 from pixelworld_env.errors import PixelWorldError
+from pixelworld_env.validation import check_seed
 
 KEYS = {"w": "UP", "a": "LEFT", "s": "DOWN", "d": "RIGHT", "0": "SIG0", "1": "SIG1"}
 
@@ -57,6 +58,14 @@ def _env(args: argparse.Namespace, render_mode: str | None) -> PixelWorldEnv:
     return make_env(members, split=args.split, seed=args.seed, render_mode=render_mode)
 
 
+def _check_index(args: argparse.Namespace, env: PixelWorldEnv) -> None:
+    """``--index``: a scene of the split, else the error saying the valid range."""
+    count = len(env.scenes)
+    if not 0 <= args.index < count:
+        raise PixelWorldError(f"--index {args.index} out of range: the {args.split} split of {args.id} has {count} "
+                              f"scenes, 0..{count - 1}")
+
+
 LABEL_HEIGHT = 12
 """Pixels above each tile of a ``show --png`` sheet for its index and label."""
 LABEL_COLORS = {1: (0, 150, 0), 0: (200, 0, 0), None: (60, 60, 60)}
@@ -89,7 +98,6 @@ def cmd_show(args: argparse.Namespace, out: TextIO) -> None:
     if args.count < 1:
         raise SystemExit(f"pixelworld show: --count must be >= 1, got {args.count}")
     env = _env(args, "ansi")
-    indices = range(len(env.scenes)) if args.all else [args.index]
     if args.png:
         path = Path(args.png)
         if path.suffix.lower() != ".png":
@@ -99,9 +107,9 @@ def cmd_show(args: argparse.Namespace, out: TextIO) -> None:
         Image.fromarray(_sheet(env, count)).save(path)
         out.write(f"wrote {count} scenes of {args.id} ({args.split}) to {args.png}\n")
         return
-    for index in indices:
-        if not 0 <= index < len(env.scenes):
-            raise SystemExit(f"pixelworld: --index {index} out of range (0..{len(env.scenes) - 1})")
+    if not args.all:
+        _check_index(args, env)
+    for index in range(len(env.scenes)) if args.all else [args.index]:
         label = f", label {env.labels[index]}" if env.labels is not None else ""
         out.write(f"{args.id} {args.split} scene {index}{label}\n{env.scenes[index].to_ascii()}\n\n")
 
@@ -126,8 +134,11 @@ def cmd_generate(args: argparse.Namespace, out: TextIO) -> None:
 
 
 def cmd_play(args: argparse.Namespace, out: TextIO, keys: TextIO) -> None:
+    seed = None if args.episode_seed is None else check_seed(args.episode_seed, "--episode-seed")
     env = _env(args, "ansi")
-    _, info = env.reset(seed=args.episode_seed, options=None if args.index is None else {"index": args.index})
+    if args.index is not None:
+        _check_index(args, env)
+    _, info = env.reset(seed=seed, options=None if args.index is None else {"index": args.index})
     names = env.action_names
     help_line = "keys: " + ", ".join(f"{k}={v}" for k, v in KEYS.items() if v in names) + ", q=quit"
     legend = ", ".join(f"{c.value}={c.name.lower()}" for c in Color)

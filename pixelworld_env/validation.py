@@ -10,8 +10,8 @@ import numpy as np
 
 from pixelworld_env.errors import PixelWorldError, PixelWorldTypeError
 
-__all__ = ["MAX_SEED", "as_integer", "check_action", "check_bool", "check_int", "check_options", "check_seed",
-           "no_episode"]
+__all__ = ["MAX_SEED", "as_integer", "check_action", "check_bool", "check_count", "check_int", "check_options",
+           "check_seed", "no_episode"]
 
 MAX_SEED = 2**63 - 1
 """Seeds are integers in ``[0, 2**63 - 1]`` (they are stored in JSON records and numpy ``int64`` arrays)."""
@@ -36,6 +36,15 @@ def check_int(value: Any, name: str, minimum: int | None = None) -> int:
         raise PixelWorldTypeError(f"{name} must be an integer, got {value!r} ({type(value).__name__})")
     if minimum is not None and number < minimum:
         raise PixelWorldError(f"{name} must be >= {minimum}, got {number}")
+    return number
+
+
+def check_count(value: Any, name: str, maximum: int, limit: str) -> int:
+    """A count of things to build or do: an integer (bools and floats refused) in ``[1, maximum]``, checked before any
+    work starts; ``limit`` names the stated bound in the message (as ``pixelworld_env.envs.vector.MAX_VECTOR_ENVS``)."""
+    number = check_int(value, name, 1)
+    if number > maximum:
+        raise PixelWorldError(f"{name} must be at most {maximum:,} (the limit {limit}), got {number:,}")
     return number
 
 

@@ -61,6 +61,19 @@ class MacroRecursionError(ConceptError):
         super().__init__(f"macro expansion does not terminate: {' -> '.join(chain)}")
 
 
+class MacroExpansionError(ConceptError):
+    """An expression would have more clauses than ``limit`` once its macros are expanded (macros that use each other
+    several times grow exponentially); ``chain`` is the path of macros to the one named, empty for the expression."""
+
+    def __init__(self, chain: list[str], size: int, limit: int) -> None:
+        self.chain, self.size, self.limit = chain, size, limit
+        what = "the expression" if not chain else f"macro {chain[-1]!r}" + (
+            f" (reached through {' -> '.join(chain)})" if len(chain) > 1 else "")
+        super().__init__(f"{what} expands to {size:,} clauses, more than the limit of {limit:,} "
+                         "(pixelworld_env.concepts.parser.MAX_EXPANDED_CLAUSES); a macro that uses another several "
+                         "times multiplies its clauses")
+
+
 class MacroNameError(ConceptError):
     """A macro is named like a built-in predicate (it would shadow it)."""
 

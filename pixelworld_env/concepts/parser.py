@@ -13,13 +13,14 @@ Grammar (whitespace and line breaks are ignored)::
 from __future__ import annotations
 
 import re
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from functools import lru_cache
 
 from pixelworld_env.concepts.errors import (
     ArityError,
     ConceptSyntaxError,
+    MacroExpansionError,
     MacroRecursionError,
     NegatedMacroError,
     UndeclaredVariableError,
@@ -28,6 +29,11 @@ from pixelworld_env.errors import PixelWorldTypeError
 
 SELF = "self"
 MAX_MACRO_DEPTH = 100
+"""The most macros nested in one another (deeper is a :class:`MacroRecursionError`)."""
+MAX_EXPANDED_CLAUSES = 1000
+"""The most clauses an expression may have once its macros are expanded (the benchmark's largest has 25). Macros
+that each use the next twice double at every level (18 doublings: 262,144 clauses), so :func:`expand` counts first and
+refuses a larger expression before it expands anything."""
 
 _TOKEN = re.compile(r"\s*(?:(?P<ident>[A-Za-z0-9_\-]+)|(?P<punct>[?(),~&]))")
 
@@ -178,15 +184,57 @@ def _parse_cached(text: str) -> Expression:
     return _Parser(text).parse()
 
 
-def expand(
-    expression: Expression, macros: Mapping[str, str | Expression], _chain: tuple[str, ...] = ()
-) -> Expression:
-    """Replace every macro call by the macro's clauses, recursively."""
+def expand(expression: Expression, macros: Mapping[str, str | Expression]) -> Expression:
+    """Replace every macro call by the macro's clauses, recursively.
+
+    The clauses are counted first (each macro once, so the count takes time linear in the macros' text): more than
+    :data:`MAX_EXPANDED_CLAUSES` is a :class:`MacroExpansionError` naming the first macro over the limit, raised before
+    anything is expanded.
+    """
+    sizes: dict[str, int] = {}
+    size = sum(_expanded_size(clause, macros, (), sizes) for clause in _clauses(expression))
+    if size > MAX_EXPANDED_CLAUSES:
+        raise MacroExpansionError([], size, MAX_EXPANDED_CLAUSES)
+    return _expand(expression, macros, ())
+
+
+def _clauses(expression: Expression) -> Iterator[Clause]:
+    """The positive clauses, then those of the negated groups."""
+    yield from expression.positives
+    for group in expression.negations:
+        yield from group
+
+
+def _expanded_size(clause: Clause, macros: Mapping[str, str | Expression], chain: tuple[str, ...],
+                   sizes: dict[str, int]) -> int:
+    """The number of clauses ``clause`` stands for once expanded (1 for a predicate); macros sized once, in
+    ``sizes``."""
+    if clause.name not in macros:
+        return 1
+    if clause.name not in sizes:
+        chain = (*chain, clause.name)
+        size = sum(_expanded_size(c, macros, chain, sizes) for c in _clauses(_macro(chain, macros)))
+        if size > MAX_EXPANDED_CLAUSES:
+            raise MacroExpansionError(list(chain), size, MAX_EXPANDED_CLAUSES)
+        sizes[clause.name] = size
+    return sizes[clause.name]
+
+
+def _macro(chain: tuple[str, ...], macros: Mapping[str, str | Expression]) -> Expression:
+    """The parsed macro ``chain[-1]``, reached through ``chain``; :class:`MacroRecursionError` if the chain cycles or
+    is deeper than :data:`MAX_MACRO_DEPTH`."""
+    if len(chain) > MAX_MACRO_DEPTH or chain[-1] in chain[:-1]:
+        raise MacroRecursionError(list(chain))
+    definition = macros[chain[-1]]
+    return parse(definition) if isinstance(definition, str) else definition
+
+
+def _expand(expression: Expression, macros: Mapping[str, str | Expression], chain: tuple[str, ...]) -> Expression:
     positives: list[Clause] = []
     negations: list[tuple[Clause, ...]] = []
     for clause in expression.positives:
         if clause.name in macros:
-            body = _macro_body(clause, macros, _chain)
+            body = _macro_body(clause, macros, chain)
             positives.extend(body.positives)
             negations.extend(body.negations)
         else:
@@ -195,7 +243,7 @@ def expand(
         spliced: list[Clause] = []
         for clause in group:
             if clause.name in macros:
-                body = _macro_body(clause, macros, _chain)
+                body = _macro_body(clause, macros, chain)
                 if body.negations:
                     raise NegatedMacroError(clause.name)
                 spliced.extend(body.positives)
@@ -207,15 +255,12 @@ def expand(
 
 def _macro_body(clause: Clause, macros: Mapping[str, str | Expression], chain: tuple[str, ...]) -> Expression:
     chain = (*chain, clause.name)
-    if len(chain) > MAX_MACRO_DEPTH or clause.name in chain[:-1]:
-        raise MacroRecursionError(list(chain))
-    definition = macros[clause.name]
-    macro = parse(definition) if isinstance(definition, str) else definition
+    macro = _macro(chain, macros)
     if len(clause.args) != len(macro.variables):
         raise ArityError(clause.name, len(macro.variables), len(clause.args), kind="macro")
     mapping = dict(zip(macro.variables, clause.args, strict=True))
     mapping[SELF] = SELF
-    body = expand(macro, macros, chain)
+    body = _expand(macro, macros, chain)
     return Expression(
         (),
         tuple(c.renamed(mapping) for c in body.positives),

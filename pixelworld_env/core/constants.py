@@ -14,6 +14,10 @@ FLOOR_HEIGHT = 3
 PADDING = 2
 """Generated objects keep this distance from the world border (docs/design.md, "The constraint problem and the
 sampler")."""
+MAX_WORLD_CELLS = 1_000_000
+"""The most cells of a world (``height x width``, frame included; the benchmark's worlds have 18 x 35 = 630): the
+engine keeps arrays of a world's cells per scene and per environment, so a larger world is refused before anything
+is built (scenes, frames, dataset specs)."""
 
 Kind = Literal["classification", "bring-about"]
 """The two kinds of task (and of dataset): a label to tell, or a goal to bring about."""

@@ -8,8 +8,9 @@ from functools import cached_property
 
 import numpy as np
 
-from pixelworld_env.core.constants import MOVEABLE_CLASSES, Color, ObjectClass
+from pixelworld_env.core.constants import MAX_WORLD_CELLS, MOVEABLE_CLASSES, Color, ObjectClass
 from pixelworld_env.errors import PixelWorldError
+from pixelworld_env.validation import check_int
 
 Cell = tuple[int, int]
 
@@ -91,8 +92,20 @@ def object_class(family: str, *, is_self: bool = False, pushable: bool = False) 
     return ObjectClass.IMMOVEABLE if family == "pixel" else ObjectClass.IMMOVEABLE_BIG
 
 
+def check_world_size(height: object, width: object, what: str) -> tuple[int, int]:
+    """A world's ``height`` and ``width`` as ints: integers >= 1 (bools and floats refused) of at most
+    :data:`~pixelworld_env.core.constants.MAX_WORLD_CELLS` cells; ``what`` names the world in the message."""
+    height, width = check_int(height, f"{what}: height", 1), check_int(width, f"{what}: width", 1)
+    if height * width > MAX_WORLD_CELLS:
+        raise PixelWorldError(f"{what}: a {height} x {width} world has {height * width:,} cells, more than the limit "
+                              f"of {MAX_WORLD_CELLS:,} (pixelworld_env.core.constants.MAX_WORLD_CELLS)")
+    return height, width
+
+
 def frame_object(height: int, width: int) -> WorldObject:
-    """The frame of a ``height`` x ``width`` world: the border ring, colour 7."""
+    """The frame of a ``height`` x ``width`` world: the border ring, colour 7 (the size checked by
+    :func:`check_world_size`)."""
+    check_world_size(height, width, "frame")
     cells = tuple((r, c) for r in range(height) for c in range(width) if r in (0, height - 1) or c in (0, width - 1))
     return WorldObject(cls=ObjectClass.FRAME, color=Color.PURPLE, position=(0, 0), cells=cells, size=(height, width),
                        family=None, name=ObjectClass.FRAME.value)

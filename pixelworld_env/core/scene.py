@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from pixelworld_env.core.constants import FLOOR_HEIGHT, Color, ObjectClass
-from pixelworld_env.core.objects import Cell, WorldObject, cell_extent, frame_object, object_class
+from pixelworld_env.core.objects import Cell, WorldObject, cell_extent, check_world_size, frame_object, object_class
 from pixelworld_env.core.shapes import check_family, shape_library
 from pixelworld_env.errors import PixelWorldError, PixelWorldTypeError
 
@@ -54,8 +54,9 @@ def _template_size(family: str | None, shape_idx: int, cells: tuple[Cell, ...]) 
 class Scene:
     """A PixelWorld state: ``height`` x ``width`` cells (frame included) and the objects in spec order.
 
-    Exactly one object is the self; at most one is the frame. Scenes are immutable values: moving the self
-    gives a new scene (see :meth:`with_positions`).
+    Exactly one object is the self; at most one is the frame. The size is checked by
+    :func:`~pixelworld_env.core.objects.check_world_size` (at most ``MAX_WORLD_CELLS`` cells). Scenes are immutable
+    values: moving the self gives a new scene (see :meth:`with_positions`).
     """
 
     height: int
@@ -63,6 +64,7 @@ class Scene:
     objects: tuple[WorldObject, ...]
 
     def __post_init__(self) -> None:
+        check_world_size(self.height, self.width, "scene")
         selves = [i for i, obj in enumerate(self.objects) if obj.is_self]
         if len(selves) != 1:
             raise PixelWorldError(f"a scene needs exactly one self object, found {len(selves)}")

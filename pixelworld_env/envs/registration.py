@@ -20,9 +20,9 @@ import gymnasium as gym
 from pixelworld_env.datasets import catalog
 from pixelworld_env.datasets.loading import Split, load_dataset
 from pixelworld_env.envs.env import Observation, PixelWorldEnv, check_settings
-from pixelworld_env.envs.vector import RENDER_ENVS, PixelWorldVectorEnv
+from pixelworld_env.envs.vector import MAX_VECTOR_ENVS, RENDER_ENVS, PixelWorldVectorEnv
 from pixelworld_env.errors import PixelWorldError
-from pixelworld_env.validation import check_bool, check_int
+from pixelworld_env.validation import check_bool, check_count
 
 ENTRY_POINT = "pixelworld_env.envs.registration:make_env"
 VECTOR_ENTRY_POINT = "pixelworld_env.envs.registration:make_vector_env"
@@ -64,8 +64,9 @@ def make_vector_env(num_envs: int = 1, *, datasets: Sequence[str], split: Split 
                     aaai18_reset_bug: bool = False,
                     render_envs: Literal["all", "first"] = "all") -> PixelWorldVectorEnv:
     """``num_envs`` environments of :func:`make_env` as one :class:`~pixelworld_env.envs.vector.PixelWorldVectorEnv`
-    (the ids' ``vector_entry_point``); settings the vector env refuses are refused before any dataset is loaded."""
-    check_int(num_envs, "num_envs", 1)
+    (the ids' ``vector_entry_point``); settings the vector env refuses (``num_envs`` above ``MAX_VECTOR_ENVS``
+    among them) are refused before any dataset is loaded."""
+    check_count(num_envs, "num_envs", MAX_VECTOR_ENVS, "pixelworld_env.envs.vector.MAX_VECTOR_ENVS")
     if check_bool(aaai18_reset_bug, "aaai18_reset_bug") or render_mode == "human" or render_envs not in RENDER_ENVS:
         PixelWorldVectorEnv.check_settings(aaai18_reset_bug=aaai18_reset_bug, render_mode=render_mode,
                                            render_envs=render_envs)

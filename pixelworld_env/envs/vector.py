@@ -45,10 +45,14 @@ from pixelworld_env.envs.env import (
     check_scene_index,
 )
 from pixelworld_env.errors import PixelWorldError, PixelWorldTypeError
-from pixelworld_env.validation import check_int, check_options
+from pixelworld_env.validation import check_count, check_options
 
 DRAW_BLOCK = 256
 """Scene indices drawn at a time from an environment's generator, as :meth:`PixelWorldEnv.reset` draws them."""
+MAX_VECTOR_ENVS = 65_536
+"""The most environments of one vector env (``num_envs``; sb3_smc trains an SMC in 16 by default, 1,024 at most):
+each holds arrays of its own (about a kilobyte, more with image observations or objects that are pushed), so a
+larger number is refused before anything is built."""
 RENDER_ENVS = ("all", "first")
 
 _COLOR_CODES = np.arange(NUM_COLORS, dtype=np.uint8)[:, None, None]
@@ -78,7 +82,8 @@ class SelfMoves(NamedTuple):
 
 class PixelWorldVectorEnv(VectorEnv):
     """``num_envs`` copies of a :class:`~pixelworld_env.PixelWorldEnv` (``env``, which is not stepped itself) as one
-    Gymnasium vector environment with next-step autoreset (``metadata["autoreset_mode"]``, as ``SyncVectorEnv``).
+    Gymnasium vector environment with next-step autoreset (``metadata["autoreset_mode"]``, as ``SyncVectorEnv``);
+    ``num_envs`` is an int in ``[1, MAX_VECTOR_ENVS]``.
 
     * ``reset(seed=...)``: an int seeds environment ``i`` with ``seed + i``, a list one seed (or ``None``) per
       environment. ``options``: ``{"index": i}`` resets every environment into scene ``i``, ``{"index": [i_0, ...]}``
@@ -96,7 +101,7 @@ class PixelWorldVectorEnv(VectorEnv):
     metadata: dict[str, Any] = {"render_modes": ["rgb_array", "ansi"], "autoreset_mode": AutoresetMode.NEXT_STEP}
 
     def __init__(self, env: PixelWorldEnv, num_envs: int, *, render_envs: Literal["all", "first"] = "all") -> None:
-        num_envs = check_int(num_envs, "num_envs", 1)
+        num_envs = check_count(num_envs, "num_envs", MAX_VECTOR_ENVS, "pixelworld_env.envs.vector.MAX_VECTOR_ENVS")
         self.check_settings(aaai18_reset_bug=env.aaai18_reset_bug, render_mode=env.render_mode,
                             render_envs=render_envs)
         self.num_envs = num_envs

@@ -31,12 +31,12 @@ from pixelworld_env.concepts import Concept, ConceptError
 from pixelworld_env.core.objects import frame_object
 from pixelworld_env.core.scene import Scene
 from pixelworld_env.errors import PixelWorldError
-from pixelworld_env.generation.dataset_spec import DatasetSpec
+from pixelworld_env.generation.dataset_spec import MAX_NUM_SAMPLES, DatasetSpec
 from pixelworld_env.generation.oracle import goal_reachable
 from pixelworld_env.generation.sampling import GenerationError, GeneratorSampler
-from pixelworld_env.validation import check_seed
+from pixelworld_env.validation import check_count, check_seed
 
-__all__ = ["GENERATOR_VERSION", "GeneratedDataset", "GeneratorStats", "generate", "split"]
+__all__ = ["GENERATOR_VERSION", "MAX_DRAWS", "GeneratedDataset", "GeneratorStats", "generate", "split"]
 
 GENERATOR_VERSION = 2  # 2: bring-about scenes whose goal cannot be reached are dropped
 """Bump whenever a change of this module, :mod:`~pixelworld_env.generation.sampling`,
@@ -45,6 +45,9 @@ entry (its function or its :class:`~pixelworld_env.concepts.predicates.Generatio
 datasets (part of the cache key)."""
 DRAWS_PER_SAMPLE = 200
 """Default draw budget of :func:`generate`: this many draws per sample of the quota (``num_samples``)."""
+MAX_DRAWS = DRAWS_PER_SAMPLE * MAX_NUM_SAMPLES
+"""The most draws :func:`generate` takes (``max_draws``, 20,000,000): the default budget of the largest quota; a larger
+budget is refused before the first draw."""
 
 
 @dataclass(frozen=True)
@@ -121,13 +124,14 @@ def generate(spec: DatasetSpec, seed: int = 0, *, max_draws: int | None = None,
     negatives first, then positives (each in the order they were drawn) and shuffled with the same
     ``random.Random(seed)`` stream.
 
-    ``max_draws`` (default ``DRAWS_PER_SAMPLE * num_samples``) bounds the draws; reaching it, or an
-    unsatisfiable generator, raises :class:`GenerationError`. ``progress(kept, target, draws)`` is
+    ``max_draws`` (default ``DRAWS_PER_SAMPLE * num_samples``, at most :data:`MAX_DRAWS`) bounds the draws;
+    reaching it, or an unsatisfiable generator, raises :class:`GenerationError`. ``progress(kept, target, draws)`` is
     called after every kept scene.
     """
     seed = check_seed(seed)
     if max_draws is None:
         max_draws = DRAWS_PER_SAMPLE * spec.num_samples
+    max_draws = check_count(max_draws, "max_draws", MAX_DRAWS, "pixelworld_env.generation.dataset.MAX_DRAWS")
     try:
         concept = Concept(spec.concept, spec.macros)
     except ConceptError as exc:

@@ -9,12 +9,18 @@ from typing import Any
 
 from pixelworld_env.concepts import parse
 from pixelworld_env.core.constants import FLOOR_HEIGHT, HEIGHT, PADDING, WIDTH
-from pixelworld_env.errors import PixelWorldError
+from pixelworld_env.core.objects import check_world_size
+from pixelworld_env.errors import PixelWorldError, PixelWorldTypeError
+from pixelworld_env.validation import check_bool, check_count, check_int
 
-__all__ = ["KINDS", "SUPPORTED_SETTINGS", "DatasetSpec"]
+__all__ = ["KINDS", "MAX_NUM_SAMPLES", "SUPPORTED_SETTINGS", "DatasetSpec"]
 
 KINDS = ("classification", "bring-about")
 SUPPORTED_SETTINGS = frozenset({"allow_targets", "allow_pushable"})
+"""The settings a dataset may have, each a bool (``True`` / ``False``, in YAML ``true`` / ``false``)."""
+MAX_NUM_SAMPLES = 100_000
+"""The most scenes of a quota (``num_samples``; the benchmark's is 50): generation draws until the quota is full, so
+a larger one is refused when the spec is made."""
 
 
 @dataclass(frozen=True)
@@ -23,9 +29,12 @@ class DatasetSpec:
 
     ``generators`` are ``(name, logic)`` pairs; ``macros`` is the merged concept + generator table
     used to expand both the concept and the generators. ``num_samples`` is the quota per label for
-    classification (50 + 50) and the total for bring-about (50). The world is ``height`` x ``width``
-    cells with the frame, the floor's top row is ``height - floor_height``, and generated objects keep
-    ``padding`` cells from the border (docs/design.md, "The constraint problem and the sampler").
+    classification (50 + 50) and the total for bring-about (50), an int in ``[1, MAX_NUM_SAMPLES]``. The world is
+    ``height`` x ``width`` cells with the frame (ints, at most ``MAX_WORLD_CELLS`` cells), the floor's top row is
+    ``height - floor_height``, and generated objects keep ``padding`` cells from the border (docs/design.md, "The
+    constraint problem and the sampler"). ``settings`` maps names of :data:`SUPPORTED_SETTINGS` to bools. Every field
+    is checked when the spec is made (a string for a number, a float for a count, ``"false"`` for ``False`` are
+    errors naming the field).
     """
 
     name: str
@@ -50,15 +59,25 @@ class DatasetSpec:
             raise PixelWorldError(f"dataset {self.name!r} has no generators")
         object.__setattr__(self, "generators", generators)
         object.__setattr__(self, "macros", dict(self.macros))
-        object.__setattr__(self, "settings", dict(self.settings or {}))
-        unknown = sorted(set(self.settings) - SUPPORTED_SETTINGS)
+        where = f"dataset {self.name!r}"
+        settings = self.settings or {}
+        if not isinstance(settings, Mapping):
+            raise PixelWorldTypeError(f"{where}: settings must be a mapping of names to bools, got {settings!r} "
+                                      f"({type(settings).__name__})")
+        unknown = sorted(set(settings) - SUPPORTED_SETTINGS, key=str)
         if unknown:
-            raise PixelWorldError(f"dataset {self.name!r}: unsupported settings {unknown}; supported: "
-                                  f"{sorted(SUPPORTED_SETTINGS)}")
-        if self.num_samples < 1:
-            raise PixelWorldError(f"dataset {self.name!r}: num_samples must be >= 1, got {self.num_samples}")
+            raise PixelWorldError(f"{where}: unsupported settings {unknown}; supported: {sorted(SUPPORTED_SETTINGS)}")
+        object.__setattr__(self, "settings", {key: check_bool(value, f"{where}: setting {key!r}")
+                                              for key, value in settings.items()})
+        object.__setattr__(self, "num_samples", check_count(self.num_samples, f"{where}: num_samples", MAX_NUM_SAMPLES,
+                                                            "pixelworld_env.generation.dataset_spec.MAX_NUM_SAMPLES"))
+        height, width = check_world_size(self.height, self.width, where)
+        object.__setattr__(self, "height", height)
+        object.__setattr__(self, "width", width)
+        object.__setattr__(self, "floor_height", check_int(self.floor_height, f"{where}: floor_height"))
+        object.__setattr__(self, "padding", check_int(self.padding, f"{where}: padding"))
         if self.height < 3 or self.width < 3 or self.padding < 0 or not 0 < self.floor_height < self.height:
-            raise PixelWorldError(f"dataset {self.name!r}: bad world size {self.height} x {self.width} "
+            raise PixelWorldError(f"{where}: bad world size {self.height} x {self.width} "
                                   f"(floor_height {self.floor_height}, padding {self.padding})")
 
     def __hash__(self) -> int:  # equal specs hash equally (the mappings are left out)
@@ -67,11 +86,11 @@ class DatasetSpec:
 
     @property
     def allow_targets(self) -> bool:
-        return bool(self.settings.get("allow_targets", False))
+        return self.settings.get("allow_targets", False)
 
     @property
     def allow_pushable(self) -> bool:
-        return bool(self.settings.get("allow_pushable", False))
+        return self.settings.get("allow_pushable", False)
 
     @property
     def size(self) -> int:

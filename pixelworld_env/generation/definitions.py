@@ -3,7 +3,8 @@
 Definition files (:func:`load_definitions`) may hold the sections
 
 * ``concepts:`` and ``generators:`` -- name -> ``{name, desc, logic}``;
-* ``datasets:`` -- name -> ``[concept, [generators...], {settings}]``;
+* ``datasets:`` -- name -> ``[concept, [generators...], {settings}]``, the settings ``allow_targets`` and
+  ``allow_pushable``, each ``true`` or ``false`` (a YAML bool, never a string);
 * ``curriculum:`` -- entry name -> ``[dataset, [lower-level experiments...]]`` (``*.curriculum`` files), where a
   lower-level experiment is an output path ``out/aaai18/<group>/<dataset>/<variant>`` and the list may instead
   be a reference ``+@list_name`` to a named list;
@@ -38,7 +39,8 @@ from pixelworld_env.concepts import PREDICATES, Concept, ConceptError, parse
 from pixelworld_env.errors import PixelWorldError, PixelWorldKeyError
 from pixelworld_env.generation.dataset import generate
 from pixelworld_env.generation.dataset import split as stratified_split
-from pixelworld_env.generation.dataset_spec import DatasetSpec
+from pixelworld_env.generation.dataset_spec import SUPPORTED_SETTINGS, DatasetSpec
+from pixelworld_env.yaml_loading import YAMLInputError, construct_node, read_yaml_file, safe_yaml_compose
 
 if TYPE_CHECKING:
     from pixelworld_env.core.constants import Kind
@@ -54,10 +56,6 @@ RELEASE_UNRESOLVED: dict[str, tuple[str, ...]] = {
     f"bfaw-self-and-two-potential-containers-in-{side}nontarget": ("potential-container",)
     for side in ("left-", "", "right-")
 }
-
-
-#: The libyaml loader when PyYAML has it (same results, several times faster), else the pure-Python one.
-_Loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 
 
 class DefinitionError(PixelWorldError):
@@ -214,27 +212,15 @@ def _line(node: yaml.Node | None) -> int:
 
 
 def load_yaml(path: Path) -> tuple[Any, yaml.Node | None]:
-    """The file's data and its node tree (for line numbers); :class:`DefinitionError` naming the file if unreadable."""
+    """The file's data and its node tree (for line numbers), read safely (:mod:`pixelworld_env.yaml_loading`: at most
+    10 MiB, no aliases); :class:`DefinitionError` naming the file (and the line) if unreadable."""
     try:
-        text = path.read_text(encoding="utf-8")
+        node = safe_yaml_compose(read_yaml_file(path), str(path))
+        return (construct_node(node, str(path)) if node is not None else None), node
     except OSError as exc:
         raise DefinitionError(f"cannot read definition file {path}: {exc.strerror}") from None
-    loader = _Loader(text)
-    try:
-        node = loader.get_single_node()
-        data = loader.construct_document(node) if node is not None else None
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f", line {mark.line + 1}" if mark else ""
-        raise DefinitionError(f"{path}{where}: invalid YAML: {getattr(exc, 'problem', exc)}") from None
-    finally:
-        loader.dispose()
-    return data, node
-
-
-def _construct(node: yaml.Node) -> Any:
-    """The Python value of one node."""
-    return yaml.constructor.SafeConstructor().construct_document(node)
+    except YAMLInputError as exc:
+        raise DefinitionError(str(exc)) from None
 
 
 def _entries(section_node: yaml.Node | None) -> dict[str, yaml.Node]:
@@ -365,8 +351,8 @@ def _read_file(path: Path, result: DefinitionSet, stack: tuple[Path, ...], pendi
             raise DefinitionError(f"{_where(path, keys.get(section))}: {section!r} must be a mapping")
         # Walk the nodes rather than the loaded mapping, so that a key repeated in one file is seen too.
         for key_node, value_node in _pairs(sections.get(section)):
-            key = _construct(key_node)
-            entry = _construct(value_node)
+            key = construct_node(key_node, str(path))
+            entry = construct_node(value_node, str(path))
             where = _where(path, key_node)
             if not isinstance(entry, dict) or not isinstance(entry.get("logic"), str):
                 raise DefinitionError(f"{where}: {section[:-1]} {key!r} needs a 'logic' string")
@@ -375,11 +361,13 @@ def _read_file(path: Path, result: DefinitionSet, stack: tuple[Path, ...], pendi
             if key in table:
                 result.redefinitions.append((table[key], definition))
             table[key] = definition
+    if data.get("datasets") is not None and not isinstance(data.get("datasets"), dict):
+        raise DefinitionError(f"{_where(path, keys.get('datasets'))}: 'datasets' must be a mapping")
     lines = _entries(sections.get("datasets"))
     for name, entry in (data.get("datasets") or {}).items():
         key_node = lines.get(name)
         where = _where(path, key_node)
-        if not (isinstance(entry, list) and 2 <= len(entry) <= 3 and isinstance(entry[0], str)
+        if not (isinstance(name, str) and isinstance(entry, list) and 2 <= len(entry) <= 3 and isinstance(entry[0], str)
                 and isinstance(entry[1], list) and all(isinstance(g, str) for g in entry[1])):
             raise DefinitionError(
                 f"{where}: dataset {name!r} must be [concept, [generators...]] or [concept, [generators...], "
@@ -388,6 +376,7 @@ def _read_file(path: Path, result: DefinitionSet, stack: tuple[Path, ...], pendi
         settings = entry[2] if len(entry) == 3 and entry[2] else {}
         if not isinstance(settings, dict):
             raise DefinitionError(f"{where}: dataset {name!r}: settings must be a mapping")
+        _check_settings(path, name, settings, _child(sections.get("datasets"), name), key_node)
         result.datasets[name] = DatasetDefinition(
             name=name, concept=entry[0], generators=tuple(entry[1]), settings=dict(settings), source=str(path),
             line=_line(key_node),
@@ -406,6 +395,23 @@ def _read_file(path: Path, result: DefinitionSet, stack: tuple[Path, ...], pendi
             item_lines = tuple(_line(item) for item in value_node.value)
             result.lists[key] = NamedList(key, items, str(path), _line(key_node), item_lines)
     _read_curricula(path, node, pending)
+
+
+def _check_settings(path: Path, name: str, settings: dict[Any, Any], entry_node: yaml.Node | None,
+                    key_node: yaml.Node | None) -> None:
+    """A dataset's settings: names of :data:`SUPPORTED_SETTINGS`, each ``true`` or ``false`` (YAML bools: the string
+    ``"false"`` would be true); errors name the line of the setting."""
+    setting_node = entry_node.value[2] if isinstance(entry_node, yaml.SequenceNode) and len(entry_node.value) == 3 \
+        else None
+    lines = _entries(setting_node)
+    for key, value in settings.items():
+        where = _where(path, lines.get(key, key_node))
+        if key not in SUPPORTED_SETTINGS:
+            raise DefinitionError(f"{where}: dataset {name!r}: unknown setting {key!r}; the settings are "
+                                  f"{', '.join(sorted(SUPPORTED_SETTINGS))}")
+        if not isinstance(value, bool):
+            raise DefinitionError(f"{where}: dataset {name!r}: setting {key!r} must be true or false (unquoted), got "
+                                  f"{value!r} ({type(value).__name__})")
 
 
 # -- curricula -------------------------------------------------------------------------------------------------

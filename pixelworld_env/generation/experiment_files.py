@@ -99,6 +99,22 @@ def _get(config: dict[str, Any], path: str, where: str) -> Any:
     return value
 
 
+def _integer(value: Any, setting: str, where: str) -> int:
+    """An integer setting (YAML ``true`` and ``2.5`` are no counts)."""
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise DefinitionError(f"{where}: setting {setting!r} must be an integer, got {value!r} "
+                              f"({type(value).__name__})")
+    return value
+
+
+def _flag(value: Any, setting: str, where: str) -> bool:
+    """A bool setting: YAML ``true`` or ``false`` (the string ``"false"`` would be true)."""
+    if not isinstance(value, bool):
+        raise DefinitionError(f"{where}: setting {setting!r} must be true or false (unquoted), got {value!r} "
+                              f"({type(value).__name__})")
+    return value
+
+
 def load_experiments(paths: str | Path | Iterable[str | Path]) -> dict[str, ExperimentDefinition]:
     """Read experiment files (name -> :class:`ExperimentDefinition`, keyed by file name).
 
@@ -124,7 +140,7 @@ def load_experiments(paths: str | Path | Iterable[str | Path]) -> dict[str, Expe
         for item in _get(vals, "vals_filter", where):
             if not (isinstance(item, list) and len(item) == 3 and isinstance(item[2], dict) and "k" in item[2]):
                 raise DefinitionError(f"{where}: vals_filter entries must be [name, rule, {{k: n}}] (got {item!r})")
-            filters.append((str(item[0]), int(item[2]["k"])))
+            filters.append((str(item[0]), _integer(item[2]["k"], "vals_filter k", where)))
         axes = [_get(vals, key, where) for key in ("vals_dataset_size", "vals_goal", "vals_embodiment",
                                                    "vals_currname")]
         axes += [[name for name, _ in filters], _get(vals, "vals_policy", where), _get(vals, "vals_algorithm", where)]
@@ -134,9 +150,11 @@ def load_experiments(paths: str | Path | Iterable[str | Path]) -> dict[str, Expe
         schedule = tuple((str(a), str(b)) for a, b in config.get("test_schedule") or ())
         result[path.name] = ExperimentDefinition(
             name=path.name, curriculum=str((path.parent / curricula[0]).resolve()), goal=goals[0],
-            smc_filters=tuple(filters), variants=variants, num_seeds=int(_get(vals, "num_smcs", where)),
-            include_base_nonsignals=bool(env_kwargs.get("include_base_nonsignals", True)),
-            num_samples=int(_get(dataset_kwargs, "num_samples", where)),
+            smc_filters=tuple(filters), variants=variants,
+            num_seeds=_integer(_get(vals, "num_smcs", where), "num_smcs", where),
+            include_base_nonsignals=_flag(env_kwargs.get("include_base_nonsignals", True), "include_base_nonsignals",
+                                          where),
+            num_samples=_integer(_get(dataset_kwargs, "num_samples", where), "num_samples", where),
             test_size=float(_get(config, "common.test_size", where)), test_schedule=schedule, source=where,
         )
     return result
