@@ -32,7 +32,7 @@ from sb3_smc.curricula import (
 from sb3_smc.curricula.format import describe, merge
 from sb3_smc.curricula.shipped import build_shipped, render
 from sb3_smc.curricula.trainer import RunSettingsError, job_name, rank_seeds, status, train_curriculum
-from sb3_smc.library import SMCLibrary
+from sb3_smc.library import CorruptModelError, SMCLibrary
 from sb3_smc.records import TrainingRecord
 from tests.helpers import import_tool, sb3_smc_cli
 
@@ -856,22 +856,25 @@ def test_a_damaged_model_file_is_reported_and_trained_again(tmp_path, monkeypatc
     model = out / "library" / before["left@0"]["model"]
     model.write_bytes(model.read_bytes()[:300])  # truncated
     (out / "library" / before["above@0"]["model"]).unlink()  # deleted
+    truncated = f"SMC 'left@0': model file {model} does not match the SHA-256 recorded in the manifest"
+    missing = f"SMC 'above@0': model file {out / 'library' / before['above@0']['model']} is missing"
     code, stdout, _ = sb3_smc_cli("status", str(out))
     assert code == 0 and re.search(r"damaged\s+2\s+left@0, above@0", stdout) and re.search(r"done\s+1\s", stdout)
-    assert "left@0.zip is corrupt or truncated" in stdout and "above@0.zip is missing" in stdout
+    assert truncated in stdout and missing in stdout
     assert (f"trains them again:\n  sb3-smc train <the curriculum file of 'tiny'> --out {out} --targets left,container "
             "--seeds 1 --timesteps 2000 --reuse two_best") in stdout
-    with pytest.raises(Exception, match="corrupt or truncated"):
+    with pytest.raises(CorruptModelError, match=re.escape(truncated)):
         SMCLibrary.load(out / "library")
     lines: list[str] = []
     train_curriculum(str(path), out, seeds=1, timesteps=2000, targets=["left", "container"], printer=lines.append)
-    assert "(1 already done)" in lines[0] and "left@0.zip is corrupt or truncated" in lines[1]
+    assert "(1 already done)" in lines[0] and truncated in lines[1]
     after = json.loads(manifest.read_text())["smcs"]
     assert after["container@0"] == before["container@0"]  # trained alike: what uses them is kept
     assert {n: after[n]["record"]["training_returns"] for n in after} == {
         n: before[n]["record"]["training_returns"] for n in before}
     assert len(SMCLibrary.load(out / "library")) == 3 and status(out)["damaged"] == {}
     # trained again differently (another CPU, say): what was trained with the damaged copy is trained again too
+    model = out / "library" / after["left@0"]["model"]  # the file of the model trained again (named by its bytes)
     model.write_bytes(b"")
     monkeypatch.setattr(trainer, "_trained_alike", lambda a, b: False)
     lines.clear()
@@ -898,7 +901,7 @@ def test_run_directory_files_and_a_full_disk_are_explained(tmp_path, monkeypatch
     written = []
 
     def full(target, data):
-        if str(target).endswith(".zip") and written:
+        if str(target).endswith(".safetensors") and written:
             raise OSError(errno.ENOSPC, "No space left on device", str(target))
         written.append(target)
         return real(target, data)

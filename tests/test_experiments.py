@@ -1463,7 +1463,7 @@ def test_the_whole_tables_script_keeps_a_runs_records_without_its_models(tmp_pat
 
     run = tmp_path / "runs" / "paper-objects"
     for name in ("run.json", "results.csv", "results.json", "wall_time.json", "evaluations/a@0.json", "cnn/t@0.json",
-                 "library/models/a@0.zip", "tensorboard/a/events", ".wall_time.json.lock"):
+                 "library/models/" + "0" * 64 + ".safetensors", "tensorboard/a/events", ".wall_time.json.lock"):
         (run / name).parent.mkdir(parents=True, exist_ok=True)
         (run / name).write_text(name)
     script, env = str(ROOT / "tools" / "paper_table.sh"), {**os.environ, "RUNS": str(tmp_path / "runs")}

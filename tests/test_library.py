@@ -1,8 +1,10 @@
-"""SMCLibrary: save/load round trip in a fresh process, validation errors, atomic saves."""
+"""SMCLibrary: save/load round trip in a fresh process, validation errors, crash-safe saves in place and the merge
+with other writers, old (pickled) libraries loaded only with trust."""
 
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 import json
 import os
 import re
@@ -30,14 +32,16 @@ from sb3_smc.library import (
     FORMAT_VERSION,
     CorruptModelError,
     LayoutMismatchError,
+    LibraryConflictError,
     LibraryError,
     ManifestError,
     MissingChildError,
     SMCLibrary,
     UnknownSMCError,
+    UntrustedModelError,
     storage,
 )
-from sb3_smc.library.manifest import ENTRY_CHECKSUM, MANIFEST_CHECKSUM, content_sha256, seal
+from sb3_smc.library.manifest import ENTRY_CHECKSUM, MANIFEST_CHECKSUM, content_sha256, model_path, seal
 from sb3_smc.records import Budget, EvaluationRecord, TaskSpec, TrainingRecord, TrainingSpec, package_versions
 from sb3_smc.smc.policies import ScriptedPolicy, policy_from_model
 from sb3_smc.smc.smc import SMC
@@ -109,6 +113,25 @@ def _edit(path: Path, change) -> None:
     sealed = MANIFEST_CHECKSUM in manifest
     change(manifest)
     (path / "manifest.json").write_text(json.dumps(seal(manifest) if sealed else manifest))
+
+
+def _model_file(path: Path, name: str) -> Path:
+    """The model file of SMC ``name`` in the library in ``path``, as its manifest entry names it."""
+    return path / json.loads((path / "manifest.json").read_text())["smcs"][name]["model"]
+
+
+def _readdress(path: Path, name: str, data: bytes) -> Path:
+    """Store ``data`` as the model file of SMC ``name`` with a manifest that records it (its SHA-256 and file name:
+    an edit meant to be kept), so that what is checked is the file's content, not its checksum."""
+    digest = hashlib.sha256(data).hexdigest()
+    file = path / model_path(digest)
+    file.write_bytes(data)
+    _edit(path, lambda m: m["smcs"][name].update(model=model_path(digest), sha256=digest))
+    return file
+
+
+def _model_names(path: Path) -> list[str]:
+    return sorted(os.listdir(path / "models"))
 
 
 def _observations(size: int, n: int = 6, seed: int = 0) -> np.ndarray:
@@ -198,15 +221,19 @@ def test_the_digest_names_the_weights_whatever_file_holds_them(smcs, saved):
 
 def test_manifest_records_each_smc_once(saved, smcs):
     """An entry is its model file, checksum and records; what the SMC is and the summaries are read from them. The
-    checksums of the manifest's own content: one per entry, of its name and fields, and one of the whole."""
+    checksums of the manifest's own content: one per entry, of its name and fields, and one of the whole. The model
+    file is named by the SHA-256 of its bytes, which are the model's (storage.model_bytes: weights and settings)."""
     manifest = json.loads((saved / "manifest.json").read_text())
-    assert manifest["format"] == FORMAT and manifest["version"] == FORMAT_VERSION == 4
+    assert manifest["format"] == FORMAT and manifest["version"] == FORMAT_VERSION == 5
     assert {"sb3_smc", "stable_baselines3", "sb3_contrib", "torch"} <= set(manifest["created_with"])
     raw = manifest["smcs"]["climber"]
     assert set(raw) == {"model", "sha256", "spec", "record", "evaluations", ENTRY_CHECKSUM}
     assert raw[ENTRY_CHECKSUM] == content_sha256(["climber", {k: v for k, v in raw.items() if k != ENTRY_CHECKSUM}])
     assert manifest[MANIFEST_CHECKSUM] == content_sha256({k: v for k, v in manifest.items() if k != MANIFEST_CHECKSUM})
-    assert raw["model"] == "models/climber.zip" and (saved / raw["model"]).is_file() and len(raw["sha256"]) == 64
+    assert re.fullmatch(r"[0-9a-f]{64}", raw["sha256"]) and raw["model"] == f"models/{raw['sha256']}.safetensors"
+    assert (saved / raw["model"]).read_bytes() == storage.model_bytes(smcs["climber"].model)
+    assert storage.sha256(saved / raw["model"]) == raw["sha256"]
+    assert _model_names(saved) == sorted(f"{entry['sha256']}.safetensors" for entry in manifest["smcs"].values())
     entries = storage.check_manifest(manifest, saved / "manifest.json")
     entry = entries["climber"]
     assert (entry.kind, entry.algo, entry.children, entry.frame_stack) == ("bring-about", "RecurrentPPO",
@@ -379,29 +406,64 @@ def test_an_smc_of_minigrid_is_an_action_of_minigrid(tmp_path):
 
 # ------------------------------------------------------------------------------------------------ broken libraries
 
-@pytest.mark.parametrize("damage", ["truncated", "random"])
-def test_corrupt_model_file(copy, damage):
-    model = copy / "models" / "corner.zip"
-    data = model.read_bytes()
-    model.write_bytes(data[: len(data) // 2] if damage == "truncated" else os.urandom(len(data)))
-    with pytest.raises(CorruptModelError, match=r"'corner': model file .*corner\.zip is corrupt or truncated"):
+@pytest.mark.parametrize(("damage", "message"), [
+    (lambda data: data[: len(data) // 2], r"tensor '.*' lies outside the file"),
+    (lambda data: data[:100], r"truncated or not a model file \(its header says \d+ bytes, the file has 92"),
+    (lambda data: data[:5], r"truncated \(5 bytes"),
+    (lambda data: os.urandom(len(data)), "truncated or not a model file"),
+    (lambda data: len(data[8:]).to_bytes(8, "little") + data[8:], "not a model file \\(its header is not JSON"),
+], ids=["half", "header-cut", "five-bytes", "random", "bad-header"])
+def test_corrupt_model_file(copy, damage, message):
+    """A damaged model file fails its checksum; stored with a checksum of the damaged bytes (a manifest edited to
+    match), it is still refused, for what it holds."""
+    model = _model_file(copy, "corner")
+    data = damage(model.read_bytes())
+    model.write_bytes(data)
+    with pytest.raises(CorruptModelError, match=rf"'corner': model file {re.escape(str(model))} does not match the "
+                                                "SHA-256 recorded"):
+        SMCLibrary.load(copy)
+    file = _readdress(copy, "corner", data)
+    with pytest.raises(CorruptModelError, match=rf"'corner': model file {re.escape(str(file))}: {message}"):
         SMCLibrary.load(copy)
 
 
 def test_modified_model_file_fails_its_checksum(copy):
-    shutil.copyfile(copy / "models" / "climber.zip", copy / "models" / "corner.zip")
-    with pytest.raises(CorruptModelError, match="does not match the SHA-256"):
+    shutil.copyfile(_model_file(copy, "climber"), _model_file(copy, "corner"))
+    with pytest.raises(CorruptModelError, match="'corner': model file .* does not match the SHA-256"):
         SMCLibrary.load(copy)
 
 
 def test_missing_model_file(copy):
-    (copy / "models" / "container.zip").unlink()
+    _model_file(copy, "container").unlink()
     with pytest.raises(CorruptModelError, match="'container': model file .* is missing"):
         SMCLibrary.load(copy)
 
 
+def test_a_model_file_that_is_a_link_is_refused(copy, tmp_path):
+    """A library's files are its own: a model file that is a symbolic link (here to the very same bytes) is refused,
+    and so is a manifest that names a file whose name is not its SHA-256."""
+    model = _model_file(copy, "corner")
+    outside = tmp_path / "elsewhere.safetensors"
+    shutil.move(model, outside)
+    model.symlink_to(outside)
+    with pytest.raises(CorruptModelError, match=f"'corner': model file {re.escape(str(model))} is a symbolic link"):
+        SMCLibrary.load(copy)
+    model.unlink()
+    shutil.move(outside, model)
+    assert SMCLibrary.load(copy).names == ("corner", "container", "climber", "corner-ppo")
+    other = json.loads((copy / "manifest.json").read_text())["smcs"]["climber"]["model"]
+    _edit(copy, lambda m: m["smcs"]["corner"].update(model=other))
+    with pytest.raises(ManifestError, match=f"entry 'corner': model file '{other}' is not named by its recorded "
+                                            "SHA-256"):
+        SMCLibrary.load(copy)
+    _edit(copy, lambda m: m["smcs"]["corner"].update(model="models/corner.bin"))
+    with pytest.raises(ManifestError, match=r"entry 'corner': model path 'models/corner.bin' must be "
+                                            r"models/<its SHA-256>\.safetensors"):
+        SMCLibrary.load(copy)
+
+
 @pytest.mark.parametrize(("version", "message"), [
-    (5, "version 5 is newer than this sb3_smc reads .*upgrade sb3_smc"),
+    (6, "version 6 is newer than this sb3_smc reads .*upgrade sb3_smc"),
     (0, "incompatible manifest version 0"),
     ("1", "version must be an integer"),
 ])
@@ -525,7 +587,7 @@ def test_the_library_command_shows_each_smc_without_loading_a_model(saved, copy)
     code, out, err = sb3_smc_cli("library", str(saved))
     assert code == 0, err
     lines = out.splitlines()
-    assert lines[0] == f"{saved}: 4 SMC(s), manifest version 4 (sb3_smc {package_versions()['sb3_smc']})"
+    assert lines[0] == f"{saved}: 4 SMC(s), manifest version 5 (sb3_smc {package_versions()['sb3_smc']})"
     climber = next(line.split() for line in lines if line.startswith("climber "))
     assert climber == ["climber", "bring-about", "RecurrentPPO", "corner,container", BA_ID, "3", "3", "0.250", "50.0"]
     code, out, _ = sb3_smc_cli("library", str(saved), "--json")
@@ -534,7 +596,7 @@ def test_the_library_command_shows_each_smc_without_loading_a_model(saved, copy)
                                   "env_id": CL_ID, "datasets": ["cl_self-in-left-corner_vs_on-hline"], "seed": 2,
                                   "selected_update": 3, "training_return": 0.25, "test_score": 0.5,
                                   "total_timesteps": 64}
-    with open(copy / "models" / "corner.zip", "r+b") as handle:  # damaged: only --check opens the models
+    with open(_model_file(copy, "corner"), "r+b") as handle:  # damaged: only --check opens the models
         handle.seek(100)
         handle.write(b"\0" * 8)
     assert sb3_smc_cli("library", str(copy))[0] == 0
@@ -558,49 +620,71 @@ def test_the_library_command_aligns_wide_names(copy):
     assert rows[-1].startswith("左の角" + " " * 5 + "classification  PPO")
 
 
-# ------------------------------------------------------------------------------------------------ atomic saves
+# ------------------------------------------------------------------------------------------------ saves in place
 
 def _leftovers(folder: Path) -> list[str]:
-    return sorted(p.name for p in folder.iterdir() if p.name.startswith("."))
+    """The hidden files and folders under ``folder`` but a library's lock: what an unfinished write leaves (the
+    temporary files of atomic_write, a folder renamed aside)."""
+    return sorted(str(p.relative_to(folder)) for p in folder.rglob(".*") if p.name != storage.LOCK)
 
 
-def test_failed_save_keeps_the_previous_library(smcs, tmp_path, monkeypatch):
+def _failing_write(monkeypatch, fails) -> None:
+    """``storage.atomic_write`` dies (a full disk) after writing half of each file for which ``fails(path)``; the
+    real atomic_write writes the half and cleans up."""
+    real = storage.atomic_write
+
+    def write(path, data):
+        if not fails(Path(path)):
+            return real(path, data)
+
+        def half(handle):
+            handle.write(data[: len(data) // 2])
+            raise OSError("disk full")
+
+        return real(path, half)
+
+    monkeypatch.setattr(storage, "atomic_write", write)
+
+
+def _state(path: Path) -> tuple[bytes, dict[str, str | None], list[str]]:
+    """What the library in ``path`` is: its manifest's bytes, each SMC (loaded) by the digest of its weights, its model
+    files."""
+    library = SMCLibrary.load(path)
+    return (path / "manifest.json").read_bytes(), {name: library[name].digest for name in library}, _model_names(path)
+
+
+def _files_of(*models) -> list[str]:
+    """The model files the models are stored as (content-addressed)."""
+    return sorted(f"{hashlib.sha256(storage.model_bytes(model)).hexdigest()}.safetensors" for model in models)
+
+
+@pytest.mark.parametrize("failing", ["model", "manifest"])
+def test_a_failed_save_keeps_the_previous_library(smcs, tmp_path, monkeypatch, failing):
+    """A save that dies writing a model file, or the manifest (after all the model files), leaves the previous library
+    as it was (the same manifest bytes, the same SMCs) and no temporary file; model files written before the failed
+    manifest are named by no entry and are deleted by the next save."""
     target = tmp_path / "library"
     SMCLibrary([smcs["corner"]]).save(target)
-    before = (target / "manifest.json").read_bytes()
-
-    def broken_save(self, path, *args, **kwargs):
-        Path(path).write_bytes(b"half a model")
-        raise OSError("disk full")
-
-    monkeypatch.setattr(TRPO, "save", broken_save)
+    before = _state(target)
+    assert before[1] == {"corner": smcs["corner"].digest} and before[2] == _files_of(smcs["corner"].model)
+    _failing_write(monkeypatch, (lambda p: p.suffix == ".safetensors") if failing == "model" else
+                   (lambda p: p.name == "manifest.json"))
     library = SMCLibrary([smcs["climber"]])
     with pytest.raises(OSError, match="disk full"):
         library.save(target)
-    assert (target / "manifest.json").read_bytes() == before
-    assert SMCLibrary.load(target).names == ("corner",)
-    assert _leftovers(tmp_path) == []
+    assert (target / "manifest.json").read_bytes() == before[0]
+    written = _model_names(target)
+    if failing == "model":  # the first new model file (container's) failed: nothing new
+        assert written == before[2]
+    else:  # every model file written, none named
+        assert written == _files_of(*(smcs[n].model for n in ("corner", "container", "climber")))
+    assert _state(target)[:2] == before[:2] and _leftovers(tmp_path) == []
     monkeypatch.undo()
-    library.save(target)  # and a later save replaces it completely
+    SMCLibrary.load(target).save()  # a save of the same library: the files no entry names go
+    assert _state(target)[1:] == before[1:]
+    library.save(target)  # and the failed save, repeated, goes through
     assert SMCLibrary.load(target).names == ("corner", "container", "climber")
-    assert _leftovers(tmp_path) == [] and sorted(os.listdir(target / "models")) == [
-        "climber.zip", "container.zip", "corner.zip"]
-
-
-def test_failed_swap_restores_the_previous_library(smcs, tmp_path, monkeypatch):
-    target = tmp_path / "library"
-    SMCLibrary([smcs["corner"]]).save(target)
-    real_rename = os.rename
-
-    def rename(src, dst):
-        if ".saving-" in str(src):
-            raise OSError("rename failed")
-        real_rename(src, dst)
-
-    monkeypatch.setattr("pixelworld_env.atomic.os.rename", rename)
-    with pytest.raises(OSError, match="rename failed"):
-        SMCLibrary([smcs["container"]]).save(target)
-    assert SMCLibrary.load(target).names == ("corner",)
+    assert _model_names(target) == _files_of(*(smcs[n].model for n in ("corner", "container", "climber")))
     assert _leftovers(tmp_path) == []
 
 
@@ -614,28 +698,170 @@ def test_save_to_own_path_and_refusals(smcs, tmp_path):
     assert SMCLibrary.load(tmp_path / "library").names == ("corner", "container")
     (tmp_path / "notes").mkdir()
     (tmp_path / "notes" / "todo.txt").write_text("keep me")
-    with pytest.raises(LibraryError, match="refusing to replace .*notes"):
+    with pytest.raises(LibraryError, match="refusing to write to .*notes: it is a non-empty directory without "
+                                           "manifest.json"):
         library.save(tmp_path / "notes")
     (tmp_path / "file").write_text("keep me")
     with pytest.raises(LibraryError, match="it is a file"):
         library.save(tmp_path / "file")
-    assert (tmp_path / "notes" / "todo.txt").read_text() == "keep me"
+    assert sorted(os.listdir(tmp_path / "notes")) == ["todo.txt"] and (tmp_path / "notes" / "todo.txt").read_text() \
+        == "keep me"
+    assert (tmp_path / "file").read_text() == "keep me"
     assert _leftovers(tmp_path) == []
 
 
-def test_interrupted_save_is_reported(saved, tmp_path):
-    shutil.copytree(saved, tmp_path / ".library.saving-abc123")
-    with pytest.raises(ManifestError, match="interrupted: found a complete new library at .*saving-abc123"):
+def test_an_interrupted_replacement_of_the_folder_is_reported(saved, tmp_path):
+    """A library replaced whole (pixelworld_env.atomic.replace_directory, as build_pretrained does) and interrupted
+    between its two renames is at ``.<name>.old-<random>``: loading the missing library says where, and that copy
+    is the library; another folder's copy is not mentioned."""
+    shutil.copytree(saved, tmp_path / ".other.old-def456")
+    with pytest.raises(ManifestError, match=r"no SMC library at .*library: .*manifest.json not found$"):
         SMCLibrary.load(tmp_path / "library")
+    shutil.copytree(saved, tmp_path / ".library.old-abc123")
+    with pytest.raises(ManifestError, match=re.escape(
+            f"manifest.json not found; a replacement of this folder was interrupted: found the previous library at "
+            f"{tmp_path / '.library.old-abc123'} (rename it to library to recover it)")):
+        SMCLibrary.load(tmp_path / "library")
+    (tmp_path / ".library.old-abc123").rename(tmp_path / "library")
+    assert _state(tmp_path / "library") == _state(saved)
+
+
+ODD = 'cl: left corner <v1>?*|"'
+"""A name that is no file name on some systems (":", "<", "?", "*", "|", '"'; a name has no "/": core/names.py)."""
 
 
 def test_names_that_are_not_file_names(smcs, tmp_path):
+    """A model file is named by its bytes, whatever the SMC's name: an SMC whose name is no file name on some systems
+    round-trips under it; two SMCs of the same model share one file, which stays while an entry names it."""
     corner = smcs["corner"]
-    odd = SMC("cl/left corner:v1", corner.kind, corner.policy, model=corner.model)
-    path = SMCLibrary([odd]).save(tmp_path / "library")
-    entry = json.loads((path / "manifest.json").read_text())["smcs"]["cl/left corner:v1"]
-    assert entry["model"].startswith("models/cl_left_corner_v1-") and (path / entry["model"]).is_file()
-    assert SMCLibrary.load(path).names == ("cl/left corner:v1",)
+    odd = SMC(ODD, corner.kind, corner.policy, model=corner.model)
+    path = SMCLibrary([odd, corner]).save(tmp_path / "library")
+    entries = json.loads((path / "manifest.json").read_text())["smcs"]
+    digest = hashlib.sha256(storage.model_bytes(corner.model)).hexdigest()
+    assert entries[ODD]["model"] == f"models/{digest}.safetensors" == entries["corner"]["model"]
+    assert entries[ODD]["sha256"] == digest and _model_names(path) == [f"{digest}.safetensors"]
+    loaded = SMCLibrary.load(path)
+    assert loaded.names == (ODD, "corner")
+    assert loaded[ODD].name == ODD and loaded[ODD].spec is None
+    assert loaded[ODD].digest == corner.digest
+    storage.remove_from_library(path, ["corner"])
+    assert _model_names(path) == [f"{digest}.safetensors"]
+    assert SMCLibrary.load(path).names == (ODD,)
+    storage.remove_from_library(path, [ODD])
+    assert _model_names(path) == [] and SMCLibrary.load(path).names == ()
+
+
+# ------------------------------------------------------------------------------------------------ other writers
+
+@pytest.fixture(scope="module")
+def rivals() -> dict[str, SMC]:
+    """SMCs named as some of ``smcs`` with other weights: what another writer stores under those names."""
+    torch.set_num_threads(1)
+    return {"corner": _smc("corner", CL_ID, RecurrentPPO, seed=7),
+            "corner2": _smc("corner", CL_ID, RecurrentPPO, seed=8),
+            "container": _smc("container", BA_ID, TRPO, seed=9)}
+
+
+def _digests(path: Path) -> dict[str, str | None]:
+    library = SMCLibrary.load(path)
+    return {name: library[name].digest for name in library}
+
+
+def test_two_writers_that_add_different_smcs_keep_both(smcs, tmp_path):
+    """Two library objects loaded from one folder each add an SMC and save: both SMCs are kept. A library that never
+    read the folder keeps what it holds too; an SMC a writer read (or wrote) is its own to drop."""
+    path = SMCLibrary([smcs["corner"]]).save(tmp_path / "library")
+    first, second = SMCLibrary.load(path), SMCLibrary.load(path)
+    first.add(smcs["container"])
+    second.add(smcs["corner-ppo"])
+    first.save()
+    second.save()
+    assert _digests(path) == {name: smcs[name].digest for name in ("corner", "container", "corner-ppo")}
+    assert _model_names(path) == _files_of(*(smcs[n].model for n in ("corner", "container", "corner-ppo")))
+    SMCLibrary([smcs["climber"]]).save(path)  # never read it: what it does not hold is kept
+    assert set(SMCLibrary.load(path).names) == {"corner", "container", "corner-ppo", "climber"}
+    second.remove("corner-ppo")  # one it wrote: dropped; those it never knew (climber, container): kept
+    second.save()
+    assert _digests(path) == {name: smcs[name].digest for name in ("corner", "container", "climber")}
+    assert _model_names(path) == _files_of(*(smcs[n].model for n in ("corner", "container", "climber")))
+    assert second.names == ("corner",)
+
+
+def test_changing_an_smc_another_writer_changed_is_a_conflict(smcs, rivals, tmp_path):
+    """An SMC this library read and another writer changed since: replacing it again, or saving it as it was read
+    (which would undo the other's change), is refused (LibraryConflictError) and nothing is written; the same change
+    is no conflict; a library loaded again makes the change."""
+    path = SMCLibrary([smcs["climber"]]).save(tmp_path / "library")
+    first, second, unchanged, alike = (SMCLibrary.load(path) for _ in range(4))
+    first.add(rivals["corner"], replace=True)
+    first.save()
+    before = _state(path)
+    assert before[1]["corner"] == rivals["corner"].digest != smcs["corner"].digest
+    second.add(rivals["corner2"], replace=True)
+    conflict = (f"{path / 'manifest.json'}: SMC 'corner' was changed by another writer since this library was "
+                "loaded; nothing was saved: load the library again and repeat the change")
+    with pytest.raises(LibraryConflictError, match=re.escape(conflict)):
+        second.save()
+    assert _state(path) == before  # not even the new model file
+    unchanged.add(smcs["corner-ppo"])
+    with pytest.raises(LibraryConflictError, match=re.escape(conflict)):
+        unchanged.save()
+    assert _state(path) == before
+    alike.add(rivals["corner"], replace=True)  # the very change the other writer made
+    alike.save()
+    assert _state(path)[1:] == before[1:]
+    again = SMCLibrary.load(path)
+    again.add(rivals["corner2"], replace=True)
+    again.save()
+    after = _digests(path)
+    assert (after["corner"], after["container"]) == (rivals["corner2"].digest, before[1]["container"])
+    assert _model_names(path) == _files_of(rivals["corner2"].model, smcs["container"].model, smcs["climber"].model)
+
+
+def test_other_conflicts_with_another_writer(smcs, rivals, tmp_path):
+    """Two writers adding different SMCs of one name, or a save removing a child that an SMC another writer added
+    calls: LibraryConflictError, nothing written."""
+    path = SMCLibrary([smcs["corner"]]).save(tmp_path / "library")
+    first, second, third = (SMCLibrary.load(path) for _ in range(3))
+    first.add(smcs["container"])
+    first.save()
+    before = _state(path)
+    second.add(rivals["container"])
+    with pytest.raises(LibraryConflictError, match="another writer added a different SMC named 'container'; nothing "
+                                                   "was saved"):
+        second.save()
+    assert _state(path) == before
+    second.remove("container")
+    second.add(smcs["container"])  # the same SMC: no conflict
+    second.save()
+    assert _state(path)[1:] == before[1:]
+    first.add(smcs["climber"])
+    first.save()
+    before = _state(path)
+    third.remove("corner")
+    with pytest.raises(LibraryConflictError, match="SMC 'climber' \\(kept from the library on disk\\) calls 'corner', "
+                                                   "which this save removes; nothing was saved"):
+        third.save()
+    assert _state(path) == before
+
+
+def test_overwrite_makes_the_folder_hold_exactly_the_library(smcs, rivals, tmp_path):
+    """``save(overwrite=True)`` drops the SMCs on disk this library does not hold (and their model files), and
+    replaces those another writer changed."""
+    path = SMCLibrary([smcs["corner"]]).save(tmp_path / "library")
+    stale, other = SMCLibrary.load(path), SMCLibrary.load(path)
+    other.add(smcs["container"])
+    other.add(rivals["corner"], replace=True)
+    other.save()
+    stale.add(smcs["corner-ppo"])
+    with pytest.raises(LibraryConflictError):
+        stale.save()
+    stale.save(overwrite=True)
+    assert _digests(path) == {"corner": smcs["corner"].digest, "corner-ppo": smcs["corner-ppo"].digest}
+    assert _model_names(path) == _files_of(smcs["corner"].model, smcs["corner-ppo"].model)
+    SMCLibrary([smcs["container"]]).save(path, overwrite=True)
+    assert _digests(path) == {"container": smcs["container"].digest}
+    assert _model_names(path) == _files_of(smcs["container"].model)
 
 
 def test_train_smc_output_round_trips(tmp_path):
@@ -681,7 +907,11 @@ def test_version_1_libraries_load_through_the_conversion(tmp_path):
         v1["smcs"][name]["sha256"] = storage.sha256(root / v1["smcs"][name]["model"])
     (root / "manifest.json").write_text(json.dumps(v1))
 
-    library = SMCLibrary.load(root)
+    first = storage.topological_order(converted, V1_MANIFEST)[0]
+    with pytest.raises(UntrustedModelError, match=re.escape(
+            f"SMC {first!r}: {root / v1['smcs'][first]['model']} is a pickled Stable-Baselines3 archive")):
+        SMCLibrary.load(root)  # its models unpickle: only with trust
+    library = SMCLibrary.load(root, trust=True)
     for name, entry in v1["smcs"].items():
         smc, meta = library[name], entry["metadata"]
         assert smc.spec == trained[name].spec
@@ -696,10 +926,17 @@ def test_version_1_libraries_load_through_the_conversion(tmp_path):
     (evaluation,) = top.evaluations
     assert (evaluation.split, evaluation.score, evaluation.repeats, evaluation.evaluation_seed) == \
         ("test", 0.25, None, None)
-    # saved again, it is a library of the current version with the same records
-    again = SMCLibrary.load(library.save(tmp_path / "v4"))
-    assert json.loads((tmp_path / "v4" / "manifest.json").read_text())["version"] == FORMAT_VERSION
+    # saved again, it is a library of the current version with the same records, which loads without trust
+    again = SMCLibrary.load(library.save(tmp_path / "v5"))
+    assert json.loads((tmp_path / "v5" / "manifest.json").read_text())["version"] == FORMAT_VERSION
     assert all(again[n].spec == library[n].spec and again[n].evaluations == library[n].evaluations for n in again)
+    assert {n: again[n].digest for n in again} == {n: trained[n].digest for n in trained}
+    # converted in place (what the error says to do): the pickled archives go
+    assert SMCLibrary.load(root, trust=True).save() == root
+    assert json.loads((root / "manifest.json").read_text())["version"] == FORMAT_VERSION
+    assert _model_names(root) == _model_names(tmp_path / "v5") and all(n.endswith(".safetensors")
+                                                                       for n in _model_names(root))
+    assert {n: m[n].digest for m in [SMCLibrary.load(root)] for n in m} == {n: trained[n].digest for n in trained}
 
 
 def test_version_1_entry_that_cannot_be_converted(tmp_path):
@@ -714,25 +951,44 @@ def test_version_1_entry_that_cannot_be_converted(tmp_path):
 
 V2_MANIFEST = Path(__file__).parent / "data" / "library_v2_manifest.json"
 """Two entries of the pretrained library as version 2 wrote them (sb3-smc before manifest version 3: each entry also
-repeating its spec's facts, its action names and observation, and seven summary fields); their model files are the
-shipped ones (the bytes the checksums are of)."""
+repeating its spec's facts, its action names and observation, and seven summary fields). Their model files were the
+shipped ones as pickled SB3 archives (``models/<name>.zip``); the fixture writes those of the shipped SMCs (now
+stored in version 5's format) with ``model.save`` and records their checksums."""
 PRETRAINED = ROOT / "sb3_smc" / "library" / "data" / "pretrained"
 
 
+@pytest.fixture(scope="module")
+def v2_models(tmp_path_factory) -> dict[str, bytes]:
+    """By entry of V2_MANIFEST, the shipped SMC's model as the SB3 archive version 2 stored (``model.save``)."""
+    names = list(json.loads(V2_MANIFEST.read_text())["smcs"])
+    shipped, folder = SMCLibrary.load(PRETRAINED, names=names), tmp_path_factory.mktemp("v2-models")
+    archives = {}
+    for name in names:
+        shipped[name].model.save(folder / "model.zip")
+        archives[name] = (folder / "model.zip").read_bytes()
+    return archives
+
+
 @pytest.fixture
-def v2_library(tmp_path) -> Path:
+def v2_library(tmp_path, v2_models) -> Path:
     root = tmp_path / "v2"
     (root / "models").mkdir(parents=True)
-    shutil.copy(V2_MANIFEST, root / "manifest.json")
-    for entry in json.loads(V2_MANIFEST.read_text())["smcs"].values():
-        shutil.copy(PRETRAINED / entry["model"], root / entry["model"])
+    manifest = json.loads(V2_MANIFEST.read_text())
+    for name, entry in manifest["smcs"].items():
+        (root / entry["model"]).write_bytes(v2_models[name])
+        entry["sha256"] = hashlib.sha256(v2_models[name]).hexdigest()  # version 2 has no checksums of its content
+    (root / "manifest.json").write_text(json.dumps(manifest, indent=2))
     return root
 
 
 def test_version_2_libraries_load_and_their_summaries_are_what_is_derived(v2_library, tmp_path):
     v2 = json.loads(V2_MANIFEST.read_text())
     assert v2["version"] == 2
-    library = SMCLibrary.load(v2_library)
+    first = next(iter(v2["smcs"]))
+    with pytest.raises(UntrustedModelError, match=re.escape(
+            f"SMC {first!r}: {v2_library / v2['smcs'][first]['model']} is a pickled Stable-Baselines3 archive")):
+        SMCLibrary.load(v2_library)
+    library = SMCLibrary.load(v2_library, trust=True)
     shipped = SMCLibrary.pretrained("search2-canon")
     entries = storage.check_manifest(v2, V2_MANIFEST)
     for name, raw in v2["smcs"].items():
@@ -742,10 +998,14 @@ def test_version_2_libraries_load_and_their_summaries_are_what_is_derived(v2_lib
         assert entry.summary() == {field: raw[field] for field in storage.SUMMARY_FIELDS}
         assert (list(entry.action_names), entry.observation) == (raw["action_names"], raw["observation"])
         assert (entry.kind, entry.algo, list(entry.children)) == (raw["kind"], raw["algo"], raw["children"])
-    again = SMCLibrary.load(library.save(tmp_path / "v4"))
-    assert json.loads((tmp_path / "v4" / "manifest.json").read_text())["version"] == FORMAT_VERSION
+    assert {n: library[n].digest for n in library} == {n: shipped[n].digest for n in library}  # the same weights
+    again = SMCLibrary.load(library.save(tmp_path / "v5"))
+    assert json.loads((tmp_path / "v5" / "manifest.json").read_text())["version"] == FORMAT_VERSION
     assert all((again[n].spec, again[n].record, again[n].evaluations) == (library[n].spec, library[n].record,
                                                                           library[n].evaluations) for n in library)
+    SMCLibrary.load(v2_library, trust=True).save()  # converted in place: the archives go
+    assert _model_names(v2_library) == _model_names(tmp_path / "v5")
+    assert (v2_library / "manifest.json").read_bytes() == (tmp_path / "v5" / "manifest.json").read_bytes()
 
 
 V2_NAME = "cl_self-in-left-corner_vs_on-hline@0"
@@ -769,10 +1029,10 @@ def test_a_version_2_entry_that_contradicts_itself_is_still_an_error(v2_library,
 
 def test_adding_to_a_version_2_library_writes_the_current_version(v2_library, smcs, tmp_path):
     """A run directory's library of version 2 goes on growing: the next SMC stored writes the whole manifest as the
-    current version, with the checksums of its content."""
-    smcs["corner"].model.save(tmp_path / "corner.zip")
+    current version, with the checksums of its content; its old models stay pickled archives (loaded with trust) until
+    the library is saved with trust."""
     storage.add_to_library(v2_library, "corner", storage.entry_for(smcs["corner"]),
-                           (tmp_path / "corner.zip").read_bytes())
+                           storage.model_bytes(smcs["corner"].model))
     manifest = json.loads((v2_library / "manifest.json").read_text())
     assert manifest["version"] == FORMAT_VERSION and list(manifest["smcs"]) == [
         *json.loads(V2_MANIFEST.read_text())["smcs"], "corner"]
@@ -780,24 +1040,30 @@ def test_adding_to_a_version_2_library_writes_the_current_version(v2_library, sm
     assert all(set(entry) == {"model", "sha256", "spec", "record", "evaluations", ENTRY_CHECKSUM}
                for entry in manifest["smcs"].values())
     assert seal(manifest) == manifest
-    library = SMCLibrary.load(v2_library)
+    assert manifest["smcs"][V2_NAME]["model"] == f"models/{V2_NAME}.zip"
+    assert manifest["smcs"]["corner"]["model"] == f"models/{manifest['smcs']['corner']['sha256']}.safetensors"
+    with pytest.raises(UntrustedModelError, match=re.escape(f"{v2_library / 'models' / V2_NAME}.zip is a pickled")):
+        SMCLibrary.load(v2_library)
+    library = SMCLibrary.load(v2_library, trust=True)
     assert library["corner"].spec == smcs["corner"].spec and library[V2_NAME].test_score == 0.97
+    assert library["corner"].digest == smcs["corner"].digest
+    assert SMCLibrary.load(v2_library, names=["corner"]).names == ("corner",)  # its own model: no trust needed
 
 
 def test_an_old_library_is_not_rewritten_where_that_would_lose_something(v2_library, smcs, tmp_path):
     """Fields a user added to a version-2 entry, or a version-1 library's metadata, are not dropped by an add."""
-    smcs["corner"].model.save(tmp_path / "corner.zip")
     add = lambda: storage.add_to_library(v2_library, "corner", storage.entry_for(smcs["corner"]),  # noqa: E731
-                                         (tmp_path / "corner.zip").read_bytes())
+                                         storage.model_bytes(smcs["corner"].model))
     before = (v2_library / "manifest.json").read_text()
     _edit(v2_library, lambda m: m["smcs"][V2_NAME].update(notes="keep me"))
     edited = (v2_library / "manifest.json").read_text()
     with pytest.raises(ManifestError, match=f"entry '{V2_NAME}': \\['notes'\\]\\); move them elsewhere first"):
         add()
     assert (v2_library / "manifest.json").read_text() == edited != before
-    SMCLibrary.load(v2_library)  # reading it is fine
+    SMCLibrary.load(v2_library, trust=True)  # reading it is fine
     _edit(v2_library, lambda m: m.update(version=1))
-    with pytest.raises(ManifestError, match="version-1 library .*convert it first: SMCLibrary.load\\(path\\).save"):
+    with pytest.raises(ManifestError, match=r"version-1 library .*convert it first: SMCLibrary.load\(path, "
+                                            r"trust=True\).save\(\) writes it in the current version"):
         add()
 
 
@@ -1005,9 +1271,43 @@ def test_version_3_libraries_load_and_get_checksums_when_written(copy):
         SMCLibrary.load(copy)
 
 
+def test_version_4_libraries_load_with_trust_and_convert_when_saved(copy, smcs):
+    """A library of version 4 (every library sb3-smc wrote before the safe model files) names pickled SB3 archives
+    ``models/<name>.zip``: it loads only with trust, and saving it so writes it as version 5, in place, its archives
+    deleted (no entry names them); it then loads without trust, the same SMCs."""
+    manifest = json.loads((copy / "manifest.json").read_text())
+    for name, entry in manifest["smcs"].items():
+        (copy / entry["model"]).unlink()
+        smcs[name].model.save(copy / "models" / f"{name}.zip")
+        entry.update(model=f"models/{name}.zip", sha256=storage.sha256(copy / "models" / f"{name}.zip"))
+    (copy / "manifest.json").write_text(json.dumps(seal({**manifest, "version": 4}), indent=2))
+    with pytest.raises(UntrustedModelError, match=re.escape(f"SMC 'corner': {copy / 'models' / 'corner.zip'} is a "
+                                                            "pickled Stable-Baselines3 archive")):
+        SMCLibrary.load(copy)
+    digests = {name: smc.digest for name, smc in smcs.items()}
+    old = SMCLibrary.load(copy, trust=True)
+    assert {name: old[name].digest for name in old} == digests
+    old.save()
+    written = json.loads((copy / "manifest.json").read_text())
+    assert written["version"] == FORMAT_VERSION and seal(written) == written
+    assert _model_names(copy) == _files_of(*(smc.model for smc in smcs.values()))
+    assert _digests(copy) == digests
+    assert {n: e["spec"] for n, e in written["smcs"].items()} == {n: e["spec"] for n, e in manifest["smcs"].items()}
+
+
 def test_a_model_of_another_algorithm_is_refused(copy):
+    """The manifest's algorithm is the model file's: an entry whose spec names another one, or whose file holds
+    another algorithm's model (the PPO SMC's file, of the same layout), is refused before a model is built."""
+    model = _model_file(copy, "corner")
     _edit(copy, lambda m: m["smcs"]["corner"]["spec"].update(algo="PPO"))
-    with pytest.raises(CorruptModelError, match="'corner': .*(manifest says PPO, but .* holds a|cannot load)"):
+    with pytest.raises(CorruptModelError, match=f"'corner': model file {re.escape(str(model))}: holds a RecurrentPPO "
+                                                "model, but the manifest says PPO"):
+        SMCLibrary.load(copy)
+    _edit(copy, lambda m: m["smcs"]["corner"]["spec"].update(algo="RecurrentPPO"))
+    SMCLibrary.load(copy, names=["corner"])
+    file = _readdress(copy, "corner", _model_file(copy, "corner-ppo").read_bytes())
+    with pytest.raises(CorruptModelError, match=f"'corner': model file {re.escape(str(file))}: holds a PPO model, but "
+                                                "the manifest says RecurrentPPO"):
         SMCLibrary.load(copy)
 
 
@@ -1043,6 +1343,7 @@ def test_saved_files_follow_the_umask(smcs, tmp_path):
     finally:
         os.umask(old)
     assert (path.stat().st_mode & 0o777) == 0o755
-    assert ((path / "manifest.json").stat().st_mode & 0o777) == 0o644
-    assert ((path / "models" / "corner.zip").stat().st_mode & 0o777) == 0o644
+    assert ((path / "manifest.json").stat().st_mode & 0o777) == 0o644 == ((path / storage.LOCK).stat().st_mode & 0o777)
+    assert (_model_file(path, "corner").stat().st_mode & 0o777) == 0o644
+    assert ((path / "models").stat().st_mode & 0o777) == 0o755
     assert (cache_file.stat().st_mode & 0o777) == 0o644

@@ -3,22 +3,21 @@ models with the trained weights), loaded by curriculum name and put on an enviro
 
 from __future__ import annotations
 
-import io
 import json
 import shutil
-import zipfile
 
 import gymnasium as gym
 import pytest
 import torch
+from safetensors import safe_open
 
 import pixelworld_env  # noqa: F401
 from sb3_smc.curricula import Curriculum, Node
-from sb3_smc.curricula.pretrained import build_pretrained, lower_level
+from sb3_smc.curricula.pretrained import build_pretrained, compact_model, lower_level
 from sb3_smc.curricula.run_directory import status
 from sb3_smc.curricula.shipped import shipped_curricula
 from sb3_smc.curricula.trainer import rank_seeds, train_curriculum
-from sb3_smc.library import LibraryError, SMCLibrary
+from sb3_smc.library import LibraryError, SMCLibrary, UntrustedModelError, storage
 from sb3_smc.library.errors import ManifestError
 from sb3_smc.library.pretrained import INDEX, pretrained_curricula, pretrained_index, pretrained_names, pretrained_root
 from tests.helpers import sb3_smc_cli
@@ -27,9 +26,15 @@ LEFT, RIGHT = "cl_self-in-left-corner_vs_on-hline", "cl_self-in-right-corner_vs_
 TARGET = "ba_self-in-target-container_from_nontarget-container"
 
 
-def _optimizer_state(path) -> dict:
-    with zipfile.ZipFile(path) as archive:
-        return torch.load(io.BytesIO(archive.read("policy.optimizer.pth")), weights_only=True)
+def _tensor_names(path) -> set[str]:
+    """The names of the tensors in a model file (safetensors)."""
+    with safe_open(path, framework="pt") as handle:
+        return set(handle.keys())
+
+
+def _model_file(library, name: str):
+    """The model file of SMC ``name`` in the library folder ``library``, as its manifest names it."""
+    return library / json.loads((library / "manifest.json").read_text())["smcs"][name]["model"]
 
 
 def test_build_and_load_a_pretrained_library(tmp_path):
@@ -47,9 +52,13 @@ def test_build_and_load_a_pretrained_library(tmp_path):
         assert smc.test_score is not None and smc.spec == original.spec and smc.record == original.record
         ours, theirs = smc.model.policy.state_dict(), original.model.policy.state_dict()
         assert all(torch.equal(ours[k], theirs[k]) for k in theirs)  # the trained weights, exactly
-        model_file = out / "models" / f"{name}.zip"
-        assert _optimizer_state(model_file)["state"] == {}  # no optimiser running state
-        assert model_file.stat().st_size < 0.6 * (run / "library" / "models" / f"{name}.zip").stat().st_size
+        model_file, full = _model_file(out, name), _model_file(run / "library", name)
+        assert model_file.name == f"{storage.sha256(model_file)}.safetensors"
+        compact, whole = _tensor_names(model_file), _tensor_names(full)
+        assert any(key.startswith("policy.optimizer/state/") for key in whole)  # the run's: the optimiser's state
+        assert compact == {key for key in whole if not key.startswith("policy.optimizer/state/")}  # none of it here
+        assert model_file.read_bytes() == compact_model(full.read_bytes())
+        assert model_file.stat().st_size < 0.6 * full.stat().st_size
     # a rebuild replaces a node's entries by its best seeds (an extra seed in the library does not survive)
     best_names = sorted(library.names)
     worst = next(f"{LEFT}@{s}" for s in range(3) if f"{LEFT}@{s}" not in library)
@@ -89,6 +98,26 @@ def test_build_and_load_a_pretrained_library(tmp_path):
         build_pretrained([run], [tiny], tmp_path / "notes", repeats=1)
     assert (tmp_path / "notes" / "keep.txt").read_text() == "mine"
     library = SMCLibrary.load(out)
+    # an out of pickled models (a library written before version 5) is rebuilt only with trust, then as version 5
+    old = tmp_path / "old"
+    shutil.copytree(out, old)
+    manifest = json.loads((old / "manifest.json").read_text())
+    for name, entry in manifest["smcs"].items():
+        (old / entry["model"]).unlink()
+        library[name].model.save(old / "models" / f"{name}.zip")
+        entry.update(model=f"models/{name}.zip", sha256=storage.sha256(old / "models" / f"{name}.zip"))
+    storage.write_manifest(old / "manifest.json", {**manifest, "version": 4})
+    pickled = (old / "manifest.json").read_bytes()
+    with pytest.raises(UntrustedModelError, match=r"\.zip is a pickled Stable-Baselines3 archive"):
+        build_pretrained([run], [tiny], old, repeats=1)
+    assert (old / "manifest.json").read_bytes() == pickled
+    build_pretrained([run], [tiny], old, repeats=1, trust=True)
+    converted = SMCLibrary.load(old)
+    assert sorted(converted.names) == best_names and json.loads((old / "manifest.json").read_text())["version"] == 5
+    assert sorted(p.name for p in (old / "models").iterdir()) == sorted(_model_file(old, n).name for n in best_names)
+    for name in best_names:
+        assert not any(key.startswith("policy.optimizer/state/") for key in _tensor_names(_model_file(old, name)))
+        assert converted[name].digest == library[name].digest
     # loaded by curriculum name from a library root (the package's by default) and used as actions
     assert pretrained_curricula(out) == ["tiny"]  # no shipped curriculum has all its lower-level nodes here
     assert SMCLibrary.pretrained("tiny", out).names == library.names == tuple(pretrained_names("tiny", out))

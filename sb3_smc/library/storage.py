@@ -192,7 +192,15 @@ def save_library(target: Path, entries: Mapping[str, dict[str, Any]], models: Ma
     changed on disk since: then, and where a kept SMC would lose a child or two SMCs share a name with different
     content, :class:`LibraryConflictError`, and nothing is written. Returns the checksums of the entries written."""
     with locked(target, exclusive=True):
-        disk, disk_entries, manifest_path = _current_manifest(target)
+        manifest_path = target / MANIFEST
+        old = read_manifest(target)[0] if manifest_path.is_file() else None
+        if old is not None and check_version(old, manifest_path) == 1:  # its conversion would drop metadata
+            if not overwrite and not set(old.get("smcs") or {}) <= set(known):
+                raise ManifestError(f"{manifest_path}: version-1 library (sb3-smc 0.1) holding SMCs this library did "
+                                    "not read; convert it first: SMCLibrary.load(path, trust=True).save()")
+            disk, disk_entries = new_manifest({}), {}  # the caller read every SMC of it: its save replaces them
+        else:
+            disk, disk_entries, manifest_path = _current_manifest(target)
         ours: dict[str, dict[str, Any]] = {}
         for name, entry in entries.items():
             digest = hashlib.sha256(models[name]).hexdigest()
