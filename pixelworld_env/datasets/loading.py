@@ -1,9 +1,14 @@
-"""``load_dataset``: the scenes and labels of a catalog dataset (generated on first use, then cached)."""
+"""``load_dataset``: the scenes and labels of a catalog dataset (generated on first use, then cached); ``few_worlds``:
+the first ``N`` worlds of a training split in its fixed, nested, label-stratified order (``train_worlds=N``)."""
 
 from __future__ import annotations
 
+import hashlib
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Literal
+from typing import Any, Literal
+
+import numpy as np
 
 from pixelworld_env.core.constants import Kind
 from pixelworld_env.core.scene import Scene
@@ -12,7 +17,7 @@ from pixelworld_env.datasets.cache import load_or_generate
 from pixelworld_env.errors import PixelWorldError
 from pixelworld_env.generation.dataset import split as stratified_split
 from pixelworld_env.generation.dataset_spec import DatasetSpec
-from pixelworld_env.validation import check_seed
+from pixelworld_env.validation import check_int, check_seed
 
 Split = Literal["all", "train", "test"]
 SPLITS = ("all", "train", "test")
@@ -66,4 +71,56 @@ def load_dataset(name: str, split: Split = "all", seed: int = 0) -> Dataset:
         name=name, kind=info.kind, concept=info.concept_logic, split=split, seed=seed,
         scenes=tuple(generated.scenes[i] for i in indices), labels=tuple(generated.labels[i] for i in indices),
     )
+
+
+def check_train_worlds(train_worlds: Any, split: str) -> int | None:
+    """``train_worlds`` of an environment checked before anything is loaded: ``None`` (every world of the split) or
+    an integer >= 1 (a bool is not one), and only on the training split: test worlds are never cut."""
+    if train_worlds is None:
+        return None
+    train_worlds = check_int(train_worlds, "train_worlds", 1)
+    if split != "train":
+        raise PixelWorldError(f"train_worlds={train_worlds} cuts the training split; split={split!r} is never cut "
+                              "(evaluate on every test world)")
+    return train_worlds
+
+
+def _order_seed(name: str, label: int) -> int:
+    """The seed of a dataset's order of its training worlds of one label: from the name, so a pool's member keeps its
+    order whatever the other members are."""
+    return int.from_bytes(hashlib.sha256(f"{name}\0{label}".encode()).digest()[:4], "little")
+
+
+def training_order(datasets: Sequence[Dataset]) -> list[tuple[int, int]]:
+    """The fixed order of a task's training worlds, ``(dataset index, scene index)`` pairs: the first ``N`` are its
+    ``N`` training worlds (:func:`few_worlds`), so the worlds of 4 are among those of 8, on every machine.
+
+    Each dataset's worlds of each label are shuffled with a seed of the dataset's name and the label (numpy's legacy
+    ``RandomState``, stable across versions); the worlds of one label are taken from the datasets in turn (a pool's
+    members as even as ``N`` allows); a classification task then alternates its labels, the positive one (1) first,
+    so that ``N`` worlds hold ``ceil(N / 2)`` positive and ``floor(N / 2)`` negative ones while both last (an odd
+    ``N``: one positive more); a bring-about task has one stream."""
+    streams: dict[int, list[tuple[int, int]]] = {}
+    for label in sorted({label for d in datasets for label in d.labels}, reverse=True):
+        shuffled = []
+        for k, dataset in enumerate(datasets):
+            members = [i for i, value in enumerate(dataset.labels) if value == label]
+            order = np.random.RandomState(_order_seed(dataset.name, label)).permutation(len(members))
+            shuffled.append([(k, members[int(j)]) for j in order])
+        streams[label] = [item for turn in range(max(map(len, shuffled), default=0))
+                          for item in (s[turn] for s in shuffled if turn < len(s))]
+    queues = list(streams.values())
+    return [item for turn in range(max(map(len, queues), default=0))
+            for item in (q[turn] for q in queues if turn < len(q))]
+
+
+def few_worlds(datasets: Sequence[Dataset], train_worlds: int) -> tuple[list[Scene], list[int]]:
+    """The first ``train_worlds`` worlds of :func:`training_order` and their labels; :class:`PixelWorldError` where
+    the training split has fewer."""
+    order = training_order(datasets)
+    if train_worlds > len(order):
+        names = ", ".join(d.name for d in datasets)
+        raise PixelWorldError(f"train_worlds={train_worlds}: the training split of {names} has {len(order)} worlds")
+    chosen = order[:train_worlds]
+    return ([datasets[k].scenes[i] for k, i in chosen], [datasets[k].labels[i] for k, i in chosen])
 

@@ -146,6 +146,9 @@ class PixelWorldEnv(gym.Env):
         self.split: str | None = None
         """The dataset split the scenes come from, when known (``gym.make`` of a ``PW-*`` id sets it); reported in
         the ``info`` of every ``reset`` so that evaluations say which split they ran on."""
+        self.train_worlds: int | None = None
+        """``N`` where the scenes are the first ``N`` worlds of the training split (``gym.make(id,
+        train_worlds=N)``); ``None``: the whole split (or not known)."""
         self.observation = observation
         self.render_mode = render_mode
         self._window = Window(f"PixelWorld: {self.concept.text}", self.metadata["render_fps"]) \
