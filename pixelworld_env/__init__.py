@@ -16,7 +16,7 @@ from pixelworld_env.core.objects import WorldObject
 from pixelworld_env.core.scene import Scene
 from pixelworld_env.datasets.loading import Dataset, load_dataset
 from pixelworld_env.envs.env import PixelWorldEnv
-from pixelworld_env.envs.registration import make_env, register_envs
+from pixelworld_env.envs.registration import make_env, register_envs, register_worlds
 from pixelworld_env.errors import PixelWorldError
 
 register_envs()
@@ -42,4 +42,5 @@ __all__ = [
     "load_dataset",
     "make_env",
     "parse",
+    "register_worlds",
 ]

@@ -107,6 +107,8 @@ class EvaluationResult:
     score: float
     environments: list[EnvironmentResult]
     action_names: tuple[str, ...] = ()
+    train_worlds: int | None = None
+    """``N`` where the environments were the first ``N`` worlds of the training split (``None``: the whole split)."""
 
     @property
     def scores(self) -> list[float]:
@@ -141,7 +143,7 @@ class EvaluationResult:
         return EvaluationRecord(smc=self.smc, env_id=self.env_id, split=self.split, kind=self.kind,
                                 repeats=self.repeats, evaluation_seed=self.seed, score=self.score,
                                 environment_scores=tuple(self.scores), mean_length=self.mean_length,
-                                call_counts=self.call_counts())
+                                call_counts=self.call_counts(), train_worlds=self.train_worlds)
 
     def to_dict(self) -> dict[str, Any]:
         """Plain data (JSON-ready: cells become lists)."""
@@ -288,6 +290,11 @@ def evaluate(smc: SMC, env_id: str | None = None, *, split: str = "test", repeat
             raise SMCError(f"SMC {smc.name!r} has actions {smc.action_names}, the env {env.action_names}")
         pixelworld = cast("PixelWorldEnv", base) if env.pixelworld else None
         if pixelworld is not None:
+            if pixelworld.split != split:  # a user's own id over chosen scenes: its worlds are not that split
+                ran = f"its {pixelworld.split} split" if pixelworld.split is not None else "worlds of no known split"
+                raise SMCError(f"SMC {smc.name!r}: {env_id} runs {ran} ({len(pixelworld.scenes)} worlds), not the "
+                               f"{split} split: evaluate on the PixelWorld id whose {split} split it is "
+                               "(evaluate(smc, env_id='PW-...-v0')), or on worlds you name (evaluate_worlds)")
             if starts is not None:
                 raise SMCError(f"starts= is for tasks without datasets; {env_id} runs every scene of its {split} "
                                "split")
@@ -315,7 +322,8 @@ def evaluate(smc: SMC, env_id: str | None = None, *, split: str = "test", repeat
         env.close()
     score = float(np.mean([e.success for env_result in environments for e in env_result.episodes]))
     result = EvaluationResult(smc=smc.name, env_id=env_id, split=split, kind=smc.kind, repeats=repeats, seed=seed,
-                              score=score, environments=environments, action_names=tuple(smc.action_names))
+                              score=score, environments=environments, action_names=tuple(smc.action_names),
+                              train_worlds=getattr(pixelworld, "train_worlds", None))
     if keep:
         smc.add_evaluation(result.record)
     return result

@@ -210,6 +210,7 @@ def train_smc(
     env_kwargs: Mapping[str, Any] | None = None,
     rnn: str | None = None,
     discount: str = "decision",
+    train_worlds: int | None = None,
     **hyperparams: Any,
 ) -> SMC:
     """Train an SMC and return the snapshot with the best mean training return.
@@ -259,6 +260,9 @@ def train_smc(
     :param discount: ``"semi-mdp"`` discounts a decision by ``gamma ** k`` for its k primitive steps (an SMC call of
         40 moves by ``gamma ** 40``) instead of ``gamma`` per decision (``"decision"``;
         :mod:`sb3_smc.common.discounting`).
+    :param train_worlds: train on the first ``N`` worlds of the training split only (PixelWorld ids: nested and
+        stratified, :func:`pixelworld_env.datasets.loading.training_order`); recorded in the spec's
+        ``task.env_kwargs``; the test split is never cut.
     :param hyperparams: override the algorithm's defaults (``policy_kwargs`` key by key).
     :return: the SMC: its ``policy`` a numpy copy of the selected snapshot's actor, ``model`` the SB3 model with the
         selected weights loaded, ``spec`` the (resolved) spec and ``record`` the :class:`TrainingRecord`.

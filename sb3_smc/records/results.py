@@ -132,6 +132,10 @@ class EvaluationRecord(Record):
     environment_scores: tuple[float, ...] = ()
     mean_length: float | None = None
     call_counts: dict[str, int] = field(default_factory=dict)
+    train_worlds: int | None = None
+    """``N`` where the test ran the first ``N`` worlds of the training split (an SMC trained on ``N`` worlds,
+    evaluated on ``split="train"``); ``None``: every world of ``split`` (in JSON only when set). With ``env_id`` (its
+    datasets), ``split`` and ``len(environment_scores)``, the record says which worlds it ran."""
 
     def __post_init__(self) -> None:
         str_field(self.smc, "smc")
@@ -148,6 +152,8 @@ class EvaluationRecord(Record):
             set_field(self, "mean_length", float_field(self.mean_length, "mean_length"))
         counts = mapping_field(self.call_counts, "call_counts")
         set_field(self, "call_counts", {k: int_field(v, f"call_counts.{k}", 0) for k, v in counts.items()})
+        if self.train_worlds is not None:
+            set_field(self, "train_worlds", int_field(self.train_worlds, "train_worlds", 1))
 
     OLD_KEYS: ClassVar[dict[str, str]] = {"seed": "evaluation_seed"}
     """Keys of records saved by earlier versions -> the fields they are now (``seed``: before issue 46)."""
@@ -155,6 +161,8 @@ class EvaluationRecord(Record):
     def to_dict(self) -> dict[str, Any]:
         out = super().to_dict()
         out["environment_scores"] = nan_to_none(self.environment_scores)
+        if self.train_worlds is None:
+            del out["train_worlds"]
         return out
 
     @classmethod

@@ -110,6 +110,13 @@ class TaskSpec(Record):
         return super().from_dict(data, where)
 
     @property
+    def train_worlds(self) -> int | None:
+        """``N`` where the SMC trains on the first ``N`` worlds of its training split (``env_kwargs``'
+        ``train_worlds``: :func:`pixelworld_env.datasets.loading.training_order`); ``None``: the whole split."""
+        value = self.env_kwargs.get("train_worlds")
+        return None if value is None else int(value)
+
+    @property
     def smc_layout(self) -> Layout:
         """The layout of the SMCs trained on this task (PixelWorld's unless :attr:`layout` says otherwise)."""
         return self.layout if self.layout is not None else PIXELWORLD_LAYOUT
@@ -294,13 +301,23 @@ class TrainingSpec(Record):
                include_primitives: bool = True, count_primitive_steps: bool = False, call_step_cap: int = 100,
                max_steps: int = 100, signal_bias: bool | SignalBias = True, frame_stack: int = 1,
                split: str = "train", env_kwargs: Mapping[str, Any] | None = None, rnn: str | None = None,
-               discount: str = "decision", **hyperparameters: Any) -> TrainingSpec:
+               discount: str = "decision", train_worlds: int | None = None, **hyperparameters: Any) -> TrainingSpec:
         """The spec of ``train_smc``'s keyword interface (``n_steps`` in ``hyperparameters`` goes to the budget;
         ``rnn="lstm"`` or ``"gru"`` picks the recurrent policy of a recurrent algorithm).
 
         ``env_id`` is the task's id (its :class:`TaskSpec` with ``split`` and ``env_kwargs``, :meth:`TaskSpec.resolved`)
         or a :class:`TaskSpec`, taken as it is (``train_smc`` passes its task unresolved and resolves it once itself);
-        ``split`` and ``env_kwargs`` then belong in it."""
+        ``split`` and ``env_kwargs`` then belong in it. ``train_worlds=N``: train on the first ``N`` worlds of the
+        training split (stored in the task's ``env_kwargs``, so in the spec, the records and the library)."""
+        if train_worlds is not None:
+            given = env_id.env_kwargs if isinstance(env_id, TaskSpec) else (env_kwargs or {})
+            if "train_worlds" in given:
+                raise RecordError("TrainingSpec.create: give train_worlds once (not also in env_kwargs)")
+            cut = {**given, "train_worlds": int_field(train_worlds, "train_worlds", 1)}
+            if isinstance(env_id, TaskSpec):
+                env_id = dataclasses.replace(env_id, env_kwargs=cut)
+            else:
+                env_kwargs = cut
         n_steps = hyperparameters.pop("n_steps", None)
         if rnn is not None:
             from sb3_smc.core.hyperparameters import recurrent_policy

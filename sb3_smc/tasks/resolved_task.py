@@ -168,7 +168,9 @@ class ResolvedTask:
 
         :param max_steps: the episode length in decisions.
         :param smc: the SMC the environment is for (named in the errors).
-        :param split: another dataset split than the task's (PixelWorld ids; ignored for others).
+        :param split: another dataset split than the task's (PixelWorld ids, and registered tasks whose entry point
+            takes ``split``, such as :func:`pixelworld_env.register_worlds`'; ignored for others). On another split
+            than ``"train"`` a task's ``train_worlds`` is left out: only training worlds are ever cut.
         :param env_kwargs: extra keyword arguments for ``gym.make``, checked as the task's are.
         :return: the environment, Gymnasium's checker off.
         """
@@ -176,8 +178,10 @@ class ResolvedTask:
         pixelworld = self.source is TaskSource.PIXELWORLD
         kwargs = {"disable_env_checker": True,
                   **_check_kwargs(self.env_id, {**self.env_kwargs, **_mapping(env_kwargs)}, pixelworld)}
-        if pixelworld:
-            kwargs["split"] = split or self.split
+        if pixelworld or (self.registration is not None and _takes(self.registration, "split", unreadable=False)):
+            kwargs["split"] = split or self.split  # PixelWorld's ids, and a registered task that has splits
+            if kwargs["split"] != "train":  # train_worlds cuts the training split only: a test has every test world
+                kwargs.pop("train_worlds", None)
         try:
             return gym.make(self.env_id, max_steps=max_steps, **kwargs)
         except TypeError:
@@ -286,14 +290,20 @@ def _mapping(env_kwargs: Any) -> dict[str, Any]:
 def _takes_max_steps(registration: EnvSpec) -> bool:
     """Whether the registered entry point takes a ``max_steps`` keyword (``True`` where its signature cannot be
     read)."""
+    return _takes(registration, "max_steps", unreadable=True, any_keyword=True)
+
+
+def _takes(registration: EnvSpec, keyword: str, *, unreadable: bool, any_keyword: bool = False) -> bool:
+    """Whether the registered entry point takes ``keyword`` by name (``unreadable`` where its signature cannot be
+    read; ``any_keyword``: a ``**kwargs`` counts too)."""
     entry = registration.entry_point
     creator = load_env_creator(entry) if isinstance(entry, str) else entry
     if not callable(creator):
-        return True
+        return unreadable
     try:
         parameters = inspect.signature(creator).parameters
     except (TypeError, ValueError):
-        return True
-    taken = parameters.get("max_steps")
-    return (taken is not None and taken.kind is not inspect.Parameter.POSITIONAL_ONLY) or any(
-        p.kind is inspect.Parameter.VAR_KEYWORD for p in parameters.values())
+        return unreadable
+    taken = parameters.get(keyword)
+    return (taken is not None and taken.kind is not inspect.Parameter.POSITIONAL_ONLY) or (any_keyword and any(
+        p.kind is inspect.Parameter.VAR_KEYWORD for p in parameters.values()))
