@@ -30,6 +30,8 @@ from pixelworld_env.validation import check_bool, check_count
 
 ENTRY_POINT = "pixelworld_env.envs.registration:make_env"
 VECTOR_ENTRY_POINT = "pixelworld_env.envs.registration:make_vector_env"
+WORLDS_ENTRY_POINT = "pixelworld_env.envs.registration:make_worlds_env"
+WORLDS_VECTOR_ENTRY_POINT = "pixelworld_env.envs.registration:make_worlds_vector_env"
 
 
 def env_id(name: str) -> str:
@@ -163,7 +165,7 @@ def register_worlds(env_id: str, *, kind: Literal["classification", "bring-about
                                labels=_labels(labels, drawn, f"{split} worlds", kind))
     worlds = Worlds(env_id, kind, concept, parts["train"], parts["test"])
     make_worlds_env(worlds)  # the concept parses, the worlds fit together: refused here, not at the first gym.make
-    gym.register(env_id, entry_point=make_worlds_env, vector_entry_point=make_worlds_vector_env,
+    gym.register(env_id, entry_point=WORLDS_ENTRY_POINT, vector_entry_point=WORLDS_VECTOR_ENTRY_POINT,
                  kwargs={"worlds": worlds})
     return env_id
 

@@ -264,8 +264,8 @@ def parse_curriculum(text: str, source: str = "<curriculum>") -> Curriculum:
         root = safe_yaml_compose(text, source)
     except YAMLInputError as err:
         line = f":{err.line}" if err.line else ""
-        problem = err.problem.replace("invalid YAML: ", "malformed YAML: ", 1)
-        raise CurriculumError(f"{source}{line}: {problem}") from None
+        said = err.problem.replace("invalid YAML: ", "malformed YAML: ", 1)
+        raise CurriculumError(f"{source}{line}: {said}") from None
     if not isinstance(root, yaml.MappingNode):
         raise CurriculumError(f"{source}: a curriculum file is a mapping with the keys {list(FORMAT_KEYS)}")
     data = _plain(root, source)

@@ -198,7 +198,7 @@ def save_library(target: Path, entries: Mapping[str, dict[str, Any]], models: Ma
             if not overwrite and not set(old.get("smcs") or {}) <= set(known):
                 raise ManifestError(f"{manifest_path}: version-1 library (sb3-smc 0.1) holding SMCs this library did "
                                     "not read; convert it first: SMCLibrary.load(path, trust=True).save()")
-            disk, disk_entries = new_manifest({}), {}  # the caller read every SMC of it: its save replaces them
+            disk, disk_entries = new_manifest({}), dict[str, LibraryEntry]()  # the caller read every SMC of it
         else:
             disk, disk_entries, manifest_path = _current_manifest(target)
         ours: dict[str, dict[str, Any]] = {}
