@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from pixelworld_env.errors import PixelWorldError
+from pixelworld_env.generation.dataset_spec import MAX_NUM_SAMPLES
 from sb3_smc import curricula
 from sb3_smc.core.hyperparameters import ALGORITHMS, DEFAULT_ALGORITHM, DEFAULT_TIMESTEPS, RECURRENT_POLICIES
 from sb3_smc.curricula import trainer
@@ -197,6 +198,28 @@ def _print_table(rows: Sequence[Sequence[str]]) -> None:
               .rstrip())
 
 
+def _learn(args: argparse.Namespace) -> int:
+    from sb3_smc.fewshot import OFFERS, learn_concept
+    from sb3_smc.fewshot.choice import DEFAULT_OFFERED
+
+    offer: str | list[str] = args.offer
+    if args.offer not in OFFERS and "," in args.offer:
+        offer = [name for item in args.offer.split(",") if (name := item.strip())]
+    settings = {"total_timesteps": args.timesteps} if args.timesteps is not None else {}
+    learned = learn_concept(args.task, library=args.library or "pretrained", offer=offer,
+                            train_worlds=args.train_worlds, k=args.k or DEFAULT_OFFERED, name=args.name,
+                            seed=args.seed, add_to=args.add_to, log_every=None, **settings)
+    smc = learned.smc
+    worlds = f"{args.train_worlds} training worlds" if args.train_worlds else "every training world"
+    print(f"{smc.name}: learned from {worlds} with {len(learned.offered)} SMC(s) offered"
+          + (f" ({', '.join(learned.offered)})" if learned.offered else ""))
+    score = smc.test_score
+    print(f"test score {100 * score:.1f} % on every held-out world, 10 times each" if score is not None else "")
+    if args.add_to:
+        print(f"added to {args.add_to}")
+    return 0
+
+
 def _import_zoo(args: argparse.Namespace) -> int:
     from sb3_smc.zoo import import_zoo_model
 
@@ -313,6 +336,24 @@ def main(argv: Sequence[str] | None = None) -> int:
                                                         "(default: the first target)")
     p.add_argument("--no-behaviour", action="store_true", help="skip the trajectory and timeline figures")
     p.set_defaults(run=_report)
+
+    p = sub.add_parser("learn", help="learn a new concept from a few of its worlds with a library's SMCs as actions")
+    p.add_argument("task", help="the concept's task: a PW-* id (e.g. PW-cl_self-in-container_vs_noncontainer-v0)")
+    p.add_argument("--train-worlds", type=_count(MAX_NUM_SAMPLES), default=None,
+                   help="train on the first N worlds of its training split (default: all of them)")
+    p.add_argument("--library", action="append", default=None,
+                   help="a library folder to take SMCs from, or 'pretrained' (the default); repeat for several")
+    p.add_argument("--offer", default="auto",
+                   help="which SMCs to offer: auto (chosen from the examples alone), all, none (a flat SMC), a "
+                        "pretrained curriculum's name (e.g. search2-canon), or names separated by commas")
+    p.add_argument("--k", type=_count(MAX_NUM_SAMPLES), default=None,
+                   help="how many SMCs the automatic choice keeps (default 8)")
+    p.add_argument("--seed", type=int, default=0, help="the training seed")
+    p.add_argument("--timesteps", type=_count(LIMITS["timesteps"]), default=None,
+                   help="the training budget (default: the package's)")
+    p.add_argument("--add-to", default=None, help="a library folder to add the learned SMC to (created if missing)")
+    p.add_argument("--name", default=None, help="the new SMC's name (default: <task>[-n<N>]@<seed>)")
+    p.set_defaults(run=_learn)
 
     p = sub.add_parser("import-zoo", help="add a model trained by rl_zoo3 to an SMC library")
     p.add_argument("run_dir", help="the zoo's run directory, e.g. logs/trpo/PW-...-v0_1")

@@ -51,7 +51,8 @@ def test_the_import_graph_has_no_cycle():
 
 LAYERS = (("pixelworld_env",), ("sb3_smc.common",), ("sb3_smc.core", "sb3_smc.recurrent_trpo"), ("sb3_smc.tasks",),
           ("sb3_smc.records", "sb3_smc.examples"), ("sb3_smc.smc",), ("sb3_smc.envs",),
-          ("sb3_smc.learning", "sb3_smc.library"), ("sb3_smc.curricula", "sb3_smc.zoo"), ("sb3_smc.experiments",),
+          ("sb3_smc.learning", "sb3_smc.library"), ("sb3_smc.curricula", "sb3_smc.zoo", "sb3_smc.fewshot"),
+          ("sb3_smc.experiments",),
           ("sb3_smc.cli", "sb3_smc.demo"))
 """The stages of docs/architecture.md, lowest first (the packages of one stage do not import each other)."""
 

@@ -1,0 +1,9 @@
+"""A new concept from a few examples, with a library of learned SMCs as its actions (docs/few_shot.md):
+:func:`~sb3_smc.fewshot.learn.learn_concept`, the automatic choice of SMCs to offer
+(:func:`~sb3_smc.fewshot.choice.choose_smcs`) and the held-out rule (:func:`~sb3_smc.fewshot.choice.held_out`)."""
+
+from sb3_smc.fewshot.choice import DEFAULT_OFFERED, Choice, choose_smcs, held_out
+from sb3_smc.fewshot.learn import OFFERS, Learned, learn_concept, offered_smcs
+
+__all__ = ["DEFAULT_OFFERED", "OFFERS", "Choice", "Learned", "choose_smcs", "held_out", "learn_concept",
+           "offered_smcs"]

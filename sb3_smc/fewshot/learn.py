@@ -1,0 +1,124 @@
+"""``learn_concept``: a new concept learned from a few examples with a library's SMCs as actions, tested on held-out
+worlds and added to a library, so that the next concept can call it (docs/few_shot.md)."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from sb3_smc.errors import SMCError, SMCTypeError
+from sb3_smc.fewshot.choice import DEFAULT_OFFERED, Choice, choose_smcs, held_out
+from sb3_smc.library import SMCLibrary
+from sb3_smc.library.pretrained import pretrained_names, pretrained_root
+from sb3_smc.smc.smc import SMC
+
+__all__ = ["OFFERS", "Learned", "learn_concept", "offered_smcs"]
+
+OFFERS = ("auto", "all", "none")
+"""The ways of offering SMCs besides a curriculum's name or a list of names: the automatic choice from the examples,
+the whole library (held out), or none (the flat SMC)."""
+
+Libraries = SMCLibrary | str | os.PathLike | Sequence[SMCLibrary | str | os.PathLike] | None
+
+
+class Learned:
+    """What :func:`learn_concept` did: the trained ``smc`` (its test evaluation in ``smc.evaluations``), the names
+    ``offered`` to it and, for the automatic choice, its ``choice`` (every candidate's score)."""
+
+    def __init__(self, smc: SMC, offered: tuple[str, ...], choice: Choice | None) -> None:
+        self.smc, self.offered, self.choice = smc, offered, choice
+
+    def __repr__(self) -> str:
+        return f"Learned({self.smc.name!r}, test score {self.smc.test_score}, offered {list(self.offered)})"
+
+
+def _library(given: Libraries) -> SMCLibrary:
+    """One library of everything ``given`` holds: ``"pretrained"`` (the package's), a folder, a library, or several
+    (a name in two must be the same SMC)."""
+    if given is None:
+        return SMCLibrary()
+    items = [given] if isinstance(given, SMCLibrary | str | os.PathLike) else list(given)
+    merged = SMCLibrary()
+    for item in items:
+        if isinstance(item, SMCLibrary):
+            library = item
+        elif isinstance(item, str | os.PathLike):
+            library = SMCLibrary.load(pretrained_root() if str(item) == "pretrained" else Path(item))
+        else:
+            raise SMCTypeError(f"library must be an SMCLibrary, a folder or 'pretrained', got {type(item).__name__}")
+        for name in library.names:
+            merged.add(library[name])
+    return merged
+
+
+def offered_smcs(library: Mapping[str, SMC], offer: str | Sequence[str], datasets: Sequence[str]) -> list[str]:
+    """The SMCs ``offer`` names that may be offered to a concept of ``datasets`` (:func:`held_out`), before any
+    automatic choice: ``"all"`` / ``"auto"`` the whole library, ``"none"`` nothing, a pretrained curriculum's name its
+    lower-level SMCs, or a list of names. A named SMC trained on the concept's own datasets is refused."""
+    allowed = held_out(library, datasets)
+    if isinstance(offer, str) and offer in OFFERS:
+        return [] if offer == "none" else allowed
+    names = pretrained_names(offer) if isinstance(offer, str) else list(offer)
+    missing = [name for name in names if name not in library]
+    if missing:
+        raise SMCError(f"offer names SMCs the library does not hold: {missing[:5]}")
+    barred = [name for name in names if name not in allowed]
+    if barred:
+        raise SMCError(f"offer names SMCs trained on the concept's own datasets {list(datasets)}: {barred[:5]} "
+                       "(held out: a concept never calls what was trained on its own worlds)")
+    return names
+
+
+def learn_concept(task: str, *, library: Libraries = "pretrained", offer: str | Sequence[str] = "auto",
+                  train_worlds: int | None = None, k: int = DEFAULT_OFFERED, name: str | None = None, seed: int = 0,
+                  repeats: int = 10, add_to: SMCLibrary | str | os.PathLike | None = None,
+                  lean_update: bool = False, log_every: int | None = 0, **settings: Any) -> Learned:
+    """Learn the concept of ``task`` from its training worlds (``train_worlds``: its first ``N``) with SMCs of
+    ``library`` as actions, test it on every held-out world, and add it to ``add_to``.
+
+    :param task: a PixelWorld id (``"PW-cl_self-in-container_vs_noncontainer-v0"``) or a user's own worlds
+        registered with :func:`pixelworld_env.register_worlds`.
+    :param library: ``"pretrained"`` (the package's), a library folder, an :class:`~sb3_smc.SMCLibrary`, several of
+        them, or ``None`` (no SMC: with ``offer="none"``, the flat SMC).
+    :param offer: ``"auto"`` (the automatic choice from the examples alone: :func:`~sb3_smc.fewshot.choose_smcs`),
+        ``"all"`` (the whole library), ``"none"``, a pretrained curriculum's name (``"search2-canon"``: its set), or a
+        list of names. SMCs trained on the concept's own datasets are never offered.
+    :param train_worlds: how many training worlds (``None``: all of them).
+    :param k: the automatic choice's number of SMCs.
+    :param name: the new SMC's name (default: the task's, ``@seed``; ``-n<N>`` with ``train_worlds``).
+    :param seed: the training seed (the choice's draws use it too).
+    :param repeats: repeats of every test world (the paper's 10).
+    :param add_to: a library (object or folder, created if missing) the SMC is added to, its children with it.
+    :param settings: the other settings of :func:`~sb3_smc.train_smc` (``total_timesteps``, ``algo``, ...).
+    :return: :class:`Learned`: the SMC, what was offered, the choice.
+    """
+    from sb3_smc.learning.evaluation import evaluate
+    from sb3_smc.learning.training import train_smc
+    from sb3_smc.records import TaskSpec
+    from sb3_smc.records.spec import smc_name_from_env_id
+
+    if not isinstance(offer, str | Sequence):
+        raise SMCTypeError(f"offer must be one of {OFFERS}, a curriculum's name or a list of names, got {offer!r}")
+    task_spec = TaskSpec(task, env_kwargs={"train_worlds": train_worlds} if train_worlds else {}).resolved()
+    if task_spec.kind is None:
+        raise SMCError(f"{task}: not a task sb3_smc knows the kind of (a PW-* id or register_worlds' id)")
+    datasets = task_spec.datasets or (task,)
+    merged = _library(library)
+    names = offered_smcs(merged, offer, datasets)
+    choice = None
+    if offer == "auto" and names:
+        choice = choose_smcs(task, [merged[n] for n in names], train_worlds=train_worlds, k=k, seed=seed)
+        names = list(choice.chosen)
+    stem = smc_name_from_env_id(task) + (f"-n{train_worlds}" if train_worlds else "")
+    smc = train_smc(task, children=[merged[n] for n in names], name=name or f"{stem}@{seed}", seed=seed,
+                    train_worlds=train_worlds, lean_update=lean_update, log_every=log_every, **settings)
+    evaluate(smc, repeats=repeats, seed=0, record_cells=False)
+    if add_to is not None:
+        target = add_to if isinstance(add_to, SMCLibrary) else (
+            SMCLibrary.load(add_to) if (Path(add_to) / "manifest.json").is_file() else SMCLibrary(path=add_to))
+        smc = target.add(smc)
+        if not isinstance(add_to, SMCLibrary):
+            target.save()
+    return Learned(smc, tuple(names), choice)

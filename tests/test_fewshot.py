@@ -1,0 +1,85 @@
+"""A new concept from a few examples with a library's SMCs (sb3_smc.fewshot): the held-out rule, what is offered,
+the automatic choice, and a learned concept saved, loaded and called by the next one."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import pytest
+
+from sb3_smc.errors import SMCError
+from sb3_smc.fewshot import choose_smcs, held_out, learn_concept, offered_smcs
+from sb3_smc.library import SMCLibrary
+from tests.helpers import sb3_smc_cli
+
+CL = "PW-cl_self-in-container_vs_noncontainer-v0"
+BA = "PW-ba_self-in-container_from_on-floor-v0"
+INSIDE = ("cl_self-inside-container_vs_noncontainer@1", "cl_self-inside-container_vs_noncontainer@3")
+
+
+@pytest.fixture(scope="module")
+def pretrained() -> SMCLibrary:
+    from sb3_smc.library.pretrained import pretrained_root
+
+    return SMCLibrary.load(pretrained_root())
+
+
+def test_no_smc_trained_on_the_concepts_own_datasets_is_offered(pretrained):
+    """An SMC trained on one of the concept's datasets is held out, and so is one that calls it; naming it is
+    refused."""
+    some = pretrained.names[0]
+    smc = pretrained[some]
+    datasets = smc.spec.task.datasets
+    allowed = held_out(pretrained, datasets)
+    assert some not in allowed and all(set(pretrained[n].spec.task.datasets).isdisjoint(datasets) for n in allowed)
+    caller = dataclasses.replace(smc, name="caller", children=(smc,),
+                                 spec=dataclasses.replace(smc.spec, name="caller", children=(smc.name,),
+                                                          task=dataclasses.replace(smc.spec.task, datasets=("x",))))
+    assert held_out({"caller": caller}, datasets) == []
+    with pytest.raises(SMCError, match=r"trained on the concept's own datasets"):
+        offered_smcs(pretrained, [some], datasets)
+    assert offered_smcs(pretrained, "none", datasets) == []
+    assert offered_smcs(pretrained, "all", datasets) == allowed
+    with pytest.raises(SMCError, match=r"does not hold"):
+        offered_smcs(pretrained, ["no-such-smc@0"], datasets)
+
+
+def test_the_automatic_choice_keeps_the_smcs_whose_outcomes_separate_the_labels(pretrained):
+    """From 8 examples of 'the self is in a container', the SMCs of 'the self is inside a container' separate the
+    labels best (score 1: their outcomes are the labels), and the choice is the same on a second call."""
+    candidates = [pretrained[n] for n in held_out(pretrained, ("cl_self-in-container_vs_noncontainer",))]
+    choice = choose_smcs(CL, candidates, train_worlds=8, k=3, seed=0)
+    assert set(INSIDE) <= set(choice.chosen) and len(choice.chosen) == 3
+    assert all(0.0 <= s <= 1.0 for s in choice.scores.values()) and choice.scores[INSIDE[0]] == 1.0
+    assert choice == choose_smcs(CL, candidates, train_worlds=8, k=3, seed=0)
+    with pytest.raises(SMCError, match=r"no SMC to choose from"):
+        choose_smcs(CL, [], train_worlds=8)
+
+
+def test_a_learned_concept_is_saved_loaded_and_called_by_the_next(pretrained, tmp_path):
+    """learn_concept trains on 2 worlds with the SMCs offered, tests on every test world, and adds the SMC to a
+    library folder; the next concept is offered that SMC by name, calls it, and the library loads both."""
+    folder = tmp_path / "mine"
+    first = learn_concept(CL, library=pretrained, offer=list(INSIDE), train_worlds=2, total_timesteps=2000,
+                          add_to=folder)
+    smc = first.smc
+    assert smc.name == "cl_self-in-container_vs_noncontainer-n2@0" and first.offered == INSIDE
+    assert smc.spec.task.train_worlds == 2 and [c.name for c in smc.children] == list(INSIDE)
+    (test,) = [e for e in smc.evaluations if e.split == "test"]
+    assert len(test.environment_scores) == 50 and test.repeats == 10
+    second = learn_concept(BA, library=folder, offer=[smc.name], train_worlds=2, total_timesteps=2000,
+                           add_to=folder)
+    assert [c.name for c in second.smc.children] == [smc.name]
+    loaded = SMCLibrary.load(folder)
+    assert set(loaded.names) == {*INSIDE, smc.name, second.smc.name}
+    assert [c.name for c in loaded[second.smc.name].children] == [smc.name]
+    assert loaded[smc.name].evaluations == smc.evaluations
+
+
+def test_the_learn_command_refuses_bad_input_before_any_work(tmp_path):
+    code, _, err = sb3_smc_cli("learn", CL, "--train-worlds", "0")
+    assert code == 2 and "--train-worlds: must be a positive integer, got 0" in err
+    code, _, err = sb3_smc_cli("learn", CL, "--offer", "nope@0,other@1", "--add-to", str(tmp_path / "x"))
+    assert code == 2 and "does not hold" in err and not (tmp_path / "x").exists()
+    code, _, err = sb3_smc_cli("learn", CL, "--train-worlds", "51")
+    assert code == 2 and "the training split of cl_self-in-container_vs_noncontainer has 50 worlds" in err
