@@ -28,7 +28,7 @@ from sb3_smc.core.hyperparameters import ALGORITHMS, DEFAULT_ALGORITHM, DEFAULT_
 from sb3_smc.curricula import trainer
 from sb3_smc.curricula.format import describe
 from sb3_smc.curricula.jobs import DEFAULT_REUSE, DEFAULT_SEEDS, REUSE, check_curriculum
-from sb3_smc.curricula.options import BACKENDS, DEFAULT_GROUP_SIZE, LIMITS, RunOptions
+from sb3_smc.curricula.options import BACKENDS, DEFAULT_GROUP_SIZE, LIMITS, MAX_TRAIN_WORLDS, RunOptions
 from sb3_smc.curricula.run_directory import status
 from sb3_smc.errors import SMCError
 from sb3_smc.experiments import report, runner
@@ -59,7 +59,7 @@ def _run_options(args: argparse.Namespace, **more: Any) -> RunOptions:
     """The run options of ``sb3-smc train`` and ``sb3-smc experiment`` (``more``: a command's own), checked."""
     return RunOptions(seeds=args.seeds, timesteps=args.timesteps, workers=args.workers, group_size=args.group_size,
                       backend=args.backend, ray_address=args.ray_address, algo=args.algo, rnn=args.rnn,
-                      lean_update=args.lean_update,
+                      lean_update=args.lean_update, train_worlds=args.train_worlds,
                       reuse_from=_reuse_from(args.reuse_from), **more)
 
 
@@ -108,6 +108,9 @@ def _resume_command(directory: Path, settings: dict[str, Any]) -> str:
     options = [("--out", str(directory)), ("--targets", ",".join(settings["targets"])), ("--seeds", settings["seeds"]),
                ("--timesteps", settings.get("timesteps")), ("--reuse", settings.get("reuse")),
                ("--algo", settings.get("algo")), ("--rnn", settings.get("rnn"))]
+    worlds = {(settings["nodes"].get(t) or {}).get("train_worlds") for t in settings["targets"]}
+    if len(worlds) == 1:
+        options.append(("--train-worlds", worlds.pop()))
     return (f"sb3-smc train {curriculum}" + "".join(f" {flag} {shlex.quote(str(value))}" for flag, value in options
                                                    if value is not None)
             + (" --lean-update" if settings.get("lean_update") else ""))
@@ -268,6 +271,9 @@ def _learner_arguments(parser: argparse.ArgumentParser) -> None:
                         help="update every SMC with the lean update (RecurrentPPO or RecurrentTRPO with one LSTM or "
                              "GRU layer; the same update up to float rounding, faster, not bit-identical; recorded "
                              "in run.json)")
+    parser.add_argument("--train-worlds", type=_count(MAX_TRAIN_WORLDS), default=None, metavar="N",
+                        help="the targets learn from the first N worlds of their training split (the nodes they use "
+                             "from all of theirs; recorded in run.json); default: every world")
 
 
 def main(argv: Sequence[str] | None = None) -> int:

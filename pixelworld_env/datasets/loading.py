@@ -99,7 +99,8 @@ def training_order(datasets: Sequence[Dataset]) -> list[tuple[int, int]]:
     ``RandomState``, stable across versions); the worlds of one label are taken from the datasets in turn (a pool's
     members as even as ``N`` allows); a classification task then alternates its labels, the positive one (1) first,
     so that ``N`` worlds hold ``ceil(N / 2)`` positive and ``floor(N / 2)`` negative ones while both last (an odd
-    ``N``: one positive more); a bring-about task has one stream."""
+    ``N``: one positive more); a bring-about task has one stream. A world that several members of a pool share comes
+    once, where it first comes, so ``N`` worlds are ``N`` different worlds."""
     streams: dict[int, list[tuple[int, int]]] = {}
     for label in sorted({label for d in datasets for label in d.labels}, reverse=True):
         shuffled = []
@@ -107,8 +108,13 @@ def training_order(datasets: Sequence[Dataset]) -> list[tuple[int, int]]:
             members = [i for i, value in enumerate(dataset.labels) if value == label]
             order = np.random.RandomState(_order_seed(dataset.name, label)).permutation(len(members))
             shuffled.append([(k, members[int(j)]) for j in order])
-        streams[label] = [item for turn in range(max(map(len, shuffled), default=0))
-                          for item in (s[turn] for s in shuffled if turn < len(s))]
+        seen: set[Scene] = set()
+        streams[label] = []
+        for turn in range(max(map(len, shuffled), default=0)):
+            for k, i in (s[turn] for s in shuffled if turn < len(s)):
+                if datasets[k].scenes[i] not in seen:  # a pool's members share worlds: each once, where it first comes
+                    seen.add(datasets[k].scenes[i])
+                    streams[label].append((k, i))
     queues = list(streams.values())
     return [item for turn in range(max(map(len, queues), default=0))
             for item in (q[turn] for q in queues if turn < len(q))]

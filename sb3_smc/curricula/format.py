@@ -54,8 +54,8 @@ MAX_CURRICULUM_CHARS = 10 * 2**20
 FORMAT_KEYS = ("curriculum", "method", "description", "defaults", "nodes", "targets")
 """Top-level keys of a curriculum file."""
 NODE_KEYS = ("name", "task", "uses", "primitives", "algo", "timesteps", "budget_scale", "count_primitive_steps",
-             "max_steps", "call_step_cap", "hyperparameters")
-"""Keys of a node (``defaults`` takes the last eight)."""
+             "max_steps", "call_step_cap", "train_worlds", "hyperparameters")
+"""Keys of a node (``defaults`` takes the last nine)."""
 DEFAULT_MAX_STEPS = WrapperSettings.max_steps
 """An episode's steps (decisions, or moves where calls cost their moves): the paper's 100."""
 DEFAULT_CALL_STEP_CAP = WrapperSettings.call_step_cap
@@ -91,6 +91,8 @@ class Node:
     count_primitive_steps: bool = False
     max_steps: int = DEFAULT_MAX_STEPS
     call_step_cap: int = DEFAULT_CALL_STEP_CAP
+    train_worlds: int | None = None
+    """Train on the first ``N`` worlds of the task's training split only (``None``: all of them)."""
     line: int | None = field(default=None, compare=False)
 
     @property
@@ -101,14 +103,15 @@ class Node:
 
     def settings(self) -> dict[str, Any]:
         """What decides the trained SMCs (two nodes of the same name must agree on it); ``budget_scale``,
-        ``count_primitive_steps``, ``max_steps`` and ``call_step_cap`` only where not their defaults (so that the
-        settings of runs from before them stay the same)."""
+        ``count_primitive_steps``, ``max_steps``, ``call_step_cap`` and ``train_worlds`` only where not their defaults
+        (so that the settings of runs from before them stay the same)."""
         scale = {"budget_scale": self.budget_scale} if self.budget_scale != 1 else {}
         count = {"count_primitive_steps": True} if self.count_primitive_steps else {}
         steps = {"max_steps": self.max_steps} if self.max_steps != DEFAULT_MAX_STEPS else {}
         cap = {"call_step_cap": self.call_step_cap} if self.call_step_cap != DEFAULT_CALL_STEP_CAP else {}
+        worlds = {"train_worlds": self.train_worlds} if self.train_worlds is not None else {}
         return {"task": self.task, "uses": list(self.uses), "primitives": self.include_primitives,
-                "algo": self.algo, "timesteps": self.timesteps, **scale, **count, **steps, **cap,
+                "algo": self.algo, "timesteps": self.timesteps, **scale, **count, **steps, **cap, **worlds,
                 "hyperparameters": self.hyperparameters}
 
 
@@ -201,6 +204,8 @@ class Curriculum:
                 item["max_steps"] = node.max_steps
             if node.call_step_cap != DEFAULT_CALL_STEP_CAP:
                 item["call_step_cap"] = node.call_step_cap
+            if node.train_worlds is not None:
+                item["train_worlds"] = node.train_worlds
             if node.hyperparameters:
                 item["hyperparameters"] = node.hyperparameters
             nodes.append(item)
@@ -360,11 +365,14 @@ def _node(item: Any, line: int, defaults: Mapping[str, Any], source: str) -> Nod
     hyper = settings.get("hyperparameters") or {}
     if not isinstance(hyper, dict):
         raise CurriculumError(f"{where}: {label}: 'hyperparameters' must be a mapping, got {hyper!r}")
+    worlds = settings.get("train_worlds")
+    if worlds is not None and (isinstance(worlds, bool) or not isinstance(worlds, int) or worlds < 1):
+        raise CurriculumError(f"{where}: {label}: 'train_worlds' must be a positive integer, got {worlds!r}")
     try:
         return Node(name=item["name"], task=item["task"], uses=tuple(uses), include_primitives=primitives,
                     algo=settings.get("algo"), timesteps=timesteps, hyperparameters=hyper, budget_scale=float(scale),
                     count_primitive_steps=count, max_steps=steps["max_steps"],
-                    call_step_cap=steps["call_step_cap"], line=line)
+                    call_step_cap=steps["call_step_cap"], train_worlds=worlds, line=line)
     except CurriculumError as err:
         raise CurriculumError(f"{where}: {label}: {err}") from None
 
@@ -441,9 +449,10 @@ def _validate(curriculum: Curriculum) -> None:
         if not isinstance(node.count_primitive_steps, bool):
             raise CurriculumError(f"{at(node)}: node {node.name!r}: count_primitive_steps must be true or false, got "
                                   f"{node.count_primitive_steps!r}")
-        for key in ("max_steps", "call_step_cap"):
+        for key in ("max_steps", "call_step_cap", "train_worlds"):
             value = getattr(node, key)
-            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+            if (value is not None or key != "train_worlds") and (
+                    isinstance(value, bool) or not isinstance(value, int) or value < 1):
                 raise CurriculumError(f"{at(node)}: node {node.name!r}: {key} must be a positive integer, got "
                                       f"{value!r}")
         if node.name in node.uses:
@@ -523,6 +532,8 @@ def describe(curriculum: Curriculum) -> str:
                 extra.append(f"{node.max_steps} steps an episode")
             if node.call_step_cap != DEFAULT_CALL_STEP_CAP:
                 extra.append(f"calls cut at {node.call_step_cap} moves")
+            if node.train_worlds is not None:
+                extra.append(f"{node.train_worlds} training worlds")
             head = f"  {mark} {name}" + (f" ({', '.join(extra)})" if extra else "")
             lines.append(head + (f" uses {', '.join(node.uses)}" if node.uses else ""))
     lines.append("(* = target)")

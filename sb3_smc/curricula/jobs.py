@@ -183,7 +183,9 @@ def node_spec(node: Node, seed: int, children: tuple[str, ...], *, timesteps: in
     hyperparameters = dict(node.hyperparameters)
     if rnn is not None:
         hyperparameters["policy"] = recurrent_policy(rnn, algo)
-    return TrainingSpec(name=job_name(node.name, seed), task=TaskSpec(node.env_id).resolved(), algo=algo,
+    cut = {"train_worlds": node.train_worlds} if node.train_worlds is not None else {}
+    task = TaskSpec(node.env_id, env_kwargs=cut).resolved()
+    return TrainingSpec(name=job_name(node.name, seed), task=task, algo=algo,
                         hyperparameters=hyperparameters, seed=seed, budget=Budget(node_budget(node, timesteps)),
                         wrapper=WrapperSettings(include_primitives=node.include_primitives,
                                                 count_primitive_steps=node.count_primitive_steps,

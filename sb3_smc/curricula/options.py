@@ -35,6 +35,8 @@ MAX_SEEDS = 1000
 """The most seeds of a run (``seeds``: seeds ``0 .. seeds-1`` of every node; the paper trains 5)."""
 MAX_WORKERS = 1024
 """The most jobs a run trains at once (``workers``: local processes, or Ray tasks in flight)."""
+MAX_TRAIN_WORLDS = 100_000
+"""The most training worlds a run's targets may be cut to (the split's own size is checked when a task is made)."""
 LIMITS = {"seeds": MAX_SEEDS, "workers": MAX_WORKERS, "timesteps": MAX_TIMESTEPS, "group_size": MAX_SEEDS}
 """The largest value of each count of :class:`RunOptions` (a group holds seeds of one node: at most ``MAX_SEEDS``),
 and of the ``sb3-smc`` options of those names."""
@@ -64,6 +66,9 @@ class RunOptions:
     :param tensorboard: write each job's curves under ``DIR/tensorboard``.
     :param reuse_from: a library whose SMCs the run copies instead of training them where it holds them with the
         very spec the run would train (:mod:`sb3_smc.curricula.reuse`); a string is taken as its path.
+    :param train_worlds: the run's targets train on the first ``N`` worlds of their training split (their nodes'
+        ``train_worlds``; the lower levels on all of theirs: what a library brings a new concept learned from a few
+        examples, docs/few_shot.md); ``None``: every node as its curriculum says.
     """
 
     seeds: int = DEFAULT_SEEDS
@@ -78,11 +83,12 @@ class RunOptions:
     group_size: int = DEFAULT_GROUP_SIZE
     tensorboard: bool = True
     reuse_from: Path | None = None
+    train_worlds: int | None = None
 
     def __post_init__(self) -> None:
-        for name, limit in LIMITS.items():
+        for name, limit in {**LIMITS, "train_worlds": MAX_TRAIN_WORLDS}.items():
             value = getattr(self, name)
-            if value is None and name == "timesteps":
+            if value is None and name in ("timesteps", "train_worlds"):
                 continue
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
                 raise SMCError(f"{name} must be a positive integer, got {value!r}")

@@ -30,6 +30,7 @@ The names of the modules above that this one offered before it was split are imp
 
 from __future__ import annotations
 
+import dataclasses
 import fcntl
 import json
 import shutil
@@ -272,6 +273,10 @@ def _resolve_run(curriculum: Any, targets: Sequence[str] | None, options: RunOpt
     items = curriculum if isinstance(curriculum, list | tuple) else [curriculum]
     merged = merge([resolve_curriculum(item) for item in items])
     selected = merged.select(targets)
+    if options.train_worlds is not None:  # the targets learn from a few worlds; their lower levels from all
+        merged = dataclasses.replace(merged, nodes=tuple(
+            dataclasses.replace(node, train_worlds=options.train_worlds) if node.name in selected else node
+            for node in merged.nodes))
     order = merged.order(selected)
     return merged, order, run_settings(merged, order, selected, options)
 

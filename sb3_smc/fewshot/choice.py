@@ -16,11 +16,15 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
 from sb3_smc.errors import SMCError
 from sb3_smc.smc.smc import SMC
+
+if TYPE_CHECKING:
+    from pixelworld_env.envs.env import PixelWorldEnv
 
 __all__ = ["DEFAULT_OFFERED", "Choice", "choose_smcs", "held_out"]
 
@@ -53,7 +57,7 @@ def held_out(library: Mapping[str, SMC], datasets: Sequence[str]) -> list[str]:
 
 def choose_smcs(env_id: str, candidates: Sequence[SMC], *, train_worlds: int | None = None,
                 k: int = DEFAULT_OFFERED, repeats: int = 4, seed: int = 0,
-                env_kwargs: Mapping[str, object] | None = None) -> Choice:
+                env_kwargs: Mapping[str, Any] | None = None) -> Choice:
     """The ``k`` candidates whose calls best tell the concept from its examples (see the module's docstring).
 
     :param env_id: the concept's task; only its training worlds are read (``train_worlds``: its first ``N``).
@@ -75,7 +79,10 @@ def choose_smcs(env_id: str, candidates: Sequence[SMC], *, train_worlds: int | N
     kwargs = {**dict(env_kwargs or {}), **({"train_worlds": train_worlds} if train_worlds is not None else {})}
     env = wrap_with_smcs(gym.make(env_id, split="train", disable_env_checker=True, **kwargs), candidates,
                          WrapperSettings())
-    base = env.base
+    if not env.pixelworld:
+        raise SMCError(f"{env_id}: the automatic choice reads a PixelWorld task's example worlds; this is another "
+                       "environment (offer a list of names instead)")
+    base = cast("PixelWorldEnv", env.base)
     kind = base.kind
     labels = np.asarray(base.labels if base.labels is not None else [1] * len(base.scenes))
     first = len(env.action_names) - len(candidates)

@@ -294,7 +294,8 @@ def evaluate(smc: SMC, env_id: str | None = None, *, split: str = "test", repeat
                 ran = f"its {pixelworld.split} split" if pixelworld.split is not None else "worlds of no known split"
                 raise SMCError(f"SMC {smc.name!r}: {env_id} runs {ran} ({len(pixelworld.scenes)} worlds), not the "
                                f"{split} split: evaluate on the PixelWorld id whose {split} split it is "
-                               "(evaluate(smc, env_id='PW-...-v0')), or on worlds you name (evaluate_worlds)")
+                               "(evaluate(smc, env_id='PW-...-v0')), or register your worlds with their splits "
+                               "(pixelworld_env.register_worlds)")
             if starts is not None:
                 raise SMCError(f"starts= is for tasks without datasets; {env_id} runs every scene of its {split} "
                                "split")

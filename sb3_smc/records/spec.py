@@ -114,7 +114,7 @@ class TaskSpec(Record):
         """``N`` where the SMC trains on the first ``N`` worlds of its training split (``env_kwargs``'
         ``train_worlds``: :func:`pixelworld_env.datasets.loading.training_order`); ``None``: the whole split."""
         value = self.env_kwargs.get("train_worlds")
-        return None if value is None else int(value)
+        return None if value is None else int_field(value, "env_kwargs.train_worlds", 1)
 
     @property
     def smc_layout(self) -> Layout:

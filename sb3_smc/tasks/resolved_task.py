@@ -226,6 +226,11 @@ def resolve_task(task: TaskFields, *, smc: str | None = None) -> ResolvedTask:
     resolved = ResolvedTask(task.env_id, task.split, dict(task.env_kwargs), registration, problem, task.kind,
                             tuple(task.datasets), task.layout)
     _check_kwargs(task.env_id, resolved.env_kwargs, resolved.source is TaskSource.PIXELWORLD)
+    if ("train_worlds" in resolved.env_kwargs and registration is not None
+            and resolved.source is not TaskSource.PIXELWORLD and not _takes(registration, "train_worlds",
+                                                                             unreadable=False)):
+        raise SMCError(f"env_kwargs: train_worlds cuts a task's training worlds; {task.env_id} has none (its entry "
+                       "point takes no train_worlds): PixelWorld ids and pixelworld_env.register_worlds' ids have them")
     if smc is not None:
         resolved.check_known(smc)
     return resolved
