@@ -1,0 +1,138 @@
+"""The few-shot table: each target concept learned from ``N`` of its training worlds, with and without the pretrained
+library's SMCs as actions (docs/few_shot.md).
+
+Declared before any run: :data:`FEW_SHOT_TARGETS` (24 of the paper's 51 level-2 targets: both kinds, the four
+categories, the two headline targets), :data:`FEW_SHOT_WORLDS` (1, 2, 4, 8 and every training world) and
+:data:`FEW_SHOT_METHODS`: ``base`` (a flat SMC, no library), ``curr`` (the children of the target's first smc-curr
+entry, their two best pretrained seeds), ``canon`` (its smc-canon entry's), ``auto`` (the automatic choice from the
+``N`` examples, :func:`sb3_smc.fewshot.choose_smcs`, over the whole pretrained library, held out). Each cell is
+:func:`sb3_smc.fewshot.learn_concept` with the paper's protocol (best training update, every test world 10 times, seed
+0), its records written to ``<out>/records/<target>/<method>-n<N>@<seed>.json`` as it finishes (a stopped run resumes
+where it stopped), and ``<out>/results.csv`` holds one row a cell: ``target, kind, category, method, train_worlds,
+seed, test_score, offered, primitive_steps``.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import time
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any
+
+from pixelworld_env.atomic import atomic_write
+from sb3_smc.curricula import shipped_curricula
+from sb3_smc.errors import SMCError
+
+__all__ = ["FEW_SHOT_METHODS", "FEW_SHOT_TARGETS", "FEW_SHOT_WORLDS", "children_of", "results_rows", "run_few_shot"]
+
+FEW_SHOT_TARGETS = (
+    # containment: 5 bring-about, 5 classification (the first: a headline target)
+    "ba_self-in-container_from_between-potential-containers", "ba_self-in-container_from_on-floor",
+    "ba_self-in-container_from_between-container-and-noncontainer", "ba_self-inside-container_from_on-floor",
+    "ba_self-in-potential-container_from_on-floor",
+    "cl_self-in-container_vs_noncontainer", "cl_self-in-container_vs_corner", "cl_container-on-floor_vs_corner",
+    "cl_self-touches-container_vs_noncontainer", "cl_self-inside-container_vs_noncontainer",
+    # objcon: 7 classification (the first: a headline target)
+    "cl_self-left-of-two-objects-vs-one", "cl_self-right-of-two-objects-vs-one", "cl_self-inside-container_vs_rest",
+    "cl_self-left-of-container_vs_object", "cl_self-right-touches-container_vs_object",
+    "cl_self-left-touches-container_vs_non-container", "cl_self-inside-enclosure_vs_rest",
+    # objects: 3 bring-about, 3 classification
+    "ba_self-left-of-two-objects_from_not-left-on-floor", "ba_self-ontop-object_from_anywhere-on-floor",
+    "ba_self-right-of-two-objects_from_not-right-on-floor",
+    "cl_object-on-floor_vs_no-object", "cl_object-above-floor_vs_no-object", "cl_object-on-floor_vs_not-on-floor",
+    # search: its one target (no smc-curr entry in the pretrained library: canon and auto only)
+    "ba_self-in-target-container_from_nontarget-container",
+)
+FEW_SHOT_WORLDS: tuple[int | None, ...] = (1, 2, 4, 8, None)
+"""Training worlds of each cell (``None``: every world of the training split, 25 for bring-about, 50 for
+classification)."""
+FEW_SHOT_METHODS = ("base", "curr", "canon", "auto")
+FIELDS = ("target", "kind", "category", "method", "train_worlds", "seed", "test_score", "offered", "primitive_steps")
+
+
+def children_of(target: str, method: str) -> list[str] | None:
+    """The pretrained SMCs a ``curr`` or ``canon`` cell of ``target`` offers: the two best seeds of every node its
+    first smc-curr / smc-canon entry uses; ``None`` where the pretrained library lacks them (search has no curr)."""
+    from sb3_smc.library.pretrained import pretrained_index, pretrained_names
+
+    held = pretrained_index()["nodes"]
+    for curriculum in shipped_curricula().values():
+        if curriculum.method != f"smc-{method}":
+            continue
+        for name in curriculum.targets:
+            node = curriculum.node(name)
+            if node.task == target and all(u in held for u in node.uses):
+                return [smc for used in node.uses for smc in pretrained_names(used)]
+    return None
+
+
+def _cell(out: Path, target: str, method: str, worlds: int | None, seed: int) -> Path:
+    return out / "records" / target / f"{method}-n{worlds or 'all'}@{seed}.json"
+
+
+def run_few_shot(out: str | Path, *, targets: Sequence[str] = FEW_SHOT_TARGETS,
+                 worlds: Sequence[int | None] = FEW_SHOT_WORLDS, methods: Sequence[str] = FEW_SHOT_METHODS,
+                 seeds: int = 5, lean_update: bool = True, printer: Callable[[str], None] = print,
+                 **settings: Any) -> Path:
+    """Run every cell not recorded yet (targets x worlds x methods x seeds, in that order of nesting: the smallest
+    ``N`` of a target first), then write ``results.csv``. ``settings``: :func:`~sb3_smc.fewshot.learn_concept`'s
+    (``total_timesteps`` ...)."""
+    from sb3_smc.fewshot import learn_concept
+    from sb3_smc.library import SMCLibrary
+    from sb3_smc.library.pretrained import pretrained_root
+
+    unknown = sorted(set(methods) - set(FEW_SHOT_METHODS))
+    if unknown:
+        raise SMCError(f"few-shot methods are {FEW_SHOT_METHODS}, got {unknown}")
+    out = Path(out)
+    library = SMCLibrary.load(pretrained_root())
+    cells = [(t, m, n, s) for t in targets for n in worlds for m in methods for s in range(seeds)]
+    todo = [c for c in cells if not _cell(out, *c).is_file()]
+    printer(f"{out}: {len(cells)} cells, {len(cells) - len(todo)} recorded, {len(todo)} to run")
+    started = time.monotonic()
+    for done, (target, method, n, seed) in enumerate(todo, 1):
+        offer: str | list[str] = {"base": "none", "auto": "auto"}.get(method) or children_of(target, method) or []
+        if method in ("curr", "canon") and not offer:
+            continue  # the pretrained library has no such entry for this target
+        learned = learn_concept(f"PW-{target}-v0", library=library, offer=offer, train_worlds=n, seed=seed,
+                                name=f"{target}-{method}-n{n or 'all'}@{seed}", lean_update=lean_update, **settings)
+        smc = learned.smc
+        assert smc.record is not None and smc.spec is not None
+        record = {"target": target, "method": method, "train_worlds": n, "seed": seed,
+                  "offered": list(learned.offered), "spec": smc.spec.to_dict(), "record": smc.record.to_dict(),
+                  "evaluations": [e.to_dict() for e in smc.evaluations],
+                  "choice": learned.choice.scores if learned.choice is not None else None}
+        atomic_write(_cell(out, target, method, n, seed), json.dumps(record, indent=1) + "\n")
+        rate = (time.monotonic() - started) / done
+        printer(f"[{done}/{len(todo)}] {target} {method} N={n or 'all'} seed {seed}: test {smc.test_score:.3f} "
+                f"(about {rate * (len(todo) - done) / 60:.0f} min left)")
+    path = out / "results.csv"
+    atomic_write(path, _csv(results_rows(out)))
+    return path
+
+
+def results_rows(out: str | Path) -> list[dict[str, Any]]:
+    """One row a recorded cell of the table in ``out`` (its records), sorted."""
+    from pixelworld_env.datasets import catalog
+
+    rows = []
+    for file in sorted(Path(out).glob("records/*/*.json")):
+        data = json.loads(file.read_text(encoding="utf-8"))
+        (test,) = [e for e in data["evaluations"] if e["split"] == "test"]
+        info = catalog.dataset(data["target"])
+        rows.append({"target": data["target"], "kind": info.kind, "category": info.category,
+                     "method": data["method"], "train_worlds": data["train_worlds"] or "all", "seed": data["seed"],
+                     "test_score": test["score"], "offered": len(data["offered"]),
+                     "primitive_steps": data["record"]["primitive_steps"]})
+    return sorted(rows, key=lambda r: (r["target"], r["method"], str(r["train_worlds"]), r["seed"]))
+
+
+def _csv(rows: list[dict[str, Any]]) -> str:
+    buffer = io.StringIO()
+    writer = csv.DictWriter(buffer, fieldnames=FIELDS, lineterminator="\n")
+    writer.writeheader()
+    writer.writerows(rows)
+    return buffer.getvalue()
