@@ -108,7 +108,7 @@ def _resume_command(directory: Path, settings: dict[str, Any]) -> str:
     options = [("--out", str(directory)), ("--targets", ",".join(settings["targets"])), ("--seeds", settings["seeds"]),
                ("--timesteps", settings.get("timesteps")), ("--reuse", settings.get("reuse")),
                ("--algo", settings.get("algo")), ("--rnn", settings.get("rnn"))]
-    worlds = {(settings["nodes"].get(t) or {}).get("train_worlds") for t in settings["targets"]}
+    worlds = {(settings.get("nodes", {}).get(t) or {}).get("train_worlds") for t in settings["targets"]}
     if len(worlds) == 1:
         options.append(("--train-worlds", worlds.pop()))
     return (f"sb3-smc train {curriculum}" + "".join(f" {flag} {shlex.quote(str(value))}" for flag, value in options

@@ -42,7 +42,7 @@ PUBLIC = (
     *_modules("pixelworld_env.envs", "env", "vector", "registration"),
     # sb3_smc: docs/architecture.md's table, docs/api/*.md
     *_modules("sb3_smc", "errors", "cli", "demo"),
-    *_modules("sb3_smc.core", "layout", "dag", "hyperparameters"),
+    *_modules("sb3_smc.core", "layout", "dag", "hyperparameters", "names"),
     *_modules("sb3_smc.tasks", "task", "resolved_task"),
     *_modules("sb3_smc.smc", "smc", "policies", "numpy_actors"),
     *_modules("sb3_smc.envs", "smc_step", "wrapper", "gymnasium_vec_env", "vec_env", "hierarchical_vec_env", "factory",
@@ -54,13 +54,15 @@ PUBLIC = (
     *_modules("sb3_smc.common.recurrent", "policies", "buffers", "type_aliases", "gru", "layers", "lean_recurrence",
               "lean_update"),
     *_modules("sb3_smc.recurrent_trpo"),
-    *_modules("sb3_smc.library", "library", "manifest", "upgrade", "pretrained", "storage", "errors"),
+    *_modules("sb3_smc.library", "library", "manifest", "upgrade", "pretrained", "storage", "errors", "model_file",
+              "files"),
+    *_modules("sb3_smc.fewshot", "learn", "choice"),
     # sb3_smc.zoo.record_video is a launcher: it runs rl_zoo3's record_video on import
     *_modules("sb3_smc.zoo", "configs", "trpo", "ppo", "ppo_lstm", "recurrent_trpo", "entries", "importing"),
     *_modules("sb3_smc.curricula", "format", "shipped", "designed", "trainer", "options", "scheduler", "jobs",
               "run_directory", "executors", "pretrained", "reuse"),
     *_modules("sb3_smc.experiments", "design", "runner", "wall_clock", "cnn", "report", "figures", "tables",
-              "statistics", "bootstrap", "claims", "sweep", "experience", "paper"),
+              "statistics", "bootstrap", "claims", "sweep", "experience", "paper", "few_shot"),
 )
 
 
