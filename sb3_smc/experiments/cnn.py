@@ -67,27 +67,31 @@ def _network(height: int, width: int) -> nn.Sequential:
         nn.Flatten(), nn.Linear(16 * height * width, 8), nn.ReLU(), nn.Linear(8, 2))
 
 
-def train_cnn(target: str, seed: int, *, dataset_seed: int = 0) -> CNNResult:
+def train_cnn(target: str, seed: int, *, dataset_seed: int = 0, train_worlds: int | None = None) -> CNNResult:
     """Train the CNN on ``target``'s training split with ``seed`` and test it on the test split (one torch thread;
-    the caller's count is restored)."""
+    the caller's count is restored). ``train_worlds=N``: on the first ``N`` worlds of the training split only (the
+    order of ``gym.make(id, train_worlds=N)``); the test split is whole."""
     from pixelworld_env.datasets import catalog
 
     if catalog.dataset(target).kind != "classification":
         raise SMCError(f"the CNN baseline classifies: {target!r} is a bring-about dataset")
     with compute_threads(1):
-        return _train(target, seed, dataset_seed)
+        return _train(target, seed, dataset_seed, train_worlds)
 
 
-def _train(target: str, seed: int, dataset_seed: int) -> CNNResult:
+def _train(target: str, seed: int, dataset_seed: int, train_worlds: int | None) -> CNNResult:
     import torch
 
-    from pixelworld_env.datasets.loading import load_dataset
+    from pixelworld_env.datasets.loading import check_train_worlds, few_worlds, load_dataset
 
+    train_worlds = check_train_worlds(train_worlds, "train")
     torch.manual_seed(seed)
     train = load_dataset(target, split="train", seed=dataset_seed)
     test = load_dataset(target, split="test", seed=dataset_seed)
-    x_train = torch.from_numpy(encode([s.grid() for s in train.scenes]))
-    y_train = torch.tensor(train.labels, dtype=torch.long)
+    scenes, labels = (list(train.scenes), list(train.labels)) if train_worlds is None else \
+        few_worlds([train], train_worlds)
+    x_train = torch.from_numpy(encode([s.grid() for s in scenes]))
+    y_train = torch.tensor(labels, dtype=torch.long)
     x_test = torch.from_numpy(encode([s.grid() for s in test.scenes]))
     y_test = torch.tensor(test.labels, dtype=torch.long)
     net = _network(*x_train.shape[2:])

@@ -3,7 +3,8 @@ library's SMCs as actions (docs/few_shot.md).
 
 Declared before any run: :data:`FEW_SHOT_TARGETS` (24 of the paper's 51 level-2 targets: both kinds, the four
 categories, the two headline targets), :data:`FEW_SHOT_WORLDS` (1, 2, 4, 8 and every training world) and
-:data:`FEW_SHOT_METHODS`: ``base`` (a flat SMC, no library), ``curr`` (the children of the target's first smc-curr
+:data:`FEW_SHOT_METHODS`: ``cnn`` (the paper's passive CNN on the same worlds, classification targets only),
+``base`` (a flat SMC, no library), ``curr`` (the children of the target's first smc-curr
 entry, their two best pretrained seeds), ``canon`` (its smc-canon entry's), ``auto`` (the automatic choice from the
 ``N`` examples, :func:`sb3_smc.fewshot.choose_smcs`, over the whole pretrained library, held out). Each cell is
 :func:`sb3_smc.fewshot.learn_concept` with the paper's protocol (best training update, every test world 10 times, seed
@@ -49,7 +50,7 @@ FEW_SHOT_TARGETS = (
 FEW_SHOT_WORLDS: tuple[int | None, ...] = (1, 2, 4, 8, None)
 """Training worlds of each cell (``None``: every world of the training split, 25 for bring-about, 50 for
 classification)."""
-FEW_SHOT_METHODS = ("base", "curr", "canon", "auto")
+FEW_SHOT_METHODS = ("cnn", "base", "curr", "canon", "auto")
 FIELDS = ("target", "kind", "category", "method", "train_worlds", "seed", "test_score", "offered", "primitive_steps")
 
 
@@ -80,6 +81,8 @@ def run_few_shot(out: str | Path, *, targets: Sequence[str] = FEW_SHOT_TARGETS,
     """Run every cell not recorded yet (targets x worlds x methods x seeds, in that order of nesting: the smallest
     ``N`` of a target first), then write ``results.csv``. ``settings``: :func:`~sb3_smc.fewshot.learn_concept`'s
     (``total_timesteps`` ...)."""
+    from pixelworld_env.datasets import catalog
+    from sb3_smc.experiments.cnn import train_cnn
     from sb3_smc.fewshot import learn_concept
     from sb3_smc.library import SMCLibrary
     from sb3_smc.library.pretrained import pretrained_root
@@ -89,11 +92,18 @@ def run_few_shot(out: str | Path, *, targets: Sequence[str] = FEW_SHOT_TARGETS,
         raise SMCError(f"few-shot methods are {FEW_SHOT_METHODS}, got {unknown}")
     out = Path(out)
     library = SMCLibrary.load(pretrained_root())
-    cells = [(t, m, n, s) for t in targets for n in worlds for m in methods for s in range(seeds)]
+    cells = [(t, m, n, s) for t in targets for n in worlds for m in methods for s in range(seeds)
+             if m != "cnn" or catalog.dataset(t).kind == "classification"]
     todo = [c for c in cells if not _cell(out, *c).is_file()]
     printer(f"{out}: {len(cells)} cells, {len(cells) - len(todo)} recorded, {len(todo)} to run")
     started = time.monotonic()
     for done, (target, method, n, seed) in enumerate(todo, 1):
+        if method == "cnn":
+            cnn = train_cnn(target, seed, train_worlds=n)
+            atomic_write(_cell(out, target, method, n, seed), json.dumps(
+                {"target": target, "method": method, "train_worlds": n, "seed": seed, "cnn": cnn.to_dict()},
+                indent=1) + "\n")
+            continue
         offer: str | list[str] = {"base": "none", "auto": "auto"}.get(method) or children_of(target, method) or []
         if method in ("curr", "canon") and not offer:
             continue  # the pretrained library has no such entry for this target
@@ -121,11 +131,14 @@ def results_rows(out: str | Path) -> list[dict[str, Any]]:
     rows = []
     for file in sorted(Path(out).glob("records/*/*.json")):
         data = json.loads(file.read_text(encoding="utf-8"))
-        (test,) = [e for e in data["evaluations"] if e["split"] == "test"]
         info = catalog.dataset(data["target"])
-        rows.append({"target": data["target"], "kind": info.kind, "category": info.category,
-                     "method": data["method"], "train_worlds": data["train_worlds"] or "all", "seed": data["seed"],
-                     "test_score": test["score"], "offered": len(data["offered"]),
+        row = {"target": data["target"], "kind": info.kind, "category": info.category, "method": data["method"],
+               "train_worlds": data["train_worlds"] or "all", "seed": data["seed"]}
+        if data["method"] == "cnn":
+            rows.append({**row, "test_score": data["cnn"]["test_score"], "offered": 0, "primitive_steps": 0})
+            continue
+        (test,) = [e for e in data["evaluations"] if e["split"] == "test"]
+        rows.append({**row, "test_score": test["score"], "offered": len(data["offered"]),
                      "primitive_steps": data["record"]["primitive_steps"]})
     return sorted(rows, key=lambda r: (r["target"], r["method"], str(r["train_worlds"]), r["seed"]))
 

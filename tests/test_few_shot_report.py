@@ -1,0 +1,58 @@
+"""The few-shot report's statistics on synthetic rows with known answers, and the report written from a results.csv."""
+
+from __future__ import annotations
+
+import csv
+
+import numpy as np
+import pytest
+
+from sb3_smc.experiments.few_shot_report import compare, hierarchical_interval, read_results, write_report
+
+FIELDS = ("target", "kind", "category", "method", "train_worlds", "seed", "test_score", "offered", "primitive_steps")
+
+
+def test_the_hierarchical_interval_covers_concepts_and_seeds():
+    """Equal concepts with no seed noise: the interval is the point; concepts that differ widen it; with many
+    concepts drawn around a known mean the 95 % interval holds it."""
+    assert hierarchical_interval({"a": [2.0, 2.0], "b": [2.0, 2.0]}) == (2.0, 2.0, 2.0)
+    point, low, high = hierarchical_interval({"a": [0.0, 0.0], "b": [10.0, 10.0]})
+    assert point == 5.0 and low == 0.0 and high == 10.0
+    rng = np.random.default_rng(1)
+    concepts = {f"c{i}": list(3.0 + rng.normal(0, 1) + rng.normal(0, 0.5, 5)) for i in range(40)}
+    point, low, high = hierarchical_interval(concepts)
+    assert low < 3.0 < high and high - low < 1.5
+    with pytest.raises(ValueError):
+        hierarchical_interval({})
+
+
+def _rows(scores: dict[tuple[str, str, object], list[float]], kind: str = "bring-about") -> list[dict]:
+    return [{"target": t, "kind": kind, "category": "x", "method": m, "train_worlds": w, "seed": s,
+             "test_score": v, "offered": 0, "primitive_steps": 100}
+            for (t, m, w), values in scores.items() for s, v in enumerate(values)]
+
+
+def test_compare_pairs_concepts_and_seeds():
+    """The difference is the library method's minus the flat SMC's, in points, over the concepts both have; the
+    t-test is across concepts."""
+    rows = _rows({("a", "auto", 4): [0.9, 0.8], ("a", "base", 4): [0.1, 0.2],
+                  ("b", "auto", 4): [0.7, 0.7], ("b", "base", 4): [0.3, 0.2],
+                  ("c", "auto", 4): [0.5, 0.5]})  # c has no flat cell: left out
+    c = compare(rows, "auto", "bring-about", 4)
+    assert c is not None and c.concepts == 2 and c.difference == pytest.approx((70 + 45) / 2)
+    assert c.test is not None and c.test[0] == 1
+    assert compare(rows, "auto", "classification", 4) is None
+
+
+def test_the_report_is_written_from_results_csv(tmp_path):
+    rows = _rows({("a", "auto", 4): [0.9], ("a", "base", 4): [0.1], ("a", "base", "all"): [0.5],
+                  ("b", "auto", 4): [0.7], ("b", "base", 4): [0.3], ("b", "base", "all"): [0.6]})
+    with open(tmp_path / "results.csv", "w", newline="") as handle:
+        writer = csv.DictWriter(handle, fieldnames=FIELDS)
+        writer.writeheader()
+        writer.writerows(rows)
+    assert read_results(tmp_path / "results.csv")[0]["train_worlds"] in (4, "all")
+    report = write_report(tmp_path, library_steps={"x@0": 1000, "y@0": 2000}).read_text()
+    assert "| auto | 80.0 (2) | - |" in report and "| base | 20.0 (2) | 55.0 (2) |" in report
+    assert "bring-about, auto: N = 4 (the flat SMC on every world: 55.0 % on 2 concepts)" in report
+    assert "3,000 primitive steps in all" in report and (tmp_path / "few_shot.png").stat().st_size > 1000
