@@ -311,3 +311,23 @@ def test_the_converted_pretrained_library_reproduces_its_records(name):
     (recorded,) = [e for e in smc.evaluations if e.split == "test" and e.repeats == 10 and e.evaluation_seed == 0]
     again = evaluate(smc, repeats=10, seed=0, record_cells=False)
     assert (again.score, tuple(again.scores)) == (recorded.score, tuple(recorded.environment_scores))
+
+
+def test_threads_of_one_process_take_turns_on_a_library(pretrained, tmp_path):
+    """``flock`` is per process: threads adding SMCs to one library at once each get theirs in."""
+    import threading
+
+    root = tmp_path / "lib"
+    smc = pretrained[NAMES[0]]
+
+    def add(prefix: str) -> None:
+        for i in range(4):
+            renamed = _renamed(smc, f"{prefix}{i}")
+            storage.add_to_library(root, renamed.name, storage.entry_for(renamed), storage.model_bytes(renamed.model))
+
+    threads = [threading.Thread(target=add, args=(p,)) for p in ("a", "b", "c")]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    assert len(storage.checked_entries(root)[0]) == 12

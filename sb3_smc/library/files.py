@@ -19,17 +19,20 @@ LOCK = ".lock"
 
 
 _HELD: dict[str, tuple[int, bool, int]] = {}
-"""The library locks this process holds, by lock file: its descriptor, whether exclusive, how many holders."""
-_HELD_GUARD = threading.RLock()
+"""The library locks this process holds, by lock file: its descriptor, whether exclusive, how many holders (the
+holding thread's nested calls)."""
+_THREADS: dict[str, threading.RLock] = {}
+"""By lock file, the lock that lets one thread of this process at a time use the library (``flock`` is per process)."""
+_GUARD = threading.Lock()
 
 
 @contextlib.contextmanager
 def locked(root: Path, *, exclusive: bool) -> Iterator[None]:
     """Hold the lock of the library in ``root``: exclusive for a writer (the folder is created), shared for a reader.
 
-    Writers wait for each other and for readers, readers only for writers (``fcntl.flock`` on ``root/.lock``); a
-    reader of a library whose folder it cannot write (a read-only copy) reads without a lock. Re-entrant within a
-    process (an exclusive hold serves a nested shared one)."""
+    Writers wait for each other and for readers, readers only for writers (``fcntl.flock`` on ``root/.lock``); within
+    a process, one thread at a time. A reader of a library whose folder it cannot write (a read-only copy) reads
+    without a lock. Re-entrant for the holding thread (an exclusive hold serves a nested shared one)."""
     try:
         import fcntl
     except ImportError:  # not POSIX: no locking
@@ -39,15 +42,16 @@ def locked(root: Path, *, exclusive: bool) -> Iterator[None]:
         root.mkdir(parents=True, exist_ok=True)
     lock = root / LOCK
     key = str(lock.absolute())
-    with _HELD_GUARD:
+    with _GUARD:
+        thread_lock = _THREADS.setdefault(key, threading.RLock())
+    with thread_lock:
         held = _HELD.get(key)
-        if held is not None and (held[1] or not exclusive):
-            _HELD[key] = (held[0], held[1], held[2] + 1)
-            fd = None
-        else:
-            if held is not None:
+        if held is not None:  # a nested call of this thread
+            if exclusive and not held[1]:
                 raise LibraryError(f"{root}: this process reads the library and asks to write it meanwhile (a "
                                    "shared lock cannot become exclusive)")
+            _HELD[key] = (held[0], held[1], held[2] + 1)
+        else:
             try:
                 fd = os.open(lock, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_CLOEXEC, 0o666)
             except FileNotFoundError:
@@ -61,10 +65,9 @@ def locked(root: Path, *, exclusive: bool) -> Iterator[None]:
             if fd >= 0:
                 fcntl.flock(fd, fcntl.LOCK_EX if exclusive else fcntl.LOCK_SH)
             _HELD[key] = (fd, exclusive, 1)
-    try:
-        yield
-    finally:
-        with _HELD_GUARD:
+        try:
+            yield
+        finally:
             fd_, mode, count = _HELD[key]
             if count > 1:
                 _HELD[key] = (fd_, mode, count - 1)
