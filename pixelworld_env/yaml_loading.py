@@ -112,6 +112,9 @@ def construct_node(node: yaml.Node, where: str) -> Any:
         return yaml.constructor.SafeConstructor().construct_document(node)
     except yaml.YAMLError as exc:
         raise _invalid(exc, where) from None
+    except (ValueError, KeyError, AttributeError, TypeError, OverflowError) as exc:  # a scalar its tag cannot read
+        line = node.start_mark.line + 1 if node.start_mark is not None else 0
+        raise YAMLInputError(where, line, f"invalid YAML value ({type(exc).__name__}: {exc})") from None
 
 
 def safe_yaml_load(text: str, where: str) -> Any:

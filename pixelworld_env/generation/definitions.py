@@ -337,8 +337,13 @@ def _read_file(path: Path, result: DefinitionSet, stack: tuple[Path, ...], pendi
     include_nodes = sections.get("__include__")
     for index, include in enumerate(includes):
         item = include_nodes.value[index] if isinstance(include_nodes, yaml.SequenceNode) else include_nodes
-        target = (path.parent / include).resolve()
-        if not target.is_file():
+        try:
+            target = (path.parent / include).resolve()
+            found = target.is_file()
+        except (OSError, ValueError) as err:  # a name the file system cannot take (too long, a NUL)
+            raise DefinitionError(f"{_where(path, item)}: included file {include!r} cannot be a path ({err})") \
+                from None
+        if not found:
             raise DefinitionError(f"{_where(path, item)}: included file {include!r} not found ({target})")
         if target == path or target in stack:
             chain = " -> ".join(p.name for p in (*stack, path, target))
@@ -354,6 +359,8 @@ def _read_file(path: Path, result: DefinitionSet, stack: tuple[Path, ...], pendi
             key = construct_node(key_node, str(path))
             entry = construct_node(value_node, str(path))
             where = _where(path, key_node)
+            if not isinstance(key, str):
+                raise DefinitionError(f"{where}: a {section[:-1]}'s name must be a string, got {key!r}")
             if not isinstance(entry, dict) or not isinstance(entry.get("logic"), str):
                 raise DefinitionError(f"{where}: {section[:-1]} {key!r} needs a 'logic' string")
             definition = Definition(key=key, logic=entry["logic"], desc=str(entry.get("desc", "")),

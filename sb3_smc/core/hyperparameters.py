@@ -196,8 +196,18 @@ _RESERVED = {"n_steps": "the budget's n_steps", "seed": "the spec's seed", "env"
              "device": "training always runs on the CPU", "tensorboard_log": "train_smc's tensorboard_log"}
 
 
-def encode_value(value: Any, where: str) -> Any:
+MAX_VALUE_DEPTH = 32
+"""The deepest nesting of lists and mappings a stored hyperparameter may have (``policy_kwargs.net_arch.pi``: 3)."""
+
+
+def _check_depth(depth: int, where: str) -> None:
+    if depth > MAX_VALUE_DEPTH:
+        raise SMCError(f"hyperparameter {where[:80]}...: nested more than {MAX_VALUE_DEPTH} deep")
+
+
+def encode_value(value: Any, where: str, _depth: int = 0) -> Any:
     """``value`` as JSON data (classes as ``{"__class__": path}``); ``ValueError`` naming ``where`` otherwise."""
+    _check_depth(_depth, where)
     if value is None or isinstance(value, bool | str):
         return value
     if isinstance(value, int | float):
@@ -215,9 +225,9 @@ def encode_value(value: Any, where: str) -> Any:
     if isinstance(value, Mapping):
         if CLASS_KEY in value and len(value) == 1:
             return {CLASS_KEY: str(value[CLASS_KEY])}
-        return {str(k): encode_value(v, f"{where}.{k}") for k, v in value.items()}
+        return {str(k): encode_value(v, f"{where}.{k}", _depth + 1) for k, v in value.items()}
     if isinstance(value, list | tuple):
-        return [encode_value(v, f"{where}[{i}]") for i, v in enumerate(value)]
+        return [encode_value(v, f"{where}[{i}]", _depth + 1) for i, v in enumerate(value)]
     raise SMCError(f"hyperparameter {where}: a {type(value).__name__} ({value!r}) cannot be stored in a training "
                    "spec; use JSON values, classes, or 'lin_<initial value>' for a linear schedule")
 
@@ -253,17 +263,18 @@ def _linear(initial: float) -> Callable[[float], float]:
     return schedule
 
 
-def decode_value(value: Any, where: str, *, trust: bool = True) -> Any:
+def decode_value(value: Any, where: str, *, trust: bool = True, _depth: int = 0) -> Any:
     """The inverse of :func:`encode_value` (classes imported, ``"lin_<x>"`` becomes a linear schedule).
     ``trust=False`` (a file someone else wrote): classes only from :data:`SAFE_CLASS_MODULES`."""
+    _check_depth(_depth, where)
     if isinstance(value, Mapping):
         if set(value) == {CLASS_KEY}:
             if not isinstance(value[CLASS_KEY], str):
                 raise SMCError(f"hyperparameter {where}: a class path must be a string, got {value[CLASS_KEY]!r}")
             return _import_class(value[CLASS_KEY], where, trust)
-        return {k: decode_value(v, f"{where}.{k}", trust=trust) for k, v in value.items()}
+        return {k: decode_value(v, f"{where}.{k}", trust=trust, _depth=_depth + 1) for k, v in value.items()}
     if isinstance(value, list):
-        return [decode_value(v, f"{where}[{i}]", trust=trust) for i, v in enumerate(value)]
+        return [decode_value(v, f"{where}[{i}]", trust=trust, _depth=_depth + 1) for i, v in enumerate(value)]
     if isinstance(value, str) and where.split(".")[-1] in SCHEDULE_KEYS and value.startswith("lin_"):
         try:
             return _linear(float(value[4:]))

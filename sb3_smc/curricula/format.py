@@ -38,7 +38,7 @@ from typing import Any
 
 import yaml
 
-from pixelworld_env.yaml_loading import YAMLInputError, safe_yaml_compose
+from pixelworld_env.yaml_loading import YAMLInputError, construct_node, safe_yaml_compose
 from sb3_smc.core.dag import CycleError, children_first, reachable
 from sb3_smc.core.hyperparameters import ALGORITHMS, DEFAULT_TIMESTEPS, MAX_TIMESTEPS
 from sb3_smc.core.names import name_problem
@@ -229,22 +229,24 @@ def _suggest(name: str, names: Iterable[str]) -> str:
 
 
 def _plain(node: yaml.Node, where: str) -> Any:
-    """A composed YAML node as Python data; duplicate mapping keys are an error (PyYAML would keep the last)."""
+    """A composed YAML node as Python data; duplicate mapping keys are an error (PyYAML would keep the last), and so
+    is a key that is not a scalar or a scalar its tag cannot read (``CurriculumError`` with the line)."""
     if isinstance(node, yaml.MappingNode):
         out: dict[Any, Any] = {}
         for key_node, value_node in node.value:
             key = _plain(key_node, where)
+            if isinstance(key, list | dict):
+                raise CurriculumError(f"{where}:{key_node.start_mark.line + 1}: a key must be a name, got {key!r}")
             if key in out:
                 raise CurriculumError(f"{where}:{key_node.start_mark.line + 1}: key {key!r} given twice")
             out[key] = _plain(value_node, where)
         return out
     if isinstance(node, yaml.SequenceNode):
         return [_plain(item, where) for item in node.value]
-    loader = yaml.SafeLoader("")
     try:
-        return loader.construct_object(node, deep=True)
-    finally:
-        loader.dispose()
+        return construct_node(node, where)
+    except YAMLInputError as err:
+        raise CurriculumError(f"{where}:{node.start_mark.line + 1}: {err.problem}") from None
 
 
 def load_curriculum(path: str | os.PathLike) -> Curriculum:
@@ -351,10 +353,11 @@ def _node(item: Any, line: int, defaults: Mapping[str, Any], source: str) -> Nod
         raise CurriculumError(f"{where}: {label}: 'timesteps' must be a positive integer, got {timesteps!r} (at "
                               f"most {MAX_TIMESTEPS:,})")
     scale = settings.get("budget_scale", 1.0)
-    if isinstance(scale, bool) or not isinstance(scale, int | float) or not math.isfinite(scale) or scale <= 0:
+    if isinstance(scale, bool) or not isinstance(scale, int | float) or not 0 < scale < math.inf:
         raise CurriculumError(f"{where}: {label}: 'budget_scale' must be a positive number, got {scale!r}")
     if (timesteps or DEFAULT_TIMESTEPS) * scale > MAX_TIMESTEPS:
-        raise CurriculumError(f"{where}: {label}: 'budget_scale' {scale!r} makes a budget of more than "
+        shown = scale if not isinstance(scale, int) or scale < 10**20 else f"(an integer of {len(str(scale))} digits)"
+        raise CurriculumError(f"{where}: {label}: 'budget_scale' {shown} makes a budget of more than "
                               f"{MAX_TIMESTEPS:,} timesteps")
     steps = {key: settings.get(key, default) for key, default in (("max_steps", DEFAULT_MAX_STEPS),
                                                                   ("call_step_cap", DEFAULT_CALL_STEP_CAP))}
@@ -398,7 +401,7 @@ def _registered(env_id: str) -> bool:
         if module:
             importlib.import_module(module)
         gym.spec(name)
-    except (ImportError, gym.error.Error):
+    except (ImportError, TypeError, ValueError, gym.error.Error):  # a relative module, a version of 4301 digits
         return False
     return True
 

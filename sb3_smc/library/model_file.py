@@ -148,14 +148,15 @@ def _header(data: bytes, where: str) -> tuple[dict[str, Any], dict[str, Any]]:
                             f"{len(data) - 8} after the length)")
     try:
         header = json.loads(data[8:8 + size].decode("utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError) as err:
-        raise _error(where, f"not a model file (its header is not JSON: {err})") from None
+    except (ValueError, RecursionError) as err:  # not JSON, not UTF-8, an endless integer, nested beyond reading
+        raise _error(where, f"not a model file (its header is not JSON this package reads: {str(err)[:200]})") \
+            from None
     if not isinstance(header, dict) or not isinstance(header.get("__metadata__"), dict):
         raise _error(where, "not an sb3-smc model file (no metadata in its header)")
     raw = header.pop("__metadata__")
     try:
         metadata = json.loads(raw[METADATA_KEY])
-    except (KeyError, TypeError, json.JSONDecodeError) as err:
+    except (KeyError, TypeError, ValueError, RecursionError) as err:
         raise _error(where, f"not an sb3-smc model file (its metadata has no JSON {METADATA_KEY!r}: {err!r})") from None
     if not isinstance(metadata, dict) or metadata.get("format") != MODEL_FORMAT:
         found = metadata.get("format") if isinstance(metadata, dict) else metadata
@@ -201,12 +202,18 @@ def _space(metadata: Mapping[str, Any], tensors: Mapping[str, Any], where: str) 
     if not (isinstance(shape, list) and all(isinstance(s, int) and s > 0 for s in shape)) or dtype not in (
             "float32", "float64"):
         raise _error(where, f"observation space {obs} is not a float32/float64 Box of a positive shape")
+    import torch
+
     low, high = tensors.get("space/low"), tensors.get("space/high")
     if low is None or high is None or list(low.shape) != shape or list(high.shape) != shape:
         raise _error(where, f"the observation space's bounds are missing or not of its shape {shape}")
+    if low.dtype not in (torch.float32, torch.float64) or high.dtype not in (torch.float32, torch.float64) or bool(
+            (low > high).any()):
+        raise _error(where, "the observation space's bounds must be float32/float64 tensors with low <= high")
     n, start = act.get("n"), act.get("start", 0)
-    if not (isinstance(n, int) and not isinstance(n, bool) and 0 < n <= 10_000 and isinstance(start, int)):
-        raise _error(where, f"action space {act} is not a Discrete space of 1-10000 actions")
+    if not (isinstance(n, int) and not isinstance(n, bool) and 0 < n <= 10_000 and isinstance(start, int)
+            and not isinstance(start, bool) and abs(start) < 2**31):
+        raise _error(where, f"action space {act!r:.200} is not a Discrete space of 1-10000 actions")
     box = spaces.Box(low.numpy().astype(dtype), high.numpy().astype(dtype), dtype=np.dtype(dtype))
     return box, spaces.Discrete(n, start=start)
 
@@ -219,6 +226,43 @@ def _check_sizes(attributes: Mapping[str, Any], observation_size: int, where: st
     if n_steps * n_envs * observation_size > MAX_ROLLOUT_VALUES:
         raise _error(where, f"its rollout buffer would hold {n_steps} x {n_envs} x {observation_size} values, more "
                             f"than {MAX_ROLLOUT_VALUES}")
+
+
+MAX_POLICY_WIDTH = 65_536
+"""The largest integer a model file's ``policy_kwargs`` may hold (a layer's width, a layer count); the paper's: 32."""
+MAX_POLICY_NUMBERS = 256
+"""The most integers a model file's ``policy_kwargs`` may hold (its layers' widths and counts)."""
+MAX_LAYERS = 64
+"""The most layers a model file's policy may have: ``n_lstm_layers``, and the length of any list of layer widths."""
+
+
+def _check_policy_size(policy_kwargs: Mapping[str, Any], where: str) -> None:
+    """Refuse a policy whose settings ask for more layers or wider ones than any SMC has, before anything is built
+    (even on the meta device, thousands of layers take minutes)."""
+    numbers: list[int] = []
+
+    def walk(value: Any) -> None:
+        if isinstance(value, bool):
+            return
+        if isinstance(value, int):
+            numbers.append(value)
+        elif isinstance(value, dict):
+            for item in value.values():
+                walk(item)
+        elif isinstance(value, list):
+            if len(value) > MAX_LAYERS:
+                raise _error(where, f"its policy's settings list {len(value)} layers (at most {MAX_LAYERS})")
+            for item in value:
+                walk(item)
+
+    walk(dict(policy_kwargs))
+    layers = policy_kwargs.get("n_lstm_layers", 1)
+    if isinstance(layers, int) and not isinstance(layers, bool) and layers > MAX_LAYERS:
+        raise _error(where, f"its policy's settings ask for {layers:,} recurrent layers (at most {MAX_LAYERS})")
+    if len(numbers) > MAX_POLICY_NUMBERS or any(abs(n) > MAX_POLICY_WIDTH for n in numbers):
+        raise _error(where, f"its policy's settings ask for {len(numbers)} layer sizes or counts up to "
+                            f"{max(map(abs, numbers), default=0):,} (at most {MAX_POLICY_NUMBERS} numbers of at most "
+                            f"{MAX_POLICY_WIDTH:,})")
 
 
 def decode_model(data: bytes, algo: str, where: str, *, trust: bool = False) -> OnPolicyAlgorithm:
@@ -254,12 +298,17 @@ def decode_model(data: bytes, algo: str, where: str, *, trust: bool = False) -> 
     if unknown:
         raise _error(where, f"attributes {unknown} are not {algo}'s (it takes {sorted(allowed)})")
     for key, kind in _COUNTERS.items():
-        if key in attributes and not (isinstance(attributes[key], int | float) and not isinstance(attributes[key], bool)
-                                      and isinstance(kind(attributes[key]), kind)):
-            raise _error(where, f"attribute {key} must be a number, got {attributes[key]!r}")
+        if key in attributes:
+            value = attributes[key]
+            if isinstance(value, bool) or not isinstance(value, kind | int) or not abs(value) < 2**63:  # type: ignore
+                raise _error(where, f"attribute {key} must be a {kind.__name__} below 2**63, got {value!r:.100}")
+            attributes[key] = kind(value)
     _check_sizes(attributes, int(obs_space.shape[0]), where)
+    policy_kwargs = attributes.get("policy_kwargs") or {}
+    if not isinstance(policy_kwargs, dict):
+        raise _error(where, f"attribute policy_kwargs must be a mapping, got {policy_kwargs!r:.100}")
+    _check_policy_size(policy_kwargs, where)
     weights = {key[len("policy/"):]: value for key, value in tensors.items() if key.startswith("policy/")}
-    policy_kwargs = dict(attributes.get("policy_kwargs") or {})
     try:
         # a subclass whose layers are made on the meta device too (SB3 moves some to ``policy.device``)
         on_meta = type("MetaProbe", (policy_class,), {"device": property(lambda self: torch.device("meta"))})

@@ -436,6 +436,9 @@ def _parse_manifest(data: bytes, manifest_path: Path) -> dict[str, Any]:
         return json.loads(data.decode("utf-8"))
     except (UnicodeDecodeError, json.JSONDecodeError) as err:
         raise ManifestError(f"{manifest_path} is not valid JSON (corrupt or truncated?): {err}") from None
+    except (ValueError, RecursionError) as err:  # an integer of thousands of digits; JSON nested beyond reading
+        raise ManifestError(f"{manifest_path} is not a manifest this package reads ({type(err).__name__}: "
+                            f"{str(err)[:200]})") from None
 
 
 def read_manifest(root: Path) -> tuple[dict[str, Any], Path]:
@@ -458,7 +461,12 @@ def checked_entries(root: Path) -> tuple[dict[str, LibraryEntry], dict[str, Any]
     key = (str(manifest_path.resolve()), hashlib.sha256(data).hexdigest())
     if key not in _CHECKED:
         manifest = _parse_manifest(data, manifest_path)
-        _keep(_CHECKED, key, (check_manifest(manifest, manifest_path), dict(manifest.get("created_with") or {})))
+        entries = check_manifest(manifest, manifest_path)
+        created_with = manifest.get("created_with") or {}
+        if not isinstance(created_with, dict) or not all(isinstance(v, str) for v in created_with.values()):
+            raise ManifestError(f"{manifest_path}: 'created_with' must map package names to versions, got "
+                                f"{created_with!r:.200}")
+        _keep(_CHECKED, key, (entries, dict(created_with)))
     entries, created_with = _CHECKED[key]
     return dict(entries), dict(created_with), manifest_path
 
