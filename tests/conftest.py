@@ -42,3 +42,19 @@ def pytest_configure(config: pytest.Config) -> None:
 def pytest_unconfigure(config: pytest.Config) -> None:
     if _TEMPORARY_CACHE is not None:
         shutil.rmtree(_TEMPORARY_CACHE, ignore_errors=True)
+
+
+# Hypothesis profiles (tests/test_fuzz.py and any other property test), chosen by HYPOTHESIS_PROFILE: "default" (the
+# normal run: 100 examples a test, derandomized so that every run tests the same ones, nothing stored) or "nightly"
+# (2000 examples, new ones each run, no deadline; failures kept in .hypothesis/, which Hypothesis git-ignores, and
+# replayed first next time). A failure prints its @reproduce_failure blob either way.
+try:
+    from hypothesis import HealthCheck, settings
+except ImportError:  # hypothesis is a test extra: without it the property tests fail to import, nothing else
+    pass
+else:
+    settings.register_profile("default", max_examples=100, deadline=5000, derandomize=True, database=None,
+                              print_blob=True, suppress_health_check=[HealthCheck.too_slow])
+    settings.register_profile("nightly", max_examples=2000, deadline=None, derandomize=False, print_blob=True,
+                              suppress_health_check=[HealthCheck.too_slow])
+    settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "default"))

@@ -49,6 +49,8 @@ class Concept:
         if not isinstance(macros, Mapping):
             raise PixelWorldTypeError(f"macros must map names to expression strings, got {type(macros).__name__}")
         for name, body in macros.items():
+            if not isinstance(name, str):
+                raise PixelWorldTypeError(f"a macro's name must be a string, got {name!r} ({type(name).__name__})")
             if not isinstance(body, str | Expression):
                 raise PixelWorldTypeError(f"macro {name!r} must be an expression string, got {body!r} "
                                           f"({type(body).__name__})")
