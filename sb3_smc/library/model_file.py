@@ -50,9 +50,9 @@ MAX_MODEL_BYTES = 256 * 2**20
 MAX_ROLLOUT_VALUES = 10**8
 """The most values a rebuilt model's rollout buffer may hold (``n_steps x n_envs x`` observation size)."""
 
-_COUNTERS = {"num_timesteps": int, "_total_timesteps": int, "_num_timesteps_at_start": int, "_n_updates": int,
-             "_episode_num": int, "_current_progress_remaining": float, "n_envs": int, "start_time": int}
-"""Training counters stored beside the constructor's arguments, with their types."""
+_COUNTERS = ("num_timesteps", "_total_timesteps", "_num_timesteps_at_start", "_n_updates", "_episode_num",
+             "_current_progress_remaining", "n_envs", "start_time")
+"""Training counters stored beside the constructor's arguments (numbers; ``start_time`` is 0.0 before training)."""
 _NOT_STORED = {"policy", "env", "device", "_init_setup_model", "verbose", "tensorboard_log"}
 """Constructor arguments a file never sets: the environment and device are the caller's, a library's model is quiet,
 and a TensorBoard folder written by another machine is not to be written to."""
@@ -297,12 +297,10 @@ def decode_model(data: bytes, algo: str, where: str, *, trust: bool = False) -> 
     unknown = sorted(set(attributes) - allowed - set(_COUNTERS))
     if unknown:
         raise _error(where, f"attributes {unknown} are not {algo}'s (it takes {sorted(allowed)})")
-    for key, kind in _COUNTERS.items():
-        if key in attributes:
-            value = attributes[key]
-            if isinstance(value, bool) or not isinstance(value, kind | int) or not abs(value) < 2**63:  # type: ignore
-                raise _error(where, f"attribute {key} must be a {kind.__name__} below 2**63, got {value!r:.100}")
-            attributes[key] = kind(value)
+    for key in _COUNTERS:
+        value = attributes.get(key, 0)
+        if isinstance(value, bool) or not isinstance(value, int | float) or not abs(value) < 2**63:
+            raise _error(where, f"attribute {key} must be a number below 2**63, got {value!r:.100}")
     _check_sizes(attributes, int(obs_space.shape[0]), where)
     policy_kwargs = attributes.get("policy_kwargs") or {}
     if not isinstance(policy_kwargs, dict):
