@@ -331,3 +331,29 @@ def test_threads_of_one_process_take_turns_on_a_library(pretrained, tmp_path):
     for thread in threads:
         thread.join()
     assert len(storage.checked_entries(root)[0]) == 12
+
+
+def test_a_script_of_a_safe_package_is_not_imported_without_trust():
+    """A model file naming a class of ``sb3_smc.zoo.__main__`` (a script: it writes files when imported) is refused
+    before the import: without trust only modules already imported, or those that define models' classes, are
+    looked in."""
+    import sys
+
+    from sb3_smc.core.hyperparameters import decode_value
+    from sb3_smc.errors import SMCError
+
+    for path in ("sb3_smc.zoo.__main__.X", "sb3_smc.curricula.__main__.X", "sb3_smc.zoo.record_video.X"):
+        with pytest.raises(SMCError, match=r"is not imported yet"):
+            decode_value({"__class__": path}, "policy_class", trust=False)
+        assert path.rpartition(".")[0] not in sys.modules
+
+
+def test_an_entry_that_calls_a_missing_child_is_refused_before_it_is_added(pretrained, tmp_path):
+    smc = pretrained[NAMES[0]]
+    entry = storage.entry_for(smc)
+    entry["spec"] = {**entry["spec"], "children": ["nobody@0"]}
+    with pytest.raises(LibraryError, match=r"calls \['nobody@0'\], which the library does not hold"):
+        storage.add_to_library(tmp_path / "lib", "x@0", entry, storage.model_bytes(smc.model))
+    assert not (tmp_path / "lib" / storage.MANIFEST).exists()
+    with pytest.raises(LibraryError, match=r"not the string"):
+        storage.remove_from_library(tmp_path / "lib", "x@0")

@@ -23,6 +23,7 @@ from __future__ import annotations
 import copy
 import importlib
 import math
+import sys
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
@@ -236,7 +237,14 @@ SAFE_CLASS_MODULES = ("torch.nn", "torch.optim", "stable_baselines3", "sb3_contr
 """The modules (and their sub-modules) a stored class is imported from without ``trust``: PyTorch's layers and
 optimisers, Stable-Baselines3's and sb3-contrib's classes and this package's. Importing a module runs its code, so a
 file that names another module's class (``{"__class__": "mypackage.MyExtractor"}``) loads only when its reader
-trusts it."""
+trusts it. Even there, without trust, only a module already imported is looked in, or one of
+:data:`SAFE_IMPORTS` (a package's scripts and launchers, ``__main__`` or ``zoo.record_video``, run code when
+imported)."""
+SAFE_IMPORTS = ("torch.nn", "torch.optim", "stable_baselines3.common.policies",
+                "stable_baselines3.common.torch_layers", "sb3_contrib.common.recurrent.policies",
+                "sb3_smc.common.recurrent", "sb3_smc.common.recurrent.policies", "sb3_smc.learning.features")
+"""The modules a stored class may be imported from without trust when they are not imported yet: those that define
+the policies, layers, optimisers and feature extractors an SMC's model uses, and run nothing on import."""
 
 
 def _import_class(path: str, where: str, trust: bool = False) -> type:
@@ -245,6 +253,10 @@ def _import_class(path: str, where: str, trust: bool = False) -> type:
         raise SMCError(f"hyperparameter {where}: class {path!r} is not from a module loaded without trust "
                        f"({', '.join(SAFE_CLASS_MODULES)}); importing it would run its module's code: pass "
                        "trust=True (--trust) only for a file from a source you trust")
+    if not trust and module not in sys.modules and module not in SAFE_IMPORTS:
+        raise SMCError(f"hyperparameter {where}: class {path!r}: its module {module!r} is not imported yet and is "
+                       "none of the modules imported without trust (sb3_smc.core.hyperparameters.SAFE_IMPORTS); "
+                       "pass trust=True (--trust) only for a file from a source you trust")
     try:
         obj: Any = importlib.import_module(module)
         for part in name.split("."):

@@ -61,7 +61,8 @@ class ReuseLibrary:
             raise LibraryError(f"{self.root}: SMC {name!r} is stored as a pickled archive (a library of version 4 or "
                                "earlier), which a run does not copy: convert the library first, if you trust it, with "
                                f"sb3-smc library {self.root} --upgrade --trust")
-        model = storage.check_model_file(self.root, name, entry)
+        with storage.locked(self.root, exclusive=False):
+            model = storage.check_model_file(self.root, name, entry)
         storage.add_to_library(library, name, storage.entry_json(name, entry.algo, entry.frame_stack, entry.spec,
                                                                  entry.record), model)
         return entry.record

@@ -89,8 +89,9 @@ def compare(rows: Sequence[Mapping[str, object]], method: str, kind: str, worlds
     if not differences:
         return None
     mean, low, high = hierarchical_interval(differences)
-    test = paired_ttest([float(np.mean(list(ours[c].values()))) for c in differences],
-                        [float(np.mean(list(flat[c].values()))) for c in differences])
+    seeds = {c: sorted(set(ours[c]) & set(flat[c])) for c in differences}  # the seeds both have, as the interval
+    test = paired_ttest([float(np.mean([ours[c][s] for s in seeds[c]])) for c in differences],
+                        [float(np.mean([flat[c][s] for s in seeds[c]])) for c in differences])
     return Comparison(method, kind, worlds, len(differences), mean, low, high, test)
 
 

@@ -39,6 +39,7 @@ import json
 import os
 import pickle
 import sys
+import tempfile
 import time
 import types
 from collections.abc import Callable, Mapping, Sequence
@@ -72,8 +73,8 @@ def checkpoint_key() -> bytes:
     path = Path(named) if named else config / "sb3-smc" / "checkpoint.key"
     if not path.is_file():
         path.parent.mkdir(parents=True, exist_ok=True, mode=0o700)
-        tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
+        fd, name = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")  # 0600, its own
+        tmp = Path(name)
         try:
             os.write(fd, os.urandom(32))
             os.fsync(fd)

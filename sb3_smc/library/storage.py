@@ -60,6 +60,7 @@ from sb3_smc.library.manifest import (
     entry_json,
     model_path,
     new_manifest,
+    parse_entry,
     seal,
     topological_order,
 )
@@ -357,8 +358,14 @@ def add_to_library(root: Path, name: str, entry: dict[str, Any], model: bytes, *
             raise LibraryError(f"{manifest_path}: has no SMC named {name!r} to replace")
         algo = ((entry.get("spec") or entry.get("smc") or {}).get("algo"))
         check_model_bytes(model, str(algo), f"SMC {name!r}: the model to add")
-        file, digest = _write_model(root, model)
-        smcs[name] = json.loads(json.dumps({"model": file, **entry, "sha256": digest}))
+        new = json.loads(json.dumps({"model": model_path(hashlib.sha256(model).hexdigest()), **entry,
+                                     "sha256": hashlib.sha256(model).hexdigest()}))
+        checked = parse_entry(name, new, manifest_path)  # the entry is checked before anything is written
+        missing = [child for child in checked.children if child not in smcs]
+        if missing:
+            raise LibraryError(f"{manifest_path}: SMC {name!r} calls {missing}, which the library does not hold")
+        _write_model(root, model)
+        smcs[name] = new
         known.pop(name, None)
         texts.pop(name, None)
         data = write_manifest(manifest_path, manifest, known, texts)
@@ -371,10 +378,13 @@ def add_to_library(root: Path, name: str, entry: dict[str, Any], model: bytes, *
 def remove_from_library(root: Path, names: Collection[str]) -> None:
     """Remove the SMCs ``names`` from the library in ``root``, under its lock: the manifest first (atomically), then
     the model files no entry names any more. No SMC left may call one of them."""
+    if isinstance(names, str):
+        raise LibraryError(f"remove_from_library takes a collection of SMC names, not the string {names!r}")
+    names = set(names)
     with locked(root, exclusive=True):
         manifest, entries, manifest_path = _current_manifest(root)
         smcs = manifest["smcs"]
-        unknown = sorted(set(names) - set(smcs))
+        unknown = sorted(names - set(smcs))
         if unknown:
             raise LibraryError(f"{manifest_path}: has no SMC named {unknown[0]!r}{suggest(unknown[0], list(smcs))}")
         callers = sorted(n for n, e in entries.items() if n not in names and set(e.children) & set(names))
@@ -395,7 +405,8 @@ def link_copy(root: Path, target: Path) -> None:
         except OSError:
             shutil.copy2(source, destination)
 
-    shutil.copytree(root, target, copy_function=link, ignore=shutil.ignore_patterns(LOCK))
+    with locked(root, exclusive=False):  # a writer's save is copied whole or not at all
+        shutil.copytree(root, target, copy_function=link, ignore=shutil.ignore_patterns(LOCK, "*.tmp"))
 
 
 # ---------------------------------------------------------------------------------------------------------------
