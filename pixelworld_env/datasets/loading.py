@@ -120,9 +120,11 @@ def training_order(datasets: Sequence[Dataset]) -> list[tuple[int, int]]:
             for item in (q[turn] for q in queues if turn < len(q))]
 
 
-def few_worlds(datasets: Sequence[Dataset], train_worlds: int) -> tuple[list[Scene], list[int]]:
-    """The first ``train_worlds`` worlds of :func:`training_order` and their labels; :class:`PixelWorldError` where
-    the training split has fewer."""
+def few_worlds(datasets: Sequence[Dataset], train_worlds: int | None) -> tuple[list[Scene], list[int]]:
+    """The first ``train_worlds`` worlds of :func:`training_order` and their labels (``None``: every world of the
+    datasets, in their own order); :class:`PixelWorldError` where the training split has fewer."""
+    if train_worlds is None:
+        return [s for d in datasets for s in d.scenes], [label for d in datasets for label in d.labels]
     order = training_order(datasets)
     if train_worlds > len(order):
         names = ", ".join(d.name for d in datasets)

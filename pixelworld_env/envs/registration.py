@@ -58,10 +58,7 @@ def make_env(datasets: Sequence[str], *, split: Split = "train", seed: int = 0, 
     concepts = {d.concept for d in loaded}
     if len(kinds) != 1 or len(concepts) != 1:
         raise PixelWorldError(f"datasets {list(datasets)} do not share one kind and concept")
-    if train_worlds is None:
-        scenes, labels = [s for d in loaded for s in d.scenes], [label for d in loaded for label in d.labels]
-    else:
-        scenes, labels = few_worlds(loaded, train_worlds)
+    scenes, labels = few_worlds(loaded, train_worlds)
     env = PixelWorldEnv(
         scenes, kind=loaded[0].kind, concept=loaded[0].concept,
         labels=labels if loaded[0].kind == "classification" else None,
@@ -176,11 +173,7 @@ def make_worlds_env(worlds: Worlds, *, split: Split = "train", max_steps: int = 
     catalog id's."""
     check_settings(max_steps=max_steps, observation=observation, render_mode=render_mode)
     train_worlds = check_train_worlds(train_worlds, split)
-    parts = worlds.split(split)
-    if train_worlds is None:
-        scenes, labels = [s for d in parts for s in d.scenes], [v for d in parts for v in d.labels]
-    else:
-        scenes, labels = few_worlds(parts, train_worlds)
+    scenes, labels = few_worlds(worlds.split(split), train_worlds)
     env = PixelWorldEnv(scenes, kind=worlds.kind, concept=worlds.concept,
                         labels=labels if worlds.kind == "classification" else None, macros=catalog.macros(),
                         max_steps=max_steps, observation=observation, render_mode=render_mode)

@@ -231,9 +231,9 @@ class SMCLibrary(Mapping[str, SMC]):
         entries = {name: self.entry(name) for name in self.names}
         models = {name: storage.model_bytes(self._smcs[name].model, where=f"SMC {name!r}") for name in self.names}
         known = self._synced.get(target.resolve(), {})
-        self._synced[target.resolve()] = storage.save_library(target, entries, models, known, overwrite=overwrite)
+        self._synced[target.resolve()], self.created_with = storage.save_library(target, entries, models, known,
+                                                                                 overwrite=overwrite)
         self.path = target
-        self.created_with = storage.checked_entries(target)[1]
         return target
 
     # ------------------------------------------------------------------------------------------ loading

@@ -169,20 +169,17 @@ def _collect_garbage(root: Path, manifest: Mapping[str, Any]) -> None:
             file.unlink(missing_ok=True)
 
 
-def _write_model(root: Path, data: bytes) -> tuple[str, str]:
-    """Write a model file content-addressed (kept where a file of the same name holds the same bytes); its manifest
-    path and SHA-256."""
-    digest = hashlib.sha256(data).hexdigest()
-    relative = model_path(digest)
-    file = root / relative
+def _write_model(root: Path, data: bytes, digest: str) -> None:
+    """Write a model file content-addressed (``digest``: the SHA-256 of ``data``), kept where a file of that name
+    holds those bytes."""
+    file = root / model_path(digest)
     if file.is_symlink() or not file.is_file() or sha256(file) != digest:
         file.unlink(missing_ok=True)
         atomic_write(file, data)
-    return relative, digest
 
 
 def save_library(target: Path, entries: Mapping[str, dict[str, Any]], models: Mapping[str, bytes],
-                 known: Mapping[str, str], *, overwrite: bool = False) -> dict[str, str]:
+                 known: Mapping[str, str], *, overwrite: bool = False) -> tuple[dict[str, str], dict[str, str]]:
     """Write SMCs to the library in ``target`` under its lock: their model files (content-addressed), then the
     manifest (atomically), then delete the files no entry names.
 
@@ -191,7 +188,8 @@ def save_library(target: Path, entries: Mapping[str, dict[str, Any]], models: Ma
     An SMC on disk that the caller never knew (another process added it, or the folder held a library the caller did
     not load) is kept, unless ``overwrite``; one the caller knew is the caller's to keep, replace or drop, unless it
     changed on disk since: then, and where a kept SMC would lose a child or two SMCs share a name with different
-    content, :class:`LibraryConflictError`, and nothing is written. Returns the checksums of the entries written."""
+    content, :class:`LibraryConflictError`, and nothing is written. Returns the checksums of the entries written and
+    the manifest's ``created_with``."""
     with locked(target, exclusive=True):
         manifest_path = target / MANIFEST
         old = read_manifest(target)[0] if manifest_path.is_file() else None
@@ -202,10 +200,9 @@ def save_library(target: Path, entries: Mapping[str, dict[str, Any]], models: Ma
             disk, disk_entries = new_manifest({}), dict[str, LibraryEntry]()  # the caller read every SMC of it
         else:
             disk, disk_entries, manifest_path = _current_manifest(target)
-        ours: dict[str, dict[str, Any]] = {}
-        for name, entry in entries.items():
-            digest = hashlib.sha256(models[name]).hexdigest()
-            ours[name] = json.loads(json.dumps({"model": model_path(digest), **entry, "sha256": digest}))
+        digests = {name: hashlib.sha256(models[name]).hexdigest() for name in entries}
+        ours = {name: json.loads(json.dumps({"model": model_path(digests[name]), **entry, "sha256": digests[name]}))
+                for name, entry in entries.items()}
         checksums = {name: entry_checksum(name, entry) for name, entry in ours.items()}
         merged = dict(ours)
         if not overwrite:
@@ -229,13 +226,11 @@ def save_library(target: Path, entries: Mapping[str, dict[str, Any]], models: Ma
                     f"{manifest_path}: SMC {lost[0][0]!r} (kept from the library on disk) calls {lost[0][1]!r}, which "
                     "this save removes; nothing was saved: load the library again")
         for name in ours:
-            relative, _ = _write_model(target, models[name])
-            if relative != ours[name]["model"]:  # pragma: no cover - the digest is the name
-                raise LibraryError(f"SMC {name!r}: its model file was not written as {relative}")
+            _write_model(target, models[name], digests[name])
         manifest = new_manifest(merged)
         write_manifest(manifest_path, manifest)
         _collect_garbage(target, manifest)
-    return checksums
+    return checksums, manifest["created_with"]
 
 
 def _children(entry: Mapping[str, Any]) -> list[str]:
@@ -358,13 +353,13 @@ def add_to_library(root: Path, name: str, entry: dict[str, Any], model: bytes, *
             raise LibraryError(f"{manifest_path}: has no SMC named {name!r} to replace")
         algo = ((entry.get("spec") or entry.get("smc") or {}).get("algo"))
         check_model_bytes(model, str(algo), f"SMC {name!r}: the model to add")
-        new = json.loads(json.dumps({"model": model_path(hashlib.sha256(model).hexdigest()), **entry,
-                                     "sha256": hashlib.sha256(model).hexdigest()}))
+        digest = hashlib.sha256(model).hexdigest()
+        new = json.loads(json.dumps({"model": model_path(digest), **entry, "sha256": digest}))
         checked = parse_entry(name, new, manifest_path)  # the entry is checked before anything is written
         missing = [child for child in checked.children if child not in smcs]
         if missing:
             raise LibraryError(f"{manifest_path}: SMC {name!r} calls {missing}, which the library does not hold")
-        _write_model(root, model)
+        _write_model(root, model, digest)
         smcs[name] = new
         known.pop(name, None)
         texts.pop(name, None)
