@@ -24,6 +24,7 @@ _EXPORTS = {
     "TrainingSpec": "sb3_smc.records",
     "WrapperSettings": "sb3_smc.records",
     "DEFAULT_HYPERPARAMETERS": "sb3_smc.core.hyperparameters",
+    "register_algorithm": "sb3_smc.core.hyperparameters",
     "initial_action_probabilities": "sb3_smc.learning.bias",
     "apply_signal_bias": "sb3_smc.learning.bias",
     "HierarchicalSMCWrapper": "sb3_smc.envs.wrapper",
@@ -79,6 +80,7 @@ __all__ = [
     "make_smc_env",
     "observation_size",
     "policy_from_model",
+    "register_algorithm",
     "sample_action",
     "smc_action_names",
     "train_smc",
@@ -101,7 +103,7 @@ def __dir__() -> list[str]:
 
 
 if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs
-    from sb3_smc.core.hyperparameters import DEFAULT_HYPERPARAMETERS
+    from sb3_smc.core.hyperparameters import DEFAULT_HYPERPARAMETERS, register_algorithm
     from sb3_smc.core.layout import observation_size, smc_action_names
     from sb3_smc.envs.factory import make_smc_env
     from sb3_smc.envs.wrapper import HierarchicalSMCWrapper

@@ -1,9 +1,9 @@
-"""Deprecated: the path of :mod:`sb3_smc.learning.training` before 2026-11-27, kept for one release."""
+"""The class path ``sb3_smc.training.SequenceLstmPolicy``, which SB3 archives saved by sb3-smc 0.1 pickled (a
+library of version 1): unpickling one imports it from here. Nothing else lives here; training is
+:mod:`sb3_smc.learning.training`. A library converted to the current version (``sb3-smc library DIR --upgrade
+--trust``) names the class at :mod:`sb3_smc.common.recurrent.policies` and needs this module no more.
+"""
 
-from sb3_smc._moved import warn_moved as _warn_moved
+from sb3_smc.common.recurrent.policies import SequenceLstmPolicy
 
-# models saved by sb3-smc 0.1 pickled their LSTM policy class as sb3_smc.training.SequenceLstmPolicy
-from sb3_smc.common.recurrent import SequenceLstmPolicy  # noqa: F401
-from sb3_smc.learning.training import *  # noqa: F403
-
-_warn_moved(__name__)
+__all__ = ["SequenceLstmPolicy"]

@@ -112,7 +112,7 @@ def test_reset_options_max_steps_and_labels_are_checked():
     with pytest.raises(ValueError, match="max_steps must be >= 1, got 0"):
         make(max_steps=0)
     scenes = [Scene.from_ascii(CONTAINER, {"a": "container"})]
-    with pytest.raises(ValueError, match="labels are for classification tasks"):
+    with pytest.raises(ValueError, match="labels are for classification and bring-about-or-cannot tasks; a bring"):
         PixelWorldEnv(scenes, kind="bring-about", concept=IN_CONTAINER, labels=[1])
 
 

@@ -33,8 +33,9 @@ def _build_tool():
 
 
 def _released() -> list[str]:
-    """The datasets of the AAAI-18 release (the catalog also holds the designed pushable curriculum)."""
-    return [n for n in catalog.dataset_names() if catalog.dataset(n).category != "pushable"]
+    """The datasets of the AAAI-18 release (the catalog also holds the designed pushable curriculum and the
+    bring-about-or-cannot datasets)."""
+    return [n for n in catalog.dataset_names() if catalog.dataset(n).category not in ("pushable", "cannot")]
 
 
 def test_datasets_equal_the_reference_catalog(ref) -> None:
@@ -61,8 +62,11 @@ def test_counts() -> None:
     pushable = [catalog.dataset(n) for n in catalog.dataset_names() if catalog.dataset(n).category == "pushable"]
     assert Counter(i.prefix for i in pushable) == {"cl": 6, "ba": 5}
     assert all(i.settings == {"allow_pushable": True} and i.source_file == "pushable.datasets" for i in pushable)
-    # 75 concepts and 167 generators of the release, 4 and 16 of the pushable curriculum
-    assert (len(catalog.concepts()), len(catalog.generators())) == (75 + 4, 167 + 16)
+    cannot = [catalog.dataset(n) for n in catalog.dataset_names() if catalog.dataset(n).category == "cannot"]
+    assert Counter(i.prefix for i in cannot) == {"bc": 8}
+    assert all(i.kind == "bring-about-or-cannot" and (i.train_size, i.test_size) == (50, 50) for i in cannot)
+    # 75 concepts and 167 generators of the release, 4 and 16 of the pushable curriculum, 1 generator for cannot
+    assert (len(catalog.concepts()), len(catalog.generators())) == (75 + 4, 167 + 16 + 1)
 
 
 def test_catalog_and_docs_are_what_the_build_writes() -> None:

@@ -24,7 +24,7 @@ def run(*argv: str, keys: str = "") -> str:
 def test_list_shows_every_id() -> None:
     lines = run("list").splitlines()
     assert lines[0].split() == ["id", "kind", "category", "train/test", "datasets"]
-    assert len(lines) == 1 + 136 + 11 + 45 + 5  # header, datasets (released + pushable), concept pools
+    assert len(lines) == 1 + 136 + 11 + 8 + 45 + 5 + 2  # header, datasets (released, pushable, cannot), pools
     row = next(line for line in lines if line.startswith("PW-cl_self-in-container_vs_noncontainer-v0 "))
     assert row.split()[1:] == ["classification", "containment", "50/50", "1"]
 

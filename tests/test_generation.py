@@ -16,12 +16,14 @@ import pytest
 from pixelworld_env import Concept, Scene
 from pixelworld_env.concepts.predicates import PREDICATES, EvalContext
 from pixelworld_env.core.shapes import shape_library
+from pixelworld_env.core.world import MOVES, World
 from pixelworld_env.datasets import catalog
 from pixelworld_env.datasets.cache import load_or_generate
 from pixelworld_env.datasets.loading import dataset_spec
 from pixelworld_env.generation.dataset import GeneratedDataset, generate, split
 from pixelworld_env.generation.dataset_spec import DatasetSpec
 from pixelworld_env.generation.definitions import DefinitionSet, load_definitions
+from pixelworld_env.generation.oracle import plan_moves
 from pixelworld_env.generation.placement import library_object
 from pixelworld_env.generation.sampling import GenerationError
 from tests.helpers import read_samples, require_reference, sample_files
@@ -36,6 +38,7 @@ REPRESENTATIVE = (
     "ba_self-in-container_from_between-container-and-noncontainer",  # h_between
     "cl_self-touches-object_vs_not-touches-on-floor",  # negated touches decides the label
 )
+CONTAINER_EXISTS = Concept("?x container(x)")
 FLOOR_GENERATOR = "?f floor(f) & blue(f) & on_top(self,f)"
 
 
@@ -74,7 +77,7 @@ def check_dataset(ds: GeneratedDataset) -> None:
              for name, logic in spec.generators}
     assert len(ds.scenes) == len(ds.labels) == len(ds.generator_of) == spec.size
     counts = collections.Counter(ds.labels)
-    if spec.kind == "classification":
+    if spec.kind in ("classification", "bring-about-or-cannot"):
         assert counts == {0: spec.num_samples, 1: spec.num_samples}
     else:
         assert counts == {1: spec.num_samples}
@@ -84,6 +87,12 @@ def check_dataset(ds: GeneratedDataset) -> None:
         assert generators[gen].holds(scene), where
         truth = concept.holds(scene)
         assert truth == bool(label) if spec.kind == "classification" else not truth, where
+        if spec.kind == "bring-about-or-cannot":  # certified: a plan that reaches the goal, or no container at all
+            plan, world = plan_moves(World(scene), concept), World(scene)
+            assert label == (plan is not None) == CONTAINER_EXISTS.holds(scene), where
+            for move in plan or ():
+                assert world.move(MOVES[move]), where
+            assert not label or concept.holds_objects(world.objects, scene.floor_row), where
         assert (scene.height, scene.width) == (spec.height, spec.width)
         assert scene.objects[-1].is_frame and len(scene.objects) == len(terms[gen]) + 1, where
         assert scene.objects[terms[gen].index("self")].is_self, where
@@ -340,10 +349,10 @@ def whole_catalog() -> dict[str, GeneratedDataset]:
 
 
 def test_whole_catalog_is_valid_with_the_original_label_counts() -> None:
-    """All 147 catalog datasets: every scene valid, and each released dataset's labels counted as in the original
+    """All 155 catalog datasets: every scene valid, and each released dataset's labels counted as in the original
     (the headers of the original samples, in the reference or the fixture)."""
     datasets = whole_catalog()
-    assert len(datasets) == 136 + 11  # the release and the pushable curriculum
+    assert len(datasets) == 136 + 11 + 8  # the release, the pushable curriculum, bring-about-or-cannot
     for ds in datasets.values():
         check_dataset(ds)
     compared = set()

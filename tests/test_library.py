@@ -13,7 +13,6 @@ import subprocess
 import sys
 import textwrap
 import unicodedata
-import warnings
 from pathlib import Path
 
 import gymnasium as gym
@@ -224,7 +223,7 @@ def test_manifest_records_each_smc_once(saved, smcs):
     checksums of the manifest's own content: one per entry, of its name and fields, and one of the whole. The model
     file is named by the SHA-256 of its bytes, which are the model's (storage.model_bytes: weights and settings)."""
     manifest = json.loads((saved / "manifest.json").read_text())
-    assert manifest["format"] == FORMAT and manifest["version"] == FORMAT_VERSION == 5
+    assert manifest["format"] == FORMAT and manifest["version"] == FORMAT_VERSION == 6
     assert {"sb3_smc", "stable_baselines3", "sb3_contrib", "torch"} <= set(manifest["created_with"])
     raw = manifest["smcs"]["climber"]
     assert set(raw) == {"model", "sha256", "spec", "record", "evaluations", ENTRY_CHECKSUM}
@@ -463,7 +462,7 @@ def test_a_model_file_that_is_a_link_is_refused(copy, tmp_path):
 
 
 @pytest.mark.parametrize(("version", "message"), [
-    (6, "version 6 is newer than this sb3_smc reads .*upgrade sb3_smc"),
+    (7, "version 7 is newer than this sb3_smc reads .*upgrade sb3_smc"),
     (0, "incompatible manifest version 0"),
     ("1", "version must be an integer"),
 ])
@@ -587,7 +586,7 @@ def test_the_library_command_shows_each_smc_without_loading_a_model(saved, copy)
     code, out, err = sb3_smc_cli("library", str(saved))
     assert code == 0, err
     lines = out.splitlines()
-    assert lines[0] == f"{saved}: 4 SMC(s), manifest version 5 (sb3_smc {package_versions()['sb3_smc']})"
+    assert lines[0] == f"{saved}: 4 SMC(s), manifest version 6 (sb3_smc {package_versions()['sb3_smc']})"
     climber = next(line.split() for line in lines if line.startswith("climber "))
     assert climber == ["climber", "bring-about", "RecurrentPPO", "corner,container", BA_ID, "3", "3", "0.250", "50.0"]
     code, out, _ = sb3_smc_cli("library", str(saved), "--json")
@@ -1086,15 +1085,13 @@ def test_a_version_2_entry_without_a_spec_loads(smcs, tmp_path):
 
 
 def test_version_0_1_models_name_a_policy_class_that_still_imports():
-    """sb3-smc 0.1 pickled its LSTM policy class as sb3_smc.training.SequenceLstmPolicy (that module is a deprecated
-    path of sb3_smc.learning.training now, which keeps the class)."""
+    """sb3-smc 0.1 pickled its LSTM policy class as sb3_smc.training.SequenceLstmPolicy (the one name that module
+    keeps)."""
     import pickle
 
     from sb3_smc.common.recurrent import SequenceLstmPolicy
 
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", DeprecationWarning)
-        legacy = pickle.loads(b"csb3_smc.training\nSequenceLstmPolicy\n.")  # the class by reference, as SB3 saves it
+    legacy = pickle.loads(b"csb3_smc.training\nSequenceLstmPolicy\n.")  # the class by reference, as SB3 saves it
     assert legacy is SequenceLstmPolicy
 
 

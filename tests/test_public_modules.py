@@ -1,11 +1,11 @@
-"""The public module paths: every documented module imports (the API reference's and the architecture map's), and
-every path the moves into sub-packages took away (``pixelworld_env`` 2026-11-25, ``sb3_smc`` 2026-11-27) still imports
-for a release, with a ``DeprecationWarning`` that names the new path (``pixelworld_env._moved``, ``sb3_smc._moved``),
-but the old ``sb3_smc`` modules whose paths are packages now: those re-export the old names without a warning."""
+"""The public module paths: every documented module imports (the API reference's and the architecture map's), the
+module paths the moves into sub-packages took away (``pixelworld_env`` 2026-11-25, ``sb3_smc`` 2026-11-27) are gone,
+and the old ``sb3_smc`` modules whose paths are packages now (``envs``, ``smc``, ``tasks``) still give their names."""
 
 from __future__ import annotations
 
 import importlib
+import importlib.util
 import re
 import subprocess
 import sys
@@ -14,16 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from pixelworld_env._moved import MODULES as PIXELWORLD_MODULES
-from pixelworld_env._moved import NAMES
-from sb3_smc._moved import MODULES as SB3_SMC_MODULES
-from sb3_smc._moved import PACKAGES
-
 ROOT = Path(__file__).resolve().parents[1]
-MODULES = {**PIXELWORLD_MODULES, **SB3_SMC_MODULES}
-"""Every old module path -> its new module."""
-SHIMS = {old: new for old, new in MODULES.items() if old not in PACKAGES}
-"""The old module paths that are deprecated shims."""
 
 
 def _modules(package: str, *names: str) -> list[str]:
@@ -66,6 +57,21 @@ PUBLIC = (
 )
 
 
+PACKAGES = {"sb3_smc.envs": "sb3_smc.envs.factory", "sb3_smc.smc": "sb3_smc.smc.smc",
+            "sb3_smc.tasks": "sb3_smc.tasks.task"}
+"""The old ``sb3_smc`` modules whose paths are packages now -> the module whose names each package re-exports."""
+REMOVED = (
+    *(f"pixelworld_env.{name}" for name in (
+        "catalog", "constants", "csp", "dataset_spec", "definitions", "env", "experiment_files", "kernels", "loading",
+        "objects", "oracle", "placement", "regions", "registration", "render", "sampling", "scene", "shapes", "vector",
+        "world", "_moved")),
+    *(f"sb3_smc.{name}" for name in (
+        "batched", "bias", "callbacks", "dag", "evaluation", "features", "gymnasium_vec_env", "hyperparameters",
+        "layout", "numpy_actors", "policies", "resolved_task", "smc_step", "vec_env", "wrapper", "_moved")),
+)
+"""The deprecated shims of the old module paths, removed after their release."""
+
+
 def api_reference_modules() -> set[str]:
     """The modules the API reference renders (its ``::: module`` lines)."""
     return {m for page in (ROOT / "docs" / "api").glob("*.md")
@@ -75,34 +81,39 @@ def api_reference_modules() -> set[str]:
 def test_the_api_reference_documents_public_modules_and_no_old_path():
     documented = api_reference_modules()
     assert documented and documented <= set(PUBLIC)
-    assert not documented & (set(MODULES) | set(NAMES))  # an old path that is a package now is not documented either
+    assert not documented & {*REMOVED, *PACKAGES, "sb3_smc.training"}
 
 
-def test_every_documented_module_imports_and_none_uses_an_old_path():
-    """In a fresh interpreter, with the old paths' deprecation warnings made errors."""
+def test_every_documented_module_imports():
+    """In a fresh interpreter."""
     code = "import importlib, sys\nfor m in sys.argv[1:]: importlib.import_module(m)"
-    done = subprocess.run([sys.executable, "-W", "error:pixelworld_env:DeprecationWarning",
-                           "-W", "error:sb3_smc:DeprecationWarning", "-c", code, *PUBLIC],
-                          capture_output=True, text=True, cwd=ROOT, timeout=300)
+    done = subprocess.run([sys.executable, "-c", code, *PUBLIC], capture_output=True, text=True, cwd=ROOT,
+                          timeout=300)
     assert done.returncode == 0, done.stderr[-3000:]
 
 
-@pytest.mark.parametrize(("old", "new"), sorted(SHIMS.items()))
-def test_an_old_module_path_warns_naming_its_new_path_and_gives_its_names(old, new):
-    fresh = importlib.import_module(new)
-    sys.modules.pop(old, None)
-    with pytest.warns(DeprecationWarning, match=rf"{re.escape(old)} moved to {re.escape(new)}") as caught:
-        __import__(old)
-    shim = sys.modules[old]
-    assert len(caught) == 1 and Path(caught[0].filename) == Path(__file__)  # the importing line is blamed
-    names = getattr(fresh, "__all__", [n for n in vars(fresh) if not n.startswith("_")])
-    assert names and all(getattr(shim, name) is getattr(fresh, name) for name in names)
-    assert (ROOT / f"{old.replace('.', '/')}.py").is_file()
+@pytest.mark.parametrize("old", REMOVED)
+def test_an_old_module_path_is_gone(old):
+    assert importlib.util.find_spec(old) is None
+
+
+def test_the_package_roots_hold_only_their_entry_points():
+    assert {p.stem for p in (ROOT / "pixelworld_env").glob("*.py")} == {
+        "__init__", "atomic", "cli", "demo", "errors", "validation", "yaml_loading"}
+    assert {p.stem for p in (ROOT / "sb3_smc").glob("*.py")} == {"__init__", "cli", "demo", "errors", "training"}
+
+
+def test_sb3_smc_training_keeps_only_the_class_path_of_version_0_1_models():
+    """sb3-smc 0.1's archives name ``sb3_smc.training.SequenceLstmPolicy`` (``tests/test_library.py`` unpickles it);
+    the module holds nothing else."""
+    module = importlib.import_module("sb3_smc.training")
+    assert module.__all__ == ["SequenceLstmPolicy"]
+    assert {n for n in vars(module) if not n.startswith("_")} == {"SequenceLstmPolicy"}
 
 
 @pytest.mark.parametrize("old", sorted(PACKAGES))
-def test_an_old_module_path_that_is_a_package_now_gives_its_names_without_a_warning(old):
-    new = importlib.import_module(SB3_SMC_MODULES[old])
+def test_an_old_module_path_that_is_a_package_now_gives_its_names(old):
+    new = importlib.import_module(PACKAGES[old])
     with warnings.catch_warnings():
         warnings.simplefilter("error", DeprecationWarning)
         package = importlib.import_module(old)
@@ -111,34 +122,10 @@ def test_an_old_module_path_that_is_a_package_now_gives_its_names_without_a_warn
         namespace: dict = {}
         exec(f"from {old} import *", namespace)
         assert all(namespace[name] is getattr(new, name) for name in names)
-    assert (ROOT / old.replace(".", "/") / "__init__.py").is_file()
 
 
-@pytest.mark.parametrize("package", sorted(NAMES))
-def test_the_names_of_an_old_module_now_a_package_resolve_with_the_warning(package):
-    module = importlib.import_module(package)
-    for name, home in NAMES[package].items():
-        vars(module).pop(name, None)  # resolved by an earlier run: resolve it again
-        with pytest.warns(DeprecationWarning, match=rf"{re.escape(package)}\.{name} moved to {re.escape(home)}"):
-            value = getattr(module, name)
-        assert value is getattr(importlib.import_module(home), name)
-        with warnings.catch_warnings():
-            warnings.simplefilter("error", DeprecationWarning)
-            assert getattr(module, name) is value  # warned once
-    with pytest.raises(ImportError, match="cannot import name 'no_such_name'"):
-        exec(f"from {package} import no_such_name", {})
-
-
-def test_the_old_paths_are_the_modules_the_move_took_away():
-    """``git show fc6e2e9 --stat``: 22 modules at ``pixelworld_env``'s root moved into sub-packages; then 19 of
-    ``sb3_smc``'s (all but ``__init__``, ``cli``, ``demo`` and ``errors``)."""
-    old = {m.rsplit(".", 1)[1] for m in [*PIXELWORLD_MODULES, *NAMES]}
-    assert old == {"catalog", "constants", "csp", "dataset_spec", "datasets", "definitions", "env", "experiment_files",
-                   "generation", "kernels", "loading", "objects", "oracle", "placement", "regions", "registration",
-                   "render", "sampling", "scene", "shapes", "vector", "world"}
-    old = {m.rsplit(".", 1)[1] for m in SB3_SMC_MODULES}
-    assert old == {"batched", "bias", "callbacks", "dag", "envs", "evaluation", "features", "gymnasium_vec_env",
-                   "hyperparameters", "layout", "numpy_actors", "policies", "resolved_task", "smc", "smc_step", "tasks",
-                   "training", "vec_env", "wrapper"}
-    assert {path.stem for path in (ROOT / "sb3_smc").glob("*.py")} == {*old - {"envs", "smc", "tasks"}, "__init__",
-                                                                      "_moved", "cli", "demo", "errors"}
+@pytest.mark.parametrize("package", ["pixelworld_env.datasets", "pixelworld_env.generation"])
+def test_the_names_of_the_old_datasets_and_generation_modules_are_gone(package):
+    """Those names live in their modules (``datasets.cache``, ``generation.dataset`` ...), not in the packages."""
+    with pytest.raises(ImportError, match="cannot import name"):
+        exec(f"from {package} import {'load_or_generate' if package.endswith('datasets') else 'generate'}", {})

@@ -24,7 +24,9 @@ BRING_ABOUT = [i for i in IDS if registered_ids()[i][0].startswith("ba_") and le
 
 
 def test_every_dataset_and_concept_pool_is_registered() -> None:
-    assert len([i for i in IDS if len(registered_ids()[i]) == 1 and i[3:-3] in catalog.dataset_names()]) == 136 + 11
+    datasets = [i for i in IDS if len(registered_ids()[i]) == 1 and i[3:-3] in catalog.dataset_names()]
+    assert len(datasets) == 136 + 11 + 8  # the release, the pushable curriculum, bring-about-or-cannot
+    assert "PW-bc_self-in-container_from_on-floor-v0" in datasets and "PW-bc_self-in-container-v0" in IDS
     assert "PW-cl_self-in-container_vs_noncontainer-v0" in gym.registry
     pool = registered_ids()["PW-ba_self-in-container-v0"]
     assert pool == tuple(sorted(n for n in catalog.dataset_names() if n.startswith("ba_self-in-container_from_")))

@@ -23,6 +23,7 @@ from sb3_smc.core.hyperparameters import (
     DEFAULT_TIMESTEPS,
     RECURRENT_POLICIES,
     algorithm,
+    algorithm_of,
     recurrent_policy,
 )
 from sb3_smc.curricula import shipped_curricula
@@ -38,7 +39,6 @@ from sb3_smc.experiments.design import (
     plan,
 )
 from sb3_smc.learning.training import train_smc, untrained_smc
-from sb3_smc.library import storage
 from sb3_smc.records import Budget, TaskSpec, TrainingSpec
 from sb3_smc.zoo import ZOO_ALGOS, hyperparams_for, render_config
 from tests.helpers import sb3_smc_cli
@@ -82,8 +82,7 @@ def test_the_defaults_are_defined_once() -> None:
 
 
 def test_library_and_rl_zoo3_read_the_algorithm_registry() -> None:
-    assert storage.ALGORITHMS == ALGORITHMS
-    assert storage.algorithm_classes() == {name: entry.load_class() for name, entry in ALGORITHM_REGISTRY.items()}
+    assert all(algorithm_of(entry.load_class()) == name for name, entry in ALGORITHM_REGISTRY.items())
     for zoo_name, name in ZOO_ALGOS.items():
         assert importlib.import_module(f"sb3_smc.zoo.{zoo_name}").hyperparams == hyperparams_for(zoo_name)
         text = render_config(zoo_name)

@@ -36,6 +36,7 @@ if str(ROOT) not in sys.path:
 
 from pixelworld_env.concepts import ConceptError, parse  # noqa: E402
 from pixelworld_env.concepts.predicates import PREDICATES  # noqa: E402
+from pixelworld_env.core.kinds import task_kind  # noqa: E402
 from pixelworld_env.generation.definitions import load_definitions  # noqa: E402
 from pixelworld_env.generation.experiment_files import GOALS, load_experiments  # noqa: E402
 
@@ -51,6 +52,7 @@ CATEGORY_BY_FILE = (
     ("bfaw-objects-", "objects"),
     ("bfaw-search-", "search"),
     ("pushable", "pushable"),
+    ("cannot", "cannot"),
 )
 KIND_BY_GOAL = {"classification": "classification", "bring-about-signal": "bring-about",
                 "bring-about-direct": "bring-about"}
@@ -80,11 +82,11 @@ def _category(source: str) -> str:
 
 
 def _split_sizes(kind: str, num_samples: int, test_fraction: float) -> tuple[int, int]:
-    """(train, test): classification has num_samples per label, bring-about num_samples in all.
+    """(train, test): a kind with labels has num_samples per label, bring-about num_samples in all.
 
     The test part is ``ceil(test_fraction * n)`` as in sklearn's ``train_test_split``.
     """
-    total = 2 * num_samples if kind == "classification" else num_samples
+    total = 2 * num_samples if task_kind(kind).label is not None else num_samples
     test = math.ceil(test_fraction * total)
     return total - test, test
 
@@ -150,7 +152,7 @@ def build_catalog(reference: Path) -> dict[str, Any]:
 
     pools: dict[str, list[str]] = defaultdict(list)
     for name, info in datasets.items():
-        pools[f"{'cl' if info['kind'] == 'classification' else 'ba'}_{info['concept']}"].append(name)
+        pools[f"{task_kind(info['kind']).prefix}_{info['concept']}"].append(name)
     clash = sorted(set(pools) & set(datasets))
     if clash:
         raise BuildError(f"concept pool names equal dataset names (their env ids would clash): {clash}")

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 from enum import IntEnum, StrEnum
-from typing import Literal
 
 HEIGHT = 18
 """World height in cells, frame included (the paper's 20 counts one more ring around the frame)."""
@@ -18,10 +17,6 @@ MAX_WORLD_CELLS = 1_000_000
 """The most cells of a world (``height x width``, frame included; the benchmark's worlds have 18 x 35 = 630): the
 engine keeps arrays of a world's cells per scene and per environment, so a larger world is refused before anything
 is built (scenes, frames, dataset specs)."""
-
-Kind = Literal["classification", "bring-about"]
-"""The two kinds of task (and of dataset): a label to tell, or a goal to bring about."""
-
 
 class Color(IntEnum):
     """Colour codes of the state array."""

@@ -122,19 +122,19 @@ def push_move(grid: np.ndarray, owner: np.ndarray, positions: np.ndarray, cells:
 
 
 @njit(cache=True, inline="always")
-def _ready(s: int, bring_about: bool, ready: np.ndarray) -> bool:  # pragma: no cover
-    return not bring_about or ready[s] != 0
+def _ready(s: int, tracks_goal: bool, ready: np.ndarray) -> bool:  # pragma: no cover
+    return not tracks_goal or ready[s] != 0
 
 
 @njit(cache=True, inline="always")
-def _reset_one(k: int, s: int, bring_about: bool, start: np.ndarray, goal0: np.ndarray, push_scene: np.ndarray,
+def _reset_one(k: int, s: int, tracks_goal: bool, start: np.ndarray, goal0: np.ndarray, push_scene: np.ndarray,
                pushing: tuple, scene: np.ndarray, row: np.ndarray, col: np.ndarray, steps: np.ndarray,
                goal: np.ndarray, autoreset: np.ndarray) -> None:  # pragma: no cover
     scene[k] = s
     row[k] = start[s, 0]
     col[k] = start[s, 1]
     steps[k] = 0
-    goal[k] = goal0[s] if bring_about else 0
+    goal[k] = goal0[s] if tracks_goal else 0
     autoreset[k] = False
     if push_scene[s]:
         grid0, owner0, _, _, _, _, n_objects, initial, disjoint0, grids, owners, positions, disjoint, _, _ = pushing
@@ -145,7 +145,7 @@ def _reset_one(k: int, s: int, bring_about: bool, start: np.ndarray, goal0: np.n
 
 
 @njit(cache=True)
-def reset_envs(mask: np.ndarray, forced: np.ndarray, bring_about: bool, ready: np.ndarray, start: np.ndarray,
+def reset_envs(mask: np.ndarray, forced: np.ndarray, tracks_goal: bool, ready: np.ndarray, start: np.ndarray,
                goal0: np.ndarray, push_scene: np.ndarray, pushing: tuple, draws: np.ndarray, used: np.ndarray,
                scene: np.ndarray, row: np.ndarray, col: np.ndarray, steps: np.ndarray, goal: np.ndarray,
                autoreset: np.ndarray) -> int:  # pragma: no cover
@@ -161,7 +161,7 @@ def reset_envs(mask: np.ndarray, forced: np.ndarray, bring_about: bool, ready: n
                 return NEED_DRAWS
             else:
                 s = draws[k, used[k]]
-            if not _ready(s, bring_about, ready):
+            if not _ready(s, tracks_goal, ready):
                 return NEED_SCENES
     for k in range(n):
         if mask[k]:
@@ -170,25 +170,29 @@ def reset_envs(mask: np.ndarray, forced: np.ndarray, bring_about: bool, ready: n
             else:
                 s = draws[k, used[k]]
                 used[k] += 1
-            _reset_one(k, s, bring_about, start, goal0, push_scene, pushing, scene, row, col, steps, goal, autoreset)
+            _reset_one(k, s, tracks_goal, start, goal0, push_scene, pushing, scene, row, col, steps, goal, autoreset)
     return OK
 
 
 @njit(cache=True)
-def step_envs(actions: np.ndarray, kinds: np.ndarray, values: np.ndarray, deltas: np.ndarray, bring_about: bool,
-              max_steps: int, signal_reward: float, potential: float, goal_reward: float, me: np.ndarray,
+def step_envs(actions: np.ndarray, kinds: np.ndarray, signal_rewards: np.ndarray, deltas: np.ndarray,
+              tracks_goal: bool, max_steps: int, potential: float, me: np.ndarray,
               start: np.ndarray, labels: np.ndarray, goal_table: np.ndarray, goal0: np.ndarray, ready: np.ndarray,
               push_scene: np.ndarray, pushing: tuple, draws: np.ndarray, used: np.ndarray, scene: np.ndarray,
               row: np.ndarray, col: np.ndarray, steps: np.ndarray, goal: np.ndarray, autoreset: np.ndarray,
               rewards: np.ndarray, terminated: np.ndarray, truncated: np.ndarray, success: np.ndarray,
               was_reset: np.ndarray, goal_pending: np.ndarray) -> int:  # pragma: no cover
     """One step of every environment (Gymnasium's next-step autoreset): those that ended last step are reset (reward
-    0, ``was_reset``), the others take ``actions[k]`` (per action ``kinds``: 0 signal, 1 move; ``values`` a signal's
-    value; ``deltas`` a move's offsets) with :class:`~pixelworld_env.PixelWorldEnv`'s rewards. Scenes are read from
+    0, ``was_reset``), the others take ``actions[k]`` (per action ``kinds``: 0 signal, 1 move; ``signal_rewards`` a
+    signal's reward by the scene's label and the goal's truth, the kind's table
+    :meth:`~pixelworld_env.core.kinds.TaskKind.reward_table`; ``deltas`` a move's offsets) with
+    :class:`~pixelworld_env.PixelWorldEnv`'s rewards; ``tracks_goal``: the kind's (shaping by ``potential``). Scenes
+    are read from
     the per-scene arrays (``me`` / ``start`` the self's index and cell, ``labels``, ``goal_table`` the goal's truth
     per self cell, -1 where not yet known, ``goal0`` at the start; ``pushing`` see above). In a scene where more
     than the self moves (``push_scene``) a move is :func:`push_move`. In bring-about, the goal after a move in such a
-    scene, or to a cell whose truth is not yet known, is left to the caller (``goal_pending``; reward 0 so far).
+    scene, or to a cell whose truth is not yet known, is left to the caller (``goal_pending``; reward 0 so far) where
+    the kind tracks the goal.
     Returns ``OK``, or ``NEED_DRAWS`` / ``NEED_SCENES`` before changing anything."""
     grid0, owner0, cells, n_cells, colors, moveable, n_objects, _, _, grids, owners, positions, disjoint, plan, \
         planned = pushing
@@ -197,14 +201,14 @@ def step_envs(actions: np.ndarray, kinds: np.ndarray, values: np.ndarray, deltas
         if autoreset[k]:
             if used[k] >= draws.shape[1]:
                 return NEED_DRAWS
-            if not _ready(draws[k, used[k]], bring_about, ready):
+            if not _ready(draws[k, used[k]], tracks_goal, ready):
                 return NEED_SCENES
     for k in range(n):
         goal_pending[k] = False
         if autoreset[k]:
             s = draws[k, used[k]]
             used[k] += 1
-            _reset_one(k, s, bring_about, start, goal0, push_scene, pushing, scene, row, col, steps, goal, autoreset)
+            _reset_one(k, s, tracks_goal, start, goal0, push_scene, pushing, scene, row, col, steps, goal, autoreset)
             rewards[k] = 0.0
             terminated[k] = False
             truncated[k] = False
@@ -223,14 +227,14 @@ def step_envs(actions: np.ndarray, kinds: np.ndarray, values: np.ndarray, deltas
                              n_objects[s], me[s], deltas[a, 0], deltas[a, 1], disjoint, k, plan, planned):
                     row[k] = positions[k, me[s], 0]
                     col[k] = positions[k, me[s], 1]
-                    goal_pending[k] = bring_about
+                    goal_pending[k] = tracks_goal
             else:
                 r = row[k] + deltas[a, 0]
                 c = col[k] + deltas[a, 1]
                 if self_target_free(owner0[s], me[s], r, c):
                     row[k] = r
                     col[k] = c
-                    if bring_about:
+                    if tracks_goal:
                         g = goal_table[s, r, c]
                         if g < 0:  # a cell not reached before in this scene: its goal is tested by the caller
                             goal_pending[k] = True
@@ -239,10 +243,7 @@ def step_envs(actions: np.ndarray, kinds: np.ndarray, values: np.ndarray, deltas
                             reward = potential if g == 1 else -potential
         else:
             term = True
-            if bring_about:
-                reward = goal_reward - potential if goal[k] == 1 else 0.0
-            else:
-                reward = signal_reward if values[a] == labels[s] else -signal_reward
+            reward = signal_rewards[a, labels[s], goal[k]]
         trunc = not term and steps[k] >= max_steps
         rewards[k] = reward
         terminated[k] = term

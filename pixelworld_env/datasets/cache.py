@@ -41,6 +41,7 @@ from pathlib import Path
 from typing import Any
 
 from pixelworld_env.atomic import atomic_write
+from pixelworld_env.core.kinds import task_kind
 from pixelworld_env.core.objects import WorldObject, frame_object
 from pixelworld_env.core.scene import Scene
 from pixelworld_env.core.shapes import LibraryParams
@@ -165,11 +166,11 @@ def _decode(spec: DatasetSpec, seed: int, payload: dict[str, Any]) -> GeneratedD
     if not (len(labels) == len(generators) == len(scenes_raw) == spec.size):
         raise _Corrupt(f"{len(scenes_raw)} scenes, {len(labels)} labels and {len(generators)} generator entries; "
                        f"expected {spec.size} of each")
-    if spec.kind == "classification":
+    if task_kind(spec.kind).label is not None:
         if sorted(set(labels)) != [0, 1] or labels.count(1) != spec.num_samples:
             raise _Corrupt(f"labels are not {spec.num_samples} positive and {spec.num_samples} negative")
     elif set(labels) != {1}:
-        raise _Corrupt("bring-about labels must all be 1")
+        raise _Corrupt(f"{spec.kind} labels must all be 1")
     names = [name for name, _ in spec.generators]
     if payload["generator_names"] != names:
         raise _Corrupt(f"generator names {payload['generator_names']} differ from the spec's {names}")

@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 from importlib import resources
 from typing import Any, NamedTuple
 
-from pixelworld_env.core.constants import Kind
+from pixelworld_env.core.kinds import Kind, task_kind
 from pixelworld_env.errors import PixelWorldError, PixelWorldKeyError
 
 FORMAT = "pixelworld-catalog"
@@ -93,8 +93,8 @@ class DatasetInfo:
 
     @property
     def prefix(self) -> str:
-        """``cl`` for classification, ``ba`` for bring-about."""
-        return "cl" if self.kind == "classification" else "ba"
+        """Its kind's name prefix: ``cl`` classification, ``ba`` bring-about, ``bc`` bring-about-or-cannot."""
+        return task_kind(self.kind).prefix
 
     @property
     def num_envs(self) -> int:

@@ -10,7 +10,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from pixelworld_env.core.constants import Kind
+from pixelworld_env.core.kinds import Kind
 from pixelworld_env.core.scene import Scene
 from pixelworld_env.datasets import catalog
 from pixelworld_env.datasets.cache import load_or_generate

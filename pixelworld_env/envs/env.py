@@ -18,28 +18,18 @@ from pixelworld_env.concepts import Concept
 from pixelworld_env.concepts.evaluate import SelfEvaluator
 from pixelworld_env.concepts.parser import Expression
 from pixelworld_env.core.constants import NUM_COLORS
+from pixelworld_env.core.kinds import GOAL_POTENTIAL, TASK_KINDS, Kind, TaskKind, task_kind
 from pixelworld_env.core.objects import Cell
 from pixelworld_env.core.render import HUMAN_CELL_SIZE, Window, check_display, rgb_image
 from pixelworld_env.core.scene import Scene
 from pixelworld_env.core.world import MOVES, World
 from pixelworld_env.errors import PixelWorldError
+from pixelworld_env.generation.oracle import can_bring_about
 from pixelworld_env.validation import check_action, check_bool, check_int, check_options, no_episode
 
-CLASSIFICATION = "classification"
-BRING_ABOUT = "bring-about"
-KINDS = (CLASSIFICATION, BRING_ABOUT)
 Observation = Literal["hand", "hand_raw", "full", "image"]
 OBSERVATIONS: tuple[Observation, ...] = ("hand", "hand_raw", "full", "image")
 RENDER_MODES = ("human", "rgb_array", "ansi")
-
-CLASSIFICATION_ACTIONS = ("SIG0", "SIG1", "DOWN", "RIGHT", "UP", "LEFT")
-BRING_ABOUT_ACTIONS = ("SIG1", "DOWN", "RIGHT", "UP", "LEFT")
-
-CLASSIFICATION_REWARD = 1.0
-GOAL_POTENTIAL = 0.5
-"""Shaping potential while the goal holds (docs/design.md, "Rewards")."""
-GOAL_REWARD = 1.0
-"""Base reward of SIG1 while the goal holds; SIG1 outside the goal earns 0 (``reward_mistake`` of AAAI-18)."""
 
 _ONE_HOT_OFFSETS = np.arange(9) * NUM_COLORS
 _COLOR_CODES = np.arange(NUM_COLORS, dtype=np.uint8)[:, None, None]
@@ -73,17 +63,31 @@ def check_scene_index(index: Any, num_scenes: int) -> int:
     return index
 
 
+def default_labels(kind: TaskKind, concept: Concept, scenes: Sequence[Scene]) -> list[int]:
+    """The labels of ``scenes`` for a kind whose worlds have them, where none are given: whether ``concept`` holds
+    (``"label"``), or whether it can be brought about by some moves (``"possible"``: an exhaustive search)."""
+    if kind.label == "possible":
+        return [int(can_bring_about(concept, s)) for s in scenes]
+    return [int(concept.holds(s)) for s in scenes]
+
+
 class PixelWorldEnv(gym.Env):
     """A PixelWorld task: explore a scene with a 3 x 3 window, then signal (docs/design.md, "Observations and
     actions", "Rewards").
 
-    * ``kind="classification"``: actions SIG0, SIG1, DOWN, RIGHT, UP, LEFT. The signal that matches the
-      scene's label earns +1, the other -1; either ends the episode.
-    * ``kind="bring-about"``: actions SIG1, DOWN, RIGHT, UP, LEFT. Moving into a state where ``concept``
-      holds earns +0.5, moving out of it -0.5; SIG1 ends the episode with +0.5 if the goal holds, else 0.
+    The actions are the kind's signals (:data:`pixelworld_env.core.kinds.TASK_KINDS`), then DOWN, RIGHT, UP, LEFT:
+
+    * ``kind="classification"``: SIG0, SIG1. The signal that matches the scene's label earns +1, the other -1;
+      either ends the episode.
+    * ``kind="bring-about"``: SIG1. Moving into a state where ``concept`` holds earns +0.5, moving out of it
+      -0.5; SIG1 ends the episode with +0.5 if the goal holds, else 0.
+    * ``kind="bring-about-or-cannot"``: SIG1 and CANNOT, the shaping of bring-about. SIG1 earns +0.5 if the goal
+      holds (+1 in all), else -1; CANNOT +1 in a world where the concept cannot be brought about, else -1 (all told).
+      ``labels`` say which worlds allow it (1) or not (0); without them each scene is searched exhaustively
+      (:func:`pixelworld_env.generation.oracle.can_bring_about`).
 
     Episodes are truncated after ``max_steps`` actions (every action counts). ``info`` holds, on every step,
-    ``scene_index``, ``label`` (classification) or ``goal`` (bring-about: whether the concept holds now),
+    ``scene_index``, ``label`` (kinds with labels) and ``goal`` (kinds that track it: whether the concept holds now),
     ``is_success`` (the paper's rule: the episode has ended with a final reward > 0) and ``signalled``
     (whether the episode ended with a signal).
 
@@ -107,7 +111,7 @@ class PixelWorldEnv(gym.Env):
         self,
         scenes: Sequence[Scene],
         *,
-        kind: Literal["classification", "bring-about"],
+        kind: Kind,
         concept: str | Expression | Concept,
         labels: Sequence[int] | None = None,
         macros: Mapping[str, str] | None = None,
@@ -116,8 +120,8 @@ class PixelWorldEnv(gym.Env):
         render_mode: str | None = None,
         aaai18_reset_bug: bool = False,
     ) -> None:
-        if kind not in KINDS:
-            raise PixelWorldError(f"kind must be one of {KINDS}, got {kind!r}")
+        self.task_kind = task_kind(kind)
+        """The kind's signals, rewards and outcomes (:class:`pixelworld_env.core.kinds.TaskKind`)."""
         max_steps = check_settings(max_steps=max_steps, observation=observation, render_mode=render_mode,
                                    aaai18_reset_bug=aaai18_reset_bug)
         self.scenes: tuple[Scene, ...] = tuple(scenes)
@@ -132,15 +136,17 @@ class PixelWorldEnv(gym.Env):
                                   f"{NUM_COLORS} channels")
         self.kind = kind
         self.concept = concept if isinstance(concept, Concept) else Concept(concept, macros)
-        if kind == BRING_ABOUT and labels is not None:
-            raise PixelWorldError("labels are for classification tasks; a bring-about task's goal is its concept")
-        if kind == CLASSIFICATION:
+        if self.task_kind.label is None and labels is not None:
+            labelled = [name for name, k in TASK_KINDS.items() if k.label is not None]
+            raise PixelWorldError(f"labels are for {' and '.join(labelled)} tasks; a {kind} task's goal is its "
+                                  "concept")
+        if self.task_kind.label is not None:
             if labels is None:
-                labels = [int(self.concept.holds(s)) for s in self.scenes]
+                labels = default_labels(self.task_kind, self.concept, self.scenes)
             if len(labels) != len(self.scenes):
                 raise PixelWorldError(f"got {len(labels)} labels for {len(self.scenes)} scenes")
             if any(label not in (0, 1) for label in labels):
-                raise PixelWorldError("classification labels must be 0 or 1")
+                raise PixelWorldError(f"{kind} labels must be 0 or 1")
         self.labels: tuple[int, ...] | None = tuple(int(x) for x in labels) if labels is not None else None
         self.max_steps = int(max_steps)
         self.split: str | None = None
@@ -156,13 +162,12 @@ class PixelWorldEnv(gym.Env):
         self.aaai18_reset_bug = aaai18_reset_bug
         self._spec: EnvSpec | None = None
 
-        self.action_names: tuple[str, ...] = CLASSIFICATION_ACTIONS if kind == CLASSIFICATION else BRING_ABOUT_ACTIONS
-        self.primitive_names: tuple[str, ...] = tuple(name for name in self.action_names if name in MOVES)
+        self.primitive_names: tuple[str, ...] = tuple(MOVES)
+        self.action_names: tuple[str, ...] = (*self.task_kind.signal_names, *self.primitive_names)
         self.action_space = spaces.Discrete(len(self.action_names))
-        # What each action does: a move offset, or the signal's value (SIG1 -> 1, SIG0 -> 0).
-        self._effects: tuple[Cell | int, ...] = tuple(
-            MOVES[name] if name in MOVES else int(name == "SIG1") for name in self.action_names
-        )
+        # What each action does: a move offset, or the signal's number in the kind's table.
+        self._effects: tuple[Cell | int, ...] = (*range(len(self.task_kind.signals)),
+                                                 *(MOVES[name] for name in self.primitive_names))
         if observation == "hand":
             self.observation_space = spaces.Box(0.0, 1.0, shape=(9 * NUM_COLORS,), dtype=np.float32)
         elif observation == "hand_raw":
@@ -253,7 +258,7 @@ class PixelWorldEnv(gym.Env):
         info: dict[str, Any] = {"scene_index": self._index, "is_success": success, "signalled": signalled}
         if self.labels is not None:
             info["label"] = self.labels[self._index]
-        if self.kind == BRING_ABOUT:
+        if self.task_kind.tracks_goal:
             info["goal"] = self._goal
         return info
 
@@ -308,7 +313,7 @@ class PixelWorldEnv(gym.Env):
         self._world = world
         self._steps = 0
         self._done = False
-        self._goal = self.goal_holds() if self.kind == BRING_ABOUT else False
+        self._goal = self.goal_holds() if self.task_kind.tracks_goal else False
         info = self._info()
         if self.split is not None:
             info["split"] = self.split
@@ -335,20 +340,17 @@ class PixelWorldEnv(gym.Env):
         terminated = False
         if effect.__class__ is tuple:  # a move
             reward = self._move(effect)  # type: ignore[arg-type]
-        else:  # a signal: 1 (SIG1) or 0 (SIG0)
+        else:  # a signal: its number in the kind's table
             terminated = True
-            if self.kind == CLASSIFICATION:
-                correct = effect == self.labels[self._index]  # type: ignore[index]
-                reward = CLASSIFICATION_REWARD if correct else -CLASSIFICATION_REWARD
-            else:
-                reward = GOAL_REWARD - GOAL_POTENTIAL if self._goal else 0.0
+            label = self.labels[self._index] if self.labels is not None else 0
+            reward = self.task_kind.reward(effect, label, self._goal)  # type: ignore[arg-type]
         truncated = not terminated and self._steps >= self.max_steps
         self._done = terminated or truncated
         info = self._info(success=self._done and reward > 0, signalled=terminated)
         return reward, terminated, truncated, info
 
     def _move(self, delta: Cell) -> float:
-        if self._world.move(delta) and self.kind == BRING_ABOUT:  # type: ignore[union-attr]
+        if self._world.move(delta) and self.task_kind.tracks_goal:  # type: ignore[union-attr]
             goal = self.goal_holds()
             if goal != self._goal:
                 self._goal = goal

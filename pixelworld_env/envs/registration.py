@@ -20,10 +20,12 @@ from typing import Literal
 
 import gymnasium as gym
 
+from pixelworld_env.concepts import Concept
+from pixelworld_env.core.kinds import Kind, task_kind
 from pixelworld_env.core.scene import Scene
 from pixelworld_env.datasets import catalog
 from pixelworld_env.datasets.loading import Dataset, Split, check_train_worlds, few_worlds, load_dataset
-from pixelworld_env.envs.env import Observation, PixelWorldEnv, check_settings
+from pixelworld_env.envs.env import Observation, PixelWorldEnv, check_settings, default_labels
 from pixelworld_env.envs.vector import MAX_VECTOR_ENVS, RENDER_ENVS, PixelWorldVectorEnv
 from pixelworld_env.errors import PixelWorldError, PixelWorldTypeError
 from pixelworld_env.validation import check_bool, check_count
@@ -61,7 +63,7 @@ def make_env(datasets: Sequence[str], *, split: Split = "train", seed: int = 0, 
     scenes, labels = few_worlds(loaded, train_worlds)
     env = PixelWorldEnv(
         scenes, kind=loaded[0].kind, concept=loaded[0].concept,
-        labels=labels if loaded[0].kind == "classification" else None,
+        labels=labels if task_kind(loaded[0].kind).label is not None else None,
         macros=catalog.macros(), max_steps=max_steps, observation=observation, render_mode=render_mode,
         aaai18_reset_bug=aaai18_reset_bug,
     )
@@ -108,7 +110,7 @@ class Worlds:
     (:func:`register_worlds`)."""
 
     name: str
-    kind: Literal["classification", "bring-about"]
+    kind: Kind
     concept: str
     train: Dataset
     test: Dataset
@@ -123,26 +125,34 @@ def _scenes(worlds: Sequence[Scene | str], what: str, kinds: Mapping[str, str] |
     return tuple(w if isinstance(w, Scene) else Scene.from_ascii(w, kinds) for w in worlds)
 
 
-def _labels(labels: Sequence[int] | None, scenes: tuple[Scene, ...], what: str, kind: str) -> tuple[int, ...]:
-    if kind == "bring-about":
+def _labels(labels: Sequence[int] | None, scenes: tuple[Scene, ...], what: str, kind: str,
+            concept: str) -> tuple[int, ...]:
+    """The worlds' labels: none for a kind without labels (all 1, as the catalog stores them), the user's for
+    classification, the user's or the exhaustive search's for bring-about-or-cannot (1: possible)."""
+    described = task_kind(kind)
+    if described.label is None:
         if labels is not None:
-            raise PixelWorldError(f"{what}: a bring-about task has no labels (its goal is the concept)")
+            raise PixelWorldError(f"{what}: a {kind} task has no labels (its goal is the concept)")
         return (1,) * len(scenes)
+    if labels is None and described.label == "possible":
+        return tuple(default_labels(described, Concept(concept, catalog.macros()), scenes))
     if labels is None or len(labels) != len(scenes) or any(
             isinstance(v, bool) or v not in (0, 1) for v in labels):
-        raise PixelWorldError(f"{what}: a classification task needs one label, 0 or 1, per world ({len(scenes)} "
+        raise PixelWorldError(f"{what}: a {kind} task needs one label, 0 or 1, per world ({len(scenes)} "
                               f"worlds), got {labels!r}")
     return tuple(int(v) for v in labels)
 
 
-def register_worlds(env_id: str, *, kind: Literal["classification", "bring-about"], concept: str,
+def register_worlds(env_id: str, *, kind: Kind, concept: str,
                     train: Sequence[Scene | str], test: Sequence[Scene | str],
                     train_labels: Sequence[int] | None = None, test_labels: Sequence[int] | None = None,
                     kinds: Mapping[str, str] | None = None) -> str:
     """Register a user's own worlds as a Gymnasium id, a task like the catalog's: ``gym.make(env_id, split="test")``,
     ``train_worlds=N``, the native vector env (``gym.make_vec``). Returns ``env_id``.
 
-    :param kind: ``"classification"`` (labels required) or ``"bring-about"`` (``concept`` is the goal; no labels).
+    :param kind: ``"classification"`` (labels required), ``"bring-about"`` (``concept`` is the goal; no labels) or
+        ``"bring-about-or-cannot"`` (labels 1 where the goal can be brought about, 0 where not; without them each
+        world is searched exhaustively).
     :param concept: a formula of the concept language (``"?x container(x) & inside_supported(self,x)"``).
     :param train: the training worlds, :class:`~pixelworld_env.Scene` objects or drawings as
         :meth:`Scene.from_ascii` takes them (``kinds``: its letters' shape families).
@@ -153,13 +163,12 @@ def register_worlds(env_id: str, *, kind: Literal["classification", "bring-about
         raise PixelWorldTypeError(f"env_id must be a non-empty string, got {env_id!r}")
     if env_id in gym.registry:
         raise PixelWorldError(f"{env_id!r} is registered already; choose another id")
-    if kind not in ("classification", "bring-about"):
-        raise PixelWorldError(f"kind must be 'classification' or 'bring-about', got {kind!r}")
+    task_kind(kind)
     parts = {}
     for split, scenes, labels in (("train", train, train_labels), ("test", test, test_labels)):
         drawn = _scenes(scenes, f"{split} worlds", kinds)
         parts[split] = Dataset(name=env_id, kind=kind, concept=concept, split=split, seed=0, scenes=drawn,
-                               labels=_labels(labels, drawn, f"{split} worlds", kind))
+                               labels=_labels(labels, drawn, f"{split} worlds", kind, concept))
     worlds = Worlds(env_id, kind, concept, parts["train"], parts["test"])
     make_worlds_env(worlds)  # the concept parses, the worlds fit together: refused here, not at the first gym.make
     gym.register(env_id, entry_point=WORLDS_ENTRY_POINT, vector_entry_point=WORLDS_VECTOR_ENTRY_POINT,
@@ -175,7 +184,7 @@ def make_worlds_env(worlds: Worlds, *, split: Split = "train", max_steps: int = 
     train_worlds = check_train_worlds(train_worlds, split)
     scenes, labels = few_worlds(worlds.split(split), train_worlds)
     env = PixelWorldEnv(scenes, kind=worlds.kind, concept=worlds.concept,
-                        labels=labels if worlds.kind == "classification" else None, macros=catalog.macros(),
+                        labels=labels if task_kind(worlds.kind).label is not None else None, macros=catalog.macros(),
                         max_steps=max_steps, observation=observation, render_mode=render_mode)
     env.split, env.train_worlds = split, train_worlds
     return env

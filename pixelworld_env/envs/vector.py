@@ -6,15 +6,15 @@ id, step by step: observations, rewards, terminations, truncations and infos (te
 
 How: the environments' state is a handful of arrays (scene index, self cell, step count, goal truth, autoreset flag,
 the block of scene draws and the PCG64 state of each environment's generator); the scenes are arrays too (initial
-colours and owners, the self's start, labels, and the bring-about goal per self cell, computed per scene the first
-time an environment is reset into it with the single env's own test, ``Concept.self_evaluator``). A step of all
-environments is :func:`pixelworld_env.core.kernels.step_envs` and their observations
+colours and owners, the self's start, labels, and the goal per self cell where the kind tracks it, computed per scene
+the first time an environment is reset into it with the single env's own test, ``Concept.self_evaluator``). A step
+of all environments is :func:`pixelworld_env.core.kernels.step_envs` and their observations
 :func:`~pixelworld_env.core.kernels.observe_windows` / :func:`~pixelworld_env.core.kernels.observe_states`. Where
 only the self moves (all AAAI-18 data) an environment needs no world arrays of its own: a move is
 :func:`~pixelworld_env.core.kernels.self_target_free` on the scene's initial owners. In worlds where objects besides
 the self move (the pushable datasets, ``World.self_only`` false) each environment keeps its own padded colours, owners
 and object positions, moved by :func:`~pixelworld_env.core.kernels.push_move` (``World.move``'s pushing, compiled);
-a bring-about goal there is ``Concept.holds_objects`` in Python, as in the single env, memoised per scene and object
+a goal there is ``Concept.holds_objects`` in Python, as in the single env, memoised per scene and object
 positions.
 """
 
@@ -32,18 +32,12 @@ from gymnasium.vector.utils import batch_space
 from pixelworld_env.concepts.evaluate import SelfEvaluator
 from pixelworld_env.core import kernels
 from pixelworld_env.core.constants import NUM_COLORS
+from pixelworld_env.core.kinds import GOAL_POTENTIAL
 from pixelworld_env.core.objects import Cell
 from pixelworld_env.core.render import rgb_image
 from pixelworld_env.core.scene import Scene
 from pixelworld_env.core.world import World
-from pixelworld_env.envs.env import (
-    BRING_ABOUT,
-    CLASSIFICATION_REWARD,
-    GOAL_POTENTIAL,
-    GOAL_REWARD,
-    PixelWorldEnv,
-    check_scene_index,
-)
+from pixelworld_env.envs.env import PixelWorldEnv, check_scene_index
 from pixelworld_env.errors import PixelWorldError, PixelWorldTypeError
 from pixelworld_env.validation import check_count, check_options
 
@@ -68,15 +62,15 @@ class SelfMoves(NamedTuple):
     scene: np.ndarray  #: per environment: its scene (read only)
     row: np.ndarray  #: per environment: the self's row (the caller writes it)
     col: np.ndarray  #: per environment: the self's column (the caller writes it)
-    goal: np.ndarray  #: per environment: the goal's truth now, int8 (bring-about; the caller writes it)
+    goal: np.ndarray  #: per environment: the goal's truth now, int8 (kinds that track it; the caller writes it)
     goal_table: np.ndarray  #: per scene and self cell: the goal's truth, -1 not known yet (``goal_at`` tests it)
     grid0: np.ndarray  #: per scene: the padded initial colours (int8), the self at its start
     owner0: np.ndarray  #: per scene: the padded initial owners (int16), the self's index at its start
     me: np.ndarray  #: per scene: the self's object index
     self_color: np.ndarray  #: per scene: the self's colour
-    labels: np.ndarray  #: per scene: its label (classification; zeros otherwise)
+    labels: np.ndarray  #: per scene: its label (kinds with labels; zeros otherwise)
     kinds: np.ndarray  #: per action: 1 a move, 0 a signal
-    values: np.ndarray  #: per action: a signal's value (1 SIG1, 0 SIG0)
+    signal_rewards: np.ndarray  #: per action, label and goal truth: a signal's reward (``TaskKind.reward_table``)
     deltas: np.ndarray  #: per action: a move's row and column offsets
 
 
@@ -120,14 +114,13 @@ class PixelWorldVectorEnv(VectorEnv):
         self.observation_space = batch_space(env.observation_space, num_envs)
         self.single_action_space = env.action_space
         self.action_space = batch_space(env.action_space, num_envs)
-        self._bring_about = env.kind == BRING_ABOUT
+        self.task_kind = env.task_kind
+        self._tracks_goal = env.task_kind.tracks_goal
 
-        # actions: kind (0 signal, 1 move), a signal's value, a move's offsets
-        effects = env._effects
-        self._moves: list[Cell | None] = [e if isinstance(e, tuple) else None for e in effects]
+        # actions: kind (0 signal, 1 move), a signal's rewards, a move's offsets
+        self._moves: list[Cell | None] = [e if isinstance(e, tuple) else None for e in env._effects]
         self._kinds = np.array([int(m is not None) for m in self._moves], dtype=np.int64)
-        self._values = np.array([0 if m is not None else e for m, e in zip(self._moves, effects, strict=True)],
-                                dtype=np.int64)
+        self._signal_rewards = env.task_kind.reward_table(len(self._moves))
         self._deltas = np.array([m if m is not None else (0, 0) for m in self._moves], dtype=np.int64)
 
         # per scene
@@ -141,7 +134,7 @@ class PixelWorldVectorEnv(VectorEnv):
         self._self_color = np.array([int(s.self_object.color) for s in self.scenes], dtype=np.int64)
         self._push_scene = np.array([not w.self_only for w in worlds], dtype=np.bool_)
         self._labels = np.array(self.labels if self.labels is not None else [0] * n_scenes, dtype=np.int64)
-        table_shape = (n_scenes, height, width) if self._bring_about else (n_scenes, 1, 1)
+        table_shape = (n_scenes, height, width) if self._tracks_goal else (n_scenes, 1, 1)
         self._goal_table = np.full(table_shape, -1, dtype=np.int8)
         self._goal0 = np.zeros(n_scenes, dtype=np.int8)
         self._ready = np.zeros(n_scenes, dtype=np.uint8)
@@ -260,7 +253,7 @@ class PixelWorldVectorEnv(VectorEnv):
         and prepare the scenes they will be reset into."""
         for k in np.flatnonzero(pending & (index < 0) & (self._used >= DRAW_BLOCK)):
             self._draw_block(int(k))
-        if self._bring_about:
+        if self._tracks_goal:
             drawn = self._draws[np.arange(self.num_envs), np.minimum(self._used, DRAW_BLOCK - 1)]
             for s in np.unique(np.where(index >= 0, index, drawn)[pending]):
                 if not self._ready[s]:
@@ -284,8 +277,8 @@ class PixelWorldVectorEnv(VectorEnv):
             raise PixelWorldError(f"objects besides the self move in scenes {pushing} (of {len(self.scenes)}): only "
                                   "step() moves them")
         return SelfMoves(self._scene, self._row, self._col, self._goal, self._goal_table, self._pushing[0],
-                         self._owner0, self._me, self._self_color, self._labels, self._kinds, self._values,
-                         self._deltas)
+                         self._owner0, self._me, self._self_color, self._labels, self._kinds,
+                         self._signal_rewards, self._deltas)
 
     # ------------------------------------------------------------------------------------------ pushing worlds
 
@@ -342,7 +335,7 @@ class PixelWorldVectorEnv(VectorEnv):
                                           "signalled": signalled.copy()}
         if self.labels is not None:
             columns["label"] = self._labels[self._scene]
-        if self._bring_about:
+        if self._tracks_goal:
             columns["goal"] = self._goal.astype(np.bool_)
         info: dict[str, Any] = {}
         for key, values in columns.items():
@@ -377,7 +370,7 @@ class PixelWorldVectorEnv(VectorEnv):
         for k in np.flatnonzero(mask).tolist():
             if seeds[k] is not None:
                 self._seed(k, seeds[k])
-        while kernels.reset_envs(mask, index, self._bring_about, self._ready, self._start, self._goal0,
+        while kernels.reset_envs(mask, index, self._tracks_goal, self._ready, self._start, self._goal0,
                                  self._push_scene, self._pushing, self._draws, self._used, self._scene, self._row,
                                  self._col, self._steps, self._goal, self._autoreset) != kernels.OK:
             self._prepare(mask, index)
@@ -426,14 +419,14 @@ class PixelWorldVectorEnv(VectorEnv):
         if actions.size and (actions.min() < 0 or actions.max() >= len(self.action_names)):
             raise PixelWorldError(f"actions must be in [0, {len(self.action_names)}), got {actions}")
         actions = actions.astype(np.int64, copy=False)
-        while kernels.step_envs(actions, self._kinds, self._values, self._deltas, self._bring_about, self.max_steps,
-                                CLASSIFICATION_REWARD, GOAL_POTENTIAL, GOAL_REWARD, self._me, self._start,
+        while kernels.step_envs(actions, self._kinds, self._signal_rewards, self._deltas, self._tracks_goal,
+                                self.max_steps, GOAL_POTENTIAL, self._me, self._start,
                                 self._labels, self._goal_table, self._goal0, self._ready, self._push_scene,
                                 self._pushing, self._draws, self._used, self._scene, self._row, self._col,
                                 self._steps, self._goal, self._autoreset, self._rewards, self._terminated,
                                 self._truncated, self._success, self._was_reset, self._goal_pending) != kernels.OK:
             self._prepare(self._autoreset, self._no_index)
-        if self._bring_about and self._goal_pending.any():
+        if self._tracks_goal and self._goal_pending.any():
             self._goals_after_moves()
         info = self._infos(self._everyone, self._success, self._terminated, self._was_reset)
         return (self.observe(), self._rewards.copy(), self._terminated.copy(), self._truncated.copy(), info)

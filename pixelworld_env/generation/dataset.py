@@ -8,7 +8,10 @@ positive clauses, a global no-overlap constraint and the frame / padding bounds.
 checked by rejection on the finished assignment (:mod:`pixelworld_env.generation.sampling`: the search;
 :mod:`pixelworld_env.generation.placement`: where each object may go). :func:`generate` then draws from the generators
 (uniformly at random), drops duplicates, labels each scene with the dataset's concept and fills the
-label quotas (classification) or keeps only scenes in which the goal does not hold (bring-about).
+label quotas (classification), keeps only scenes in which the goal does not hold (bring-about), or keeps scenes in
+which the goal does not hold and fills the quotas of worlds where it can be brought about and where it cannot, as
+the exhaustive search over the world's moves decides (bring-about-or-cannot: 50/50, certified;
+:func:`pixelworld_env.generation.oracle.can_bring_about`).
 
 Determinism: only Python's :class:`random.Random` with integer seeds (portable) and integer arithmetic
 are used. The generator choice and the final shuffle use ``random.Random(seed)``; each generator has
@@ -28,11 +31,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from pixelworld_env.concepts import Concept, ConceptError
+from pixelworld_env.core.kinds import task_kind
 from pixelworld_env.core.objects import frame_object
 from pixelworld_env.core.scene import Scene
 from pixelworld_env.errors import PixelWorldError
 from pixelworld_env.generation.dataset_spec import MAX_NUM_SAMPLES, DatasetSpec
-from pixelworld_env.generation.oracle import goal_reachable
+from pixelworld_env.generation.oracle import ReachabilityLimit, can_bring_about, goal_reachable
 from pixelworld_env.generation.sampling import GenerationError, GeneratorSampler
 from pixelworld_env.validation import check_count, check_seed
 
@@ -72,11 +76,13 @@ class GeneratorStats:
 class GeneratedDataset:
     """A generated dataset: scenes (objects in term order, frame last), labels and provenance.
 
-    Bring-about labels are all 1. ``generator_of[i]`` names the generator that produced scene ``i``.
+    Bring-about labels are all 1; bring-about-or-cannot labels say whether the goal can be brought about (1) or
+    not (0). ``generator_of[i]`` names the generator that produced scene ``i``.
     ``draws`` counts generator samples taken, ``duplicates`` those identical to an earlier sample, and
     ``filtered`` those dropped by the concept filter (bring-about: goal already true; classification:
-    label quota already full); ``unreachable`` counts bring-about scenes dropped because no sequence of moves
-    reaches the goal (:func:`pixelworld_env.generation.oracle.goal_reachable`).
+    label quota already full; bring-about-or-cannot: either); ``unreachable`` counts bring-about scenes dropped
+    because no sequence of moves reaches the goal (:func:`pixelworld_env.generation.oracle.goal_reachable`), and
+    bring-about-or-cannot scenes the exhaustive search could not decide within its limit.
     """
 
     spec: DatasetSpec
@@ -143,7 +149,7 @@ def generate(spec: DatasetSpec, seed: int = 0, *, max_draws: int | None = None,
         raise GenerationError(f"{exc} (before the first draw; kept {_counts(spec, kept)})") from None
     chooser = random.Random(seed)
     frame = frame_object(spec.height, spec.width)
-    classification = spec.kind == "classification"
+    kind = task_kind(spec.kind)
     quota = spec.num_samples
     seen: set[tuple] = set()
     draws = duplicates = filtered = unreachable = 0
@@ -172,8 +178,18 @@ def generate(spec: DatasetSpec, seed: int = 0, *, max_draws: int | None = None,
         seen.add(key)
         scene = Scene(height=spec.height, width=spec.width, objects=(*objects, frame))
         truth = concept.holds(scene)
-        if classification:
-            label = int(truth)
+        if kind.label is not None:
+            if kind.tracks_goal and truth:  # bring-about-or-cannot: the goal must not hold at the start
+                filtered += 1
+                continue
+            if kind.label == "label":
+                label = int(truth)
+            else:  # "possible": decided by the exhaustive search; a world it cannot decide is not kept
+                try:
+                    label = int(can_bring_about(concept, scene))
+                except ReachabilityLimit:
+                    unreachable += 1
+                    continue
             if len(kept[label]) >= quota:
                 filtered += 1
                 continue
@@ -205,7 +221,7 @@ def generate(spec: DatasetSpec, seed: int = 0, *, max_draws: int | None = None,
 
 
 def _counts(spec: DatasetSpec, kept: Mapping[int, list]) -> str:
-    if spec.kind == "classification":
+    if task_kind(spec.kind).label is not None:
         return f"{len(kept[1])} positive and {len(kept[0])} negative of {spec.num_samples} each"
     return f"{len(kept[1])} of {spec.num_samples} scenes in which the goal does not hold"
 

@@ -9,13 +9,13 @@ from typing import Any
 
 from pixelworld_env.concepts import parse
 from pixelworld_env.core.constants import FLOOR_HEIGHT, HEIGHT, PADDING, WIDTH
+from pixelworld_env.core.kinds import KINDS, task_kind
 from pixelworld_env.core.objects import check_world_size
 from pixelworld_env.errors import PixelWorldError, PixelWorldTypeError
 from pixelworld_env.validation import check_bool, check_count, check_int
 
-__all__ = ["KINDS", "MAX_NUM_SAMPLES", "SUPPORTED_SETTINGS", "DatasetSpec"]
+__all__ = ["MAX_NUM_SAMPLES", "SUPPORTED_SETTINGS", "DatasetSpec"]
 
-KINDS = ("classification", "bring-about")
 SUPPORTED_SETTINGS = frozenset({"allow_targets", "allow_pushable"})
 """The settings a dataset may have, each a bool (``True`` / ``False``, in YAML ``true`` / ``false``)."""
 MAX_NUM_SAMPLES = 100_000
@@ -94,8 +94,8 @@ class DatasetSpec:
 
     @property
     def size(self) -> int:
-        """The number of scenes of the dataset (``2 * num_samples`` for classification)."""
-        return 2 * self.num_samples if self.kind == "classification" else self.num_samples
+        """The number of scenes of the dataset (``2 * num_samples`` for the kinds with labels: that many of each)."""
+        return 2 * self.num_samples if task_kind(self.kind).label is not None else self.num_samples
 
     def used_macros(self) -> dict[str, str]:
         """The macros reachable from the concept and the generators (name -> logic), sorted by name."""

@@ -36,6 +36,7 @@ from typing import TYPE_CHECKING, Any, cast
 import yaml
 
 from pixelworld_env.concepts import PREDICATES, Concept, ConceptError, parse
+from pixelworld_env.core.kinds import kind_of_name, task_kind
 from pixelworld_env.errors import PixelWorldError, PixelWorldKeyError
 from pixelworld_env.generation.dataset import generate
 from pixelworld_env.generation.dataset import split as stratified_split
@@ -43,7 +44,7 @@ from pixelworld_env.generation.dataset_spec import SUPPORTED_SETTINGS, DatasetSp
 from pixelworld_env.yaml_loading import YAMLInputError, construct_node, read_yaml_file, safe_yaml_compose
 
 if TYPE_CHECKING:
-    from pixelworld_env.core.constants import Kind
+    from pixelworld_env.core.kinds import Kind
     from pixelworld_env.envs.env import PixelWorldEnv
 
 #: Top-level keys with a meaning of their own (everything else that is a list of strings is a named list).
@@ -86,8 +87,9 @@ class DatasetDefinition:
 
     @property
     def kind(self) -> str:
-        """``classification`` for ``cl_`` names, ``bring-about`` for ``ba_`` names."""
-        return "bring-about" if self.name.startswith("ba_") else "classification"
+        """The kind its name's prefix says: ``cl_`` classification, ``ba_`` bring-about, ``bc_``
+        bring-about-or-cannot (:func:`pixelworld_env.core.kinds.kind_of_name`)."""
+        return kind_of_name(self.name, f"{self.source}, line {self.line}: dataset").name
 
 
 @dataclass(frozen=True)
@@ -186,7 +188,7 @@ class DefinitionSet:
         indices = range(len(generated.scenes)) if split == "all" else \
             stratified_split(generated.labels)[0 if split == "train" else 1]
         scenes = [generated.scenes[i] for i in indices]
-        labels = [generated.labels[i] for i in indices] if spec.kind == "classification" else None
+        labels = [generated.labels[i] for i in indices] if task_kind(spec.kind).label is not None else None
         kind = cast("Kind", spec.kind)  # DatasetSpec checked it
         return PixelWorldEnv(scenes, kind=kind, concept=spec.concept, labels=labels, macros=self.macros,
                              **kwargs)

@@ -2,11 +2,13 @@
 as plain JSON.
 
 :data:`ALGORITHM_REGISTRY` is the single source of what sb3-smc knows of each algorithm (like rl_zoo3's ``ALGOS``,
-but torch-free: classes are imported on first use): its SB3 class, the paper's settings (docs/design.md), the
-recurrent cells it takes, its rl_zoo3 name. ``train_smc`` builds the class and merges a user's overrides into the
-defaults (:func:`resolve_hyperparameters`), a :class:`~sb3_smc.records.TrainingSpec` stores the merged result, a
-library loads its models with the class, curricula and the ``sb3-smc`` command take its names, and the rl_zoo3
-files in ``zoo_configs/`` are generated from it (:mod:`sb3_smc.zoo`).
+but torch-free: each class is imported on first use, and only where an SMC of its algorithm needs it): its SB3 class,
+the paper's settings (docs/design.md), the recurrent cells it takes, its rl_zoo3 name. ``train_smc`` builds the class
+and merges a user's overrides into the defaults (:func:`resolve_hyperparameters`), a
+:class:`~sb3_smc.records.TrainingSpec` stores the merged result, a library loads its models with the class,
+curricula and the ``sb3-smc`` command take the built-in names (:data:`ALGORITHMS`), and the rl_zoo3 files in
+``zoo_configs/`` are generated from it (:mod:`sb3_smc.zoo`). :func:`register_algorithm` adds a learner of the user's
+own, for ``train_smc`` and libraries.
 
 Stored hyperparameters are JSON data. Two non-JSON kinds of value have a JSON form:
 
@@ -25,10 +27,10 @@ import importlib
 import math
 import sys
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
-from sb3_smc.errors import SMCError
+from sb3_smc.errors import SMCError, SMCRuntimeError, SMCTypeError
 
 if TYPE_CHECKING:
     from stable_baselines3.common.on_policy_algorithm import OnPolicyAlgorithm
@@ -50,10 +52,12 @@ __all__ = [
     "STEPS_PER_UPDATE",
     "Algorithm",
     "algorithm",
+    "algorithm_of",
     "constructor_arguments",
     "decode_value",
     "encode_value",
     "recurrent_policy",
+    "register_algorithm",
     "resolve_hyperparameters",
 ]
 
@@ -99,6 +103,8 @@ class Algorithm:
     (the start-up hook ``_sb3_smc_gym_hook`` adds the names rl_zoo3 lacks to its table)."""
     zoo_note: str = ""
     """What ``zoo_configs/<zoo_name>.yml`` says of the settings."""
+    registered: type[OnPolicyAlgorithm] | None = field(default=None, repr=False)
+    """The class itself, for one the user's code registered (:func:`register_algorithm`): nothing is imported."""
 
     @property
     def recurrent(self) -> bool:
@@ -106,9 +112,17 @@ class Algorithm:
         return bool(self.cells)
 
     def load_class(self) -> type[OnPolicyAlgorithm]:
-        """The Stable-Baselines3 class (imports torch); on-policy: ``n_steps`` comes from the budget."""
+        """The Stable-Baselines3 class (imports torch); on-policy: ``n_steps`` comes from the budget.
+        :class:`~sb3_smc.errors.SMCRuntimeError` naming the algorithm and its module where that cannot be imported
+        (only this algorithm's SMCs need it)."""
+        if self.registered is not None:
+            return self.registered
         module, _, name = self.class_path.rpartition(".")
-        return getattr(importlib.import_module(module), name)
+        try:
+            return getattr(importlib.import_module(module), name)
+        except Exception as err:  # noqa: BLE001 - whatever the module's code raises on import
+            raise SMCRuntimeError(f"algorithm {self.name!r}: cannot import its class {name!r} from module {module!r} "
+                                  f"({type(err).__name__}: {err}); only the SMCs of {self.name} need it") from err
 
 
 def _lstm_32() -> dict[str, Any]:
@@ -153,15 +167,17 @@ ALGORITHM_REGISTRY: dict[str, Algorithm] = {algo.name: algo for algo in (
                  "policy; policy: MlpGruPolicy gives the paper's GRU, baseline: linear_feature its linear feature "
                  "baseline. sb3-smc's start-up hook adds --algo recurrent_trpo to rl_zoo3."),
 )}
-"""Every algorithm by name, in the order of :data:`ALGORITHMS`. Overrides replace the defaults key by key,
-``policy_kwargs`` key by key too. RecurrentPPO and TRPO are the measured settings of ``docs/training.md``; PPO
-(memoryless; minibatches of 250, 10 epochs, learning rate 3e-4, the settings of the earlier hand-written rl_zoo3
-file) is offered for comparison, untuned. RecurrentTRPO (:mod:`sb3_smc.recurrent_trpo`, the paper's learner with
-``rnn="gru"``) has TRPO's trust region (KL 0.01) and critic learning rate on RecurrentPPO's recurrent policy;
-``baseline="linear_feature"`` gives the paper's linear feature baseline instead of the critic."""
+"""Every algorithm by name: the built-in ones (:data:`ALGORITHMS`), then those :func:`register_algorithm` added.
+Overrides replace the defaults key by key, ``policy_kwargs`` key by key too. RecurrentPPO and TRPO are the measured
+settings of ``docs/training.md``; PPO (memoryless; minibatches of 250, 10 epochs, learning rate 3e-4, the settings
+of the earlier hand-written rl_zoo3 file) is offered for comparison, untuned. RecurrentTRPO
+(:mod:`sb3_smc.recurrent_trpo`, the paper's learner with ``rnn="gru"``) has TRPO's trust region (KL 0.01) and critic
+learning rate on RecurrentPPO's recurrent policy; ``baseline="linear_feature"`` gives the paper's linear feature
+baseline instead of the critic."""
 
 ALGORITHMS = tuple(ALGORITHM_REGISTRY)
-"""Algorithms :func:`~sb3_smc.learning.training.train_smc` trains."""
+"""The built-in algorithms: those of the ``sb3-smc`` command's ``--algo`` and of curricula. ``train_smc`` and
+libraries take these and those :func:`register_algorithm` adds (every name of :data:`ALGORITHM_REGISTRY`)."""
 DEFAULT_ALGORITHM = ALGORITHMS[0]
 """The algorithm of a spec, a curriculum node or a run that names none."""
 DEFAULT_HYPERPARAMETERS: dict[str, dict[str, Any]] = {name: algo.hyperparameters
@@ -172,8 +188,20 @@ DEFAULT_HYPERPARAMETERS: dict[str, dict[str, Any]] = {name: algo.hyperparameters
 def algorithm(name: str) -> Algorithm:
     """The registry's entry of ``name``; ``ValueError`` naming the algorithms for an unknown one."""
     if name not in ALGORITHM_REGISTRY:
-        raise SMCError(f"algo must be one of {ALGORITHMS}, got {name!r}")
+        raise SMCError(f"algo must be one of {tuple(ALGORITHM_REGISTRY)}, got {name!r}")
     return ALGORITHM_REGISTRY[name]
+
+
+def algorithm_of(cls: type) -> str | None:
+    """The name of the registry's algorithm whose class is exactly ``cls`` (a model's type), ``None`` if none is.
+    Only a class that can be ``cls`` is looked at: a registered one by identity, a built-in one (imported on first
+    use) where its name is ``cls``'s, so an algorithm whose module cannot be imported fails only for its own models
+    (:meth:`Algorithm.load_class`'s error)."""
+    for name, entry in ALGORITHM_REGISTRY.items():
+        if entry.registered is cls or (entry.registered is None and entry.class_path.rpartition(".")[2] == cls.__name__
+                                       and entry.load_class() is cls):
+            return name
+    return None
 
 
 def recurrent_policy(rnn: str, algo: str | None = None) -> str:
@@ -331,3 +359,63 @@ def constructor_arguments(hyperparameters: Mapping[str, Any]) -> tuple[str | typ
 
         policy = getattr(recurrent, policy)
     return policy, kwargs
+
+
+def register_algorithm(name: str, cls: type[OnPolicyAlgorithm], *,
+                       hyperparameters: Mapping[str, Any] | None = None) -> Algorithm:
+    """Add a learner of your own: ``train_smc(..., algo=name)`` trains with ``cls``, and libraries save and load its
+    SMCs, in this process (register it in every process that trains or loads them, before it does).
+
+    Registering is your trust in ``cls``: a library's SMC of ``name`` is rebuilt with it without ``trust=True``,
+    though its module is none of :data:`SAFE_CLASS_MODULES` (a file names the algorithm, never its module, so
+    nothing is imported for it). Another class of that module that a file names (a policy of your own) still needs
+    ``trust=True``. Curricula and the ``sb3-smc`` command take the built-in algorithms only (:data:`ALGORITHMS`).
+
+    :param name: the algorithm's name in specs and manifests: a non-empty string without white space, not
+        registered to another class (registering the same class again changes nothing).
+    :param cls: a subclass of Stable-Baselines3's ``OnPolicyAlgorithm`` (``train_smc`` sets ``n_steps``) with an
+        actor-critic policy over discrete actions (what :func:`~sb3_smc.smc.policies.policy_from_model` copies).
+    :param hyperparameters: its default constructor arguments, ``policy`` among them (JSON values and classes, as
+        :func:`encode_value` stores them); default: those of the nearest registered class it derives from, whose
+        recurrent cells (``rnn=``) it takes in any case.
+    :return: its registry entry.
+    :raises SMCTypeError: a name that is not a string, or a ``cls`` that is not such a class.
+    :raises SMCError: a name that is empty, has white space or is another class's, a class registered under another
+        name, missing or bad defaults.
+    """
+    from stable_baselines3.common.on_policy_algorithm import OnPolicyAlgorithm
+
+    if not isinstance(name, str):
+        raise SMCTypeError(f"an algorithm's name must be a string, got {type(name).__name__}")
+    if not name or not name.isprintable() or any(c.isspace() for c in name):
+        raise SMCError(f"an algorithm's name must be a non-empty string without white space, got {name!r}")
+    if not (isinstance(cls, type) and issubclass(cls, OnPolicyAlgorithm)):
+        raise SMCTypeError(f"algorithm {name!r}: cls must be a subclass of stable_baselines3's OnPolicyAlgorithm, "
+                           f"got {cls!r}")
+    known = ALGORITHM_REGISTRY.get(name)
+    if known is not None:
+        if known.load_class() is cls:
+            return known
+        raise SMCError(f"algorithm {name!r} is registered already, to {known.class_path}; choose another name")
+    other = algorithm_of(cls)
+    if other is not None:
+        raise SMCError(f"{cls.__qualname__} is registered already as {other!r}; use that name")
+    parent = next((ALGORITHM_REGISTRY[found] for base in cls.__mro__[1:] if (found := algorithm_of(base))), None)
+    if hyperparameters is not None:
+        defaults = {"policy_kwargs": {}, **copy.deepcopy(dict(hyperparameters))}
+        encode_value(defaults, "hyperparameters")  # JSON values and classes only
+        reserved = sorted(set(defaults) & set(_RESERVED))
+        if not isinstance(defaults.get("policy"), str | type) or not isinstance(defaults["policy_kwargs"], dict) \
+                or reserved:
+            raise SMCError(f"algorithm {name!r}: its hyperparameters need a 'policy' (a name or a class) and a "
+                           f"mapping 'policy_kwargs', and none of {sorted(_RESERVED)} (train_smc sets those)")
+    elif parent is not None:
+        defaults = copy.deepcopy(parent.hyperparameters)
+    else:
+        raise SMCError(f"algorithm {name!r}: {cls.__qualname__} derives from no registered algorithm; give its "
+                       "hyperparameters (its policy at least)")
+    entry = Algorithm(name, f"{cls.__module__}.{cls.__qualname__}", defaults,
+                      cells=parent.cells if parent is not None else (), registered=cls)
+    ALGORITHM_REGISTRY[name] = entry
+    DEFAULT_HYPERPARAMETERS[name] = entry.hyperparameters
+    return entry

@@ -7,13 +7,16 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+from pixelworld_env.core.kinds import TASK_KINDS, all_signal_names
 from sb3_smc.errors import SMCError
 
-__all__ = ["CALL_PREFIX", "HAND_SIZE", "MOVES", "PIXELWORLD_LAYOUT", "SIGNALS", "Layout", "observation_size",
-           "smc_action_names"]
+__all__ = ["CALL_PREFIX", "HAND_SIZE", "MOVES", "PIXELWORLD_LAYOUT", "SIGNALS", "SIGNAL_NAMES", "Layout",
+           "observation_size", "smc_action_names"]
 
-SIGNALS = {"classification": ("SIG0", "SIG1"), "bring-about": ("SIG1",)}
-"""The signal actions of each task kind, in environment order."""
+SIGNALS: dict[str, tuple[str, ...]] = {name: kind.signal_names for name, kind in TASK_KINDS.items()}
+"""The signal actions of each task kind, in environment order (PixelWorld's table of kinds)."""
+SIGNAL_NAMES = all_signal_names()
+"""Every kind's signal names: action names no primitive may take."""
 MOVES = ("DOWN", "RIGHT", "UP", "LEFT")
 """The primitive moves, in environment order."""
 HAND_SIZE = 81
@@ -35,7 +38,7 @@ class Layout:
         if not isinstance(self.sensor_size, int) or self.sensor_size < 1:
             raise SMCError(f"a layout needs sensor_size >= 1, got {self.sensor_size!r}")
         clash = [name for name in self.primitives
-                 if name.startswith(CALL_PREFIX) or name in SIGNALS["classification"] or not name]
+                 if name.startswith(CALL_PREFIX) or name in SIGNAL_NAMES or not name]
         if clash or len(set(self.primitives)) != len(self.primitives):
             raise SMCError(f"primitive action names must be unique, non-empty, and neither signals nor "
                            f"'{CALL_PREFIX}...', got {list(self.primitives)}")

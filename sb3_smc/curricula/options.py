@@ -17,7 +17,7 @@ from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any
 
-from sb3_smc.core.hyperparameters import MAX_TIMESTEPS, algorithm, recurrent_policy
+from sb3_smc.core.hyperparameters import ALGORITHMS, MAX_TIMESTEPS, recurrent_policy
 from sb3_smc.curricula.format import Curriculum, Node
 from sb3_smc.curricula.jobs import DEFAULT_REUSE, DEFAULT_SEEDS, REUSE, JobId, check_curriculum, node_budget, node_spec
 from sb3_smc.errors import SMCError, SMCTypeError
@@ -103,8 +103,8 @@ class RunOptions:
             raise SMCError(f"backend must be {' or '.join(map(repr, BACKENDS))}, got {self.backend!r}")
         if self.ray_address is not None and self.backend != "ray":
             raise SMCError(f"a Ray address ({self.ray_address!r}) is for backend 'ray', not {self.backend!r}")
-        if self.algo is not None:
-            algorithm(self.algo)  # a known algorithm
+        if self.algo is not None and self.algo not in ALGORITHMS:  # built-in: worker processes know no registered one
+            raise SMCError(f"algo must be one of {ALGORITHMS}, got {self.algo!r}")
         if self.rnn is not None:
             recurrent_policy(self.rnn)  # a known cell (each node's algorithm is checked with its spec)
         if self.reuse_from is not None and not isinstance(self.reuse_from, Path):

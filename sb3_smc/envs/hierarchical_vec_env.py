@@ -27,7 +27,7 @@ import numpy as np
 from stable_baselines3.common.vec_env.base_vec_env import VecEnvObs
 
 from pixelworld_env.core.constants import NUM_COLORS
-from pixelworld_env.envs.env import BRING_ABOUT, CLASSIFICATION_REWARD, GOAL_POTENTIAL, GOAL_REWARD
+from pixelworld_env.core.kinds import GOAL_POTENTIAL
 from pixelworld_env.envs.vector import PixelWorldVectorEnv
 from sb3_smc.core.layout import CALL_PREFIX, HAND_SIZE, MOVES, PIXELWORLD_LAYOUT, smc_action_names
 from sb3_smc.envs import smc_step
@@ -83,7 +83,8 @@ def _stacked(plans: Sequence[LeafPlan]) -> tuple[Any, ...]:
 
     w_ih, w_hh, b_first, b_second, w_out, b_out = zip(*(p.weights for p in plans), strict=True)
     return (actions, stack([p.kinds for p in plans]), stack([p.values for p in plans]),
-            stack([p.deltas for p in plans]), plans[0].gru, stack(w_ih), np.stack(w_hh), np.stack(b_first),
+            stack([p.deltas for p in plans]), np.array([p.cut_outcome for p in plans]), plans[0].gru, stack(w_ih),
+            np.stack(w_hh), np.stack(b_first),
             np.stack(b_second), stack(w_out, axis=1), stack(b_out))
 
 
@@ -141,21 +142,21 @@ class HierarchicalSMCVecEnv(NativeSMCVecEnv):
 
         self._calls = leaf_calls
         # the top-level actions: a signal or a move (the base env's effect), or a call of a child
-        kinds, values, deltas, targets = [], [], [], []
+        kinds, signal_rewards, deltas, targets = [], [], [], []
         for name in self.action_names:
             if name.startswith(CALL_PREFIX):
                 kinds.append(leaf_calls.CALL)
-                values.append(0)
+                signal_rewards.append(np.zeros((2, 2)))
                 deltas.append((0, 0))
                 targets.append(names.index(name[len(CALL_PREFIX):]))
             else:
                 a = env.action_names.index(name)
                 kinds.append(int(self._world.kinds[a]))  # leaf_calls.MOVE or leaf_calls.SIGNAL, as the vector env's
-                values.append(int(self._world.values[a]))
+                signal_rewards.append(self._world.signal_rewards[a])
                 deltas.append(tuple(self._world.deltas[a]))
                 targets.append(-1)
         self._kinds = np.array(kinds, dtype=np.int64)
-        self._values = np.array(values, dtype=np.int64)
+        self._signal_rewards = np.array(signal_rewards, dtype=np.float64)
         self._deltas = np.array(deltas, dtype=np.int64).reshape(n_actions, 2)
         self._targets = np.array(targets, dtype=np.int64)
         self._children = _stacked(plans)
@@ -220,8 +221,8 @@ class HierarchicalSMCVecEnv(NativeSMCVecEnv):
         self._phase[:] = leaf_calls.STARTING
         while True:
             status = leaf_calls.smc_steps(
-                actions, self._kinds, self._values, self._deltas, self._targets, caps, self.kind == BRING_ABOUT,
-                CLASSIFICATION_REWARD, GOAL_POTENTIAL, GOAL_REWARD, NUM_COLORS, world.me, world.self_color,
+                actions, self._kinds, self._signal_rewards, self._deltas, self._targets, caps,
+                self.vector_env.task_kind.tracks_goal, GOAL_POTENTIAL, NUM_COLORS, world.me, world.self_color,
                 world.labels, world.goal_table, *self._children, world.scene, world.row, world.col, world.goal,
                 self._grids, self._owners, self._phase, self._counters, self._totals, self._h, self._c,
                 self._uniforms, self._used, self._unused_generator, self._rewards, self._terminated, self._moves)

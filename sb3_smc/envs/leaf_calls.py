@@ -44,7 +44,7 @@ def _shape(goal: int, counters: np.ndarray, totals: np.ndarray, potential: float
 
 @njit(cache=True, error_model="numpy")  # no division checks: the cell's tanh vectorizes
 def leaf_call(grid: np.ndarray, owner: np.ndarray, me: int, self_color: int, goal_cells: np.ndarray,
-              bring_about: bool, potential: float, n_colors: int, kinds: np.ndarray, values: np.ndarray,
+              tracks_goal: bool, potential: float, n_colors: int, kinds: np.ndarray, values: np.ndarray,
               deltas: np.ndarray, counters: np.ndarray, totals: np.ndarray, gru: bool, h: np.ndarray, c: np.ndarray,
               w_ih: np.ndarray, w_hh: np.ndarray, b_first: np.ndarray, b_second: np.ndarray, w_out: np.ndarray,
               b_out: np.ndarray, rng: np.random.Generator, uniforms: np.ndarray) -> int:  # pragma: no cover
@@ -56,10 +56,12 @@ def leaf_call(grid: np.ndarray, owner: np.ndarray, me: int, self_color: int, goa
     from ``rng`` as that loop, so the same call.
 
     ``grid`` / ``owner``: the world's live padded arrays (moves are made in them); ``goal_cells``: per self cell
-    the goal's truth (1 / 0, -1 not known yet; bring-about only), ``potential`` the reward of entering the goal
-    (minus that of leaving it); ``n_colors`` the window's one-hot width. Per action ``kinds`` (0 signal, 1 move),
-    ``values`` (a signal's outcome) and ``deltas`` (a move's row/column offsets). ``counters`` (int64, see
-    ``ROW`` ...) and ``totals`` (``[reward, outcome]``) carry the call's state in and out, ``h`` / ``c`` the
+    the goal's truth (1 / 0, -1 not known yet; read where the task's kind ``tracks_goal``), ``potential`` the reward
+    of entering the goal (minus that of leaving it); ``n_colors`` the window's one-hot width. Per action ``kinds`` (0
+    signal, 1 move), ``values`` (a signal's outcome) and ``deltas`` (a move's row/column offsets). ``counters``
+    (int64, see ``ROW`` ...) and ``totals`` (``[reward, outcome]``; the outcome as it comes in stays where the call
+    ends without a signal: the caller sets it to the child kind's cut outcome) carry the call's state in and out,
+    ``h`` / ``c`` the
     recurrent state (``c`` unused for a GRU, whose biases are ``b_first`` / ``b_second``; an LSTM's bias is
     ``b_first``). Each decision takes one uniform: ``rng.random()`` when ``uniforms`` is empty, else
     ``uniforms[counters[DRAWN]]`` (draws made ahead from the same generator: the same numbers; ``uniforms`` must
@@ -114,7 +116,7 @@ def leaf_call(grid: np.ndarray, owner: np.ndarray, me: int, self_color: int, goa
         owner[row + 1, col + 1] = me
         counters[ROW] = row
         counters[COL] = col
-        if bring_about:
+        if tracks_goal:
             goal = goal_cells[row, col]
             if goal < 0:
                 counters[RESUME] = 1
@@ -131,11 +133,11 @@ after a top-level move for a goal truth not known yet (the step resumes there); 
 
 
 @njit(cache=True)
-def smc_steps(actions: np.ndarray, kinds: np.ndarray, values: np.ndarray, deltas: np.ndarray, targets: np.ndarray,
-              caps: np.ndarray, bring_about: bool, signal_reward: float, potential: float, goal_reward: float,
+def smc_steps(actions: np.ndarray, kinds: np.ndarray, signal_rewards: np.ndarray, deltas: np.ndarray,
+              targets: np.ndarray, caps: np.ndarray, tracks_goal: bool, potential: float,
               n_colors: int, me: np.ndarray, self_color: np.ndarray, labels: np.ndarray, goal_table: np.ndarray,
               child_actions: np.ndarray, child_kinds: np.ndarray, child_values: np.ndarray,
-              child_deltas: np.ndarray, gru: bool,
+              child_deltas: np.ndarray, child_cut: np.ndarray, gru: bool,
               w_ih: np.ndarray, w_hh: np.ndarray, b_first: np.ndarray, b_second: np.ndarray, w_out: np.ndarray,
               b_out: np.ndarray, scene: np.ndarray, row: np.ndarray, col: np.ndarray, goal: np.ndarray,
               grids: np.ndarray, owners: np.ndarray, phase: np.ndarray, counters: np.ndarray, totals: np.ndarray,
@@ -145,11 +147,13 @@ def smc_steps(actions: np.ndarray, kinds: np.ndarray, values: np.ndarray, deltas
     self moves: :meth:`sb3_smc.HierarchicalSMCWrapper.step`'s action (a signal, a move, or a whole call of a child
     by :func:`leaf_call`) with :class:`~pixelworld_env.PixelWorldEnv`'s rewards, the same moves and draws.
 
-    Per top-level action ``kinds`` (:data:`SIGNAL`, :data:`MOVE`, :data:`CALL`), ``values`` (a signal's value),
-    ``deltas`` (a move's offsets), ``targets`` (a call's child); ``caps`` per environment its call's decisions and
-    moves. Per scene ``me``, ``self_color``, ``labels`` and ``goal_table`` (the goal's truth per self cell, -1 not
-    known yet). The children's plans and weights stacked (one row per child, ``child_actions`` its actions; the rows
-    padded to the most actions; ``b_second`` empty rows for an LSTM).
+    Per top-level action ``kinds`` (:data:`SIGNAL`, :data:`MOVE`, :data:`CALL`), ``signal_rewards`` (a signal's
+    reward by label and goal truth: the task kind's table), ``deltas`` (a move's offsets), ``targets`` (a call's
+    child); ``caps`` per environment its call's decisions and moves; ``tracks_goal`` the task kind's. Per scene
+    ``me``, ``self_color``, ``labels`` and ``goal_table`` (the goal's truth per self cell, -1 not known yet). The
+    children's plans and weights stacked (one row per child, ``child_actions`` its actions; the rows padded to the
+    most actions; ``child_cut`` the outcome of a call that ends without a signal; ``b_second`` empty rows for an
+    LSTM).
     Per environment its live state (``scene``, ``row``, ``col``, ``goal``, its padded ``grids`` / ``owners``), a
     call's ``counters`` / ``totals`` / ``h`` / ``c`` and its ``uniforms`` drawn ahead, ``used`` of them. Writes
     ``rewards`` and ``terminated``, and for a call ``moves`` (its outcome stays in ``totals[k, 1]``).
@@ -176,10 +180,11 @@ def smc_steps(actions: np.ndarray, kinds: np.ndarray, values: np.ndarray, deltas
                 counters[k, PREVIOUS] = -1
                 counters[k, GOAL] = goal[k]
                 counters[k, DRAWN] = used[k]
-                totals[k, :] = 0.0
+                totals[k, 0] = 0.0
+                totals[k, 1] = child_cut[child]
                 h[k, :] = 0.0
                 c[k, :] = 0.0
-            status = leaf_call(grids[k], owners[k], me[s], self_color[s], goal_table[s], bring_about, potential,
+            status = leaf_call(grids[k], owners[k], me[s], self_color[s], goal_table[s], tracks_goal, potential,
                                n_colors, child_kinds[child, :na], child_values[child, :na], child_deltas[child, :na],
                                counters[k], totals[k], gru, h[k], c[k], w_ih[child, :w_ih.shape[1] - n_most + na],
                                w_hh[child], b_first[child], b_second[child], w_out[child, :, :na], b_out[child, :na],
@@ -209,7 +214,7 @@ def smc_steps(actions: np.ndarray, kinds: np.ndarray, values: np.ndarray, deltas
                     owners[k, r_next + 1, q_next + 1] = me[s]
                     row[k] = r_next
                     col[k] = q_next
-                    if bring_about:
+                    if tracks_goal:
                         phase[k] = IN_MOVE
                 if phase[k] == IN_MOVE and goal_table[s, row[k], col[k]] < 0:
                     return k
@@ -220,9 +225,6 @@ def smc_steps(actions: np.ndarray, kinds: np.ndarray, values: np.ndarray, deltas
                     rewards[k] = potential if g == 1 else -potential
         else:  # a signal ends the episode
             terminated[k] = True
-            if bring_about:
-                rewards[k] = goal_reward - potential if goal[k] == 1 else 0.0
-            else:
-                rewards[k] = signal_reward if values[a] == labels[s] else -signal_reward
+            rewards[k] = signal_rewards[a, labels[s], goal[k]]
         phase[k] = STEPPED
     return -1

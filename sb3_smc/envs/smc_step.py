@@ -3,9 +3,10 @@
 :class:`~sb3_smc.envs.vec_env.FlatSMCVecEnv` (a flat SMC's environments as arrays over PixelWorld's native vector env).
 
 * The **observation** (:class:`SMCObservation`): the sensor (PixelWorld's one-hot 3 x 3 window), the last outcome of
-  each SMC (:data:`SIGNAL_OUTCOMES`; :data:`NO_OUTCOME` until called in the episode or when a call timed out), the
-  one-hot previous action (none, :data:`NO_ACTION`, after a reset), float32. :meth:`SMCObservation.write` writes
-  the outcomes and the previous action of one observation or of rows of them; the environment writes the sensor.
+  each SMC (:data:`SIGNAL_OUTCOMES`; :data:`NO_OUTCOME` until called in the episode, a call cut at its cap its
+  kind's ``cut_outcome``), the one-hot previous action (none, :data:`NO_ACTION`, after a reset), float32.
+  :meth:`SMCObservation.write` writes the outcomes and the previous action of one observation or of rows of them;
+  the environment writes the sensor.
 * The **step's rules**: how many of the episode's ``max_steps`` an action takes (:func:`step_cost`), when the step
   ends the episode by time (:func:`truncated`), whether the episode succeeded (:func:`is_success`), what
   ``primitive_steps`` an action that is not a call makes (:func:`primitive_steps`), and the info keys.
@@ -25,15 +26,17 @@ from typing import Any, overload
 import numpy as np
 from gymnasium import spaces
 
+from pixelworld_env.core.kinds import signal_outcomes
 from sb3_smc.core.layout import observation_size
 
 __all__ = ["ELAPSED_STEPS", "IS_SUCCESS", "NO_ACTION", "NO_OUTCOME", "PRIMITIVE_STEPS", "SIGNAL_OUTCOMES",
            "SMC_CALLS", "SMCObservation", "is_success", "primitive_steps", "step_cost", "truncated"]
 
-SIGNAL_OUTCOMES = {"SIG1": 1.0, "SIG0": -1.0}
-"""The outcome an SMC call records for each signal."""
+SIGNAL_OUTCOMES = signal_outcomes()
+"""The outcome an SMC call records for each signal (the table of kinds: +1 SIG1, -1 SIG0, -1 CANNOT)."""
 NO_OUTCOME = 0.0
-"""The outcome of an SMC not called in this episode, or of a call cut at its cap."""
+"""The outcome of an SMC not called in this episode (a call cut at its cap records its kind's ``cut_outcome``: 0,
+or -0.5 for bring-about-or-cannot, so that a parent tells done, cannot, cut and not called apart)."""
 NO_ACTION = -1
 """The previous action after a reset: none (the one-hot previous action is all zeros)."""
 

@@ -185,7 +185,7 @@ class NativeSMCVecEnv(GymnasiumVecEnv):
             info: dict[str, Any] = {IS_SUCCESS: s, PRIMITIVE_STEPS: m, "TimeLimit.truncated": t}
             if names:
                 info[SMC_CALLS] = [] if child < 0 else [{"smc": names[child], "depth": 1, "primitive_steps": m,
-                                                         "outcome": int(outcome), "reward": r}]
+                                                         "outcome": outcome, "reward": r}]
             infos.append(info)
         for k, terminal in zip(step.ended.tolist(), step.terminal, strict=True):
             infos[k]["terminal_observation"] = terminal

@@ -12,8 +12,9 @@ from gymnasium import spaces
 from gymnasium.wrappers import OrderEnforcing, PassiveEnvChecker
 
 from pixelworld_env.core.constants import NUM_COLORS
+from pixelworld_env.core.kinds import GOAL_POTENTIAL, task_kind
 from pixelworld_env.core.world import MOVES as MOVE_OFFSETS
-from pixelworld_env.envs.env import BRING_ABOUT, GOAL_POTENTIAL, PixelWorldEnv
+from pixelworld_env.envs.env import PixelWorldEnv
 from pixelworld_env.validation import check_action, no_episode
 from sb3_smc.core.layout import CALL_PREFIX, smc_action_names
 from sb3_smc.envs import smc_step
@@ -54,6 +55,7 @@ class LeafPlan(NamedTuple):
     kinds: np.ndarray  #: per action: 1 a move, 0 a signal
     values: np.ndarray  #: per action: a signal's outcome (0 for a move)
     deltas: np.ndarray  #: per action: a move's row and column offsets (0 for a signal)
+    cut_outcome: float  #: the outcome of a call that ends without a signal (the SMC kind's)
     gru: bool  #: the policy is a GRU (else an LSTM)
     hidden: int  #: the recurrent state's size
     weights: tuple[np.ndarray, ...]  #: the compiled step's weights (``compiled_weights``)
@@ -74,7 +76,7 @@ def leaf_plan(smc: SMC, sensor_size: int, primitives: Sequence[str]) -> LeafPlan
     return LeafPlan(np.array([int(name in primitives) for name in names], dtype=np.int64),
                     np.array([SIGNAL_OUTCOMES.get(name, 0.0) for name in names], dtype=np.float64),
                     np.array([MOVE_OFFSETS.get(name, (0, 0)) for name in names], dtype=np.int64).reshape(n_actions, 2),
-                    isinstance(policy, NumpyGRUPolicy), policy.hidden_size, weights)
+                    task_kind(smc.kind).cut_outcome, isinstance(policy, NumpyGRUPolicy), policy.hidden_size, weights)
 
 
 def _only_order_checks(env: gym.Env, base: gym.Env) -> bool:
@@ -109,7 +111,8 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
     (seeded by ``reset(seed=...)``), until it emits one of its signals or ``call_step_cap`` primitive moves have
     been made under it, the moves of the calls it makes included (docs/design.md, "Hierarchy: SMC calls"); each
     call also takes at most ``call_step_cap`` decisions of its own. Its signal
-    never ends the episode: it becomes the SMC's **outcome** (+1 SIG1, -1 SIG0, 0 timed out). An SMC that has
+    never ends the episode: it becomes the SMC's **outcome** (the signal's: +1 SIG1, -1 SIG0, -1 CANNOT; a call
+    cut at its cap: the SMC kind's ``cut_outcome``, 0, or -0.5 for bring-about-or-cannot). An SMC that has
     children calls them the same way, each with its own outcome vector, at any depth; a nested call shares the
     move budget of the top-level call it runs in, so a call of any depth makes at most ``call_step_cap`` moves.
 
@@ -237,19 +240,19 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         :meth:`call_coroutine`."""
         from sb3_smc.envs import leaf_calls  # numba: loaded on the first compiled call
 
-        kinds, values, deltas, gru, hidden, (w_ih, w_hh, b_first, b_second, w_out, b_out) = leaf
+        kinds, values, deltas, cut, gru, hidden, (w_ih, w_hh, b_first, b_second, w_out, b_out) = leaf
         base = cast(PixelWorldEnv, self.base)
         world = base.world
         row, col = world.positions[world.self_index]
         counters = np.array([row, col, cap, budget[0], 0, -1, int(base.goal), 0, 0], dtype=np.int64)
-        totals = np.zeros(2)
+        totals = np.array([0.0, cut])
         h, c = np.zeros(hidden), np.zeros(hidden)
         cells = base.goal_cells()
-        bring_about = base.kind == BRING_ABOUT
+        tracks_goal = base.task_kind.tracks_goal
         color = int(world.scene.self_object.color)
         try:
             while True:
-                status = leaf_calls.leaf_call(world.grid, world.owner, world.self_index, color, cells, bring_about,
+                status = leaf_calls.leaf_call(world.grid, world.owner, world.self_index, color, cells, tracks_goal,
                                               GOAL_POTENTIAL, NUM_COLORS, kinds, values, deltas, counters, totals, gru,
                                               h, c, w_ih, w_hh, b_first, b_second, w_out, b_out, rng,
                                               _NO_UNIFORMS)
@@ -279,7 +282,7 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
 
         The call takes at most ``cap`` decisions and makes at most ``budget[0]`` moves (default ``cap``), nested
         calls included: ``budget`` is the one-element move budget shared by the calls of one top-level call,
-        decreased by every move; the call ends timed out (outcome 0) when it is used up.
+        decreased by every move; the call ends timed out (its kind's cut outcome) when it is used up.
 
         It yields ``(policy, observation, state)`` whenever a policy must decide (``smc``'s or, inside a child's call,
         the child's) and expects ``policy.probabilities(observation, state)`` back: :func:`run_coroutine` (what
@@ -297,7 +300,7 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
             leaf = self._leaf_plan(smc)
             if leaf is not None:  # the whole call compiled: no decision to yield
                 reward, moves, outcome = self._compiled_call(smc, leaf, cap, budget, self._rng)
-                calls.append({"smc": smc.name, "depth": depth, "primitive_steps": moves, "outcome": int(outcome),
+                calls.append({"smc": smc.name, "depth": depth, "primitive_steps": moves, "outcome": outcome,
                               "reward": reward})
                 return reward, moves, outcome
         plan = self._plan_of(smc)
@@ -308,7 +311,7 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         outcomes = np.full(len(smc.children), NO_OUTCOME, dtype=np.float32)
         previous = NO_ACTION
         state = policy.initial_state()
-        reward, moves, outcome = 0.0, 0, NO_OUTCOME
+        reward, moves, outcome = 0.0, 0, task_kind(smc.kind).cut_outcome
         self._stack.append(smc.name)
         for _ in range(cap):
             if budget[0] <= 0:  # the moves of the top-level call are used up (by a call this one made)
@@ -347,7 +350,7 @@ class HierarchicalSMCWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
                     break
             previous = action
         self._stack.pop()
-        calls.append({"smc": smc.name, "depth": depth, "primitive_steps": moves, "outcome": int(outcome),
+        calls.append({"smc": smc.name, "depth": depth, "primitive_steps": moves, "outcome": outcome,
                       "reward": reward})
         return reward, moves, outcome
 

@@ -5,7 +5,8 @@ Declared before any run: :data:`FEW_SHOT_TARGETS` (24 of the paper's 51 level-2 
 categories, the two headline targets), :data:`FEW_SHOT_WORLDS` (1, 2, 4, 8 and every training world) and
 :data:`FEW_SHOT_METHODS`: ``cnn`` (the paper's passive CNN on the same worlds, classification targets only),
 ``base`` (a flat SMC, no library), ``curr`` (the children of the target's first smc-curr
-entry, their two best pretrained seeds), ``canon`` (its smc-canon entry's), ``auto`` (the automatic choice from the
+entry, their two best pretrained seeds), ``canon`` (its smc-canon entry's; both less any SMC trained on the target's
+own datasets, which the held-out rule bars), ``auto`` (the automatic choice from the
 ``N`` examples, :func:`sb3_smc.fewshot.choose_smcs`, over the whole pretrained library, held out). Each cell is
 :func:`sb3_smc.fewshot.learn_concept` with the paper's protocol (best training update, every test world 10 times, seed
 0), its records written to ``<out>/records/<target>/<method>-n<N>@<seed>.json`` as it finishes (a stopped run resumes
@@ -83,7 +84,7 @@ def run_few_shot(out: str | Path, *, targets: Sequence[str] = FEW_SHOT_TARGETS,
     (``total_timesteps`` ...)."""
     from pixelworld_env.datasets import catalog
     from sb3_smc.experiments.cnn import train_cnn
-    from sb3_smc.fewshot import learn_concept
+    from sb3_smc.fewshot import held_out, learn_concept
     from sb3_smc.library import SMCLibrary
     from sb3_smc.library.pretrained import pretrained_root
 
@@ -105,8 +106,11 @@ def run_few_shot(out: str | Path, *, targets: Sequence[str] = FEW_SHOT_TARGETS,
                 indent=1) + "\n")
             continue
         offer: str | list[str] = {"base": "none", "auto": "auto"}.get(method) or children_of(target, method) or []
-        if method in ("curr", "canon") and not offer:
-            continue  # the pretrained library has no such entry for this target
+        if method in ("curr", "canon"):
+            allowed = set(held_out(library, (target,)))
+            offer = [name for name in offer if name in allowed]  # held out: none trained on the target's worlds
+            if not offer:
+                continue  # the pretrained library has no such entry for this target
         learned = learn_concept(f"PW-{target}-v0", library=library, offer=offer, train_worlds=n, seed=seed,
                                 name=f"{target}-{method}-n{n or 'all'}@{seed}", lean_update=lean_update, **settings)
         smc = learned.smc

@@ -7,7 +7,8 @@ seeds of ``seed``) in the task's own environment, and scores it:
 * classification: how well its outcomes separate the labels, ``|mean outcome on positive worlds - mean outcome on
   negative worlds| / 2`` (an outcome is +1 for ``SIG1``, -1 for ``SIG0``, 0 for a timeout), in ``[0, 1]``; with
   examples of one label only, how decisive its outcomes are (``mean |outcome|``);
-* bring-about: how often the goal holds when its call ends, in ``[0, 1]``.
+* the kinds with a goal (bring-about, bring-about-or-cannot): how often the goal holds when its call ends, on the
+  example worlds that allow it, in ``[0, 1]``.
 
 The ``k`` best are kept, ties to the library's order. Deterministic for a given ``seed``.
 """
@@ -83,7 +84,7 @@ def choose_smcs(env_id: str, candidates: Sequence[SMC], *, train_worlds: int | N
         raise SMCError(f"{env_id}: the automatic choice reads a PixelWorld task's example worlds; this is another "
                        "environment (offer a list of names instead)")
     base = cast("PixelWorldEnv", env.base)
-    kind = base.kind
+    tracks_goal = base.task_kind.tracks_goal
     labels = np.asarray(base.labels if base.labels is not None else [1] * len(base.scenes))
     first = len(env.action_names) - len(candidates)
     outcomes = np.zeros((len(candidates), len(base.scenes), repeats))
@@ -95,12 +96,11 @@ def choose_smcs(env_id: str, candidates: Sequence[SMC], *, train_worlds: int | N
                               options={"index": world})
                     _, _, _, _, info = env.step(first + j)
                     top = [call for call in info["smc_calls"] if call["depth"] == 1][-1]
-                    outcomes[j, world, repeat] = float(base.goal_holds()) if kind == "bring-about" \
-                        else float(top["outcome"])
+                    outcomes[j, world, repeat] = float(base.goal_holds()) if tracks_goal else float(top["outcome"])
     finally:
         env.close()
-    if kind == "bring-about":
-        scores = outcomes.mean(axis=(1, 2))
+    if tracks_goal:  # how often the call ends in the goal, on the worlds that allow it
+        scores = outcomes[:, labels == 1].mean(axis=(1, 2)) if (labels == 1).any() else np.zeros(len(candidates))
     elif len(set(labels.tolist())) == 2:
         scores = np.abs(outcomes[:, labels == 1].mean(axis=(1, 2)) - outcomes[:, labels == 0].mean(axis=(1, 2))) / 2
     else:

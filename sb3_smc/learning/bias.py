@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from sb3_smc.core.layout import CALL_PREFIX, MOVES
+from sb3_smc.core.layout import CALL_PREFIX, MOVES, SIGNAL_NAMES
 from sb3_smc.errors import SMCError
 
 __all__ = ["NONSIGNAL_WEIGHT", "SIGNAL_WEIGHT", "SMC_WEIGHT", "apply_signal_bias", "initial_action_probabilities"]
@@ -18,14 +18,14 @@ SIGNAL_WEIGHT, NONSIGNAL_WEIGHT, SMC_WEIGHT = 1.0, 20.0, 20.0
 
 
 def _group(name: str, primitives: Sequence[str]) -> str:
-    if name.startswith("SIG"):
+    if name in SIGNAL_NAMES:
         return "signal"
     if name.startswith(CALL_PREFIX):
         return "smc"
     if name in primitives:
         return "move"
-    raise SMCError(f"unknown action name {name!r}: expected a signal (SIG*), a primitive {tuple(primitives)} or "
-                   f"{CALL_PREFIX}<child>")
+    raise SMCError(f"unknown action name {name!r}: expected a signal {SIGNAL_NAMES}, a primitive "
+                   f"{tuple(primitives)} or {CALL_PREFIX}<child>")
 
 
 def initial_action_probabilities(action_names: Sequence[str], *, signal_weight: float = SIGNAL_WEIGHT,

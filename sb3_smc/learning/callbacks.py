@@ -50,6 +50,7 @@ from typing import Any
 import numpy as np
 from stable_baselines3.common.callbacks import BaseCallback
 
+from pixelworld_env.core.kinds import task_kind
 from sb3_smc.envs.vec_env import SMCStep
 
 __all__ = ["BestSnapshot", "RolloutStats", "SMCTrainingCallback"]
@@ -107,11 +108,11 @@ class SMCTrainingCallback(BaseCallback):
     """Statistics, TensorBoard curves, best-snapshot selection and progress lines for SMC training.
 
     ``children`` are the names of the SMCs the trained policy can call (their curves are written even when a
-    child is never called, as zeros); ``kind`` is the task kind ("classification" adds ``smc/accuracy``).
-    ``total_updates`` is only used for the progress line. ``stop_at``: the largest mean training return there is
-    (:data:`sb3_smc.tasks.task.MAX_RETURN`); training stops once the selection reaches it (:attr:`solved`). After
-    training, :attr:`best` holds the selection (``best.state``: a deep copy of the policy's ``state_dict`` of the
-    selected update) and :attr:`history` one dict of statistics per update.
+    child is never called, as zeros); ``kind`` is the task kind (one scored by accuracy, classification, adds
+    ``smc/accuracy``). ``total_updates`` is only used for the progress line. ``stop_at``: the largest mean training
+    return there is (:data:`sb3_smc.tasks.task.MAX_RETURN`); training stops once the selection reaches it
+    (:attr:`solved`). After training, :attr:`best` holds the selection (``best.state``: a deep copy of the
+    policy's ``state_dict`` of the selected update) and :attr:`history` one dict of statistics per update.
     """
 
     def __init__(self, *, kind: str, children: Sequence[str] = (), total_updates: int | None = None,
@@ -281,7 +282,7 @@ class SMCTrainingCallback(BaseCallback):
             "smc/episode_primitive_steps": float(np.mean(stats.primitive_lengths)) if episodes else math.nan,
             "smc/episodes": float(episodes),
         }
-        if self.kind == "classification":
+        if task_kind(self.kind).score == "accuracy":
             row["smc/accuracy"] = stats.success_rate
         for child, count in stats.calls.items():
             row[f"smc_calls/{child}/calls_per_episode"] = count / episodes if episodes else math.nan

@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
+from pixelworld_env.core.kinds import task_kind
 from pixelworld_env.validation import check_int, check_seed
 from sb3_smc.envs.factory import make_smc_env, spec_for_smc
 from sb3_smc.errors import SMCError
@@ -150,7 +151,7 @@ class EvaluationResult:
         return asdict(self)
 
     def summary(self) -> str:
-        what = "accuracy" if self.kind == "classification" else "success rate"
+        what = task_kind(self.kind).score
         return (f"{self.smc} on {self.env_id} ({self.split}): {what} {self.score:.3f} over {len(self.environments)} "
                 f"environments x {self.repeats} repeats, mean length {self.mean_length:.1f}")
 

@@ -241,7 +241,8 @@ def train_smc(
         update"); ``SMCError`` for a model it does not apply to (another algorithm or cell, a critic LSTM, several
         minibatches per epoch). Off by default: results stay bit-identical.
     :param algo: a name of :data:`~sb3_smc.core.hyperparameters.ALGORITHM_REGISTRY`: ``"RecurrentPPO"`` (LSTM 32),
-        ``"TRPO"`` (MLP 32), ``"PPO"`` (MLP 32) or ``"RecurrentTRPO"`` (:mod:`sb3_smc.recurrent_trpo`).
+        ``"TRPO"`` (MLP 32), ``"PPO"`` (MLP 32), ``"RecurrentTRPO"`` (:mod:`sb3_smc.recurrent_trpo`) or a learner
+        of your own (:func:`~sb3_smc.core.hyperparameters.register_algorithm`).
     :param total_timesteps: the budget in decisions, at least 1 (:func:`untrained_smc` gives the SMC before
         training).
     :param seed: the training seed (environments, network, sampling).

@@ -1,7 +1,7 @@
 """SMC libraries: trained SMCs in a directory with a versioned manifest.
 
 * :mod:`sb3_smc.library.library` — :class:`SMCLibrary`, the API (a mapping name -> SMC; add, save, load, wrap);
-* :mod:`sb3_smc.library.manifest` — the manifest: its schema (version 5), the checksums of its content,
+* :mod:`sb3_smc.library.manifest` — the manifest: its schema (version 6), the checksums of its content,
   :class:`LibraryEntry`, validation, the load order;
 * :mod:`sb3_smc.library.model_file` — a model as a file that loads without running code (safetensors + JSON);
 * :mod:`sb3_smc.library.upgrade` — manifests of versions 1 to 4, converted on read;

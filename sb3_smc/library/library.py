@@ -183,11 +183,8 @@ class SMCLibrary(Mapping[str, SMC]):
         if smc.model is None:
             raise LibraryError(
                 f"SMC {smc.name!r} has no model (a scripted policy: {type(smc.policy).__name__}); a library stores "
-                f"only SMCs with a trained {'/'.join(storage.ALGORITHMS)} model")
-        algo = type(smc.model).__name__
-        if algo not in storage.ALGORITHMS or not isinstance(smc.model, storage.algorithm_classes()[algo]):
-            raise LibraryError(f"SMC {smc.name!r}: cannot store a {algo} model (supported: "
-                               f"{', '.join(storage.ALGORITHMS)})")
+                "only SMCs with a trained model")
+        algo = storage.algorithm_name(smc)
         storage.check_model_layout(smc.name, smc.model, smc.action_names, smc.observation_size, f"its {algo} model",
                                    storage.frame_stack_of(smc), smc.layout)
 
@@ -246,7 +243,8 @@ class SMCLibrary(Mapping[str, SMC]):
         library and no SMC calls itself (through any chain), that action names and observation sizes agree with
         kind/children and with each model's spaces, and that each model file is intact (its SHA-256 as recorded, a
         well-formed model file) and rebuilds its model from its tensors and settings (``device="cpu"``; nothing is
-        unpickled, classes come only from Stable-Baselines3, sb3-contrib, PyTorch and this package). Reads under the
+        unpickled, classes come only from Stable-Baselines3, sb3-contrib, PyTorch and this package, and the learners
+        this process registered, :func:`~sb3_smc.core.hyperparameters.register_algorithm`). Reads under the
         library's shared lock: a writer's save is seen whole or not at all. Symbolic links inside the folder are
         refused. See ``docs/security.md``.
 

@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import Any
 
 from sb3_smc.core.dag import CycleError, children_first
-from sb3_smc.core.hyperparameters import ALGORITHMS as TRAINED_ALGORITHMS
+from sb3_smc.core.hyperparameters import ALGORITHM_REGISTRY
 from sb3_smc.core.layout import PIXELWORLD_LAYOUT, SIGNALS, Layout, observation_size, smc_action_names
 from sb3_smc.core.names import name_problem
 from sb3_smc.errors import SMCError
@@ -38,23 +38,23 @@ from sb3_smc.records import (
     test_score_of,
 )
 
-__all__ = ["ALGORITHMS", "ENTRY_CHECKSUM", "FORMAT", "FORMAT_VERSION", "MANIFEST", "MANIFEST_CHECKSUM", "MODELS",
+__all__ = ["ENTRY_CHECKSUM", "FORMAT", "FORMAT_VERSION", "MANIFEST", "MANIFEST_CHECKSUM", "MODELS",
            "SUMMARY_FIELDS", "LibraryEntry", "check_entries", "check_version", "content_sha256", "entry_checksum",
            "entry_json", "layout_json", "model_path", "new_manifest", "seal", "topological_order", "unseal"]
 
 FORMAT = "sb3-smc-library"
 """Value of the manifest's ``format`` field."""
-FORMAT_VERSION = 5
+FORMAT_VERSION = 6
 """Manifest version written. Versions 1 (sb3-smc 0.1), 2 (each entry repeating its spec's facts and summaries), 3
 (no checksums of the manifest's content) and 4 (pickled SB3 archives as model files) are read through
 :mod:`sb3_smc.library.upgrade`. Version 5 names content-addressed model files that load without unpickling
 (:mod:`sb3_smc.library.model_file`); an entry of an earlier library converted on read may still name a pickled
-``.zip`` archive until the library is saved again with ``trust=True``."""
+``.zip`` archive until the library is saved again with ``trust=True``. Version 6 is version 5 that may hold SMCs of
+every kind of PixelWorld's table (``bring-about-or-cannot`` besides the two of version 5): a reader of version 5
+refuses it by its version, with "upgrade sb3_smc", rather than at an SMC of a kind it does not know."""
 MANIFEST = "manifest.json"
 MODELS = "models"
 """The folder of a library's model files."""
-ALGORITHMS = TRAINED_ALGORITHMS
-"""Algorithms whose models a library stores (those ``train_smc`` trains; loaded with their class, ``device="cpu"``)."""
 
 ENTRY_CHECKSUM = "entry_sha256"
 """The field of a version-4 entry holding the SHA-256 of its name and content (:func:`seal`)."""
@@ -216,9 +216,9 @@ def seal(manifest: dict[str, Any], known: dict[str, tuple[str, str]] | None = No
 
 
 def unseal(manifest: dict[str, Any], where: Path) -> dict[str, Any]:
-    """A version-4 or -5 manifest without its checksums, after checking that its content is what :func:`seal` wrote
-    (:class:`ManifestError` naming the file and the SMC whose entry changed, or saying that something outside the
-    entries did)."""
+    """A manifest of version 4 or later without its checksums, after checking that its content is what
+    :func:`seal` wrote (:class:`ManifestError` naming the file and the SMC whose entry changed, or saying that
+    something outside the entries did)."""
     fix = ("edited by hand or damaged since sb3_smc wrote it; restore it, or write an edit meant to be kept with "
            "sb3_smc.library.storage.write_manifest")
     smcs = manifest.get("smcs")
@@ -350,9 +350,9 @@ def _parse_smc(name: str, smc: Any, where: Path) -> tuple[str, str, tuple[str, .
     if smc["kind"] not in SIGNALS:
         raise ManifestError(f"{where}: entry {name!r}: unknown kind {smc['kind']!r} (expected one of "
                             f"{list(SIGNALS)})")
-    if smc["algo"] not in ALGORITHMS:
+    if smc["algo"] not in ALGORITHM_REGISTRY:
         raise ManifestError(f"{where}: entry {name!r}: unknown algorithm {smc['algo']!r} (supported: "
-                            f"{list(ALGORITHMS)})")
+                            f"{list(ALGORITHM_REGISTRY)})")
     children = smc["children"]
     if not all(isinstance(c, str) for c in children) or len(set(children)) != len(children):
         raise ManifestError(f"{where}: entry {name!r}: smc.children must be distinct names, got {children!r}")

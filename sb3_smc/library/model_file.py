@@ -28,9 +28,9 @@ from collections import deque
 from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any
 
-from sb3_smc.core.hyperparameters import ALGORITHM_REGISTRY, SCHEDULE_KEYS, decode_value, encode_value
+from sb3_smc.core.hyperparameters import ALGORITHM_REGISTRY, SCHEDULE_KEYS, algorithm_of, decode_value, encode_value
 from sb3_smc.errors import SMCError
-from sb3_smc.library.errors import CorruptModelError
+from sb3_smc.library.errors import CorruptModelError, LibraryError
 
 if TYPE_CHECKING:
     from stable_baselines3.common.on_policy_algorithm import OnPolicyAlgorithm
@@ -102,9 +102,10 @@ def encode_model(model: OnPolicyAlgorithm, *, optimizer_state: bool = True, wher
     from gymnasium import spaces
     from safetensors.torch import save
 
-    algo = type(model).__name__
-    if algo not in ALGORITHM_REGISTRY:
-        raise SMCError(f"{where}: cannot store a {algo} model (supported: {', '.join(ALGORITHM_REGISTRY)})")
+    algo = algorithm_of(type(model))
+    if algo is None:
+        raise SMCError(f"{where}: cannot store a {type(model).__name__} model (supported: "
+                       f"{', '.join(ALGORITHM_REGISTRY)}; sb3_smc.register_algorithm adds a learner)")
     obs, act = model.observation_space, model.action_space
     if not isinstance(obs, spaces.Box) or not isinstance(act, spaces.Discrete):
         raise SMCError(f"{where}: a library stores models with a Box observation space and a Discrete action space, "
@@ -292,7 +293,10 @@ def decode_model(data: bytes, algo: str, where: str, *, trust: bool = False) -> 
 
     if not (isinstance(policy_class, type) and issubclass(policy_class, BasePolicy)):
         raise _error(where, f"policy_class {metadata['policy_class']!r} is not a Stable-Baselines3 policy")
-    cls = ALGORITHM_REGISTRY[algo].load_class()
+    try:
+        cls = ALGORITHM_REGISTRY[algo].load_class()
+    except SMCError as err:
+        raise LibraryError(f"{where}: {err}") from err
     allowed = set(_constructor_parameters(cls)) - _NOT_STORED
     unknown = sorted(set(attributes) - allowed - set(_COUNTERS))
     if unknown:

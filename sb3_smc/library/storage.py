@@ -7,7 +7,7 @@ removing SMCs in place, under a lock. The manifest's schema and validation (and 
 Layout::
 
     my-library/
-        manifest.json        {"format": "sb3-smc-library", "version": 5, "created_with": {...}, "smcs": {...},
+        manifest.json        {"format": "sb3-smc-library", "version": 6, "created_with": {...}, "smcs": {...},
                               "manifest_sha256": ...}
         models/<sha256>.safetensors   one model per SMC, named by the SHA-256 of its bytes (never rewritten)
         .lock                the lock of its writers and readers
@@ -33,8 +33,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from pixelworld_env.atomic import OLD_MARKER, atomic_write
-from sb3_smc.core.hyperparameters import ALGORITHM_REGISTRY
+from sb3_smc.core.hyperparameters import ALGORITHM_REGISTRY, algorithm_of
 from sb3_smc.core.layout import HAND_SIZE, PIXELWORLD_LAYOUT, Layout
+from sb3_smc.errors import SMCError
 from sb3_smc.library.errors import (
     CorruptModelError,
     LayoutMismatchError,
@@ -47,7 +48,6 @@ from sb3_smc.library.errors import (
 )
 from sb3_smc.library.files import LOCK, locked, read_inside
 from sb3_smc.library.manifest import (
-    ALGORITHMS,
     FORMAT,
     FORMAT_VERSION,
     MANIFEST,
@@ -71,9 +71,8 @@ from sb3_smc.smc.smc import SMC
 
 if TYPE_CHECKING:
     from stable_baselines3.common.base_class import BaseAlgorithm
-    from stable_baselines3.common.on_policy_algorithm import OnPolicyAlgorithm
 
-__all__ = ["ALGORITHMS", "FORMAT", "FORMAT_VERSION", "LOCK", "MANIFEST", "MAX_MANIFEST_BYTES", "MODELS",
+__all__ = ["FORMAT", "FORMAT_VERSION", "LOCK", "MANIFEST", "MAX_MANIFEST_BYTES", "MODELS",
            "SUMMARY_FIELDS", "LibraryEntry", "add_to_library", "check_manifest", "check_model_file", "checked_entries",
            "entry_for", "entry_json", "interrupted_hint", "is_pickled", "link_copy", "load_model", "locked",
            "manifest_text", "model_bytes", "new_manifest", "read_manifest", "remove_from_library", "save_library",
@@ -83,10 +82,18 @@ MAX_MANIFEST_BYTES = 256 * 2**20
 """The largest manifest read (256 MiB; the package's pretrained library's is about 1 MB)."""
 
 
-def algorithm_classes() -> dict[str, type[OnPolicyAlgorithm]]:
-    """Algorithm name (as in the manifest's ``algo``) -> SB3 class (from
-    :data:`~sb3_smc.core.hyperparameters.ALGORITHM_REGISTRY`)."""
-    return {name: algo.load_class() for name, algo in ALGORITHM_REGISTRY.items()}
+def algorithm_name(smc: SMC) -> str:
+    """The registry's name of the algorithm of ``smc``'s model (:func:`~sb3_smc.core.hyperparameters.algorithm_of`:
+    only that algorithm's class is imported); :class:`LibraryError` for a model of none, or where the class of the
+    one it can be cannot be imported."""
+    try:
+        algo = algorithm_of(type(smc.model))
+    except SMCError as err:
+        raise LibraryError(f"SMC {smc.name!r}: {err}") from err
+    if algo is None:
+        raise LibraryError(f"SMC {smc.name!r}: cannot store a {type(smc.model).__name__} model (supported: "
+                           f"{', '.join(ALGORITHM_REGISTRY)}; sb3_smc.register_algorithm adds a learner)")
+    return algo
 
 
 def sha256(path: Path) -> str:
@@ -147,7 +154,7 @@ def check_model_layout(name: str, model: Any, action_names: Sequence[str], size:
 
 def entry_for(smc: SMC) -> dict[str, Any]:
     """The manifest entry of ``smc`` (without the ``model`` file and ``sha256`` fields the save adds)."""
-    return entry_json(smc.name, type(smc.model).__name__, frame_stack_of(smc), smc.spec, smc.record, smc.evaluations,
+    return entry_json(smc.name, algorithm_name(smc), frame_stack_of(smc), smc.spec, smc.record, smc.evaluations,
                       kind=smc.kind, children=tuple(c.name for c in smc.children),
                       include_primitives=smc.include_primitives, layout=smc.layout)
 
@@ -545,7 +552,10 @@ def load_model(root: Path, name: str, entry: LibraryEntry, *, trust: bool = Fals
             "comes from, load it with trust=True (sb3-smc library DIR --upgrade --trust converts it to the safe "
             "format); otherwise ask for a version-5 copy")
     algorithm = ALGORITHM_REGISTRY[entry.algo]
-    cls = algorithm.load_class()
+    try:
+        cls = algorithm.load_class()
+    except SMCError as err:
+        raise LibraryError(f"SMC {name!r}: {err}") from err
     try:
         model = cls.load(io.BytesIO(data), device="cpu")
     except Exception as err:  # noqa: BLE001 - SB3 raises many kinds of errors for a bad archive

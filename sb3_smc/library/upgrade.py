@@ -10,6 +10,7 @@
   (``models/<name>.zip``), which load only with ``trust=True``; saving the library writes them in version 5's format.
 - Version 3: the content of version 4 without its checksums (:func:`sb3_smc.library.manifest.seal`), which are
   written with it the next time it is written.
+- Version 5: the content of version 6, whose SMCs may also be of the ``bring-about-or-cannot`` kind; read as it is.
 
 JSON in, JSON out; saving a loaded library (``SMCLibrary.load(path).save()``) writes the current version.
 """
@@ -21,9 +22,9 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+from sb3_smc.core.hyperparameters import ALGORITHMS
 from sb3_smc.library.errors import LayoutMismatchError, ManifestError
 from sb3_smc.library.manifest import (
-    ALGORITHMS,
     ENTRY_FIELDS,
     FORMAT_VERSION,
     SMC_FIELDS,

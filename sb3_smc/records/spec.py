@@ -11,7 +11,6 @@ from typing import Any, ClassVar
 
 from sb3_smc.core.hyperparameters import (
     ALGORITHM_REGISTRY,
-    ALGORITHMS,
     DEFAULT_ALGORITHM,
     DEFAULT_N_ENVS,
     DEFAULT_TIMESTEPS,
@@ -268,7 +267,7 @@ class TrainingSpec(Record):
         for name, cls in self._nested.items():
             if not isinstance(getattr(self, name), cls):
                 raise RecordError(f"{name} must be a {cls.__name__}, got {getattr(self, name)!r}")
-        str_field(self.algo, "algo", ALGORITHMS)
+        str_field(self.algo, "algo", tuple(ALGORITHM_REGISTRY))
         set_field(self, "seed", int_field(self.seed, "seed", 0, MAX_TRAINING_SEED))
         set_field(self, "frame_stack", int_field(self.frame_stack, "frame_stack", 1, MAX_FRAME_STACK))
         if ALGORITHM_REGISTRY[self.algo].recurrent and self.frame_stack != 1:

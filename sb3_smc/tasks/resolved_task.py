@@ -30,7 +30,7 @@ from typing import Any, Protocol
 import gymnasium as gym
 from gymnasium.envs.registration import EnvSpec, find_highest_version, get_env_id, load_env_creator, parse_env_id
 
-from pixelworld_env.envs.registration import ENTRY_POINT, make_env
+from pixelworld_env.envs.registration import ENTRY_POINT, VECTOR_ENTRY_POINT, WORLDS_VECTOR_ENTRY_POINT, make_env
 from pixelworld_env.envs.vector import PixelWorldVectorEnv
 from sb3_smc.core.layout import PIXELWORLD_LAYOUT, Layout
 from sb3_smc.errors import SMCError, SMCTypeError
@@ -104,10 +104,11 @@ class ResolvedTask:
 
     @property
     def native_vector(self) -> bool:
-        """Whether PixelWorld's native vector env hosts the task (a flat SMC on it trains there): a ``PW-*`` id with
-        a vector entry point, without ``aaai18_reset_bug`` or ``render_mode="human"``."""
-        return (self.source is TaskSource.PIXELWORLD and self.env_id.startswith("PW-")
-                and self.registration is not None and self.registration.vector_entry_point is not None
+        """Whether PixelWorld's native vector env hosts the task (a flat SMC on it trains there): a ``PW-*`` id or
+        one of :func:`pixelworld_env.register_worlds`, with PixelWorld's vector entry point, without
+        ``aaai18_reset_bug`` or ``render_mode="human"``."""
+        return (self.registration is not None
+                and self.registration.vector_entry_point in (VECTOR_ENTRY_POINT, WORLDS_VECTOR_ENTRY_POINT)
                 and not self.env_kwargs.get("aaai18_reset_bug") and self.env_kwargs.get("render_mode") != "human")
 
     @cached_property

@@ -9,12 +9,17 @@ An SMC task is what the paper trains an SMC on (its rules, in the package's word
 * **classification** (``label(env) -> 0 or 1``, read from the episode's initial state at reset): actions SIG0,
   SIG1, then the primitives. The signal equal to the label earns +1, the other -1; either ends the episode.
   Primitive steps earn 0.
+* **bring-about-or-cannot** (``goal`` as for bring-about, and ``possible(env) -> bool``, read at reset: whether the
+  goal can be brought about from this state): actions SIG1, CANNOT, then the primitives; bring-about's shaping, SIG1
+  in the goal +1 in all and outside it -1, CANNOT +1 where the goal is impossible and -1 (in all) where it is not.
+
+The signals and their rewards are PixelWorld's table of kinds (:data:`pixelworld_env.core.kinds.TASK_KINDS`).
 
 The environment's own rewards are not the task's and are dropped. An episode is cut (truncated) after
 ``max_steps`` actions. When the environment ends its episode itself (Minigrid reaching its goal square, a time
 limit of its own), the task's episode ends there, as if the SMC had stopped without a signal: terminated if the
-environment terminated, truncated if it truncated; a bring-about task then pays what SIG1 would (0.5 if the goal
-holds), a classification task nothing more.
+environment terminated, truncated if it truncated; a kind with a goal then pays what a right SIG1 would (0.5 if the
+goal holds, else nothing), a classification task nothing more.
 
 The observation is the environment's, flattened to float32 (:attr:`SMCTask.sensor_size` values): a ``Box``,
 ``Discrete`` (one-hot), ``MultiBinary`` / ``MultiDiscrete`` or a ``Dict`` / ``Tuple`` of them, as
@@ -35,21 +40,15 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from pixelworld_env.envs.env import (
-    BRING_ABOUT,
-    CLASSIFICATION,
-    CLASSIFICATION_REWARD,
-    GOAL_POTENTIAL,
-    GOAL_REWARD,
-    PixelWorldEnv,
-)
+from pixelworld_env.core.kinds import GOAL_POTENTIAL, GOAL_REWARD, SIGNAL_REWARD, task_kind
+from pixelworld_env.envs.env import PixelWorldEnv
 from pixelworld_env.validation import no_episode
 from sb3_smc.core.layout import SIGNALS, Layout
 from sb3_smc.errors import SMCError, SMCTypeError
 
 __all__ = ["MAX_RETURN", "SMCTask", "TaskEnv", "describe_task", "layout_of", "returns_bounded", "task_layer"]
 
-MAX_RETURN = max(CLASSIFICATION_REWARD, GOAL_REWARD)
+MAX_RETURN = max(SIGNAL_REWARD, GOAL_REWARD)
 """The largest undiscounted return an episode of an SMC task can earn, a clean success of either kind (1): the right
 signal once, or (the shaping telescoping to at most ``GOAL_POTENTIAL``) SIG1 in the goal. No task with these rules
 returns more, PixelWorld's or :class:`SMCTask`'s, whatever the SMC calls; a subclass that rewards otherwise, or a
@@ -57,6 +56,7 @@ wrapper that changes the rewards on their way, may (:func:`returns_bounded`)."""
 
 Goal = Callable[[gym.Env], bool]
 Label = Callable[[gym.Env], int]
+Possible = Callable[[gym.Env], bool]
 Observation = Callable[[Any], np.ndarray]
 
 
@@ -162,39 +162,47 @@ def _primitive_names(env: gym.Env, n: int, names: Sequence[str] | None) -> tuple
 
 class SMCTask(gym.Wrapper, gym.utils.RecordConstructorArgs):
     """``env`` (any Gymnasium environment with a ``Discrete`` action space) as an SMC task of ``kind``
-    ``"bring-about"`` (with ``goal``) or ``"classification"`` (with ``label``): the paper's signals, rewards and
-    episode limit (see the module docstring), the environment's observation flattened to its sensor values.
+    ``"bring-about"`` (with ``goal``), ``"classification"`` (with ``label``) or ``"bring-about-or-cannot"`` (with
+    ``goal`` and ``possible``): the paper's signals, rewards and episode limit (see the module docstring), the
+    environment's observation flattened to its sensor values.
 
-    ``goal(env)`` (a bool, numpy's too; anything else is a ``TypeError`` naming the function) and ``label(env)``
-    (0 or 1) receive the unwrapped environment (Minigrid's ``MiniGridEnv``, with its ``agent_pos``, ``carrying``,
-    ``grid``). ``primitive_names`` names the environment's actions (default: its
+    ``goal(env)`` and ``possible(env)`` (bools, numpy's too; anything else is a ``TypeError`` naming the function)
+    and ``label(env)`` (0 or 1) receive the unwrapped environment (Minigrid's ``MiniGridEnv``, with its ``agent_pos``,
+    ``carrying``, ``grid``). ``primitive_names`` names the environment's actions (default: its
     ``actions`` enum, as Minigrid has, else ``A0``...). It is a Gymnasium environment of its own (``reset`` /
     ``step``, observation the sensor values) and the :class:`TaskEnv` a
     :class:`~sb3_smc.envs.wrapper.HierarchicalSMCWrapper` builds SMC calls on.
     """
 
     def __init__(self, env: gym.Env, kind: str, *, goal: Goal | None = None, label: Label | None = None,
-                 observation: Observation | Sequence[str] | None = None, max_steps: int = 100,
-                 primitive_names: Sequence[str] | None = None) -> None:
-        gym.utils.RecordConstructorArgs.__init__(self, kind=kind, goal=goal, label=label, observation=observation,
-                                                 max_steps=max_steps, primitive_names=primitive_names)
+                 possible: Possible | None = None, observation: Observation | Sequence[str] | None = None,
+                 max_steps: int = 100, primitive_names: Sequence[str] | None = None) -> None:
+        gym.utils.RecordConstructorArgs.__init__(self, kind=kind, goal=goal, label=label, possible=possible,
+                                                 observation=observation, max_steps=max_steps,
+                                                 primitive_names=primitive_names)
         super().__init__(env)
         if not isinstance(env.action_space, spaces.Discrete) or int(env.action_space.start) != 0:
             raise SMCError(f"an SMC task needs a Discrete action space starting at 0 (actions become SMC actions), "
                            f"got {env.action_space}")
         if kind not in SIGNALS:
             raise SMCError(f"kind must be one of {tuple(SIGNALS)}, got {kind!r}")
-        needed, other = ("goal", "label") if kind == BRING_ABOUT else ("label", "goal")
-        given = {"goal": goal, "label": label}
-        if not callable(given[needed]):
-            raise SMCTypeError(f"a {kind} task needs {needed}=function(env), got {given[needed]!r}")
-        if given[other] is not None:
-            raise SMCError(f"a {kind} task takes {needed}=, not {other}=")
+        self.task_kind = task_kind(kind)
+        given: dict[str, Callable[[gym.Env], Any] | None] = {"goal": goal, "label": label, "possible": possible}
+        needed: list[str] = ["goal"] if self.task_kind.tracks_goal else []
+        if self.task_kind.label is not None:
+            needed.append(self.task_kind.label)
+        for name in needed:
+            if not callable(given[name]):
+                raise SMCTypeError(f"a {kind} task needs {name}=function(env), got {given[name]!r}")
+        extra = [name for name, value in given.items() if value is not None and name not in needed]
+        if extra:
+            raise SMCError(f"a {kind} task takes {', '.join(f'{n}=' for n in needed)}, not {extra[0]}=")
         if not isinstance(max_steps, int) or isinstance(max_steps, bool) or max_steps < 1:
             raise SMCError(f"max_steps must be an integer >= 1, got {max_steps!r}")
         self.kind = kind
         self.max_steps = max_steps
-        self._goal_of, self._label_of = goal, label
+        self._goal_of = goal
+        self._label_of, self._possible_of = label, possible
         self._flatten, self.sensor_size = _flattener(env.observation_space, observation)
         self.primitive_names = _primitive_names(env, int(env.action_space.n), primitive_names)
         self.action_names = (*SIGNALS[kind], *self.primitive_names)
@@ -211,14 +219,18 @@ class SMCTask(gym.Wrapper, gym.utils.RecordConstructorArgs):
 
     # ------------------------------------------------------------------------------------------ the task
 
-    def _read_goal(self) -> bool:
-        assert self._goal_of is not None
-        holds = self._goal_of(self.env.unwrapped)
+    def _read_bool(self, function: Goal | Possible) -> bool:
+        holds = function(self.env.unwrapped)
         if not isinstance(holds, bool | np.bool_):
-            name = getattr(self._goal_of, "__qualname__", repr(self._goal_of))
-            raise SMCTypeError(f"goal function {name} must return a bool (True or False, numpy bools too), got "
+            name = getattr(function, "__qualname__", repr(function))
+            which = "goal" if function is self._goal_of else "possible"
+            raise SMCTypeError(f"{which} function {name} must return a bool (True or False, numpy bools too), got "
                                f"{holds!r} ({type(holds).__name__})")
         return bool(holds)
+
+    def _read_goal(self) -> bool:
+        assert self._goal_of is not None
+        return self._read_bool(self._goal_of)
 
     def _read_sensor(self, obs: Any, method: str) -> np.ndarray:
         """The sensor values of the observation ``obs`` the environment's ``method`` returned; :class:`SMCError`
@@ -239,9 +251,9 @@ class SMCTask(gym.Wrapper, gym.utils.RecordConstructorArgs):
 
     def _info(self, success: bool = False, signalled: bool = False) -> dict[str, Any]:
         info: dict[str, Any] = {"is_success": success, "signalled": signalled}
-        if self.kind == BRING_ABOUT:
+        if self.task_kind.tracks_goal:
             info["goal"] = self._goal
-        else:
+        if self.task_kind.label is not None:  # "label" whatever it says (bring-about-or-cannot: possible)
             info["label"] = self._label
         return info
 
@@ -261,7 +273,7 @@ class SMCTask(gym.Wrapper, gym.utils.RecordConstructorArgs):
         obs, _, terminated, truncated, _ = self.env.step(action - self._n_signals)
         self._sensor = self._read_sensor(obs, "step")
         reward = 0.0
-        if self.kind == BRING_ABOUT:
+        if self.task_kind.tracks_goal:
             goal = self._read_goal()
             if goal != self._goal:
                 self._goal = goal
@@ -269,8 +281,7 @@ class SMCTask(gym.Wrapper, gym.utils.RecordConstructorArgs):
         ended = bool(terminated or truncated)
         if ended:
             self._done = True
-            if self.kind == BRING_ABOUT and self._goal:
-                reward += GOAL_REWARD - GOAL_POTENTIAL
+            reward += self.task_kind.reward_at_end(self._label, self._goal)
         return reward, bool(terminated), bool(truncated and not terminated)
 
     def transition(self, action: int) -> tuple[float, bool, bool, dict[str, Any]]:
@@ -278,11 +289,7 @@ class SMCTask(gym.Wrapper, gym.utils.RecordConstructorArgs):
         self._check_episode("step")
         self._steps += 1
         if action < self._n_signals:
-            value = 1 if self.action_names[action] == "SIG1" else 0
-            if self.kind == CLASSIFICATION:
-                reward = CLASSIFICATION_REWARD if value == self._label else -CLASSIFICATION_REWARD
-            else:
-                reward = GOAL_REWARD - GOAL_POTENTIAL if self._goal else 0.0
+            reward = self.task_kind.reward(action, self._label, self._goal)
             self._done = True
             return reward, True, False, self._info(success=reward > 0, signalled=True)
         reward, terminated, truncated = self.apply_primitive(action)
@@ -299,9 +306,12 @@ class SMCTask(gym.Wrapper, gym.utils.RecordConstructorArgs):
         self._steps = 0
         self._started = True
         self._done = False
-        if self.kind == BRING_ABOUT:
+        if self.task_kind.tracks_goal:
             self._goal = self._read_goal()
-        else:
+        if self.task_kind.label == "possible":
+            assert self._possible_of is not None
+            self._label = int(self._read_bool(self._possible_of))
+        elif self.task_kind.label == "label":
             assert self._label_of is not None
             label = self._label_of(self.env.unwrapped)
             if label not in (0, 1) or isinstance(label, float):
