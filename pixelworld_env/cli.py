@@ -25,7 +25,7 @@ from pixelworld_env.envs.registration import make_env, registered_ids
 from pixelworld_env.errors import PixelWorldError
 from pixelworld_env.validation import check_seed
 
-KEYS = {"w": "UP", "a": "LEFT", "s": "DOWN", "d": "RIGHT", "0": "SIG0", "1": "SIG1"}
+KEYS = {"w": "UP", "a": "LEFT", "s": "DOWN", "d": "RIGHT", "0": "SIG0", "1": "SIG1", "c": "CANNOT"}
 
 
 def _resolve(name: str) -> tuple[str, tuple[str, ...]]:
@@ -142,8 +142,11 @@ def cmd_play(args: argparse.Namespace, out: TextIO, keys: TextIO) -> None:
     names = env.action_names
     help_line = "keys: " + ", ".join(f"{k}={v}" for k, v in KEYS.items() if v in names) + ", q=quit"
     legend = ", ".join(f"{c.value}={c.name.lower()}" for c in Color)
-    task = (f"classify: SIG1 if the concept holds, else SIG0 (label of this scene: {info['label']})"
-            if env.labels is not None else "bring it about: move until the concept holds, then SIG1")
+    task = "bring it about: move until the concept holds, then SIG1"
+    if env.task_kind.label == "label":
+        task = f"classify: SIG1 if the concept holds, else SIG0 (label of this scene: {info['label']})"
+    elif env.task_kind.label == "possible":
+        task += f", or CANNOT where it cannot be (this scene: {'possible' if info['label'] else 'impossible'})"
     out.write(f"{args.id}, scene {info['scene_index']}: {task}\nconcept: {env.concept.text}\n")
     total, step = 0.0, 0
     pending: list[str] = []

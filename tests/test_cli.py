@@ -101,6 +101,8 @@ def test_play_reads_every_key_of_a_line_and_explains_the_task() -> None:
     assert "concept: " in out and "classify: SIG1 if the concept holds" in out and "0=empty" in out
     ba = run("play", ID, "--index", "0", keys="q\n")
     assert "bring it about" in ba and "goal holds: no" in ba
+    bc = run("play", "PW-bc_self-in-container_from_on-floor-v0", "--index", "0", keys="c\n")  # CANNOT, possible
+    assert "or CANNOT where it cannot be (this scene: possible)" in bc and "c=CANNOT" in bc and "return -1.0" in bc
 
 
 def test_play_ctrl_c_is_not_a_traceback() -> None:

@@ -24,8 +24,8 @@ def _modules(package: str, *names: str) -> list[str]:
 PUBLIC = (
     # pixelworld_env: docs/architecture.md (the layout and its table), docs/api/pixelworld_env.md
     *_modules("pixelworld_env", "errors", "validation", "yaml_loading", "atomic", "cli", "demo"),
-    *_modules("pixelworld_env.core", "constants", "objects", "shapes", "regions", "scene", "world", "kernels",
-              "render"),
+    *_modules("pixelworld_env.core", "constants", "kinds", "objects", "shapes", "regions", "scene", "world",
+              "kernels", "render"),
     *_modules("pixelworld_env.concepts", "parser", "predicates", "evaluate", "errors"),
     *_modules("pixelworld_env.generation", "definitions", "experiment_files", "dataset", "dataset_spec", "sampling",
               "placement", "csp", "oracle"),
