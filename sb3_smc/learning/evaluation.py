@@ -91,7 +91,8 @@ class EnvironmentResult:
     index: int
     score: float
     label: int | None
-    """The classification label (``None`` for bring-about)."""
+    """The world's label (classification: the concept holds; bring-about-or-cannot: the goal is possible; ``None``
+    for bring-about)."""
     episodes: list[EpisodeResult]
 
 
