@@ -114,9 +114,10 @@ def test_policies_without_a_compiled_step_keep_the_python_loop() -> None:
     assert wrapper._leaf_plan(leaf) is None
 
 
-def directed_smc(name: str, move: str) -> SMC:
-    """A compiled bring-about leaf that (almost surely) makes ``move`` until its call is cut."""
-    smc = random_smc(name, "bring-about", "lstm", seed=0)
+def directed_smc(name: str, move: str, kind: str = "bring-about") -> SMC:
+    """A compiled leaf of ``kind`` that (almost surely) takes action ``move`` every decision (a move: until its call
+    is cut)."""
+    smc = random_smc(name, kind, "lstm", seed=0)
     _, w_out, b_out = smc.policy.head[0]
     w_out *= 1e-3
     b_out[:] = [40.0 if n == move else 0.0 for n in smc.action_names]

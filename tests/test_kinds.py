@@ -17,7 +17,6 @@ from pixelworld_env.envs.vector import PixelWorldVectorEnv
 from pixelworld_env.errors import PixelWorldError
 from pixelworld_env.generation.dataset_spec import DatasetSpec
 from pixelworld_env.generation.oracle import ReachabilityLimit, can_bring_about, plan_moves
-from sb3_smc import SMC
 from sb3_smc.core.layout import smc_action_names
 from sb3_smc.envs.hierarchical_vec_env import HierarchicalSMCVecEnv
 from sb3_smc.envs.vec_env import SMCVecEnv
@@ -27,7 +26,7 @@ from sb3_smc.learning.training import make_vec_env
 from sb3_smc.records import TrainingSpec
 from sb3_smc.tasks.task import SMCTask
 from tests.helpers import IN_CONTAINER, step_side_by_side
-from tests.test_compiled_calls import compare, random_smc
+from tests.test_compiled_calls import compare, directed_smc, random_smc
 
 POSSIBLE = """
 ###########
@@ -167,20 +166,12 @@ def test_every_step_path_gives_the_same_rewards(kind: str) -> None:
     assert shaping == ([0.0] * 5 if kind == "classification" else [0.0, 0.0, 0.5, -0.5, 0.5])
 
 
-def directed(name: str, kind: str, action: str) -> SMC:
-    """A compiled leaf of ``kind`` that (almost surely) takes ``action`` every decision."""
-    smc = random_smc(name, kind, "lstm", seed=0)
-    _, w_out, b_out = smc.policy.head[0]
-    w_out *= 1e-3
-    b_out[:] = [40.0 if n == action else 0.0 for n in smc.action_names]
-    return smc
-
-
 @pytest.mark.parametrize("record_cells", [False, True])  # the compiled call and the Python loop
 def test_a_parent_tells_done_cannot_cut_and_not_called_apart(record_cells: bool) -> None:
-    kids = [directed("cannot", "bring-about-or-cannot", "CANNOT"), directed("done", "bring-about-or-cannot", "SIG1"),
-            directed("cut", "bring-about-or-cannot", "LEFT"), directed("cut_ba", "bring-about", "LEFT"),
-            directed("never", "bring-about-or-cannot", "SIG1")]
+    kids = [directed_smc(name, action, kind) for name, action, kind in (
+        ("cannot", "CANNOT", "bring-about-or-cannot"), ("done", "SIG1", "bring-about-or-cannot"),
+        ("cut", "LEFT", "bring-about-or-cannot"), ("cut_ba", "LEFT", "bring-about"),
+        ("never", "SIG1", "bring-about-or-cannot"))]
     wrapper = HierarchicalSMCWrapper(env_of("bring-about-or-cannot"), kids, record_cells=record_cells)
     wrapper.reset(seed=0, options={"index": 1})
     for kid in kids[:4]:

@@ -40,7 +40,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from pixelworld_env.core.kinds import GOAL_POTENTIAL, GOAL_REWARD, SIGNAL_REWARD, task_kind
+from pixelworld_env.core.kinds import GOAL_POTENTIAL, GOAL_REWARD, SIGNAL_REWARD, TASK_KINDS
 from pixelworld_env.envs.env import PixelWorldEnv
 from pixelworld_env.validation import no_episode
 from sb3_smc.core.layout import SIGNALS, Layout
@@ -186,7 +186,7 @@ class SMCTask(gym.Wrapper, gym.utils.RecordConstructorArgs):
                            f"got {env.action_space}")
         if kind not in SIGNALS:
             raise SMCError(f"kind must be one of {tuple(SIGNALS)}, got {kind!r}")
-        self.task_kind = task_kind(kind)
+        self.task_kind = TASK_KINDS[kind]  # SIGNALS is the table's
         given: dict[str, Callable[[gym.Env], Any] | None] = {"goal": goal, "label": label, "possible": possible}
         needed: list[str] = ["goal"] if self.task_kind.tracks_goal else []
         if self.task_kind.label is not None:
