@@ -1,0 +1,199 @@
+"""The "cannot" table: SMCs that may say a concept cannot be brought about (kind ``bring-about-or-cannot``,
+docs/results/cannot/README.md).
+
+Declared before any run: :data:`CANNOT_TARGETS` (the 8 ``bc_`` datasets, each beside its ordinary ``ba_`` dataset)
+and :data:`CANNOT_PARENTS` (classification concepts above them). Cells, 5 seeds each:
+
+- ``bc``: a flat SMC on ``PW-bc_X-v0``; its test (every world 10 times) is kept episode by episode: the world's
+  label (1: the goal can be brought about), the signal that ended the episode and its moves.
+- ``ba``: a flat SMC on ``PW-ba_X-v0`` (the same concept and starts, every world possible), tested on its own test
+  split and on the ``bc_`` test split's possible worlds (the same worlds the ``bc`` SMC's success is read on).
+- ``parent-bc`` / ``parent-ba``: each parent trained with one child, ``bc_self-in-container_from_on-floor@s``
+  against ``ba_self-in-container_from_on-floor@s`` (the same seed ``s``), so the pair differs only in the child's
+  third outcome.
+
+Every cell is :func:`sb3_smc.fewshot.learn_concept` with the paper's protocol (best training update, every test world
+10 times, evaluation seed 0) and the lean update, its record written to ``<out>/records/<target>/<cell>@<seed>.json``
+as it finishes (a stopped run resumes where it stopped); the children of the parents live in ``<out>/library`` (not
+committed). :func:`results_rows` derives one row a cell from the records.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import time
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from pixelworld_env.atomic import atomic_write
+from sb3_smc.errors import SMCError
+
+if TYPE_CHECKING:
+    from sb3_smc.learning.evaluation import EvaluationResult
+
+__all__ = ["CANNOT_CHILD", "CANNOT_PARENTS", "CANNOT_TARGETS", "FIELDS", "episode_rows", "ordinary", "results_rows",
+           "run_cannot"]
+
+CANNOT_TARGETS = (
+    "bc_self-in-container_from_on-floor", "bc_self-inside-container_from_on-floor",
+    "bc_self-in-container_from_directly-above", "bc_self-inside-container_from_directly-above",
+    "bc_self-in-container_from_adjacent-on-floor", "bc_self-in-container_from_left-touches-on-floor",
+    "bc_self-in-container_from_right-touches-on-floor", "bc_self-in-container_from_between-potential-containers",
+)
+CANNOT_CHILD = "bc_self-in-container_from_on-floor"
+"""The child the parents call (``parent-bc``), or its ordinary twin (``parent-ba``)."""
+CANNOT_PARENTS = ("cl_container-on-floor_vs_noncontainer", "cl_container-on-floor_vs_corner")
+FIELDS = ("target", "cell", "seed", "test_score", "cannot_accuracy", "cannot_on_impossible", "cannot_on_possible",
+          "success_on_possible", "moves_to_cannot", "moves_per_episode", "primitive_steps")
+"""The columns of ``results.csv``; a cell leaves empty those that are not its own (``cannot_*`` for ``ba``)."""
+
+
+def ordinary(target: str) -> str:
+    """The ordinary bring-about dataset of a ``bc_`` target (``bc_X`` -> ``ba_X``)."""
+    if not target.startswith("bc_"):
+        raise SMCError(f"{target!r} is not a bring-about-or-cannot dataset (bc_...)")
+    return "ba_" + target[3:]
+
+
+def episode_rows(result: EvaluationResult) -> list[list[Any]]:
+    """A test's episodes as ``[world, label, signal, success, primitive_steps]`` (``signal``: the action that ended
+    the episode, ``None`` for a time-out)."""
+    rows = []
+    for world in result.environments:
+        for episode in world.episodes:
+            signal = result.action_names[episode.actions[-1]] if episode.signalled else None
+            rows.append([world.index, world.label, signal, bool(episode.success), episode.primitive_steps])
+    return rows
+
+
+def _record(out: Path, target: str, cell: str, seed: int) -> Path:
+    return out / "records" / target / f"{cell}@{seed}.json"
+
+
+def _cells(targets: Sequence[str], parents: Sequence[str], seeds: int) -> list[tuple[str, str, int]]:
+    """Seed by seed: the flat cells, then the parents (which call that seed's flat SMCs)."""
+    return [cell for s in range(seeds) for cell in [(t, c, s) for t in targets for c in ("bc", "ba")]
+            + [(p, c, s) for p in parents for c in ("parent-bc", "parent-ba")]]
+
+
+def _child(cell: str, seed: int) -> str:
+    """The library name of a parent cell's child, or of the flat cell of :data:`CANNOT_CHILD` that trains it."""
+    return f"{CANNOT_CHILD[3:]}-{cell[-2:]}@{seed}"
+
+
+def _possible_worlds_id(target: str) -> str:
+    """A ``register_worlds`` bring-about id over the possible worlds of ``target``'s splits (registered once)."""
+    import gymnasium as gym
+
+    from pixelworld_env import register_worlds
+    from pixelworld_env.datasets import catalog
+    from pixelworld_env.datasets.loading import load_dataset
+
+    env_id = f"SMCCannotPossible-{target[3:]}-v0"
+    if env_id not in gym.registry:
+        split = {s: load_dataset(target, s) for s in ("train", "test")}
+        register_worlds(env_id, kind="bring-about", concept=catalog.dataset(target).concept_logic,
+                        **{s: [w for w, label in zip(d.scenes, d.labels, strict=True) if label == 1]
+                           for s, d in split.items()})
+    return env_id
+
+
+def run_cannot(out: str | Path, *, targets: Sequence[str] = CANNOT_TARGETS,
+               parents: Sequence[str] = CANNOT_PARENTS, seeds: int = 5, lean_update: bool = True,
+               printer: Callable[[str], None] = print, **settings: Any) -> Path:
+    """Run every cell not recorded yet (seed by seed: the flat cells, then the parents, whose children are that
+    seed's flat ``bc`` / ``ba`` SMCs of :data:`CANNOT_CHILD`), then write ``results.csv``. ``settings``:
+    :func:`~sb3_smc.fewshot.learn_concept`'s (``total_timesteps`` ...)."""
+    from sb3_smc.fewshot import learn_concept
+    from sb3_smc.learning.evaluation import evaluate
+    from sb3_smc.library import SMCLibrary
+
+    unknown = sorted(set(targets) - set(CANNOT_TARGETS))
+    if unknown:
+        raise SMCError(f"cannot-table targets are {CANNOT_TARGETS}, got {unknown}")
+    if parents and CANNOT_CHILD not in targets:
+        raise SMCError(f"the parents call {CANNOT_CHILD}'s SMCs: keep it among the targets")
+    out = Path(out)
+    library_path = out / "library"
+    library = SMCLibrary.load(library_path) if (library_path / "manifest.json").is_file() else None
+    cells = _cells(targets, parents, seeds)
+    # a child's flat cell reruns where the library lost its SMC (training is deterministic: the same SMC and record)
+    todo = [c for c in cells if not _record(out, *c).is_file()
+            or (c[0] == CANNOT_CHILD and bool(parents) and (library is None or _child(c[1], c[2]) not in library))]
+    printer(f"{out}: {len(cells)} cells, {len(cells) - len(todo)} recorded, {len(todo)} to run")
+    started = time.monotonic()
+    for done, (target, cell, seed) in enumerate(todo, 1):
+        if cell.startswith("parent"):
+            assert library is not None  # its flat cells come first in the order of the cells
+            task, offer, lib = f"PW-{target}-v0", [_child(cell, seed)], library
+        else:
+            dataset = target if cell == "bc" else ordinary(target)
+            task, offer, lib = f"PW-{dataset}-v0", "none", None
+        learned = learn_concept(task, library=lib, offer=offer, seed=seed, name=f"{target[3:]}-{cell}@{seed}",
+                                lean_update=lean_update, **settings)
+        smc = learned.smc
+        assert smc.record is not None and smc.spec is not None
+        record: dict[str, Any] = {"target": target, "cell": cell, "seed": seed, "offered": list(learned.offered),
+                                  "spec": smc.spec.to_dict(), "record": smc.record.to_dict(),
+                                  "evaluations": [e.to_dict() for e in smc.evaluations]}
+        test = evaluate(smc, repeats=10, seed=0, record_cells=False, keep=False)  # learn_concept's test, per episode
+        record["episodes"] = episode_rows(test)
+        if cell == "ba":
+            possible = evaluate(smc, _possible_worlds_id(target), repeats=10, seed=0, record_cells=False, keep=False)
+            record["possible_episodes"] = episode_rows(possible)
+        if target == CANNOT_CHILD and parents:
+            library = library or SMCLibrary(path=library_path)
+            library.add(smc, replace=True)
+            library.save()
+        atomic_write(_record(out, target, cell, seed), json.dumps(record, indent=1) + "\n")
+        rate = (time.monotonic() - started) / done
+        printer(f"[{done}/{len(todo)}] {target} {cell}@{seed}: test {smc.test_score:.3f} "
+                f"(about {rate * (len(todo) - done) / 60:.0f} min left)")
+    path = out / "results.csv"
+    atomic_write(path, _csv(results_rows(out)))
+    return path
+
+
+def _mean(values: Sequence[float]) -> float | str:
+    return round(float(np.mean(values)), 6) if len(values) else ""
+
+
+def results_rows(out: str | Path) -> list[dict[str, Any]]:
+    """One row a recorded cell in ``out``: ``test_score`` (the cell's own test), for ``bc`` the verdict's accuracy
+    (CANNOT signalled exactly on the impossible worlds), the CANNOT rate on impossible and on possible worlds, the
+    success rate on the possible worlds and the mean moves before a CANNOT on impossible worlds; for ``ba`` its
+    success rate on the ``bc`` test split's possible worlds; for every cell the mean moves of a test episode."""
+    rows = []
+    for file in sorted(Path(out).glob("records/*/*.json")):
+        data = json.loads(file.read_text(encoding="utf-8"))
+        episodes = data["episodes"]
+        (test,) = [e for e in data["evaluations"] if e["split"] == "test"]
+        row: dict[str, Any] = {name: "" for name in FIELDS}
+        row.update(target=data["target"], cell=data["cell"], seed=data["seed"], test_score=test["score"],
+                   moves_per_episode=_mean([e[4] for e in episodes]),
+                   primitive_steps=data["record"]["primitive_steps"])
+        if data["cell"] == "bc":
+            impossible = [e for e in episodes if e[1] == 0]
+            possible = [e for e in episodes if e[1] == 1]
+            row.update(cannot_accuracy=_mean([(e[2] == "CANNOT") == (e[1] == 0) for e in episodes]),
+                       cannot_on_impossible=_mean([e[2] == "CANNOT" for e in impossible]),
+                       cannot_on_possible=_mean([e[2] == "CANNOT" for e in possible]),
+                       success_on_possible=_mean([e[3] for e in possible]),
+                       moves_to_cannot=_mean([e[4] for e in impossible if e[2] == "CANNOT"]))
+        elif data["cell"] == "ba":
+            row.update(success_on_possible=_mean([e[3] for e in data["possible_episodes"]]))
+        rows.append(row)
+    return sorted(rows, key=lambda r: (r["target"], r["cell"], r["seed"]))
+
+
+def _csv(rows: list[dict[str, Any]]) -> str:
+    buffer = io.StringIO()
+    writer = csv.DictWriter(buffer, fieldnames=FIELDS, lineterminator="\n")
+    writer.writeheader()
+    writer.writerows(rows)
+    return buffer.getvalue()
