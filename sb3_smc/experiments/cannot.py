@@ -96,10 +96,10 @@ def _possible_worlds_id(target: str) -> str:
 
     env_id = f"SMCCannotPossible-{target[3:]}-v0"
     if env_id not in gym.registry:
-        split = {s: load_dataset(target, s) for s in ("train", "test")}
-        register_worlds(env_id, kind="bring-about", concept=catalog.dataset(target).concept_logic,
-                        **{s: [w for w, label in zip(d.scenes, d.labels, strict=True) if label == 1]
-                           for s, d in split.items()})
+        train, test = ([w for w, label in zip(d.scenes, d.labels, strict=True) if label == 1]
+                       for d in (load_dataset(target, "train"), load_dataset(target, "test")))
+        register_worlds(env_id, kind="bring-about", concept=catalog.dataset(target).concept_logic, train=train,
+                        test=test)
     return env_id
 
 
@@ -128,6 +128,7 @@ def run_cannot(out: str | Path, *, targets: Sequence[str] = CANNOT_TARGETS,
     printer(f"{out}: {len(cells)} cells, {len(cells) - len(todo)} recorded, {len(todo)} to run")
     started = time.monotonic()
     for done, (target, cell, seed) in enumerate(todo, 1):
+        offer: str | list[str]
         if cell.startswith("parent"):
             assert library is not None  # its flat cells come first in the order of the cells
             task, offer, lib = f"PW-{target}-v0", [_child(cell, seed)], library
