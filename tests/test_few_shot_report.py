@@ -7,7 +7,8 @@ import csv
 import numpy as np
 import pytest
 
-from sb3_smc.experiments.few_shot_report import compare, hierarchical_interval, read_results, write_report
+from sb3_smc.experiments.few_shot_report import compare, read_results, write_report
+from sb3_smc.experiments.statistics import hierarchical_interval
 
 FIELDS = ("target", "kind", "category", "method", "train_worlds", "seed", "test_score", "offered", "primitive_steps")
 

@@ -74,7 +74,7 @@ def test_the_table_gives_each_signal_one_outcome_and_every_wrong_signal_minus_on
     cannot = TASK_KINDS["bring-about-or-cannot"]
     sig1, no = cannot.signal_names.index("SIG1"), cannot.signal_names.index("CANNOT")
     potential = 0.5
-    assert cannot.reward(sig1, 1, True) + potential == 1.0 and cannot.reward(sig1, 1, False) == -1.0
+    assert cannot.reward(sig1, 1, True) + potential == 1.0 and cannot.reward(sig1, 1, False) == 0.0
     assert cannot.reward(no, 0, False) == 1.0 and cannot.reward(no, 1, False) == -1.0
     assert cannot.reward(no, 1, True) + potential == -1.0  # a wrong cannot gives the collected potential back
     assert [k.cut_outcome for k in TASK_KINDS.values()] == [0.0, 0.0, -0.5]
@@ -159,7 +159,7 @@ def test_every_step_path_gives_the_same_rewards(kind: str) -> None:
                 ("classification", 1, "SIG1"): -1.0, ("classification", 1, "SIG0"): 1.0,
                 ("bring-about", 0, "SIG1"): 1.0, ("bring-about", 1, "SIG1"): 0.0,
                 ("bring-about-or-cannot", 0, "SIG1"): 1.0, ("bring-about-or-cannot", 0, "CANNOT"): -1.0,
-                ("bring-about-or-cannot", 1, "SIG1"): -1.0, ("bring-about-or-cannot", 1, "CANNOT"): 1.0,
+                ("bring-about-or-cannot", 1, "SIG1"): 0.0, ("bring-about-or-cannot", 1, "CANNOT"): 1.0,
             }[kind, scene, signal]
             assert total == expected
     shaping = returns_on_every_path(kind, 0, moves)[0]

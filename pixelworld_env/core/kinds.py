@@ -109,16 +109,16 @@ TASK_KINDS: dict[str, TaskKind] = {kind.name: kind for kind in (
              tracks_goal=True, label=None, cut_outcome=0.0, score="success rate",
              description="move until the concept holds, then SIG1: +1 in all with the shaping, 0 outside the goal "
                          "(AAAI-18's reward_mistake = 0)"),
-    # A goal signal outside the goal costs -1 here (not 0 as in bring-about): otherwise SIG1 would be the safe
-    # answer where the world is in doubt, and the cannot signal never worth its risk. A wrong cannot signal while
-    # the goal holds also gives back the potential collected, so that every wrong signal totals -1.
+    # SIG1 is bring-about's (0 outside the goal). A cost of -1 there was tried and measured (docs/results/cannot):
+    # the flat SMC then stops signalling SIG1 at all. A wrong cannot signal while the goal holds also gives back the
+    # potential collected, so that it totals -1.
     TaskKind(BRING_ABOUT_OR_CANNOT, "bc",
-             (Signal("SIG1", 1.0, _same_for_every_label((-SIGNAL_REWARD, _RIGHT_GOAL))),
+             (Signal("SIG1", 1.0, _same_for_every_label((0.0, _RIGHT_GOAL))),
               Signal("CANNOT", -1.0, ((SIGNAL_REWARD, -SIGNAL_REWARD - GOAL_POTENTIAL),
                                       (-SIGNAL_REWARD, -SIGNAL_REWARD - GOAL_POTENTIAL)))),
              tracks_goal=True, label="possible", cut_outcome=-0.5, score="success rate",
              description="bring the concept about and SIG1 where the world allows it (+1), or CANNOT where it does "
-                         "not (+1); a wrong signal -1, a timeout 0"),
+                         "not (+1); a wrong CANNOT -1, SIG1 outside the goal and a timeout 0"),
 )}
 """Every task kind, by name."""
 KINDS: tuple[str, ...] = tuple(TASK_KINDS)

@@ -15,13 +15,11 @@ from pathlib import Path
 import numpy as np
 
 from pixelworld_env.atomic import atomic_write
-from sb3_smc.experiments.statistics import paired_ttest, ttest_text
+from sb3_smc.experiments.statistics import hierarchical_interval, paired_ttest, ttest_text
 
-__all__ = ["Comparison", "compare", "hierarchical_interval", "read_results", "write_report"]
+__all__ = ["Comparison", "compare", "read_results", "write_report"]
 
 LIBRARY_METHODS = ("curr", "canon", "auto")
-BOOTSTRAP = 2000
-"""Bootstrap resamples of an interval."""
 
 
 def read_results(path: str | Path) -> list[dict[str, object]]:
@@ -43,24 +41,6 @@ def _by_concept(rows: Sequence[Mapping[str, object]], method: str, worlds: objec
         if row["method"] == method and row["train_worlds"] == worlds:
             out.setdefault(str(row["target"]), []).append(float(row["test_score"]))  # type: ignore[arg-type]
     return out
-
-
-def hierarchical_interval(differences: Mapping[str, Sequence[float]], *, resamples: int = BOOTSTRAP,
-                          seed: int = 0) -> tuple[float, float, float]:
-    """``(mean, low, high)``: the mean over concepts of each concept's mean over its seeds, and its 95 % percentile
-    interval from resampling concepts with replacement and then, within each drawn concept, its seeds with
-    replacement (so the interval covers both the choice of concepts and the seeds' noise)."""
-    concepts = [np.asarray(v, dtype=float) for v in differences.values() if len(v)]
-    if not concepts:
-        raise ValueError("no concept to resample")
-    rng = np.random.default_rng(seed)
-    point = float(np.mean([c.mean() for c in concepts]))
-    draws = np.empty(resamples)
-    for b in range(resamples):
-        picked = rng.integers(0, len(concepts), len(concepts))
-        draws[b] = np.mean([concepts[i][rng.integers(0, len(concepts[i]), len(concepts[i]))].mean() for i in picked])
-    low, high = np.percentile(draws, [2.5, 97.5])
-    return point, float(low), float(high)
 
 
 @dataclass(frozen=True)

@@ -14,10 +14,12 @@ from dataclasses import dataclass
 import numpy as np
 
 __all__ = ["SeedSummary", "holm", "mean_of_all", "mean_se", "method_mean", "method_test", "paired_ttest", "p_at_df",
-           "seed_summary", "wins"]
+           "seed_summary", "wins", "hierarchical_interval", "BOOTSTRAP"]
 
 Score = Mapping[tuple[str, str], float]
 """(target, method) -> the reported score (best seed; curr: best curriculum)."""
+BOOTSTRAP = 2000
+"""Bootstrap resamples of an interval."""
 
 
 def paired_ttest(ours: Sequence[float], theirs: Sequence[float]) -> tuple[int, float, float] | None:
@@ -30,6 +32,24 @@ def paired_ttest(ours: Sequence[float], theirs: Sequence[float]) -> tuple[int, f
         return None
     result = stats.ttest_rel(a, b)
     return len(a) - 1, float(result.statistic), float(result.pvalue)
+
+
+def hierarchical_interval(differences: Mapping[str, Sequence[float]], *, resamples: int = BOOTSTRAP,
+                          seed: int = 0) -> tuple[float, float, float]:
+    """``(mean, low, high)``: the mean over concepts of each concept's mean over its seeds, and its 95 % percentile
+    interval from resampling concepts with replacement and then, within each drawn concept, its seeds with
+    replacement (so the interval covers both the choice of concepts and the seeds' noise)."""
+    concepts = [np.asarray(v, dtype=float) for v in differences.values() if len(v)]
+    if not concepts:
+        raise ValueError("no concept to resample")
+    rng = np.random.default_rng(seed)
+    point = float(np.mean([c.mean() for c in concepts]))
+    draws = np.empty(resamples)
+    for b in range(resamples):
+        picked = rng.integers(0, len(concepts), len(concepts))
+        draws[b] = np.mean([concepts[i][rng.integers(0, len(concepts[i]), len(concepts[i]))].mean() for i in picked])
+    low, high = np.percentile(draws, [2.5, 97.5])
+    return point, float(low), float(high)
 
 
 def holm(pvalues: Sequence[float]) -> list[float]:

@@ -1,0 +1,65 @@
+"""The cannot table: its metrics on hand-made records with known answers, and a run that resumes."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from sb3_smc.errors import SMCError
+from sb3_smc.experiments.cannot import CANNOT_CHILD, ordinary, results_rows, run_cannot
+
+TARGET = "bc_self-in-container_from_on-floor"
+
+
+def _write(tmp_path, cell: str, episodes: list[list], **extra) -> None:
+    folder = tmp_path / "records" / TARGET
+    folder.mkdir(parents=True, exist_ok=True)
+    record = {"target": TARGET, "cell": cell, "seed": 0, "offered": [], "record": {"primitive_steps": 1234},
+              "evaluations": [{"split": "train", "score": 1.0}, {"split": "test", "score": 0.5}],
+              "episodes": episodes, **extra}
+    (folder / f"{cell}@0.json").write_text(json.dumps(record))
+
+
+def test_the_metrics_of_a_bc_cell_and_a_ba_cell(tmp_path):
+    """Episodes ``[world, label, signal, success, moves]``: the verdict is CANNOT or not, read against the label."""
+    _write(tmp_path, "bc", [[0, 0, "CANNOT", True, 2], [0, 0, None, False, 100],     # impossible world: 1 of 2
+                            [1, 1, "SIG1", True, 10], [1, 1, "CANNOT", False, 4]])   # possible world: 1 of 2 wrong
+    _write(tmp_path, "ba", [[0, 1, "SIG1", True, 8]],
+           possible_episodes=[[0, None, "SIG1", True, 6], [1, None, None, False, 100], [2, None, "SIG1", True, 9]])
+    ba, bc = results_rows(tmp_path)
+    assert bc["cell"] == "bc" and bc["test_score"] == 0.5 and bc["primitive_steps"] == 1234
+    assert bc["cannot_accuracy"] == 0.5  # right: CANNOT on impossible, SIG1 on possible
+    assert bc["cannot_on_impossible"] == 0.5 and bc["cannot_on_possible"] == 0.5
+    assert bc["success_on_possible"] == 0.5 and bc["moves_to_cannot"] == 2.0
+    assert bc["moves_per_episode"] == pytest.approx(116 / 4)
+    assert ba["success_on_possible"] == pytest.approx(2 / 3) and ba["cannot_accuracy"] == ""
+    assert ba["moves_per_episode"] == 8.0
+
+
+def test_bad_targets_are_refused_before_any_work(tmp_path):
+    with pytest.raises(SMCError, match="cannot-table targets"):
+        run_cannot(tmp_path, targets=["bc_nope"])
+    with pytest.raises(SMCError, match="keep it among the targets"):
+        run_cannot(tmp_path, targets=["bc_self-inside-container_from_on-floor"])
+    with pytest.raises(SMCError, match="not a bring-about-or-cannot"):
+        ordinary("ba_self-in-container_from_on-floor")
+    assert not (tmp_path / "records").exists()
+
+
+def test_a_run_records_its_cells_and_resumes_without_training_again(tmp_path):
+    lines: list[str] = []
+    run_cannot(tmp_path, targets=[CANNOT_CHILD], parents=[], seeds=1, printer=lines.append, total_timesteps=600,
+               n_envs=4)
+    first = {p.name: p.read_bytes() for p in (tmp_path / "records" / TARGET).iterdir()}
+    assert sorted(first) == ["ba@0.json", "bc@0.json"] and "2 to run" in lines[0]
+    bc = json.loads(first["bc@0.json"])
+    assert {label for _, label, *_ in bc["episodes"]} == {0, 1} and len(bc["episodes"]) == 50 * 10
+    ba = json.loads(first["ba@0.json"])
+    assert len(ba["possible_episodes"]) == 25 * 10  # the bc test split's 25 possible worlds
+    lines.clear()
+    run_cannot(tmp_path, targets=[CANNOT_CHILD], parents=[], seeds=1, printer=lines.append, total_timesteps=600,
+               n_envs=4)
+    assert "0 to run" in lines[0]
+    assert {p.name: p.read_bytes() for p in (tmp_path / "records" / TARGET).iterdir()} == first
+    assert (tmp_path / "results.csv").read_text().count("\n") == 3
