@@ -63,3 +63,33 @@ def test_a_run_records_its_cells_and_resumes_without_training_again(tmp_path):
     assert "0 to run" in lines[0]
     assert {p.name: p.read_bytes() for p in (tmp_path / "records" / TARGET).iterdir()} == first
     assert (tmp_path / "results.csv").read_text().count("\n") == 3
+
+
+def test_the_report_pairs_targets_and_seeds(tmp_path):
+    """Two targets x two seeds and one parent: the table's means, the difference on possible worlds (bc minus ba)
+    and the parents' paired difference are the hand-computed ones."""
+    from sb3_smc.experiments.cannot import CANNOT_PARENTS, CANNOT_TARGETS, FIELDS, _csv, write_report
+
+    first, second = CANNOT_TARGETS[:2]
+    rows = []
+    for target, bc, ba in ((first, (0.6, 0.8), (0.5, 0.5)), (second, (0.4, 0.4), (0.5, 0.7))):
+        for seed in (0, 1):
+            rows.append({**dict.fromkeys(FIELDS, ""), "target": target, "cell": "bc", "seed": seed,
+                         "test_score": 0.5, "cannot_accuracy": 0.75, "cannot_on_impossible": 0.9,
+                         "cannot_on_possible": 0.1, "success_on_possible": bc[seed], "moves_to_cannot": 3 + seed,
+                         "moves_per_episode": 20, "primitive_steps": 100})
+            rows.append({**dict.fromkeys(FIELDS, ""), "target": target, "cell": "ba", "seed": seed,
+                         "test_score": 0.6, "success_on_possible": ba[seed], "moves_per_episode": 30,
+                         "primitive_steps": 100})
+    for seed, (with_bc, with_ba) in enumerate(((0.9, 0.7), (0.8, 0.7), (1.0, 0.7))):
+        for cell, score, moves in (("parent-bc", with_bc, 50 + seed), ("parent-ba", with_ba, 150 + 2 * seed)):
+            rows.append({**dict.fromkeys(FIELDS, ""), "target": CANNOT_PARENTS[0], "cell": cell, "seed": seed,
+                         "test_score": score, "moves_per_episode": moves, "primitive_steps": 100})
+    (tmp_path / "results.csv").write_text(_csv(rows))
+    report = write_report(tmp_path).read_text()
+    assert f"| {first[3:]} | 2 | 75.0 ± 0.0 | 90.0 ± 0.0 | 10.0 ± 0.0 | 70.0 ± 14.1 | 50.0 ± 0.0 | +20.0 | 3.5 ± 0.7 |" \
+        in report
+    assert f"| {second[3:]} | 2 |" in report and "| -20.0 |" in report
+    assert "bc minus ba: +0.0 points" in report  # (+20 - 20) / 2
+    assert f"| {CANNOT_PARENTS[0][3:]} | 3 | 90.0 ± 10.0 | 70.0 ± 0.0 | +20.0 | t(2) = 3.46" in report
+    assert "| 51.0 ± 1.0 | 152.0 ± 2.0 |" in report
