@@ -10,7 +10,10 @@
 #                                                readings: the sweep of each reading's free parameter, SWEEP_METHODS
 #                                                on SWEEP_TARGETS of sb3_smc.experiments.design;
 #                                                experience: the flat SMC with 1, 4 and 16 x the budget,
-#                                                EXPERIENCE_METHODS on SWEEP_TARGETS)
+#                                                EXPERIENCE_METHODS on SWEEP_TARGETS;
+#                                                readings-all: curr-cap10 and curr-moves-200, experience-all: base-x4,
+#                                                each on the 39 level-2 targets outside SWEEP_TARGETS, so that with
+#                                                readings and experience they cover all 51)
 #   tools/paper_table.sh continue                the queue (docs/results/paper/queue.txt: category, commit, reuse, and
 #                                                any further options of its sb3-smc experiment, e.g. --lean-update),
 #                                                on this machine or a new one:
@@ -42,6 +45,11 @@ selection() {  # the experiment options of a category (base-gru, canon-scaled, b
 print("--methods", ",".join(SWEEP_METHODS), "--targets", ",".join(SWEEP_TARGETS))' ;;
     experience) "$RUN_ENV/bin/python" -I -c 'from sb3_smc.experiments.design import EXPERIENCE_METHODS, SWEEP_TARGETS
 print("--methods", ",".join(EXPERIENCE_METHODS), "--targets", ",".join(SWEEP_TARGETS))' ;;
+    readings-all|experience-all) "$RUN_ENV/bin/python" -I -c 'import sys
+from sb3_smc.experiments import level2_targets
+from sb3_smc.experiments.design import SWEEP_TARGETS
+methods = "curr-cap10,curr-moves-200" if sys.argv[1] == "readings-all" else "base-x4"
+print("--methods", methods, "--targets", ",".join(t for t in level2_targets() if t not in SWEEP_TARGETS))' "$1" ;;
     curr-moves|curr-moves-cl) echo "--methods curr-moves --targets $("$RUN_ENV/bin/python" -I -c 'import sys
 from pixelworld_env.datasets import catalog
 from sb3_smc.experiments import level2_targets
