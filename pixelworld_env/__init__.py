@@ -1,5 +1,14 @@
 """PixelWorld: 2-D pixel worlds generated from a concept language, served as Gymnasium environments."""
 
+from importlib import metadata as _metadata
+
+try:
+    __version__ = _metadata.version("sb3-smc")
+    """The installed distribution's version (pyproject.toml's), shared by ``pixelworld_env`` and ``sb3_smc``."""
+except _metadata.PackageNotFoundError:  # a checkout on sys.path, not installed
+    __version__ = "unknown"
+
+
 from pixelworld_env.concepts import (
     ArityError,
     Concept,
@@ -22,6 +31,7 @@ from pixelworld_env.errors import PixelWorldError
 register_envs()
 
 __all__ = [
+    "__version__",
     "HEIGHT",
     "WIDTH",
     "ArityError",

@@ -7,7 +7,14 @@ loads neither torch nor Stable-Baselines3; ``from sb3_smc import train_smc`` loa
 from __future__ import annotations
 
 import importlib
+from importlib import metadata as _metadata
 from typing import TYPE_CHECKING, Any
+
+try:
+    __version__ = _metadata.version("sb3-smc")
+    """The installed distribution's version (pyproject.toml's), shared by ``pixelworld_env`` and ``sb3_smc``."""
+except _metadata.PackageNotFoundError:  # a checkout on sys.path, not installed
+    __version__ = "unknown"
 
 _EXPORTS = {
     "SMCError": "sb3_smc.errors",
@@ -49,6 +56,7 @@ _EXPORTS = {
 }
 
 __all__ = [
+    "__version__",
     "Budget",
     "CorruptModelError",
     "DEFAULT_HYPERPARAMETERS",
@@ -86,7 +94,7 @@ __all__ = [
     "train_smc",
     "untrained_smc",
 ]
-assert set(__all__) == set(_EXPORTS)
+assert set(__all__) == {*_EXPORTS, "__version__"}
 
 
 def __getattr__(name: str) -> Any:

@@ -51,7 +51,8 @@ def _curricula(args: argparse.Namespace) -> int:
         levels = " + ".join(str(len(level)) for level in curriculum.levels())
         rows.append((name, curriculum.method or "", str(len(curriculum.targets)), levels))
     _print_table(rows)
-    print("\nsb3-smc curricula NAME shows one curriculum; docs/curricula.md describes the file format.")
+    print("\nsb3-smc curricula NAME shows one curriculum; `python -m pydoc sb3_smc.curricula.format` describes the "
+          "file format (and docs/curricula.md in the repository).")
     return 0
 
 

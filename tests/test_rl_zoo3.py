@@ -16,6 +16,7 @@ import site
 import subprocess
 import sys
 import sysconfig
+import tomllib
 import venv
 from pathlib import Path
 
@@ -135,6 +136,25 @@ def test_the_wheel_ships_the_pretrained_library(installed: Installed) -> None:
              "print(len(pretrained_curricula()), len(SMCLibrary.pretrained('search2-canon')))")
     shipped = json.loads((ROOT / "sb3_smc" / "library" / "data" / "pretrained" / "pretrained.json").read_text())
     assert installed.run(check).stdout.split() == [str(len(shipped["curricula"])), "26"]  # as in the source tree
+
+
+def test_the_wheel_carries_its_license_and_metadata(installed: Installed) -> None:
+    """A wheel that stands alone: the LICENSE file, the license expression, authors, classifiers, the typed marker of
+    both packages, and ``__version__`` of both equal to the distribution's."""
+    check = ("import json, pixelworld_env, sb3_smc; from importlib import metadata as m; from pathlib import Path; "
+             "d = m.distribution('sb3-smc'); "
+             "print(json.dumps({'version': d.version, 'versions': [pixelworld_env.__version__, sb3_smc.__version__], "
+             "'license': d.metadata['License-Expression'], 'license_files': d.metadata.get_all('License-File'), "
+             "'author': d.metadata['Author'], 'classifiers': d.metadata.get_all('Classifier'), "
+             "'license_text': (d.locate_file('') / next(f for f in d.files if f.name == 'LICENSE')).read_text(), "
+             "'typed': [Path(p.__file__).with_name('py.typed').is_file() for p in (pixelworld_env, sb3_smc)]}))")
+    meta = json.loads(installed.run(check).stdout)
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+    assert meta["version"] == project["version"] and meta["versions"] == [meta["version"]] * 2
+    assert meta["license"] == "MIT" and meta["license_files"] == ["LICENSE"]
+    assert meta["license_text"] == (ROOT / "LICENSE").read_text() and meta["license_text"].startswith("MIT License")
+    assert meta["author"] == "The sb3-smc developers" and "Typing :: Typed" in meta["classifiers"]
+    assert meta["typed"] == [True, True]
 
 
 @pytest.mark.parametrize("install", INSTALLS)

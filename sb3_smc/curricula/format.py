@@ -258,7 +258,8 @@ def load_curriculum(path: str | os.PathLike) -> Curriculum:
         raise CurriculumError(f"cannot read curriculum file {path}: {err}") from None
     except UnicodeDecodeError as err:
         raise CurriculumError(f"{path}: not a curriculum file: not UTF-8 text (byte {err.object[err.start]:#04x} at "
-                              f"position {err.start}); a curriculum is a YAML file (docs/curricula.md)") from None
+                              f"position {err.start}); a curriculum is a YAML file (its format: python -m pydoc "
+                              "sb3_smc.curricula.format)") from None
     return parse_curriculum(text, str(path))
 
 
