@@ -176,15 +176,33 @@ def _library(args: argparse.Namespace) -> int:
         return 0
     made = (manifest.get("created_with") or {}).get("sb3_smc", "an unknown sb3_smc")
     print(f"{root}: {len(rows)} SMC(s), manifest version {manifest['version']} (sb3_smc {made}){checked}")
-    table = [("name", "kind", "algo", "children", "env id", "seed", "update", "return", "test %")]
+    table = [("name", "kind", "algo", "children", "task", "seed", "update", "return", "test %")]
     for row in rows:
         number = {key: "-" if row[key] is None else row[key] for key in ("seed", "selected_update")}
-        table.append((row["name"], row["kind"], row["algo"], ",".join(row["children"]) or "-", row["env_id"] or "-",
+        table.append((row["name"], row["kind"], row["algo"], _children_cell(row["children"]),
+                      _task_cell(row["name"], row["env_id"]),
                       str(number["seed"]), str(number["selected_update"]),
                       "-" if row["training_return"] is None else f"{row['training_return']:.3f}",
                       "-" if row["test_score"] is None else f"{100 * row['test_score']:.1f}"))
     _print_table(table)
+    print("task: the env id (PW-X-v0 as X; = where X is the name before its @seed); --json: every field in full")
     return 0
+
+
+CHILDREN_WIDTH = 32
+"""The widest children cell of ``sb3-smc library``'s table; longer lists become a count (``--json`` lists them)."""
+
+
+def _children_cell(children: Sequence[str]) -> str:
+    listed = ",".join(children)
+    return (listed or "-") if len(listed) <= CHILDREN_WIDTH else f"{len(children)} SMC{'s' * (len(children) != 1)}"
+
+
+def _task_cell(name: str, env_id: str | None) -> str:
+    if env_id is None:
+        return "-"
+    dataset = env_id.removeprefix("PW-").removesuffix("-v0") if env_id.startswith("PW-") else env_id
+    return "=" if dataset == name.rpartition("@")[0] else dataset
 
 
 def _display_width(text: str) -> int:

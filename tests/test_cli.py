@@ -114,3 +114,14 @@ def test_play_ctrl_c_is_not_a_traceback() -> None:
     with pytest.raises(SystemExit) as info:
         main(["play", ID], out=out, keys=Interrupt())
     assert info.value.code == 130 and out.getvalue().endswith("interrupted\n")
+
+
+def test_the_library_table_keeps_long_cells_short() -> None:
+    """A long list of children becomes a count, a PixelWorld env id its dataset, and ``=`` where the name says it."""
+    from sb3_smc.cli import CHILDREN_WIDTH, _children_cell, _task_cell
+
+    many = [f"cl_self-in-container_vs_noncontainer@{seed}" for seed in range(4)]
+    assert _children_cell(many) == "4 SMCs" and _children_cell(["a@0", "b@1"]) == "a@0,b@1"
+    assert _children_cell([]) == "-" and len(many[0]) > CHILDREN_WIDTH and _children_cell(many[:1]) == "1 SMC"
+    assert _task_cell("cl_x@3", "PW-cl_x-v0") == "=" and _task_cell("mine", "PW-cl_x-v0") == "cl_x"
+    assert _task_cell("walker@0", "MiniGrid-Empty-5x5-v0") == "MiniGrid-Empty-5x5-v0" and _task_cell("a", None) == "-"

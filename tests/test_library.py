@@ -588,7 +588,9 @@ def test_the_library_command_shows_each_smc_without_loading_a_model(saved, copy)
     lines = out.splitlines()
     assert lines[0] == f"{saved}: 4 SMC(s), manifest version 6 (sb3_smc {package_versions()['sb3_smc']})"
     climber = next(line.split() for line in lines if line.startswith("climber "))
-    assert climber == ["climber", "bring-about", "RecurrentPPO", "corner,container", BA_ID, "3", "3", "0.250", "50.0"]
+    assert climber == ["climber", "bring-about", "RecurrentPPO", "corner,container", BA_ID[3:-3], "3", "3", "0.250",
+                       "50.0"]
+    assert lines[-1].startswith("task: the env id")
     code, out, _ = sb3_smc_cli("library", str(saved), "--json")
     rows = {row["name"]: row for row in json.loads(out)}
     assert rows["corner-ppo"] == {"name": "corner-ppo", "kind": "classification", "algo": "PPO", "children": [],
@@ -608,7 +610,7 @@ def test_the_library_command_aligns_wide_names(copy):
     _edit(copy, lambda m: m["smcs"].update({"左の角": m["smcs"].pop("corner-ppo")}))
     code, out, err = sb3_smc_cli("library", str(copy))
     assert code == 0, err
-    rows = out.splitlines()[1:]
+    rows = out.splitlines()[1:-1]  # the last line says what the task column holds
     assert [row.split()[0] for row in rows] == ["name", "corner", "container", "climber", "左の角"]
 
     def columns(text: str) -> int:
