@@ -159,7 +159,7 @@ def test_the_wheel_carries_its_license_and_metadata(installed: Installed) -> Non
 
 @pytest.mark.parametrize("install", INSTALLS)
 def test_the_readme_command_on_a_concept_pool(request: pytest.FixtureRequest, install: str) -> None:
-    """The README's first zoo line, as typed, in a wheel install and in the editable install of a clone."""
+    """The bare zoo line (docs/library.md, 'as typed'), in a wheel install and in the editable install of a clone."""
     environment: Installed = request.getfixturevalue(install)
     result = environment.zoo("train", "--algo", "trpo", "--env", POOL, "-n", "1000", "--num-threads", "1", "-f",
                              "pool")
