@@ -440,3 +440,13 @@ def test_level2_container_smc_end_to_end() -> None:
     assert result.score >= 0.85
     assert sum(result.call_counts().values()) > 0  # it uses its children
     _check_reference(CONTAINER_ID, smc, result.score)
+
+
+def test_a_short_training_shows_its_progress_with_the_time_left() -> None:
+    """The default progress: about ten lines whatever the budget (here 3 updates: a line each), each but the last
+    with the time left, then the line of the selection."""
+    lines: list[str] = []
+    train_smc(CORNER_ID, total_timesteps=6000, seed=0, printer=lines.append)
+    assert [line.split()[2] for line in lines[:3]] == ["1/3", "2/3", "3/3"]
+    assert all(" s left  steps " in line for line in lines[:2]) and " s left" not in lines[2]
+    assert lines[3].startswith("[cl_self-in-left-corner_vs_on-hline] done: 6,000 steps") and len(lines) == 4

@@ -28,6 +28,7 @@ import os
 import platform
 import shlex
 import subprocess
+import time
 from collections.abc import Callable, Collection, Mapping, Sequence
 from functools import partial
 from pathlib import Path
@@ -338,11 +339,13 @@ def _results(directory: Path, design: ExperimentPlan, options: RunOptions, repea
         printer(f"evaluating {sum(w[0] == 'smc' for w in work)} SMC(s), training {sum(w[0] == 'cnn' for w in work)} "
                 f"CNN(s), {options.workers} at a time")
     every = max(1, len(work) // 20)
+    started = time.perf_counter()
     for done, (item, result) in enumerate(map_unordered(partial(_compute, directory, repeats), work, options), 1):
         atomic_write(_result_path(directory, item), json.dumps(result, indent=2) + "\n")
         found[item] = result
         if progress and (done % every == 0 or done == len(work)):
-            printer(f"evaluated {done}/{len(work)}")
+            left = (time.perf_counter() - started) / done * (len(work) - done)
+            printer(f"evaluated {done}/{len(work)}" + (f", about {left / 60:.1f} min left" if done < len(work) else ""))
     return found
 
 

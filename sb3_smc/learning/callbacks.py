@@ -302,6 +302,9 @@ class SMCTrainingCallback(BaseCallback):
         steps = self.num_timesteps - self._start_steps
         rate = steps / max(self.elapsed, 1e-9)
         best = self.best
-        self.printer(f"[{self.name}] update {update}{total}  steps {self.num_timesteps:,}  {rate:,.0f} steps/s  "
+        left = ""
+        if self.total_updates and update < self.total_updates:
+            left = f"  about {(self.total_updates - update) * self.elapsed / update:.0f} s left"
+        self.printer(f"[{self.name}] update {update}{total}{left}  steps {self.num_timesteps:,}  {rate:,.0f} steps/s  "
                      f"return {row['smc/training_return']:.3f}  success {row['smc/success_rate']:.2f}  "
                      f"length {row['smc/episode_length']:.1f}  best {best.best_return:.3f} @ {best.best_update}")

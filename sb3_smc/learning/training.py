@@ -226,8 +226,8 @@ def train_smc(
     :param tensorboard_log: a folder for SB3's curves and those of
     :class:`~sb3_smc.learning.callbacks.SMCTrainingCallback`
         (run name: the SMC's name).
-    :param log_every: a progress line through ``printer`` every that many updates (0: quiet; ``None``: every 10
-        updates when training runs 50 updates or more).
+    :param log_every: a progress line through ``printer`` every that many updates, with the time left (0: quiet;
+        ``None``: about ten lines in all, every ``ceil(updates / 10)`` updates).
     :param callback: an extra SB3 callback.
     :param printer: where progress lines go.
     :param stop_at_max_return: end training once an update's mean training return is
@@ -410,7 +410,7 @@ def training_callbacks(spec: TrainingSpec, task: TaskFacts, *, log_every: int | 
 
     total_updates = spec.budget.updates
     if log_every is None:
-        log_every = 10 if total_updates >= 50 else 0
+        log_every = -(-total_updates // 10)
     stats = SMCTrainingCallback(kind=task.kind, children=spec.children, total_updates=total_updates,
                                 log_every=log_every, name=spec.name, printer=printer,
                                 stop_at=MAX_RETURN if stop_at_max_return and task.bounded else None)
