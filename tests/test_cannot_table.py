@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import json
+import shutil
 
 import pytest
 
 from sb3_smc.errors import SMCError
 from sb3_smc.experiments.cannot import CANNOT_CHILD, ordinary, results_rows, run_cannot
+from sb3_smc.library import SMCLibrary
 
 TARGET = "bc_self-in-container_from_on-floor"
 
@@ -52,7 +54,7 @@ def test_a_run_records_its_cells_and_resumes_without_training_again(tmp_path):
     run_cannot(tmp_path, targets=[CANNOT_CHILD], parents=[], seeds=1, printer=lines.append, total_timesteps=600,
                n_envs=4)
     first = {p.name: p.read_bytes() for p in (tmp_path / "records" / TARGET).iterdir()}
-    assert sorted(first) == ["ba@0.json", "bc@0.json"] and "2 to run" in lines[0]
+    assert sorted(first) == ["ba@0.json", "bc-ba@0.json", "bc@0.json"] and "3 to run" in lines[0]
     bc = json.loads(first["bc@0.json"])
     assert {label for _, label, *_ in bc["episodes"]} == {0, 1} and len(bc["episodes"]) == 50 * 10
     ba = json.loads(first["ba@0.json"])
@@ -62,7 +64,18 @@ def test_a_run_records_its_cells_and_resumes_without_training_again(tmp_path):
                n_envs=4)
     assert "0 to run" in lines[0]
     assert {p.name: p.read_bytes() for p in (tmp_path / "records" / TARGET).iterdir()} == first
-    assert (tmp_path / "results.csv").read_text().count("\n") == 3
+    assert (tmp_path / "results.csv").read_text().count("\n") == 4
+    assert json.loads(first["bc-ba@0.json"])["offered"] == ["self-in-container_from_on-floor-ba@0"]
+    shutil.rmtree(tmp_path / "library")  # the SMC bc-ba calls is lost: its cell runs again, to the same record
+    lines.clear()
+    run_cannot(tmp_path, targets=[CANNOT_CHILD], parents=[], seeds=1, printer=lines.append, total_timesteps=600,
+               n_envs=4)
+    assert "1 to run" in lines[0] and "ba@0" in lines[1]
+    again = json.loads((tmp_path / "records" / TARGET / "ba@0.json").read_text())
+    before = json.loads(first["ba@0.json"])
+    assert again["record"].pop("wall_time_s") > 0 and before["record"].pop("wall_time_s") > 0
+    assert again == before  # the same SMC: weights aside, every number of its record and tests
+    assert "self-in-container_from_on-floor-ba@0" in SMCLibrary.load(tmp_path / "library")
 
 
 def test_the_report_pairs_targets_and_seeds(tmp_path):
@@ -78,6 +91,7 @@ def test_the_report_pairs_targets_and_seeds(tmp_path):
                          "test_score": 0.5, "cannot_accuracy": 0.75, "cannot_on_impossible": 0.9,
                          "cannot_on_possible": 0.1, "success_on_possible": bc[seed], "moves_to_cannot": 3 + seed,
                          "moves_per_episode": 20, "primitive_steps": 100})
+            rows.append({**rows[-1], "cell": "bc-ba", "cannot_accuracy": 0.95 - 0.1 * seed})
             rows.append({**dict.fromkeys(FIELDS, ""), "target": target, "cell": "ba", "seed": seed,
                          "test_score": 0.6, "success_on_possible": ba[seed], "moves_per_episode": 30,
                          "primitive_steps": 100})
@@ -91,5 +105,7 @@ def test_the_report_pairs_targets_and_seeds(tmp_path):
     assert f"| {first[3:]} {row}" in report
     assert f"| {second[3:]} | 2 |" in report and "| -20.0 |" in report
     assert "bc minus ba: +0.0 points" in report  # (+20 - 20) / 2
+    assert "## bc SMCs calling the ordinary SMC" in report and "bc-ba minus ba: +0.0 points" in report
+    assert "cannot accuracy, bc-ba minus bc: +15.0 points" in report  # (+20 + 10) / 2 on each target
     assert f"| {CANNOT_PARENTS[0][3:]} | 3 | 90.0 ± 10.0 | 70.0 ± 0.0 | +20.0 | t(2) = 3.46" in report
     assert "| 51.0 ± 1.0 | 152.0 ± 2.0 |" in report

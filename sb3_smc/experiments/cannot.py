@@ -8,14 +8,16 @@ and :data:`CANNOT_PARENTS` (classification concepts above them). Cells, 5 seeds 
   label (1: the goal can be brought about), the signal that ended the episode and its moves.
 - ``ba``: a flat SMC on ``PW-ba_X-v0`` (the same concept and starts, every world possible), tested on its own test
   split and on the ``bc_`` test split's possible worlds (the same worlds the ``bc`` SMC's success is read on).
+- ``bc-ba``: a ``bc`` SMC on ``PW-bc_X-v0`` with one child, that seed's ``ba`` SMC (moves and signals besides):
+  what a cannot signal is worth when the bring-about is already learned (scored as ``bc``).
 - ``parent-bc`` / ``parent-ba``: each parent trained with one child, ``bc_self-in-container_from_on-floor@s``
   against ``ba_self-in-container_from_on-floor@s`` (the same seed ``s``), so the pair differs only in the child's
   third outcome.
 
 Every cell is :func:`sb3_smc.fewshot.learn_concept` with the paper's protocol (best training update, every test world
 10 times, evaluation seed 0) and the lean update, its record written to ``<out>/records/<target>/<cell>@<seed>.json``
-as it finishes (a stopped run resumes where it stopped); the children of the parents live in ``<out>/library`` (not
-committed). :func:`results_rows` derives one row a cell from the records.
+as it finishes (a stopped run resumes where it stopped); the SMCs other cells call live in ``<out>/library`` (not
+committed; a lost one is trained again, the same SMC). :func:`results_rows` derives one row a cell from the records.
 """
 
 from __future__ import annotations
@@ -76,15 +78,33 @@ def _record(out: Path, target: str, cell: str, seed: int) -> Path:
     return out / "records" / target / f"{cell}@{seed}.json"
 
 
+FLAT_CELLS = ("bc", "ba", "bc-ba")
+PARENT_CELLS = ("parent-bc", "parent-ba")
+
+
 def _cells(targets: Sequence[str], parents: Sequence[str], seeds: int) -> list[tuple[str, str, int]]:
-    """Seed by seed: the flat cells, then the parents (which call that seed's flat SMCs)."""
-    return [cell for s in range(seeds) for cell in [(t, c, s) for t in targets for c in ("bc", "ba")]
-            + [(p, c, s) for p in parents for c in ("parent-bc", "parent-ba")]]
+    """Seed by seed: the target cells (``bc-ba`` after the ``ba`` it calls), then the parents (which call that seed's
+    SMCs of :data:`CANNOT_CHILD`)."""
+    return [cell for s in range(seeds) for cell in [(t, c, s) for t in targets for c in FLAT_CELLS]
+            + [(p, c, s) for p in parents for c in PARENT_CELLS]]
 
 
-def _child(cell: str, seed: int) -> str:
-    """The library name of a parent cell's child, or of the flat cell of :data:`CANNOT_CHILD` that trains it."""
-    return f"{CANNOT_CHILD[3:]}-{cell[-2:]}@{seed}"
+def _smc_name(target: str, cell: str, seed: int) -> str:
+    return f"{target[3:]}-{cell}@{seed}"
+
+
+def _called(target: str, cell: str, seed: int, parents: bool) -> bool:
+    """Whether another cell calls the SMC of this cell (so the run's library keeps it)."""
+    return cell == "ba" or (parents and target == CANNOT_CHILD and cell == "bc")
+
+
+def _children(target: str, cell: str, seed: int) -> list[str]:
+    """The library names a cell calls."""
+    if cell == "bc-ba":
+        return [_smc_name(target, "ba", seed)]
+    if cell in PARENT_CELLS:
+        return [_smc_name(CANNOT_CHILD, cell.removeprefix("parent-"), seed)]
+    return []
 
 
 def _possible_worlds_id(target: str) -> str:
@@ -123,21 +143,17 @@ def run_cannot(out: str | Path, *, targets: Sequence[str] = CANNOT_TARGETS,
     library_path = out / "library"
     library = SMCLibrary.load(library_path) if (library_path / "manifest.json").is_file() else None
     cells = _cells(targets, parents, seeds)
-    # a child's flat cell reruns where the library lost its SMC (training is deterministic: the same SMC and record)
+    # a called SMC's cell reruns where the library lost it (training is deterministic: the same SMC and record)
     todo = [c for c in cells if not _record(out, *c).is_file()
-            or (c[0] == CANNOT_CHILD and bool(parents) and (library is None or _child(c[1], c[2]) not in library))]
+            or (_called(*c, bool(parents)) and (library is None or _smc_name(*c) not in library))]
     printer(f"{out}: {len(cells)} cells, {len(cells) - len(todo)} recorded, {len(todo)} to run")
     started = time.monotonic()
     for done, (target, cell, seed) in enumerate(todo, 1):
-        offer: str | list[str]
-        if cell.startswith("parent"):
-            assert library is not None  # its flat cells come first in the order of the cells
-            task, offer, lib = f"PW-{target}-v0", [_child(cell, seed)], library
-        else:
-            dataset = target if cell == "bc" else ordinary(target)
-            task, offer, lib = f"PW-{dataset}-v0", "none", None
-        learned = learn_concept(task, library=lib, offer=offer, seed=seed, name=f"{target[3:]}-{cell}@{seed}",
-                                lean_update=lean_update, **settings)
+        children = _children(target, cell, seed)
+        task = f"PW-{ordinary(target) if cell == 'ba' else target}-v0"
+        assert not children or library is not None  # the cells they call come first in the order of the cells
+        learned = learn_concept(task, library=library if children else None, offer=children or "none", seed=seed,
+                                name=_smc_name(target, cell, seed), lean_update=lean_update, **settings)
         smc = learned.smc
         assert smc.record is not None and smc.spec is not None
         record: dict[str, Any] = {"target": target, "cell": cell, "seed": seed, "offered": list(learned.offered),
@@ -148,7 +164,7 @@ def run_cannot(out: str | Path, *, targets: Sequence[str] = CANNOT_TARGETS,
         if cell == "ba":
             possible = evaluate(smc, _possible_worlds_id(target), repeats=10, seed=0, record_cells=False, keep=False)
             record["possible_episodes"] = episode_rows(possible)
-        if target == CANNOT_CHILD and parents:
+        if _called(target, cell, seed, bool(parents)):
             library = library or SMCLibrary(path=library_path)
             library.add(smc, replace=True)
             library.save()
@@ -168,8 +184,9 @@ def _mean(values: Sequence[float]) -> float | str:
 def results_rows(out: str | Path) -> list[dict[str, Any]]:
     """One row a recorded cell in ``out``: ``test_score`` (the cell's own test), for ``bc`` the verdict's accuracy
     (CANNOT signalled exactly on the impossible worlds), the CANNOT rate on impossible and on possible worlds, the
-    success rate on the possible worlds and the mean moves before a CANNOT on impossible worlds; for ``ba`` its
-    success rate on the ``bc`` test split's possible worlds; for every cell the mean moves of a test episode."""
+    success rate on the possible worlds and the mean moves before a CANNOT on impossible worlds (the same for
+    ``bc-ba``); for ``ba`` its success rate on the ``bc`` test split's possible worlds; for every cell the mean
+    moves of a test episode."""
     rows = []
     for file in sorted(Path(out).glob("records/*/*.json")):
         data = json.loads(file.read_text(encoding="utf-8"))
@@ -179,7 +196,7 @@ def results_rows(out: str | Path) -> list[dict[str, Any]]:
         row.update(target=data["target"], cell=data["cell"], seed=data["seed"], test_score=test["score"],
                    moves_per_episode=_mean([e[4] for e in episodes]),
                    primitive_steps=data["record"]["primitive_steps"])
-        if data["cell"] == "bc":
+        if data["cell"] in ("bc", "bc-ba"):
             impossible = [e for e in episodes if e[1] == 0]
             possible = [e for e in episodes if e[1] == 1]
             row.update(cannot_accuracy=_mean([(e[2] == "CANNOT") == (e[1] == 0) for e in episodes]),
@@ -221,47 +238,71 @@ def _paired(a: dict[int, float], b: dict[int, float]) -> tuple[list[float], list
     return [a[s] for s in seeds], [b[s] for s in seeds]
 
 
-def write_report(out: str | Path) -> Path:
-    """``<out>/report.md`` from ``<out>/results.csv`` (:func:`results_rows`' columns): the table per target (means ±
-    s.d. over seeds), the flat SMCs' comparison on possible worlds across targets (paired t-test on the targets' seed
-    means, and a hierarchical interval over targets and seeds) and the parents' paired comparison over seeds."""
-    out = Path(out)
-    with open(out / "results.csv", newline="", encoding="utf-8") as handle:
-        rows = list(csv.DictReader(handle))
-    lines = ["# The cannot table: report", "",
-             f"Generated by `sb3_smc.experiments.cannot.write_report` from `results.csv` ({len(rows)} cells). Scores "
-             "in percent, mean ± s.d. over seeds (n: seeds); moves are primitive moves of a test episode.", "",
-             "## Flat SMCs, per target", "",
-             "| target | n | cannot accuracy | CANNOT on impossible | CANNOT on possible | success on possible (bc) "
-             "| success on possible (ba) | difference | moves to CANNOT | ba on its own test |",
+_TITLES = {"bc": "Flat SMCs (bc, beside the ordinary flat SMC ba), per target",
+           "bc-ba": "bc SMCs calling the ordinary SMC (bc-ba: the seed's ba SMC as a child), per target"}
+
+
+def _target_table(rows: Sequence[dict[str, Any]], cell: str) -> tuple[list[str], dict[str, list[float]]]:
+    """The per-target table of a ``bc`` or ``bc-ba`` cell and, per target, its seeds' success on possible worlds
+    minus the ``ba`` SMC's (points)."""
+    lines = ["", f"## {_TITLES[cell]}", "",
+             "| target | n | cannot accuracy | CANNOT on impossible | CANNOT on possible | success on possible "
+             "| ba: success on possible | difference | moves to CANNOT | ba: on its own test |",
              "|---|---|---|---|---|---|---|---|---|---|"]
-    column = {field: _by(rows, "bc", field) for field in FIELDS[4:9]}
+    column = {field: _by(rows, cell, field) for field in FIELDS[4:9]}
     ba_possible, ba_test = _by(rows, "ba", "success_on_possible"), _by(rows, "ba", "test_score")
     differences: dict[str, list[float]] = {}
     for target in [t for t in CANNOT_TARGETS if t in column["cannot_accuracy"]]:
-        bc = column["success_on_possible"][target]
-        ours, theirs = _paired(bc, ba_possible.get(target, {}))
+        own_possible = column["success_on_possible"][target]
+        ours, theirs = _paired(own_possible, ba_possible.get(target, {}))
         differences[target] = [100 * (x - y) for x, y in zip(ours, theirs, strict=True)]
         diff = f"{np.mean(differences[target]):+.1f}" if differences[target] else "-"
         moves = column["moves_to_cannot"].get(target, {})
         own = [_summary(list(column[f][target].values())) for f in FIELDS[4:8]]
         ba = [_summary(list(d[target].values())) if target in d else "-" for d in (ba_possible, ba_test)]
-        lines.append(f"| {target[3:]} | {len(bc)} | {' | '.join(own)} | {ba[0]} | {diff} | "
+        lines.append(f"| {target[3:]} | {len(own_possible)} | {' | '.join(own)} | {ba[0]} | {diff} | "
                      f"{_summary(list(moves.values()), 1.0) if moves else '-'} | {ba[1]} |")
-    lines += ["", "## Across targets", ""]
-    complete = {t: d for t, d in differences.items() if d}
+    lines += ["", "Across targets:", ""]
     for field, title in (("cannot_accuracy", "cannot accuracy"), ("cannot_on_impossible", "CANNOT on impossible"),
                          ("cannot_on_possible", "CANNOT on possible")):
         values = {t: [100 * v for v in seeds.values()] for t, seeds in column[field].items()}
         if values:
             mean, low, high = hierarchical_interval(values)
             lines.append(f"- {title}: {mean:.1f} % [{low:.1f}, {high:.1f}] over {len(values)} targets")
+    complete = {t: d for t, d in differences.items() if d}
     if len(complete) >= 2:
         mean, low, high = hierarchical_interval(complete)
         test = paired_ttest([float(np.mean(list(column["success_on_possible"][t].values()))) for t in complete],
                             [float(np.mean(list(ba_possible[t].values()))) for t in complete])
-        lines.append(f"- success on possible worlds, bc minus ba: {mean:+.1f} points [{low:+.1f}, {high:+.1f}] over "
-                     f"{len(complete)} targets" + (f", {ttest_text(test)}" if test else ""))
+        lines.append(f"- success on possible worlds, {cell} minus ba: {mean:+.1f} points [{low:+.1f}, {high:+.1f}] "
+                     f"over {len(complete)} targets" + (f", {ttest_text(test)}" if test else ""))
+    return lines, differences
+
+
+def write_report(out: str | Path) -> Path:
+    """``<out>/report.md`` from ``<out>/results.csv`` (:func:`results_rows`' columns): a table per target for ``bc``
+    and ``bc-ba`` (means ± s.d. over seeds) with their comparison on possible worlds against ``ba`` across targets
+    (paired t-test on the targets' seed means, and a hierarchical interval over targets and seeds), ``bc-ba``
+    against ``bc`` on the cannot accuracy, and the parents' paired comparison over seeds."""
+    out = Path(out)
+    with open(out / "results.csv", newline="", encoding="utf-8") as handle:
+        rows = list(csv.DictReader(handle))
+    lines = ["# The cannot table: report", "",
+             f"Generated by `sb3_smc.experiments.cannot.write_report` from `results.csv` ({len(rows)} cells). Scores "
+             "in percent, mean ± s.d. over seeds (n: seeds); moves are primitive moves of a test episode."]
+    for cell in ("bc", "bc-ba"):
+        if any(row["cell"] == cell for row in rows):
+            lines += _target_table(rows, cell)[0]
+    flat, called = _by(rows, "bc", "cannot_accuracy"), _by(rows, "bc-ba", "cannot_accuracy")
+    both = {t: [100 * (a - b) for a, b in zip(*_paired(called[t], flat[t]), strict=True)]
+            for t in flat if t in called}
+    both = {t: d for t, d in both.items() if d}
+    if len(both) >= 2:
+        mean, low, high = hierarchical_interval(both)
+        test = paired_ttest([float(np.mean(list(called[t].values()))) for t in both],
+                            [float(np.mean(list(flat[t].values()))) for t in both])
+        lines += ["", f"- cannot accuracy, bc-ba minus bc: {mean:+.1f} points [{low:+.1f}, {high:+.1f}] over "
+                  f"{len(both)} targets" + (f", {ttest_text(test)}" if test else "")]
     lines += ["", "Intervals: 95 % hierarchical bootstrap (targets, then seeds within each target); the t-test pairs "
               "the targets' seed means.", "", "## Parents", "",
               "| parent | n | accuracy, bc child | accuracy, ba child | difference | paired t | moves, bc child "
