@@ -278,6 +278,24 @@ def test_human_rendering_on_a_machine_without_a_display_draws_off_screen_and_say
 
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="DISPLAY / WAYLAND_DISPLAY are Linux's displays")
+def test_human_rendering_without_a_display_prints_only_its_own_warning(tmp_path) -> None:
+    """No SDL probe of Wayland / X11 first (its "XDG_RUNTIME_DIR is invalid" line), and the driver is chosen for
+    the call only: the process's environment is left as it was."""
+    pytest.importorskip("pygame", reason="pygame is in the [test] extra")
+    code = ("import os, gymnasium as gym, pixelworld_env; "
+            "env = gym.make('PW-cl_self-in-left-corner_vs_on-hline-v0', render_mode='human'); env.reset(seed=0); "
+            "env.step(2); env.close(); env.reset(seed=1); env.render(); env.close(); "
+            "print(os.environ.get('SDL_VIDEODRIVER'))")
+    environment = {k: v for k, v in os.environ.items()
+                   if k not in ("DISPLAY", "WAYLAND_DISPLAY", "SDL_VIDEODRIVER", "XDG_RUNTIME_DIR")}
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=environment,
+                            cwd=tmp_path, check=True)
+    assert result.stdout.strip() == "None" and "XDG_RUNTIME_DIR" not in result.stderr
+    assert result.stderr.count("UserWarning") == 1
+    assert 'WARN: render_mode="human": pygame finds no display' in result.stderr
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="DISPLAY / WAYLAND_DISPLAY are Linux's displays")
 def test_human_rendering_with_a_video_driver_that_cannot_start_says_so(pygame_display,
                                                                       monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("SDL_VIDEODRIVER", "x11")  # chosen on purpose, and no X display

@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import os
+import sys
 from typing import Any
 
 import gymnasium as gym
@@ -51,6 +52,28 @@ HEADLESS_DRIVERS = ("offscreen", "dummy")
 """SDL video drivers that draw without showing anything: what SDL falls back to on a machine without a display."""
 
 
+def _no_display() -> bool:
+    """Linux without a display variable and without a chosen SDL video driver."""
+    return (sys.platform.startswith("linux") and not os.environ.get("SDL_VIDEODRIVER")
+            and not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY"))
+
+
+def init_display() -> None:
+    """``pygame.display.init()``; where :func:`_no_display`, with the driver SDL would fall back to (``offscreen``)
+    chosen for this call only, so that SDL does not probe Wayland and X11 first (which prints "XDG_RUNTIME_DIR is
+    invalid or not set" to stderr)."""
+    import pygame
+
+    headless = _no_display()
+    if headless:
+        os.environ["SDL_VIDEODRIVER"] = "offscreen"
+    try:
+        pygame.display.init()
+    finally:
+        if headless:
+            del os.environ["SDL_VIDEODRIVER"]
+
+
 def check_display() -> None:
     """Check that ``render_mode="human"`` can draw here, and warn where its window cannot be seen.
 
@@ -68,15 +91,16 @@ def check_display() -> None:
         raise DependencyNotInstalled('render_mode="human" draws in a pygame window, and pygame is not installed: '
                                      'pip install "sb3-smc[render]" (or use render_mode="rgb_array")') from None
     displays = f"DISPLAY={os.environ.get('DISPLAY')!r}, WAYLAND_DISPLAY={os.environ.get('WAYLAND_DISPLAY')!r}"
+    chosen = os.environ.get("SDL_VIDEODRIVER", "")
     try:
-        pygame.display.init()
+        init_display()
     except pygame.error as error:
         raise RuntimeError(f'render_mode="human" draws in a pygame window, and pygame has no video driver here '
                            f"({error}; SDL_VIDEODRIVER={os.environ.get('SDL_VIDEODRIVER')!r}, {displays}): "
                            "run it where a screen is attached (or forwarded), set SDL_VIDEODRIVER=dummy to draw "
                            'without one, or use render_mode="rgb_array"') from None
     driver = pygame.display.get_driver()
-    if driver in HEADLESS_DRIVERS and driver not in os.environ.get("SDL_VIDEODRIVER", ""):
+    if driver in HEADLESS_DRIVERS and driver not in chosen:
         gym.logger.warn(f'render_mode="human": pygame finds no display here (video driver: {driver}; {displays}), '
                         "so the window is drawn off screen and nothing is shown; set SDL_VIDEODRIVER=dummy to do "
                         'that without this warning, or use render_mode="rgb_array"')
@@ -97,7 +121,7 @@ class Window:
         import pygame
 
         if self._screen is None:
-            pygame.display.init()
+            init_display()
             self._screen = pygame.display.set_mode((frame.shape[1], frame.shape[0]))
             pygame.display.set_caption(self.title)
             self._clock = pygame.time.Clock()
