@@ -82,11 +82,12 @@ FLAT_CELLS = ("bc", "ba", "bc-ba")
 PARENT_CELLS = ("parent-bc", "parent-ba")
 
 
-def _cells(targets: Sequence[str], parents: Sequence[str], seeds: int) -> list[tuple[str, str, int]]:
-    """Seed by seed: the target cells (``bc-ba`` after the ``ba`` it calls), then the parents (which call that seed's
-    SMCs of :data:`CANNOT_CHILD`)."""
-    return [cell for s in range(seeds) for cell in [(t, c, s) for t in targets for c in FLAT_CELLS]
-            + [(p, c, s) for p in parents for c in PARENT_CELLS]]
+def _cells(targets: Sequence[str], parents: Sequence[str], seeds: Sequence[int]) -> list[tuple[str, str, int]]:
+    """Seed by seed the flat ``bc`` and ``ba`` cells, then the parents (which call that seed's SMCs of
+    :data:`CANNOT_CHILD`); the ``bc-ba`` cells (each after the ``ba`` it calls) last."""
+    return ([cell for s in seeds for cell in [(t, c, s) for t in targets for c in ("bc", "ba")]
+             + [(p, c, s) for p in parents for c in PARENT_CELLS]]
+            + [(t, "bc-ba", s) for s in seeds for t in targets])
 
 
 def _smc_name(target: str, cell: str, seed: int) -> str:
@@ -125,10 +126,12 @@ def _possible_worlds_id(target: str) -> str:
 
 
 def run_cannot(out: str | Path, *, targets: Sequence[str] = CANNOT_TARGETS,
-               parents: Sequence[str] = CANNOT_PARENTS, seeds: int = 5, lean_update: bool = True,
+               parents: Sequence[str] = CANNOT_PARENTS, seeds: int | Sequence[int] = 5, lean_update: bool = True,
                printer: Callable[[str], None] = print, **settings: Any) -> Path:
     """Run every cell not recorded yet (seed by seed: the flat cells, then the parents, whose children are that
-    seed's flat ``bc`` / ``ba`` SMCs of :data:`CANNOT_CHILD`), then write ``results.csv``. ``settings``:
+    seed's flat ``bc`` / ``ba`` SMCs of :data:`CANNOT_CHILD`; ``bc-ba`` last), then write ``results.csv``. ``seeds``: a
+    count (seeds 0 to ``seeds - 1``) or the seeds themselves (two processes may share a run on disjoint seeds: the
+    library's save merges their SMCs). ``settings``:
     :func:`~sb3_smc.fewshot.learn_concept`'s (``total_timesteps`` ...)."""
     from sb3_smc.fewshot import learn_concept
     from sb3_smc.learning.evaluation import evaluate
@@ -142,7 +145,7 @@ def run_cannot(out: str | Path, *, targets: Sequence[str] = CANNOT_TARGETS,
     out = Path(out)
     library_path = out / "library"
     library = SMCLibrary.load(library_path) if (library_path / "manifest.json").is_file() else None
-    cells = _cells(targets, parents, seeds)
+    cells = _cells(targets, parents, range(seeds) if isinstance(seeds, int) else seeds)
     # a called SMC's cell reruns where the library lost it (training is deterministic: the same SMC and record)
     todo = [c for c in cells if not _record(out, *c).is_file()
             or (_called(*c, bool(parents)) and (library is None or _smc_name(*c) not in library))]
