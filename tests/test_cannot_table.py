@@ -101,11 +101,12 @@ def test_the_report_pairs_targets_and_seeds(tmp_path):
                          "test_score": score, "moves_per_episode": moves, "primitive_steps": 100})
     (tmp_path / "results.csv").write_text(_csv(rows))
     report = write_report(tmp_path).read_text()
+    assert report.startswith("# Bring about, or say it cannot be done")
     row = "| 2 | 75.0 ± 0.0 | 90.0 ± 0.0 | 10.0 ± 0.0 | 70.0 ± 14.1 | 50.0 ± 0.0 | +20.0 | 3.5 ± 0.7 |"
     assert f"| {first[3:]} {row}" in report
     assert f"| {second[3:]} | 2 |" in report and "| -20.0 |" in report
     assert "bc minus ba: +0.0 points" in report  # (+20 - 20) / 2
-    assert "## bc SMCs calling the ordinary SMC" in report and "bc-ba minus ba: +0.0 points" in report
+    assert "### bc SMCs calling the ordinary SMC" in report and "bc-ba minus ba: +0.0 points" in report
     assert "cannot accuracy, bc-ba minus bc: +15.0 points" in report  # (+20 + 10) / 2 on each target
     assert f"| {CANNOT_PARENTS[0][3:]} | 3 | 90.0 ± 10.0 | 70.0 ± 0.0 | +20.0 | t(2) = 3.46" in report
     assert "| 51.0 ± 1.0 | 152.0 ± 2.0 |" in report
