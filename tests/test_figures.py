@@ -125,3 +125,54 @@ def test_the_trajectory_and_timeline_figures_keep_their_text_on_the_canvas(tmp_p
     for hierarchical in (smc, _hierarchical("curr", children[:1])):
         figures.timeline_figure(hierarchical, DEMO_TARGET, tmp_path / "timeline.png")
         assert clipped == {"trajectories": [], "timeline": []}
+
+
+def test_the_timeline_keeps_back_to_back_calls_apart_and_names_their_outcomes() -> None:
+    """Two calls of one child in a row are two spans (they were one bar); a grandchild's moves are a span of its
+    own inside its caller's; outcomes are named by the child's kind."""
+    from types import SimpleNamespace
+
+    from sb3_smc.experiments.figures import _outcome_name, _spans
+
+    a, b = ("a",), ("a", "g")
+    episode = SimpleNamespace(moves=[(a, "L"), (a, "L"), (a, "R"), (b, "D"), (b, "D"), ((), "U")],
+                              move_decisions=[0, 0, 1, 1, 1, 2])
+    assert _spans(episode) == [(1, "a", 0, 2, 0), (1, "a", 2, 5, 1), (2, "g", 3, 5, 1)]
+    assert [_outcome_name(kind, v) for kind, v in (("bring-about", 1.0), ("bring-about", 0.0),
+                                                   ("classification", -1.0), ("bring-about-or-cannot", -1.0),
+                                                   ("bring-about-or-cannot", -0.5))] == \
+        ["SIG1", "cut", "SIG0", "CANNOT", "cut"]
+
+
+def test_the_timeline_shows_a_successful_episode_when_there_is_one(tmp_path, monkeypatch) -> None:
+    """The default episode is the first success among the paper's repeats (here the third), and the title says
+    which try it was; with none, the title says that too."""
+    titles: list[str] = []
+    real_fit, real_run = figures.fit_text, figures.run_episode
+    monkeypatch.setattr(figures, "fit_text", lambda text, fig: (titles.append(text.get_text()), real_fit(text, fig)))
+    seeds: list[int] = []
+
+    def third_succeeds(smc, env, **kwargs):
+        episode = real_run(smc, env, **kwargs)
+        seeds.append(kwargs["seed"])
+        episode.success = len(seeds) == 3
+        return episode
+
+    monkeypatch.setattr(figures, "run_episode", third_succeeds)
+    figures.timeline_figure(_hierarchical("h", ("left",)), DEMO_TARGET, tmp_path / "timeline.png")
+    assert len(seeds) == 3 and "success, the first success of 3 tries" in titles[-1]
+    assert seeds == [figures.episode_seed(0, repeat, 0) for repeat in range(3)]
+    monkeypatch.setattr(figures, "run_episode", real_run)
+    figures.timeline_figure(_hierarchical("h", ("left",)), DEMO_TARGET, tmp_path / "timeline.png")
+    assert "failure; no success in 20 tries, the last shown" in titles[-1]
+
+
+def test_the_trajectory_key_says_only_what_is_drawn(tmp_path, monkeypatch) -> None:
+    """A classification target's key has no blue dots (no goal is drawn), a bring-about one's no label frame."""
+    keys: list[str] = []
+    real = figures.fit_text
+    monkeypatch.setattr(figures, "fit_text", lambda text, fig: (keys.append(text.get_text()), real(text, fig)))
+    smc = _hierarchical("h", ("left",))
+    figures.trajectory_figure({"curr": smc}, DEMO_TARGET, tmp_path / "t.png", environments=1, repeats=1)
+    assert "frame" in keys[-1] and "blue dots" not in keys[-1]
+    assert "blue dots" in figures.TRAJECTORY_KEYS["goal"] and "frame" not in figures.TRAJECTORY_KEYS["goal"]

@@ -4,8 +4,8 @@
   the self visited over the repeats as a heat overlay (brighter orange = more visits), a green (positive) or red
   (negative) frame for the ground truth of a classification task, and for a bring-about task the cells where the
   self would satisfy the goal marked with blue dots.
-* :func:`timeline_figure`: one episode of a hierarchical SMC: at each primitive move, which SMC (at which depth) or
-  the policy itself was acting, and the outcome of every SMC call.
+* :func:`timeline_figure`: one (by default successful) episode of a hierarchical SMC along its primitive moves: each
+  call as a labelled span on its depth's row with its outcome, the SMC's own moves as dots, its signal as a marker.
 * :func:`bar_panels`: Fig. 5-style grouped bars, one panel per kind or category, an error bar only where there is
   more than one value behind a bar.
 
@@ -28,6 +28,7 @@ import gymnasium as gym
 import numpy as np
 
 from pixelworld_env.atomic import atomic_write  # pixelworld_env registers the PW-* ids on import
+from pixelworld_env.core.kinds import task_kind
 from pixelworld_env.core.render import rgb_image
 from sb3_smc.experiments.design import METHOD_REGISTRY
 from sb3_smc.learning.evaluation import episode_seed, make_evaluation_env, run_episode, start_seed
@@ -45,9 +46,13 @@ __all__ = ["METHOD_COLORS", "METHOD_LABELS", "Panel", "bar_panels", "fit_text", 
 
 METHOD_COLORS = {name: method.colour for name, method in METHOD_REGISTRY.items()}
 METHOD_LABELS = {name: method.label for name, method in METHOD_REGISTRY.items()}
-TRAJECTORY_KEY = ("orange: cells the self visited (brighter = more episodes); frame: the environment's label "
-                  "(green positive, red negative; classification); blue dots: cells where the self reaches the goal "
-                  "(bring-about)")
+TRAJECTORY_KEYS = {
+    "classification": "orange: cells the self visited (brighter = more episodes); frame: the environment's label "
+                      "(green positive, red negative)",
+    "goal": "orange: cells the self visited (brighter = more episodes); blue dots: cells where the self reaches the "
+            "goal",
+}
+"""The key under a trajectory figure: classification, or a goal kind (bring-about, bring-about-or-cannot)."""
 
 
 def pyplot() -> Any:
@@ -180,50 +185,111 @@ def trajectory_figure(smcs: Mapping[str, SMC], target: str, path: str | Path, *,
             if j == 0:
                 ax.set_ylabel(f"env {i}", fontsize=7)
     fit_text(fig.suptitle(f"{target}: visited cells over {repeats} test episodes", fontsize=8), fig)
-    key = fig.text(0.5, 0.005, TRAJECTORY_KEY, ha="center", va="bottom", fontsize=5.5)
+    key = fig.text(0.5, 0.005, TRAJECTORY_KEYS["goal" if task_kind(env.kind).tracks_goal else "classification"],
+                   ha="center", va="bottom", fontsize=5.5)
     fit_text(key, fig)
     fig.tight_layout(rect=(0, _share(key, fig), 1, 1))
     return save_figure(fig, Path(path))
 
 
+TIMELINE_TRIES = 20
+"""Test episodes :func:`timeline_figure` tries for a successful one (repeats of the paper's test, in order)."""
+
+
+def _outcome_name(kind: str, outcome: float) -> str:
+    """What a call's outcome value says for a child of ``kind``: its signal's name, or ``cut``."""
+    spec = task_kind(kind)
+    named = [signal.name for signal in spec.signals if signal.outcome == outcome]
+    return named[0] if named else "cut" if outcome == spec.cut_outcome else f"{outcome:+g}"
+
+
+def _spans(episode: Any) -> list[tuple[int, str, float, float, int]]:
+    """``(depth, smc, start, end, decision)`` of every stretch of moves one SMC made: a new span where the SMC at
+    that depth changes or a new decision begins (so back-to-back calls of one child stay apart); nested calls of one
+    grandchild within one call are one span."""
+    spans: list[tuple[int, str, float, float, int]] = []
+    open_spans: dict[int, list[Any]] = {}
+    for t, ((chain, _), decision) in enumerate(zip(episode.moves, episode.move_decisions, strict=True)):
+        for depth in list(open_spans):
+            span = open_spans[depth]
+            if depth > len(chain) or chain[depth - 1] != span[1] or decision != span[4]:
+                spans.append(tuple(open_spans.pop(depth)))  # type: ignore[arg-type]
+        for depth, name in enumerate(chain, start=1):
+            if depth in open_spans:
+                open_spans[depth][3] = t + 1
+            else:
+                open_spans[depth] = [depth, name, t, t + 1, decision]
+    spans += [tuple(span) for span in open_spans.values()]  # type: ignore[misc]
+    return sorted(spans, key=lambda span: (span[2], span[0]))
+
+
 def timeline_figure(smc: SMC, target: str, path: str | Path, *, index: int = 0, seed: int = 0,
-                    env_id: str | None = None) -> Path:
-    """Fig. 1: one test episode of ``smc`` on environment ``index`` of ``target``: a row per depth (0 = the SMC
-    itself), a bar per primitive move coloured by the acting SMC, each call's outcome written at its end.
-    ``env_id`` (default ``PW-<target>-v0``) may be another environment's SMC task: its test start state ``index``."""
+                    env_id: str | None = None, success: bool = True) -> Path:
+    """Fig. 1 (right): one test episode of ``smc`` on environment ``index`` of ``target``, along its primitive
+    moves: each call of a child as a labelled span on its depth's row (a new span for each call, its outcome
+    written in it), the SMC's own moves as dots and its final signal as a marker (green: the episode succeeded).
+
+    :param success: show the first successful episode of up to :data:`TIMELINE_TRIES` repeats of the paper's test
+        (the title says so, or that none succeeded and which one is shown); ``False``: repeat 0.
+    :param env_id: default ``PW-<target>-v0``; another environment's SMC task runs its test start state ``index``.
+    """
     plt = pyplot()
     env = make_evaluation_env(smc, env_id or f"PW-{target}-v0")  # the SMC's own settings, test split
     start = None if env.pixelworld else start_seed("test", index)
-    episode = run_episode(smc, env, index=index, seed=seed, start_seed=start)
-    names = sorted({name for chain, _ in episode.moves for name in chain})
-    colors = {name: plt.cm.tab20(k % 20) for k, name in enumerate(names)}
-    depth = max((len(chain) for chain, _ in episode.moves), default=0)
-    fig, ax = plt.subplots(figsize=(max(5.0, 0.12 * len(episode.moves) + 2), 1.2 + 0.5 * (depth + 1)))
-    for t, (chain, move) in enumerate(episode.moves):
-        ax.barh(0, 1, left=t, color="#444444" if not chain else "#dddddd", edgecolor="none")
-        for level, name in enumerate(chain, start=1):
-            ax.barh(level, 1, left=t, color=colors[name], edgecolor="none")
-        ax.text(t + 0.5, -0.45, move[0], ha="center", va="center", fontsize=5)
-    for call in episode.call_log:  # the outcome of each direct call, written where its moves end
-        if call["depth"] != 1:
-            continue
-        own = [t for t, (d, (chain, _)) in enumerate(zip(episode.move_decisions, episode.moves, strict=True))
-               if d == call["decision"] and chain]
-        later = [t for t, d in enumerate(episode.move_decisions) if d >= call["decision"]]
-        end = own[-1] + 1 if own else (later[0] if later else len(episode.moves))
-        outcome = {1: "SIG1", -1: "SIG0", 0: "cut"}[call["outcome"]]
-        ax.text(end, 1.45, outcome, fontsize=5, ha="right")
-    ax.set_yticks(range(depth + 1), ["policy", *[f"depth {d}" for d in range(1, depth + 1)]], fontsize=7)
+    for repeat in range(TIMELINE_TRIES if success else 1):
+        episode = run_episode(smc, env, index=index, seed=episode_seed(seed, repeat, index), start_seed=start)
+        if episode.success:
+            break
+    env.close()
+    kinds: dict[str, str] = {}
+    pending = list(smc.children)
+    while pending:  # every SMC below this one, by name
+        child = pending.pop()
+        kinds[child.name] = child.kind
+        pending += child.children
+    names = sorted(kinds)
+    colors = {name: plt.cm.tab10(k % 10) for k, name in enumerate(names)}
+    spans = _spans(episode)
+    depth = max((span[0] for span in spans), default=1 if smc.children else 0)
+    moves = len(episode.moves)
+    fig, ax = plt.subplots(figsize=(min(14.0, max(6.0, 0.08 * moves + 2.5)), 1.6 + 0.55 * (depth + 1)))
+    own = [t for t, (chain, _) in enumerate(episode.moves) if not chain]
+    ax.scatter([t + 0.5 for t in own], [0] * len(own), s=9, color="#555555", zorder=3)
+    calls = {call["decision"]: call for call in episode.call_log if call["depth"] == 1}
+    spanned = {span[4] for span in spans if span[0] == 1}
+    for decision, call in calls.items():  # a call that made no move: a narrow bar where the next move is
+        if decision not in spanned:
+            x = next((t for t, d in enumerate(episode.move_decisions) if d > decision), moves)
+            spans.append((1, call["smc"], x - 0.2, x + 0.2, decision))
+    for level, name, left, right, decision in spans:
+        ax.barh(level, right - left, left=left, height=0.6, color=colors.get(name, "#bbbbbb"), edgecolor="white",
+                linewidth=1.0)
+        if level == 1 and decision in calls:  # the call's outcome, written in its span where it fits
+            label = _outcome_name(kinds.get(name, smc.kind), calls[decision]["outcome"])
+            if (right - left) * fig.get_figwidth() / (moves + 1.5) > 0.06 * len(label):
+                ax.text((left + right) / 2, level, label, ha="center", va="center", fontsize=6, clip_on=True)
+    if episode.signalled:
+        signal = smc.action_names[episode.actions[-1]]
+        mark = "#2e7d32" if episode.success else "#c62828"
+        ax.scatter([moves + 0.5], [0], s=60, marker="D", color=mark, zorder=4)
+        ax.text(moves + 0.5, 0.38, signal, ha="center", va="bottom", fontsize=6, color=mark)
+    ax.set_xlim(0, moves + 1.5)
+    ax.set_ylim(-0.6, depth + 0.6)
+    ax.set_yticks(range(depth + 1), [f"{smc.kind} SMC", *[f"depth {d}" for d in range(1, depth + 1)]], fontsize=7)
     ax.set_xlabel("primitive move", fontsize=7)
-    bottom = 0.0
-    if names:  # the legend below the axes
-        legend = fitted_legend(fig, [plt.Rectangle((0, 0), 1, 1, color=colors[n]) for n in names], names,
-                               columns=len(names), fontsize=5, loc="lower center", bbox_to_anchor=(0.5, 0.0),
-                               frameon=False)
-        bottom = _share(legend, fig, grow=True)
+    ax.tick_params(axis="x", labelsize=6)
+    handles = [plt.Rectangle((0, 0), 1, 1, color=colors[n]) for n in names]
+    handles += [plt.Line2D([], [], marker="o", linestyle="", color="#555555", markersize=3),
+                plt.Line2D([], [], marker="D", linestyle="", color="#2e7d32", markersize=5)]
+    labels = [*names, "a move of the SMC itself", "its signal (red: wrong)"]
+    legend = fitted_legend(fig, handles, labels, columns=min(len(labels), 3), fontsize=5, loc="lower center",
+                           bbox_to_anchor=(0.5, 0.0), frameon=False)
+    bottom = _share(legend, fig, grow=True)
+    tried = "" if not success else (f", the first success of {repeat + 1} tries" if episode.success
+                                    else f"; no success in {TIMELINE_TRIES} tries, the last shown")
     result = "success" if episode.success else "failure"
-    fit_text(fig.suptitle(f"{smc.name}\non {target}, test environment {index}: {len(episode.moves)} moves, "
-                          f"{episode.length} decisions, {result}", fontsize=7), fig)
+    fit_text(fig.suptitle(f"{smc.name}\non {target}, test environment {index}: {moves} moves, "
+                          f"{episode.length} decisions, {result}{tried}", fontsize=7), fig)
     fig.tight_layout(rect=(0, bottom, 1, 1))
     return save_figure(fig, Path(path))
 

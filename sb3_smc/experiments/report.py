@@ -375,8 +375,11 @@ def _figures(folder: Path, table: ResultTable) -> list[Path]:
                 errors[m].append(None if se is None else 100 * se)
         panels.append(Panel(kind, list(members), values, errors))
     partial = {m for _, m in table.unfinished}
-    paths = [bar_panels(panels, methods, "Mean test score per category and kind (best seed of each concept; error "
-                        "bars: standard error across the concepts)", folder / "categories.png", partial=partial)]
+    bars = ("error bars: standard error across the concepts" if any(e is not None for p in panels
+                                                                     for v in p.errors.values() for e in v)
+            else "one concept behind each bar: no error bars")
+    paths = [bar_panels(panels, methods, f"Mean test score per category and kind (best seed of each concept; {bars})",
+                        folder / "categories.png", partial=partial)]
     for kind in KINDS:
         groups = [c for c in CATEGORIES if table.of_kind(kind, c)]
         if not groups:
