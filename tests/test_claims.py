@@ -1,7 +1,11 @@
-"""The claims table's rules: bootstrap intervals over seeds and test worlds, the four verdicts, the readings of a
-call, our own methods' checks (sb3_smc.experiments.bootstrap, sb3_smc.experiments.claims)."""
+"""The claims table's rules: bootstrap intervals over seeds and test worlds (and concepts: the hierarchical
+bootstrap), the verdicts (a statement of significance needs our t-test), the readings of a call (a column holds only
+what ran under it; a subset's cell says so), wins at the ceiling, our own methods' checks (sb3_smc.experiments.
+bootstrap, sb3_smc.experiments.claims, sb3_smc.experiments.statistics)."""
 
 from __future__ import annotations
+
+from collections.abc import Callable, Mapping
 
 import numpy as np
 import pytest
@@ -13,15 +17,21 @@ from sb3_smc.experiments.claims import (
     NOT_COMPARABLE,
     NOT_JUDGED,
     NOT_RUN,
+    NOT_SIGNIFICANT,
     READINGS,
+    SAME,
     VERDICTS,
     Judged,
+    Reading,
+    Statement,
     judge,
     method_checks,
+    significance,
     statements,
     tally,
     verdict,
 )
+from sb3_smc.experiments.statistics import ceiling_wins, wins, wins_text
 
 
 def _candidates(seed: int = 0, worlds: int = 25) -> dict[tuple[str, str], list[Candidate]]:
@@ -105,9 +115,10 @@ def _table(methods: dict[str, float]) -> tuple[Replicates, dict[str, str], dict[
 
 
 def test_every_statement_of_the_paper_under_each_reading() -> None:
-    """31 statements (15 classification, 10 bring-about, 6 headline); a reading whose methods did not run says so, the
-    flat-with-400-moves reading judges only the statements about the flat SMC, a pair still training is not
-    judged, and a subset of a kind's concepts is not comparable."""
+    """31 statements (15 classification, 10 bring-about, 6 headline); a reading whose methods did not run says so, a
+    later reading that runs a statement's methods as the first does says so (the flat-with-400-moves reading judges
+    only the statements about the flat SMC, the costs-its-moves reading none about the cnn and base alone), a pair
+    still training is not judged, and a subset of a kind's concepts is not comparable."""
     replicates, kind_of, category_of = _table({"cnn": 0.7, "base": 0.6, "curr": 0.9, "canon": 0.85,
                                                "curr-noprim": 0.9, "canon-noprim": 0.85, "curr-moves": 0.55,
                                                "base-400": 0.65})
@@ -120,7 +131,10 @@ def test_every_statement_of_the_paper_under_each_reading() -> None:
     mean = 100 * np.mean([replicates.estimate[(t, "curr")] for t in curr_mean.targets])
     assert cell.verdict == "exceeded" and cell.ours.startswith(f"{mean:.1f} [") and mean > 90  # against 74.5
     assert judge(curr_mean, moves, replicates).verdict == "short"  # curr-moves 55-59 against 74.5
-    assert judge(curr_mean, flat400, replicates).ours == "as one step"
+    assert judge(curr_mean, flat400, replicates) == Judged(SAME, "")
+    for copied in ("classification: mean of cnn", "bring-about: mean of base", "classification: cnn above base"):
+        assert judge(by_text[copied], moves, replicates) == Judged(SAME, "")  # not curr-moves': not counted there
+    assert judge(by_text["classification: mean of cnn"], one_step, replicates).verdict in VERDICTS
     test = by_text["bring-about: curr above base (paired t-test)"]
     assert judge(test, moves, replicates).verdict == "opposite" and "t(16) = " in judge(test, moves, replicates).ours
     assert judge(test, flat400, replicates).verdict in VERDICTS  # curr against base-400
@@ -170,7 +184,8 @@ def test_the_equal_experience_readings_judge_curr_against_the_flat_smc_by_sign_o
         {flat_at(m): {t: (("base-x1", 0.5), ("base-x4", 0.5)) for t in sweep} for m in ("curr-cap100",
                                                                                         "curr-moves-100")})
     cell = judge(test, one_step, flat)  # curr-cap100 30 + k points above the flat SMC on the 5 concepts
-    assert cell.verdict == "reproduced" and cell.ours.startswith(f"+32.0 [+32.0, +32.0] on {len(sweep)}; t(4) = ")
+    assert cell.verdict == "reproduced" and cell.ours.startswith("+32.0 [")
+    assert f"] on {len(sweep)} swept targets; t(4) = " in cell.ours  # the subset's, said in the cell
     assert judge(test, moves, flat).verdict == "opposite"  # curr-moves-100 5 + k / 2 points below it
     assert judge(by_text["bring-about: mean of curr"], one_step, flat) == Judged("", "")
     assert judge(test, one_step, flat, unfinished={(sweep[0], flat_at("curr-cap100"))}).verdict == NOT_JUDGED
@@ -200,7 +215,7 @@ def test_a_settings_kind_mean_is_its_score_on_the_sweep_and_stays_within_100_els
     (fit,) = [f for f in sweep_fits(replicates, kind_of, ["curr-moves", "base", "curr-moves-100", "curr-moves-400"])
               if f.method == "curr-moves-400"]
     numbers = {n.what: n.ours.estimate for n in fit.numbers}
-    assert numbers["bring-about: mean (estimated over all 3)"] == pytest.approx(100 * (0.9 + 1.0 + 1.0) / 3)
+    assert numbers["bring-about: mean (extrapolated to all 3 from 1 swept)"] == pytest.approx(100 * 2.9 / 3)
     assert numbers["bring-about: lead over base"] == pytest.approx(100 * (2.9 / 3 - 0.5))
 
 
@@ -240,7 +255,7 @@ def test_the_sweep_scores_each_setting_against_the_paper_and_names_the_best_fit(
     assert {f.method for f in fits} == set(SWEEP_METHODS)
     by_method = {f.method: f for f in fits}
     cap25 = {n.what: n for n in by_method["curr-cap25"].numbers}
-    assert cap25["classification: mean (estimated over all 34)"].ours.estimate == pytest.approx(
+    assert cap25["classification: mean (extrapolated to all 34 from 7 swept)"].ours.estimate == pytest.approx(
         100 * (0.949 + 0.002 * np.mean([k % 3 for k in range(len(everything)) if kind_of[everything[k]]
                                          == "classification"]) - 0.2), abs=0.05)
     assert fits[0].method in ("curr-cap25", "curr-moves-400")  # both land on the paper's kind means
@@ -266,3 +281,152 @@ def test_the_sweep_scores_each_setting_against_the_paper_and_names_the_best_fit(
     # the next two settings have as many of the paper's numbers inside: no clear fit, both named
     assert fits[2].reproduced == fits[1].reproduced
     assert f"No clear fit: **{fits[1].method}** (" in section and f"as many inside for {fits[2].method} " in section
+
+
+def test_the_hierarchical_bootstrap_resamples_concepts_with_a_known_answer() -> None:
+    """Concepts without seed or world noise: the concepts held fixed give no spread at all; resampled, the interval of
+    the mean is the textbook one (1.96 population s.d. / sqrt(concepts)) and covers the true mean of the population
+    the concepts were drawn from in about 95 % of draws; a method a constant above another on every concept has a
+    gap without spread (the draws stay paired); the same records and seed give the same interval."""
+    rng = np.random.default_rng(7)
+    values = rng.normal(0.6, 0.1, 40)
+    targets = [f"t{k}" for k in range(40)]
+    candidates = {(t, m): [Candidate(t, v + shift)] for t, v in zip(targets, values, strict=True)
+                  for m, shift in (("a", 0.0), ("b", 0.05))}
+    replicates = Replicates(candidates, replicates=4000)
+    assert replicates.mean(targets, "a") == Interval(pytest.approx(values.mean()), pytest.approx(values.mean()),
+                                                      pytest.approx(values.mean()))
+    found = replicates.mean(targets, "a", concepts=True)
+    half = 1.96 * values.std() / np.sqrt(len(values))
+    assert found.estimate == pytest.approx(values.mean())
+    assert (found.high - found.low) / 2 == pytest.approx(half, rel=0.08)
+    assert found.low < values.mean() < found.high
+    gap = replicates.gap(targets, "b", "a", concepts=True)
+    assert gap.low == pytest.approx(0.05) and gap.high == pytest.approx(0.05)
+    assert Replicates(candidates, replicates=4000).mean(targets, "a", concepts=True) == found
+    assert Replicates(candidates, replicates=4000, seed=1).mean(targets, "a", concepts=True) != found
+    covered = 0
+    for draw in range(200):  # coverage of the population's mean 0.6
+        sample = np.random.default_rng(100 + draw).normal(0.6, 0.1, 20)
+        names = [f"c{k}" for k in range(20)]
+        interval = Replicates({(t, "a"): [Candidate(t, v)] for t, v in zip(names, sample, strict=True)},
+                              replicates=400, seed=draw).mean(names, "a", concepts=True)
+        covered += interval.low <= 0.6 <= interval.high
+    assert 0.88 <= covered / 200 <= 0.99
+
+
+def test_the_hierarchical_bootstrap_adds_the_concepts_to_the_seeds_and_worlds() -> None:
+    """Concepts alike but for their worlds' noise: resampling them as well counts that noise about twice (each
+    concept's observed score already holds it: the interval sqrt(2) times as wide, the known conservative bias of a
+    two-level bootstrap); concepts far apart: the spread between them dominates."""
+    rng = np.random.default_rng(3)
+    names = [f"t{k}" for k in range(12)]
+
+    def interval(levels: list[float], concepts: bool) -> Interval:
+        found = {(t, "m"): [Candidate("n", float(np.mean(w)), tuple(w))
+                            for w in [[float(x) for x in rng.random(40) < level]]]
+                 for t, level in zip(names, levels, strict=True)}
+        return Replicates(found, replicates=2000).mean(names, "m", concepts=concepts)
+
+    def width(found: Interval) -> float:
+        return found.high - found.low
+
+    alike, apart = [0.5] * 12, [0.1 + 0.07 * k for k in range(12)]
+    assert width(interval(alike, True)) / width(interval(alike, False)) == pytest.approx(np.sqrt(2), rel=0.15)
+    assert width(interval(apart, True)) > 2 * width(interval(apart, False))
+
+
+def _subset_statement(significant: bool) -> tuple[Statement, Replicates]:
+    """A hand-made statement of significance (the paper's +10, t-test) over three concepts, with no seed or world
+    noise: curr above base by 30, 1 and 2 points (interval excluding zero, t-test p = 0.37) or by 11, 10 and 12
+    (p < 0.05)."""
+    gaps = (0.11, 0.10, 0.12) if significant else (0.30, 0.01, 0.02)
+    targets = ("x", "y", "z")
+    candidates = {}
+    for target, gap in zip(targets, gaps, strict=True):
+        candidates[(target, "base")] = [Candidate(target, 0.5)]
+        candidates[(target, "curr")] = [Candidate(target, 0.5 + gap)]
+    def gap(score: Callable[[str, str], np.ndarray], ours: Mapping[str, str]) -> np.ndarray:
+        return 100 * sum(score(t, ours["curr"]) - score(t, ours["base"]) for t in targets) / len(targets)
+
+    statement = Statement("classification: curr above base (paired t-test)", 10.0, "+10.0; t(2) = 9", targets,
+                          ("curr", "base"), gap, gap=True, test=("curr", "base"))
+    return statement, Replicates(candidates, replicates=200)
+
+
+def test_a_statement_of_significance_needs_our_paired_t_test() -> None:
+    """Reproduced or exceeded (the paper's sign) and opposite (the other) need our paired t-test at p < 0.05 with that
+    sign; otherwise not significant. The interval's other verdicts stay."""
+    paper = 10.0
+    assert significance("reproduced", (33, 3.0, 0.006), paper) == "reproduced"
+    assert significance("exceeded", (33, 5.0, 1e-5), paper) == "exceeded"
+    assert significance("reproduced", (6, 1.43, 0.20), paper) == NOT_SIGNIFICANT  # interval alone is not a test
+    assert significance("exceeded", (6, 1.43, 0.20), paper) == NOT_SIGNIFICANT
+    assert significance("reproduced", (10, -3.0, 0.01), paper) == NOT_SIGNIFICANT  # p < 0.05 the wrong way
+    assert significance("reproduced", None, paper) == NOT_SIGNIFICANT
+    assert significance("opposite", (4, -2.59, 0.061), paper) == NOT_SIGNIFICANT
+    assert significance("opposite", (16, -4.0, 0.001), paper) == "opposite"
+    assert significance("reproduced", (16, -4.0, 0.001), -2.0) == "reproduced"  # a negative gap: a negative t
+    assert significance("short", (6, 1.43, 0.20), paper) == "short"
+    assert NOT_SIGNIFICANT in VERDICTS
+    # hand-made rows: the interval beyond the paper's +10 (no noise: [+11, +11]) but p = 0.37 across the concepts
+    reading = READINGS[0]
+    statement, replicates = _subset_statement(significant=False)
+    cell = judge(statement, reading, replicates)
+    assert cell.ours.startswith("+11.0 [+11.0, +11.0]; t(2) = 1.16, p = 0.37") and cell.verdict == NOT_SIGNIFICANT
+    statement, replicates = _subset_statement(significant=True)
+    assert judge(statement, reading, replicates).verdict == "exceeded"
+    # on a subset (the equal-experience readings): the cell says on how many of the subset's targets
+    subset = Reading("on a subset", {"curr": "curr", "base": "base"}, targets=("x", "y"), subset="swept targets")
+    cell = judge(statement, subset, replicates)
+    assert " on 2 swept targets; t(1) = " in cell.ours and cell.verdict in VERDICTS
+    statement, replicates = _subset_statement(significant=False)
+    cell = judge(statement, Reading("on a subset", subset.methods, targets=("x", "y", "z"), subset="swept targets"),
+                 replicates)
+    assert " on 3 swept targets; t(2) = 1.16, p = 0.37" in cell.ours and cell.verdict == NOT_SIGNIFICANT
+
+
+def test_wins_at_the_ceiling_are_counted_apart() -> None:
+    """A win at the ceiling: the winner at 98 % or more, by 2 points or less; the claims table's share of bring-about
+    concepts won says how many of its wins are."""
+    score = {("a", "h"): 1.0, ("a", "f"): 0.985, ("b", "h"): 0.99, ("b", "f"): 0.96, ("c", "h"): 0.9,
+             ("c", "f"): 0.89, ("d", "h"): 0.98, ("d", "f"): 0.97, ("e", "h"): 0.97, ("e", "f"): 0.99,
+             ("g", "h"): 1.0, ("g", "f"): 0.98}
+    targets = list("abcdeg")
+    assert wins(score, targets, ["h"], "f") == (5, 6)
+    assert ceiling_wins(score, targets, ["h"], "f") == 3  # a, d and g (by exactly 2 points); not b (3), c (at 90)
+    assert wins_text(5, 6, 3) == "5 of 6 (3 of them at the ceiling)" and wins_text(5, 6, 0) == "5 of 6"
+    replicates, kind_of, category_of = _table({"base": 0.955, "curr": 0.965, "canon": 0.5})
+    won = next(s for s in statements(kind_of, category_of)
+               if not isinstance(s, str) and s.text.startswith("bring-about: a hierarchical SMC"))
+    cell = judge(won, READINGS[0], replicates)  # curr 0.2-1.8 points above base, at 98.5 % or more
+    assert "(17 wins, 17 of them at the ceiling)" in cell.ours and cell.verdict == "exceeded"
+    replicates, kind_of, category_of = _table({"base": 0.6, "curr": 0.9, "canon": 0.5})
+    assert "ceiling" not in judge(won, READINGS[0], replicates).ours
+
+
+def test_a_reading_column_counts_only_what_ran_under_it() -> None:
+    """The claims table's tally line: the costs-its-moves column leaves out the cnn and base rows it shares with the
+    first (said once there) and says how many it left out; a subset column says what it is measured on."""
+    from sb3_smc.experiments.runner import reported
+    from sb3_smc.experiments.tables import CLAIMS_COUNT, ResultTable, number_sections
+
+    everything = level2_targets()
+    level = {"cnn": 0.7, "base": 0.6, "curr": 0.9, "canon": 0.85, "curr-moves": 0.55}
+    rows = []
+    for k, target in enumerate(everything):
+        info = catalog.dataset(target)
+        for method, value in level.items():
+            if method == "cnn" and info.kind != "classification":
+                continue
+            rows += [{"target": target, "kind": info.kind, "category": info.category, "method": method,
+                      "curriculum": method, "seed": seed, "test_score": value + 0.01 * (k % 7) - 0.05 * seed
+                      + 0.002 * k * (method == "curr-moves")} for seed in range(2)]
+    lines = number_sections(ResultTable(rows, reported(rows)))
+    counted = next(line for line in lines if line.startswith(CLAIMS_COUNT))
+    moves = counted.split("a call costs its moves: ")[1].split(";")[0].removesuffix(".")
+    assert moves.endswith(f"(6 {SAME}, not counted)")  # mean of cnn, of base (two kinds), cnn above base, 2 headline
+    judged = sum(int(part.split()[0]) for part in moves.split(" (")[0].split(", "))
+    assert judged == 31 - 6  # every other statement: judged or not run
+    rows_of = [line for line in lines if line.startswith("| classification: mean of cnn |")]
+    assert rows_of and rows_of[0].split(" | ")[3].strip(" |") == SAME

@@ -123,7 +123,7 @@ def test_the_claims_table_judges_curr_against_the_flat_smc_at_its_experience(tmp
     (row,) = [line for line in lines if line.startswith("| bring-about: curr above base (paired t-test)")]
     sweep = [t for t in SWEEP_TARGETS if catalog.dataset(t).kind == "bring-about"]
     lead = 100 * sum(0.01 * (level2_targets().index(t) % 3) for t in sweep) / len(sweep) + 30
-    assert f"| +{lead:.1f} [" in row and f"] on {len(sweep)}; t({len(sweep) - 1}) = " in row
+    assert f"| +{lead:.1f} [" in row and f"] on {len(sweep)} swept targets; t({len(sweep) - 1}) = " in row
     assert row.endswith(": reproduced |")
     (mean_row,) = [line for line in lines if line.startswith("| bring-about: mean of curr |")]
     assert mean_row.endswith("|  |")  # not a comparison with the flat SMC: blank

@@ -5,11 +5,17 @@ on the target's test worlds. One bootstrap replicate draws, for every target, it
 same draw for every SMC tested on them, as they were tested on the same worlds) and, for every node, its seeds with
 replacement, and takes the best SMC of the draw. Any number computed from reported scores (a mean over concepts, a
 difference of means, a count of concepts won) is then computed on every replicate, and its interval is the 2.5th to
-97.5th percentile of those values, moved by their bias (their mean minus the estimate) and kept within their range. A
-best-of statistic is biased under the bootstrap: a draw of worlds adds noise to every SMC's score, and the best of
+97.5th percentile of those values, moved by their bias (their mean minus the estimate) and kept within their range.
+A best-of statistic is biased under the bootstrap: a draw of worlds adds noise to every SMC's score, and the best of
 noisier scores is higher; a draw of seeds may leave out the best seed, and is then lower. Moving the interval by the
 net difference puts the estimate where the replicates' mean is. An SMC whose per-world scores are not recorded counts
 with its test score in every draw of worlds.
+
+A statement that generalises beyond the concepts run (an effect claimed across concepts, an extrapolation from some
+of them) may also resample the concepts (a hierarchical bootstrap, :meth:`Replicates.interval`'s ``strata``): each
+replicate draws the concepts with replacement, and each drawn concept brings a replicate of its own seeds and worlds.
+That counts a concept's seed and world noise once more than its observed score already holds it: conservative, up to
+sqrt(2) times too wide where the concepts are alike, little where they differ (as scores across concepts do).
 """
 
 from __future__ import annotations
@@ -70,6 +76,7 @@ class Replicates:
         if replicates < 2:
             raise ValueError(f"replicates must be at least 2, got {replicates}")
         self.replicates = replicates
+        self.seed = seed
         self.estimate = {key: max(c.score for c in found) for key, found in candidates.items() if found}
         """The reported scores themselves (each pair's best SMC)."""
         self.draws: dict[tuple[str, str], np.ndarray] = {}
@@ -114,11 +121,13 @@ class Replicates:
         """Whether every one of ``methods`` has a score on every one of ``targets``."""
         return bool(targets) and all((t, m) in self.estimate for t in targets for m in methods)
 
-    def interval(self, statistic: Callable[[Callable[[str, str], np.ndarray]], np.ndarray | float]) -> Interval:
+    def interval(self, statistic: Callable[[Callable[[str, str], np.ndarray]], np.ndarray | float],
+                 strata: Sequence[Sequence[str]] = ()) -> Interval:
         """The estimate and interval of ``statistic``, a function of the scores (called with ``score(target,
-        method)``, an array over replicates or the reported score) that returns a number per replicate."""
+        method)``, an array over replicates or the reported score) that returns a number per replicate; ``strata``:
+        groups of targets resampled too, each apart (:meth:`_resampled`)."""
         estimate = float(statistic(lambda t, m: np.asarray(self.estimate[(t, m)])))
-        values = np.asarray(statistic(lambda t, m: self.draws[(t, m)]), dtype=float)
+        values = np.asarray(statistic(self._resampled(strata)), dtype=float)
         tail = 100 * (1 - LEVEL) / 2
         bias = float(values.mean()) - estimate
         low, high = np.percentile(values, [tail, 100 - tail]) - bias
@@ -126,10 +135,39 @@ class Replicates:
         low, high = max(low, min(values.min(), estimate)), min(high, max(values.max(), estimate))
         return Interval(estimate, float(low), float(high))
 
-    def mean(self, targets: Sequence[str], method: str) -> Interval:
-        """``method``'s mean over ``targets``."""
-        return self.interval(lambda score: sum(score(t, method) for t in targets) / len(targets))
+    def _resampled(self, strata: Sequence[Sequence[str]]) -> Callable[[str, str], np.ndarray]:
+        """``score(target, method)`` over the replicates with the targets of each of ``strata`` drawn with
+        replacement: in replicate r, a target's place holds a concept of its stratum drawn at random, in a replicate
+        of that concept drawn at random (its seeds and worlds drawn anew for each draw of it), the same for every
+        method (comparisons stay paired). Each stratum's draws come from a generator seeded with :attr:`seed` and
+        its targets' names. A target in no stratum of two or more keeps its own replicates."""
+        place: dict[str, tuple[tuple[str, ...], np.ndarray, np.ndarray]] = {}
+        for stratum in strata:
+            members = tuple(sorted(set(stratum)))
+            if len(members) < 2:
+                continue
+            rng = _stream(self.seed, "concepts", *members)
+            picks = rng.integers(0, len(members), size=(len(members), self.replicates))
+            columns = rng.integers(0, self.replicates, size=(len(members), self.replicates))
+            place.update((t, (members, picks[i], columns[i])) for i, t in enumerate(members))
+        stacked: dict[tuple[tuple[str, ...], str], np.ndarray] = {}
 
-    def gap(self, targets: Sequence[str], a: str, b: str) -> Interval:
-        """The mean of ``a`` minus the mean of ``b`` over ``targets``."""
-        return self.interval(lambda score: sum(score(t, a) - score(t, b) for t in targets) / len(targets))
+        def score(target: str, method: str) -> np.ndarray:
+            if target not in place:
+                return self.draws[(target, method)]
+            members, picks, columns = place[target]
+            if (members, method) not in stacked:
+                stacked[(members, method)] = np.stack([self.draws[(t, method)] for t in members])
+            return stacked[(members, method)][picks, columns]
+
+        return score
+
+    def mean(self, targets: Sequence[str], method: str, *, concepts: bool = False) -> Interval:
+        """``method``'s mean over ``targets`` (``concepts``: the targets resampled too)."""
+        return self.interval(lambda score: sum(score(t, method) for t in targets) / len(targets),
+                             [targets] if concepts else ())
+
+    def gap(self, targets: Sequence[str], a: str, b: str, *, concepts: bool = False) -> Interval:
+        """The mean of ``a`` minus the mean of ``b`` over ``targets`` (``concepts``: the targets resampled too)."""
+        return self.interval(lambda score: sum(score(t, a) - score(t, b) for t in targets) / len(targets),
+                             [targets] if concepts else ())

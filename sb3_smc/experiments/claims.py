@@ -5,18 +5,27 @@ The paper does not say how a hierarchical SMC's episode counted a call, so every
 method is judged under each :data:`READINGS` entry: a call is one step (``curr``, ``canon``), a call costs its moves
 (``curr-moves``), and, where the statement compares with the flat SMC, the one-step reading against a flat SMC with
 as many moves (``base-400``) and both readings against the flat SMC at as much experience (the sweep's settings of
-curr and curr-moves on its 12 concepts, :mod:`sb3_smc.experiments.experience`). A verdict compares the paper's
+curr and curr-moves on its 12 concepts, :mod:`sb3_smc.experiments.experience`). Against a number of the paper our
+interval resamples seeds and test worlds (the paper's number is over the same concepts as ours); where a statement
+is judged by its sign, a claimed effect across concepts, it resamples the concepts too (a hierarchical bootstrap),
+and a statement of significance needs our paired t-test across concepts as well. A verdict compares the paper's
 number with our interval:
 
 * ``reproduced``: the paper's number lies inside our interval;
 * ``exceeded``: our interval lies beyond it, in the direction the statement claims (a higher mean, a larger gap);
+* ``not significant``: a statement of significance (the paper's paired t-tests) whose interval gives a sign
+  (reproduced, exceeded or opposite) where our paired t-test across the concepts does not give p < 0.05
+  (:data:`SIGNIFICANCE`) with that sign;
 * ``short``: our interval lies on the near side of it, not beyond zero;
 * ``opposite``: our interval lies entirely on the other side of zero (a comparison reversed).
 
 A statement without a number of the paper (the CNN by category, Fig. 5a) is reproduced where our interval has the
 claimed sign, opposite where it has the other, and short where it holds zero; so is a comparison judged on a subset
-of the concepts the paper's number is over (the equal-experience readings). Our own methods that no reading uses
-(``base-gru``, ``canon-scaled``, the sweep's settings) are judged in a table of their own (:func:`method_checks`).
+of the concepts the paper's number is over (the equal-experience readings), its cell saying on how many of which
+targets (a statement of the subset, not of the kind). A later reading that runs all of a statement's methods as the
+first does says "same as one step" (:data:`SAME`) and is not counted in its column. Wins at the ceiling are counted
+apart (:data:`~sb3_smc.experiments.statistics.CEILING`). Our own methods that no reading uses (``base-gru``,
+``canon-scaled``, the sweep's settings) are judged in a table of their own (:func:`method_checks`).
 """
 
 from __future__ import annotations
@@ -31,13 +40,19 @@ from sb3_smc.experiments.bootstrap import Interval, Replicates
 from sb3_smc.experiments.design import METHOD_REGISTRY, SWEEP_TARGETS
 from sb3_smc.experiments.experience import flat_at
 from sb3_smc.experiments.paper import PAPER_CONCEPTS, PAPER_COUNTS, PAPER_MEANS, PAPER_NOPRIM, PAPER_TTESTS
-from sb3_smc.experiments.statistics import method_test, ttest_text
+from sb3_smc.experiments.statistics import ceiling_wins, method_test, ttest_text, wins
 
-__all__ = ["NOT_COMPARABLE", "NOT_JUDGED", "NOT_RUN", "READINGS", "VERDICTS", "Judged", "Reading", "Statement",
-           "judge", "method_checks", "points", "statements", "tally", "verdict"]
+__all__ = ["NOT_COMPARABLE", "NOT_JUDGED", "NOT_RUN", "NOT_SIGNIFICANT", "READINGS", "SAME", "SIGNIFICANCE",
+           "VERDICTS", "Judged", "Reading", "Statement", "judge", "method_checks", "points", "significance",
+           "statements", "tally", "verdict"]
 
-VERDICTS = ("reproduced", "exceeded", "short", "opposite")
+NOT_SIGNIFICANT = "not significant"
+VERDICTS = ("reproduced", "exceeded", NOT_SIGNIFICANT, "short", "opposite")
 NOT_RUN, NOT_JUDGED, NOT_COMPARABLE = "not run", "not judged: partial", "not comparable: a subset"
+SAME = "same as one step"
+"""A later reading's cell where it runs the statement's methods as the first reading does (not counted there)."""
+SIGNIFICANCE = 0.05
+"""The p below which our paired t-test supports a statement of significance."""
 WON = 14 / 16
 """The paper's share of bring-about concepts on which a hierarchical SMC beats the flat one."""
 
@@ -48,22 +63,21 @@ class Reading:
 
     name: str
     methods: Mapping[str, str]
-    compares_flat_only: bool = False
-    """It differs from the first reading only in the flat SMC: judged only on statements about the flat SMC."""
     targets: tuple[str, ...] | None = None
     """Judged on these concepts only (chosen before the run): the comparisons of two of its methods, by sign."""
+    subset: str = ""
+    """What :attr:`targets` are called in a cell (``swept targets``)."""
 
 
 _PAPERS = ("cnn", "base", "curr", "canon", "curr-noprim", "canon-noprim")
 READINGS = (
     Reading("a call is one step", {m: m for m in _PAPERS}),
     Reading("a call costs its moves", {"cnn": "cnn", "base": "base", "curr": "curr-moves"}),
-    Reading("one step, the flat SMC with 400 moves", {**{m: m for m in _PAPERS}, "base": "base-400"},
-            compares_flat_only=True),
+    Reading("one step, the flat SMC with 400 moves", {**{m: m for m in _PAPERS}, "base": "base-400"}),
     Reading("one step, at equal experience", {"curr": "curr-cap100", "base": flat_at("curr-cap100")},
-            targets=SWEEP_TARGETS),
+            targets=SWEEP_TARGETS, subset="swept targets"),
     Reading("costs its moves, at equal experience", {"curr": "curr-moves-100", "base": flat_at("curr-moves-100")},
-            targets=SWEEP_TARGETS),
+            targets=SWEEP_TARGETS, subset="swept targets"),
 )
 """The readings of a call the claims are judged under, in the table's column order."""
 
@@ -84,11 +98,18 @@ class Statement:
     gap: bool = False
     """A comparison (a difference of means): it can be reversed."""
     test: tuple[str, str] | None = None
-    """The two paper methods of a paired t-test to show beside our interval."""
+    """The two paper methods of the paper's paired t-test: ours is shown beside our interval, and the statement is
+    one of significance (:func:`significance`)."""
+    groups: tuple[tuple[str, ...], ...] | None = None
+    """The concepts resampled, each group apart (Fig. 5a's categories); ``None``: all of :attr:`targets` together."""
+    note: Callable[[Mapping[tuple[str, str], float], Mapping[str, str]], str] | None = None
+    """A remark on our number from the reported scores and the reading's methods (the wins at the ceiling)."""
 
     @property
-    def about_flat(self) -> bool:
-        return "base" in self.methods
+    def strata(self) -> tuple[tuple[str, ...], ...]:
+        """The groups of concepts the bootstrap resamples (:meth:`~sb3_smc.experiments.bootstrap.Replicates.
+        interval`)."""
+        return self.groups if self.groups is not None else (self.targets,)
 
 
 @dataclass(frozen=True)
@@ -123,7 +144,8 @@ def statements(kind_of: Mapping[str, str], category_of: Mapping[str, str]) -> li
         else:
             out.append(Statement("bring-about: a hierarchical SMC (best of curr, canon) beats the flat one, % of "
                                  "concepts", 100 * WON, "on 14 of 16 concepts", targets, ("curr", "canon", "base"),
-                                 functools.partial(_won, targets=targets)))
+                                 functools.partial(_won, targets=targets),
+                                 note=functools.partial(_ceiling_note, targets=targets)))
         noprim = PAPER_NOPRIM[kind]
         for method in ("curr", "canon"):
             without = f"{method}-noprim"
@@ -140,6 +162,15 @@ def _won(score: Score, ours: Mapping[str, str], *, targets: tuple[str, ...]) -> 
     """The share (%) of ``targets`` on which the better of curr and canon scores above the flat SMC."""
     best = [np.maximum(score(t, ours["curr"]), score(t, ours["canon"])) > score(t, ours["base"]) for t in targets]
     return np.asarray(100 * sum(best) / len(targets), dtype=float)
+
+
+def _ceiling_note(estimate: Mapping[tuple[str, str], float], ours: Mapping[str, str], *,
+                  targets: tuple[str, ...]) -> str:
+    """How many of the wins of the better of curr and canon are at the ceiling (none: nothing to say)."""
+    better = [ours["curr"], ours["canon"]]
+    at_ceiling = ceiling_wins(estimate, targets, better, ours["base"])
+    won, _ = wins(estimate, targets, better, ours["base"])
+    return f" ({won} wins, {at_ceiling} of them at the ceiling)" if at_ceiling else ""
 
 
 def _mean(text: str, paper: float, targets: tuple[str, ...], method: str) -> Statement:
@@ -171,7 +202,8 @@ def _cnn_statements(targets: tuple[str, ...], category_of: Mapping[str, str]) ->
                      members["containment"], ("cnn", *smcs), lambda s, o: lead(s, o, "containment"), gap=True)]
     out += [Statement(f"classification / {c}: the cnn relatively better than on containment", None,
                       "qualitative (Fig. 5a)", members[c] + members["containment"], ("cnn", *smcs),
-                      functools.partial(_lead_difference, lead=lead, category=c), gap=True)
+                      functools.partial(_lead_difference, lead=lead, category=c), gap=True,
+                      groups=(members[c], members["containment"]))
             for c in ("objects", "objcon")]
     return out
 
@@ -195,13 +227,26 @@ def verdict(paper: float | None, interval: Interval, gap: bool) -> str:
     return "exceeded" if low > abs(paper) else "short"
 
 
+def significance(found: str, test: tuple[int, float, float] | None, paper: float) -> str:
+    """The verdict of a statement of significance: ``found`` (the interval's verdict), except that one that gives a
+    sign (reproduced, exceeded: the paper's; opposite: the other) needs our paired ``test`` at p <
+    :data:`SIGNIFICANCE` with that sign (``paper``: the paper's gap); without it, :data:`NOT_SIGNIFICANT`."""
+    claimed = {"reproduced": 1.0, "exceeded": 1.0, "opposite": -1.0}.get(found)
+    if claimed is None:
+        return found
+    supported = test is not None and test[2] < SIGNIFICANCE and claimed * test[1] * paper > 0
+    return found if supported else NOT_SIGNIFICANT
+
+
 def judge(statement: Statement, reading: Reading, replicates: Replicates,
           unfinished: Collection[tuple[str, str]] = ()) -> Judged:
     """``statement`` under ``reading``: our number with its interval and the verdict, or why there is none."""
-    if reading.compares_flat_only and not statement.about_flat:
-        return Judged("as one step", "")
     if reading.targets is not None:
         return _judge_on_subset(statement, reading, reading.targets, replicates, unfinished)
+    first = READINGS[0].methods
+    if reading is not READINGS[0] and all(m in first and reading.methods.get(m) == first[m]
+                                          for m in statement.methods):
+        return Judged(SAME, "")
     if not all(m in reading.methods for m in statement.methods):
         return Judged("-", NOT_RUN)
     ours = [reading.methods[m] for m in statement.methods]
@@ -209,20 +254,28 @@ def judge(statement: Statement, reading: Reading, replicates: Replicates,
         return Judged("-", NOT_JUDGED)
     if not replicates.has(statement.targets, *ours):
         return Judged("-", NOT_RUN)
-    interval = replicates.interval(lambda score: statement.statistic(score, reading.methods))
+    # the paper's number is over the same concepts as ours: against it, only seeds and worlds vary; a claimed sign
+    # (an effect across concepts) is judged with the concepts resampled too
+    strata = statement.strata if statement.paper is None else ()
+    interval = replicates.interval(lambda score: statement.statistic(score, reading.methods), strata)
     text = points(interval, statement.gap)
-    if statement.test is not None:
+    if statement.note is not None:
+        text += statement.note(replicates.estimate, reading.methods)
+    found = verdict(statement.paper, interval, statement.gap)
+    if statement.test is not None and statement.paper is not None:
         a, b = (reading.methods[m] for m in statement.test)
         _, test = method_test(replicates.estimate, statement.targets, a, b)
-        if test is not None:
-            text += f"; {ttest_text(test)}"
-    return Judged(text, verdict(statement.paper, interval, statement.gap))
+        text += f"; {ttest_text(test)}" if test is not None else ""
+        found = significance(found, test, statement.paper)
+    return Judged(text, found)
 
 
 def _judge_on_subset(statement: Statement, reading: Reading, subset: Collection[str], replicates: Replicates,
                      unfinished: Collection[tuple[str, str]]) -> Judged:
     """A comparison of two of ``reading``'s methods on the concepts of ``subset`` it is about, judged by the sign of
-    the paper's claim (its number is over all of them); any other statement is not judged (a blank cell)."""
+    the paper's claim (its number is over all of them) and, for a statement of significance, by our paired t-test
+    there too; its cell says on how many of the subset's targets. Any other statement is not judged (a blank
+    cell)."""
     if not (statement.gap and statement.paper is not None and len(statement.methods) == 2
             and all(m in reading.methods for m in statement.methods)):
         return Judged("", "")
@@ -234,12 +287,15 @@ def _judge_on_subset(statement: Statement, reading: Reading, subset: Collection[
         return Judged("-", NOT_JUDGED)
     if not replicates.has(targets, a, b):
         return Judged("-", NOT_RUN)
-    gap = replicates.interval(lambda score: 100 * sum(score(t, a) - score(t, b) for t in targets) / len(targets))
+    gap = replicates.gap(targets, a, b, concepts=True)
+    gap = Interval(100 * gap.estimate, 100 * gap.low, 100 * gap.high)
     sign = 1.0 if statement.paper >= 0 else -1.0
     claimed = Interval(sign * gap.estimate, min(sign * gap.low, sign * gap.high), max(sign * gap.low, sign * gap.high))
     _, test = method_test(replicates.estimate, targets, a, b)
-    text = f"{points(gap, True)} on {len(targets)}" + (f"; {ttest_text(test)}" if test is not None else "")
-    return Judged(text, verdict(None, claimed, gap=True))
+    text = f"{points(gap, True)} on {len(targets)} {reading.subset}".rstrip() \
+        + (f"; {ttest_text(test)}" if test is not None else "")
+    found = verdict(None, claimed, gap=True)
+    return Judged(text, significance(found, test, statement.paper) if statement.test is not None else found)
 
 
 def points(interval: Interval, signed: bool) -> str:

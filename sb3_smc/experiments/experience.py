@@ -36,7 +36,7 @@ from sb3_smc.curricula.run_directory import read_json
 from sb3_smc.errors import SMCError
 from sb3_smc.experiments.bootstrap import Replicates
 from sb3_smc.experiments.design import EXPERIENCE_METHODS, METHOD_REGISTRY
-from sb3_smc.experiments.statistics import method_test, ttest_text, wins
+from sb3_smc.experiments.statistics import CEILING, NEAR, ceiling_wins, method_test, ttest_text, wins
 
 __all__ = ["EXPERIENCE_FILE", "EXPERIENCE_HEADING", "AtExperience", "Experience", "at_experience", "blends",
            "experience_section", "flat_at"]
@@ -252,13 +252,15 @@ def experience_section(table: ScoreTable, experience: Experience | None) -> list
     for method in [m for m in table.hierarchical if any(k == m for _, k in found)]:
         targets = sorted(t for t, m in found if m == method)
         blend = flat_at(method)
-        lead = replicates.gap(targets, method, blend)
+        lead = replicates.gap(targets, method, blend, concepts=True)
         ahead, _ = wins(replicates.estimate, targets, [method], blend)
+        at_ceiling = ceiling_wins(replicates.estimate, targets, [method], blend)
         _, test = method_test(replicates.estimate, targets, method, blend)
         short = sum(found[(t, method)].where == "beyond" for t in targets)
+        remarks = [f"{at_ceiling} of them at the ceiling"] * bool(at_ceiling) \
+            + [f"on {short} the flat SMC's curve ends below its experience"] * bool(short)
         summary.append(f"{method}: ahead on {ahead} of {len(targets)} targets"
-                       + (f" (on {short} the flat SMC's curve ends below its experience)" if short else "")
-                       + ", mean lead "
+                       + (f" ({'; '.join(remarks)})" if remarks else "") + ", mean lead "
                        f"{100 * lead.estimate:+.1f} points [{100 * lead.low:+.1f}, {100 * lead.high:+.1f}]"
                        + (f", {ttest_text(test)}" if test is not None else "")
                        + (" (partial)" if any((t, method) in table.unfinished for t in targets) else ""))
@@ -268,8 +270,10 @@ def experience_section(table: ScoreTable, experience: Experience | None) -> list
             "experience: the moves of all seeds of its target nodes and of every lower-level node they were built on "
             "(docs/experiments.md, \"Equal experience\"), with how many times the first point's that is; the flat "
             "SMC's score at that experience, interpolated in log experience (at the curve's end where the method's "
-            "experience lies beyond it), and the method's lead. Per method: its mean lead with a 95 % bootstrap "
-            "interval over seeds and test worlds, and the paired t-test across the targets.",
+            "experience lies beyond it), and the method's lead. Per method: on how many targets it leads (those at "
+            f"the ceiling counted apart: the winner at {100 * CEILING:.0f} % or more, by {100 * NEAR:.0f} points or "
+            "less), its mean lead with a 95 % bootstrap interval over the targets, seeds and test worlds, and the "
+            "paired t-test across the targets.",
             "", "| target | kind | flat SMC: score @ moves | method | score @ moves | flat SMC there | lead |",
             "|---|---|---|---|---|---:|---:|", *rows, "", f"**At equal experience**: {'; '.join(summary)}.", ""]
 

@@ -1,5 +1,6 @@
 """The numbers of a report, torch-free: seed summaries, means with standard errors across concepts, paired t-tests
-(also at the paper's degrees of freedom) and win counts (the claims table: :mod:`sb3_smc.experiments.claims`).
+(also at the paper's degrees of freedom) and win counts, those at the ceiling apart (the claims table:
+:mod:`sb3_smc.experiments.claims`).
 
 Scores are fractions (0-1) as the results hold them; the paper's numbers (:mod:`sb3_smc.experiments.paper`) are
 percentages.
@@ -13,13 +14,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["SeedSummary", "holm", "mean_of_all", "mean_se", "method_mean", "method_test", "paired_ttest", "p_at_df",
-           "seed_summary", "wins", "hierarchical_interval", "BOOTSTRAP"]
+__all__ = ["BOOTSTRAP", "CEILING", "NEAR", "SeedSummary", "ceiling_wins", "hierarchical_interval", "holm",
+           "mean_of_all", "mean_se", "method_mean", "method_test", "p_at_df", "paired_ttest", "seed_summary", "wins",
+           "wins_text"]
 
 Score = Mapping[tuple[str, str], float]
 """(target, method) -> the reported score (best seed; curr: best curriculum)."""
 BOOTSTRAP = 2000
 """Bootstrap resamples of an interval."""
+CEILING, NEAR = 0.98, 0.02
+"""A win at the ceiling: the winner scores at least ``CEILING`` and wins by at most ``NEAR`` (both near 100 %: the
+win says little about which method is better)."""
 
 
 def paired_ttest(ours: Sequence[float], theirs: Sequence[float]) -> tuple[int, float, float] | None:
@@ -111,12 +116,27 @@ def mean_se(values: Sequence[float]) -> tuple[float, float | None]:
     return float(array.mean()), se
 
 
+def _won(score: Score, targets: Sequence[str], better: Sequence[str], than: str) -> list[tuple[float, float]]:
+    """(the best of ``better``, ``than``) on each of ``targets`` where both were run."""
+    return [(max(score[(t, m)] for m in better if (t, m) in score), score[(t, than)]) for t in targets
+            if (t, than) in score and any((t, m) in score for m in better)]
+
+
 def wins(score: Score, targets: Sequence[str], better: Sequence[str], than: str) -> tuple[int, int]:
     """On how many of ``targets`` the best of the ``better`` methods scores above ``than``; and over how many
     targets both were run."""
-    compared = [t for t in targets if (t, than) in score and any((t, m) in score for m in better)]
-    won = sum(max(score[(t, m)] for m in better if (t, m) in score) > score[(t, than)] for t in compared)
-    return won, len(compared)
+    compared = _won(score, targets, better, than)
+    return sum(a > b for a, b in compared), len(compared)
+
+
+def ceiling_wins(score: Score, targets: Sequence[str], better: Sequence[str], than: str) -> int:
+    """How many of :func:`wins`'s wins are at the ceiling (:data:`CEILING`, :data:`NEAR`)."""
+    return sum(b < a and a >= CEILING - 1e-9 and a - b <= NEAR + 1e-9 for a, b in _won(score, targets, better, than))
+
+
+def wins_text(won: int, compared: int, ceiling: int) -> str:
+    """``9 of 12 (3 of them at the ceiling)``: a win count with its wins at the ceiling counted apart."""
+    return f"{won} of {compared}" + (f" ({ceiling} of them at the ceiling)" if ceiling else "")
 
 
 def mean_of_all(values: Sequence[float | None]) -> float | None:

@@ -7,7 +7,8 @@ a kind is estimated concept by concept: on the sweep's targets its own score; on
 of its reading's method (``curr`` for a cap, ``curr-moves`` for an episode's moves) plus the setting's mean
 difference, on the sweep's targets of that kind, from the sweep's own setting of 100 (``curr-cap100``,
 ``curr-moves-100``: the same lower-level SMCs as every setting), kept within 0-100 % (a shift of +60 points on a
-concept already at 80 % gives 100 %, not 140 %). From it: the kind's mean
+concept already at 80 % gives 100 %, not 140 %): an extrapolation from the swept targets, labelled so, whose interval
+resamples the swept targets as well as seeds and worlds (they stand for the others). From it: the kind's mean
 against the paper's curr, and its lead over the flat SMC against the paper's. Beside them: the two headline targets,
 and the share of the sweep's bring-about targets on which the setting beats the flat SMC against the paper's 14 of 16.
 Every number has its bootstrap interval (:mod:`sb3_smc.experiments.bootstrap`) and a verdict
@@ -111,12 +112,13 @@ def _kind_numbers(replicates: Replicates, kind: str, everything: tuple[str, ...]
 
     paper = PAPER_MEANS[kind]
     gap = paper["curr"] - paper["base"]
-    estimated, ahead = replicates.interval(mean), replicates.interval(lead)
-    out = [Scored(f"{kind}: mean (estimated over all {len(everything)})", paper["curr"], estimated,
-                  verdict(paper["curr"], estimated, gap=False)),
+    # the swept targets stand for the kind's other concepts: resampled (a hierarchical bootstrap)
+    estimated, ahead = replicates.interval(mean, [swept]), replicates.interval(lead, [swept])
+    out = [Scored(f"{kind}: mean (extrapolated to all {len(everything)} from {len(swept)} swept)", paper["curr"],
+                  estimated, verdict(paper["curr"], estimated, gap=False)),
            Scored(f"{kind}: lead over base", gap, ahead, verdict(gap, ahead, gap=True), gap=True)]
     if kind == "bring-about":
-        share = replicates.interval(won)
-        out.append(Scored(f"bring-about: beats base on the sweep's {len(swept)} concepts, %", 100 * WON, share,
+        share = replicates.interval(won, [swept])
+        out.append(Scored(f"bring-about: beats base on the {len(swept)} swept targets, %", 100 * WON, share,
                           verdict(100 * WON, share, gap=False)))
     return out

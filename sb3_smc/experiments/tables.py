@@ -22,6 +22,8 @@ from sb3_smc.experiments.claims import (
     NOT_COMPARABLE,
     NOT_JUDGED,
     READINGS,
+    SAME,
+    SIGNIFICANCE,
     VERDICTS,
     judge,
     method_checks,
@@ -40,7 +42,10 @@ from sb3_smc.experiments.paper import (
     PAPER_TTESTS,
 )
 from sb3_smc.experiments.statistics import (
+    CEILING,
+    NEAR,
     Score,
+    ceiling_wins,
     mean_of_all,
     mean_se,
     method_mean,
@@ -50,6 +55,7 @@ from sb3_smc.experiments.statistics import (
     seed_summary,
     ttest_text,
     wins,
+    wins_text,
 )
 from sb3_smc.experiments.sweep import sweep_fits, sweep_reference
 
@@ -192,32 +198,42 @@ def _claims_section(table: ResultTable, experience: Experience | None) -> list[s
     readings = [READINGS[k] for k in shown]
     lines = [CLAIMS_HEADING, "",
              "Every statement of the paper's results with ours under each reading of an SMC call: ours with its 95 % "
-             "bootstrap interval over seeds and test worlds (points), and the verdict: reproduced where the paper's "
-             "number lies inside our interval, exceeded or short where our interval lies beyond or before it, "
-             "opposite where it lies on the other side of zero (docs/experiments.md, \"The claims table\"). "
+             "bootstrap interval (points) over seeds and test worlds (the paper's numbers are over the same concepts "
+             "as ours), and over the concepts too where a statement is judged by its sign (a hierarchical bootstrap), "
+             "and the verdict: reproduced where the paper's number lies inside our interval, exceeded or short where "
+             "our interval lies beyond or before it, opposite where it lies on the other side of zero; a statement "
+             "without a number of the paper, or on a subset of its concepts, by the sign of our interval. A statement "
+             "of significance (a paired t-test of the paper) keeps a verdict that gives a sign (reproduced, exceeded, "
+             f"opposite) only where our paired t-test gives p < {SIGNIFICANCE} with that sign, else it is not "
+             "significant (docs/experiments.md, \"The claims table\"). A later reading that runs a statement's "
+             f"methods as the first does says \"{SAME}\", not counted in its column. A win at the ceiling: the "
+             f"winner at {100 * CEILING:.0f} % or more, by {100 * NEAR:.0f} points or less. "
              + " ".join(f"*{r.name}*: {', '.join(f'{p} = {m}' for p, m in r.methods.items() if p != m) or 'as run'}"
-                        + (" (the statements about the flat SMC only)" if r.compares_flat_only else "")
-                        + (f" (the comparisons of curr with the flat SMC on the {len(r.targets)} concepts of the sweep "
-                           "and the flat SMC's curve of experience, judged by the sign the paper claims)"
-                           if r.targets is not None else "") + "."
+                        + (f" (the comparisons of curr with the flat SMC on the {len(r.targets)} {r.subset} and the "
+                           "flat SMC's curve of experience, judged by the sign the paper claims on these targets "
+                           "only)" if r.targets is not None else "") + "."
                         for r in readings), "",
              "| statement | paper | " + " | ".join(r.name for r in readings) + " |",
              "|---|---|" + "---|" * len(readings)]
     verdicts: list[list[str]] = [[] for _ in readings]
+    same = [0] * len(readings)
     for st in found:
         if isinstance(st, str):
             lines.append(f"| {st} | | " + " | ".join(NOT_COMPARABLE for _ in readings) + " |")
             continue
         row = [cells[id(st)][k] for k in shown]
-        for column, cell in zip(verdicts, row, strict=True):
+        for k, cell in enumerate(row):
             if cell.verdict:
-                column.append(cell.verdict)
+                verdicts[k].append(cell.verdict)
+            same[k] += cell.ours == SAME
         lines.append(f"| {st.text} | {st.paper_text} | "
                      + " | ".join(f"{c.ours}: {c.verdict}" if c.verdict in VERDICTS else (c.verdict or c.ours)
                                   for c in row) + " |")
     count = sum(not isinstance(st, str) for st in found)
     lines += ["", f"{CLAIMS_COUNT} ({count} statements): "
-              + "; ".join(f"{r.name}: {tally(v)}" for r, v in zip(readings, verdicts, strict=True)) + ".", ""]
+              + "; ".join(f"{r.name}" + (f" (on {len(r.targets)} {r.subset})" if r.targets is not None else "")
+                          + f": {tally(v)}" + (f" ({n} {SAME}, not counted)" if n else "")
+                          for r, v, n in zip(readings, verdicts, same, strict=True)) + ".", ""]
     checks = method_checks(table.replicates, table.kind_of, table.category_of, table.methods, table.unfinished)
     if checks:
         lines += [CHECKS_HEADING, "",
@@ -241,12 +257,13 @@ def _sweep_section(table: ResultTable) -> list[str]:
     paper = {n.what: f"{n.paper:{'+.1f' if n.gap else '.1f'}}" for f in fits for n in f.numbers}
     lines = [SWEEP_HEADING, "",
              "Each setting of the sweep (docs/experiments.md, \"Equal budgets and the readings of a call\") against "
-             "every number of the paper it touches: a kind's mean estimated over all its concepts (on the sweep's "
+             "every number of the paper it touches: a kind's mean extrapolated to all its concepts (on the sweep's "
              "targets the setting's own score; on the others the whole table's curr or curr-moves plus the "
              "setting's mean difference from the sweep's setting of 100, kept within 0-100 %), its lead over the "
-             "flat SMC, the share of bring-about concepts won, the headline targets; ours with its 95 % bootstrap "
-             "interval and the verdict. Best fit first: the most of the paper's numbers inside our intervals, then "
-             "the smallest mean distance from them; a fit is clear when no other setting has as many inside.", "",
+             "flat SMC, the share of the swept bring-about targets won, the headline targets; ours with its 95 % "
+             "bootstrap interval (over the swept targets too, where they stand for the others) and the verdict. "
+             "Best fit first: the most of the paper's numbers inside our intervals, then the smallest mean distance "
+             "from them; a fit is clear when no other setting has as many inside.", "",
              "| setting | paper's numbers inside | mean distance (points) | " + " | ".join(columns) + " |",
              "|---|---:|---:|" + "---|" * len(columns),
              "| **paper** | | | " + " | ".join(paper[c] for c in columns) + " |"]
@@ -438,10 +455,12 @@ def _ttest_section(table: ResultTable) -> list[str]:
                     partial = table.partial(table.of_kind(kind), *better, flat)
                     whole = (kind == "bring-about" and label == "curr or canon" and n == PAPER_COUNTS[kind]
                              and not partial)
-                    counts.append(f"| {kind} | {label} | {flat}{partial} | {won} of {n} |"
+                    at_ceiling = ceiling_wins(table.score, table.of_kind(kind), better, flat)
+                    counts.append(f"| {kind} | {label} | {flat}{partial} | {wins_text(won, n, at_ceiling)} |"
                                   + (" 14 of 16 |" if whole else " |"))
     if counts:
-        lines += ["", "Concepts on which a hierarchical SMC beats a flat one (reported scores):", "",
+        lines += ["", "Concepts on which a hierarchical SMC beats a flat one (reported scores; a win at the ceiling: "
+                  f"the winner at {100 * CEILING:.0f} % or more, by {100 * NEAR:.0f} points or less):", "",
                   "| kind | hierarchical | flat | beats it on | paper |", "|---|---|---|---:|---|", *counts]
     return lines
 
