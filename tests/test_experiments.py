@@ -1570,3 +1570,13 @@ def test_cpu_model_names_the_family_and_model(tmp_path: Path) -> None:
     info.write_text("processor\t: 0\nCPU implementer\t: 0x41\n")
     assert cpu_model(info) is None
     assert cpu_model(tmp_path / "absent") is None
+
+
+def test_the_per_concept_table_has_the_papers_column_only_where_the_paper_gives_a_number(tmp_path):
+    """The demo's target has no number in the paper: no empty "paper" column; a headline target brings it."""
+    for name, targets in (("demo", ["cl_self-in-container_vs_noncontainer"]),
+                          ("headline", ["cl_self-in-container_vs_noncontainer", "cl_self-left-of-two-objects-vs-one"])):
+        _synthetic_table(tmp_path / name, targets, ["base", "curr"], lambda t, m: 0.8)
+        [path] = write_report([tmp_path / name], out=tmp_path / f"{name}-report", behaviour=False)
+        header = next(line for line in path.read_text().splitlines() if line.startswith("| target | kind | category"))
+        assert ("paper (base / curr / canon)" in header) == (name == "headline"), header

@@ -294,17 +294,19 @@ def _sweep_section(table: ResultTable) -> list[str]:
 
 def _concept_section(table: ResultTable) -> list[str]:
     methods = table.methods
+    given = [t for t in table.targets if t in PAPER_CONCEPTS]  # the paper's column only where it gives a number
+    paper_column = " paper (base / curr / canon) |" if given else ""
     lines = ["## Per concept", "",
              "Best seed (curr: best curriculum) as the paper reports, then the mean ± s.d. over the seeds of that "
              "curriculum.", "",
-             "| target | kind | category | " + " | ".join(methods) + " | paper (base / curr / canon) |",
-             "|---|---|---|" + "---:|" * len(methods) + "---|"]
+             "| target | kind | category | " + " | ".join(methods) + " |" + paper_column,
+             "|---|---|---|" + "---:|" * len(methods) + ("---|" if given else "")]
     for target in table.targets:
         paper = PAPER_CONCEPTS.get(target)
         paper_text = " / ".join(f"{paper[m]:.1f}" for m in ("base", "curr", "canon")) if paper else ""
+        paper_cell = f" {paper_text} |" if given else ""
         lines.append(f"| {target} | {table.kind_of[target]} | {table.category_of[target]} | "
-                     + " | ".join(table.cell(target, m) for m in methods) + f" | {paper_text} |")
-    given = [t for t in table.targets if t in PAPER_CONCEPTS]
+                     + " | ".join(table.cell(target, m) for m in methods) + " |" + paper_cell)
     if given:
         lines += ["", "Differences to the paper (ours - paper, points):", ""]
         for target in given:
