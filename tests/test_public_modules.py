@@ -54,7 +54,7 @@ PUBLIC = (
               "run_directory", "executors", "pretrained", "reuse"),
     *_modules("sb3_smc.experiments", "design", "runner", "wall_clock", "cnn", "report", "figures", "tables",
               "statistics", "bootstrap", "claims", "sweep", "experience", "paper", "few_shot", "few_shot_report",
-              "cannot"),
+              "cannot", "tabular"),
 )
 
 

@@ -23,7 +23,6 @@ committed; a lost one is trained again, the same SMC). :func:`results_rows` deri
 from __future__ import annotations
 
 import csv
-import io
 import json
 import time
 from collections.abc import Callable, Sequence
@@ -35,6 +34,7 @@ import numpy as np
 from pixelworld_env.atomic import atomic_write
 from sb3_smc.errors import SMCError
 from sb3_smc.experiments.statistics import hierarchical_interval, paired_ttest, seed_summary, ttest_text
+from sb3_smc.experiments.tabular import csv_text
 
 if TYPE_CHECKING:
     from sb3_smc.learning.evaluation import EvaluationResult
@@ -213,12 +213,8 @@ def results_rows(out: str | Path) -> list[dict[str, Any]]:
     return sorted(rows, key=lambda r: (r["target"], r["cell"], r["seed"]))
 
 
-def _csv(rows: list[dict[str, Any]]) -> str:
-    buffer = io.StringIO()
-    writer = csv.DictWriter(buffer, fieldnames=FIELDS, lineterminator="\n")
-    writer.writeheader()
-    writer.writerows(rows)
-    return buffer.getvalue()
+def _csv(rows: Sequence[dict[str, Any]]) -> str:
+    return csv_text(rows, FIELDS)
 
 
 def _by(rows: Sequence[dict[str, Any]], cell: str, field: str) -> dict[str, dict[int, float]]:

@@ -16,8 +16,6 @@ seed, test_score, offered, primitive_steps``.
 
 from __future__ import annotations
 
-import csv
-import io
 import json
 import time
 from collections.abc import Callable, Sequence
@@ -27,6 +25,7 @@ from typing import Any
 from pixelworld_env.atomic import atomic_write
 from sb3_smc.curricula import shipped_curricula
 from sb3_smc.errors import SMCError
+from sb3_smc.experiments.tabular import csv_text
 
 __all__ = ["FEW_SHOT_METHODS", "FEW_SHOT_TARGETS", "FEW_SHOT_WORLDS", "children_of", "results_rows", "run_few_shot"]
 
@@ -147,9 +146,5 @@ def results_rows(out: str | Path) -> list[dict[str, Any]]:
     return sorted(rows, key=lambda r: (r["target"], r["method"], str(r["train_worlds"]), r["seed"]))
 
 
-def _csv(rows: list[dict[str, Any]]) -> str:
-    buffer = io.StringIO()
-    writer = csv.DictWriter(buffer, fieldnames=FIELDS, lineterminator="\n")
-    writer.writeheader()
-    writer.writerows(rows)
-    return buffer.getvalue()
+def _csv(rows: Sequence[dict[str, Any]]) -> str:
+    return csv_text(rows, FIELDS)

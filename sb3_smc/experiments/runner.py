@@ -21,8 +21,6 @@
 
 from __future__ import annotations
 
-import csv
-import io
 import json
 import os
 import platform
@@ -53,6 +51,7 @@ from sb3_smc.experiments.design import (
     level2_targets,
     plan,
 )
+from sb3_smc.experiments.tabular import csv_text
 from sb3_smc.experiments.wall_clock import UNKNOWN_COMMIT, WallClock, lower_bound
 from sb3_smc.learning.evaluation import MAX_REPEATS, evaluate
 from sb3_smc.library import SMCLibrary, storage
@@ -447,12 +446,7 @@ def reported(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
 
 
 def _csv(rows: Sequence[dict[str, Any]]) -> str:
-    buffer = io.StringIO()
-    writer = csv.DictWriter(buffer, fieldnames=RESULT_FIELDS, lineterminator="\n")
-    writer.writeheader()
-    for row in rows:
-        writer.writerow({k: ("" if row[k] is None else row[k]) for k in RESULT_FIELDS})
-    return buffer.getvalue()
+    return csv_text(rows, RESULT_FIELDS)
 
 
 def evaluation_path(directory: Path, name: str) -> Path:
