@@ -1072,11 +1072,12 @@ def test_the_whole_table_report_with_canon_scaled_and_curr_moves(tmp_path):
             "concepts | 100.0 [") in claims
 
 
-def test_the_readme_gets_the_whole_tables_means_and_tests_from_the_report(tmp_path):
-    """``tools/readme_table.py`` copies the report's means and t-tests per kind between the README's markers (a
-    kind's categories only while it has no mean over all its concepts), says when the table is partial (which run
-    directories, and whether every one of the paper's methods has all its concepts), leaves the rest of the README
-    as it was, and refuses a README without its markers."""
+def test_the_readme_gets_the_answer_from_the_report(tmp_path):
+    """``tools/readme_table.py`` writes, between the README's markers, the answer table (base, curr and canon, curr's
+    lead per reading, the sweep's best settings labelled as a subset's), the verdict and the headline targets, every
+    number copied from the report's claims, checks and sweep tables with the paper's t-tests beside ours; says when
+    the table is partial (which run directories, and whether every one of the paper's methods has all its concepts);
+    leaves the rest of the README as it was, and refuses a README without its markers."""
     from pixelworld_env.datasets import catalog
 
     readme_table = import_tool("readme_table")
@@ -1084,41 +1085,49 @@ def test_the_readme_gets_the_whole_tables_means_and_tests_from_the_report(tmp_pa
     everything = level2_targets()
 
     def score(t: str, m: str) -> float:
-        return 0.5 + 0.01 * (everything.index(t) % 7) + 0.1 * ("curr" in m)
+        k = everything.index(t)
+        return 0.5 + 0.01 * (k % 7) + (0.1 + 0.01 * (k % 3)) * ("curr" in m)
 
     _synthetic_table(tmp_path / "run", everything, ["base", "curr"], score)
     [report] = write_report([tmp_path / "run"], out=tmp_path / "docs", behaviour=False)
+    claims = report.read_text().split("## The paper's claims")[1].split("\n## ")[0]
     readme = tmp_path / "README.md"
     readme.write_text(f"# Title\n\nbefore\n{readme_table.START}\nold\n{readme_table.END}\nafter\n")
+    cl = [t for t in everything if catalog.dataset(t).kind == "classification"]
+    lead = 100 * np.mean([score(t, "curr") - score(t, "base") for t in cl])
     for _ in range(2):  # the same README again: nothing else changes
         assert readme_table.main(["--report", str(report), "--readme", str(readme)]) == 0
         text = readme.read_text()
         assert text.startswith("# Title\n\nbefore\n<!-- paper-table:start -->\n") and text.endswith("-->\nafter\n")
         assert "old" not in text and "partial" not in text and "(docs/report.md)" in text
+        assert "| | classification: ours | paper | bring-about: ours | paper |" in text
+        row = _row_cells(text, "| curr above base (a call is one step) |")
+        ours = _row_cells(claims, "| classification: curr above base (paired t-test) |")[2]
+        assert row[1] == ours.replace(": reproduced", " (reproduced)") and row[1].startswith(f"+{lead:.1f} [")
+        assert f"t(33) = {_hand_t(score, cl, 'curr', 'base'):.2f}" in row[1]
+        assert row[2] == "+10.4; t(34) = 4.9, p = 2e-05" and row[4] == "+21.8; t(16) = 4.1, p = 0.0008"
+        assert _row_cells(text, "| the flat SMC (base): mean |")[2] == "74.5"
+        assert "canon" not in text.split("**The paper's claims")[0]  # not run: no row, no headline number
+        assert f"With a call counted as one step, curr leads the flat SMC by +{lead:.1f}, p = " in text
+        assert "Made fair in moves" not in text and "At equal experience" not in text  # no such rows
+        assert ("**The paper's two headline targets** (best seed of 5): `cl_self-left-of-two-objects-vs-one` base "
+                in text)
         counted = next(line for line in report.read_text().splitlines() if line.startswith("**In all**"))
         assert counted.startswith("**In all** (31 statements): a call is one step: ")
         assert ("**[The paper's claims](docs/report.md#the-papers-claims)**" + counted.removeprefix("**In all**")
                 in text)
-        assert text.count("| bring-about | **paper** (all) | 17 | 52.7 | 74.5 |") == 1
-        assert "| bring-about | curr vs base | 17 | " in text and "t(16) = 4.1, p = 0.0008" in text
-        assert "| classification | all | 34 | " in text and "| bring-about | all | 17 | " in text
-        assert "| classification | objects |" not in text and "| bring-about / containment |" not in text
-    # one classification concept missing: that kind shows its categories, bring-about its mean over all 17
-    first = next(t for t in everything if catalog.dataset(t).kind == "classification")
-    _synthetic_table(tmp_path / "part", [t for t in everything if t != first], ["base", "curr"], score)
-    [report] = write_report([tmp_path / "part"], out=tmp_path / "docs", behaviour=False)
+    # the sweep's settings on a few targets: their best of each reading, labelled as the subset's and not judged
+    swept = [t for t in everything if catalog.dataset(t).kind == "bring-about"][:5]
+    _synthetic_table(tmp_path / "sweep", swept, ["curr-cap10", "curr-cap100", "curr-moves-200"], score)
+    [report] = write_report([tmp_path / "run", tmp_path / "sweep"], out=tmp_path / "docs", behaviour=False)
     readme_table.main(["--report", str(report), "--readme", str(readme)])
     text = readme.read_text()
-    assert "| classification | objects |" in text and "| classification | all |" not in text
-    assert "| bring-about | all | 17 | " in text and "| bring-about | objects |" not in text
-    # the flat SMC on all 34, curr on 33: classification is still partial (curr has no mean over all)
-    _synthetic_table(tmp_path / "flat", everything, ["base"], score)
-    _synthetic_table(tmp_path / "curr", [t for t in everything if t != first], ["curr"], score)
-    [report] = write_report([tmp_path / "flat", tmp_path / "curr"], out=tmp_path / "docs", behaviour=False)
-    readme_table.main(["--report", str(report), "--readme", str(readme)])
-    text = readme.read_text()
-    assert "| classification | objects |" in text and "| classification | all |" not in text
-    assert "| bring-about | all | 17 | " in text
+    for setting in ("curr-cap10", "curr-moves-200"):
+        row = _row_cells(text, f"| {setting}: mean (the sweep's best setting of its reading) |")
+        mean = 100 * np.mean([score(t, setting) for t in swept])
+        assert row[1] == "-" and row[3].startswith(f"{mean:.1f} [")
+        assert row[3].endswith("] on 5 concepts (a subset: not judged)") and row[4] == "74.5"
+    assert "curr-cap100:" not in text  # not the best of its reading
     results = json.loads((tmp_path / "run" / "results.json").read_text())
     (tmp_path / "run" / "results.json").write_text(json.dumps({**results, "complete": False,
                                                                      "missing": [f"{everything[0]}@2"]}))  # base
@@ -1129,6 +1138,10 @@ def test_the_readme_gets_the_whole_tables_means_and_tests_from_the_report(tmp_pa
     with pytest.raises(SystemExit, match="needs exactly one line beginning '\\*\\*In all\\*\\*' \\(it has 0\\)"):
         readme_table.main(["--report", str(report), "--readme", str(readme)])
     # over several directories: the partial ones by name, and whether the paper's methods are whole all the same
+    first = cl[0]
+    _synthetic_table(tmp_path / "flat", everything, ["base"], score)
+    _synthetic_table(tmp_path / "curr", [t for t in everything if t != first], ["curr"], score)
+
     def mark_partial(directory: Path) -> None:
         results = json.loads((directory / "results.json").read_text())
         node = next(iter(plan(everything, results["settings"]["methods"]).nodes.values()))[0]  # one of its own
@@ -1148,22 +1161,10 @@ def test_the_readme_gets_the_whole_tables_means_and_tests_from_the_report(tmp_pa
     [report] = write_report([tmp_path / "flat", tmp_path / "more", tmp_path / "rest"], out=tmp_path / "docs",
                             behaviour=False)
     readme_table.main(["--report", str(report), "--readme", str(readme)])
+    text = readme.read_text()
     assert ("report.md), **partial: `flat` and `more` are still being run**; the paper's methods have all their "
-            "concepts; scores" in readme.read_text())
-    readme_table.main(["--report", str(report), "--readme", str(readme), "--brief"])  # the landing page's
-    brief = readme.read_text()
-    assert "**Means per kind and category (Fig. 5a/5d)**" in brief and "| bring-about | all | 17 | " in brief
-    assert "Paired t-tests" not in brief and "curr vs base" not in brief and "**[The paper's claims]" in brief
-    # a method run on a few targets only (a sweep's setting): in the full block's means, not in the brief's
-    _synthetic_table(tmp_path / "sweep", everything[:3], ["curr-cap10"], score)
-    [report] = write_report([tmp_path / "flat", tmp_path / "more", tmp_path / "rest", tmp_path / "sweep"],
-                            out=tmp_path / "docs", behaviour=False)
-    readme_table.main(["--report", str(report), "--readme", str(readme)])
-    assert "| curr-cap10 |" in readme.read_text()
-    readme_table.main(["--report", str(report), "--readme", str(readme), "--brief"])
-    brief = readme.read_text()
-    assert "curr-cap10" not in brief and "| kind | category | concepts | cnn | base | curr |" in brief
-    assert "|---|---|---:|" in brief and "| bring-about | all | 17 | " in brief
+            "concepts; scores" in text)
+    assert _row_cells(text, "| canon above base (a call is one step) |")[2] == "+5.7; t(34) = 2.3, p = 0.025"
     readme.write_text("# no markers\n")
     with pytest.raises(SystemExit, match="needs exactly one <!-- paper-table:start -->"):
         readme_table.main(["--report", str(report), "--readme", str(readme)])
@@ -1499,7 +1500,7 @@ def test_the_whole_tables_script_reports_the_queued_directories_it_has(tmp_path)
                    env={**os.environ, "RUNS": str(tmp_path / "runs")})
     assert (tmp_path / "calls").read_text().splitlines() == [
         f"sb3-smc report {paper}/objects {paper}/search --out {paper} --no-behaviour",
-        f"python {repo}/tools/readme_table.py --brief",  # the landing page: the claims count and the means
+        f"python {repo}/tools/readme_table.py",  # the landing page
         f"python {repo}/tools/readme_table.py --readme {paper}/README.md"]
 
 

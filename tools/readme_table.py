@@ -1,16 +1,17 @@
 #!/usr/bin/env python
-"""Put the whole table's means and t-tests per kind, beside the paper's, into a README: from the sections "Means
-per kind and category" and "Paired t-tests across concepts" of ``docs/results/paper/report.md`` (what ``sb3-smc
-report`` wrote), the rows over all concepts of a kind (means, the paper's, ours - paper; t-tests with a result; win
-counts the paper gives), and the report's count of its claims' verdicts, copied between the README's markers
-``<!-- paper-table:start -->`` and ``<!-- paper-table:end -->``. The per-category rows stay in the report, and the
-numbers and counts where the report computes them; this only copies them. ``tools/paper_table.sh report``
-runs it on the project's README with ``--brief`` (the claims count and the means only: the landing page stays short)
-and on the results' own (``docs/results/paper/README.md``: everything).
+"""Put the answer of the whole table into a README: from ``docs/results/paper/report.md`` (what ``sb3-smc report``
+wrote), one table of the paper's methods and the fair comparisons that answer its question (the means of base, curr
+and canon, curr's and canon's leads over the flat SMC with their paired t-tests, the same lead where a call costs its
+moves, at equal moves per episode, at equal experience, and for the setting of each reading that fits the paper
+best), ours beside the paper's; the verdict in three sentences; the two headline targets; and the count of the
+claims' verdicts, copied between the README's markers ``<!-- paper-table:start -->`` and ``<!-- paper-table:end -->``.
+Every number is the report's (its claims table, its checks of the method and its sweep): this only copies and
+arranges them, so the READMEs cannot disagree with the report. ``tools/paper_table.sh report`` runs it on the
+project's README and on the results' own (``docs/results/paper/README.md``).
 
 Usage::
 
-    python tools/readme_table.py [--report docs/results/paper/report.md] [--readme README.md] [--brief]
+    python tools/readme_table.py [--report docs/results/paper/report.md] [--readme README.md]
 """
 
 from __future__ import annotations
@@ -21,12 +22,27 @@ import re
 import sys
 from pathlib import Path
 
+from sb3_smc.experiments.claims import READINGS
 from sb3_smc.experiments.design import DEFAULT_METHODS
-from sb3_smc.experiments.tables import CLAIMS_COUNT, CLAIMS_HEADING, MEANS_HEADING, TESTS_HEADING
+from sb3_smc.experiments.tables import CHECKS_HEADING, CLAIMS_COUNT, CLAIMS_HEADING, MEANS_HEADING, SWEEP_HEADING
 
 ROOT = Path(__file__).resolve().parents[1]
 START, END = "<!-- paper-table:start -->", "<!-- paper-table:end -->"
-SECTIONS = (MEANS_HEADING, TESTS_HEADING)
+KINDS = ("classification", "bring-about")
+ONE_STEP, MOVES, EQUAL_MOVES, EXPERIENCE, MOVES_EXPERIENCE = (reading.name for reading in READINGS)
+HEADLINE = ("cl_self-left-of-two-objects-vs-one", "ba_self-in-container_from_between-potential-containers")
+LEAD = "{m} above base (paired t-test)"
+ANSWER_ROWS = (  # (what the row says, the claims table's statement after "<kind>: ", its column)
+    ("the flat SMC (base): mean", "mean of base", ONE_STEP),
+    ("curr: mean (a call is one step)", "mean of curr", ONE_STEP),
+    ("canon: mean (a call is one step)", "mean of canon", ONE_STEP),
+    ("curr above base (a call is one step)", LEAD.format(m="curr"), ONE_STEP),
+    ("canon above base (a call is one step)", LEAD.format(m="canon"), ONE_STEP),
+    ("curr above base, a call costing its moves (curr-moves)", LEAD.format(m="curr"), MOVES),
+    ("curr above base given 400 moves an episode (equal moves)", LEAD.format(m="curr"), EQUAL_MOVES),
+    ("curr above base at equal experience (a call is one step)", LEAD.format(m="curr"), EXPERIENCE),
+    ("curr above base at equal experience (a call costs its moves)", LEAD.format(m="curr"), MOVES_EXPERIENCE),
+)
 
 
 def section(report: str, heading: str) -> list[str]:
@@ -44,11 +60,29 @@ def cells(row: str) -> list[str]:
     return [cell.strip() for cell in row.strip().strip("|").split("|")]
 
 
-KEEP = {  # a table's header -> which of its rows the README keeps
-    "| kind | category |": lambda c: c[1] in ("all", "**paper** (all)") or c[1].startswith("ours - paper"),
-    "| kind / category |": lambda c: "/" not in c[0] and c[2] != "0",
-    "| kind | hierarchical |": lambda c: bool(c[4]),
-}
+def tables_of(report: str, heading: str) -> list[list[str]]:
+    """The Markdown tables (their lines) of the report's section ``heading``."""
+    tables: list[list[str]] = []
+    previous = ""
+    for line in section(report, heading):
+        if line.startswith("|"):
+            if not previous.startswith("|"):
+                tables.append([])
+            tables[-1].append(line)
+        previous = line
+    return tables
+
+
+def table_of(report: str, heading: str) -> dict[str, dict[str, str]]:
+    """The first table of the report's section ``heading``: its rows by their first cell, each row's cells by the
+    table's header (``{}`` where the report has no such section)."""
+    if heading not in report.splitlines():
+        return {}
+    tables = tables_of(report, heading)
+    if not tables:
+        return {}
+    header = cells(tables[0][0])
+    return {row[0]: dict(zip(header, row, strict=False)) for row in map(cells, tables[0][2:])}
 
 
 def incomplete(table: list[str]) -> set[str]:
@@ -67,45 +101,6 @@ def incomplete(table: list[str]) -> set[str]:
     return out
 
 
-def kind_rows(table: list[str]) -> list[str]:
-    """``table`` (its lines) with the header and the rows over all concepts of a kind (:data:`KEEP`); in the means
-    table, a kind not whole yet (:func:`incomplete`) keeps its categories' rows instead."""
-    keep = next((rule for header, rule in KEEP.items() if table[0].startswith(header)), None)
-    if keep is None:
-        raise SystemExit(f"the report has a table the README does not know: {table[0]!r}")
-    partial = incomplete(table) if table[0].startswith("| kind | category |") else set()
-    return table[:2] + [row for row in table[2:]
-                        if (cells(row)[1] != "all" if cells(row)[0] in partial else keep(cells(row)))]
-
-
-def without_subset_methods(table: list[str]) -> list[str]:
-    """The means table without the columns of our methods that ran on a subset of the concepts only (no mean over
-    all of a kind's concepts: the sweep's settings, equal experience); the paper's methods keep theirs."""
-    header = cells(table[0])
-    rows = [cells(row) for row in table[2:]]
-    over_all = [row for row in rows if row[1] == "all"]
-    drop = {i for i in range(3, len(header)) if over_all and header[i] not in DEFAULT_METHODS
-            and all(row[i] in ("", "-") for row in over_all)}
-    if not drop:
-        return table
-    kept = [[c for i, c in enumerate(cells(line)) if i not in drop] for line in table]
-    return ["|" + "|".join(row if k == 1 else [f" {c} " if c else " " for c in row]) + "|"
-            for k, row in enumerate(kept)]
-
-
-def tables_of(report: str, heading: str) -> list[list[str]]:
-    """The Markdown tables (their lines) of the report's section ``heading``."""
-    tables: list[list[str]] = []
-    previous = ""
-    for line in section(report, heading):
-        if line.startswith("|"):
-            if not previous.startswith("|"):
-                tables.append([])
-            tables[-1].append(line)
-        previous = line
-    return tables
-
-
 PARTIAL = re.compile(r"^\*\*Partial results\*\*(?: \((?P<run>[^)]+)\))?:", re.MULTILINE)
 
 
@@ -119,14 +114,13 @@ def partial_note(report: str) -> str:
     if not all(runs):  # a report over one directory names none
         return ", **partial: the table is still being run**"
     names = " and ".join(", ".join(f"`{run}`" for run in runs).rsplit(", ", 1))
-    means = [table for table in tables_of(report, SECTIONS[0]) if table[0].startswith("| kind | category |")]
+    means = [table for table in tables_of(report, MEANS_HEADING) if table[0].startswith("| kind | category |")]
     kinds = {cells(row)[0] for table in means for row in table[2:]}
     columns = {column for table in means for column in cells(table[0])}
-    whole = (kinds >= {"classification", "bring-about"} and columns >= set(DEFAULT_METHODS)
+    whole = (kinds >= set(KINDS) and columns >= set(DEFAULT_METHODS)
              and not any(incomplete(table) for table in means))
     return (f", **partial: {names} {'is' if len(runs) == 1 else 'are'} still being run**"
             + ("; the paper's methods have all their concepts" if whole else ""))
-
 
 
 def claims_line(report: str, source: str) -> str:
@@ -141,23 +135,145 @@ def claims_line(report: str, source: str) -> str:
     return f"**[The paper's claims]({source}#the-papers-claims)**" + counted[0].removeprefix(CLAIMS_COUNT)
 
 
-def block(report: str, source: str, sections: tuple[str, ...] = SECTIONS) -> str:
-    """The README's block: a line on what it is (whole, or what is still being run), the count of the claims
-    reproduced, then the rows per kind of ``sections`` (default: both), headed in bold; the brief block (the means
-    only) leaves out the methods run on a subset of the concepts (:func:`without_subset_methods`)."""
+def split_verdict(cell: str) -> tuple[str, str]:
+    """A claims cell as (ours, verdict): ``"89.8 [88.4, 91.0]: exceeded"`` -> ``("89.8 [88.4, 91.0]", "exceeded")``;
+    a cell without a verdict (``not run``, ``same as one step``, empty) -> ``("", cell)``."""
+    ours, _, verdict = cell.rpartition(": ")
+    return (ours, verdict) if ours else ("", cell)
+
+
+def best_settings(report: str) -> list[str]:
+    """The sweep's best-fitting setting of each reading (a cap of moves a call; a number of moves an episode), in
+    the sweep table's best-first order, leaving out a setting still training."""
+    rows = [name for name in table_of(report, SWEEP_HEADING) if not name.startswith("**") and "*" not in name]
+    return [setting for prefix in ("curr-cap", "curr-moves-")
+            if (setting := next((name for name in rows if name.startswith(prefix)), None))]
+
+
+def answer_rows(report: str) -> list[tuple[str, dict[str, tuple[str, str, str]]]]:
+    """The answer table's rows: what each says, and per kind (ours, verdict, the paper's); a row no kind has a
+    result for is left out."""
+    claims = table_of(report, CLAIMS_HEADING)
+    checks = table_of(report, CHECKS_HEADING)
+    rows: list[tuple[str, dict[str, tuple[str, str, str]]]] = []
+    for label, statement, column in ANSWER_ROWS:
+        found = {}
+        for kind in KINDS:
+            row = claims.get(f"{kind}: {statement}", {})
+            ours, verdict = split_verdict(row.get(column, ""))
+            if ours:
+                found[kind] = (ours, verdict, row["paper"])
+        if found:
+            rows.append((label, found))
+    for setting in best_settings(report):
+        for what, statement in (("mean", f"mean of {setting}"), ("above base", f"{setting} above base")):
+            found = {}
+            for kind in KINDS:
+                row = next((r for name, r in checks.items() if name.startswith(f"{kind}: {statement} (")), None)
+                if row is not None:
+                    subset = row["check"].rpartition(" (")[2].rstrip(")")
+                    found[kind] = (f"{row['ours']} on {subset}", "a subset: not judged", row["paper"])
+            if found:
+                rows.append((f"{setting}: {what} (the sweep's best setting of its reading)", found))
+    return rows
+
+
+def answer_table(report: str) -> list[str]:
+    """The answer table (Markdown lines): a row per comparison, ours with its interval and verdict beside the
+    paper's, per kind; ``[]`` where the report has no claims table."""
+    rows = answer_rows(report)
+    if not rows:
+        return []
+    lines = ["| | classification: ours | paper | bring-about: ours | paper |", "|---|---|---|---|---|"]
+    for label, found in rows:
+        line = [label]
+        for kind in KINDS:
+            ours, verdict, paper = found.get(kind, ("-", "", ""))
+            line += [f"{ours} ({verdict})" if verdict else ours, paper]
+        lines.append("| " + " | ".join(line) + " |")
+    return lines
+
+
+_PHRASES = {"exceeded": "above the paper's", "reproduced": "as the paper's", "short": "below the paper's",
+            "opposite": "the opposite sign to the paper's", "not significant": "not significant"}
+
+
+def _brief(ours: str) -> str:
+    """A cell's number without its interval, with its p and subset: ``"+8.8 [-4.6, +23.9] on 7 swept targets; t(6)
+    = 1.43, p = 0.2"`` -> ``"+8.8 on 7 swept targets, p = 0.2"``."""
+    number = ours.split(" ")[0]
+    subset = re.search(r"\] (on \d+ [^;]+)", ours)
+    p = re.search(r"p = ([^ ;)]+)", ours)
+    return number + (f" {subset[1]}" if subset else "") + (f", p = {p[1]}" if p else "")
+
+
+def _both(found: dict[str, tuple[str, str, str]], paper: bool = False) -> str:
+    """The two kinds' numbers (with the paper's), then their verdicts in words."""
+    said = " and ".join(f"{_brief(found[kind][0])} on {kind}" + (f" (paper {found[kind][2].split(';')[0]})"
+                                                                  if paper else "")
+                        for kind in KINDS if kind in found)
+    verdicts = [found[kind][1] for kind in KINDS if kind in found]
+    if len(set(verdicts)) == 1:
+        words = _PHRASES.get(verdicts[0], verdicts[0]) + (" on both kinds" if len(verdicts) == 2 else "")
+    else:
+        words = ", ".join(f"{found[kind][1]} on {kind}" for kind in KINDS if kind in found)
+    return f"{said} ({words})"
+
+
+def verdict(report: str) -> list[str]:
+    """The verdict in three sentences, each from the answer table's rows (so from the report's numbers): the
+    paper's reading of a call as one step, the readings that make the comparison fair in moves, and equal
+    experience; a sentence whose rows the report lacks is left out."""
+    rows = dict(answer_rows(report))
+    sentences = []
+    lead = rows.get(ANSWER_ROWS[3][0])
+    if lead:
+        sentences.append(f"With a call counted as one step, curr leads the flat SMC by {_both(lead, paper=True)}.")
+    fair = [(what, rows[label]) for what, label in (("with each call costing its moves", ANSWER_ROWS[5][0]),
+                                                    ("against a flat SMC given 400 moves an episode",
+                                                     ANSWER_ROWS[6][0])) if label in rows]
+    if fair:
+        sentences.append("Made fair in moves, its lead is " + "; ".join(f"{_both(found)} {what}"
+                                                                        for what, found in fair) + ".")
+    equal = [(what, rows[label]) for what, label in (("a call as one step", ANSWER_ROWS[7][0]),
+                                                     ("each call costing its moves", ANSWER_ROWS[8][0]))
+             if label in rows]
+    if equal:
+        sentences.append("At equal experience it is " + "; ".join(f"{_both(found)} with {what}"
+                                                                  for what, found in equal)
+                         + (", measured on the sweep's targets only" if "swept" in str(equal) else "") + ".")
+    return [" ".join(sentences)] if sentences else []
+
+
+def headline(report: str) -> list[str]:
+    """The two headline targets' base, curr and canon (and curr-moves) where the report has them, ours beside the
+    paper's, one sentence."""
+    claims = table_of(report, CLAIMS_HEADING)
+    said = []
+    for target in HEADLINE:
+        scores = {m: (ours, claims[f"{target}: {m}"]["paper"]) for m in ("base", "curr", "canon")
+                  if (ours := split_verdict(claims.get(f"{target}: {m}", {}).get(ONE_STEP, ""))[0])}
+        if not scores:
+            continue
+        moves = split_verdict(claims.get(f"{target}: curr", {}).get(MOVES, ""))[0]
+        said.append(f"`{target}` " + ", ".join(f"{m} {ours.split(' [')[0]}" for m, (ours, _) in scores.items())
+                    + " (paper " + ", ".join(paper for _, paper in scores.values()) + ")"
+                    + (f", curr-moves {moves.split(' [')[0]}" if moves else ""))
+    return [f"**The paper's two headline targets** (best seed of 5): {'; '.join(said)}."] if said else []
+
+
+def block(report: str, source: str) -> str:
+    """The README's block: a line on what it is (whole, or what is still being run), the answer table, the
+    verdict, the headline targets and the count of the claims' verdicts."""
     lines = [START, "", f"From [the whole table's report]({source})" + partial_note(report)
-             + "; scores in %, ours beside the paper's (Hay et al., AAAI-18).", ""]
+             + "; scores in %, ours (95 % bootstrap interval; a lead over all of a kind's concepts resamples the "
+             "concepts too) beside the paper's (Hay et al., AAAI-18), with the verdict.", ""]
+    for part in (answer_table(report), verdict(report), headline(report)):
+        if part:
+            lines += [*part, ""]
     counted = claims_line(report, source)
     if counted:
         lines += [counted, ""]
-    brief = tuple(sections) == SECTIONS[:1]
-    for heading in sections:  # their tables only: the report explains them
-        lines += [f"**{heading.removeprefix('## ')}**", ""]
-        for table in tables_of(report, heading):
-            rows = kind_rows(table)
-            if brief and table[0].startswith("| kind | category |"):
-                rows = without_subset_methods(rows)
-            lines += [*rows, ""]
     return "\n".join([*lines, END])
 
 
@@ -174,8 +290,6 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--report", type=Path, default=ROOT / "docs/results/paper/report.md")
     parser.add_argument("--readme", type=Path, default=ROOT / "README.md")
-    parser.add_argument("--brief", action="store_true",
-                        help="the means only, no t-tests (the landing page; the results' README has them all)")
     args = parser.parse_args(argv)
     for path, what in ((args.report, "the report (tools/paper_table.sh report makes it)"),
                        (args.readme, "the README to update")):
@@ -183,12 +297,11 @@ def main(argv: list[str] | None = None) -> int:
             raise SystemExit(f"{path} not found: {what}")
     source = Path(os.path.relpath(args.report.resolve(), args.readme.resolve().parent)).as_posix()
     report = args.report.read_text(encoding="utf-8")
-    text = update(args.readme.read_text(encoding="utf-8"),
-                  block(report, source, SECTIONS[:1] if args.brief else SECTIONS))
+    text = update(args.readme.read_text(encoding="utf-8"), block(report, source))
     tmp = args.readme.with_suffix(".tmp")
     tmp.write_text(text, encoding="utf-8")
     tmp.replace(args.readme)
-    print(f"{args.readme}: the table from {args.report}")
+    print(f"{args.readme}: the answer from {args.report}")
     return 0
 
 
