@@ -6,11 +6,12 @@ STAMP := $(VENV)/.installed
 
 .PHONY: demo test lint docs bench clean
 
+# PYTHONWARNINGS=ignore: no setuptools editable-install banner under --quiet
 $(STAMP): pyproject.toml setup.py sb3_smc_gym_hook.pth
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip "setuptools>=77"
 	$(PY) -m pip install --quiet torch==2.13.0
-	$(PY) -m pip install --quiet -e ".[test,docs]"
+	PYTHONWARNINGS=ignore $(PY) -m pip install --quiet -e ".[test,docs]"
 	touch $(STAMP)
 
 demo: $(STAMP)

@@ -15,7 +15,9 @@ import argparse
 import errno
 import json
 import shlex
+import signal
 import sys
+import threading
 import unicodedata
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -406,6 +408,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.set_defaults(run=_status)
 
     args = parser.parse_args(argv)
+    main_thread = threading.current_thread() is threading.main_thread()  # where a handler may be set
+    previous = signal.signal(signal.SIGTERM, _terminated) if main_thread else None  # as Ctrl-C: the workers end
     try:
         return args.run(args)
     except (SMCError, PixelWorldError) as err:  # bad input, said in one line; anything else is a bug: its traceback
@@ -414,9 +418,21 @@ def main(argv: Sequence[str] | None = None) -> int:
     except OSError as err:  # a file of the user's: missing, not allowed, the disk full
         print(f"sb3-smc {args.command}: error: {_os_error(err)}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print("\ninterrupted: what finished is saved; run the same command again to resume", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as stop:
+        print(f"\n{'terminated' if isinstance(stop, _Terminated) else 'interrupted'}: what finished is saved; run the "
+              "same command again to resume", file=sys.stderr)
+        return 143 if isinstance(stop, _Terminated) else 130
+    finally:
+        if main_thread:
+            signal.signal(signal.SIGTERM, previous)
+
+
+class _Terminated(KeyboardInterrupt):
+    """SIGTERM, raised where the command is, so that it stops as on Ctrl-C."""
+
+
+def _terminated(signum: int, frame: object) -> None:
+    raise _Terminated
 
 
 def _os_error(err: OSError) -> str:

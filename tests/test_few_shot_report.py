@@ -7,7 +7,7 @@ import csv
 import numpy as np
 import pytest
 
-from sb3_smc.experiments.few_shot_report import compare, read_results, write_report
+from sb3_smc.experiments.few_shot_report import compare, fewest_worlds, read_results, write_report
 from sb3_smc.experiments.statistics import hierarchical_interval
 
 FIELDS = ("target", "kind", "category", "method", "train_worlds", "seed", "test_score", "offered", "primitive_steps")
@@ -45,6 +45,25 @@ def test_compare_pairs_concepts_and_seeds():
     assert compare(rows, "auto", "classification", 4) is None
 
 
+def test_the_fewest_worlds_are_paired_on_the_concepts_with_a_flat_smc_on_every_world():
+    """Per concept, the first N whose seed mean reaches that concept's flat SMC on every world; pooled, the first N
+    whose mean over the concepts measured there reaches the flat SMC's mean over the same concepts; a concept
+    without the flat SMC on every world is left out."""
+    rows = _rows({("a", "base", "all"): [0.8, 0.6], ("a", "auto", 1): [0.5], ("a", "auto", 2): [0.7, 0.8],
+                  ("b", "base", "all"): [0.5], ("b", "auto", 1): [0.6], ("b", "auto", 2): [0.4],
+                  ("c", "base", "all"): [0.9], ("c", "auto", 1): [0.2], ("c", "auto", 2): [0.3],
+                  ("d", "auto", 1): [1.0]})  # d: no flat SMC on every world
+    fewest = fewest_worlds(rows, "auto", [2, "all", 1])
+    assert fewest is not None and fewest.per_concept == {"a": 2, "b": 1, "c": None}
+    # pooled: N = 1 gives (0.5 + 0.6 + 0.2) / 3 < (0.7 + 0.5 + 0.9) / 3; N = 2 gives (0.75 + 0.4 + 0.3) / 3 < 0.7
+    assert fewest.pooled is None
+    assert fewest_worlds(rows, "curr", [1, 2]) is None
+    closer = _rows({("a", "base", "all"): [0.5], ("a", "curr", 1): [0.2], ("a", "curr", 4): [0.6],
+                    ("b", "base", "all"): [0.5], ("b", "curr", 4): [0.5]})  # b measured at N = 4 only
+    fewest = fewest_worlds(closer, "curr", [1, 4])
+    assert fewest is not None and fewest.per_concept == {"a": 4, "b": 4} and fewest.pooled == 4
+
+
 def test_the_report_is_written_from_results_csv(tmp_path):
     rows = _rows({("a", "auto", 4): [0.9], ("a", "base", 4): [0.1], ("a", "base", "all"): [0.5],
                   ("b", "auto", 4): [0.7], ("b", "base", 4): [0.3], ("b", "base", "all"): [0.6]})
@@ -55,5 +74,5 @@ def test_the_report_is_written_from_results_csv(tmp_path):
     assert read_results(tmp_path / "results.csv")[0]["train_worlds"] in (4, "all")
     report = write_report(tmp_path, library_steps={"x@0": 1000, "y@0": 2000}).read_text()
     assert "| auto | 80.0 (2) | - |" in report and "| base | 20.0 (2) | 55.0 (2) |" in report
-    assert "bring-about, auto: N = 4 (the flat SMC on every world: 55.0 % on 2 concepts)" in report
+    assert "| bring-about | auto | 2 | 2 | 4 | 4 |" in report  # a: 0.9 >= 0.5 at N = 4; b: 0.7 >= 0.6 too
     assert "3,000 primitive steps in all" in report and (tmp_path / "few_shot.png").stat().st_size > 1000

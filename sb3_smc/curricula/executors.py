@@ -56,7 +56,7 @@ class _InProcess:
         except Exception as err:  # noqa: BLE001 - reported as the job's failure
             return [(handle, err)]
 
-    def shutdown(self) -> None:
+    def shutdown(self, now: bool = False) -> None:
         self._work.clear()
 
 
@@ -111,7 +111,13 @@ class _Processes:
             self._pool = self._make()
         return out
 
-    def shutdown(self) -> None:
+    def shutdown(self, now: bool = False) -> None:
+        """Wait for the workers to end; ``now`` (the run stopped with jobs still training: interrupted, terminated or
+        failed): end them first, their jobs lost (a resumed run trains them again). Either way the pool's queues are
+        closed here, so that no semaphore is left to the resource tracker."""
+        if now:
+            for worker in list((getattr(self._pool, "_processes", None) or {}).values()):  # no public way in 3.11
+                worker.terminate()
         self._pool.shutdown(wait=True, cancel_futures=True)
 
 
@@ -172,7 +178,7 @@ class _Ray:
                 out.append((ref, _lost(err, self._ray)))
         return out
 
-    def shutdown(self) -> None:
+    def shutdown(self, now: bool = False) -> None:
         for ref in self._pending:  # after an interrupt or an error: free the cluster
             self._ray.cancel(ref)
         self._pending.clear()

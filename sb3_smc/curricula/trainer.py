@@ -323,8 +323,8 @@ def _run(scheduler: Scheduler, progress: bool, printer: Callable[[str], None], s
     # run_job, run_group: this module's, at each run
     executor = make_executor(options, run_job, run_group)
     bar = _Progress(len(jobs), done_before, steps_total, steps_done, printer if progress else None)
+    pending: dict[Any, tuple[JobId, ...]] = {}
     try:
-        pending: dict[Any, tuple[JobId, ...]] = {}
         while True:
             for unit in scheduler.units(scheduler.ready(), options.group_size, options.workers):
                 if len(pending) >= options.workers:
@@ -345,7 +345,7 @@ def _run(scheduler: Scheduler, progress: bool, printer: Callable[[str], None], s
                 scheduler.running.difference_update(unit)
                 _finish(scheduler, unit, outcome, bar)
     finally:
-        executor.shutdown()
+        executor.shutdown(now=bool(pending))  # jobs still training: stopped (interrupted, terminated) or failed
         write_state(directory, [], started, scheduler.skip)
         bar.close()
     if all(scheduler.done(job) for job in jobs):  # groups saved in an earlier attempt and then split otherwise
@@ -491,10 +491,11 @@ def _rows(scheduler: Scheduler) -> list[dict[str, Any]]:
 # ---------------------------------------------------------------------------------------------------------------
 
 class _Progress:
-    """One live line: jobs done / total, running, budget steps/s, ETA (``\\r``-refreshed on a terminal, else one line
-    per round of finished jobs, once their places are refilled (:meth:`show`), so that it counts the jobs running
-    then). A finished job counts its whole budget, also when its training stopped at the largest return, so that
-    the rate and the jobs left are in the same units."""
+    """Progress of a run: jobs done / total, running, budget steps/s and the ETA. On a terminal a tqdm bar over the
+    run's budget steps (its description the jobs done and running); else one line per round of finished jobs, once
+    their places are refilled (:meth:`show`), so that it counts the jobs running then. A finished job counts its
+    whole budget, also when its training stopped at the largest return, so that the rate and the jobs left are in
+    the same units."""
 
     def __init__(self, total: int, done: int, steps_total: int, steps_done: int,
                  printer: Callable[[str], None] | None) -> None:
@@ -502,22 +503,30 @@ class _Progress:
         self.printer = printer
         self.start = time.perf_counter()
         self.steps_at_start = steps_done
-        self.tty = printer is print and sys.stdout.isatty()
         self.running = 0
         self.shown = done  # jobs done at the last log line
+        self.bar: Any = None
+        if printer is print and sys.stdout.isatty():
+            from tqdm import tqdm
+
+            self.bar = tqdm(total=steps_total, initial=steps_done, unit="step", unit_scale=True, dynamic_ncols=True,
+                            desc=self._jobs(), file=sys.stdout)
+
+    def _jobs(self) -> str:
+        return f"jobs {self.done}/{self.total}, running {self.running}"
 
     def line(self) -> str:
         elapsed = time.perf_counter() - self.start
         rate = (self.steps_done - self.steps_at_start) / elapsed if elapsed > 0 else 0.0
         left = self.steps_total - self.steps_done
         eta = f"{left / rate / 60:.0f} min" if rate > 0 else "?"
-        return (f"jobs {self.done}/{self.total}, running {self.running}, {rate:,.0f} budget steps/s, "
-                f"ETA {eta if left else '0 min'}")
+        return f"{self._jobs()}, {rate:,.0f} budget steps/s, ETA {eta if left else '0 min'}"
 
     def show(self, running: int) -> None:
         self.running = running
-        if self.printer is not None and self.tty:
-            print("\r" + self.line() + " " * 8, end="", flush=True)
+        if self.bar is not None:
+            self.bar.set_description(self._jobs(), refresh=False)
+            self.bar.update(self.steps_done - self.bar.n)
         elif self.printer is not None and self.done > self.shown:
             self.shown = self.done
             self.printer(self.line())
@@ -533,13 +542,13 @@ class _Progress:
         self.shown = min(self.shown, self.done)
 
     def note(self, text: str) -> None:
-        if self.printer is not None:
-            if self.tty:
-                print()
+        if self.bar is not None:
+            self.bar.write(text)
+        elif self.printer is not None:
             self.printer(text)
 
     def close(self) -> None:
-        if self.printer is not None and self.tty:
-            print()
+        if self.bar is not None:
+            self.bar.close()
 
 
