@@ -696,35 +696,9 @@ def _children(pid: int) -> list[int]:
     return out
 
 
-@pytest.mark.skipif(not Path("/proc/self/stat").is_file(), reason="reads the process table from /proc")
-def test_a_killed_run_leaves_no_worker_training(tmp_path):
-    """SIGKILL the run's process while its two workers train: the workers end too (within seconds), instead of
-    training their jobs on for nothing."""
-    command = [sys.executable, "-m", "sb3_smc.cli", "train", str(_tiny(tmp_path)), "--out", str(tmp_path / "run"),
-               "--seeds", "2", "--timesteps", "400000", "--workers", "2", "--no-tensorboard"]
-    process = subprocess.Popen(command, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    deadline = time.time() + 120
-    while time.time() < deadline and len(status(tmp_path / "run")["running"] if (tmp_path / "run" / "state.json")
-                                             .is_file() else []) < 2:
-        time.sleep(0.1)
-    time.sleep(3.0)  # the workers have started their jobs
-    workers = _children(process.pid)
-    assert len(workers) >= 2, "the run did not start its workers"
-    process.send_signal(signal.SIGKILL)
-    process.wait()
-    deadline = time.time() + 15
-    while time.time() < deadline and any(map(_alive, workers)):
-        time.sleep(0.2)
-    alive = [pid for pid in workers if _alive(pid)]
-    for pid in alive:  # do not leave them behind on failure
-        os.kill(pid, signal.SIGKILL)
-    assert not alive, "workers went on after their run was killed"
-
-
-@pytest.mark.skipif(not Path("/proc/self/stat").is_file(), reason="reads the process table from /proc")
-def test_sigterm_stops_a_run_with_workers_as_ctrl_c_does(tmp_path):
-    """SIGTERM to ``sb3-smc train --workers 2`` while its workers train: it says so and how to resume, exits 143,
-    ends its workers and leaves no semaphore to the resource tracker (no "leaked semaphore" warning)."""
+def _training_on_two_workers(tmp_path: Path) -> tuple[subprocess.Popen, list[int]]:
+    """``sb3-smc train --workers 2`` started, once both its workers train: the process (stderr piped) and the pids
+    of its children."""
     command = [sys.executable, "-m", "sb3_smc.cli", "train", str(_tiny(tmp_path)), "--out", str(tmp_path / "run"),
                "--seeds", "2", "--timesteps", "400000", "--workers", "2", "--no-tensorboard"]
     process = subprocess.Popen(command, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
@@ -734,19 +708,43 @@ def test_sigterm_stops_a_run_with_workers_as_ctrl_c_does(tmp_path):
         time.sleep(0.1)
     time.sleep(3.0)  # the workers have started their jobs
     workers = _children(process.pid)
+    assert len(workers) >= 2, "the run did not start its workers"
+    return process, workers
+
+
+def _left_alive(workers: list[int]) -> list[int]:
+    """Those of ``workers`` still alive 15 s on (killed then, so that a failing test leaves none behind)."""
+    deadline = time.time() + 15
+    while time.time() < deadline and any(map(_alive, workers)):
+        time.sleep(0.2)
+    alive = [pid for pid in workers if _alive(pid)]
+    for pid in alive:
+        os.kill(pid, signal.SIGKILL)
+    return alive
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").is_file(), reason="reads the process table from /proc")
+def test_a_killed_run_leaves_no_worker_training(tmp_path):
+    """SIGKILL the run's process while its two workers train: the workers end too (within seconds), instead of
+    training their jobs on for nothing."""
+    process, workers = _training_on_two_workers(tmp_path)
+    process.send_signal(signal.SIGKILL)
+    process.communicate()
+    assert not _left_alive(workers), "workers went on after their run was killed"
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").is_file(), reason="reads the process table from /proc")
+def test_sigterm_stops_a_run_with_workers_as_ctrl_c_does(tmp_path):
+    """SIGTERM to ``sb3-smc train --workers 2`` while its workers train: it says so and how to resume, exits 143,
+    ends its workers and leaves no semaphore to the resource tracker (no "leaked semaphore" warning)."""
+    process, workers = _training_on_two_workers(tmp_path)
     process.send_signal(signal.SIGTERM)
     _, err = process.communicate(timeout=60)
     assert process.returncode == 143, err
     assert err.strip().endswith("terminated: what finished is saved; run the same command again to resume"), err
     assert "leaked semaphore" not in err and "Traceback" not in err
     assert status(tmp_path / "run")["running"] == []
-    deadline = time.time() + 15  # the workers (and the resource tracker) end with the run
-    while time.time() < deadline and any(map(_alive, workers)):
-        time.sleep(0.2)
-    alive = [pid for pid in workers if _alive(pid)]
-    for pid in alive:  # do not leave them behind on failure
-        os.kill(pid, signal.SIGKILL)
-    assert len(workers) >= 2 and not alive, "workers went on after their run was terminated"
+    assert not _left_alive(workers), "workers went on after their run was terminated"
 
 
 def test_cli_lists_shows_trains_and_reports(tmp_path):

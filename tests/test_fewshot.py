@@ -83,3 +83,34 @@ def test_the_learn_command_refuses_bad_input_before_any_work(tmp_path):
     assert code == 2 and "does not hold" in err and not (tmp_path / "x").exists()
     code, _, err = sb3_smc_cli("learn", CL, "--train-worlds", "51")
     assert code == 2 and "the training split of cl_self-in-container_vs_noncontainer has 50 worlds" in err
+
+
+def test_the_few_shot_table_records_each_cell_and_resumes(tmp_path):
+    """``run_few_shot`` on one concept at N = 1 and 2: a record per cell (the CNN's too) and one results.csv row,
+    curr's set held out, a progress line per cell; run again, it trains nothing; an unknown method is refused."""
+    import csv
+
+    from sb3_smc.experiments.few_shot import children_of, run_few_shot
+
+    target = "cl_self-in-container_vs_noncontainer"
+    lines: list[str] = []
+    path = run_few_shot(tmp_path, targets=[target], worlds=[1, 2], methods=["cnn", "base", "curr"], seeds=1,
+                        printer=lines.append, total_timesteps=2048)
+    assert lines[0] == f"{tmp_path}: 6 cells, 0 recorded, 6 to run"
+    assert [line.split(":")[0] for line in lines[1:]] == [
+        f"[1/6] {target} cnn N=1 seed 0", f"[2/6] {target} base N=1 seed 0", f"[3/6] {target} curr N=1 seed 0",
+        f"[4/6] {target} cnn N=2 seed 0", f"[5/6] {target} base N=2 seed 0", f"[6/6] {target} curr N=2 seed 0"]
+    with open(path, newline="") as handle:
+        rows = list(csv.DictReader(handle))
+    assert [(r["method"], r["train_worlds"]) for r in rows] == [("base", "1"), ("base", "2"), ("cnn", "1"),
+                                                                 ("cnn", "2"), ("curr", "1"), ("curr", "2")]
+    curr = [r for r in rows if r["method"] == "curr"]
+    assert all(int(r["offered"]) == len(children_of(target, "curr") or []) > 0 for r in curr)
+    assert all(0 <= float(r["test_score"]) <= 1 for r in rows) and (tmp_path / "records" / target).is_dir()
+    assert children_of("ba_self-in-target-container_from_nontarget-container", "curr") is None  # search: no curr
+    again: list[str] = []
+    run_few_shot(tmp_path, targets=[target], worlds=[1, 2], methods=["cnn", "base", "curr"], seeds=1,
+                 printer=again.append, total_timesteps=2048)
+    assert again == [f"{tmp_path}: 6 cells, 6 recorded, 0 to run"]
+    with pytest.raises(SMCError, match="few-shot methods are"):
+        run_few_shot(tmp_path, methods=["flat"])

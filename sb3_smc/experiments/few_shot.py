@@ -103,6 +103,7 @@ def run_few_shot(out: str | Path, *, targets: Sequence[str] = FEW_SHOT_TARGETS,
             atomic_write(_cell(out, target, method, n, seed), json.dumps(
                 {"target": target, "method": method, "train_worlds": n, "seed": seed, "cnn": cnn.to_dict()},
                 indent=1) + "\n")
+            _progress(printer, done, len(todo), started, f"{target} cnn N={n or 'all'} seed {seed}", cnn.test_score)
             continue
         offer: str | list[str] = {"base": "none", "auto": "auto"}.get(method) or children_of(target, method) or []
         if method in ("curr", "canon"):
@@ -119,12 +120,15 @@ def run_few_shot(out: str | Path, *, targets: Sequence[str] = FEW_SHOT_TARGETS,
                   "evaluations": [e.to_dict() for e in smc.evaluations],
                   "choice": learned.choice.scores if learned.choice is not None else None}
         atomic_write(_cell(out, target, method, n, seed), json.dumps(record, indent=1) + "\n")
-        rate = (time.monotonic() - started) / done
-        printer(f"[{done}/{len(todo)}] {target} {method} N={n or 'all'} seed {seed}: test {smc.test_score:.3f} "
-                f"(about {rate * (len(todo) - done) / 60:.0f} min left)")
+        _progress(printer, done, len(todo), started, f"{target} {method} N={n or 'all'} seed {seed}", smc.test_score)
     path = out / "results.csv"
     atomic_write(path, _csv(results_rows(out)))
     return path
+
+
+def _progress(printer: Callable[[str], None], done: int, total: int, started: float, cell: str, score: float) -> None:
+    rate = (time.monotonic() - started) / done
+    printer(f"[{done}/{total}] {cell}: test {score:.3f} (about {rate * (total - done) / 60:.0f} min left)")
 
 
 def results_rows(out: str | Path) -> list[dict[str, Any]]:
