@@ -38,7 +38,10 @@ def test_every_page_is_in_the_nav() -> None:
 
 def test_the_readme_links_pages_of_the_site() -> None:
     nav = _nav()
-    links = [link.split("#")[0] for link in re.findall(r"\]\(([^)]+)\)", (ROOT / "README.md").read_text("utf-8"))]
+    readme = (ROOT / "README.md").read_text("utf-8")
+    links = [link.split("#")[0] for link in re.findall(r"(?<!!)\[[^\]]*\]\(([^)]+)\)", readme)]
+    for image in re.findall(r"!\[[^\]]*\]\(([^)]+)\)", readme):  # a figure: a file of the site's folder
+        assert image.startswith("docs/") and (ROOT / image).is_file(), f"README shows {image!r}: not a file in docs/"
     local = [link for link in links if not re.match(r"[a-z]+:", link)]
     assert local, "the README links no page"
     for link in local:

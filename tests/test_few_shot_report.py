@@ -67,6 +67,7 @@ def test_the_fewest_worlds_are_paired_on_the_concepts_with_a_flat_smc_on_every_w
 def test_the_report_is_written_from_results_csv(tmp_path):
     rows = _rows({("a", "auto", 4): [0.9], ("a", "base", 4): [0.1], ("a", "base", "all"): [0.5],
                   ("b", "auto", 4): [0.7], ("b", "base", 4): [0.3], ("b", "base", "all"): [0.6]})
+    rows += _rows({("c", "cnn", 4): [0.6, 0.8], ("c", "base", 4): [0.5]}, kind="classification")
     with open(tmp_path / "results.csv", "w", newline="") as handle:
         writer = csv.DictWriter(handle, fieldnames=FIELDS)
         writer.writeheader()
@@ -74,5 +75,8 @@ def test_the_report_is_written_from_results_csv(tmp_path):
     assert read_results(tmp_path / "results.csv")[0]["train_worlds"] in (4, "all")
     report = write_report(tmp_path, library_steps={"x@0": 1000, "y@0": 2000}).read_text()
     assert "| auto | 80.0 (2) | - |" in report and "| base | 20.0 (2) | 55.0 (2) |" in report
+    assert "a count below the kind's (2 bring-about, 1 classification) marks a cell" in report
+    bring_about, classification = report.split("### bring-about")[1].split("### classification")
+    assert "| cnn |" not in bring_about and "| cnn | 70.0 (1) | - |" in classification.split("\n## ")[0]
     assert "| bring-about | auto | 2 | 2 | 4 | 4 |" in report  # a: 0.9 >= 0.5 at N = 4; b: 0.7 >= 0.6 too
     assert "3,000 primitive steps in all" in report and (tmp_path / "few_shot.png").stat().st_size > 1000

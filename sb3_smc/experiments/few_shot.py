@@ -120,7 +120,9 @@ def run_few_shot(out: str | Path, *, targets: Sequence[str] = FEW_SHOT_TARGETS,
                   "evaluations": [e.to_dict() for e in smc.evaluations],
                   "choice": learned.choice.scores if learned.choice is not None else None}
         atomic_write(_cell(out, target, method, n, seed), json.dumps(record, indent=1) + "\n")
-        _progress(printer, done, len(todo), started, f"{target} {method} N={n or 'all'} seed {seed}", smc.test_score)
+        score = smc.test_score
+        assert score is not None  # learn_concept tests what it learns
+        _progress(printer, done, len(todo), started, f"{target} {method} N={n or 'all'} seed {seed}", score)
     path = out / "results.csv"
     atomic_write(path, _csv(results_rows(out)))
     return path

@@ -127,12 +127,15 @@ def write_report(out: str | Path, library_steps: Mapping[str, int] | None = None
     lines = ["# The few-shot table", "", f"{len({r['target'] for r in rows})} concepts, {len(rows)} cells measured "
              "(a cell: one concept, method, number of training worlds and seed). Scores: the paper's protocol, every "
              "test world 10 times; a concept's score is the mean over its seeds.", ""]
+    concepts_of = {kind: len({r["target"] for r in rows if r["kind"] == kind}) for kind in kinds}
     lines += ["## Score against the number of training worlds", "",
-              "Mean over concepts (their seeds' means), in %, with the number of concepts measured.", ""]
+              "Mean over concepts (their seeds' means), in %, with the number of concepts measured; a count below "
+              "the kind's (" + ", ".join(f"{n} {kind}" for kind, n in concepts_of.items()) + ") marks a cell "
+              "still being run (or a method the concept has no entry for), its mean over those concepts only.", ""]
     for kind in kinds:
         lines += [f"### {kind}", "", "| method | " + " | ".join(f"N={w}" for w in worlds) + " |",
                   "|---|" + "---:|" * len(worlds)]
-        for method in methods:
+        for method in [m for m in methods if any(r["method"] == m and r["kind"] == kind for r in rows)]:
             cells = []
             for w in worlds:
                 concepts = _by_concept([r for r in rows if r["kind"] == kind], method, w)
