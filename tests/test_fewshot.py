@@ -114,3 +114,28 @@ def test_the_few_shot_table_records_each_cell_and_resumes(tmp_path):
     assert again == [f"{tmp_path}: 6 cells, 6 recorded, 0 to run"]
     with pytest.raises(SMCError, match="few-shot methods are"):
         run_few_shot(tmp_path, methods=["flat"])
+
+
+def test_learn_concepts_trains_seeds_together_each_as_train_smc_does(pretrained):
+    """Two seeds offered the same SMCs train as one group (``train_smcs``), and each is the SMC ``train_smc`` gives
+    for its seed alone: the same weights, record and test score."""
+    import numpy as np
+
+    from sb3_smc import evaluate, train_smc
+    from sb3_smc.fewshot import learn_concepts
+
+    together = learn_concepts(CL, seeds=[0, 1], library=pretrained, offer=list(INSIDE), train_worlds=2,
+                              total_timesteps=4000)
+    assert [one.offered for one in together] == [INSIDE, INSIDE]
+    for seed, one in enumerate(together):
+        alone = train_smc(CL, children=[pretrained[n] for n in INSIDE], seed=seed, train_worlds=2,
+                          total_timesteps=4000, name=one.smc.name, log_every=0)
+        evaluate(alone, repeats=10, seed=0, record_cells=False)
+        assert one.smc.record is not None and alone.record is not None
+        timeless = [dataclasses.replace(r, wall_time_s=0.0) for r in (one.smc.record, alone.record)]
+        assert timeless[0] == timeless[1] and one.smc.test_score == alone.test_score
+        mine, theirs = one.smc.model.policy.state_dict(), alone.model.policy.state_dict()
+        assert all(np.array_equal(mine[key].numpy(), theirs[key].numpy()) for key in theirs)
+    assert together[0].smc.record.training_returns != together[1].smc.record.training_returns  # two seeds
+    with pytest.raises(SMCError, match="1 names for 2 seeds"):
+        learn_concepts(CL, seeds=[0, 1], library=pretrained, offer="none", names=["x"])

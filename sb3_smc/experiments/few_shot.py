@@ -9,9 +9,10 @@ entry, their two best pretrained seeds), ``canon`` (its smc-canon entry's; both 
 own datasets, which the held-out rule bars), ``auto`` (the automatic choice from the
 ``N`` examples, :func:`sb3_smc.fewshot.choose_smcs`, over the whole pretrained library, held out). Each cell is
 :func:`sb3_smc.fewshot.learn_concept` with the paper's protocol (best training update, every test world 10 times, seed
-0), its records written to ``<out>/records/<target>/<method>-n<N>@<seed>.json`` as it finishes (a stopped run resumes
-where it stopped), and ``<out>/results.csv`` holds one row a cell: ``target, kind, category, method, train_worlds,
-seed, test_score, offered, primitive_steps``.
+0; the seeds of one target, method and ``N`` trained together by :func:`sb3_smc.fewshot.learn_concepts`, each the SMC
+``learn_concept`` gives), its records written to ``<out>/records/<target>/<method>-n<N>@<seed>.json`` as it finishes
+(a stopped run resumes where it stopped), and ``<out>/results.csv`` holds one row a cell: ``target, kind, category,
+method, train_worlds, seed, test_score, offered, primitive_steps``.
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ from __future__ import annotations
 import json
 import time
 from collections.abc import Callable, Sequence
+from itertools import groupby
 from pathlib import Path
 from typing import Any
 
@@ -83,7 +85,7 @@ def run_few_shot(out: str | Path, *, targets: Sequence[str] = FEW_SHOT_TARGETS,
     (``total_timesteps`` ...)."""
     from pixelworld_env.datasets import catalog
     from sb3_smc.experiments.cnn import train_cnn
-    from sb3_smc.fewshot import held_out, learn_concept
+    from sb3_smc.fewshot import held_out, learn_concepts
     from sb3_smc.library import SMCLibrary
     from sb3_smc.library.pretrained import pretrained_root
 
@@ -96,33 +98,40 @@ def run_few_shot(out: str | Path, *, targets: Sequence[str] = FEW_SHOT_TARGETS,
              if m != "cnn" or catalog.dataset(t).kind == "classification"]
     todo = [c for c in cells if not _cell(out, *c).is_file()]
     printer(f"{out}: {len(cells)} cells, {len(cells) - len(todo)} recorded, {len(todo)} to run")
-    started = time.monotonic()
-    for done, (target, method, n, seed) in enumerate(todo, 1):
+    started, done = time.monotonic(), 0
+    for (target, method, n), group in groupby(todo, key=lambda cell: cell[:3]):
+        seeds_left = [seed for *_, seed in group]
         if method == "cnn":
-            cnn = train_cnn(target, seed, train_worlds=n)
-            atomic_write(_cell(out, target, method, n, seed), json.dumps(
-                {"target": target, "method": method, "train_worlds": n, "seed": seed, "cnn": cnn.to_dict()},
-                indent=1) + "\n")
-            _progress(printer, done, len(todo), started, f"{target} cnn N={n or 'all'} seed {seed}", cnn.test_score)
+            for seed in seeds_left:
+                cnn = train_cnn(target, seed, train_worlds=n)
+                atomic_write(_cell(out, target, method, n, seed), json.dumps(
+                    {"target": target, "method": method, "train_worlds": n, "seed": seed, "cnn": cnn.to_dict()},
+                    indent=1) + "\n")
+                done += 1
+                _progress(printer, done, len(todo), started, f"{target} cnn N={n or 'all'} seed {seed}",
+                          cnn.test_score)
             continue
         offer: str | list[str] = {"base": "none", "auto": "auto"}.get(method) or children_of(target, method) or []
         if method in ("curr", "canon"):
             allowed = set(held_out(library, (target,)))
             offer = [name for name in offer if name in allowed]  # held out: none trained on the target's worlds
             if not offer:
+                done += len(seeds_left)
                 continue  # the pretrained library has no such entry for this target
-        learned = learn_concept(f"PW-{target}-v0", library=library, offer=offer, train_worlds=n, seed=seed,
-                                name=f"{target}-{method}-n{n or 'all'}@{seed}", lean_update=lean_update, **settings)
-        smc = learned.smc
-        assert smc.record is not None and smc.spec is not None
-        record = {"target": target, "method": method, "train_worlds": n, "seed": seed,
-                  "offered": list(learned.offered), "spec": smc.spec.to_dict(), "record": smc.record.to_dict(),
-                  "evaluations": [e.to_dict() for e in smc.evaluations],
-                  "choice": learned.choice.scores if learned.choice is not None else None}
-        atomic_write(_cell(out, target, method, n, seed), json.dumps(record, indent=1) + "\n")
-        score = smc.test_score
-        assert score is not None  # learn_concept tests what it learns
-        _progress(printer, done, len(todo), started, f"{target} {method} N={n or 'all'} seed {seed}", score)
+        learned = learn_concepts(f"PW-{target}-v0", seeds=seeds_left, library=library, offer=offer, train_worlds=n,
+                                 names=[f"{target}-{method}-n{n or 'all'}@{seed}" for seed in seeds_left],
+                                 lean_update=lean_update, **settings)
+        for seed, one in zip(seeds_left, learned, strict=True):
+            smc = one.smc
+            score = smc.test_score
+            assert smc.record is not None and smc.spec is not None and score is not None  # trained and tested
+            record = {"target": target, "method": method, "train_worlds": n, "seed": seed,
+                      "offered": list(one.offered), "spec": smc.spec.to_dict(), "record": smc.record.to_dict(),
+                      "evaluations": [e.to_dict() for e in smc.evaluations],
+                      "choice": one.choice.scores if one.choice is not None else None}
+            atomic_write(_cell(out, target, method, n, seed), json.dumps(record, indent=1) + "\n")
+            done += 1
+            _progress(printer, done, len(todo), started, f"{target} {method} N={n or 'all'} seed {seed}", score)
     path = out / "results.csv"
     atomic_write(path, _csv(results_rows(out)))
     return path

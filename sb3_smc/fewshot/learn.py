@@ -14,7 +14,7 @@ from sb3_smc.library import SMCLibrary
 from sb3_smc.library.pretrained import pretrained_names, pretrained_root
 from sb3_smc.smc.smc import SMC
 
-__all__ = ["OFFERS", "Learned", "learn_concept", "offered_smcs"]
+__all__ = ["OFFERS", "Learned", "learn_concept", "learn_concepts", "offered_smcs"]
 
 OFFERS = ("auto", "all", "none")
 """The ways of offering SMCs besides a curriculum's name or a list of names: the automatic choice from the examples,
@@ -94,31 +94,56 @@ def learn_concept(task: str, *, library: Libraries = "pretrained", offer: str | 
     :param settings: the other settings of :func:`~sb3_smc.train_smc` (``total_timesteps``, ``algo``, ...).
     :return: :class:`Learned`: the SMC, what was offered, the choice.
     """
+    [learned] = learn_concepts(task, seeds=[seed], library=library, offer=offer, train_worlds=train_worlds, k=k,
+                               names=None if name is None else [name], repeats=repeats, lean_update=lean_update,
+                               log_every=log_every, **settings)
+    if add_to is not None:
+        target = add_to if isinstance(add_to, SMCLibrary) else (
+            SMCLibrary.load(add_to) if (Path(add_to) / "manifest.json").is_file() else SMCLibrary(path=add_to))
+        learned = Learned(target.add(learned.smc), learned.offered, learned.choice)
+        if not isinstance(add_to, SMCLibrary):
+            target.save()
+    return learned
+
+
+def learn_concepts(task: str, *, seeds: Sequence[int], library: Libraries = "pretrained",
+                   offer: str | Sequence[str] = "auto", train_worlds: int | None = None, k: int = DEFAULT_OFFERED,
+                   names: Sequence[str] | None = None, repeats: int = 10, lean_update: bool = False,
+                   log_every: int | None = 0, **settings: Any) -> list[Learned]:
+    """:func:`learn_concept` for each of ``seeds`` (``names``: the SMCs' names, one per seed), the SMCs trained
+    together (:func:`~sb3_smc.learning.batched.train_smcs`: the seeds offered the same SMCs in one group), each the
+    SMC ``learn_concept`` gives for its seed; then each tested on every held-out world."""
+    from sb3_smc.learning.batched import train_smcs
     from sb3_smc.learning.evaluation import evaluate
-    from sb3_smc.learning.training import train_smc
+    from sb3_smc.learning.training import smc_spec
     from sb3_smc.records import TaskSpec
     from sb3_smc.records.spec import smc_name_from_env_id
 
     if not isinstance(offer, str | Sequence):
         raise SMCTypeError(f"offer must be one of {OFFERS}, a curriculum's name or a list of names, got {offer!r}")
+    if names is not None and len(names) != len(seeds):
+        raise SMCError(f"learn_concepts: {len(names)} names for {len(seeds)} seeds")
     task_spec = TaskSpec(task, env_kwargs={"train_worlds": train_worlds} if train_worlds else {}).resolved()
     if task_spec.kind is None:
         raise SMCError(f"{task}: not a task sb3_smc knows the kind of (a PW-* id or register_worlds' id)")
     datasets = task_spec.datasets or (task,)
     merged = _library(library)
-    names = offered_smcs(merged, offer, datasets)
-    choice = None
-    if offer == "auto" and names:
-        choice = choose_smcs(task, [merged[n] for n in names], train_worlds=train_worlds, k=k, seed=seed)
-        names = list(choice.chosen)
+    allowed = offered_smcs(merged, offer, datasets)
     stem = smc_name_from_env_id(task) + (f"-n{train_worlds}" if train_worlds else "")
-    smc = train_smc(task, children=[merged[n] for n in names], name=name or f"{stem}@{seed}", seed=seed,
-                    train_worlds=train_worlds, lean_update=lean_update, log_every=log_every, **settings)
-    evaluate(smc, repeats=repeats, seed=0, record_cells=False)
-    if add_to is not None:
-        target = add_to if isinstance(add_to, SMCLibrary) else (
-            SMCLibrary.load(add_to) if (Path(add_to) / "manifest.json").is_file() else SMCLibrary(path=add_to))
-        smc = target.add(smc)
-        if not isinstance(add_to, SMCLibrary):
-            target.save()
-    return Learned(smc, tuple(names), choice)
+    offers: list[tuple[tuple[str, ...], Choice | None]] = []
+    specs = []
+    for i, seed in enumerate(seeds):
+        choice = None
+        chosen = allowed
+        if offer == "auto" and allowed:
+            choice = choose_smcs(task, [merged[n] for n in allowed], train_worlds=train_worlds, k=k, seed=seed)
+            chosen = list(choice.chosen)
+        offers.append((tuple(chosen), choice))
+        spec, _ = smc_spec(task, children=[merged[n] for n in chosen], seed=seed, train_worlds=train_worlds,
+                           name=names[i] if names is not None else f"{stem}@{seed}", **settings)
+        specs.append(spec)
+    children = {n: merged[n] for chosen, _ in offers for n in chosen}
+    smcs = train_smcs(specs, children=children, lean_update=lean_update, log_every=log_every)
+    for smc in smcs:
+        evaluate(smc, repeats=repeats, seed=0, record_cells=False)
+    return [Learned(smc, chosen, choice) for smc, (chosen, choice) in zip(smcs, offers, strict=True)]

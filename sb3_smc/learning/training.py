@@ -65,7 +65,7 @@ from sb3_smc.smc.smc import SMC, StepPolicy
 from sb3_smc.tasks.resolved_task import ResolvedTask, resolve_task
 from sb3_smc.tasks.task import MAX_RETURN
 
-__all__ = ["check_model_settings", "make_vec_env", "resolve_children", "train_smc", "untrained_smc"]
+__all__ = ["check_model_settings", "make_vec_env", "resolve_children", "smc_spec", "train_smc", "untrained_smc"]
 
 
 Children = Sequence[SMC] | tuple[Mapping[str, SMC], Sequence[str]] | Mapping[str, SMC] | None
@@ -294,6 +294,19 @@ def untrained_smc(task: str | TrainingSpec, *, children: Children = None, **sett
     spec, kids, resolved = _spec_and_children(task, children, {**_KEYWORD_DEFAULTS, **known}, settings)
     return _train(spec, kids, resolved, tensorboard_log=None, log_every=0, callback=None, printer=print,
                   stop_at_max_return=False)
+
+
+def smc_spec(task: str | TrainingSpec, *, children: Children = None, **settings: Any) -> tuple[TrainingSpec,
+                                                                                             tuple[SMC, ...]]:
+    """The spec :func:`train_smc` would train for these arguments (its task resolved) and the child SMCs it names:
+    for :func:`~sb3_smc.learning.batched.train_smcs`, which trains many such specs together, each as ``train_smc``
+    would. ``settings``: ``train_smc``'s spec settings and hyperparameters (not its run options)."""
+    runs = sorted(set(settings) & set(_RUN_OPTIONS))
+    if runs:
+        raise SMCTypeError(f"smc_spec takes the spec's settings, not the run options {runs}")
+    known = {key: settings.pop(key) for key in list(settings) if key in _KEYWORD_DEFAULTS}
+    spec, kids, _ = _spec_and_children(task, children, {**_KEYWORD_DEFAULTS, **known}, settings)
+    return spec, kids
 
 
 def _spec_and_children(task: str | TrainingSpec, children: Children, settings: dict[str, Any],
