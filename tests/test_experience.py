@@ -82,10 +82,16 @@ def test_the_section_reads_the_flat_curve_at_the_curriculum_experience(tmp_path:
     assert "curr: ahead on 1 of 1 targets, mean lead +20.0 points [" in lines[-2]
     beyond = Experience(5, experience.uses, {**experience.steps, CURR: {s: 20_000_000 for s in range(5)}})
     (row,) = [line for line in experience_section(ResultTable(rows, reported), beyond) if line.startswith("| ba")]
-    assert row.endswith("| 50.0 (its most: less experience) | -10.0 |")
+    assert row.endswith("| 50.0 (its best point: less experience) | -10.0 |")
     assert "curr: ahead on 0 of 1 targets (on 1 the flat SMC's curve ends below its experience), mean lead -10.0" in \
         experience_section(ResultTable(rows, reported), beyond)[-2]
     assert experience_section(ResultTable(rows, reported), None) == []
+    # the curve falls at its last point (30 -> 25 %): beyond it, the flat SMC is read at its best point, 30 %
+    fell = [{**r, "test_score": r["test_score"] - 0.25} if r["method"] == "base-x16" else r for r in rows]
+    (row,) = [line for line in experience_section(ResultTable(fell, [r for r in fell if r["seed"] == 0]), beyond)
+              if line.startswith("| ba")]
+    assert "10.0 @ 2.0M / 30.0 @ 8.0M / 25.0 @ 32.0M" in row
+    assert row.endswith("| 30.0 (its best point: less experience) | +10.0 |")
 
 
 def test_the_claims_table_judges_curr_against_the_flat_smc_at_its_experience(tmp_path: Path) -> None:

@@ -169,14 +169,17 @@ def _moves(count: float) -> str:
     return f"{count / 1e6:.1f}M" if count >= 100_000 else f"{count / 1e3:.1f}k"
 
 
-def _weights(curve: Sequence[tuple[float, str]], spent: float) -> tuple[tuple[tuple[str, float], ...], str]:
+def _weights(curve: Sequence[tuple[float, str]], spent: float,
+             score: Mapping[str, float]) -> tuple[tuple[tuple[str, float], ...], str]:
     """The flat SMC's score at the experience ``spent`` as weights on its curve's points ((experience, method),
-    sorted by experience), and where it lies: inside the measured range (interpolated in log experience), or at its
-    nearest end (``below``, ``beyond``)."""
+    sorted by experience), and where it lies: inside the measured range (interpolated in log experience), below it
+    (its first point), or beyond it (its best point, by ``score``: a flat SMC whose curve fell at its last point, or
+    that converged, is read at the most it reached, never less)."""
     if spent <= curve[0][0]:
         return ((curve[0][1], 1.0),), "below"
     if spent >= curve[-1][0]:
-        return ((curve[-1][1], 1.0),), "beyond"
+        best = max(range(len(curve)), key=lambda i: (score[curve[i][1]], i))  # ties: the later point
+        return ((curve[best][1], 1.0),), "beyond"
     for (e0, m0), (e1, m1) in itertools.pairwise(curve):
         if e0 <= spent <= e1:
             share = (math.log(spent) - math.log(e0)) / (math.log(e1) - math.log(e0)) if e1 > e0 else 0.0
@@ -199,7 +202,8 @@ class AtExperience:
     """(experience, flat method) for each point of the curve, by experience."""
     weights: tuple[tuple[str, float], ...]
     where: str
-    """``inside`` the curve's range, ``below`` it or ``beyond`` it (the flat SMC's score at the nearest end)."""
+    """``inside`` the curve's range, ``below`` it (the flat SMC's score at its first point) or ``beyond`` it (at its
+    best point)."""
 
 
 def at_experience(table: ScoreTable, experience: Experience | None) -> dict[tuple[str, str], AtExperience]:
@@ -212,14 +216,15 @@ def at_experience(table: ScoreTable, experience: Experience | None) -> dict[tupl
     for target in table.targets:
         points = [(experience.total([METHOD_REGISTRY[m].flat_node(target).name]), m) for m in flats
                   if (target, m) in table.score]
-        curve = tuple(sorted((e, m) for e, m in points if e))
+        curve = tuple(sorted(((e, m) for e, m in points if e), key=lambda p: (p[0], flats.index(p[1]))))
         if len(curve) < 2:
             continue
         for method in table.hierarchical:
             spent = experience.total(table.candidate_nodes(target, method)) \
                 if (target, method) in table.score else None
             if spent is not None:
-                found[(target, method)] = AtExperience(spent, curve, *_weights(curve, spent))
+                found[(target, method)] = AtExperience(spent, curve, *_weights(
+                    curve, spent, {m: table.score[(target, m)] for _, m in curve}))
     return found
 
 
@@ -243,7 +248,7 @@ def experience_section(table: ScoreTable, experience: Experience | None) -> list
     rows: list[str] = []
     for (target, method), at in found.items():
         ours, flat = table.score[(target, method)], replicates.estimate[(target, flat_at(method))]
-        mark = {"inside": "", "below": " (its least)", "beyond": " (its most: less experience)"}[at.where]
+        mark = {"inside": "", "below": " (its least)", "beyond": " (its best point: less experience)"}[at.where]
         rows.append(f"| {target} | {table.kind_of[target]} | "
                     + " / ".join(f"{100 * table.score[(target, m)]:.1f} @ {_moves(e)}" for e, m in at.curve)
                     + f" | {method} | {100 * ours:.1f} @ {_moves(at.spent)} ({at.spent / at.curve[0][0]:.0f} x) | "
