@@ -80,3 +80,8 @@ def test_the_report_is_written_from_results_csv(tmp_path):
     assert "| cnn |" not in bring_about and "| cnn | 70.0 (1) | - |" in classification.split("\n## ")[0]
     assert "| bring-about | auto | 2 | 2 | 4 | 4 |" in report  # a: 0.9 >= 0.5 at N = 4; b: 0.7 >= 0.6 too
     assert "3,000 primitive steps in all" in report and (tmp_path / "few_shot.png").stat().st_size > 1000
+    assert "a hollow point stands on fewer concepts than the method's other points" in report
+    from sb3_smc.experiments.few_shot import FEW_SHOT_METHODS
+    from sb3_smc.experiments.few_shot_report import COLOURS
+
+    assert set(COLOURS) == set(FEW_SHOT_METHODS)  # one colour per method in every panel

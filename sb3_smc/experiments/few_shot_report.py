@@ -20,6 +20,8 @@ from sb3_smc.experiments.statistics import hierarchical_interval, paired_ttest, 
 __all__ = ["Comparison", "Fewest", "compare", "fewest_worlds", "read_results", "write_report"]
 
 LIBRARY_METHODS = ("curr", "canon", "auto")
+COLOURS = {"cnn": "tab:gray", "base": "tab:blue", "curr": "tab:orange", "canon": "tab:green", "auto": "tab:red"}
+"""One colour per method, the same in every panel."""
 
 
 def read_results(path: str | Path) -> list[dict[str, object]]:
@@ -188,7 +190,9 @@ def write_report(out: str | Path, library_steps: Mapping[str, int] | None = None
                  for w in worlds]
         lines.append(f"| {method} | " + " | ".join(cells) + " |")
     _figure(rows, methods, worlds, kinds, out / "few_shot.png")
-    lines += ["", "![score against the number of training worlds](few_shot.png)", ""]
+    lines += ["", "![score against the number of training worlds](few_shot.png)", "",
+              "Score against N per kind, the mean over concepts; a hollow point stands on fewer concepts than the "
+              "method's other points (still being run).", ""]
     return atomic_write(out / "report.md", "\n".join(lines) + "\n")
 
 
@@ -210,14 +214,18 @@ def _figure(rows: Sequence[Mapping[str, object]], methods: Sequence[str], worlds
     figure, axes = plt.subplots(1, len(kinds), figsize=(5 * len(kinds), 3.6), squeeze=False)
     for ax, kind in zip(axes[0], kinds, strict=True):
         for method in methods:
-            xs, ys = [], []
+            points = []
             for k, w in enumerate(worlds):
                 concepts = _by_concept([r for r in rows if r["kind"] == kind], method, w)
                 if concepts:
-                    xs.append(k)
-                    ys.append(100 * np.mean([np.mean(v) for v in concepts.values()]))
-            if xs:
-                ax.plot(xs, ys, marker="o", label=method)
+                    points.append((k, 100 * np.mean([np.mean(v) for v in concepts.values()]), len(concepts)))
+            if not points:
+                continue
+            most = max(n for *_, n in points)
+            colour = COLOURS.get(method, "black")
+            ax.plot([x for x, *_ in points], [y for _, y, _ in points], color=colour, label=method)
+            for x, y, n in points:  # hollow: fewer concepts than the method's other points (still being run)
+                ax.plot(x, y, "o", color=colour, markerfacecolor=colour if n == most else "white")
         ax.set_xticks(range(len(worlds)), [str(w) for w in worlds])
         ax.set_xlabel("training worlds N")
         ax.set_ylabel("test score (%)")
