@@ -125,4 +125,3 @@ def test_the_library_table_keeps_long_cells_short() -> None:
     assert _children_cell([]) == "-" and len(many[0]) > CHILDREN_WIDTH and _children_cell(many[:1]) == "1 SMC"
     assert _task_cell("cl_x@3", "PW-cl_x-v0") == "=" and _task_cell("mine", "PW-cl_x-v0") == "cl_x"
     assert _task_cell("walker@0", "MiniGrid-Empty-5x5-v0") == "MiniGrid-Empty-5x5-v0" and _task_cell("a", None) == "-"
-

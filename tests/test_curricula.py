@@ -1018,3 +1018,32 @@ def test_the_probe_picks_the_worst_seeds_as_the_original_release_does():
     assert probe_node.chosen_seeds(records, "worst") == [2, 0]  # never-selected first, then the lowest return
     tied = {s: _record(1.0) for s in range(5)}
     assert probe_node.chosen_seeds(tied, "worst") == probe_node.chosen_seeds(tied, "best") == [0, 1]
+
+
+def test_progress_on_a_terminal_is_a_tqdm_bar_over_the_budget_steps(monkeypatch):
+    """On a terminal the run's progress is a tqdm bar over its budget steps, described by the jobs done and running;
+    a note is written above it; elsewhere, one line per round of finished jobs."""
+    import io
+
+    from sb3_smc.curricula.trainer import _Progress
+
+    class Terminal(io.StringIO):
+        def isatty(self) -> bool:
+            return True
+
+    screen = Terminal()
+    monkeypatch.setattr(sys, "stdout", screen)
+    bar = _Progress(2, 0, 800, 0, print)
+    bar.show(2)
+    bar.finished(400)
+    bar.show(1)
+    bar.note("job x failed: why")
+    bar.close()
+    text = screen.getvalue()
+    assert "jobs 1/2, running 1: " in text and "400/800" in text and "job x failed: why\n" in text
+    lines: list[str] = []
+    plain = _Progress(2, 0, 800, 0, lines.append)
+    plain.show(2)
+    plain.finished(400)
+    plain.show(1)
+    assert len(lines) == 1 and lines[0].startswith("jobs 1/2, running 1, ")
