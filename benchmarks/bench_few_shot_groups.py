@@ -1,5 +1,6 @@
 """The few-shot table's cells with their seeds trained together (``learn_concepts``, as ``tools/few_shot_table.py``
-trains them) beside the same seeds one by one (``learn_concept`` per seed), in one run: wall seconds for the five
+trains them) beside the same seeds one by one (``learn_concept`` per seed), in one run, which goes first
+alternating cell by cell: wall seconds for the five
 seeds of a target, method and ``N`` (the choice, training and the test together), and whether both give the same
 test scores (they must: each grouped SMC is the one ``learn_concept`` gives).
 
@@ -11,14 +12,22 @@ from __future__ import annotations
 
 import argparse
 import time
+from typing import Any
 
 from sb3_smc.common.threads import compute_threads
-from sb3_smc.experiments.few_shot import children_of
-from sb3_smc.fewshot import held_out, learn_concept, learn_concepts
+from sb3_smc.experiments.few_shot import offer_for
+from sb3_smc.fewshot import learn_concept, learn_concepts
 from sb3_smc.library import SMCLibrary
 from sb3_smc.library.pretrained import pretrained_root
 
 TARGETS = ("cl_self-in-container_vs_noncontainer", "ba_self-in-container_from_on-floor")
+
+
+def _scores(task: str, seeds: list[int], settings: dict[str, Any], *, together: bool) -> list[float | None]:
+    """The test scores of ``seeds``, learned together (``learn_concepts``) or one by one (``learn_concept``)."""
+    if together:
+        return [one.smc.test_score for one in learn_concepts(task, seeds=seeds, **settings)]
+    return [learn_concept(task, seed=seed, **settings).smc.test_score for seed in seeds]
 
 
 def main() -> None:
@@ -32,20 +41,23 @@ def main() -> None:
     seeds = list(range(args.seeds))
     print("| target | method | N | seeds | one by one (s) | together (s) | ratio | same scores |\n"
           "|---|---|---:|---:|---:|---:|---:|---|")
+    cell = 0
     with compute_threads(1):
         learn_concept(f"PW-{TARGETS[0]}-v0", library=library, offer="none", train_worlds=2,
                       total_timesteps=2000)  # compiles the kernels once, outside the timings
         for target in args.targets.split(","):
             for method in args.methods.split(","):
-                offer: str | list[str] = {"base": "none", "auto": "auto"}.get(method) or [
-                    n for n in children_of(target, method) or [] if n in set(held_out(library, (target,)))]
+                offer = offer_for(target, method, library)
+                if offer is None:
+                    continue  # the pretrained library has no such entry for this target
                 settings = {"library": library, "offer": offer, "train_worlds": args.worlds, "lean_update": True}
-                start = time.perf_counter()
-                alone = [learn_concept(f"PW-{target}-v0", seed=s, **settings).smc.test_score for s in seeds]
-                apart = time.perf_counter() - start
-                start = time.perf_counter()
-                grouped = [one.smc.test_score for one in learn_concepts(f"PW-{target}-v0", seeds=seeds, **settings)]
-                together = time.perf_counter() - start
+                cell += 1
+                timed = {}
+                for way in ("apart", "together") if cell % 2 else ("together", "apart"):  # alternating first
+                    start = time.perf_counter()
+                    scores = _scores(f"PW-{target}-v0", seeds, settings, together=way == "together")
+                    timed[way] = (scores, time.perf_counter() - start)
+                (alone, apart), (grouped, together) = timed["apart"], timed["together"]
                 print(f"| {target} | {method} | {args.worlds} | {len(seeds)} | {apart:.0f} | {together:.0f} | "
                       f"{apart / together:.2f} | {'yes' if alone == grouped else 'NO'} |", flush=True)
 

@@ -423,7 +423,7 @@ def main(argv: Sequence[str] | None = None) -> int:
               "same command again to resume", file=sys.stderr)
         return 143 if isinstance(stop, _Terminated) else 130
     finally:
-        if main_thread:
+        if main_thread and previous is not None:  # None: a handler set outside Python, left as it is
             signal.signal(signal.SIGTERM, previous)
 
 

@@ -1037,10 +1037,11 @@ def test_progress_on_a_terminal_is_a_tqdm_bar_over_the_budget_steps(monkeypatch)
     bar.show(2)
     bar.finished(400)
     bar.show(1)
+    assert "jobs 0/2, running 2: " in screen.getvalue()  # drawn at once, before any job finished
     bar.note("job x failed: why")
-    bar.close()
     text = screen.getvalue()
     assert "jobs 1/2, running 1: " in text and "400/800" in text and "job x failed: why\n" in text
+    bar.close()
     lines: list[str] = []
     plain = _Progress(2, 0, 800, 0, lines.append)
     plain.show(2)

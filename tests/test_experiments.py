@@ -1128,6 +1128,16 @@ def test_the_readme_gets_the_answer_from_the_report(tmp_path):
         assert row[1] == "-" and row[3].startswith(f"{mean:.1f} [")
         assert row[3].endswith("] on 5 concepts (a subset: not judged)") and row[4] == "74.5"
     assert "curr-cap100:" not in text  # not the best of its reading
+    # a cell the report could not judge yet (partial) is no result: no row, no sentence, no headline number
+    unjudged = re.sub(r"(\| classification: curr above base \(paired t-test\) \| [^|]+ \| )[^|]+\|",
+                      r"\1not judged: partial |", report.read_text())
+    assert "not judged: partial" in unjudged
+    row = readme_table.answer_table(unjudged)[[r.split(" | ")[0] for r in readme_table.answer_table(unjudged)]
+                                              .index("| curr above base (a call is one step)")]
+    assert _row_cells(row, "|")[1] == "-" and "not judged" not in " ".join(readme_table.verdict(unjudged))
+    # a claims table without one of the statements the answer reads: refused, naming it
+    with pytest.raises(SystemExit, match="has no statement 'classification: mean of base'"):
+        readme_table.answer_rows(report.read_text().replace("| classification: mean of base |", "| renamed |"))
     results = json.loads((tmp_path / "run" / "results.json").read_text())
     (tmp_path / "run" / "results.json").write_text(json.dumps({**results, "complete": False,
                                                                      "missing": [f"{everything[0]}@2"]}))  # base

@@ -7,7 +7,7 @@ import dataclasses
 
 import pytest
 
-from sb3_smc.errors import SMCError
+from sb3_smc.errors import SMCError, SMCTypeError
 from sb3_smc.fewshot import choose_smcs, held_out, learn_concept, offered_smcs
 from sb3_smc.library import SMCLibrary
 from tests.helpers import sb3_smc_cli
@@ -139,3 +139,28 @@ def test_learn_concepts_trains_seeds_together_each_as_train_smc_does(pretrained)
     assert together[0].smc.record.training_returns != together[1].smc.record.training_returns  # two seeds
     with pytest.raises(SMCError, match="1 names for 2 seeds"):
         learn_concepts(CL, seeds=[0, 1], library=pretrained, offer="none", names=["x"])
+    with pytest.raises(SMCTypeError, match="learn_concept takes no callback"):
+        learn_concept(CL, library=pretrained, offer="none", callback=object())
+
+
+def test_learn_concepts_gives_train_smcs_both_seeds_in_one_group(pretrained, monkeypatch, tmp_path):
+    """The seeds reach ``train_smcs`` in one call, as one group (batchable, the same group key), with the run
+    options ``learn_concept`` takes (TensorBoard curves, the printer)."""
+    from sb3_smc.fewshot import learn_concepts
+    from sb3_smc.learning import batched
+
+    calls = []
+    real = batched.train_smcs
+
+    def spy(specs, **options):
+        calls.append((list(specs), options))
+        return real(specs, **options)
+
+    monkeypatch.setattr(batched, "train_smcs", spy)
+    lines: list[str] = []
+    learn_concepts(CL, seeds=[0, 1], library=pretrained, offer="none", train_worlds=2, total_timesteps=2000,
+                   tensorboard_log=str(tmp_path / "tb"), printer=lines.append, log_every=1)
+    [(specs, options)] = calls
+    assert [s.seed for s in specs] == [0, 1] and all(batched.batchable(s) for s in specs)
+    assert batched._env_key(specs[0]) == batched._env_key(specs[1])  # one group
+    assert options["tensorboard_log"] == str(tmp_path / "tb") and any(tmp_path.joinpath("tb").iterdir()) and lines

@@ -22,7 +22,7 @@ import re
 import sys
 from pathlib import Path
 
-from sb3_smc.experiments.claims import READINGS
+from sb3_smc.experiments.claims import READINGS, VERDICTS
 from sb3_smc.experiments.design import DEFAULT_METHODS
 from sb3_smc.experiments.tables import CHECKS_HEADING, CLAIMS_COUNT, CLAIMS_HEADING, MEANS_HEADING, SWEEP_HEADING
 
@@ -137,9 +137,10 @@ def claims_line(report: str, source: str) -> str:
 
 def split_verdict(cell: str) -> tuple[str, str]:
     """A claims cell as (ours, verdict): ``"89.8 [88.4, 91.0]: exceeded"`` -> ``("89.8 [88.4, 91.0]", "exceeded")``;
-    a cell without a verdict (``not run``, ``same as one step``, empty) -> ``("", cell)``."""
+    a cell without one of the claims' verdicts (``not run``, ``not judged: partial``, ``same as one step``, empty)
+    -> ``("", cell)``."""
     ours, _, verdict = cell.rpartition(": ")
-    return (ours, verdict) if ours else ("", cell)
+    return (ours, verdict) if ours and verdict in VERDICTS else ("", cell)
 
 
 def best_settings(report: str) -> list[str]:
@@ -155,6 +156,11 @@ def answer_rows(report: str) -> list[tuple[str, dict[str, tuple[str, str, str]]]
     result for is left out."""
     claims = table_of(report, CLAIMS_HEADING)
     checks = table_of(report, CHECKS_HEADING)
+    missing = [f"{kind}: {statement}" for _, statement, _ in ANSWER_ROWS for kind in KINDS
+               if claims and f"{kind}: {statement}" not in claims]
+    if missing:
+        raise SystemExit(f"the report's claims table has no statement {missing[0]!r}: the answer table reads it "
+                         "(make the report again with tools/paper_table.sh report, or update ANSWER_ROWS)")
     rows: list[tuple[str, dict[str, tuple[str, str, str]]]] = []
     for label, statement, column in ANSWER_ROWS:
         found = {}
@@ -194,7 +200,7 @@ def answer_table(report: str) -> list[str]:
     return lines
 
 
-_PHRASES = {"exceeded": "above the paper's", "reproduced": "as the paper's", "short": "below the paper's",
+_PHRASES = {"exceeded": "above the paper's", "reproduced": "as the paper's", "short": "short of the paper's claim",
             "opposite": "the opposite sign to the paper's", "not significant": "not significant"}
 
 
@@ -241,7 +247,9 @@ def verdict(report: str) -> list[str]:
     if equal:
         sentences.append("At equal experience it is " + "; ".join(f"{_both(found)} with {what}"
                                                                   for what, found in equal)
-                         + (", measured on the sweep's targets only" if "swept" in str(equal) else "") + ".")
+                         + (", measured on the sweep's targets only"
+                            if any("swept" in ours for _, found in equal for ours, _, _ in found.values()) else "")
+                         + ".")
     return [" ".join(sentences)] if sentences else []
 
 

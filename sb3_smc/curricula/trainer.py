@@ -527,6 +527,7 @@ class _Progress:
         if self.bar is not None:
             self.bar.set_description(self._jobs(), refresh=False)
             self.bar.update(self.steps_done - self.bar.n)
+            self.bar.refresh()  # also when only the jobs running changed (update draws at most every 0.1 s)
         elif self.printer is not None and self.done > self.shown:
             self.shown = self.done
             self.printer(self.line())

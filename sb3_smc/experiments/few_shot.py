@@ -10,16 +10,17 @@ own datasets, which the held-out rule bars), ``auto`` (the automatic choice from
 ``N`` examples, :func:`sb3_smc.fewshot.choose_smcs`, over the whole pretrained library, held out). Each cell is
 :func:`sb3_smc.fewshot.learn_concept` with the paper's protocol (best training update, every test world 10 times, seed
 0; the seeds of one target, method and ``N`` trained together by :func:`sb3_smc.fewshot.learn_concepts`, each the SMC
-``learn_concept`` gives), its records written to ``<out>/records/<target>/<method>-n<N>@<seed>.json`` as it finishes
-(a stopped run resumes where it stopped), and ``<out>/results.csv`` holds one row a cell: ``target, kind, category,
-method, train_worlds, seed, test_score, offered, primitive_steps``.
+``learn_concept`` gives), its records written to ``<out>/records/<target>/<method>-n<N>@<seed>.json`` as its
+group finishes (a stopped run resumes where it stopped, losing at most the group it was training), and
+``<out>/results.csv`` holds one row a cell: ``target, kind, category, method, train_worlds, seed, test_score,
+offered, primitive_steps``.
 """
 
 from __future__ import annotations
 
 import json
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from itertools import groupby
 from pathlib import Path
 from typing import Any
@@ -29,7 +30,8 @@ from sb3_smc.curricula import shipped_curricula
 from sb3_smc.errors import SMCError
 from sb3_smc.experiments.tabular import csv_text
 
-__all__ = ["FEW_SHOT_METHODS", "FEW_SHOT_TARGETS", "FEW_SHOT_WORLDS", "children_of", "results_rows", "run_few_shot"]
+__all__ = ["FEW_SHOT_METHODS", "FEW_SHOT_TARGETS", "FEW_SHOT_WORLDS", "children_of", "offer_for", "results_rows",
+           "run_few_shot"]
 
 FEW_SHOT_TARGETS = (
     # containment: 5 bring-about, 5 classification (the first: a headline target)
@@ -72,6 +74,19 @@ def children_of(target: str, method: str) -> list[str] | None:
     return None
 
 
+def offer_for(target: str, method: str, library: Mapping[str, Any]) -> str | list[str] | None:
+    """What a cell of ``method`` offers ``target`` (``learn_concept``'s ``offer``): ``"none"`` (base), ``"auto"``,
+    or curr's / canon's pretrained SMCs less those the held-out rule bars; ``None`` where the pretrained library has
+    no such entry for the target (the cell is not run)."""
+    from sb3_smc.fewshot import held_out
+
+    if method in ("base", "auto"):
+        return {"base": "none", "auto": "auto"}[method]
+    allowed = set(held_out(library, (target,)))
+    offer = [name for name in children_of(target, method) or [] if name in allowed]  # none trained on its worlds
+    return offer or None
+
+
 def _cell(out: Path, target: str, method: str, worlds: int | None, seed: int) -> Path:
     return out / "records" / target / f"{method}-n{worlds or 'all'}@{seed}.json"
 
@@ -85,7 +100,7 @@ def run_few_shot(out: str | Path, *, targets: Sequence[str] = FEW_SHOT_TARGETS,
     (``total_timesteps`` ...)."""
     from pixelworld_env.datasets import catalog
     from sb3_smc.experiments.cnn import train_cnn
-    from sb3_smc.fewshot import held_out, learn_concepts
+    from sb3_smc.fewshot import learn_concepts
     from sb3_smc.library import SMCLibrary
     from sb3_smc.library.pretrained import pretrained_root
 
@@ -111,13 +126,10 @@ def run_few_shot(out: str | Path, *, targets: Sequence[str] = FEW_SHOT_TARGETS,
                 _progress(printer, done, len(todo), started, f"{target} cnn N={n or 'all'} seed {seed}",
                           cnn.test_score)
             continue
-        offer: str | list[str] = {"base": "none", "auto": "auto"}.get(method) or children_of(target, method) or []
-        if method in ("curr", "canon"):
-            allowed = set(held_out(library, (target,)))
-            offer = [name for name in offer if name in allowed]  # held out: none trained on the target's worlds
-            if not offer:
-                done += len(seeds_left)
-                continue  # the pretrained library has no such entry for this target
+        offer = offer_for(target, method, library)
+        if offer is None:
+            done += len(seeds_left)
+            continue  # the pretrained library has no such entry for this target
         learned = learn_concepts(f"PW-{target}-v0", seeds=seeds_left, library=library, offer=offer, train_worlds=n,
                                  names=[f"{target}-{method}-n{n or 'all'}@{seed}" for seed in seeds_left],
                                  lean_update=lean_update, **settings)

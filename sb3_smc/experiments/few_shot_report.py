@@ -150,7 +150,8 @@ def write_report(out: str | Path, library_steps: Mapping[str, int] | None = None
               "on every training world of the same concept (25 bring-about, 50 classification); the concepts are "
               "those where both are measured. Pooled: the first N at which the method's mean over those concepts "
               "(the ones measured at that N) reaches the flat SMC's mean over the same concepts.", "",
-              "| kind | method | concepts | reached on | fewest N (median of those reached) | pooled: first N |",
+              "| kind | method | concepts | reached on | fewest N (median of those reached; of two, the lower) | "
+              "pooled: first N |",
               "|---|---|---:|---:|---|---|"]
     for kind in kinds:
         kind_rows = [r for r in rows if r["kind"] == kind]

@@ -4,7 +4,7 @@ worlds and added to a library, so that the next concept can call it (docs/few_sh
 from __future__ import annotations
 
 import os
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -91,11 +91,12 @@ def learn_concept(task: str, *, library: Libraries = "pretrained", offer: str | 
     :param seed: the training seed (the choice's draws use it too).
     :param repeats: repeats of every test world (the paper's 10).
     :param add_to: a library (object or folder, created if missing) the SMC is added to, its children with it.
-    :param settings: the other settings of :func:`~sb3_smc.train_smc` (``total_timesteps``, ``algo``, ...).
+    :param settings: the other settings of :func:`~sb3_smc.train_smc` (``total_timesteps``, ``algo``,
+        ``tensorboard_log``, ...; no ``callback``: :func:`learn_concepts`).
     :return: :class:`Learned`: the SMC, what was offered, the choice.
     """
     [learned] = learn_concepts(task, seeds=[seed], library=library, offer=offer, train_worlds=train_worlds, k=k,
-                               names=None if name is None else [name], repeats=repeats, lean_update=lean_update,
+                               names=[name] if name else None, repeats=repeats, lean_update=lean_update,
                                log_every=log_every, **settings)
     if add_to is not None:
         target = add_to if isinstance(add_to, SMCLibrary) else (
@@ -109,10 +110,14 @@ def learn_concept(task: str, *, library: Libraries = "pretrained", offer: str | 
 def learn_concepts(task: str, *, seeds: Sequence[int], library: Libraries = "pretrained",
                    offer: str | Sequence[str] = "auto", train_worlds: int | None = None, k: int = DEFAULT_OFFERED,
                    names: Sequence[str] | None = None, repeats: int = 10, lean_update: bool = False,
-                   log_every: int | None = 0, **settings: Any) -> list[Learned]:
+                   log_every: int | None = 0, tensorboard_log: str | None = None,
+                   printer: Callable[[str], None] = print, stop_at_max_return: bool = True,
+                   **settings: Any) -> list[Learned]:
     """:func:`learn_concept` for each of ``seeds`` (``names``: the SMCs' names, one per seed), the SMCs trained
     together (:func:`~sb3_smc.learning.batched.train_smcs`: the seeds offered the same SMCs in one group), each the
-    SMC ``learn_concept`` gives for its seed; then each tested on every held-out world."""
+    SMC ``learn_concept`` gives for its seed; then each tested on every held-out world. ``tensorboard_log``,
+    ``printer`` and ``stop_at_max_return`` are ``train_smc``'s; ``settings`` its spec settings (``total_timesteps``,
+    ``algo``, ...); a ``callback`` is refused (``train_smcs`` runs none)."""
     from sb3_smc.learning.batched import train_smcs
     from sb3_smc.learning.evaluation import evaluate
     from sb3_smc.learning.training import smc_spec
@@ -121,6 +126,9 @@ def learn_concepts(task: str, *, seeds: Sequence[int], library: Libraries = "pre
 
     if not isinstance(offer, str | Sequence):
         raise SMCTypeError(f"offer must be one of {OFFERS}, a curriculum's name or a list of names, got {offer!r}")
+    if "callback" in settings:
+        raise SMCTypeError("learn_concept takes no callback: it trains through train_smcs, which runs none "
+                           "(train_smc(..., callback=...) on the task with the same children does)")
     if names is not None and len(names) != len(seeds):
         raise SMCError(f"learn_concepts: {len(names)} names for {len(seeds)} seeds")
     task_spec = TaskSpec(task, env_kwargs={"train_worlds": train_worlds} if train_worlds else {}).resolved()
@@ -143,7 +151,8 @@ def learn_concepts(task: str, *, seeds: Sequence[int], library: Libraries = "pre
                            name=names[i] if names is not None else f"{stem}@{seed}", **settings)
         specs.append(spec)
     children = {n: merged[n] for chosen, _ in offers for n in chosen}
-    smcs = train_smcs(specs, children=children, lean_update=lean_update, log_every=log_every)
+    smcs = train_smcs(specs, children=children, lean_update=lean_update, log_every=log_every,
+                      tensorboard_log=tensorboard_log, printer=printer, stop_at_max_return=stop_at_max_return)
     for smc in smcs:
         evaluate(smc, repeats=repeats, seed=0, record_cells=False)
     return [Learned(smc, chosen, choice) for smc, (chosen, choice) in zip(smcs, offers, strict=True)]
