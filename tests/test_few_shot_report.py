@@ -85,3 +85,39 @@ def test_the_report_is_written_from_results_csv(tmp_path):
     from sb3_smc.experiments.few_shot_report import COLOURS
 
     assert set(COLOURS) == set(FEW_SHOT_METHODS)  # one colour per method in every panel
+
+
+def test_the_few_shot_script_checkpoints_a_runs_new_records(tmp_path):
+    """``tools/few_shot_table.sh checkpoint``: the run's records copied into docs/results/few_shot/records (the
+    committed ones left as they are), then results.csv and the report written by the repository's Python; without a
+    run it says so; an unknown command gets the usage."""
+    import os
+    import shutil
+    import subprocess
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    repo = tmp_path / "repo"
+    (repo / "tools").mkdir(parents=True)
+    shutil.copy(root / "tools" / "few_shot_table.sh", repo / "tools")
+    stub = repo / ".venv" / "bin" / "python"
+    stub.parent.mkdir(parents=True)
+    stub.write_text(f"#!/bin/sh\necho \"$@\" > {tmp_path}/called\n")
+    stub.chmod(0o755)
+    kept = repo / "docs" / "results" / "few_shot" / "records" / "a"
+    kept.mkdir(parents=True)
+    (kept / "base-n1@0.json").write_text("committed")
+    run = tmp_path / "src" / "runs" / "few-shot" / "records" / "a"
+    run.mkdir(parents=True)
+    (run / "base-n1@0.json").write_text("the run's copy")
+    (run / "base-n8@0.json").write_text("new")
+    script = [str(repo / "tools" / "few_shot_table.sh")]
+    env = {**os.environ, "FEW_SHOT_SRC": str(tmp_path / "src")}
+    subprocess.run([*script, "checkpoint"], check=True, env=env, capture_output=True)
+    assert (kept / "base-n1@0.json").read_text() == "committed" and (kept / "base-n8@0.json").read_text() == "new"
+    assert "write_report(out)" in (tmp_path / "called").read_text()
+    missing = subprocess.run([*script, "checkpoint"], env={**env, "FEW_SHOT_SRC": str(tmp_path / "none")},
+                             capture_output=True, text=True)
+    assert missing.returncode == 1 and f"no run at {tmp_path / 'none'}" in missing.stderr
+    wrong = subprocess.run([*script, "go"], env=env, capture_output=True, text=True)
+    assert wrong.returncode == 2 and "usage:" in wrong.stderr
