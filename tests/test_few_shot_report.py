@@ -78,7 +78,8 @@ def test_the_report_is_written_from_results_csv(tmp_path):
     assert "a count below the kind's (2 bring-about, 1 classification) marks a cell" in report
     bring_about, classification = report.split("### bring-about")[1].split("### classification")
     assert "| cnn |" not in bring_about and "| cnn | 70.0 (1) | - |" in classification.split("\n## ")[0]
-    assert "| bring-about | auto | 2 | 2 | 4 | 4 |" in report  # a: 0.9 >= 0.5 at N = 4; b: 0.7 >= 0.6 too
+    assert "| bring-about | auto | 2 | 55.0 % | 2 | 4 | 4 |" in report  # a: 0.9 >= 0.5 at N = 4; b: 0.7 >= 0.6
+    assert "| classification | - | 0 | not measured yet | - | - | - |" in report
     assert "3,000 primitive steps in all" in report and (tmp_path / "few_shot.png").stat().st_size > 1000
     assert "a hollow point stands on fewer concepts than the method's other points" in report
     from sb3_smc.experiments.few_shot import FEW_SHOT_METHODS
