@@ -6,6 +6,7 @@ from __future__ import annotations
 import csv
 import json
 import math
+import os
 import re
 import shlex
 import shutil
@@ -1470,8 +1471,6 @@ def test_the_whole_tables_script_keeps_a_runs_records_without_its_models(tmp_pat
     """``tools/paper_table.sh keep <category> <repo>``: a run directory's records (run.json, results, the wall-time
     ledger, evaluations, the CNN's) copied into ``docs/results/paper/<category>`` (no library, no curves, no lock), a
     later keep replacing the evaluations whole; an unknown command is refused with the usage."""
-    import os
-
     run = tmp_path / "runs" / "paper-objects"
     for name in ("run.json", "results.csv", "results.json", "wall_time.json", "evaluations/a@0.json", "cnn/t@0.json",
                  "library/models/" + "0" * 64 + ".safetensors", "tensorboard/a/events", ".wall_time.json.lock"):
@@ -1496,8 +1495,6 @@ def test_the_whole_tables_script_keeps_a_runs_records_without_its_models(tmp_pat
 def test_the_whole_tables_script_reports_the_queued_directories_it_has(tmp_path):
     """``tools/paper_table.sh report``: one ``sb3-smc report`` over the kept directories of the queue's categories,
     in the queue's order (a category with no records yet left out), then the README's table."""
-    import os
-
     repo = _script_repo(tmp_path, {"sb3-smc": f'echo "sb3-smc $*" >> {tmp_path}/calls',
                                    "python": f'echo "python $*" >> {tmp_path}/calls'})
     paper = repo / "docs" / "results" / "paper"
@@ -1518,8 +1515,6 @@ def test_the_whole_tables_script_keeps_nothing_of_a_run_with_nothing_evaluated(t
     """``tools/paper_table.sh partial <category>`` at a session's end: a run whose tabulation has no row yet (no
     target node finished) or fails is not kept and does not stop the checkpoint (exit 0, said on its output); one
     with rows is kept."""
-    import os
-
     run = tmp_path / "runs" / "paper-objects"
     run.mkdir(parents=True)
     (run / "run.json").write_text("{}")
@@ -1548,8 +1543,6 @@ def test_the_whole_tables_script_keeps_nothing_of_a_run_with_nothing_evaluated(t
 def test_the_whole_tables_script_passes_a_queue_lines_further_options(tmp_path):
     """A queue line's fourth column on (such as ``--lean-update``) goes to its category's ``sb3-smc experiment``,
     in ``run`` and in ``partial``; a line without one adds nothing."""
-    import os
-
     _executable(tmp_path / "env" / "bin" / "sb3-smc", f'echo "$*" >> {tmp_path}/calls')
     repo = _script_repo(tmp_path, {})
     paper = repo / "docs" / "results" / "paper"
@@ -1591,3 +1584,16 @@ def test_the_per_concept_table_has_the_papers_column_only_where_the_paper_gives_
         [path] = write_report([tmp_path / name], out=tmp_path / f"{name}-report", behaviour=False)
         header = next(line for line in path.read_text().splitlines() if line.startswith("| target | kind | category"))
         assert ("paper (base / curr / canon)" in header) == (name == "headline"), header
+
+
+@pytest.mark.parametrize("readme", ["README.md", "docs/results/paper/README.md"])
+def test_the_committed_readmes_hold_the_reports_answer(readme):
+    """Both READMEs' blocks are what ``tools/readme_table.py`` makes from the committed report today: no number of
+    them was edited by hand, and none is stale (``tools/paper_table.sh report`` rewrites them)."""
+    readme_table = import_tool("readme_table")
+    report = ROOT / "docs" / "results" / "paper" / "report.md"
+    path = ROOT / readme
+    source = Path(os.path.relpath(report, path.parent)).as_posix()
+    text = path.read_text(encoding="utf-8")
+    start, end = text.index(readme_table.START), text.index(readme_table.END) + len(readme_table.END)
+    assert text[start:end] == readme_table.block(report.read_text(encoding="utf-8"), source)
