@@ -122,3 +122,19 @@ def test_the_few_shot_script_checkpoints_a_runs_new_records(tmp_path):
     assert missing.returncode == 1 and f"no run at {tmp_path / 'none'}" in missing.stderr
     wrong = subprocess.run([*script, "go"], env=env, capture_output=True, text=True)
     assert wrong.returncode == 2 and "usage:" in wrong.stderr
+
+
+def test_the_committed_few_shot_report_is_its_records(tmp_path):
+    """The committed results.csv is the committed records' rows, and report.md is what write_report makes of it: a
+    checkpoint left nothing stale."""
+    import shutil
+    from pathlib import Path
+
+    from sb3_smc.experiments.few_shot import FIELDS as COLUMNS
+    from sb3_smc.experiments.few_shot import results_rows
+    from sb3_smc.experiments.tabular import csv_text
+
+    committed = Path(__file__).resolve().parents[1] / "docs" / "results" / "few_shot"
+    assert (committed / "results.csv").read_text(encoding="utf-8") == csv_text(results_rows(committed), COLUMNS)
+    shutil.copy(committed / "results.csv", tmp_path / "results.csv")
+    assert write_report(tmp_path).read_text(encoding="utf-8") == (committed / "report.md").read_text(encoding="utf-8")
