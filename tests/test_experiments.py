@@ -1129,13 +1129,22 @@ def test_the_readme_gets_the_answer_from_the_report(tmp_path):
         assert row[1] == "-" and row[3].startswith(f"{mean:.1f} [")
         assert row[3].endswith("] on 5 concepts (a subset: not judged)") and row[4] == "74.5"
     assert "curr-cap100:" not in text  # not the best of its reading
+    readme_table.main(["--report", str(report), "--readme", str(readme), "--brief"])  # the landing page's
+    brief = readme.read_text()
+    assert "| curr above base (a call is one step) |" in brief and "**[The paper's claims]" in brief
+    assert "curr-cap10:" not in brief and "With a call counted as one step" not in brief
+    assert "headline targets** (best seed" not in brief
+    assert ("The verdict, the paper's headline targets and the sweep's best setting of each reading: [the results "
+            "page](docs/README.md).") in brief
+    readme_table.main(["--report", str(report), "--readme", str(readme)])
     # a cell the report could not judge yet (partial) is no result: no row, no sentence, no headline number
     unjudged = re.sub(r"(\| classification: curr above base \(paired t-test\) \| [^|]+ \| )[^|]+\|",
                       r"\1not judged: partial |", report.read_text())
     assert "not judged: partial" in unjudged
-    row = readme_table.answer_table(unjudged)[[r.split(" | ")[0] for r in readme_table.answer_table(unjudged)]
-                                              .index("| curr above base (a call is one step)")]
-    assert _row_cells(row, "|")[1] == "-" and "not judged" not in " ".join(readme_table.verdict(unjudged))
+    rows = readme_table.answer_rows(unjudged)
+    row = readme_table.answer_table(rows)[[r.split(" | ")[0] for r in readme_table.answer_table(rows)]
+                                          .index("| curr above base (a call is one step)")]
+    assert _row_cells(row, "|")[1] == "-" and "not judged" not in " ".join(readme_table.verdict(rows))
     # a claims table without one of the statements the answer reads: refused, naming it
     with pytest.raises(SystemExit, match="has no statement 'classification: mean of base'"):
         readme_table.answer_rows(report.read_text().replace("| classification: mean of base |", "| renamed |"))
@@ -1507,7 +1516,7 @@ def test_the_whole_tables_script_reports_the_queued_directories_it_has(tmp_path)
                    env={**os.environ, "RUNS": str(tmp_path / "runs")})
     assert (tmp_path / "calls").read_text().splitlines() == [
         f"sb3-smc report {paper}/objects {paper}/search --out {paper} --no-behaviour",
-        f"python {repo}/tools/readme_table.py",  # the landing page
+        f"python {repo}/tools/readme_table.py --brief",  # the landing page
         f"python {repo}/tools/readme_table.py --readme {paper}/README.md"]
 
 
@@ -1596,4 +1605,5 @@ def test_the_committed_readmes_hold_the_reports_answer(readme):
     source = Path(os.path.relpath(report, path.parent)).as_posix()
     text = path.read_text(encoding="utf-8")
     start, end = text.index(readme_table.START), text.index(readme_table.END) + len(readme_table.END)
-    assert text[start:end] == readme_table.block(report.read_text(encoding="utf-8"), source)
+    assert text[start:end] == readme_table.block(report.read_text(encoding="utf-8"), source,
+                                                 brief=readme == "README.md")

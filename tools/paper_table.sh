@@ -167,7 +167,7 @@ case ${1:-} in
       if [ -f "$repo/docs/results/paper/$cat/results.json" ]; then dirs+=("$repo/docs/results/paper/$cat"); fi
     done
     "$repo/.venv/bin/sb3-smc" report "${dirs[@]}" --out "$repo/docs/results/paper" --no-behaviour
-    "$repo/.venv/bin/python" "$repo/tools/readme_table.py"
+    "$repo/.venv/bin/python" "$repo/tools/readme_table.py" --brief
     "$repo/.venv/bin/python" "$repo/tools/readme_table.py" --readme "$repo/docs/results/paper/README.md" ;;
   *) echo "usage: $0 run [categories...] | continue | checkpoint | keep <category> [repo] | partial <category> | report" >&2
      exit 2 ;;

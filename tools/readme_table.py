@@ -7,11 +7,12 @@ best), ours beside the paper's; the verdict in three sentences; the two headline
 claims' verdicts, copied between the README's markers ``<!-- paper-table:start -->`` and ``<!-- paper-table:end -->``.
 Every number is the report's (its claims table, its checks of the method and its sweep): this only copies and
 arranges them, so the READMEs cannot disagree with the report. ``tools/paper_table.sh report`` runs it on the
-project's README and on the results' own (``docs/results/paper/README.md``).
+project's README (``--brief``: the answer table and the claims' count, the rest a link away) and on the results' own
+(``docs/results/paper/README.md``).
 
 Usage::
 
-    python tools/readme_table.py [--report docs/results/paper/report.md] [--readme README.md]
+    python tools/readme_table.py [--report docs/results/paper/report.md] [--readme README.md] [--brief]
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ import re
 import sys
 from pathlib import Path
 
+from pixelworld_env.atomic import atomic_write
 from sb3_smc.experiments.claims import READINGS, VERDICTS
 from sb3_smc.experiments.design import DEFAULT_METHODS
 from sb3_smc.experiments.tables import CHECKS_HEADING, CLAIMS_COUNT, CLAIMS_HEADING, MEANS_HEADING, SWEEP_HEADING
@@ -151,9 +153,13 @@ def best_settings(report: str) -> list[str]:
             if (setting := next((name for name in rows if name.startswith(prefix)), None))]
 
 
-def answer_rows(report: str) -> list[tuple[str, dict[str, tuple[str, str, str]]]]:
-    """The answer table's rows: what each says, and per kind (ours, verdict, the paper's); a row no kind has a
-    result for is left out."""
+Rows = list[tuple[str, dict[str, tuple[str, str, str]]]]
+"""The answer table's rows: what each says, and per kind (ours, verdict, the paper's)."""
+
+
+def answer_rows(report: str, sweep: bool = True) -> Rows:
+    """The answer table's rows from the report's claims table (and, with ``sweep``, the sweep's best setting of each
+    reading from its checks table); a row no kind has a result for is left out."""
     claims = table_of(report, CLAIMS_HEADING)
     checks = table_of(report, CHECKS_HEADING)
     missing = [f"{kind}: {statement}" for _, statement, _ in ANSWER_ROWS for kind in KINDS
@@ -161,7 +167,7 @@ def answer_rows(report: str) -> list[tuple[str, dict[str, tuple[str, str, str]]]
     if missing:
         raise SystemExit(f"the report's claims table has no statement {missing[0]!r}: the answer table reads it "
                          "(make the report again with tools/paper_table.sh report, or update ANSWER_ROWS)")
-    rows: list[tuple[str, dict[str, tuple[str, str, str]]]] = []
+    rows: Rows = []
     for label, statement, column in ANSWER_ROWS:
         found = {}
         for kind in KINDS:
@@ -171,7 +177,7 @@ def answer_rows(report: str) -> list[tuple[str, dict[str, tuple[str, str, str]]]
                 found[kind] = (ours, verdict, row["paper"])
         if found:
             rows.append((label, found))
-    for setting in best_settings(report):
+    for setting in best_settings(report) if sweep else []:
         for what, statement in (("mean", f"mean of {setting}"), ("above base", f"{setting} above base")):
             found = {}
             for kind in KINDS:
@@ -184,10 +190,9 @@ def answer_rows(report: str) -> list[tuple[str, dict[str, tuple[str, str, str]]]
     return rows
 
 
-def answer_table(report: str) -> list[str]:
-    """The answer table (Markdown lines): a row per comparison, ours with its interval and verdict beside the
-    paper's, per kind; ``[]`` where the report has no claims table."""
-    rows = answer_rows(report)
+def answer_table(rows: Rows) -> list[str]:
+    """The answer table (Markdown lines) of ``rows``: a row per comparison, ours with its interval and verdict beside
+    the paper's, per kind; ``[]`` without rows (the report has no claims table)."""
     if not rows:
         return []
     lines = ["| | classification: ours | paper | bring-about: ours | paper |", "|---|---|---|---|---|"]
@@ -226,11 +231,11 @@ def _both(found: dict[str, tuple[str, str, str]], paper: bool = False) -> str:
     return f"{said} ({words})"
 
 
-def verdict(report: str) -> list[str]:
+def verdict(answer: Rows) -> list[str]:
     """The verdict in three sentences, each from the answer table's rows (so from the report's numbers): the
     paper's reading of a call as one step, the readings that make the comparison fair in moves, and equal
-    experience; a sentence whose rows the report lacks is left out."""
-    rows = dict(answer_rows(report))
+    experience; a sentence whose rows are missing is left out."""
+    rows = dict(answer)
     sentences = []
     lead = rows.get(ANSWER_ROWS[3][0])
     if lead:
@@ -270,13 +275,22 @@ def headline(report: str) -> list[str]:
     return [f"**The paper's two headline targets** (best seed of 5): {'; '.join(said)}."] if said else []
 
 
-def block(report: str, source: str) -> str:
+def block(report: str, source: str, brief: bool = False) -> str:
     """The README's block: a line on what it is (whole, or what is still being run), the answer table, the
-    verdict, the headline targets and the count of the claims' verdicts."""
+    verdict, the headline targets and the count of the claims' verdicts; ``brief`` (the landing page): without the
+    sweep's rows, the verdict and the headline targets, which the results page beside the report holds."""
     lines = [START, "", f"From [the whole table's report]({source})" + partial_note(report)
              + "; scores in %, ours (95 % bootstrap interval; a lead over all of a kind's concepts resamples the "
              "concepts too) beside the paper's (Hay et al., AAAI-18), with the verdict.", ""]
-    for part in (answer_table(report), verdict(report), headline(report)):
+    rows = answer_rows(report, sweep=not brief)
+    parts = [answer_table(rows)]
+    if brief:
+        page = (Path(source).parent / "README.md").as_posix()
+        parts.append([f"The verdict, the paper's headline targets and the sweep's best setting of each reading: "
+                      f"[the results page]({page})."] if rows else [])
+    else:
+        parts += [verdict(rows), headline(report)]
+    for part in parts:
         if part:
             lines += [*part, ""]
     counted = claims_line(report, source)
@@ -298,6 +312,8 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--report", type=Path, default=ROOT / "docs/results/paper/report.md")
     parser.add_argument("--readme", type=Path, default=ROOT / "README.md")
+    parser.add_argument("--brief", action="store_true",
+                        help="the landing page's block: no sweep rows, verdict or headline targets")
     args = parser.parse_args(argv)
     for path, what in ((args.report, "the report (tools/paper_table.sh report makes it)"),
                        (args.readme, "the README to update")):
@@ -305,10 +321,7 @@ def main(argv: list[str] | None = None) -> int:
             raise SystemExit(f"{path} not found: {what}")
     source = Path(os.path.relpath(args.report.resolve(), args.readme.resolve().parent)).as_posix()
     report = args.report.read_text(encoding="utf-8")
-    text = update(args.readme.read_text(encoding="utf-8"), block(report, source))
-    tmp = args.readme.with_suffix(".tmp")
-    tmp.write_text(text, encoding="utf-8")
-    tmp.replace(args.readme)
+    atomic_write(args.readme, update(args.readme.read_text(encoding="utf-8"), block(report, source, args.brief)))
     print(f"{args.readme}: the answer from {args.report}")
     return 0
 
