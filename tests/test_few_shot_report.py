@@ -116,6 +116,7 @@ def test_the_few_shot_script_checkpoints_a_runs_new_records(tmp_path):
     env = {**os.environ, "FEW_SHOT_SRC": str(tmp_path / "src")}
     subprocess.run([*script, "checkpoint"], check=True, env=env, capture_output=True)
     assert (kept / "base-n1@0.json").read_text() == "committed" and (kept / "base-n8@0.json").read_text() == "new"
+    assert "write_results(out)" in (tmp_path / "called").read_text()
     assert "write_report(out)" in (tmp_path / "called").read_text()
     missing = subprocess.run([*script, "checkpoint"], env={**env, "FEW_SHOT_SRC": str(tmp_path / "none")},
                              capture_output=True, text=True)
@@ -130,11 +131,9 @@ def test_the_committed_few_shot_report_is_its_records(tmp_path):
     import shutil
     from pathlib import Path
 
-    from sb3_smc.experiments.few_shot import FIELDS as COLUMNS
-    from sb3_smc.experiments.few_shot import results_rows
-    from sb3_smc.experiments.tabular import csv_text
+    from sb3_smc.experiments.few_shot import results_csv
 
     committed = Path(__file__).resolve().parents[1] / "docs" / "results" / "few_shot"
-    assert (committed / "results.csv").read_text(encoding="utf-8") == csv_text(results_rows(committed), COLUMNS)
+    assert (committed / "results.csv").read_text(encoding="utf-8") == results_csv(committed)
     shutil.copy(committed / "results.csv", tmp_path / "results.csv")
     assert write_report(tmp_path).read_text(encoding="utf-8") == (committed / "report.md").read_text(encoding="utf-8")

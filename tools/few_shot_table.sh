@@ -39,14 +39,11 @@ case "${1:-}" in
     cp -rn "$src/runs/few-shot/records/." "$repo/docs/results/few_shot/records/"
     cd "$repo"
     "$py" -c "
-from pixelworld_env.atomic import atomic_write
-from sb3_smc.experiments.few_shot import FIELDS, results_rows
-from sb3_smc.experiments.few_shot_report import write_report
-from sb3_smc.experiments.tabular import csv_text
+from sb3_smc.experiments.few_shot import write_results
+from sb3_smc.experiments.few_shot_report import read_results, write_report
 out = 'docs/results/few_shot'
-rows = results_rows(out)
-atomic_write(out + '/results.csv', csv_text(rows, FIELDS))
+cells = len(read_results(write_results(out)))
 write_report(out)
-print(f'{out}: {len(rows)} cells; results.csv, report.md and few_shot.png written')" ;;
+print(f'{out}: {cells} cells; results.csv, report.md and few_shot.png written')" ;;
   *) echo "usage: $0 continue [WORLDS...] | checkpoint" >&2; exit 2 ;;
 esac

@@ -30,8 +30,8 @@ from sb3_smc.curricula import shipped_curricula
 from sb3_smc.errors import SMCError
 from sb3_smc.experiments.tabular import csv_text
 
-__all__ = ["FEW_SHOT_METHODS", "FEW_SHOT_TARGETS", "FEW_SHOT_WORLDS", "children_of", "offer_for", "results_rows",
-           "run_few_shot"]
+__all__ = ["FEW_SHOT_METHODS", "FEW_SHOT_TARGETS", "FEW_SHOT_WORLDS", "children_of", "offer_for", "results_csv",
+           "results_rows", "run_few_shot", "write_results"]
 
 FEW_SHOT_TARGETS = (
     # containment: 5 bring-about, 5 classification (the first: a headline target)
@@ -144,9 +144,7 @@ def run_few_shot(out: str | Path, *, targets: Sequence[str] = FEW_SHOT_TARGETS,
             atomic_write(_cell(out, target, method, n, seed), json.dumps(record, indent=1) + "\n")
             done += 1
             _progress(printer, done, len(todo), started, f"{target} {method} N={n or 'all'} seed {seed}", score)
-    path = out / "results.csv"
-    atomic_write(path, _csv(results_rows(out)))
-    return path
+    return write_results(out)
 
 
 def _progress(printer: Callable[[str], None], done: int, total: int, started: float, cell: str, score: float) -> None:
@@ -173,5 +171,11 @@ def results_rows(out: str | Path) -> list[dict[str, Any]]:
     return sorted(rows, key=lambda r: (r["target"], r["method"], str(r["train_worlds"]), r["seed"]))
 
 
-def _csv(rows: Sequence[dict[str, Any]]) -> str:
-    return csv_text(rows, FIELDS)
+def results_csv(out: str | Path) -> str:
+    """The text of ``<out>/results.csv``: one row a recorded cell (:func:`results_rows`)."""
+    return csv_text(results_rows(out), FIELDS)
+
+
+def write_results(out: str | Path) -> Path:
+    """``<out>/results.csv`` written from the records in ``out`` (:func:`results_csv`)."""
+    return atomic_write(Path(out) / "results.csv", results_csv(out))
