@@ -27,7 +27,9 @@
 #   tools/paper_table.sh partial <category>       at a session's end: tabulate what the running category has finished
 #                                                (--no-train), keep it and make its partial report (nothing kept
 #                                                while it has no evaluated SMC)
-#   tools/paper_table.sh report                  one report over every kept directory: docs/results/paper/report.md,
+#   tools/paper_table.sh report                  one report over every complete kept directory (a partial one keeps
+#                                                its records and its own report.md until it is complete):
+#                                                docs/results/paper/report.md,
 #                                                its means (and, in the results' README, its t-tests) copied into
 #                                                both READMEs (tools/readme_table.py)
 # Environment: RUNS (default /work/runs), RUN_ENV (default /work/run-env: a venv with the worktree installed),
@@ -163,8 +165,8 @@ case ${1:-} in
     "$repo/.venv/bin/sb3-smc" report "$repo/docs/results/paper/$cat" --no-behaviour ;;
   report)
     dirs=()
-    for cat in $(queue | awk '{print $1}'); do
-      if [ -f "$repo/docs/results/paper/$cat/results.json" ]; then dirs+=("$repo/docs/results/paper/$cat"); fi
+    for cat in $(queue | awk '{print $1}'); do  # complete categories only: a partial one is kept, not reported
+      if complete "$repo/docs/results/paper/$cat/results.json"; then dirs+=("$repo/docs/results/paper/$cat"); fi
     done
     "$repo/.venv/bin/sb3-smc" report "${dirs[@]}" --out "$repo/docs/results/paper" --no-behaviour
     "$repo/.venv/bin/python" "$repo/tools/readme_table.py" --brief
