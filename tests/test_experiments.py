@@ -1502,16 +1502,18 @@ def test_the_whole_tables_script_keeps_a_runs_records_without_its_models(tmp_pat
 
 
 def test_the_whole_tables_script_reports_the_queued_directories_it_has(tmp_path):
-    """``tools/paper_table.sh report``: one ``sb3-smc report`` over the kept directories of the queue's categories,
-    in the queue's order (a category with no records yet left out), then the README's table."""
+    """``tools/paper_table.sh report``: one ``sb3-smc report`` over the complete kept directories of the queue's
+    categories, in the queue's order (a category with no records yet, or kept partial, left out), then the README's
+    table."""
     repo = _script_repo(tmp_path, {"sb3-smc": f'echo "sb3-smc $*" >> {tmp_path}/calls',
                                    "python": f'echo "python $*" >> {tmp_path}/calls'})
     paper = repo / "docs" / "results" / "paper"
     paper.mkdir(parents=True)
-    (paper / "queue.txt").write_text("# category, commit, reuse\nobjects  abc  -\nsearch  abc  -\nlater  abc  -\n")
-    for category in ("search", "objects"):
+    (paper / "queue.txt").write_text("# category, commit, reuse\nobjects  abc  -\npartial  abc  -\nsearch  abc  -\n"
+                                     "later  abc  -\n")
+    for category, complete in (("search", True), ("objects", True), ("partial", False)):
         (paper / category).mkdir()
-        (paper / category / "results.json").write_text("{}")
+        (paper / category / "results.json").write_text(json.dumps({"complete": complete}))
     subprocess.run([str(repo / "tools" / "paper_table.sh"), "report"], check=True, capture_output=True,
                    env={**os.environ, "RUNS": str(tmp_path / "runs")})
     assert (tmp_path / "calls").read_text().splitlines() == [
