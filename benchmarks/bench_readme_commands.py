@@ -161,7 +161,7 @@ DOCS: dict[str, dict[str, list[list[str]]]] = {  # the docs' pages, by page and 
     "training.md: TrainingSpec, TRPO, 200,000 steps (its child trained first)": {
         "full": _py(SPEC.format(more="", steps=200_000)), "quick": _py(SPEC.format(more=QUICK, steps=20_000))},
     "training.md: train_smcs, five seeds": {"full": _py(GROUP.format(more="")),
-                                            "quick": _py(GROUP.format(more=", total_timesteps=20_000"))},
+                                            "quick": _py(GROUP.format(more=QUICK))},
     "library.md: save, load, a parent, evaluate, train again": {"full": _py(LIBRARY.format(more="")),
                                                                 "quick": _py(LIBRARY.format(more=QUICK))},
     "library.md: SMCLibrary.pretrained": {"full": _py(PRETRAINED)},
