@@ -12,7 +12,7 @@ from typing import Any
 import pytest
 
 from sb3_smc.errors import SMCError
-from sb3_smc.experiments.experience import EXPERIENCE_HEADING, Experience, experience_section, main
+from sb3_smc.experiments.experience import EXPERIENCE_HEADING, Experience, Experiences, experience_section, main
 from sb3_smc.experiments.tables import ResultTable
 
 TARGET = "ba_self-in-container_from_on-floor"
@@ -33,7 +33,7 @@ def _run(directory: Path, nodes: dict[str, list[str]], steps: dict[str, int], se
 def test_experience_counts_every_seed_of_every_node_below_once(tmp_path: Path) -> None:
     """Two entries share a lower node (counted once); a node with two of five seeds recorded (pretrained) counts as
     their mean times five; a node without records makes the total unknown. The file round-trips; the command
-    writes it."""
+    writes it. Several runs' experience is kept apart, each score's from its own run."""
     nodes = {"a": [], "b": [], "c": ["a"], CURR: ["a", "b"], f"{CURR}2": ["c"], "untrained": ["a"]}
     steps = {**{f"a@{s}": 100 for s in range(5)}, "b@0": 10, "b@3": 30, **{f"c@{s}": 7 for s in range(5)},
              **{f"{CURR}@{s}": 1000 + s for s in range(5)}, **{f"{CURR}2@{s}": 1 for s in range(5)}}
@@ -50,9 +50,12 @@ def test_experience_counts_every_seed_of_every_node_below_once(tmp_path: Path) -
     (run / "experience.json").write_text('{"format": "sb3-smc-experience", "version": 2}')
     with pytest.raises(SMCError, match="experience.json: not an sb3-smc-experience file of version 1"):
         Experience.load(run / "experience.json")
-    other = Experience(5, {"a": ("b",)}, {})
-    with pytest.raises(SMCError, match="node 'a' uses"):
-        Experience.merged([experience, other])
+    # two runs with SMCs of one node name trained apart (node "a"): each score counts the records of its own run
+    other = Experience(5, {"a": (), CURR: ("a",)}, {"a": {0: 1, 1: 3}, CURR: {s: 2 for s in range(5)}})
+    runs = Experiences(((experience, frozenset({(TARGET, "curr")})), (other, frozenset({(TARGET, "curr-cap10")}))))
+    assert runs.of(TARGET, "curr") is experience and runs.of(TARGET, "curr-cap10") is other
+    assert runs.of(TARGET, "base") is None and experience.of(TARGET, "anything") is experience
+    assert other.total([CURR]) == 10 + 2 * 5 and experience.total([CURR]) == 5010 + 500 + 100
 
 
 def _row(method: str, node: str, seed: int, score: float) -> dict[str, Any]:
@@ -173,3 +176,34 @@ def test_while_the_flat_smc_s_curve_is_trained_curr_is_not_judged_at_its_experie
     lines = number_sections(ResultTable(rows, reported, unfinished), experience)
     (row,) = [line for line in lines if line.startswith("| bring-about: curr above base (paired t-test)")]
     assert row.endswith("| not judged: partial |")
+
+
+def test_the_flat_curve_is_extended_where_curr_leads_beyond_it_and_the_flat_smc_has_not_converged(
+        tmp_path: Path) -> None:
+    """The next point of the flat SMC's curve (sb3_smc.experiments.extension) on a target: where curr's experience
+    lies beyond the curve, curr leads the flat SMC's best point and a seed of its last point ran its whole budget;
+    not where every seed stopped early (converged), where curr trails, where curr's experience lies inside the
+    curve, or where the point is measured already; beyond 16 x only while the curve still rises."""
+    from sb3_smc.experiments.extension import needs_point
+
+    def case(flat: dict[int, tuple[float, int]], curr: tuple[float, int], name: str) -> list[list[str]]:
+        """flat: factor -> (score, each seed's moves); curr: (score, its target node's moves a seed)."""
+        nodes = {**{f"base-x{k}/{TARGET}": [] for k in flat}, CURR: []}
+        steps = {**{f"base-x{k}/{TARGET}@{s}": moves for k, (_, moves) in flat.items() for s in range(5)},
+                 **{f"{CURR}@{s}": curr[1] for s in range(5)}}
+        experience = Experience.from_run(_run(tmp_path / name, nodes, steps))
+        rows = [_row(f"base-x{k}", f"base-x{k}/{TARGET}", s, score) for k, (score, _) in flat.items() for s in range(5)]
+        rows += [_row("curr", CURR, s, curr[0]) for s in range(5)]
+        table = ResultTable(rows, [r for r in rows if r["seed"] == 0])
+        return [needs_point(table, experience, method, 100) for method in ("base-x16", "base-x64")]
+
+    full = {1: (0.3, 100), 4: (0.5, 400)}  # every seed ran its whole budget (100 moves a seed at 1 x)
+    assert case(full, (0.9, 10_000), "leads") == [[TARGET], []]
+    assert case({1: (0.3, 100), 4: (0.5, 250)}, (0.9, 10_000), "converged") == [[], []]  # stopped early at 4 x
+    assert case(full, (0.4, 10_000), "trails") == [[], []]
+    assert case(full, (0.9, 200), "inside") == [[], []]  # 1,000 moves: between the points (500 and 2,000)
+    assert case({**full, 16: (0.7, 1600)}, (0.9, 100_000), "rises") == [[], [TARGET]]  # x16 measured; still rising
+    assert case({**full, 16: (0.5, 1600)}, (0.9, 100_000), "flat") == [[], []]  # 16 x no better than 4 x
+    with pytest.raises(SMCError, match="the curve's next point is one of"):
+        needs_point(ResultTable([_row("curr", CURR, 0, 0.5)], [_row("curr", CURR, 0, 0.5)]),
+                    Experience(5), "base-x4", 100)

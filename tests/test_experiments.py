@@ -669,13 +669,13 @@ def test_the_fair_methods_change_only_their_episode_length_or_call_cap():
 
 
 def test_the_equal_experience_methods_are_base_with_its_budget_scaled():
-    """``base-x1`` / ``base-x4`` / ``base-x16``: base's flat SMC named ``<method>/<target>``, its budget 1 / 4 / 16
-    times the run's, all else base's job."""
+    """``base-x1`` / ``-x4`` / ``-x16`` / ``-x64``: base's flat SMC named ``<method>/<target>``, its budget 1 / 4 / 16 /
+    64 times the run's, all else base's job."""
     from sb3_smc.curricula.jobs import node_spec
 
     design = plan([LEFT_OF, IN_CONTAINER], ["base", *EXPERIENCE_METHODS])
-    assert EXPERIENCE_METHODS == ("base-x1", "base-x4", "base-x16")
-    for method, factor in zip(EXPERIENCE_METHODS, (1, 4, 16), strict=True):
+    assert EXPERIENCE_METHODS == ("base-x1", "base-x4", "base-x16", "base-x64")
+    for method, factor in zip(EXPERIENCE_METHODS, (1, 4, 16, 64), strict=True):
         for target in (LEFT_OF, IN_CONTAINER):
             (name,) = design.nodes[(target, method)]
             assert name == f"{method}/{target}" and design.nodes[(target, "base")] == (target,)
@@ -1075,8 +1075,8 @@ def test_the_whole_table_report_with_canon_scaled_and_curr_moves(tmp_path):
 
 def test_the_readme_gets_the_answer_from_the_report(tmp_path):
     """``tools/readme_table.py`` writes, between the README's markers, the answer table (base, curr and canon, curr's
-    lead per reading, the sweep's best settings labelled as a subset's), the verdict and the headline targets, every
-    number copied from the report's claims, checks and sweep tables with the paper's t-tests beside ours; says when
+    lead per reading, the best setting of each reading where it ran on every concept), the verdict and the headline
+    targets, every number copied from the report's claims table with the paper's t-tests beside ours; says when
     the table is partial (which run directories, and whether every one of the paper's methods has all its concepts);
     leaves the rest of the README as it was, and refuses a README without its markers."""
     from pixelworld_env.datasets import catalog
@@ -1117,24 +1117,30 @@ def test_the_readme_gets_the_answer_from_the_report(tmp_path):
         assert counted.startswith("**In all** (31 statements): a call is one step: ")
         assert ("**[The paper's claims](docs/report.md#the-papers-claims)**" + counted.removeprefix("**In all**")
                 in text)
-    # the sweep's settings on a few targets: their best of each reading, labelled as the subset's and not judged
+    # the best setting of each reading on a few targets only: no row (the paper's numbers are over all concepts)
     swept = [t for t in everything if catalog.dataset(t).kind == "bring-about"][:5]
-    _synthetic_table(tmp_path / "sweep", swept, ["curr-cap10", "curr-cap100", "curr-moves-200"], score)
+    _synthetic_table(tmp_path / "sweep", swept, ["curr-cap10", "curr-moves-200"], score)
     [report] = write_report([tmp_path / "run", tmp_path / "sweep"], out=tmp_path / "docs", behaviour=False)
     readme_table.main(["--report", str(report), "--readme", str(readme)])
+    assert "curr-cap10:" not in readme.read_text() and "curr-moves-200:" not in readme.read_text()
+    # on every concept: their rows are the claims table's columns of those readings, judged
+    _synthetic_table(tmp_path / "best", everything, ["curr-cap10", "curr-moves-200"], score)
+    [report] = write_report([tmp_path / "run", tmp_path / "best"], out=tmp_path / "docs", behaviour=False)
+    readme_table.main(["--report", str(report), "--readme", str(readme)])
     text = readme.read_text()
-    for setting in ("curr-cap10", "curr-moves-200"):
-        row = _row_cells(text, f"| {setting}: mean (the sweep's best setting of its reading) |")
-        mean = 100 * np.mean([score(t, setting) for t in swept])
-        assert row[1] == "-" and row[3].startswith(f"{mean:.1f} [")
-        assert row[3].endswith("] on 5 concepts (a subset: not judged)") and row[4] == "74.5"
-    assert "curr-cap100:" not in text  # not the best of its reading
+    for setting, label in (("curr-cap10", "a call is one step, cut after 10 moves"),
+                           ("curr-moves-200", "calls cost their moves, 200 moves an episode")):
+        row = _row_cells(text, f"| {setting}: mean ({label}) |")
+        mean = 100 * np.mean([score(t, setting) for t in cl])
+        assert row[1].startswith(f"{mean:.1f} [") and row[1].endswith(")") and row[2] == "84.9"
+        assert _row_cells(text, f"| {setting} above base |")[1].startswith(f"+{lead:.1f} [")
+    assert "with calls costing their moves in 200 moves an episode (the setting of that reading that fits" in text
     readme_table.main(["--report", str(report), "--readme", str(readme), "--brief"])  # the landing page's
     brief = readme.read_text()
     assert "| curr above base (a call is one step) |" in brief and "**[The paper's claims]" in brief
     assert "curr-cap10:" not in brief and "With a call counted as one step" not in brief
     assert "headline targets** (best seed" not in brief
-    assert ("The verdict, the paper's headline targets and the sweep's best setting of each reading: [the results "
+    assert ("The verdict, the paper's headline targets and the best setting of each reading: [the results "
             "page](docs/README.md).") in brief
     readme_table.main(["--report", str(report), "--readme", str(readme)])
     # a cell the report could not judge yet (partial) is no result: no row, no sentence, no headline number
@@ -1570,6 +1576,32 @@ def test_the_whole_tables_script_passes_a_queue_lines_further_options(tmp_path):
                                "--workers 2") and calls[0].endswith(" --lean-update")
     assert "--lean-update" not in calls[1] and calls[1].endswith("--workers 2")
     assert calls[2].endswith("--no-train --lean-update")
+
+
+def test_the_whole_tables_script_extends_the_flat_curve_where_the_rule_says(tmp_path):
+    """``experience-x16`` / ``experience-x64``: their targets come from ``python -m sb3_smc.experiments.extension``
+    over the queue's complete kept categories; where it names none, nothing runs (said on the output)."""
+    _executable(tmp_path / "env" / "bin" / "sb3-smc", f'echo "$*" >> {tmp_path}/calls')
+    repo = _script_repo(tmp_path, {"python": f'echo "$*" >> {tmp_path}/asked\ncat {tmp_path}/answer'})
+    paper = repo / "docs" / "results" / "paper"
+    paper.mkdir(parents=True)
+    (paper / "queue.txt").write_text("experience  abc  -\nexperience-x16  abc  -  --lean-update\n"
+                                     "experience-x64  abc  -  --lean-update\n")
+    (paper / "experience").mkdir()
+    (paper / "experience" / "results.json").write_text(json.dumps({"complete": True}))
+    env = {**os.environ, "RUNS": str(tmp_path / "runs"), "RUN_ENV": str(tmp_path / "env")}
+    script = str(repo / "tools" / "paper_table.sh")
+    (tmp_path / "answer").write_text("--methods base-x16 --targets a,b\n")
+    subprocess.run([script, "run", "experience-x16"], env=env, check=True, capture_output=True)
+    assert (tmp_path / "asked").read_text().splitlines() == [
+        f"-m sb3_smc.experiments.extension base-x16 {paper}/experience"]
+    (call,) = (tmp_path / "calls").read_text().splitlines()
+    assert call.startswith(f"experiment --out {tmp_path}/runs/paper-experience-x16 --methods base-x16 --targets a,b "
+                           "--seeds 5") and call.endswith(" --lean-update")
+    (tmp_path / "answer").write_text("")
+    done = subprocess.run([script, "run", "experience-x64"], env=env, check=True, capture_output=True, text=True)
+    assert "experience-x64: no target needs it, nothing to run" in done.stdout
+    assert len((tmp_path / "calls").read_text().splitlines()) == 1
 
 
 def test_cpu_model_names_the_family_and_model(tmp_path: Path) -> None:

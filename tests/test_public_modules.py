@@ -53,8 +53,8 @@ PUBLIC = (
     *_modules("sb3_smc.curricula", "format", "shipped", "designed", "trainer", "options", "scheduler", "jobs",
               "run_directory", "executors", "pretrained", "reuse"),
     *_modules("sb3_smc.experiments", "design", "runner", "wall_clock", "cnn", "report", "figures", "tables",
-              "statistics", "bootstrap", "claims", "sweep", "experience", "paper", "few_shot", "few_shot_report",
-              "cannot", "tabular"),
+              "statistics", "bootstrap", "claims", "sweep", "experience", "extension", "paper", "few_shot",
+              "few_shot_report", "cannot", "tabular"),
 )
 
 

@@ -11,9 +11,13 @@
 #                                                on SWEEP_TARGETS of sb3_smc.experiments.design;
 #                                                experience: the flat SMC with 1, 4 and 16 x the budget,
 #                                                EXPERIENCE_METHODS on SWEEP_TARGETS;
-#                                                readings-all: curr-cap10 and curr-moves-200, experience-all: base-x4,
+#                                                readings-all: curr-cap10 and curr-moves-200, experience-all: base-x1
+#                                                and base-x4 (base-x1: base retrained, so that its moves are recorded),
 #                                                each on the 39 level-2 targets outside SWEEP_TARGETS, so that with
-#                                                readings and experience they cover all 51)
+#                                                readings and experience they cover all 51;
+#                                                experience-x16, experience-x64: base-x16 / base-x64 on the targets
+#                                                whose flat SMC's curve must go on, from the complete kept categories
+#                                                (python -m sb3_smc.experiments.extension; nothing to run: skipped))
 #   tools/paper_table.sh continue                the queue (docs/results/paper/queue.txt: category, commit, reuse, and
 #                                                any further options of its sb3-smc experiment, e.g. --lean-update),
 #                                                on this machine or a new one:
@@ -50,8 +54,10 @@ print("--methods", ",".join(EXPERIENCE_METHODS), "--targets", ",".join(SWEEP_TAR
     readings-all|experience-all) "$RUN_ENV/bin/python" -I -c 'import sys
 from sb3_smc.experiments import level2_targets
 from sb3_smc.experiments.design import SWEEP_TARGETS
-methods = "curr-cap10,curr-moves-200" if sys.argv[1] == "readings-all" else "base-x4"
+methods = "curr-cap10,curr-moves-200" if sys.argv[1] == "readings-all" else "base-x1,base-x4"
 print("--methods", methods, "--targets", ",".join(t for t in level2_targets() if t not in SWEEP_TARGETS))' "$1" ;;
+    experience-x16|experience-x64)  # from the kept records of the categories before it (complete ones only)
+      "$repo/.venv/bin/python" -m sb3_smc.experiments.extension "base-${1#experience-}" $(complete_dirs) ;;
     curr-moves|curr-moves-cl) echo "--methods curr-moves --targets $("$RUN_ENV/bin/python" -I -c 'import sys
 from pixelworld_env.datasets import catalog
 from sb3_smc.experiments import level2_targets
@@ -75,6 +81,12 @@ holds() {  # whether the JSON file $1 exists and its key $2 is true (not false, 
 
 complete() {  # whether the results.json $1 says its run is complete
   holds "$1" complete
+}
+
+complete_dirs() {  # the kept directories of the queue's complete categories
+  for cat in $(queue | awk '{print $1}'); do
+    if complete "$repo/docs/results/paper/$cat/results.json"; then echo "$repo/docs/results/paper/$cat"; fi
+  done
 }
 
 environment() {  # the venv of commit $1 (a worktree of it, found or added, installed into $RUNS/env-$1, once)
@@ -123,6 +135,7 @@ case ${1:-} in
         done
       fi
       RUN_ENV=$env REUSE_FROM=$(reuse_path "$reuse") nice -n 5 "$0" run "$cat" < /dev/null
+      if complete "$dir/results.json"; then "$0" keep "$cat"; fi  # kept as it completes: a later category reads it
     done ;;
   checkpoint)
     queue | while read -r cat commit reuse _; do
@@ -136,10 +149,12 @@ case ${1:-} in
     shift
     export OMP_NUM_THREADS=1 MKL_NUM_THREADS=1
     for cat in ${@:-search objects containment objcon}; do
+      chosen=$(selection "$cat")
+      if [ -z "$chosen" ]; then echo "=== $cat: no target needs it, nothing to run"; continue; fi
       echo "=== $cat start $(date -Is)"
       rc=0
-      # shellcheck disable=SC2046
-      "$RUN_ENV/bin/sb3-smc" experiment --out "$RUNS/paper-$cat" $(selection "$cat") --seeds 5 --workers 2 \
+      # shellcheck disable=SC2086
+      "$RUN_ENV/bin/sb3-smc" experiment --out "$RUNS/paper-$cat" $chosen --seeds 5 --workers 2 \
         ${REUSE_FROM:+--reuse-from "$REUSE_FROM"} $(options "$cat") || rc=$?
       echo "=== $cat end $(date -Is) rc=$rc"
     done ;;
@@ -164,10 +179,7 @@ case ${1:-} in
     "$0" keep "$cat"
     "$repo/.venv/bin/sb3-smc" report "$repo/docs/results/paper/$cat" --no-behaviour ;;
   report)
-    dirs=()
-    for cat in $(queue | awk '{print $1}'); do  # complete categories only: a partial one is kept, not reported
-      if complete "$repo/docs/results/paper/$cat/results.json"; then dirs+=("$repo/docs/results/paper/$cat"); fi
-    done
+    mapfile -t dirs < <(complete_dirs)  # complete categories only: a partial one is kept, not reported
     "$repo/.venv/bin/sb3-smc" report "${dirs[@]}" --out "$repo/docs/results/paper" --no-behaviour
     "$repo/.venv/bin/python" "$repo/tools/readme_table.py" --brief
     "$repo/.venv/bin/python" "$repo/tools/readme_table.py" --readme "$repo/docs/results/paper/README.md" ;;

@@ -2,13 +2,13 @@
 """Put the answer of the whole table into a README: from ``docs/results/paper/report.md`` (what ``sb3-smc report``
 wrote), one table of the paper's methods and the fair comparisons that answer its question (the means of base, curr
 and canon, curr's and canon's leads over the flat SMC with their paired t-tests, the same lead where a call costs its
-moves, at equal moves per episode, at equal experience, and for the setting of each reading that fits the paper
-best), ours beside the paper's; the verdict in three sentences; the two headline targets; and the count of the
-claims' verdicts, copied between the README's markers ``<!-- paper-table:start -->`` and ``<!-- paper-table:end -->``.
-Every number is the report's (its claims table, its checks of the method and its sweep): this only copies and
-arranges them, so the READMEs cannot disagree with the report. ``tools/paper_table.sh report`` runs it on the
-project's README (``--brief``: the answer table and the claims' count, the rest a link away) and on the results' own
-(``docs/results/paper/README.md``).
+moves, at equal moves per episode, at equal experience, and curr's mean and lead under the setting of each reading
+that fits the paper best, run on every concept), ours beside the paper's; the verdict in three sentences; the two
+headline targets; and the count of the claims' verdicts, copied between the README's markers
+``<!-- paper-table:start -->`` and ``<!-- paper-table:end -->``. Every number is the report's claims table's (and
+the count under it): this only copies and arranges them, so the READMEs cannot disagree with the report.
+``tools/paper_table.sh report`` runs it on the project's README (``--brief``: the answer table and the claims' count,
+the rest a link away) and on the results' own (``docs/results/paper/README.md``).
 
 Usage::
 
@@ -26,12 +26,13 @@ from pathlib import Path
 from pixelworld_env.atomic import atomic_write
 from sb3_smc.experiments.claims import READINGS, VERDICTS
 from sb3_smc.experiments.design import DEFAULT_METHODS
-from sb3_smc.experiments.tables import CHECKS_HEADING, CLAIMS_COUNT, CLAIMS_HEADING, MEANS_HEADING, SWEEP_HEADING
+from sb3_smc.experiments.tables import CLAIMS_COUNT, CLAIMS_HEADING, MEANS_HEADING
 
 ROOT = Path(__file__).resolve().parents[1]
 START, END = "<!-- paper-table:start -->", "<!-- paper-table:end -->"
 KINDS = ("classification", "bring-about")
-ONE_STEP, MOVES, EQUAL_MOVES, EXPERIENCE, MOVES_EXPERIENCE = (reading.name for reading in READINGS)
+ONE_STEP, MOVES, EQUAL_MOVES, CAP10, MOVES200, EXPERIENCE, MOVES_EXPERIENCE, CAP10_EXPERIENCE = (
+    reading.name for reading in READINGS)
 HEADLINE = ("cl_self-left-of-two-objects-vs-one", "ba_self-in-container_from_between-potential-containers")
 LEAD = "{m} above base (paired t-test)"
 ANSWER_ROWS = (  # (what the row says, the claims table's statement after "<kind>: ", its column)
@@ -44,6 +45,14 @@ ANSWER_ROWS = (  # (what the row says, the claims table's statement after "<kind
     ("curr above base given 400 moves an episode (equal moves)", LEAD.format(m="curr"), EQUAL_MOVES),
     ("curr above base at equal experience (a call is one step)", LEAD.format(m="curr"), EXPERIENCE),
     ("curr above base at equal experience (a call costs its moves)", LEAD.format(m="curr"), MOVES_EXPERIENCE),
+    ("curr-cap10 above base at equal experience (a call is one step, cut after 10 moves)", LEAD.format(m="curr"),
+     CAP10_EXPERIENCE),
+)
+BEST_ROWS = (  # the setting of each reading that fits the paper best, on every concept (the results page only)
+    ("curr-cap10: mean (a call is one step, cut after 10 moves)", "mean of curr", CAP10),
+    ("curr-cap10 above base", LEAD.format(m="curr"), CAP10),
+    ("curr-moves-200: mean (calls cost their moves, 200 moves an episode)", "mean of curr", MOVES200),
+    ("curr-moves-200 above base", LEAD.format(m="curr"), MOVES200),
 )
 
 
@@ -145,30 +154,22 @@ def split_verdict(cell: str) -> tuple[str, str]:
     return (ours, verdict) if ours and verdict in VERDICTS else ("", cell)
 
 
-def best_settings(report: str) -> list[str]:
-    """The sweep's best-fitting setting of each reading (a cap of moves a call; a number of moves an episode), in
-    the sweep table's best-first order, leaving out a setting still training."""
-    rows = [name for name in table_of(report, SWEEP_HEADING) if not name.startswith("**") and "*" not in name]
-    return [setting for prefix in ("curr-cap", "curr-moves-")
-            if (setting := next((name for name in rows if name.startswith(prefix)), None))]
-
-
 Rows = list[tuple[str, dict[str, tuple[str, str, str]]]]
 """The answer table's rows: what each says, and per kind (ours, verdict, the paper's)."""
 
 
-def answer_rows(report: str, sweep: bool = True) -> Rows:
-    """The answer table's rows from the report's claims table (and, with ``sweep``, the sweep's best setting of each
-    reading from its checks table); a row no kind has a result for is left out."""
+def answer_rows(report: str, best: bool = True) -> Rows:
+    """The answer table's rows from the report's claims table (with ``best``, the best settings' rows too); a row no
+    kind has a result for is left out."""
     claims = table_of(report, CLAIMS_HEADING)
-    checks = table_of(report, CHECKS_HEADING)
-    missing = [f"{kind}: {statement}" for _, statement, _ in ANSWER_ROWS for kind in KINDS
+    wanted = (*ANSWER_ROWS, *(BEST_ROWS if best else ()))
+    missing = [f"{kind}: {statement}" for _, statement, _ in wanted for kind in KINDS
                if claims and f"{kind}: {statement}" not in claims]
     if missing:
         raise SystemExit(f"the report's claims table has no statement {missing[0]!r}: the answer table reads it "
                          "(make the report again with tools/paper_table.sh report, or update ANSWER_ROWS)")
     rows: Rows = []
-    for label, statement, column in ANSWER_ROWS:
+    for label, statement, column in wanted:
         found = {}
         for kind in KINDS:
             row = claims.get(f"{kind}: {statement}", {})
@@ -177,16 +178,6 @@ def answer_rows(report: str, sweep: bool = True) -> Rows:
                 found[kind] = (ours, verdict, row["paper"])
         if found:
             rows.append((label, found))
-    for setting in best_settings(report) if sweep else []:
-        for what, statement in (("mean", f"mean of {setting}"), ("above base", f"{setting} above base")):
-            found = {}
-            for kind in KINDS:
-                row = next((r for name, r in checks.items() if name.startswith(f"{kind}: {statement} (")), None)
-                if row is not None:
-                    subset = row["check"].rpartition(" (")[2].rstrip(")")
-                    found[kind] = (f"{row['ours']} on {subset}", "a subset: not judged", row["paper"])
-            if found:
-                rows.append((f"{setting}: {what} (the sweep's best setting of its reading)", found))
     return rows
 
 
@@ -242,19 +233,20 @@ def verdict(answer: Rows) -> list[str]:
         sentences.append(f"With a call counted as one step, curr leads the flat SMC by {_both(lead, paper=True)}.")
     fair = [(what, rows[label]) for what, label in (("with each call costing its moves", ANSWER_ROWS[5][0]),
                                                     ("against a flat SMC given 400 moves an episode",
-                                                     ANSWER_ROWS[6][0])) if label in rows]
+                                                     ANSWER_ROWS[6][0]),
+                                                    ("with calls costing their moves in 200 moves an episode (the "
+                                                     "setting of that reading that fits the paper best)",
+                                                     BEST_ROWS[3][0])) if label in rows]
     if fair:
         sentences.append("Made fair in moves, its lead is " + "; ".join(f"{_both(found)} {what}"
                                                                         for what, found in fair) + ".")
     equal = [(what, rows[label]) for what, label in (("a call as one step", ANSWER_ROWS[7][0]),
-                                                     ("each call costing its moves", ANSWER_ROWS[8][0]))
+                                                     ("each call costing its moves", ANSWER_ROWS[8][0]),
+                                                     ("a call cut after 10 moves", ANSWER_ROWS[9][0]))
              if label in rows]
     if equal:
         sentences.append("At equal experience it is " + "; ".join(f"{_both(found)} with {what}"
-                                                                  for what, found in equal)
-                         + (", measured on the sweep's targets only"
-                            if any("swept" in ours for _, found in equal for ours, _, _ in found.values()) else "")
-                         + ".")
+                                                                  for what, found in equal) + ".")
     return [" ".join(sentences)] if sentences else []
 
 
@@ -278,15 +270,15 @@ def headline(report: str) -> list[str]:
 def block(report: str, source: str, brief: bool = False) -> str:
     """The README's block: a line on what it is (whole, or what is still being run), the answer table, the
     verdict, the headline targets and the count of the claims' verdicts; ``brief`` (the landing page): without the
-    sweep's rows, the verdict and the headline targets, which the results page beside the report holds."""
+    best settings' rows, the verdict and the headline targets, which the results page beside the report holds."""
     lines = [START, "", f"From [the whole table's report]({source})" + partial_note(report)
              + "; scores in %, ours (95 % bootstrap interval; a lead over all of a kind's concepts resamples the "
              "concepts too) beside the paper's (Hay et al., AAAI-18), with the verdict.", ""]
-    rows = answer_rows(report, sweep=not brief)
+    rows = answer_rows(report, best=not brief)
     parts = [answer_table(rows)]
     if brief:
         page = (Path(source).parent / "README.md").as_posix()
-        parts.append([f"The verdict, the paper's headline targets and the sweep's best setting of each reading: "
+        parts.append([f"The verdict, the paper's headline targets and the best setting of each reading: "
                       f"[the results page]({page})."] if rows else [])
     else:
         parts += [verdict(rows), headline(report)]
@@ -313,7 +305,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--report", type=Path, default=ROOT / "docs/results/paper/report.md")
     parser.add_argument("--readme", type=Path, default=ROOT / "README.md")
     parser.add_argument("--brief", action="store_true",
-                        help="the landing page's block: no sweep rows, verdict or headline targets")
+                        help="the landing page's block: no best settings' rows, verdict or headline targets")
     args = parser.parse_args(argv)
     for path, what in ((args.report, "the report (tools/paper_table.sh report makes it)"),
                        (args.readme, "the README to update")):

@@ -3,9 +3,11 @@ call, bootstrap intervals (:mod:`sb3_smc.experiments.bootstrap`) instead of a fi
 
 The paper does not say how a hierarchical SMC's episode counted a call, so every statement about a hierarchical
 method is judged under each :data:`READINGS` entry: a call is one step (``curr``, ``canon``), a call costs its moves
-(``curr-moves``), and, where the statement compares with the flat SMC, the one-step reading against a flat SMC with
-as many moves (``base-400``) and both readings against the flat SMC at as much experience (the sweep's settings of
-curr and curr-moves on its 12 concepts, :mod:`sb3_smc.experiments.experience`). Against a number of the paper our
+(``curr-moves``), the one-step reading against a flat SMC with as many moves (``base-400``), the setting of each
+reading that fits the paper best on every concept (``curr-cap10``: a call cut after 10 moves; ``curr-moves-200``:
+200 moves an episode), and, where the statement compares curr with the flat SMC, the flat SMC at as much experience
+(:mod:`sb3_smc.experiments.experience`: curr's setting of each reading on the sweep's 12 concepts, and
+``curr-cap10`` on the 39 outside them, where its moves were recorded). Against a number of the paper our
 interval resamples seeds and test worlds (the paper's number is over the same concepts as ours); where a statement
 is judged by its sign, a claimed effect across concepts, it resamples the concepts too (a hierarchical bootstrap),
 and a statement of significance needs our paired t-test across concepts as well. A verdict compares the paper's
@@ -20,12 +22,14 @@ number with our interval:
 * ``opposite``: our interval lies entirely on the other side of zero (a comparison reversed).
 
 A statement without a number of the paper (the CNN by category, Fig. 5a) is reproduced where our interval has the
-claimed sign, opposite where it has the other, and short where it holds zero; so is a comparison judged on a subset
-of the concepts the paper's number is over (the equal-experience readings), its cell saying on how many of which
-targets (a statement of the subset, not of the kind). A later reading that runs all of a statement's methods as the
+claimed sign, opposite where it has the other, and short where it holds zero; so is a comparison at equal
+experience (the paper's number is not at equal experience: only its sign is claimed there), and one judged on a
+subset of the concepts the paper's number is over says on how many of which targets in its cell (a statement of the
+subset, not of the kind). A later reading that runs all of a statement's methods as the
 first does says "same as one step" (:data:`SAME`) and is not counted in its column. Wins at the ceiling are counted
 apart (:data:`~sb3_smc.experiments.statistics.CEILING`). Our own methods that no reading uses (``base-gru``,
-``canon-scaled``, the sweep's settings) are judged in a table of their own (:func:`method_checks`).
+``canon-scaled``, the flat SMC's points of experience) are judged in a table of their own (:func:`method_checks`);
+the sweep's other settings have their section (:mod:`sb3_smc.experiments.sweep`).
 """
 
 from __future__ import annotations
@@ -37,7 +41,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from sb3_smc.experiments.bootstrap import Interval, Replicates
-from sb3_smc.experiments.design import METHOD_REGISTRY, SWEEP_TARGETS
+from sb3_smc.experiments.design import METHOD_REGISTRY, SWEEP_METHODS, SWEEP_TARGETS
 from sb3_smc.experiments.experience import flat_at
 from sb3_smc.experiments.paper import PAPER_CONCEPTS, PAPER_COUNTS, PAPER_MEANS, PAPER_NOPRIM, PAPER_TTESTS
 from sb3_smc.experiments.statistics import ceiling_wins, method_test, ttest_text, wins
@@ -64,9 +68,18 @@ class Reading:
     name: str
     methods: Mapping[str, str]
     targets: tuple[str, ...] | None = None
-    """Judged on these concepts only (chosen before the run): the comparisons of two of its methods, by sign."""
+    """Judged on these concepts only (chosen before the run); ``None``: on all of each statement's."""
+    excluding: tuple[str, ...] = ()
+    """Judged on the concepts outside these (where :attr:`targets` is ``None``)."""
     subset: str = ""
-    """What :attr:`targets` are called in a cell (``swept targets``)."""
+    """What the concepts it is judged on are called in a cell (``swept targets``)."""
+    by_sign: bool = False
+    """Only the comparisons of two of its methods are judged, by the sign the paper claims (equal experience)."""
+
+    def __post_init__(self) -> None:
+        if (self.targets is not None or self.excluding) and not self.by_sign:
+            raise ValueError(f"reading {self.name!r}: on a subset of the concepts it must be judged by sign (the "
+                             "paper's numbers are over all of them)")
 
 
 _PAPERS = ("cnn", "base", "curr", "canon", "curr-noprim", "canon-noprim")
@@ -74,12 +87,21 @@ READINGS = (
     Reading("a call is one step", {m: m for m in _PAPERS}),
     Reading("a call costs its moves", {"cnn": "cnn", "base": "base", "curr": "curr-moves"}),
     Reading("one step, the flat SMC with 400 moves", {**{m: m for m in _PAPERS}, "base": "base-400"}),
+    Reading("one step, a call cut after 10 moves", {"cnn": "cnn", "base": "base", "curr": "curr-cap10"}),
+    Reading("costs its moves, 200 moves an episode", {"cnn": "cnn", "base": "base", "curr": "curr-moves-200"}),
     Reading("one step, at equal experience", {"curr": "curr-cap100", "base": flat_at("curr-cap100")},
-            targets=SWEEP_TARGETS, subset="swept targets"),
+            targets=SWEEP_TARGETS, subset="swept targets", by_sign=True),
     Reading("costs its moves, at equal experience", {"curr": "curr-moves-100", "base": flat_at("curr-moves-100")},
-            targets=SWEEP_TARGETS, subset="swept targets"),
+            targets=SWEEP_TARGETS, subset="swept targets", by_sign=True),
+    # the sweep's curr-cap10 trained before the SMCs' moves were recorded: its experience is known outside the sweep
+    Reading("cut after 10 moves, at equal experience", {"curr": "curr-cap10", "base": flat_at("curr-cap10")},
+            excluding=SWEEP_TARGETS, subset="targets outside the sweep", by_sign=True),
 )
-"""The readings of a call the claims are judged under, in the table's column order."""
+"""The readings of a call the claims are judged under, in the table's column order: the paper's methods as run;
+curr whose calls cost their moves; the flat SMC with as many moves as curr makes; the setting of each reading's free
+parameter that fits the paper best (the sweep, :mod:`sb3_smc.experiments.sweep`), run on every concept; and the flat
+SMC at as much experience as curr's setting of each reading (on the sweep's concepts) and the best one-step setting
+(on the concepts outside the sweep, where its moves were recorded)."""
 
 Score = Callable[[str, str], np.ndarray]
 
@@ -241,8 +263,8 @@ def significance(found: str, test: tuple[int, float, float] | None, paper: float
 def judge(statement: Statement, reading: Reading, replicates: Replicates,
           unfinished: Collection[tuple[str, str]] = ()) -> Judged:
     """``statement`` under ``reading``: our number with its interval and the verdict, or why there is none."""
-    if reading.targets is not None:
-        return _judge_on_subset(statement, reading, reading.targets, replicates, unfinished)
+    if reading.by_sign:
+        return _judge_by_sign(statement, reading, replicates, unfinished)
     first = READINGS[0].methods
     if reading is not READINGS[0] and all(m in first and reading.methods.get(m) == first[m]
                                           for m in statement.methods):
@@ -270,17 +292,18 @@ def judge(statement: Statement, reading: Reading, replicates: Replicates,
     return Judged(text, found)
 
 
-def _judge_on_subset(statement: Statement, reading: Reading, subset: Collection[str], replicates: Replicates,
-                     unfinished: Collection[tuple[str, str]]) -> Judged:
-    """A comparison of two of ``reading``'s methods on the concepts of ``subset`` it is about, judged by the sign of
-    the paper's claim (its number is over all of them) and, for a statement of significance, by our paired t-test
-    there too; its cell says on how many of the subset's targets. Any other statement is not judged (a blank
-    cell)."""
+def _judge_by_sign(statement: Statement, reading: Reading, replicates: Replicates,
+                   unfinished: Collection[tuple[str, str]]) -> Judged:
+    """A comparison of two of ``reading``'s methods on the concepts it is about (those of the reading's
+    :attr:`~Reading.targets` where it has them), judged by the sign of the paper's claim, the concepts resampled, and,
+    for a statement of significance, by our paired t-test too; a subset's cell says on how many of its targets. Any
+    other statement is not judged (a blank cell)."""
     if not (statement.gap and statement.paper is not None and len(statement.methods) == 2
             and all(m in reading.methods for m in statement.methods)):
         return Judged("", "")
     a, b = (reading.methods[m] for m in statement.methods)
-    targets = [t for t in statement.targets if t in subset]
+    targets = [t for t in statement.targets if t in reading.targets] if reading.targets is not None else \
+        [t for t in statement.targets if t not in reading.excluding]
     if not all(any((t, m) in replicates.estimate or (t, m) in unfinished for t in targets) for m in (a, b)):
         return Judged("-", NOT_RUN)  # one of the two neither ran nor is running here (the curve's run not begun)
     if any((t, m) in unfinished for t in targets for m in (a, b)):
@@ -292,7 +315,7 @@ def _judge_on_subset(statement: Statement, reading: Reading, subset: Collection[
     sign = 1.0 if statement.paper >= 0 else -1.0
     claimed = Interval(sign * gap.estimate, min(sign * gap.low, sign * gap.high), max(sign * gap.low, sign * gap.high))
     _, test = method_test(replicates.estimate, targets, a, b)
-    text = f"{points(gap, True)} on {len(targets)} {reading.subset}".rstrip() \
+    text = points(gap, True) + (f" on {len(targets)} {reading.subset}" if reading.subset else "") \
         + (f"; {ttest_text(test)}" if test is not None else "")
     found = verdict(None, claimed, gap=True)
     return Judged(text, significance(found, test, statement.paper) if statement.test is not None else found)
@@ -317,11 +340,12 @@ def tally(cells: Sequence[str]) -> str:
 def method_checks(replicates: Replicates, kind_of: Mapping[str, str], category_of: Mapping[str, str],
                   methods: Sequence[str], unfinished: Collection[tuple[str, str]] = ()) -> list[tuple[str, str, str,
                                                                                                     str]]:
-    """Our own methods that no reading of every concept uses, against the paper's numbers for the method they stand
-    for: per kind, their mean and their gap to the flat SMC (``base``). Rows of (statement, paper, ours, verdict)."""
+    """Our own methods that no reading of every concept uses and the sweep's section does not show, against the
+    paper's numbers for the method they stand for: per kind, their mean and their gap to the flat SMC (``base``).
+    Rows of (statement, paper, ours, verdict)."""
     used = {m for reading in READINGS if reading.targets is None for m in reading.methods.values()}
     rows = []
-    for method in (m for m in methods if m not in used and METHOD_REGISTRY[m].smc):
+    for method in (m for m in methods if m not in used and m not in SWEEP_METHODS and METHOD_REGISTRY[m].smc):
         paper_name = METHOD_REGISTRY[method].paper_name
         for kind in ("classification", "bring-about"):
             targets = tuple(sorted(t for t in kind_of if kind_of[t] == kind and category_of[t] != "pushable"))

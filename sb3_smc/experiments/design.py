@@ -12,7 +12,7 @@ moves an episode (as many as curr makes, median, on every target probed); the sw
 reading of a call, ``curr-cap10`` / ``-cap25`` / ``-cap50`` / ``-cap100`` (a call one step, cut after 10 / 25 / 50
 / 100 moves; ``-cap100`` is curr's setting, trained again in the sweep's run) and ``curr-moves-100`` / ``-200`` /
 ``-400`` (calls cost their moves, 100 / 200 / 400 moves an episode; ``-100`` is curr-moves' setting); ``base-x1``,
-``base-x4`` and ``base-x16``, the flat SMC with 1, 4 and 16 times the budget (equal experience,
+``base-x4``, ``base-x16`` and ``base-x64``, the flat SMC with 1, 4, 16 and 64 times the budget (equal experience,
 :data:`EXPERIENCE_METHODS`); ``curr-lower-x2``, curr whose lower-level nodes (every node below its target nodes)
 train with twice the run's budget, under names of their own. Every SMC method's jobs are nodes of curricula
 (shipped ones, or a flat method's); :func:`plan` merges them so that a lower-level node shared by several methods
@@ -201,7 +201,7 @@ METHOD_REGISTRY: dict[str, ExperimentMethod] = {method.name: method for method i
       for steps, colour in ((100, "#d2a07a"), (200, "#c47a4a"), (400, "#6b3310"))),
     *(ExperimentMethod(f"base-x{factor}", f"base-x{factor} (flat SMC, {factor} x the budget)", colour, paper="base",
                        budget_factor=factor)
-      for factor, colour in ((1, "#a9bfe0"), (4, "#7f9fd0"), (16, "#2b4f8c"))),
+      for factor, colour in ((1, "#a9bfe0"), (4, "#7f9fd0"), (16, "#2b4f8c"), (64, "#142a52"))),
     ExperimentMethod("curr-lower-x2", "curr-lower-x2 (curr, 2 x the budget of its lower levels)", "#e07b91",
                      curricula="smc-curr", paper="curr", lower_budget_factor=2),
 )}
@@ -233,11 +233,13 @@ SWEEP_TARGETS = (
 )
 """The sweep's fixed targets, chosen before its run: both kinds and every category, the two headline targets and the
 two where the original flat SMCs scored 100 and curr-moves 5.6 and 3.2."""
-EXPERIENCE_METHODS = ("base-x1", "base-x4", "base-x16")
-"""The flat SMC with 1, 4 and 16 times the budget, on :data:`SWEEP_TARGETS`, in one run whose records keep every SMC's
-primitive moves (``base-x1`` is ``base`` retrained there, so that its moves are recorded too): a curve of the flat
-SMC's score against the primitive moves it trained on, to set a curriculum's score against at the curriculum's own
-experience (its target SMCs' moves and those of every lower-level SMC it was built on; about 10-25 x base's)."""
+EXPERIENCE_METHODS = ("base-x1", "base-x4", "base-x16", "base-x64")
+"""The flat SMC with 1, 4, 16 and 64 times the budget, in runs whose records keep every SMC's primitive moves
+(``base-x1`` is ``base`` retrained there, so that its moves are recorded too): a curve of the flat SMC's score against
+the primitive moves it trained on, to set a curriculum's score against at the curriculum's own experience (its target
+SMCs' moves and those of every lower-level SMC it was built on; about 10-25 x base's). 1, 4 and 16 x on
+:data:`SWEEP_TARGETS`, 1 and 4 x on every other target, and each next point where the curve must go on
+(:mod:`sb3_smc.experiments.extension`)."""
 CATEGORIES = ("containment", "objcon", "objects", "search", "pushable")
 PAPER_CATEGORIES = CATEGORIES[:4]
 """The categories of the released benchmark (``all``); ``pushable`` is the curriculum sb3-smc designed."""

@@ -38,8 +38,8 @@ from sb3_smc.experiments.bootstrap import Replicates
 from sb3_smc.experiments.design import EXPERIENCE_METHODS, METHOD_REGISTRY
 from sb3_smc.experiments.statistics import CEILING, NEAR, ceiling_wins, method_test, ttest_text, wins
 
-__all__ = ["EXPERIENCE_FILE", "EXPERIENCE_HEADING", "AtExperience", "Experience", "at_experience", "blends",
-           "experience_section", "flat_at"]
+__all__ = ["EXPERIENCE_FILE", "EXPERIENCE_HEADING", "AtExperience", "Experience", "ExperienceSource", "Experiences",
+           "at_experience", "blends", "experience_section", "flat_at"]
 
 EXPERIENCE_FILE = "experience.json"
 """The file of a run directory's (or its kept records') :class:`Experience`."""
@@ -104,20 +104,9 @@ class Experience:
     def load(cls, path: str | Path) -> Experience:
         return cls.from_dict(_json(Path(path), f"an {FORMAT} file"), str(path))
 
-    @classmethod
-    def merged(cls, parts: Sequence[Experience]) -> Experience | None:
-        """The experience of several runs (a node in two of them must have the same uses; ``None`` for none)."""
-        if not parts:
-            return None
-        uses: dict[str, tuple[str, ...]] = {}
-        steps: dict[str, dict[int, int]] = {}
-        for part in parts:
-            for name, used in part.uses.items():
-                if uses.setdefault(name, used) != used:
-                    raise SMCError(f"node {name!r} uses {list(uses[name])} in one run and {list(used)} in another")
-            for name, seeds in part.steps.items():
-                steps.setdefault(name, {}).update(seeds)
-        return cls(max(p.seeds for p in parts), uses, steps)
+    def of(self, target: str, method: str) -> Experience:
+        """The experience ``method``'s score on ``target`` was trained with: this one run's."""
+        return self
 
     def closure(self, nodes: Iterable[str]) -> set[str]:
         """``nodes`` and every node they use, at any depth."""
@@ -137,6 +126,24 @@ class Experience:
         once; ``None`` where any of them has no record."""
         totals = [self.node_total(name) for name in self.closure(nodes)]
         return None if not totals or any(t is None for t in totals) else float(sum(t for t in totals if t))
+
+
+@dataclass(frozen=True)
+class Experiences:
+    """The experience of several runs, each with the (target, method) scores it reported: a score's experience is
+    counted in the run that trained it. Two runs may hold SMCs of one node name trained apart (lower-level nodes one
+    run reused from the pretrained library, two of five seeds, and another trained again), so their records are not
+    merged."""
+
+    runs: tuple[tuple[Experience, frozenset[tuple[str, str]]], ...]
+
+    def of(self, target: str, method: str) -> Experience | None:
+        """The experience of the run that reported ``method`` on ``target`` (``None``: no run with records did)."""
+        return next((experience for experience, pairs in self.runs if (target, method) in pairs), None)
+
+
+ExperienceSource = Experience | Experiences
+"""One run's experience (every score's), or several runs' (:class:`Experiences`)."""
 
 
 class ScoreTable(Protocol):
@@ -206,21 +213,29 @@ class AtExperience:
     best point)."""
 
 
-def at_experience(table: ScoreTable, experience: Experience | None) -> dict[tuple[str, str], AtExperience]:
-    """(target, hierarchical method) -> where its experience falls on the flat SMC's curve, for every target with
-    at least two points of the curve and every method whose experience is recorded there."""
-    flats = [m for m in EXPERIENCE_METHODS if m in table.methods]
+def _spent(experience: ExperienceSource, target: str, method: str, nodes: Collection[str]) -> float | None:
+    """The experience of ``nodes`` in the run that reported ``method`` on ``target`` (``None``: not recorded)."""
+    run = experience.of(target, method)
+    return run.total(nodes) if run is not None else None
+
+
+def at_experience(table: ScoreTable, experience: ExperienceSource | None,
+                  curve_of: Collection[str] = EXPERIENCE_METHODS) -> dict[tuple[str, str], AtExperience]:
+    """(target, hierarchical method) -> where its experience falls on the flat SMC's curve (of the flat methods
+    ``curve_of``, default every one that ran), for every target with at least two points of the curve and every
+    method whose experience is recorded there."""
+    flats = [m for m in EXPERIENCE_METHODS if m in table.methods and m in curve_of]
     if experience is None or len(flats) < 2:
         return {}
     found: dict[tuple[str, str], AtExperience] = {}
     for target in table.targets:
-        points = [(experience.total([METHOD_REGISTRY[m].flat_node(target).name]), m) for m in flats
+        points = [(_spent(experience, target, m, [METHOD_REGISTRY[m].flat_node(target).name]), m) for m in flats
                   if (target, m) in table.score]
         curve = tuple(sorted(((e, m) for e, m in points if e), key=lambda p: (p[0], flats.index(p[1]))))
         if len(curve) < 2:
             continue
         for method in table.hierarchical:
-            spent = experience.total(table.candidate_nodes(target, method)) \
+            spent = _spent(experience, target, method, table.candidate_nodes(target, method)) \
                 if (target, method) in table.score else None
             if spent is not None:
                 found[(target, method)] = AtExperience(spent, curve, *_weights(
@@ -237,7 +252,7 @@ def blends(found: Mapping[tuple[str, str], AtExperience]) -> dict[str, dict[str,
     return out
 
 
-def experience_section(table: ScoreTable, experience: Experience | None) -> list[str]:
+def experience_section(table: ScoreTable, experience: ExperienceSource | None) -> list[str]:
     """The report's section: per target with the flat SMC's curve, each hierarchical method's best-seed score and
     experience beside the flat SMC's score at that experience, and per method its lead with a bootstrap interval and
     a paired t-test; nothing without the curve's records."""

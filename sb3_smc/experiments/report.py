@@ -28,7 +28,7 @@ from sb3_smc.curricula.designed import designed_curricula
 from sb3_smc.curricula.jobs import job_name, node_of
 from sb3_smc.errors import SMCError
 from sb3_smc.experiments.design import CATEGORIES, METHOD_REGISTRY, METHODS, SMC_METHODS, plan
-from sb3_smc.experiments.experience import EXPERIENCE_FILE, Experience
+from sb3_smc.experiments.experience import EXPERIENCE_FILE, Experience, Experiences
 from sb3_smc.experiments.figures import Panel, bar_panels, timeline_figure, trajectory_figure
 from sb3_smc.experiments.runner import evaluation_path, experiment_command, read_evaluation, read_results
 from sb3_smc.experiments.tables import KINDS, ResultTable, number_sections
@@ -36,7 +36,7 @@ from sb3_smc.experiments.wall_clock import UNKNOWN_COMMIT, lower_bound
 from sb3_smc.library import SMCLibrary, storage
 from sb3_smc.smc.smc import SMC
 
-__all__ = ["pushable_levels", "write_report"]
+__all__ = ["pushable_levels", "read_table", "write_report"]
 
 
 def write_report(directories: str | Path | Sequence[str | Path], *, out: str | Path | None = None,
@@ -144,12 +144,25 @@ def _with_worlds(sources: Sequence[tuple[Path, dict[str, Any]]]) -> list[tuple[P
     return out
 
 
-def _write(sources: Sequence[tuple[Path, dict[str, Any]]], out: Path, trajectories: str | None,
-           behaviour: bool) -> Path:
+def read_table(directories: Sequence[str | Path]) -> tuple[ResultTable, Experiences | None]:
+    """The merged results of experiment directories (every one read and checked) and their kept experience: what a
+    report over them reads."""
+    if not directories:
+        raise SMCError("no experiment directories to read")
+    return _table([(Path(d), read_results(Path(d))) for d in directories])
+
+
+def _table(sources: Sequence[tuple[Path, dict[str, Any]]]) -> tuple[ResultTable, Experiences | None]:
     rows, reported = _merge(_with_worlds(sources))
     table = ResultTable(rows, reported, _unfinished(sources))
-    experience = Experience.merged([Experience.load(d / EXPERIENCE_FILE) for d, _ in sources
-                                    if (d / EXPERIENCE_FILE).is_file()])  # a bad file: refused before any figure
+    runs = tuple((Experience.load(d / EXPERIENCE_FILE), frozenset((r["target"], r["method"]) for r in results["rows"]))
+                 for d, results in sources if (d / EXPERIENCE_FILE).is_file())  # a bad file: refused before any figure
+    return table, Experiences(runs) if runs else None
+
+
+def _write(sources: Sequence[tuple[Path, dict[str, Any]]], out: Path, trajectories: str | None,
+           behaviour: bool) -> Path:
+    table, experience = _table(sources)
     methods, targets = table.methods, table.targets
     figures_dir = out / "figures"
     figures_dir.mkdir(parents=True, exist_ok=True)
