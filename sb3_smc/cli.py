@@ -138,7 +138,7 @@ def _experiment(args: argparse.Namespace) -> int:
 
 def _report(args: argparse.Namespace) -> int:
     for path in report.write_report(args.directories, out=args.out, trajectories=args.trajectories,
-                                    behaviour=not args.no_behaviour):
+                                    behaviour=not args.no_behaviour, reruns=args.rerun):
         print(f"wrote {path}")
     return 0
 
@@ -362,6 +362,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--trajectories", default=None, help="the target of the trajectory and timeline figures "
                                                         "(default: the first target)")
     p.add_argument("--no-behaviour", action="store_true", help="skip the trajectory and timeline figures")
+    p.add_argument("--rerun", action="append", default=[], metavar="DIR",
+                   help="one of the directories that ran target x method pairs of the others again: its rows replace "
+                        "theirs, named in the report (repeatable; needs --out)")
     p.set_defaults(run=_report)
 
     p = sub.add_parser("learn", help="learn a new concept from a few of its worlds with a library's SMCs as actions")

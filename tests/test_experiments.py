@@ -1311,6 +1311,38 @@ def test_the_whole_table_report_over_two_directories(tmp_path):
     assert not (tmp_path / "twice").exists()
 
 
+def test_a_reruns_rows_replace_those_of_the_pairs_it_ran_again(tmp_path):
+    """``reruns``: a directory that ran some target x method pairs of another again (a method retrained with its
+    moves recorded, say) replaces that directory's rows of those pairs, in the table and in one report over both,
+    whose provenance names them; a rerun not among the directories, reruns without one report over all, and a
+    partial directory with pairs replaced are refused before anything is written."""
+    from sb3_smc.experiments.report import read_table
+
+    a, b = level2_targets()[:2]
+    _synthetic_table(tmp_path / "first", [a, b], ["base", "curr"], lambda t, m: 0.5)
+    _synthetic_table(tmp_path / "again", [a], ["curr"], lambda t, m: 0.9)
+    with pytest.raises(SMCError, match=f"{a} with curr is in both"):
+        read_table([tmp_path / "first", tmp_path / "again"])
+    table, _ = read_table([tmp_path / "first", tmp_path / "again"], reruns=[tmp_path / "again"])
+    assert table.score == {(a, "base"): 0.5, (a, "curr"): 0.9, (b, "base"): 0.5, (b, "curr"): 0.5}
+    assert table.seeds[(a, "curr")] == pytest.approx([0.9, 0.8])  # the rerun's seeds, not the first's
+    [path] = write_report([tmp_path / "first", tmp_path / "again"], out=tmp_path / "both", behaviour=False,
+                          reruns=[tmp_path / "again"])
+    text = path.read_text()
+    assert f"- replaced by the rerun `../again` (not in this report): curr on 1 target(s), {a}" in text
+    assert text.count("replaced by the rerun") == 1
+    for reruns, out, message in (([tmp_path / "other"], tmp_path / "x", "is not one of the directories"),
+                                 ([tmp_path / "again"], None, "give --out")):
+        with pytest.raises(SMCError, match=message):
+            write_report([tmp_path / "first", tmp_path / "again"], out=out, behaviour=False, reruns=reruns)
+    results = json.loads((tmp_path / "first" / "results.json").read_text())
+    (tmp_path / "first" / "results.json").write_text(json.dumps({**results, "complete": False,
+                                                                  "missing": ["x@0"]}))
+    with pytest.raises(SMCError, match="is partial: a rerun replaces pairs of complete directories only"):
+        read_table([tmp_path / "first", tmp_path / "again"], reruns=[tmp_path / "again"])
+    assert not (tmp_path / "x").exists()
+
+
 def test_the_report_marks_wall_times_recorded_before_the_ledger_and_gives_every_commit(tmp_path):
     """A directory whose wall time was recorded without the wall-time ledger (none, or one begun from such a total)
     gives only a lower bound, marked ``≥``, and so does the total over directories when any part is one; a
@@ -1602,6 +1634,29 @@ def test_the_whole_tables_script_extends_the_flat_curve_where_the_rule_says(tmp_
     done = subprocess.run([script, "run", "experience-x64"], env=env, check=True, capture_output=True, text=True)
     assert "experience-x64: no target needs it, nothing to run" in done.stdout
     assert len((tmp_path / "calls").read_text().splitlines()) == 1
+
+
+def test_the_whole_tables_script_lets_a_rerun_replace_an_earlier_categorys_pairs(tmp_path):
+    """A complete category of the script's reruns (``experience-cap10``) goes to the report as ``--rerun``, and to the
+    curve's extension only for a category after it; the extension of a category reads only the categories before it
+    in the queue."""
+    repo = _script_repo(tmp_path, {"sb3-smc": f'echo "sb3-smc $*" >> {tmp_path}/calls',
+                                   "python": f'echo "python $*" >> {tmp_path}/calls'})
+    _executable(tmp_path / "env" / "bin" / "sb3-smc", "true")
+    paper = repo / "docs" / "results" / "paper"
+    paper.mkdir(parents=True)
+    (paper / "queue.txt").write_text("readings  abc  -\nexperience-x64  abc  -\nexperience-cap10  abc  -\n")
+    for category in ("readings", "experience-cap10"):
+        (paper / category).mkdir()
+        (paper / category / "results.json").write_text(json.dumps({"complete": True}))
+    env = {**os.environ, "RUNS": str(tmp_path / "runs"), "RUN_ENV": str(tmp_path / "env")}
+    script = str(repo / "tools" / "paper_table.sh")
+    subprocess.run([script, "run", "experience-x64"], env=env, check=True, capture_output=True)
+    subprocess.run([script, "report"], env=env, check=True, capture_output=True)
+    calls = (tmp_path / "calls").read_text().splitlines()
+    assert calls[0] == f"python -m sb3_smc.experiments.extension base-x64 {paper}/readings"
+    assert calls[1] == (f"sb3-smc report {paper}/readings {paper}/experience-cap10 --out {paper} --no-behaviour "
+                        f"--rerun {paper}/experience-cap10")
 
 
 def test_cpu_model_names_the_family_and_model(tmp_path: Path) -> None:

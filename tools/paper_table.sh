@@ -15,6 +15,8 @@
 #                                                and base-x4 (base-x1: base retrained, so that its moves are recorded),
 #                                                each on the 39 level-2 targets outside SWEEP_TARGETS, so that with
 #                                                readings and experience they cover all 51;
+#                                                experience-cap10: curr-cap10 on SWEEP_TARGETS again, its moves
+#                                                recorded (the sweep's run of it predates them), replacing the sweep's;
 #                                                experience-x16, experience-x64: base-x16 / base-x64 on the targets
 #                                                whose flat SMC's curve must go on, from the complete kept categories
 #                                                (python -m sb3_smc.experiments.extension; nothing to run: skipped))
@@ -51,13 +53,16 @@ selection() {  # the experiment options of a category (base-gru, canon-scaled, b
 print("--methods", ",".join(SWEEP_METHODS), "--targets", ",".join(SWEEP_TARGETS))' ;;
     experience) "$RUN_ENV/bin/python" -I -c 'from sb3_smc.experiments.design import EXPERIENCE_METHODS, SWEEP_TARGETS
 print("--methods", ",".join(EXPERIENCE_METHODS), "--targets", ",".join(SWEEP_TARGETS))' ;;
+    experience-cap10) "$RUN_ENV/bin/python" -I -c 'from sb3_smc.experiments.design import SWEEP_TARGETS
+print("--methods curr-cap10 --targets", ",".join(SWEEP_TARGETS))' ;;
     readings-all|experience-all) "$RUN_ENV/bin/python" -I -c 'import sys
 from sb3_smc.experiments import level2_targets
 from sb3_smc.experiments.design import SWEEP_TARGETS
 methods = "curr-cap10,curr-moves-200" if sys.argv[1] == "readings-all" else "base-x1,base-x4"
 print("--methods", methods, "--targets", ",".join(t for t in level2_targets() if t not in SWEEP_TARGETS))' "$1" ;;
     experience-x16|experience-x64)  # from the kept records of the categories before it (complete ones only)
-      "$repo/.venv/bin/python" -m sb3_smc.experiments.extension "base-${1#experience-}" $(complete_dirs) ;;
+      "$repo/.venv/bin/python" -m sb3_smc.experiments.extension "base-${1#experience-}" $(complete_dirs "$1") \
+        $(rerun_options "$1") ;;
     curr-moves|curr-moves-cl) echo "--methods curr-moves --targets $("$RUN_ENV/bin/python" -I -c 'import sys
 from pixelworld_env.datasets import catalog
 from sb3_smc.experiments import level2_targets
@@ -83,9 +88,19 @@ complete() {  # whether the results.json $1 says its run is complete
   holds "$1" complete
 }
 
-complete_dirs() {  # the kept directories of the queue's complete categories
+complete_dirs() {  # the kept directories of the queue's complete categories (before category $1, if given)
   for cat in $(queue | awk '{print $1}'); do
+    if [ "$cat" = "${1:-}" ]; then break; fi
     if complete "$repo/docs/results/paper/$cat/results.json"; then echo "$repo/docs/results/paper/$cat"; fi
+  done
+}
+
+RERUNS="experience-cap10"  # categories that run target x method pairs of earlier ones again: their rows replace those
+
+rerun_options() {  # --rerun for each complete category of RERUNS (before category $1, if given)
+  local dir
+  for dir in $(complete_dirs "${1:-}"); do
+    case " $RERUNS " in *" $(basename "$dir") "*) echo "--rerun $dir" ;; esac
   done
 }
 
@@ -180,7 +195,8 @@ case ${1:-} in
     "$repo/.venv/bin/sb3-smc" report "$repo/docs/results/paper/$cat" --no-behaviour ;;
   report)
     mapfile -t dirs < <(complete_dirs)  # complete categories only: a partial one is kept, not reported
-    "$repo/.venv/bin/sb3-smc" report "${dirs[@]}" --out "$repo/docs/results/paper" --no-behaviour
+    # shellcheck disable=SC2046
+    "$repo/.venv/bin/sb3-smc" report "${dirs[@]}" --out "$repo/docs/results/paper" --no-behaviour $(rerun_options)
     "$repo/.venv/bin/python" "$repo/tools/readme_table.py" --brief
     "$repo/.venv/bin/python" "$repo/tools/readme_table.py" --readme "$repo/docs/results/paper/README.md" ;;
   *) echo "usage: $0 run [categories...] | continue | checkpoint | keep <category> [repo] | partial <category> | report" >&2

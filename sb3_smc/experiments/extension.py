@@ -78,11 +78,13 @@ def main(argv: Sequence[str] | None = None) -> None:
                                                  "point METHOD; nothing where none does.")
     parser.add_argument("method", choices=EXPERIENCE_METHODS[len(FIRST):])
     parser.add_argument("directories", nargs="+", help="complete experiment directories (with experience.json)")
+    parser.add_argument("--rerun", action="append", default=[], metavar="DIR",
+                        help="one of the directories that ran pairs of the others again: its rows replace theirs")
     args = parser.parse_args(argv)
     budgets = {read_results(Path(d))["settings"]["timesteps"] for d in args.directories}
     if len(budgets) != 1:
         raise SystemExit(f"the directories ran with different budgets {sorted(budgets)}: the curve needs one")
-    table, experience = read_table(args.directories)
+    table, experience = read_table(args.directories, reruns=args.rerun)
     if experience is None:
         raise SystemExit("none of the directories has an experience.json: no curve to extend")
     targets = needs_point(table, experience, args.method, budgets.pop())

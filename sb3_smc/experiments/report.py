@@ -40,7 +40,8 @@ __all__ = ["pushable_levels", "read_table", "write_report"]
 
 
 def write_report(directories: str | Path | Sequence[str | Path], *, out: str | Path | None = None,
-                 trajectories: str | None = None, behaviour: bool = True) -> list[Path]:
+                 trajectories: str | None = None, behaviour: bool = True,
+                 reruns: Sequence[str | Path] = ()) -> list[Path]:
     """Write ``report.md`` and ``figures/`` for experiment directories (every directory is read and checked before
     anything is written).
 
@@ -49,6 +50,8 @@ def write_report(directories: str | Path | Sequence[str | Path], *, out: str | P
     :param trajectories: the target whose behaviour is drawn (default: the first one).
     :param behaviour: also draw the Fig. 4 trajectories of the best SMC of each method and the Fig. 1 timeline of
         the best hierarchical SMC (they need the directories' libraries).
+    :param reruns: those of ``directories`` that ran some target x method pairs of the others again: theirs replace
+        the others' (:func:`read_table`; one report over all, ``out``).
     :return: the report paths.
     """
     items = [Path(directories)] if isinstance(directories, str | Path) else [Path(d) for d in directories]
@@ -56,8 +59,52 @@ def write_report(directories: str | Path | Sequence[str | Path], *, out: str | P
         raise SMCError("no experiment directories to report on")
     sources = [(d, read_results(d)) for d in items]  # every directory read before anything is written
     if out is None:
+        if reruns:
+            raise SMCError("reruns replace another directory's pairs in one report over all of them: give --out")
         return [_write([source], source[0], trajectories, behaviour) for source in sources]
-    return [_write(sources, Path(out), trajectories, behaviour)]
+    sources, replaced = _replaced(sources, reruns)
+    return [_write(sources, Path(out), trajectories, behaviour, replaced)]
+
+
+Replaced = dict[Path, dict[Path, list[tuple[str, str]]]]
+"""Of each directory, the target x method pairs a rerun replaced there, by rerun."""
+
+
+def _replaced(sources: Sequence[tuple[Path, dict[str, Any]]], reruns: Sequence[str | Path]
+              ) -> tuple[list[tuple[Path, dict[str, Any]]], Replaced]:
+    """``sources`` without the rows and reported scores of the pairs a rerun ran again, and which those were. A rerun
+    not among the directories, a pair that two reruns ran, or a partial directory with pairs replaced is refused."""
+    chosen = [Path(r) for r in reruns]
+    directories = [d for d, _ in sources]
+    for rerun in chosen:
+        if rerun not in directories:
+            raise SMCError(f"the rerun {rerun} is not one of the directories reported on: "
+                           + ", ".join(map(str, directories)))
+    owner: dict[tuple[str, str], Path] = {}
+    for directory, results in sources:
+        if directory in chosen:
+            for entry in results["reported"]:
+                key = (entry["target"], entry["method"])
+                if key in owner and owner[key] != directory:
+                    raise SMCError(f"{key[0]} with {key[1]} is in two reruns, {owner[key]} and {directory}: keep one")
+                owner[key] = directory
+    out: list[tuple[Path, dict[str, Any]]] = []
+    replaced: Replaced = {}
+    for directory, results in sources:
+        if directory in chosen:
+            out.append((directory, results))
+            continue
+        gone = {(e["target"], e["method"]) for e in results["reported"] if (e["target"], e["method"]) in owner}
+        for key in sorted(gone):
+            replaced.setdefault(directory, {}).setdefault(owner[key], []).append(key)
+        if gone and results.get("missing"):
+            raise SMCError(f"{directory / 'results.json'} is partial: a rerun replaces pairs of complete directories "
+                           "only (report it when its run is complete)")
+        kept = {**results,
+                "rows": [r for r in results["rows"] if (r["target"], r["method"]) not in gone],
+                "reported": [e for e in results["reported"] if (e["target"], e["method"]) not in gone]}
+        out.append((directory, kept))
+    return out, replaced
 
 
 def _merge(sources: Sequence[tuple[Path, dict[str, Any]]]) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
@@ -144,12 +191,14 @@ def _with_worlds(sources: Sequence[tuple[Path, dict[str, Any]]]) -> list[tuple[P
     return out
 
 
-def read_table(directories: Sequence[str | Path]) -> tuple[ResultTable, Experiences | None]:
+def read_table(directories: Sequence[str | Path], reruns: Sequence[str | Path] = ()
+               ) -> tuple[ResultTable, Experiences | None]:
     """The merged results of experiment directories (every one read and checked) and their kept experience: what a
-    report over them reads."""
+    report over them reads. A target x method in two directories is refused, unless one of them is among ``reruns``
+    (those of ``directories`` that ran some of the others' pairs again): the rerun's rows replace the others'."""
     if not directories:
         raise SMCError("no experiment directories to read")
-    return _table([(Path(d), read_results(Path(d))) for d in directories])
+    return _table(_replaced([(Path(d), read_results(Path(d))) for d in directories], reruns)[0])
 
 
 def _table(sources: Sequence[tuple[Path, dict[str, Any]]]) -> tuple[ResultTable, Experiences | None]:
@@ -161,7 +210,7 @@ def _table(sources: Sequence[tuple[Path, dict[str, Any]]]) -> tuple[ResultTable,
 
 
 def _write(sources: Sequence[tuple[Path, dict[str, Any]]], out: Path, trajectories: str | None,
-           behaviour: bool) -> Path:
+           behaviour: bool, replaced: Replaced | None = None) -> Path:
     table, experience = _table(sources)
     methods, targets = table.methods, table.targets
     figures_dir = out / "figures"
@@ -214,15 +263,16 @@ def _write(sources: Sequence[tuple[Path, dict[str, Any]]], out: Path, trajectori
     lines += ["", "## Figures", ""] + [f"![{p.stem}](figures/{p.name})" for p in figures]
     if behaviour_note:
         lines += ["", behaviour_note]
-    lines += _provenance(sources, out)
+    lines += _provenance(sources, out, replaced or {})
     path = out / "report.md"
     atomic_write(path, "\n".join(lines) + "\n")
     return path
 
 
-def _provenance(sources: Sequence[tuple[Path, dict[str, Any]]], out: Path) -> list[str]:
+def _provenance(sources: Sequence[tuple[Path, dict[str, Any]]], out: Path, replaced: Replaced) -> list[str]:
     """How each directory was run: budget, learner, machine, code and the commits its SMCs were trained at, wall time
-    (marked ``≥`` where it is a lower bound: :func:`_wall_time_is_lower_bound`) and command."""
+    (marked ``≥`` where it is a lower bound: :func:`_wall_time_is_lower_bound`), command, and the pairs a rerun
+    replaced there."""
     lines = ["", "## How this was run", ""]
     total = 0.0
     bounded = 0
@@ -240,7 +290,8 @@ def _provenance(sources: Sequence[tuple[Path, dict[str, Any]]], out: Path) -> li
                   *_commits_lines(results),
                   _wall_time_line(directory, results),
                   f"- command: `{results.get('command') or _command(directory, settings)}`",
-                  "- rows: `results.csv` (one per target x method x curriculum x seed), `results.json`", ""]
+                  "- rows: `results.csv` (one per target x method x curriculum x seed), `results.json`",
+                  *_replaced_lines(replaced.get(directory, {}), out), ""]
         total += results.get("wall_time_total_s", results.get("wall_time_s", 0))
         bounded += _wall_time_is_lower_bound(directory, results)
     if len(sources) > 1:
@@ -248,6 +299,18 @@ def _provenance(sources: Sequence[tuple[Path, dict[str, Any]]], out: Path) -> li
                      + (f"≥ {total / 3600:.2f} h (a lower bound: {bounded} of them recorded without the wall-time "
                         "ledger `wall_time.json`, so without the runs that stopped before their end, at a working "
                         "session's end say)." if bounded else f"{total / 3600:.2f} h."))
+    return lines
+
+
+def _replaced_lines(by_rerun: dict[Path, list[tuple[str, str]]], out: Path) -> list[str]:
+    """The pairs of a directory its reruns replaced, by method, in the report's provenance."""
+    lines = []
+    for rerun, pairs in by_rerun.items():
+        methods = dict.fromkeys(m for _, m in pairs)
+        for method in methods:
+            targets = [t for t, m in pairs if m == method]
+            lines.append(f"- replaced by the rerun `{os.path.relpath(rerun, out)}` (not in this report): {method} on "
+                         f"{len(targets)} target(s), {', '.join(targets)}")
     return lines
 
 
