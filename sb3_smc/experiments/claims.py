@@ -7,7 +7,7 @@ method is judged under each :data:`READINGS` entry: a call is one step (``curr``
 reading that fits the paper best on every concept (``curr-cap10``: a call cut after 10 moves; ``curr-moves-200``:
 200 moves an episode), and, where the statement compares curr with the flat SMC, the flat SMC at as much experience
 (:mod:`sb3_smc.experiments.experience`: curr's setting of each reading on the sweep's 12 concepts, and
-``curr-cap10`` on the 39 outside them, where its moves were recorded). Against a number of the paper our
+``curr-cap10`` on all 51). Against a number of the paper our
 interval resamples seeds and test worlds (the paper's number is over the same concepts as ours); where a statement
 is judged by its sign, a claimed effect across concepts, it resamples the concepts too (a hierarchical bootstrap),
 and a statement of significance needs our paired t-test across concepts as well. A verdict compares the paper's
@@ -69,15 +69,13 @@ class Reading:
     methods: Mapping[str, str]
     targets: tuple[str, ...] | None = None
     """Judged on these concepts only (chosen before the run); ``None``: on all of each statement's."""
-    excluding: tuple[str, ...] = ()
-    """Judged on the concepts outside these (where :attr:`targets` is ``None``)."""
     subset: str = ""
     """What the concepts it is judged on are called in a cell (``swept targets``)."""
     by_sign: bool = False
     """Only the comparisons of two of its methods are judged, by the sign the paper claims (equal experience)."""
 
     def __post_init__(self) -> None:
-        if (self.targets is not None or self.excluding) and not self.by_sign:
+        if self.targets is not None and not self.by_sign:
             raise ValueError(f"reading {self.name!r}: on a subset of the concepts it must be judged by sign (the "
                              "paper's numbers are over all of them)")
 
@@ -93,15 +91,14 @@ READINGS = (
             targets=SWEEP_TARGETS, subset="swept targets", by_sign=True),
     Reading("costs its moves, at equal experience", {"curr": "curr-moves-100", "base": flat_at("curr-moves-100")},
             targets=SWEEP_TARGETS, subset="swept targets", by_sign=True),
-    # the sweep's curr-cap10 trained before the SMCs' moves were recorded: its experience is known outside the sweep
     Reading("cut after 10 moves, at equal experience", {"curr": "curr-cap10", "base": flat_at("curr-cap10")},
-            excluding=SWEEP_TARGETS, subset="targets outside the sweep", by_sign=True),
+            by_sign=True),
 )
 """The readings of a call the claims are judged under, in the table's column order: the paper's methods as run;
 curr whose calls cost their moves; the flat SMC with as many moves as curr makes; the setting of each reading's free
 parameter that fits the paper best (the sweep, :mod:`sb3_smc.experiments.sweep`), run on every concept; and the flat
 SMC at as much experience as curr's setting of each reading (on the sweep's concepts) and the best one-step setting
-(on the concepts outside the sweep, where its moves were recorded)."""
+(on every concept)."""
 
 Score = Callable[[str, str], np.ndarray]
 
@@ -303,7 +300,7 @@ def _judge_by_sign(statement: Statement, reading: Reading, replicates: Replicate
         return Judged("", "")
     a, b = (reading.methods[m] for m in statement.methods)
     targets = [t for t in statement.targets if t in reading.targets] if reading.targets is not None else \
-        [t for t in statement.targets if t not in reading.excluding]
+        list(statement.targets)
     if not all(any((t, m) in replicates.estimate or (t, m) in unfinished for t in targets) for m in (a, b)):
         return Judged("-", NOT_RUN)  # one of the two neither ran nor is running here (the curve's run not begun)
     if any((t, m) in unfinished for t in targets for m in (a, b)):

@@ -230,7 +230,7 @@ def _write(sources: Sequence[tuple[Path, dict[str, Any]]], out: Path, trajectori
              f"Methods {', '.join(methods)}; {len(targets)} target(s)"
              + (f" from {len(sources)} run directories" if len(sources) > 1 else "") + "; "
              + (f"{seeds} seed(s); {timesteps:,} steps per SMC"
-                + "".join(dict.fromkeys(_target_rules(s) for s in settings))
+                + _target_rules(list(dict.fromkeys(m for s in settings for m in s["methods"])))
                 + f"; test: {repeats} repeats per test environment"
                 if seeds is not None else "seeds, budgets and repeats per directory below")
              + ", stochastic policy, the update with the best training return. Scores in %; the paper's numbers "
@@ -281,7 +281,7 @@ def _provenance(sources: Sequence[tuple[Path, dict[str, Any]]], out: Path, repla
         machine = results.get("machine", {})
         if len(sources) > 1:
             lines += [f"### {os.path.relpath(directory, out)}", ""]
-        lines += [f"- budget: {settings['timesteps']:,} steps per SMC{_target_rules(settings)}, seeds "
+        lines += [f"- budget: {settings['timesteps']:,} steps per SMC{_target_rules(settings['methods'])}, seeds "
                   f"0-{settings['seeds'] - 1}, {settings['repeats']} test repeats; {settings['workers']} worker(s), "
                   f"backend {settings['backend']}",
                   f"- learner: {_learners(settings)}",
@@ -351,10 +351,11 @@ def _commits_lines(results: dict[str, Any]) -> list[str]:
     return [line + (f"; {note}" if isinstance(note, str) and note else "")]
 
 
-def _target_rules(settings: dict[str, Any]) -> str:
-    """The methods of the run that train otherwise than the run says (``canon-scaled``: longer, ``curr-moves``:
-    calls costing their moves, ...), and how (:attr:`~sb3_smc.experiments.design.ExperimentMethod.change`)."""
-    methods = [METHOD_REGISTRY[m] for m in settings["methods"] if m in METHOD_REGISTRY]
+def _target_rules(names: Sequence[str]) -> str:
+    """Those of the methods ``names`` that train otherwise than the run says (``canon-scaled``: longer,
+    ``curr-moves``: calls costing their moves, ...), each once, and how
+    (:attr:`~sb3_smc.experiments.design.ExperimentMethod.change`)."""
+    methods = [METHOD_REGISTRY[m] for m in names if m in METHOD_REGISTRY]
     return "".join(f" ({m.name}: {m.change})" for m in methods if m.change)
 
 
