@@ -1109,8 +1109,9 @@ def test_the_readme_gets_the_answer_from_the_report(tmp_path):
         assert row[2] == "+10.4; t(34) = 4.9, p = 2e-05" and row[4] == "+21.8; t(16) = 4.1, p = 0.0008"
         assert _row_cells(text, "| the flat SMC (base): mean |")[2] == "74.5"
         assert "canon" not in text.split("**The paper's claims")[0]  # not run: no row, no headline number
-        assert f"With a call counted as one step, curr leads the flat SMC by +{lead:.1f}, p = " in text
-        assert "Made fair in moves" not in text and "At equal experience" not in text  # no such rows
+        assert f"- **A call as one step** (the paper's count): curr leads the flat SMC by +{lead:.1f} (p = " in text
+        assert "; paper +10.4) on classification and +" in text
+        assert "**Fair in moves**" not in text and "**At equal experience**" not in text  # no such rows
         assert ("**The paper's two headline targets** (best seed of 5): `cl_self-left-of-two-objects-vs-one` base "
                 in text)
         counted = next(line for line in report.read_text().splitlines() if line.startswith("**In all**"))
@@ -1134,11 +1135,12 @@ def test_the_readme_gets_the_answer_from_the_report(tmp_path):
         mean = 100 * np.mean([score(t, setting) for t in cl])
         assert row[1].startswith(f"{mean:.1f} [") and row[1].endswith(")") and row[2] == "84.9"
         assert _row_cells(text, f"| {setting} above base |")[1].startswith(f"+{lead:.1f} [")
-    assert "with calls costing their moves in 200 moves an episode (the setting of that reading that fits" in text
+    assert ("- **Fair in moves**, curr's lead over the flat SMC is: with calls costing their moves in 200 moves an "
+            f"episode (that reading's best setting), +{lead:.1f} (p = ") in text
     readme_table.main(["--report", str(report), "--readme", str(readme), "--brief"])  # the landing page's
     brief = readme.read_text()
     assert "| curr above base (a call is one step) |" in brief and "**[The paper's claims]" in brief
-    assert "curr-cap10:" not in brief and "With a call counted as one step" not in brief
+    assert "curr-cap10:" not in brief and "**A call as one step**" not in brief
     assert "headline targets** (best seed" not in brief
     assert ("The verdict, the paper's headline targets and the best setting of each reading: [the results "
             "page](docs/README.md).") in brief
@@ -1202,6 +1204,27 @@ def test_the_readme_gets_the_answer_from_the_report(tmp_path):
     elsewhere.write_text(f"{readme_table.START}\n{readme_table.END}\n")
     readme_table.main(["--report", str(report), "--readme", str(elsewhere)])
     assert "(../docs/report.md#the-papers-claims)" in elsewhere.read_text()
+
+
+def test_the_verdict_says_where_the_flat_curve_ends_below_curr_cap10():
+    """The equal-experience sentence of the verdict carries, from the report's summary line, on how many targets the
+    flat SMC's curve ends below curr-cap10's experience; nothing where the report says none or has no summary."""
+    readme_table = import_tool("readme_table")
+    summary = ("**At equal experience**: curr-cap10: ahead on 41 of 51 targets (6 of them at the ceiling; on 27 the "
+               "flat SMC's curve ends below its experience), mean lead +7.8 points; curr-cap50: ahead on 9 of 12 "
+               "targets (on 9 the flat SMC's curve ends below its experience), mean lead +11.9 points.")
+    said = " (on 27 of its 51 targets the flat SMC's curve ends below curr-cap10's experience: read at its best point)"
+    assert readme_table.beyond(f"# r\n\n{summary}\n", "curr-cap10") == said
+    assert readme_table.beyond(summary, "curr-cap50").startswith(" (on 9 of its 12 targets")
+    assert readme_table.beyond(summary.replace("; on 27 the flat SMC's curve ends below its experience", ""),
+                               "curr-cap10") == ""
+    assert readme_table.beyond("# no summary", "curr-cap10") == ""
+    cell = ("+7.4 [+2.8, +12.1]; t(33) = 3.63, p = 0.00094", "reproduced", "+10.4; t(34) = 4.9, p = 2e-05")
+    rows = [(readme_table.ANSWER_ROWS[9][0], {"classification": cell, "bring-about": cell})]
+    [sentence] = readme_table.verdict(rows, summary)
+    assert sentence == ("- **At equal experience** (the flat SMC read off its curve of experience), it is: with a call "
+                        "cut after 10 moves, +7.4 (p = 0.00094) on classification and +7.4 (p = 0.00094) on "
+                        f"bring-about: as the paper's on both kinds{said}.")
 
 
 def _row_cells(text: str, start: str) -> list[str]:

@@ -200,54 +200,65 @@ _PHRASES = {"exceeded": "above the paper's", "reproduced": "as the paper's", "sh
             "opposite": "the opposite sign to the paper's", "not significant": "not significant"}
 
 
-def _brief(ours: str) -> str:
-    """A cell's number without its interval, with its p and subset: ``"+8.8 [-4.6, +23.9] on 7 swept targets; t(6)
-    = 1.43, p = 0.2"`` -> ``"+8.8 on 7 swept targets, p = 0.2"``."""
-    number = ours.split(" ")[0]
-    subset = re.search(r"\] (on \d+ [^;]+)", ours)
+def _brief(ours: str, paper: str = "") -> str:
+    """A cell's number without its interval, its p, the paper's number and the cell's subset in brackets:
+    ``"+8.8 [-4.6, +23.9] on 7 swept targets; t(6) = 1.43, p = 0.2"`` -> ``"+8.8 (p = 0.2; 7 swept targets)"``."""
+    subset = re.search(r"\] on (\d+ [^;]+)", ours)
     p = re.search(r"p = ([^ ;)]+)", ours)
-    return number + (f" {subset[1]}" if subset else "") + (f", p = {p[1]}" if p else "")
+    said = [text for text in (p and f"p = {p[1]}", paper and f"paper {paper.split(';')[0]}", subset and subset[1])
+            if text]
+    return ours.split(" ")[0] + (f" ({'; '.join(said)})" if said else "")
 
 
 def _both(found: dict[str, tuple[str, str, str]], paper: bool = False) -> str:
     """The two kinds' numbers (with the paper's), then their verdicts in words."""
-    said = " and ".join(f"{_brief(found[kind][0])} on {kind}" + (f" (paper {found[kind][2].split(';')[0]})"
-                                                                  if paper else "")
+    said = " and ".join(f"{_brief(found[kind][0], found[kind][2] if paper else '')} on {kind}"
                         for kind in KINDS if kind in found)
     verdicts = [found[kind][1] for kind in KINDS if kind in found]
     if len(set(verdicts)) == 1:
         words = _PHRASES.get(verdicts[0], verdicts[0]) + (" on both kinds" if len(verdicts) == 2 else "")
     else:
         words = ", ".join(f"{found[kind][1]} on {kind}" for kind in KINDS if kind in found)
-    return f"{said} ({words})"
+    return f"{said}: {words}"
 
 
-def verdict(answer: Rows) -> list[str]:
-    """The verdict in three sentences, each from the answer table's rows (so from the report's numbers): the
-    paper's reading of a call as one step, the readings that make the comparison fair in moves, and equal
-    experience; a sentence whose rows are missing is left out."""
+def beyond(report: str, method: str) -> str:
+    """From the report's equal-experience summary, on how many of ``method``'s targets the flat SMC's curve ends
+    below its experience (the flat SMC read at its best point there: the lead an upper bound unless the flat SMC had
+    converged), as a remark; ``""`` where the report says none."""
+    summary = next((line for line in report.splitlines() if line.startswith("**At equal experience**")), "")
+    found = re.search(rf"{re.escape(method)}: ahead on \d+ of (\d+) targets \([^)]*?on (\d+) the flat SMC's curve "
+                      r"ends below its experience\)", summary)
+    return (f" (on {found[2]} of its {found[1]} targets the flat SMC's curve ends below {method}'s experience: "
+            "read at its best point)") if found else ""
+
+
+def verdict(answer: Rows, report: str = "") -> list[str]:
+    """The verdict in three sentences, a list item each, from the answer table's rows (so from the report's
+    numbers): the paper's reading of a call as one step, the readings that make the comparison fair in moves, and
+    equal experience (on every concept first, then on the sweep's; from ``report``, where the flat SMC's curve ends
+    below curr-cap10's experience); a sentence whose rows are missing is left out."""
     rows = dict(answer)
+    remark = {ANSWER_ROWS[9][0]: beyond(report, "curr-cap10")}
+
+    def said(parts: tuple[tuple[str, str], ...]) -> str:
+        return "; ".join(f"{what}, {_both(rows[label])}{remark.get(label, '')}" for what, label in parts
+                         if label in rows)
+
     sentences = []
-    lead = rows.get(ANSWER_ROWS[3][0])
-    if lead:
-        sentences.append(f"With a call counted as one step, curr leads the flat SMC by {_both(lead, paper=True)}.")
-    fair = [(what, rows[label]) for what, label in (("with each call costing its moves", ANSWER_ROWS[5][0]),
-                                                    ("against a flat SMC given 400 moves an episode",
-                                                     ANSWER_ROWS[6][0]),
-                                                    ("with calls costing their moves in 200 moves an episode (the "
-                                                     "setting of that reading that fits the paper best)",
-                                                     BEST_ROWS[3][0])) if label in rows]
-    if fair:
-        sentences.append("Made fair in moves, its lead is " + "; ".join(f"{_both(found)} {what}"
-                                                                        for what, found in fair) + ".")
-    equal = [(what, rows[label]) for what, label in (("a call as one step", ANSWER_ROWS[7][0]),
-                                                     ("each call costing its moves", ANSWER_ROWS[8][0]),
-                                                     ("a call cut after 10 moves", ANSWER_ROWS[9][0]))
-             if label in rows]
-    if equal:
-        sentences.append("At equal experience it is " + "; ".join(f"{_both(found)} with {what}"
-                                                                  for what, found in equal) + ".")
-    return [" ".join(sentences)] if sentences else []
+    if lead := rows.get(ANSWER_ROWS[3][0]):
+        sentences.append(f"- **A call as one step** (the paper's count): curr leads the flat SMC by "
+                         f"{_both(lead, paper=True)}.")
+    if fair := said((("with each call costing its moves", ANSWER_ROWS[5][0]),
+                     ("against a flat SMC given 400 moves an episode", ANSWER_ROWS[6][0]),
+                     ("with calls costing their moves in 200 moves an episode (that reading's best setting)",
+                      BEST_ROWS[3][0]))):
+        sentences.append(f"- **Fair in moves**, curr's lead over the flat SMC is: {fair}.")
+    if equal := said((("with a call cut after 10 moves", ANSWER_ROWS[9][0]),
+                      ("with a call as one step", ANSWER_ROWS[7][0]),
+                      ("with each call costing its moves", ANSWER_ROWS[8][0]))):
+        sentences.append(f"- **At equal experience** (the flat SMC read off its curve of experience), it is: {equal}.")
+    return sentences
 
 
 def headline(report: str) -> list[str]:
@@ -281,7 +292,7 @@ def block(report: str, source: str, brief: bool = False) -> str:
         parts.append([f"The verdict, the paper's headline targets and the best setting of each reading: "
                       f"[the results page]({page})."] if rows else [])
     else:
-        parts += [verdict(rows), headline(report)]
+        parts += [verdict(rows, report), headline(report)]
     for part in parts:
         if part:
             lines += [*part, ""]
