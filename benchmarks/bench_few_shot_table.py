@@ -54,40 +54,29 @@ def _groups() -> dict[tuple[Any, str, str], list[str]]:
 
 def _recorded(target: str, method: str, n: int | None) -> tuple[list[float] | None, float | None]:
     """The committed records' test scores and summed training seconds of a group (``None`` where not recorded)."""
+    from sb3_smc.experiments.few_shot import record_score, record_training_s
+
     files = [RECORDS / target / f"{method}-n{n or 'all'}@{seed}.json" for seed in SEEDS]
     if not all(f.is_file() for f in files):
         return None, None
     data = [json.loads(f.read_text(encoding="utf-8")) for f in files]
-    if method == "cnn":
-        return [d["cnn"]["test_score"] for d in data], sum(d["cnn"]["wall_time_s"] for d in data)
-    scores = [next(e["score"] for e in d["evaluations"] if e["split"] == "test") for d in data]
-    return scores, sum(d["record"]["wall_time_s"] for d in data)
+    return [record_score(d) for d in data], sum(record_training_s(d) for d in data)
 
 
 def _time_group(target: str, method: str, n: int | None) -> tuple[float, float, list[float]]:
-    """Wall seconds of one group as the table trains it, its training seconds (the SMCs' shares) and test scores."""
+    """Wall seconds of one group as the table trains it (``group_records``), its training seconds and test scores."""
     from sb3_smc.common.threads import compute_threads
-    from sb3_smc.experiments.cnn import train_cnn
-    from sb3_smc.experiments.few_shot import offer_for
-    from sb3_smc.fewshot import learn_concepts
+    from sb3_smc.experiments.few_shot import group_records, record_score, record_training_s
     from sb3_smc.library import SMCLibrary
     from sb3_smc.library.pretrained import pretrained_root
 
+    library = SMCLibrary.load(pretrained_root())
     with compute_threads(1):
-        if method == "cnn":
-            start = time.perf_counter()
-            cnns = [train_cnn(target, seed, train_worlds=n) for seed in SEEDS]
-            return time.perf_counter() - start, sum(c.wall_time_s for c in cnns), [c.test_score for c in cnns]
-        library = SMCLibrary.load(pretrained_root())
-        offer = offer_for(target, method, library)
-        assert offer is not None  # drawn from the groups the table runs
         start = time.perf_counter()
-        learned = learn_concepts(f"PW-{target}-v0", seeds=SEEDS, library=library, offer=offer, train_worlds=n,
-                                 names=[f"{target}-{method}-n{n or 'all'}@{seed}" for seed in SEEDS],
-                                 lean_update=True, printer=lambda _: None)
+        records = list(group_records(target, method, n, SEEDS, library, printer=lambda _: None))
         seconds = time.perf_counter() - start
-    training = sum(one.smc.record.wall_time_s for one in learned if one.smc.record is not None)
-    return seconds, training, [float(one.smc.test_score or 0.0) for one in learned]
+    assert len(records) == len(SEEDS)  # drawn from the groups the table runs
+    return seconds, sum(map(record_training_s, records)), [record_score(r) for r in records]
 
 
 def _warm(_: int) -> None:

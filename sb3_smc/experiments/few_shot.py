@@ -20,18 +20,21 @@ from __future__ import annotations
 
 import json
 import time
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from itertools import groupby
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from pixelworld_env.atomic import atomic_write
 from sb3_smc.curricula import shipped_curricula
 from sb3_smc.errors import SMCError
 from sb3_smc.experiments.tabular import csv_text
 
-__all__ = ["FEW_SHOT_METHODS", "FEW_SHOT_TARGETS", "FEW_SHOT_WORLDS", "children_of", "offer_for", "results_csv",
-           "results_rows", "run_few_shot", "write_results"]
+if TYPE_CHECKING:
+    from sb3_smc.library import SMCLibrary
+
+__all__ = ["FEW_SHOT_METHODS", "FEW_SHOT_TARGETS", "FEW_SHOT_WORLDS", "children_of", "group_records", "offer_for",
+           "record_score", "record_training_s", "results_csv", "results_rows", "run_few_shot", "write_results"]
 
 FEW_SHOT_TARGETS = (
     # containment: 5 bring-about, 5 classification (the first: a headline target)
@@ -99,8 +102,6 @@ def run_few_shot(out: str | Path, *, targets: Sequence[str] = FEW_SHOT_TARGETS,
     ``N`` of a target first), then write ``results.csv``. ``settings``: :func:`~sb3_smc.fewshot.learn_concept`'s
     (``total_timesteps`` ...)."""
     from pixelworld_env.datasets import catalog
-    from sb3_smc.experiments.cnn import train_cnn
-    from sb3_smc.fewshot import learn_concepts
     from sb3_smc.library import SMCLibrary
     from sb3_smc.library.pretrained import pretrained_root
 
@@ -116,35 +117,54 @@ def run_few_shot(out: str | Path, *, targets: Sequence[str] = FEW_SHOT_TARGETS,
     started, done = time.monotonic(), 0
     for (target, method, n), group in groupby(todo, key=lambda cell: cell[:3]):
         seeds_left = [seed for *_, seed in group]
-        if method == "cnn":
-            for seed in seeds_left:
-                cnn = train_cnn(target, seed, train_worlds=n)
-                atomic_write(_cell(out, target, method, n, seed), json.dumps(
-                    {"target": target, "method": method, "train_worlds": n, "seed": seed, "cnn": cnn.to_dict()},
-                    indent=1) + "\n")
-                done += 1
-                _progress(printer, done, len(todo), started, f"{target} cnn N={n or 'all'} seed {seed}",
-                          cnn.test_score)
-            continue
-        offer = offer_for(target, method, library)
-        if offer is None:
-            done += len(seeds_left)
-            continue  # the pretrained library has no such entry for this target
-        learned = learn_concepts(f"PW-{target}-v0", seeds=seeds_left, library=library, offer=offer, train_worlds=n,
-                                 names=[f"{target}-{method}-n{n or 'all'}@{seed}" for seed in seeds_left],
-                                 lean_update=lean_update, **settings)
-        for seed, one in zip(seeds_left, learned, strict=True):
-            smc = one.smc
-            score = smc.test_score
-            assert smc.record is not None and smc.spec is not None and score is not None  # trained and tested
-            record = {"target": target, "method": method, "train_worlds": n, "seed": seed,
-                      "offered": list(one.offered), "spec": smc.spec.to_dict(), "record": smc.record.to_dict(),
-                      "evaluations": [e.to_dict() for e in smc.evaluations],
-                      "choice": one.choice.scores if one.choice is not None else None}
-            atomic_write(_cell(out, target, method, n, seed), json.dumps(record, indent=1) + "\n")
-            done += 1
-            _progress(printer, done, len(todo), started, f"{target} {method} N={n or 'all'} seed {seed}", score)
+        records = group_records(target, method, n, seeds_left, library, lean_update=lean_update, **settings)
+        for trained, record in enumerate(records, 1):
+            atomic_write(_cell(out, target, method, n, record["seed"]), json.dumps(record, indent=1) + "\n")
+            _progress(printer, done + trained, len(todo), started,
+                      f"{target} {method} N={n or 'all'} seed {record['seed']}", record_score(record))
+        done += len(seeds_left)  # a group without an entry in the pretrained library is skipped
     return write_results(out)
+
+
+def group_records(target: str, method: str, worlds: int | None, seeds: Sequence[int], library: SMCLibrary, *,
+                  lean_update: bool = True, **settings: Any) -> Iterator[dict[str, Any]]:
+    """Train one group of the table (a target, a method, ``N`` and its seeds) as :func:`run_few_shot` does and yield
+    each seed's record as it is done: the CNN seed by seed; the SMCs' seeds together in one
+    :func:`~sb3_smc.fewshot.learn_concepts` call, then one by one; nothing where ``library`` has no entry of
+    ``method`` for ``target``."""
+    from sb3_smc.experiments.cnn import train_cnn
+    from sb3_smc.fewshot import learn_concepts
+
+    cell = {"target": target, "method": method, "train_worlds": worlds}
+    if method == "cnn":
+        for seed in seeds:
+            yield {**cell, "seed": seed, "cnn": train_cnn(target, seed, train_worlds=worlds).to_dict()}
+        return
+    offer = offer_for(target, method, library)
+    if offer is None:
+        return
+    learned = learn_concepts(f"PW-{target}-v0", seeds=seeds, library=library, offer=offer, train_worlds=worlds,
+                             names=[f"{target}-{method}-n{worlds or 'all'}@{seed}" for seed in seeds],
+                             lean_update=lean_update, **settings)
+    for seed, one in zip(seeds, learned, strict=True):
+        smc = one.smc
+        assert smc.record is not None and smc.spec is not None and smc.test_score is not None  # trained and tested
+        yield {**cell, "seed": seed, "offered": list(one.offered), "spec": smc.spec.to_dict(),
+               "record": smc.record.to_dict(), "evaluations": [e.to_dict() for e in smc.evaluations],
+               "choice": one.choice.scores if one.choice is not None else None}
+
+
+def record_score(record: Mapping[str, Any]) -> float:
+    """A cell record's test score (:func:`group_records`)."""
+    if record["method"] == "cnn":
+        return float(record["cnn"]["test_score"])
+    (test,) = [e for e in record["evaluations"] if e["split"] == "test"]
+    return float(test["score"])
+
+
+def record_training_s(record: Mapping[str, Any]) -> float:
+    """A cell record's training seconds (:func:`group_records`)."""
+    return float(record["cnn" if record["method"] == "cnn" else "record"]["wall_time_s"])
 
 
 def _progress(printer: Callable[[str], None], done: int, total: int, started: float, cell: str, score: float) -> None:
@@ -162,12 +182,9 @@ def results_rows(out: str | Path) -> list[dict[str, Any]]:
         info = catalog.dataset(data["target"])
         row = {"target": data["target"], "kind": info.kind, "category": info.category, "method": data["method"],
                "train_worlds": data["train_worlds"] or "all", "seed": data["seed"]}
-        if data["method"] == "cnn":
-            rows.append({**row, "test_score": data["cnn"]["test_score"], "offered": 0, "primitive_steps": 0})
-            continue
-        (test,) = [e for e in data["evaluations"] if e["split"] == "test"]
-        rows.append({**row, "test_score": test["score"], "offered": len(data["offered"]),
-                     "primitive_steps": data["record"]["primitive_steps"]})
+        cnn = data["method"] == "cnn"
+        rows.append({**row, "test_score": record_score(data), "offered": 0 if cnn else len(data["offered"]),
+                     "primitive_steps": 0 if cnn else data["record"]["primitive_steps"]})
     return sorted(rows, key=lambda r: (r["target"], r["method"], str(r["train_worlds"]), r["seed"]))
 
 
