@@ -1224,7 +1224,10 @@ def test_the_verdict_says_where_the_flat_curve_ends_below_curr_cap10():
     [sentence] = readme_table.verdict(rows, summary)
     assert sentence == ("- **At equal experience** (the flat SMC read off its curve of experience), it is: with a call "
                         "cut after 10 moves, +7.4 (p = 0.00094) on classification and +7.4 (p = 0.00094) on "
-                        f"bring-about: as the paper's on both kinds{said}.")
+                        f"bring-about: in the paper's direction, p < 0.05 on both kinds{said}.")
+    short = ("-1.0 [-5.0, +3.0]; t(33) = -0.5, p = 0.6", "short", "+10.4")
+    rows = [(readme_table.ANSWER_ROWS[7][0], {"classification": short, "bring-about": short})]
+    assert readme_table.verdict(rows, summary)[0].endswith(": its interval holding zero on both kinds.")
 
 
 def _row_cells(text: str, start: str) -> list[str]:

@@ -210,13 +210,19 @@ def _brief(ours: str, paper: str = "") -> str:
     return ours.split(" ")[0] + (f" ({'; '.join(said)})" if said else "")
 
 
-def _both(found: dict[str, tuple[str, str, str]], paper: bool = False) -> str:
-    """The two kinds' numbers (with the paper's), then their verdicts in words."""
+_BY_SIGN = {"reproduced": "in the paper's direction, p < 0.05", "short": "its interval holding zero",
+            "opposite": "the opposite of the paper's", "not significant": "in the paper's direction, not significant"}
+"""The verdicts in words where only the sign is judged (at equal experience: the paper's number is not)."""
+
+
+def _both(found: dict[str, tuple[str, str, str]], paper: bool = False, by_sign: bool = False) -> str:
+    """The two kinds' numbers (with the paper's), then their verdicts in words (``by_sign``: of a sign)."""
     said = " and ".join(f"{_brief(found[kind][0], found[kind][2] if paper else '')} on {kind}"
                         for kind in KINDS if kind in found)
     verdicts = [found[kind][1] for kind in KINDS if kind in found]
     if len(set(verdicts)) == 1:
-        words = _PHRASES.get(verdicts[0], verdicts[0]) + (" on both kinds" if len(verdicts) == 2 else "")
+        words = (_BY_SIGN if by_sign else _PHRASES).get(verdicts[0], verdicts[0]) + (" on both kinds"
+                                                                                   if len(verdicts) == 2 else "")
     else:
         words = ", ".join(f"{found[kind][1]} on {kind}" for kind in KINDS if kind in found)
     return f"{said}: {words}"
@@ -241,9 +247,9 @@ def verdict(answer: Rows, report: str = "") -> list[str]:
     rows = dict(answer)
     remark = {ANSWER_ROWS[9][0]: beyond(report, "curr-cap10")}
 
-    def said(parts: tuple[tuple[str, str], ...]) -> str:
-        return "; ".join(f"{what}, {_both(rows[label])}{remark.get(label, '')}" for what, label in parts
-                         if label in rows)
+    def said(parts: tuple[tuple[str, str], ...], by_sign: bool = False) -> str:
+        return "; ".join(f"{what}, {_both(rows[label], by_sign=by_sign)}{remark.get(label, '')}"
+                         for what, label in parts if label in rows)
 
     sentences = []
     if lead := rows.get(ANSWER_ROWS[3][0]):
@@ -256,7 +262,7 @@ def verdict(answer: Rows, report: str = "") -> list[str]:
         sentences.append(f"- **Fair in moves**, curr's lead over the flat SMC is: {fair}.")
     if equal := said((("with a call cut after 10 moves", ANSWER_ROWS[9][0]),
                       ("with a call as one step", ANSWER_ROWS[7][0]),
-                      ("with each call costing its moves", ANSWER_ROWS[8][0]))):
+                      ("with each call costing its moves", ANSWER_ROWS[8][0])), by_sign=True):
         sentences.append(f"- **At equal experience** (the flat SMC read off its curve of experience), it is: {equal}.")
     return sentences
 
