@@ -29,9 +29,9 @@
 #   tools/paper_table.sh checkpoint              at a session's end: keep every queued category this machine has run
 #                                                (partial while unfinished), then the report
 #   tools/paper_table.sh keep <category> [repo]   copy a run's records (no models) into docs/results/paper/<category>,
-#                                                with its SMCs' primitive moves (experience.json) and its own report
+#                                                with its SMCs' primitive moves (experience.json)
 #   tools/paper_table.sh partial <category>       at a session's end: tabulate what the running category has finished
-#                                                (--no-train) and keep it, its report saying partial (nothing kept
+#                                                (--no-train), keep it and make its partial report (nothing kept
 #                                                while it has no evaluated SMC)
 #   tools/paper_table.sh report                  one report over every complete kept directory (a partial one keeps
 #                                                its records and its own report.md until it is complete):
@@ -183,7 +183,6 @@ case ${1:-} in
     if [ -f "$src/library/manifest.json" ]; then  # every trained SMC's primitive moves (the equal-experience section)
       "$(dirname "$0")/../.venv/bin/python" -m sb3_smc.experiments.experience "$src" --out "$dst/experience.json"
     fi
-    "$(dirname "$0")/../.venv/bin/sb3-smc" report "$dst" --no-behaviour  # its own page, partial or whole
     du -sh "$dst" ;;
   partial)
     cat=$2
@@ -192,7 +191,8 @@ case ${1:-} in
     if ! "$RUN_ENV/bin/sb3-smc" experiment --out "$RUNS/paper-$cat" $(selection "$cat") --seeds 5 --workers 2 \
         --no-train $(options "$cat"); then echo "=== $cat: not tabulated (the error above), not kept"; exit 0; fi
     if ! holds "$RUNS/paper-$cat/results.json" rows; then echo "=== $cat: nothing evaluated yet, not kept"; exit 0; fi
-    "$0" keep "$cat" ;;
+    "$0" keep "$cat"
+    "$repo/.venv/bin/sb3-smc" report "$repo/docs/results/paper/$cat" --no-behaviour ;;
   report)
     mapfile -t dirs < <(complete_dirs)  # complete categories only: a partial one is kept, not reported
     # shellcheck disable=SC2046
